@@ -1,0 +1,156 @@
+//! The experiment registry behind `cargo xtask reproduce-table`.
+//!
+//! Every paper table the project reproduces is an [`Experiment`] with a stable
+//! id. An experiment is seeded and deterministic, writes its CSV and SVG files
+//! under `<out>/<id>/`, and returns its tables (the paper's cells beside ours).
+
+use std::path::PathBuf;
+
+use crate::table::Table;
+
+/// Scale of a run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mode {
+    /// Small enough for CI; the numbers guarded by the golden files.
+    Quick,
+    /// Paper scale.
+    Full,
+}
+
+/// Options common to every experiment.
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    /// Quick (CI) or full (paper-scale) run.
+    pub mode: Mode,
+    /// Root folder for outputs; each experiment writes under `out/<id>/`.
+    pub out: PathBuf,
+    /// Show progress on stderr.
+    pub progress: bool,
+}
+
+/// What went wrong while running an experiment.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ExperimentError {
+    /// An output file could not be written.
+    #[error("cannot write {path}: {source}")]
+    Io {
+        /// The file or folder.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// The id is not in the registry.
+    #[error("unknown experiment `{0}` (try `list`)")]
+    Unknown(String),
+    /// The experiment is registered but not implemented yet.
+    #[error("experiment `{0}` is registered but not implemented yet")]
+    NotImplemented(&'static str),
+    /// A filter or tracker failed during the run.
+    #[error("experiment `{id}` failed: {message}")]
+    Failed {
+        /// Experiment id.
+        id: &'static str,
+        /// What failed.
+        message: String,
+    },
+}
+
+/// One reproducible experiment.
+pub trait Experiment: Sync {
+    /// Stable id used on the command line (`hikpf`, `ball`, ...).
+    fn id(&self) -> &'static str;
+    /// Which paper and table it reproduces.
+    fn source(&self) -> &'static str;
+    /// One line saying what it measures.
+    fn summary(&self) -> &'static str;
+    /// Whether it can run yet.
+    fn implemented(&self) -> bool {
+        true
+    }
+    /// Runs it, writes its files under `opts.out/<id>/` and returns its tables.
+    fn run(&self, opts: &RunOptions) -> Result<Vec<Table>, ExperimentError>;
+}
+
+/// An experiment that the SPEC asks for and that is not built yet.
+struct Planned {
+    id: &'static str,
+    source: &'static str,
+    summary: &'static str,
+}
+
+impl Experiment for Planned {
+    fn id(&self) -> &'static str {
+        self.id
+    }
+    fn source(&self) -> &'static str {
+        self.source
+    }
+    fn summary(&self) -> &'static str {
+        self.summary
+    }
+    fn implemented(&self) -> bool {
+        false
+    }
+    fn run(&self, _opts: &RunOptions) -> Result<Vec<Table>, ExperimentError> {
+        Err(ExperimentError::NotImplemented(self.id))
+    }
+}
+
+/// Every experiment, in the order `all` runs them.
+pub fn registry() -> Vec<Box<dyn Experiment>> {
+    vec![
+        Box::new(Planned {
+            id: "hikpf",
+            source: "paper 000 Table 1; van der Merwe et al. 2000 Table 1",
+            summary: "PF, PF-EKF, PF-UKF, PF-IEKF, HIKPF on the scalar Gamma-noise model",
+        }),
+        Box::new(Planned {
+            id: "ball",
+            source: "paper 001 Tables 1-3",
+            summary: "KF, UKF, PF_10/30/70 histogram ball trackers: fps, error, lost, found",
+        }),
+        Box::new(Planned {
+            id: "affine",
+            source: "paper 002 (RMS eq. 6, particles per frame)",
+            summary: "HKPF, ISPF and self-tuning HKPF on synthetic affine sequences",
+        }),
+        Box::new(Planned {
+            id: "correlation",
+            source: "paper 004 Tables 1-3",
+            summary: "MAD vs PF correlation tracker through an occlusion; Kalman multi-target",
+        }),
+        Box::new(Planned {
+            id: "condensation",
+            source: "paper 003",
+            summary: "CONDENSATION with IFD, skin, OR and AND cues; c-AVQ; priority IFD",
+        }),
+    ]
+}
+
+/// Looks an experiment up by id.
+pub fn find(id: &str) -> Result<Box<dyn Experiment>, ExperimentError> {
+    registry()
+        .into_iter()
+        .find(|e| e.id() == id)
+        .ok_or_else(|| ExperimentError::Unknown(id.to_string()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ids_are_unique() {
+        let reg = registry();
+        let mut ids: Vec<_> = reg.iter().map(|e| e.id()).collect();
+        ids.sort();
+        ids.dedup();
+        assert_eq!(ids.len(), reg.len());
+    }
+
+    #[test]
+    fn unknown_id_is_an_error() {
+        assert!(matches!(find("nope"), Err(ExperimentError::Unknown(_))));
+    }
+}

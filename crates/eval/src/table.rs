@@ -1,0 +1,108 @@
+//! A plain text table: the paper's cells beside ours, printed and written as CSV.
+
+use std::fmt;
+
+/// A rectangular table of strings with a title and a header row.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Table {
+    /// Title printed above the table.
+    pub title: String,
+    /// Column headers.
+    pub header: Vec<String>,
+    /// Rows; each has `header.len()` cells.
+    pub rows: Vec<Vec<String>>,
+}
+
+impl Table {
+    /// An empty table with the given title and header.
+    pub fn new(title: impl Into<String>, header: &[&str]) -> Self {
+        Self {
+            title: title.into(),
+            header: header.iter().map(|s| s.to_string()).collect(),
+            rows: Vec::new(),
+        }
+    }
+
+    /// Appends a row.
+    ///
+    /// # Panics
+    /// When the row does not have one cell per column (a programming error).
+    pub fn push(&mut self, row: Vec<String>) {
+        assert_eq!(row.len(), self.header.len(), "row width != header width");
+        self.rows.push(row);
+    }
+
+    /// The table as CSV (RFC 4180 quoting where a cell needs it).
+    pub fn to_csv(&self) -> String {
+        fn cell(s: &str) -> String {
+            if s.contains([',', '"', '\n']) {
+                format!("\"{}\"", s.replace('"', "\"\""))
+            } else {
+                s.to_string()
+            }
+        }
+        let mut out = String::new();
+        for row in std::iter::once(&self.header).chain(&self.rows) {
+            let line: Vec<String> = row.iter().map(|c| cell(c)).collect();
+            out.push_str(&line.join(","));
+            out.push('\n');
+        }
+        out
+    }
+}
+
+impl fmt::Display for Table {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let ncol = self.header.len();
+        let mut width = vec![0usize; ncol];
+        for row in std::iter::once(&self.header).chain(&self.rows) {
+            for (w, c) in width.iter_mut().zip(row) {
+                *w = (*w).max(c.chars().count());
+            }
+        }
+        writeln!(f, "{}", self.title)?;
+        let line = |f: &mut fmt::Formatter<'_>, row: &[String]| -> fmt::Result {
+            let cells: Vec<String> = row
+                .iter()
+                .zip(&width)
+                .enumerate()
+                .map(|(i, (c, w))| {
+                    if i == 0 {
+                        format!("{c:<w$}")
+                    } else {
+                        format!("{c:>w$}")
+                    }
+                })
+                .collect();
+            writeln!(f, "  {}", cells.join("  "))
+        };
+        line(f, &self.header)?;
+        let total: usize = width.iter().sum::<usize>() + 2 * ncol.saturating_sub(1);
+        writeln!(f, "  {}", "-".repeat(total))?;
+        for row in &self.rows {
+            line(f, row)?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn csv_quotes_cells_that_need_it() {
+        let mut t = Table::new("t", &["a", "b"]);
+        t.push(vec!["x,y".into(), "1".into()]);
+        assert_eq!(t.to_csv(), "a,b\n\"x,y\",1\n");
+    }
+
+    #[test]
+    fn display_aligns_columns() {
+        let mut t = Table::new("T", &["name", "v"]);
+        t.push(vec!["long name".into(), "1.5".into()]);
+        let s = t.to_string();
+        assert!(s.contains("  name         v"), "{s}");
+        assert!(s.contains("  long name  1.5"), "{s}");
+    }
+}
