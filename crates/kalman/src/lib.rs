@@ -1,1 +1,27 @@
-//! placeholder
+#![doc = include_str!("../README.md")]
+
+mod consistency;
+mod error;
+mod gaussian;
+mod hybrid;
+mod kf;
+mod linalg;
+mod model;
+mod smoother;
+mod ukf;
+mod update;
+
+pub use consistency::{ChiSquareBand, chi_square_cdf, chi_square_quantile, nees};
+pub use error::{KalmanError, Result, Step};
+pub use gaussian::{FactoredGaussian, Gaussian};
+pub use hybrid::{HybridPrior, HybridStep, HybridUkfIekf};
+pub use kf::{Ekf, Iekf, Kf};
+pub use model::{
+    Additive, Dynamics, DynamicsJacobian, LinearDynamics, LinearMeasurement, Measurement,
+    MeasurementJacobian, NoisyDynamics, NoisyMeasurement,
+};
+pub use ukf::{Ukf, UkfStep};
+pub use update::{CovarianceUpdate, Innovation, Update};
+
+/// Re-exported so users name the same `nalgebra` as the crate.
+pub use nalgebra;

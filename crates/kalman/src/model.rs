@@ -1,0 +1,203 @@
+//! Model traits: what a user plugs into the filters.
+//!
+//! Additive-noise models (`x_k = f(x_{k-1}) + v`, `z = h(x) + n`) implement
+//! [`Dynamics`] and [`Measurement`], plus the `*Jacobian` traits for the EKF
+//! and IEKF. Models whose noise enters non-additively (the augmented UKF of
+//! paper 000 sec. 3.3, `x_a = [x, v, n]`) implement [`NoisyDynamics`] and
+//! [`NoisyMeasurement`]; [`Additive`] turns an additive model into one.
+
+use nalgebra::{SMatrix, SVector};
+
+use crate::error::{Result, Step};
+use crate::gaussian::Gaussian;
+use crate::linalg;
+
+/// State transition with additive noise: `x_k = f(x_{k-1}) + v`, `v ~ N(0, Q)`.
+pub trait Dynamics<const N: usize> {
+    /// `f(x)`.
+    fn propagate(&self, x: &SVector<f64, N>) -> SVector<f64, N>;
+    /// `Q`, the covariance of the additive process noise.
+    fn process_noise(&self) -> SMatrix<f64, N, N>;
+}
+
+/// The Jacobian `F = df/dx` of a [`Dynamics`] (EKF, IEKF).
+pub trait DynamicsJacobian<const N: usize>: Dynamics<N> {
+    /// `df/dx` at `x`.
+    fn jacobian(&self, x: &SVector<f64, N>) -> SMatrix<f64, N, N>;
+}
+
+/// Measurement with additive noise: `z = h(x) + n`, `n ~ N(0, R)`.
+pub trait Measurement<const N: usize, const M: usize> {
+    /// `h(x)`.
+    fn observe(&self, x: &SVector<f64, N>) -> SVector<f64, M>;
+    /// `R`, the covariance of the additive measurement noise.
+    fn measurement_noise(&self) -> SMatrix<f64, M, M>;
+}
+
+/// The Jacobian `H = dh/dx` of a [`Measurement`] (EKF, IEKF).
+pub trait MeasurementJacobian<const N: usize, const M: usize>: Measurement<N, M> {
+    /// `dh/dx` at `x`.
+    fn jacobian(&self, x: &SVector<f64, N>) -> SMatrix<f64, M, N>;
+}
+
+/// State transition with general noise: `x_k = f(x_{k-1}, v)`, `v ~ N(mu_v, Q_v)`.
+///
+/// The noise may have a non-zero mean (a Gaussian moment match of, say, the
+/// Gamma noise of the `hikpf` model).
+pub trait NoisyDynamics<const N: usize, const V: usize> {
+    /// `f(x, v)`.
+    fn propagate_with(&self, x: &SVector<f64, N>, v: &SVector<f64, V>) -> SVector<f64, N>;
+    /// The distribution of `v`.
+    fn process_noise_dist(&self) -> Gaussian<V>;
+}
+
+/// Measurement with general noise: `z = h(x, n)`, `n ~ N(mu_n, R_n)`.
+pub trait NoisyMeasurement<const N: usize, const M: usize, const W: usize> {
+    /// `h(x, n)`.
+    fn observe_with(&self, x: &SVector<f64, N>, n: &SVector<f64, W>) -> SVector<f64, M>;
+    /// The distribution of `n`.
+    fn measurement_noise_dist(&self) -> Gaussian<W>;
+}
+
+/// Adapter: an additive-noise model seen as a general-noise one
+/// (`f(x, v) = f(x) + v`, `v ~ N(0, Q)`), for the augmented UKF.
+#[derive(Debug, Clone, Copy)]
+pub struct Additive<'a, T>(pub &'a T);
+
+impl<const N: usize, T: Dynamics<N>> NoisyDynamics<N, N> for Additive<'_, T> {
+    fn propagate_with(&self, x: &SVector<f64, N>, v: &SVector<f64, N>) -> SVector<f64, N> {
+        self.0.propagate(x) + v
+    }
+    fn process_noise_dist(&self) -> Gaussian<N> {
+        Gaussian::from_parts(SVector::zeros(), self.0.process_noise())
+    }
+}
+
+impl<const N: usize, const M: usize, T: Measurement<N, M>> NoisyMeasurement<N, M, M>
+    for Additive<'_, T>
+{
+    fn observe_with(&self, x: &SVector<f64, N>, n: &SVector<f64, M>) -> SVector<f64, M> {
+        self.0.observe(x) + n
+    }
+    fn measurement_noise_dist(&self) -> Gaussian<M> {
+        Gaussian::from_parts(SVector::zeros(), self.0.measurement_noise())
+    }
+}
+
+/// Linear dynamics `x_k = F x_{k-1} + B u + v`, `v ~ N(0, Q)`, with a control
+/// input of dimension `U` (0 for none).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LinearDynamics<const N: usize, const U: usize = 0> {
+    f: SMatrix<f64, N, N>,
+    b: SMatrix<f64, N, U>,
+    q: SMatrix<f64, N, N>,
+}
+
+impl<const N: usize> LinearDynamics<N, 0> {
+    /// `x_k = F x_{k-1} + v`, `v ~ N(0, Q)`.
+    ///
+    /// # Errors
+    /// Non-finite `F` or `Q`; `Q` not symmetric positive semi-definite.
+    pub fn new(f: SMatrix<f64, N, N>, q: SMatrix<f64, N, N>) -> Result<Self> {
+        Self::with_control(f, SMatrix::zeros(), q)
+    }
+}
+
+impl<const N: usize, const U: usize> LinearDynamics<N, U> {
+    /// `x_k = F x_{k-1} + B u + v`, `v ~ N(0, Q)`.
+    ///
+    /// # Errors
+    /// Non-finite `F`, `B` or `Q`; `Q` not symmetric positive semi-definite.
+    pub fn with_control(
+        f: SMatrix<f64, N, N>,
+        b: SMatrix<f64, N, U>,
+        q: SMatrix<f64, N, N>,
+    ) -> Result<Self> {
+        linalg::check_finite_mat(&f, "transition matrix F", Step::Construction)?;
+        linalg::check_finite_mat(&b, "control matrix B", Step::Construction)?;
+        linalg::check_covariance(&q, "process noise Q", Step::Construction)?;
+        linalg::psd_sqrt(&q, "process noise Q", Step::Construction)?;
+        Ok(Self { f, b, q })
+    }
+
+    /// `F`.
+    pub fn transition(&self) -> &SMatrix<f64, N, N> {
+        &self.f
+    }
+
+    /// `B`.
+    pub fn control(&self) -> &SMatrix<f64, N, U> {
+        &self.b
+    }
+
+    /// `Q`.
+    pub fn noise(&self) -> &SMatrix<f64, N, N> {
+        &self.q
+    }
+}
+
+impl<const N: usize, const U: usize> Dynamics<N> for LinearDynamics<N, U> {
+    #[inline]
+    fn propagate(&self, x: &SVector<f64, N>) -> SVector<f64, N> {
+        self.f * x
+    }
+    #[inline]
+    fn process_noise(&self) -> SMatrix<f64, N, N> {
+        self.q
+    }
+}
+
+impl<const N: usize, const U: usize> DynamicsJacobian<N> for LinearDynamics<N, U> {
+    #[inline]
+    fn jacobian(&self, _x: &SVector<f64, N>) -> SMatrix<f64, N, N> {
+        self.f
+    }
+}
+
+/// Linear measurement `z = H x + n`, `n ~ N(0, R)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LinearMeasurement<const N: usize, const M: usize> {
+    h: SMatrix<f64, M, N>,
+    r: SMatrix<f64, M, M>,
+}
+
+impl<const N: usize, const M: usize> LinearMeasurement<N, M> {
+    /// `z = H x + n`, `n ~ N(0, R)`.
+    ///
+    /// # Errors
+    /// Non-finite `H` or `R`; `R` not symmetric positive semi-definite.
+    pub fn new(h: SMatrix<f64, M, N>, r: SMatrix<f64, M, M>) -> Result<Self> {
+        linalg::check_finite_mat(&h, "measurement matrix H", Step::Construction)?;
+        linalg::check_covariance(&r, "measurement noise R", Step::Construction)?;
+        linalg::psd_sqrt(&r, "measurement noise R", Step::Construction)?;
+        Ok(Self { h, r })
+    }
+
+    /// `H`.
+    pub fn matrix(&self) -> &SMatrix<f64, M, N> {
+        &self.h
+    }
+
+    /// `R`.
+    pub fn noise(&self) -> &SMatrix<f64, M, M> {
+        &self.r
+    }
+}
+
+impl<const N: usize, const M: usize> Measurement<N, M> for LinearMeasurement<N, M> {
+    #[inline]
+    fn observe(&self, x: &SVector<f64, N>) -> SVector<f64, M> {
+        self.h * x
+    }
+    #[inline]
+    fn measurement_noise(&self) -> SMatrix<f64, M, M> {
+        self.r
+    }
+}
+
+impl<const N: usize, const M: usize> MeasurementJacobian<N, M> for LinearMeasurement<N, M> {
+    #[inline]
+    fn jacobian(&self, _x: &SVector<f64, N>) -> SMatrix<f64, M, N> {
+        self.h
+    }
+}

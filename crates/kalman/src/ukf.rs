@@ -1,0 +1,505 @@
+//! The unscented Kalman filter with scaled sigma points (paper 001 eq. 8-12;
+//! Julier 2002; van der Merwe 2004), in additive-noise and augmented-state
+//! forms (paper 000 sec. 3.3), and the unscented RTS smoother (Sarkka 2008).
+//!
+//! For an `L`-dimensional (possibly augmented) state with mean `m` and
+//! covariance `P = S S^T`:
+//!
+//! `c = alpha^2 (L + kappa)`, `lambda = c - L`,
+//! `X_0 = m`, `X_{i} = m + sqrt(c) S_i`, `X_{L+i} = m - sqrt(c) S_i`,
+//! `Wm_0 = lambda / c`, `Wc_0 = Wm_0 + 1 - alpha^2 + beta`,
+//! `Wm_i = Wc_i = 1 / (2c)`.
+//!
+//! `Wm_0` may be negative (small `alpha`); only `c > 0` is required. The
+//! augmented covariance `diag(P, Q_v, R_n)` is block diagonal, so its square
+//! root is taken block by block and no `L x L` matrix is ever formed.
+
+use nalgebra::{SMatrix, SVector};
+
+use crate::error::{KalmanError, Result, Step};
+use crate::gaussian::Gaussian;
+use crate::linalg;
+use crate::model::{Dynamics, Measurement, NoisyDynamics, NoisyMeasurement};
+use crate::update::{Innovation, Update};
+
+/// Scaled unscented transform parameters and the filter built on them.
+///
+/// ```
+/// use bayestrack_kalman::{Dynamics, Gaussian, Measurement, Ukf};
+/// use nalgebra::{Matrix1, Matrix2, SMatrix, SVector, Vector1, Vector2};
+///
+/// /// Pendulum: theta += dt omega, omega -= dt g/L sin theta; z = sin theta.
+/// struct Pendulum;
+/// impl Dynamics<2> for Pendulum {
+///     fn propagate(&self, x: &SVector<f64, 2>) -> SVector<f64, 2> {
+///         Vector2::new(x[0] + 0.01 * x[1], x[1] - 0.01 * 9.81 * x[0].sin())
+///     }
+///     fn process_noise(&self) -> SMatrix<f64, 2, 2> {
+///         Matrix2::new(1e-8, 0.0, 0.0, 1e-6)
+///     }
+/// }
+/// impl Measurement<2, 1> for Pendulum {
+///     fn observe(&self, x: &SVector<f64, 2>) -> SVector<f64, 1> {
+///         Vector1::new(x[0].sin())
+///     }
+///     fn measurement_noise(&self) -> SMatrix<f64, 1, 1> {
+///         Matrix1::new(0.0025)
+///     }
+/// }
+///
+/// let ukf = Ukf::new(1e-3, 2.0, 0.0)?;
+/// let belief = Gaussian::new(Vector2::new(0.5, 0.0), Matrix2::identity() * 0.1)?;
+/// let step = ukf.step(&belief, &Pendulum, &Pendulum, Some(&Vector1::new(0.47)))?;
+/// assert!(step.update.innovation.is_some());
+/// # Ok::<(), bayestrack_kalman::KalmanError>(())
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ukf {
+    alpha: f64,
+    beta: f64,
+    kappa: f64,
+}
+
+/// Weights of a sigma-point set of dimension `L`.
+#[derive(Debug, Clone, Copy)]
+struct Weights {
+    wm0: f64,
+    wc0: f64,
+    wi: f64,
+    scale: f64,
+}
+
+/// Statistics of a sigma-point set pushed through `f` then `h`.
+struct Moments<const N: usize, const K: usize, const M: usize> {
+    x_mean: SVector<f64, K>,
+    p_xx: SMatrix<f64, K, K>,
+    y_mean: SVector<f64, M>,
+    p_yy: SMatrix<f64, M, M>,
+    p_xy: SMatrix<f64, K, M>,
+    /// Cov(input state, propagated state), for the smoother.
+    p_in_x: SMatrix<f64, N, K>,
+}
+
+/// The predicted belief and the measurement update of a joint UKF step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UkfStep<const N: usize, const M: usize> {
+    /// `x_{k|k-1}` from the sigma points pushed through `f`.
+    pub predicted: Gaussian<N>,
+    /// The update with the same sigma points pushed through `h`.
+    pub update: Update<N, M>,
+}
+
+/// The zero-dimensional Gaussian: "no noise block".
+fn none<const D: usize>() -> Gaussian<D> {
+    Gaussian::from_parts(SVector::zeros(), SMatrix::zeros())
+}
+
+fn no_output<const K: usize>(_: &SVector<f64, K>, _: &SVector<f64, 0>) -> SVector<f64, 0> {
+    SVector::zeros()
+}
+
+#[inline]
+fn outer<const A: usize, const B: usize>(
+    a: &SVector<f64, A>,
+    b: &SVector<f64, B>,
+) -> SMatrix<f64, A, B> {
+    a * b.transpose()
+}
+
+impl Ukf {
+    /// Scaled sigma points with spread `alpha`, prior-knowledge `beta` (2 is
+    /// optimal for Gaussians) and secondary scaling `kappa`.
+    ///
+    /// # Errors
+    /// [`KalmanError::InvalidParameter`] for a non-positive or non-finite
+    /// `alpha`, or a non-finite `beta` or `kappa`.
+    pub fn new(alpha: f64, beta: f64, kappa: f64) -> Result<Self> {
+        if !(alpha > 0.0 && alpha.is_finite()) {
+            return Err(KalmanError::InvalidParameter {
+                name: "alpha",
+                value: alpha,
+                reason: "must be positive and finite",
+            });
+        }
+        for (name, value) in [("beta", beta), ("kappa", kappa)] {
+            if !value.is_finite() {
+                return Err(KalmanError::InvalidParameter {
+                    name,
+                    value,
+                    reason: "must be finite",
+                });
+            }
+        }
+        Ok(Self { alpha, beta, kappa })
+    }
+
+    /// `alpha`.
+    pub fn alpha(&self) -> f64 {
+        self.alpha
+    }
+
+    /// `beta`.
+    pub fn beta(&self) -> f64 {
+        self.beta
+    }
+
+    /// `kappa`.
+    pub fn kappa(&self) -> f64 {
+        self.kappa
+    }
+
+    /// The weights `(Wm_0, Wc_0, W_i)` for a state of dimension `l`.
+    ///
+    /// # Errors
+    /// [`KalmanError::InvalidParameter`] when `alpha^2 (l + kappa) <= 0`.
+    pub fn weights(&self, l: usize) -> Result<(f64, f64, f64)> {
+        let w = self.weights_for(l)?;
+        Ok((w.wm0, w.wc0, w.wi))
+    }
+
+    fn weights_for(&self, l: usize) -> Result<Weights> {
+        let a2 = self.alpha * self.alpha;
+        let c = a2 * (l as f64 + self.kappa);
+        if c <= 0.0 || !c.is_finite() {
+            return Err(KalmanError::InvalidParameter {
+                name: "kappa",
+                value: self.kappa,
+                reason: "alpha^2 (L + kappa) must be positive",
+            });
+        }
+        let wm0 = (c - l as f64) / c;
+        Ok(Weights {
+            wm0,
+            wc0: wm0 + 1.0 - a2 + self.beta,
+            wi: 0.5 / c,
+            scale: c.sqrt(),
+        })
+    }
+
+    /// Pushes the sigma points of `[x; v; w] ~ N([m; mv; mw], diag(P, Qv, Rw))`
+    /// through `xf = f(x, v)` and `y = h(xf, w)`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn transform<const N: usize, const V: usize, const W: usize, const K: usize, const M: usize>(
+        &self,
+        prior: &Gaussian<N>,
+        v: &Gaussian<V>,
+        w: &Gaussian<W>,
+        f: impl Fn(&SVector<f64, N>, &SVector<f64, V>) -> SVector<f64, K>,
+        h: impl Fn(&SVector<f64, K>, &SVector<f64, W>) -> SVector<f64, M>,
+        step: Step,
+    ) -> Result<Moments<N, K, M>> {
+        let wt = self.weights_for(N + V + W)?;
+        let sp = linalg::psd_sqrt(prior.cov(), "state covariance P", step)? * wt.scale;
+        let sv = linalg::psd_sqrt(v.cov(), "process noise covariance", step)? * wt.scale;
+        let sw = linalg::psd_sqrt(w.cov(), "measurement noise covariance", step)? * wt.scale;
+        let (m, mv, mw) = (prior.mean(), v.mean(), w.mean());
+
+        let xf0 = f(m, mv);
+        let y0 = h(&xf0, mw);
+        let push = |x: SVector<f64, N>, vv: SVector<f64, V>| {
+            let xf = f(&x, &vv);
+            let y = h(&xf, mw);
+            (xf, y)
+        };
+        let xp: [_; N] = core::array::from_fn(|j| push(m + sp.column(j), *mv));
+        let xm: [_; N] = core::array::from_fn(|j| push(m - sp.column(j), *mv));
+        let vp: [_; V] = core::array::from_fn(|j| push(*m, mv + sv.column(j)));
+        let vm: [_; V] = core::array::from_fn(|j| push(*m, mv - sv.column(j)));
+        let wp: [_; W] = core::array::from_fn(|j| h(&xf0, &(mw + sw.column(j))));
+        let wm: [_; W] = core::array::from_fn(|j| h(&xf0, &(mw - sw.column(j))));
+
+        // means
+        let mut sx = xf0 * (2 * W) as f64;
+        let mut sy = SVector::<f64, M>::zeros();
+        for (xf, y) in xp.iter().chain(&xm).chain(&vp).chain(&vm) {
+            sx += xf;
+            sy += y;
+        }
+        for y in wp.iter().chain(&wm) {
+            sy += y;
+        }
+        let x_mean = xf0 * wt.wm0 + sx * wt.wi;
+        let y_mean = y0 * wt.wm0 + sy * wt.wi;
+
+        // covariances
+        let dx0 = xf0 - x_mean;
+        let dy0 = y0 - y_mean;
+        let mut p_xx = SMatrix::<f64, K, K>::zeros();
+        let mut p_yy = SMatrix::<f64, M, M>::zeros();
+        let mut p_xy = SMatrix::<f64, K, M>::zeros();
+        for (xf, y) in xp.iter().chain(&xm).chain(&vp).chain(&vm) {
+            let dx = xf - x_mean;
+            let dy = y - y_mean;
+            p_xx += outer(&dx, &dx);
+            p_yy += outer(&dy, &dy);
+            p_xy += outer(&dx, &dy);
+        }
+        for y in wp.iter().chain(&wm) {
+            let dy = y - y_mean;
+            p_yy += outer(&dy, &dy);
+            p_xy += outer(&dx0, &dy);
+        }
+        p_xx += outer(&dx0, &dx0) * (2 * W) as f64;
+        let p_xx = p_xx * wt.wi + outer(&dx0, &dx0) * wt.wc0;
+        let p_yy = p_yy * wt.wi + outer(&dy0, &dy0) * wt.wc0;
+        let p_xy = p_xy * wt.wi + outer(&dx0, &dy0) * wt.wc0;
+        let mut p_in_x = SMatrix::<f64, N, K>::zeros();
+        for j in 0..N {
+            let d = xp[j].0 - xm[j].0;
+            p_in_x += sp.column(j) * d.transpose();
+        }
+        let p_in_x = p_in_x * wt.wi;
+
+        linalg::check_finite_vec(&x_mean, "sigma-point mean of f", step)?;
+        linalg::check_finite_vec(&y_mean, "sigma-point mean of h", step)?;
+        Ok(Moments {
+            x_mean,
+            p_xx,
+            y_mean,
+            p_yy,
+            p_xy,
+            p_in_x,
+        })
+    }
+
+    /// The measurement update from transformed moments.
+    fn correct<const N: usize, const M: usize>(
+        predicted: &Gaussian<N>,
+        y_mean: &SVector<f64, M>,
+        s: SMatrix<f64, M, M>,
+        p_xy: &SMatrix<f64, N, M>,
+        z: &SVector<f64, M>,
+    ) -> Result<Update<N, M>> {
+        linalg::check_finite_vec(z, "measurement z", Step::Update)?;
+        let s = linalg::symmetrize(&s);
+        let chol = linalg::cholesky(s, "innovation covariance S", Step::Update)?;
+        let k = chol.solve(&p_xy.transpose()).transpose();
+        let residual = z - y_mean;
+        let mean = predicted.mean() + k * residual;
+        let cov = linalg::symmetrize(&(predicted.cov() - k * s * k.transpose()));
+        Ok(Update {
+            posterior: Gaussian::checked(mean, cov, Step::Update)?,
+            innovation: Some(Innovation::new(residual, s, &chol)),
+            iterations: 1,
+        })
+    }
+
+    /// Additive-noise time update: sigma points of the prior through `f`,
+    /// `P = sum Wc (X - x)(X - x)^T + Q`.
+    ///
+    /// # Errors
+    /// [`KalmanError::NotPositiveDefinite`] when the prior covariance has no
+    /// square root; [`KalmanError::NonFinite`] for a non-finite result.
+    pub fn predict<const N: usize, D: Dynamics<N>>(
+        &self,
+        prior: &Gaussian<N>,
+        dynamics: &D,
+    ) -> Result<Gaussian<N>> {
+        let mo = self.transform(
+            prior,
+            &none::<0>(),
+            &none::<0>(),
+            |x, _| dynamics.propagate(x),
+            no_output,
+            Step::Predict,
+        )?;
+        Gaussian::checked(
+            mo.x_mean,
+            linalg::symmetrize(&(mo.p_xx + dynamics.process_noise())),
+            Step::Predict,
+        )
+    }
+
+    /// Additive-noise measurement update with sigma points drawn from `prior`.
+    ///
+    /// # Errors
+    /// As [`Ukf::predict`]; [`KalmanError::NotPositiveDefinite`] naming the
+    /// innovation covariance when it is singular; non-finite `z`.
+    pub fn update<const N: usize, const M: usize, H: Measurement<N, M>>(
+        &self,
+        prior: &Gaussian<N>,
+        measurement: &H,
+        z: Option<&SVector<f64, M>>,
+    ) -> Result<Update<N, M>> {
+        let Some(z) = z else {
+            return Ok(Update::missing(prior));
+        };
+        let mo = self.transform(
+            prior,
+            &none::<0>(),
+            &none::<0>(),
+            |x, _| *x,
+            |x, _| measurement.observe(x),
+            Step::Update,
+        )?;
+        Self::correct(
+            prior,
+            &mo.y_mean,
+            mo.p_yy + measurement.measurement_noise(),
+            &mo.p_xy,
+            z,
+        )
+    }
+
+    /// Predict and update with ONE sigma-point set: the points of the prior
+    /// go through `f`, and the propagated points through `h` (the form of
+    /// filterpy's `UnscentedKalmanFilter`, whose update reuses the predicted
+    /// sigma points; `Q` enters `P_{k|k-1}` but not the cross-covariance).
+    ///
+    /// # Errors
+    /// As [`Ukf::predict`] and [`Ukf::update`].
+    pub fn step<const N: usize, const M: usize, D: Dynamics<N>, H: Measurement<N, M>>(
+        &self,
+        prior: &Gaussian<N>,
+        dynamics: &D,
+        measurement: &H,
+        z: Option<&SVector<f64, M>>,
+    ) -> Result<UkfStep<N, M>> {
+        let Some(z) = z else {
+            let predicted = self.predict(prior, dynamics)?;
+            return Ok(UkfStep {
+                predicted,
+                update: Update::missing(&predicted),
+            });
+        };
+        let mo = self.transform(
+            prior,
+            &none::<0>(),
+            &none::<0>(),
+            |x, _| dynamics.propagate(x),
+            |x, _| measurement.observe(x),
+            Step::Predict,
+        )?;
+        let predicted = Gaussian::checked(
+            mo.x_mean,
+            linalg::symmetrize(&(mo.p_xx + dynamics.process_noise())),
+            Step::Predict,
+        )?;
+        let update = Self::correct(
+            &predicted,
+            &mo.y_mean,
+            mo.p_yy + measurement.measurement_noise(),
+            &mo.p_xy,
+            z,
+        )?;
+        Ok(UkfStep { predicted, update })
+    }
+
+    /// Augmented time update: sigma points of `[x; v]` through `f(x, v)`.
+    ///
+    /// # Errors
+    /// As [`Ukf::predict`].
+    pub fn predict_augmented<const N: usize, const V: usize, D: NoisyDynamics<N, V>>(
+        &self,
+        prior: &Gaussian<N>,
+        dynamics: &D,
+    ) -> Result<Gaussian<N>> {
+        let mo = self.transform(
+            prior,
+            &dynamics.process_noise_dist(),
+            &none::<0>(),
+            |x, v| dynamics.propagate_with(x, v),
+            no_output,
+            Step::Predict,
+        )?;
+        Gaussian::checked(mo.x_mean, linalg::symmetrize(&mo.p_xx), Step::Predict)
+    }
+
+    /// Augmented measurement update: sigma points of `[x; n]` through `h(x, n)`.
+    ///
+    /// # Errors
+    /// As [`Ukf::update`].
+    pub fn update_augmented<
+        const N: usize,
+        const M: usize,
+        const W: usize,
+        H: NoisyMeasurement<N, M, W>,
+    >(
+        &self,
+        prior: &Gaussian<N>,
+        measurement: &H,
+        z: Option<&SVector<f64, M>>,
+    ) -> Result<Update<N, M>> {
+        let Some(z) = z else {
+            return Ok(Update::missing(prior));
+        };
+        let mo = self.transform(
+            prior,
+            &none::<0>(),
+            &measurement.measurement_noise_dist(),
+            |x, _| *x,
+            |x, n| measurement.observe_with(x, n),
+            Step::Update,
+        )?;
+        Self::correct(prior, &mo.y_mean, mo.p_yy, &mo.p_xy, z)
+    }
+
+    /// The joint augmented step of paper 000 sec. 3.3 (a): ONE sigma-point
+    /// set of `x_a = [x; v; n]`, pushed through `f(x, v)` and then `h(., n)`.
+    ///
+    /// # Errors
+    /// As [`Ukf::step`].
+    pub fn step_augmented<
+        const N: usize,
+        const V: usize,
+        const M: usize,
+        const W: usize,
+        D: NoisyDynamics<N, V>,
+        H: NoisyMeasurement<N, M, W>,
+    >(
+        &self,
+        prior: &Gaussian<N>,
+        dynamics: &D,
+        measurement: &H,
+        z: Option<&SVector<f64, M>>,
+    ) -> Result<UkfStep<N, M>> {
+        let Some(z) = z else {
+            let predicted = self.predict_augmented(prior, dynamics)?;
+            return Ok(UkfStep {
+                predicted,
+                update: Update::missing(&predicted),
+            });
+        };
+        let mo = self.transform(
+            prior,
+            &dynamics.process_noise_dist(),
+            &measurement.measurement_noise_dist(),
+            |x, v| dynamics.propagate_with(x, v),
+            |x, n| measurement.observe_with(x, n),
+            Step::Predict,
+        )?;
+        let predicted = Gaussian::checked(mo.x_mean, linalg::symmetrize(&mo.p_xx), Step::Predict)?;
+        let update = Self::correct(&predicted, &mo.y_mean, mo.p_yy, &mo.p_xy, z)?;
+        Ok(UkfStep { predicted, update })
+    }
+
+    /// Unscented Rauch-Tung-Striebel smoothing (Sarkka 2008) of filtered
+    /// beliefs produced with additive-noise `dynamics`.
+    ///
+    /// # Errors
+    /// As [`Ukf::predict`]; [`KalmanError::NotPositiveDefinite`] when a
+    /// predicted covariance cannot be factored.
+    pub fn rts_smooth<const N: usize, D: Dynamics<N>>(
+        &self,
+        filtered: &[Gaussian<N>],
+        dynamics: &D,
+    ) -> Result<Vec<Gaussian<N>>> {
+        crate::smoother::rts_backward(filtered, |_, g| {
+            let mo = self.transform(
+                g,
+                &none::<0>(),
+                &none::<0>(),
+                |x, _| dynamics.propagate(x),
+                no_output,
+                Step::Smooth,
+            )?;
+            let predicted = Gaussian::checked(
+                mo.x_mean,
+                linalg::symmetrize(&(mo.p_xx + dynamics.process_noise())),
+                Step::Smooth,
+            )?;
+            Ok((predicted, mo.p_in_x))
+        })
+    }
+}

@@ -1,0 +1,118 @@
+//! What a measurement update returns, and the gain step shared by the KF,
+//! EKF and IEKF.
+
+use nalgebra::{Cholesky, Const, SMatrix, SVector};
+
+use crate::error::{Result, Step};
+use crate::gaussian::{Gaussian, LN_2PI};
+use crate::linalg;
+
+/// How the posterior covariance is formed after a linear(ised) update.
+///
+/// Both forms are symmetrised afterwards.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum CovarianceUpdate {
+    /// `(I - K H) P (I - K H)^T + K R K^T`: stays positive semi-definite under
+    /// round-off and for any gain.
+    #[default]
+    Joseph,
+    /// `P - K H P`: cheaper, exact only for the optimal gain.
+    Standard,
+}
+
+/// The innovation of an update and the statistics derived from it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Innovation<const M: usize> {
+    /// `nu = z - z_hat`.
+    pub residual: SVector<f64, M>,
+    /// `S`, the innovation covariance.
+    pub covariance: SMatrix<f64, M, M>,
+    /// `log N(nu; 0, S)`, from the Cholesky factor of `S`.
+    pub log_likelihood: f64,
+    /// Normalised innovation squared `nu^T S^{-1} nu` (chi-square with `M`
+    /// degrees of freedom for a consistent filter).
+    pub nis: f64,
+}
+
+impl<const M: usize> Innovation<M> {
+    /// Derives NIS and log-likelihood from the residual and the factor of `S`.
+    pub(crate) fn new(
+        residual: SVector<f64, M>,
+        covariance: SMatrix<f64, M, M>,
+        chol: &Cholesky<f64, Const<M>>,
+    ) -> Self {
+        let nis = residual.dot(&chol.solve(&residual));
+        let log_likelihood = -0.5 * (nis + linalg::log_det(chol) + M as f64 * LN_2PI);
+        Self {
+            residual,
+            covariance,
+            log_likelihood,
+            nis,
+        }
+    }
+}
+
+/// The result of a measurement update.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Update<const N: usize, const M: usize> {
+    /// The posterior belief (the prior itself when the measurement is missing).
+    pub posterior: Gaussian<N>,
+    /// Innovation statistics; `None` when the measurement was missing.
+    pub innovation: Option<Innovation<M>>,
+    /// Relinearisations performed (IEKF); 1 for the other filters, 0 when the
+    /// measurement was missing.
+    pub iterations: usize,
+}
+
+impl<const N: usize, const M: usize> Update<N, M> {
+    /// The update for a missing measurement: the posterior is the prior.
+    pub(crate) fn missing(prior: &Gaussian<N>) -> Self {
+        Self {
+            posterior: *prior,
+            innovation: None,
+            iterations: 0,
+        }
+    }
+}
+
+/// The output of one linearised gain step.
+pub(crate) struct GainStep<const N: usize, const M: usize> {
+    pub mean: SVector<f64, N>,
+    pub cov: SMatrix<f64, N, N>,
+    pub innovation: Innovation<M>,
+}
+
+/// Gain step about a linearisation `H`: `S = H P H^T + R`,
+/// `K = P H^T S^{-1}` (Cholesky solve), `x + K nu`, and the covariance in
+/// the requested form. `residual` is the (linearised) innovation.
+#[inline]
+pub(crate) fn gain_step<const N: usize, const M: usize>(
+    mean: &SVector<f64, N>,
+    p: &SMatrix<f64, N, N>,
+    residual: SVector<f64, M>,
+    h: &SMatrix<f64, M, N>,
+    r: &SMatrix<f64, M, M>,
+    form: CovarianceUpdate,
+) -> Result<GainStep<N, M>> {
+    let hp = h * p;
+    let s = linalg::symmetrize(&(hp * h.transpose() + r));
+    let chol = linalg::cholesky(s, "innovation covariance S", Step::Update)?;
+    // K^T = S^{-1} H P  (P and S symmetric)
+    let k = chol.solve(&hp).transpose();
+    let new_mean = mean + k * residual;
+    let new_cov = match form {
+        CovarianceUpdate::Joseph => {
+            let a = SMatrix::<f64, N, N>::identity() - k * h;
+            a * p * a.transpose() + k * r * k.transpose()
+        }
+        CovarianceUpdate::Standard => p - k * hp,
+    };
+    let new_cov = linalg::symmetrize(&new_cov);
+    linalg::check_finite_vec(&new_mean, "posterior mean", Step::Update)?;
+    linalg::check_finite_mat(&new_cov, "posterior covariance", Step::Update)?;
+    Ok(GainStep {
+        mean: new_mean,
+        cov: new_cov,
+        innovation: Innovation::new(residual, s, &chol),
+    })
+}
