@@ -343,9 +343,11 @@ impl Ukf {
     }
 
     /// Predict and update with ONE sigma-point set: the points of the prior
-    /// go through `f`, and the propagated points through `h` (the form of
-    /// filterpy's `UnscentedKalmanFilter`, whose update reuses the predicted
-    /// sigma points; `Q` enters `P_{k|k-1}` but not the cross-covariance).
+    /// go through `f`, and the propagated points through `h`, without
+    /// redrawing them from `x_{k|k-1}` (`Q` enters `P_{k|k-1}` but not the
+    /// cross-covariance). Cheaper than [`Ukf::predict`] + [`Ukf::update`],
+    /// which redraw (as filterpy 1.4.5 and later do); identical for linear `f`
+    /// only when `Q = 0`.
     ///
     /// # Errors
     /// As [`Ukf::predict`] and [`Ukf::update`].
