@@ -1,0 +1,40 @@
+//! Criterion benchmarks for bayestrack-image.
+
+use std::hint::black_box;
+
+use bayestrack_image::{Affine2, Border, Image, ImageViewMut, rgb_to_hsv_into, warp_into};
+use criterion::{Criterion, criterion_group, criterion_main};
+
+fn frame_rgb(w: usize, h: usize) -> Image<u8> {
+    let mut img = Image::new(w, h, 3, 0u8).unwrap();
+    let mut s = 12345u32;
+    for v in img.as_mut_slice() {
+        s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+        *v = (s >> 24) as u8;
+    }
+    img
+}
+
+fn bench_warp(c: &mut Criterion) {
+    let frame = Image::from_fn(320, 240, |x, y| ((x * 7 + y * 13) % 256) as f32).unwrap();
+    let pose = Affine2::from_rows([[1.1, 0.2, 120.0], [-0.15, 0.95, 80.0]]).unwrap();
+    let mut buf = [0f32; 36 * 36];
+    c.bench_function("warp_into 36x36 affine patch (gray f32 320x240)", |b| {
+        b.iter(|| {
+            let mut patch = ImageViewMut::from_slice(&mut buf, 36, 36, 1, 36).unwrap();
+            warp_into(frame.view(), black_box(&pose), Border::Error, &mut patch).unwrap();
+            black_box(buf[0])
+        })
+    });
+}
+
+fn bench_hsv(c: &mut Criterion) {
+    let frame = frame_rgb(320, 240);
+    let mut out = Image::new(320, 240, 3, 0f32).unwrap();
+    c.bench_function("rgb_to_hsv_into 320x240", |b| {
+        b.iter(|| rgb_to_hsv_into(black_box(frame.view()), &mut out.view_mut()).unwrap())
+    });
+}
+
+criterion_group!(benches, bench_warp, bench_hsv);
+criterion_main!(benches);
