@@ -134,6 +134,15 @@ pub enum ImageError {
         #[source]
         source: image::ImageError,
     },
+    /// A PNG/JPEG file that ends before its end marker (cut short).
+    #[cfg(feature = "io")]
+    #[error("image file {path} is truncated: no {format} end marker")]
+    Truncated {
+        /// The file.
+        path: PathBuf,
+        /// The format detected.
+        format: String,
+    },
     /// Writing an image failed.
     #[cfg(feature = "io")]
     #[error("cannot write image {path}: {source}")]

@@ -1,0 +1,517 @@
+//! PNG/JPEG frame folders, OTB ground truth and PNG output (feature `io`).
+
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use crate::{BBox, Image, ImageError, ImageView, Result, Rgb, draw_box, gray_to_rgb};
+
+fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> ImageError + '_ {
+    move |source| ImageError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+fn is_frame_file(p: &Path) -> bool {
+    p.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| matches!(e.to_ascii_lowercase().as_str(), "png" | "jpg" | "jpeg"))
+}
+
+/// The number formed by the last run of digits in a file stem
+/// (`0001` -> 1, `img00042` -> 42).
+fn frame_number(p: &Path) -> Option<u64> {
+    let stem = p.file_stem()?.to_str()?;
+    let end = stem.rfind(|c: char| c.is_ascii_digit())? + 1;
+    let start = stem[..end]
+        .rfind(|c: char| !c.is_ascii_digit())
+        .map_or(0, |i| i + 1);
+    stem[start..end].parse().ok()
+}
+
+/// Lists the PNG/JPEG frames of a folder in numeric order.
+///
+/// Accepts either the frame folder itself or a sequence folder with an
+/// `img/` sub-folder (OTB layout: `img/0001.jpg`, `img/img00001.png`). Files
+/// are ordered by the last number in their name, then by name, so
+/// `2.png` comes before `10.png`.
+///
+/// # Errors
+/// [`ImageError::Io`] if the folder cannot be read; [`ImageError::NoFrames`]
+/// if it holds no PNG/JPEG file.
+pub fn list_frames(dir: impl AsRef<Path>) -> Result<Vec<PathBuf>> {
+    let dir = dir.as_ref();
+    let mut frames = frames_in(dir)?;
+    if frames.is_empty() && dir.join("img").is_dir() {
+        frames = frames_in(&dir.join("img"))?;
+    }
+    if frames.is_empty() {
+        return Err(ImageError::NoFrames {
+            path: dir.to_path_buf(),
+        });
+    }
+    frames.sort_by(|a, b| {
+        let ka = frame_number(a).unwrap_or(u64::MAX);
+        let kb = frame_number(b).unwrap_or(u64::MAX);
+        ka.cmp(&kb).then_with(|| a.cmp(b))
+    });
+    Ok(frames)
+}
+
+fn frames_in(dir: &Path) -> Result<Vec<PathBuf>> {
+    let mut out = Vec::new();
+    for entry in fs::read_dir(dir).map_err(io_err(dir))? {
+        let p = entry.map_err(io_err(dir))?.path();
+        if p.is_file() && is_frame_file(&p) {
+            out.push(p);
+        }
+    }
+    Ok(out)
+}
+
+/// Whether the end of the file carries the format's end marker. The JPEG
+/// decoder fills a truncated scan with gray instead of failing, so a missing
+/// EOI (`FF D9`) or PNG `IEND` is how truncation is caught.
+fn has_end_marker(bytes: &[u8], format: image::ImageFormat) -> bool {
+    let tail = &bytes[bytes.len().saturating_sub(64)..];
+    match format {
+        image::ImageFormat::Jpeg => tail.windows(2).any(|w| w == [0xFF, 0xD9]),
+        image::ImageFormat::Png => tail.windows(4).any(|w| w == b"IEND"),
+        _ => true,
+    }
+}
+
+fn decode(path: &Path) -> Result<image::DynamicImage> {
+    let bytes = fs::read(path).map_err(io_err(path))?;
+    let format = image::guess_format(&bytes)
+        .or_else(|_| image::ImageFormat::from_path(path))
+        .map_err(|source| ImageError::Decode {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    if !has_end_marker(&bytes, format) {
+        return Err(ImageError::Truncated {
+            path: path.to_path_buf(),
+            format: format!("{format:?}"),
+        });
+    }
+    image::load_from_memory_with_format(&bytes, format).map_err(|source| ImageError::Decode {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+fn from_dynamic(img: image::DynamicImage, gray: bool) -> Image<u8> {
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    let (data, ch) = if gray {
+        (img.into_luma8().into_raw(), 1)
+    } else {
+        (img.into_rgb8().into_raw(), 3)
+    };
+    // The decoder guarantees the buffer length; zero-size images cannot decode.
+    Image::from_vec(w, h, ch, data).expect("decoder returned a consistent buffer")
+}
+
+/// Reads a PNG/JPEG frame keeping its colour kind: gray files give 1
+/// channel, colour files 3 channels (alpha dropped), 8 bits per channel.
+///
+/// # Errors
+/// [`ImageError::Io`] if the file cannot be opened; [`ImageError::Truncated`]
+/// if it lacks its end marker; [`ImageError::Decode`] (naming the file) if
+/// it is corrupt or not an image;
+/// [`ImageError::ZeroSize`] for an empty image.
+pub fn read_frame(path: impl AsRef<Path>) -> Result<Image<u8>> {
+    let path = path.as_ref();
+    let img = decode(path)?;
+    check_nonempty(&img)?;
+    let gray = !img.color().has_color();
+    Ok(from_dynamic(img, gray))
+}
+
+/// Reads a PNG/JPEG frame as 1-channel gray.
+///
+/// # Errors
+/// As [`read_frame`].
+pub fn read_frame_gray(path: impl AsRef<Path>) -> Result<Image<u8>> {
+    let img = decode(path.as_ref())?;
+    check_nonempty(&img)?;
+    Ok(from_dynamic(img, true))
+}
+
+/// Reads a PNG/JPEG frame as 3-channel RGB (gray files are replicated).
+///
+/// # Errors
+/// As [`read_frame`].
+pub fn read_frame_rgb(path: impl AsRef<Path>) -> Result<Image<u8>> {
+    let img = decode(path.as_ref())?;
+    check_nonempty(&img)?;
+    Ok(from_dynamic(img, false))
+}
+
+fn check_nonempty(img: &image::DynamicImage) -> Result<()> {
+    if img.width() == 0 || img.height() == 0 {
+        return Err(ImageError::ZeroSize {
+            width: img.width() as usize,
+            height: img.height() as usize,
+            channels: usize::from(img.color().channel_count()),
+        });
+    }
+    Ok(())
+}
+
+/// Parses OTB ground truth: one `x y w h` row per frame, numbers separated
+/// by commas, tabs and/or spaces. A row of four zeros means "unlabelled" and
+/// becomes `None`. Blank lines are skipped (they number no frame).
+///
+/// `path` only names the source in errors.
+///
+/// # Errors
+/// [`ImageError::GroundTruthParse`] naming the 1-based line for a row that
+/// is not four finite numbers with non-negative width and height.
+pub fn parse_ground_truth(text: &str, path: impl AsRef<Path>) -> Result<Vec<Option<BBox>>> {
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let trimmed = line.trim();
+        if trimmed.is_empty() {
+            continue;
+        }
+        let bad = |reason: String| ImageError::GroundTruthParse {
+            path: path.as_ref().to_path_buf(),
+            line: i + 1,
+            text: line.to_string(),
+            reason,
+        };
+        let fields: Vec<&str> = trimmed
+            .split(|c: char| c == ',' || c.is_whitespace())
+            .filter(|f| !f.is_empty())
+            .collect();
+        if fields.len() != 4 {
+            return Err(bad(format!("expected 4 numbers, found {}", fields.len())));
+        }
+        let mut v = [0f64; 4];
+        for (slot, f) in v.iter_mut().zip(&fields) {
+            *slot = f
+                .parse::<f64>()
+                .map_err(|e| bad(format!("{f:?} is not a number ({e})")))?;
+            if !slot.is_finite() {
+                return Err(bad(format!("{f:?} is not finite")));
+            }
+        }
+        if v[2] < 0.0 || v[3] < 0.0 {
+            return Err(bad("negative width or height".to_string()));
+        }
+        out.push((v != [0.0; 4]).then(|| BBox::new(v[0], v[1], v[2], v[3])));
+    }
+    Ok(out)
+}
+
+/// Reads an OTB ground-truth file; see [`parse_ground_truth`].
+///
+/// # Errors
+/// [`ImageError::Io`] if the file cannot be read;
+/// [`ImageError::GroundTruthParse`] naming the file and line of a bad row.
+pub fn read_ground_truth(path: impl AsRef<Path>) -> Result<Vec<Option<BBox>>> {
+    let path = path.as_ref();
+    let bytes = fs::read(path).map_err(io_err(path))?;
+    let text = String::from_utf8_lossy(&bytes);
+    parse_ground_truth(&text, path)
+}
+
+/// Finds the ground-truth file of an OTB sequence folder:
+/// `groundtruth_rect.txt`, else the first (by name) `*gt*.txt` or
+/// `groundtruth*.txt`.
+///
+/// # Errors
+/// [`ImageError::Io`] if the folder cannot be read;
+/// [`ImageError::NoGroundTruth`] if there is none.
+pub fn find_ground_truth(dir: impl AsRef<Path>) -> Result<PathBuf> {
+    let dir = dir.as_ref();
+    let standard = dir.join("groundtruth_rect.txt");
+    if standard.is_file() {
+        return Ok(standard);
+    }
+    let mut candidates = Vec::new();
+    for entry in fs::read_dir(dir).map_err(io_err(dir))? {
+        let p = entry.map_err(io_err(dir))?.path();
+        let name = p
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or_default()
+            .to_ascii_lowercase();
+        if p.is_file()
+            && name.ends_with(".txt")
+            && (name.contains("_gt") || name.starts_with("groundtruth"))
+        {
+            candidates.push(p);
+        }
+    }
+    candidates.sort();
+    candidates
+        .into_iter()
+        .next()
+        .ok_or_else(|| ImageError::NoGroundTruth {
+            path: dir.to_path_buf(),
+        })
+}
+
+/// An OTB-layout sequence on disk: its frame paths and ground truth.
+/// Frames are decoded on demand with [`OtbSequence::frame`].
+#[derive(Clone, Debug)]
+pub struct OtbSequence {
+    /// The sequence folder.
+    pub dir: PathBuf,
+    /// Frame files in order.
+    pub frames: Vec<PathBuf>,
+    /// The ground-truth file.
+    pub ground_truth_path: PathBuf,
+    /// One entry per ground-truth row; `None` where unlabelled.
+    pub ground_truth: Vec<Option<BBox>>,
+}
+
+impl OtbSequence {
+    /// Opens a sequence folder (`img/` + ground-truth file).
+    ///
+    /// # Errors
+    /// Those of [`list_frames`], [`find_ground_truth`], [`read_ground_truth`].
+    pub fn open(dir: impl AsRef<Path>) -> Result<Self> {
+        let dir = dir.as_ref();
+        let frames = list_frames(dir)?;
+        let ground_truth_path = find_ground_truth(dir)?;
+        let ground_truth = read_ground_truth(&ground_truth_path)?;
+        Ok(Self {
+            dir: dir.to_path_buf(),
+            frames,
+            ground_truth_path,
+            ground_truth,
+        })
+    }
+
+    /// Number of frames.
+    pub fn len(&self) -> usize {
+        self.frames.len()
+    }
+
+    /// Whether the sequence has no frames (never true for an opened one).
+    pub fn is_empty(&self) -> bool {
+        self.frames.is_empty()
+    }
+
+    /// Decodes frame `index` (0-based) with [`read_frame`].
+    ///
+    /// # Errors
+    /// [`ImageError::InvalidParameter`] for an index past the end; those of
+    /// [`read_frame`].
+    pub fn frame(&self, index: usize) -> Result<Image<u8>> {
+        let path = self
+            .frames
+            .get(index)
+            .ok_or_else(|| ImageError::InvalidParameter {
+                name: "index",
+                reason: format!("frame {index} of a {}-frame sequence", self.frames.len()),
+            })?;
+        read_frame(path)
+    }
+}
+
+/// Writes a 1- or 3-channel 8-bit image (any stride) as PNG.
+///
+/// # Errors
+/// [`ImageError::Channels`] for other channel counts; [`ImageError::Encode`]
+/// naming the file if writing fails.
+pub fn write_png(path: impl AsRef<Path>, img: ImageView<'_, u8>) -> Result<()> {
+    let path = path.as_ref();
+    let color = match img.channels() {
+        1 => image::ExtendedColorType::L8,
+        3 => image::ExtendedColorType::Rgb8,
+        got => {
+            return Err(ImageError::Channels {
+                operation: "write_png",
+                expected: 3,
+                got,
+            });
+        }
+    };
+    let too_big = || ImageError::InvalidParameter {
+        name: "image size",
+        reason: format!("{}x{} exceeds u32", img.width(), img.height()),
+    };
+    let w = u32::try_from(img.width()).map_err(|_| too_big())?;
+    let h = u32::try_from(img.height()).map_err(|_| too_big())?;
+    let packed = img.to_image();
+    image::save_buffer_with_format(
+        path,
+        packed.as_slice(),
+        w,
+        h,
+        color,
+        image::ImageFormat::Png,
+    )
+    .map_err(|source| ImageError::Encode {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// Writes a frame as an RGB PNG with box outlines drawn on it (gray frames
+/// are converted to RGB first).
+///
+/// # Errors
+/// As [`write_png`] and [`draw_box`].
+pub fn write_frame_with_boxes(
+    path: impl AsRef<Path>,
+    frame: ImageView<'_, u8>,
+    boxes: &[(BBox, Rgb)],
+    thickness: usize,
+) -> Result<()> {
+    let mut rgb = match frame.channels() {
+        1 => gray_to_rgb(frame)?,
+        3 => frame.to_image(),
+        got => {
+            return Err(ImageError::Channels {
+                operation: "write_frame_with_boxes",
+                expected: 3,
+                got,
+            });
+        }
+    };
+    for (b, c) in boxes {
+        draw_box(&mut rgb.view_mut(), b, *c, thickness)?;
+    }
+    write_png(path, rgb.view())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tmpdir(name: &str) -> PathBuf {
+        let d =
+            std::env::temp_dir().join(format!("bayestrack-image-{name}-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&d);
+        fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    #[test]
+    fn frame_numbers() {
+        assert_eq!(frame_number(Path::new("img/0001.jpg")), Some(1));
+        assert_eq!(frame_number(Path::new("img00042.png")), Some(42));
+        assert_eq!(frame_number(Path::new("a1b20.png")), Some(20));
+        assert_eq!(frame_number(Path::new("x.png")), None);
+    }
+
+    #[test]
+    fn ground_truth_formats() {
+        let t = "1,2,3,4\n5\t6\t7\t8\n\n9 10  11 12\n0,0,0,0\n87.586,40.153,75,97\r\n";
+        let gt = parse_ground_truth(t, "gt.txt").unwrap();
+        assert_eq!(gt.len(), 5);
+        assert_eq!(gt[0], Some(BBox::new(1.0, 2.0, 3.0, 4.0)));
+        assert_eq!(gt[1], Some(BBox::new(5.0, 6.0, 7.0, 8.0)));
+        assert_eq!(gt[2], Some(BBox::new(9.0, 10.0, 11.0, 12.0)));
+        assert_eq!(gt[3], None);
+        assert_eq!(gt[4], Some(BBox::new(87.586, 40.153, 75.0, 97.0)));
+    }
+
+    #[test]
+    fn bad_ground_truth_names_the_line() {
+        for (text, line) in [
+            ("1,2,3,4\n1,2,x,4\n", 2),
+            ("1,2,3\n", 1),
+            ("1,2,3,4\n\n1,2,3,4,5\n", 3),
+            ("1,2,-3,4\n", 1),
+            ("1,2,NaN,4\n", 1),
+        ] {
+            match parse_ground_truth(text, "seq/gt.txt") {
+                Err(ImageError::GroundTruthParse { line: l, path, .. }) => {
+                    assert_eq!(l, line, "{text:?}");
+                    assert_eq!(path, Path::new("seq/gt.txt"));
+                }
+                other => panic!("{text:?}: expected a parse error, got {other:?}"),
+            }
+        }
+        let e = parse_ground_truth("1;2;3;4", "a.txt").unwrap_err();
+        assert!(e.to_string().contains("a.txt:1"), "{e}");
+    }
+
+    #[test]
+    fn png_round_trip_and_numeric_order() {
+        let d = tmpdir("roundtrip");
+        let img = Image::from_fn(7, 5, |x, y| (x * 30 + y) as u8).unwrap();
+        // Written out of order and with different digit counts.
+        for (name, add) in [("img10.png", 10u8), ("img2.png", 2), ("img1.png", 1)] {
+            let shifted = img.map(|v| v.saturating_add(add));
+            write_png(d.join(name), shifted.view()).unwrap();
+        }
+        fs::write(d.join("notes.txt"), "not a frame").unwrap();
+        let frames = list_frames(&d).unwrap();
+        let names: Vec<_> = frames
+            .iter()
+            .map(|p| p.file_name().unwrap().to_str().unwrap().to_string())
+            .collect();
+        assert_eq!(names, ["img1.png", "img2.png", "img10.png"]);
+        let back = read_frame(&frames[1]).unwrap();
+        assert_eq!(back.channels(), 1);
+        assert_eq!(back, img.map(|v| v.saturating_add(2)));
+        let rgb = read_frame_rgb(&frames[1]).unwrap();
+        assert_eq!(rgb.channels(), 3);
+        // A sequence folder with img/ is accepted too.
+        let seq = tmpdir("seq");
+        fs::create_dir_all(seq.join("img")).unwrap();
+        write_png(seq.join("img/0001.png"), img.view()).unwrap();
+        fs::write(seq.join("groundtruth_rect.txt"), "1\t1\t3\t3\n").unwrap();
+        let s = OtbSequence::open(&seq).unwrap();
+        assert_eq!((s.len(), s.ground_truth.len()), (1, 1));
+        assert_eq!(s.frame(0).unwrap(), img);
+        assert!(s.frame(1).is_err());
+        // Boxes drawn on a gray frame come back red.
+        let out = seq.join("boxed.png");
+        write_frame_with_boxes(
+            &out,
+            img.view(),
+            &[(BBox::new(2.0, 2.0, 3.0, 3.0), Rgb::new(255, 0, 0))],
+            1,
+        )
+        .unwrap();
+        let boxed = read_frame(&out).unwrap();
+        assert_eq!(boxed.pixel(1, 1).unwrap(), &[255, 0, 0]);
+        assert_eq!(boxed.pixel(0, 0).unwrap(), &[0, 0, 0]);
+        let _ = fs::remove_dir_all(&d);
+        let _ = fs::remove_dir_all(&seq);
+    }
+
+    #[test]
+    fn bad_files_name_the_file() {
+        let d = tmpdir("bad");
+        let img = Image::from_fn(32, 32, |x, y| (x * y) as u8).unwrap();
+        let good = d.join("good.png");
+        write_png(&good, img.view()).unwrap();
+        let bytes = fs::read(&good).unwrap();
+        let trunc = d.join("truncated.png");
+        fs::write(&trunc, &bytes[..bytes.len() / 2]).unwrap();
+        let text = d.join("text.jpg");
+        fs::write(&text, "hello, I am not a JPEG").unwrap();
+        for p in [&trunc, &text] {
+            match read_frame(p) {
+                Err(e @ (ImageError::Decode { .. } | ImageError::Truncated { .. })) => {
+                    assert!(e.to_string().contains(p.to_str().unwrap()), "{e}");
+                }
+                other => panic!("{}: expected Decode, got {other:?}", p.display()),
+            }
+        }
+        assert!(matches!(
+            read_frame(d.join("missing.png")),
+            Err(ImageError::Io { .. })
+        ));
+        let empty = tmpdir("empty");
+        assert!(matches!(
+            list_frames(&empty),
+            Err(ImageError::NoFrames { .. })
+        ));
+        assert!(matches!(
+            find_ground_truth(&empty),
+            Err(ImageError::NoGroundTruth { .. })
+        ));
+        let _ = fs::remove_dir_all(&d);
+        let _ = fs::remove_dir_all(&empty);
+    }
+}
