@@ -1,0 +1,10 @@
+#![doc = include_str!("../README.md")]
+
+pub mod error;
+pub mod group;
+
+pub use error::{AffineError, Result};
+pub use group::{Affine2, AffineParams, AlgebraVector, BBox, basis, hat, vee};
+pub mod lwpr;
+
+pub use lwpr::{Kernel, Lwpr, LwprConfig, Prediction};
