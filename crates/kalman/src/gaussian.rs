@@ -87,12 +87,11 @@ impl<const N: usize> Gaussian<N> {
     /// # Errors
     /// [`KalmanError::NotPositiveDefinite`] when the covariance is singular.
     pub fn factor(&self) -> Result<FactoredGaussian<N>> {
-        let chol = linalg::cholesky(self.cov, "covariance", Step::Evaluate)?;
-        let log_det = linalg::log_det(&chol);
+        let llt = linalg::Llt::new(&self.cov, "covariance", Step::Evaluate)?;
         Ok(FactoredGaussian {
             mean: self.mean,
-            l: chol.unpack(),
-            log_norm: -0.5 * (log_det + N as f64 * LN_2PI),
+            l: *llt.l(),
+            log_norm: -0.5 * (llt.log_det() + N as f64 * LN_2PI),
         })
     }
 

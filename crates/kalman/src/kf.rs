@@ -18,7 +18,7 @@ fn linear_predict<const N: usize>(
     p: &SMatrix<f64, N, N>,
     q: &SMatrix<f64, N, N>,
 ) -> Result<Gaussian<N>> {
-    let cov = linalg::symmetrize(&(f * p * f.transpose() + q));
+    let cov = linalg::symmetrize(&(linalg::mul_t(&linalg::mul(f, p), f) + q));
     linalg::check_finite_vec(&mean, "predicted mean", Step::Predict)?;
     linalg::check_finite_mat(&cov, "predicted covariance", Step::Predict)?;
     Ok(Gaussian::from_parts(mean, cov))
@@ -69,6 +69,7 @@ impl Kf {
     ///
     /// # Errors
     /// [`KalmanError::NonFinite`] for a non-finite control or result.
+    #[inline]
     pub fn predict<const N: usize, const U: usize>(
         &self,
         prior: &Gaussian<N>,
@@ -76,7 +77,7 @@ impl Kf {
         control: Option<&SVector<f64, U>>,
     ) -> Result<Gaussian<N>> {
         let f = model.transition();
-        let mut mean = f * prior.mean();
+        let mut mean = linalg::mul(f, prior.mean());
         if let Some(u) = control {
             linalg::check_finite_vec(u, "control input u", Step::Predict)?;
             mean += model.control() * u;
@@ -90,6 +91,7 @@ impl Kf {
     /// [`KalmanError::NonFinite`] for a non-finite `z`;
     /// [`KalmanError::NotPositiveDefinite`] naming the innovation covariance
     /// `S` when it is singular.
+    #[inline]
     pub fn update<const N: usize, const M: usize>(
         &self,
         prior: &Gaussian<N>,
@@ -173,6 +175,7 @@ impl Ekf {
     ///
     /// # Errors
     /// As [`Kf::update`].
+    #[inline]
     pub fn update<const N: usize, const M: usize, H: MeasurementJacobian<N, M>>(
         &self,
         prior: &Gaussian<N>,

@@ -1,7 +1,7 @@
 //! Small dense helpers: checks, symmetrisation, factorisations that report
 //! which matrix failed.
 
-use nalgebra::{Cholesky, Const, SMatrix, SVector};
+use nalgebra::{SMatrix, SVector};
 
 use crate::error::{KalmanError, Result, Step};
 
@@ -32,8 +32,45 @@ pub(crate) fn check_finite_mat<const R: usize, const C: usize>(
     }
 }
 
+/// `A B` with fixed-size loops that unroll for small dimensions (nalgebra's
+/// general product stays an out-of-line call in the filter hot paths).
+#[inline(always)]
+pub(crate) fn mul<const R: usize, const K: usize, const C: usize>(
+    a: &SMatrix<f64, R, K>,
+    b: &SMatrix<f64, K, C>,
+) -> SMatrix<f64, R, C> {
+    let mut out = SMatrix::<f64, R, C>::zeros();
+    for j in 0..C {
+        for k in 0..K {
+            let bkj = b[(k, j)];
+            for i in 0..R {
+                out[(i, j)] += a[(i, k)] * bkj;
+            }
+        }
+    }
+    out
+}
+
+/// `A B^T`, as [`mul`].
+#[inline(always)]
+pub(crate) fn mul_t<const R: usize, const K: usize, const C: usize>(
+    a: &SMatrix<f64, R, K>,
+    b: &SMatrix<f64, C, K>,
+) -> SMatrix<f64, R, C> {
+    let mut out = SMatrix::<f64, R, C>::zeros();
+    for j in 0..C {
+        for k in 0..K {
+            let bjk = b[(j, k)];
+            for i in 0..R {
+                out[(i, j)] += a[(i, k)] * bjk;
+            }
+        }
+    }
+    out
+}
+
 /// `(A + A^T) / 2`.
-#[inline]
+#[inline(always)]
 pub(crate) fn symmetrize<const D: usize>(m: &SMatrix<f64, D, D>) -> SMatrix<f64, D, D> {
     (m + m.transpose()) * 0.5
 }
@@ -62,19 +99,90 @@ pub(crate) fn check_covariance<const D: usize>(
     Ok(())
 }
 
-/// Cholesky factor of a positive-definite matrix, or the error that names it.
-#[inline]
-pub(crate) fn cholesky<const D: usize>(
-    m: SMatrix<f64, D, D>,
-    matrix: &'static str,
-    step: Step,
-) -> Result<Cholesky<f64, Const<D>>> {
-    Cholesky::new(m).ok_or(KalmanError::NotPositiveDefinite { matrix, step })
+/// The Cholesky factorisation `A = L L^T` of a small symmetric positive
+/// definite matrix, written out with fixed-size loops: for the 1..6
+/// dimensional matrices of filtering these unroll completely, where the
+/// general routines of nalgebra stay out-of-line calls.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Llt<const D: usize> {
+    l: SMatrix<f64, D, D>,
+}
+
+impl<const D: usize> Llt<D> {
+    /// Factors `a` (lower triangle read), or names it in the error.
+    #[inline(always)]
+    pub(crate) fn new(a: &SMatrix<f64, D, D>, matrix: &'static str, step: Step) -> Result<Self> {
+        let mut l = SMatrix::<f64, D, D>::zeros();
+        for j in 0..D {
+            let mut d = a[(j, j)];
+            for k in 0..j {
+                d -= l[(j, k)] * l[(j, k)];
+            }
+            // also rejects NaN
+            if !(d > 0.0 && d.is_finite()) {
+                return Err(KalmanError::NotPositiveDefinite { matrix, step });
+            }
+            let ljj = d.sqrt();
+            l[(j, j)] = ljj;
+            let inv = 1.0 / ljj;
+            for i in (j + 1)..D {
+                let mut s = a[(i, j)];
+                for k in 0..j {
+                    s -= l[(i, k)] * l[(j, k)];
+                }
+                l[(i, j)] = s * inv;
+            }
+        }
+        Ok(Self { l })
+    }
+
+    /// The lower-triangular factor.
+    #[inline]
+    pub(crate) fn l(&self) -> &SMatrix<f64, D, D> {
+        &self.l
+    }
+
+    /// `A^{-1} B` by forward and back substitution.
+    #[inline(always)]
+    pub(crate) fn solve<const C: usize>(&self, b: &SMatrix<f64, D, C>) -> SMatrix<f64, D, C> {
+        let l = &self.l;
+        let mut x = *b;
+        for c in 0..C {
+            for i in 0..D {
+                let mut s = x[(i, c)];
+                for k in 0..i {
+                    s -= l[(i, k)] * x[(k, c)];
+                }
+                x[(i, c)] = s / l[(i, i)];
+            }
+            for i in (0..D).rev() {
+                let mut s = x[(i, c)];
+                for k in (i + 1)..D {
+                    s -= l[(k, i)] * x[(k, c)];
+                }
+                x[(i, c)] = s / l[(i, i)];
+            }
+        }
+        x
+    }
+
+    /// `log det A = 2 sum log L_ii`, with one logarithm when the product of
+    /// the pivots is representable.
+    #[inline]
+    pub(crate) fn log_det(&self) -> f64 {
+        let prod: f64 = (0..D).map(|i| self.l[(i, i)]).product();
+        if prod.is_normal() {
+            2.0 * prod.ln()
+        } else {
+            2.0 * (0..D).map(|i| self.l[(i, i)].ln()).sum::<f64>()
+        }
+    }
 }
 
 /// A square root `L` with `L L^T = m` of a symmetric positive semi-definite
 /// matrix: the Cholesky factor when it exists, otherwise the symmetric
 /// eigen-decomposition with round-off-negative eigenvalues clamped to zero.
+#[inline(always)]
 pub(crate) fn psd_sqrt<const D: usize>(
     m: &SMatrix<f64, D, D>,
     matrix: &'static str,
@@ -83,8 +191,8 @@ pub(crate) fn psd_sqrt<const D: usize>(
     if D == 0 {
         return Ok(SMatrix::zeros());
     }
-    if let Some(c) = Cholesky::new(*m) {
-        return Ok(c.l());
+    if let Ok(llt) = Llt::new(m, matrix, step) {
+        return Ok(llt.l);
     }
     if !m.iter().all(|x| x.is_finite()) {
         return Err(KalmanError::NonFinite { what: matrix, step });
@@ -104,16 +212,32 @@ pub(crate) fn psd_sqrt<const D: usize>(
     Ok(l)
 }
 
-/// `log det` of the matrix factored by `c`.
-#[inline]
-pub(crate) fn log_det<const D: usize>(c: &Cholesky<f64, Const<D>>) -> f64 {
-    2.0 * c.l_dirty().diagonal().iter().map(|d| d.ln()).sum::<f64>()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use nalgebra::Matrix2;
+
+    #[test]
+    fn products_match_nalgebra() {
+        let a = nalgebra::Matrix2x3::new(1.0, 2.0, 3.0, 4.0, 5.0, 6.0);
+        let b = nalgebra::Matrix3x2::new(0.5, -1.0, 2.0, 0.0, 1.5, 3.0);
+        assert_eq!(mul(&a, &b), a * b);
+        assert_eq!(mul_t(&a, &a), a * a.transpose());
+    }
+
+    #[test]
+    fn llt_solves_and_log_det() {
+        let a = nalgebra::Matrix3::new(4.0, 1.0, 0.5, 1.0, 3.0, 0.2, 0.5, 0.2, 2.0);
+        let llt = Llt::new(&a, "a", Step::Evaluate).unwrap();
+        assert!((llt.l() * llt.l().transpose() - a).amax() < 1e-14);
+        let b = nalgebra::Matrix3x2::new(1.0, 2.0, 3.0, 4.0, 5.0, 6.0);
+        assert!((a * llt.solve(&b) - b).amax() < 1e-13);
+        assert!((llt.log_det() - a.determinant().ln()).abs() < 1e-13);
+        let bad = nalgebra::Matrix2::new(1.0, 2.0, 2.0, 1.0);
+        assert!(Llt::new(&bad, "bad", Step::Update).is_err());
+        let nan = nalgebra::Matrix2::new(f64::NAN, 0.0, 0.0, 1.0);
+        assert!(Llt::new(&nan, "nan", Step::Update).is_err());
+    }
 
     #[test]
     fn psd_sqrt_of_a_singular_matrix() {

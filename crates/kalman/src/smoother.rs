@@ -22,8 +22,8 @@ pub(crate) fn rts_backward<const N: usize>(
     let mut smoothed = filtered.to_vec();
     for k in (0..filtered.len().saturating_sub(1)).rev() {
         let (predicted, cross) = predict(k, &filtered[k])?;
-        let chol = linalg::cholesky(
-            *predicted.cov(),
+        let chol = linalg::Llt::new(
+            predicted.cov(),
             "predicted covariance P_{k+1|k}",
             Step::Smooth,
         )?;

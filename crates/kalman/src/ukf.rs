@@ -273,7 +273,7 @@ impl Ukf {
     ) -> Result<Update<N, M>> {
         linalg::check_finite_vec(z, "measurement z", Step::Update)?;
         let s = linalg::symmetrize(&s);
-        let chol = linalg::cholesky(s, "innovation covariance S", Step::Update)?;
+        let chol = linalg::Llt::new(&s, "innovation covariance S", Step::Update)?;
         let k = chol.solve(&p_xy.transpose()).transpose();
         let residual = z - y_mean;
         let mean = predicted.mean() + k * residual;

@@ -1,7 +1,7 @@
 //! What a measurement update returns, and the gain step shared by the KF,
 //! EKF and IEKF.
 
-use nalgebra::{Cholesky, Const, SMatrix, SVector};
+use nalgebra::{SMatrix, SVector};
 
 use crate::error::{Result, Step};
 use crate::gaussian::{Gaussian, LN_2PI};
@@ -36,13 +36,14 @@ pub struct Innovation<const M: usize> {
 
 impl<const M: usize> Innovation<M> {
     /// Derives NIS and log-likelihood from the residual and the factor of `S`.
+    #[inline]
     pub(crate) fn new(
         residual: SVector<f64, M>,
         covariance: SMatrix<f64, M, M>,
-        chol: &Cholesky<f64, Const<M>>,
+        chol: &linalg::Llt<M>,
     ) -> Self {
         let nis = residual.dot(&chol.solve(&residual));
-        let log_likelihood = -0.5 * (nis + linalg::log_det(chol) + M as f64 * LN_2PI);
+        let log_likelihood = -0.5 * (nis + chol.log_det() + M as f64 * LN_2PI);
         Self {
             residual,
             covariance,
@@ -94,18 +95,18 @@ pub(crate) fn gain_step<const N: usize, const M: usize>(
     r: &SMatrix<f64, M, M>,
     form: CovarianceUpdate,
 ) -> Result<GainStep<N, M>> {
-    let hp = h * p;
-    let s = linalg::symmetrize(&(hp * h.transpose() + r));
-    let chol = linalg::cholesky(s, "innovation covariance S", Step::Update)?;
+    let hp = linalg::mul(h, p);
+    let s = linalg::symmetrize(&(linalg::mul_t(&hp, h) + r));
+    let chol = linalg::Llt::new(&s, "innovation covariance S", Step::Update)?;
     // K^T = S^{-1} H P  (P and S symmetric)
     let k = chol.solve(&hp).transpose();
-    let new_mean = mean + k * residual;
+    let new_mean = mean + linalg::mul(&k, &residual);
     let new_cov = match form {
         CovarianceUpdate::Joseph => {
-            let a = SMatrix::<f64, N, N>::identity() - k * h;
-            a * p * a.transpose() + k * r * k.transpose()
+            let a = SMatrix::<f64, N, N>::identity() - linalg::mul(&k, h);
+            linalg::mul_t(&linalg::mul(&a, p), &a) + linalg::mul_t(&linalg::mul(&k, r), &k)
         }
-        CovarianceUpdate::Standard => p - k * hp,
+        CovarianceUpdate::Standard => p - linalg::mul(&k, &hp),
     };
     let new_cov = linalg::symmetrize(&new_cov);
     linalg::check_finite_vec(&new_mean, "posterior mean", Step::Update)?;
