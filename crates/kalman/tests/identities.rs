@@ -296,7 +296,7 @@ fn rts_smoother_equals_batch_least_squares() {
     let qi = dynamics.noise().try_inverse().unwrap();
     let h = sensor.matrix();
     let ri = sensor.noise().try_inverse().unwrap();
-    for k in 0..t {
+    for (k, z) in zs.iter().enumerate() {
         // residual x_{k+1} - F x_k with weight Q^-1: blocks [-F, I]
         let (a, b) = (k * n, (k + 1) * n);
         let ftqif = f.transpose() * qi * f;
@@ -307,7 +307,7 @@ fn rts_smoother_equals_batch_least_squares() {
         add_block(&mut info, b, b, &qi);
         // measurement z_{k+1} = H x_{k+1}
         add_block(&mut info, b, b, &(h.transpose() * ri * h));
-        add_rows(&mut rhs, b, &(h.transpose() * ri * zs[k]));
+        add_rows(&mut rhs, b, &(h.transpose() * ri * z));
     }
     let chol = info.cholesky().unwrap();
     let x = chol.solve(&rhs);
