@@ -3,7 +3,7 @@
 use thiserror::Error;
 
 /// Everything that can go wrong in `bayestrack-affine`.
-#[derive(Debug, Clone, PartialEq, Error)]
+#[derive(Debug, Error)]
 #[non_exhaustive]
 pub enum AffineError {
     /// A number given to the named operation was NaN or infinite.
@@ -74,13 +74,10 @@ pub enum AffineError {
         /// Length received.
         got: usize,
     },
-    /// An image patch needed by the pose estimator falls (partly) outside the
-    /// frame or could not be sampled.
-    #[error("patch warp failed: {reason}")]
-    Patch {
-        /// What went wrong, as reported by the image crate.
-        reason: String,
-    },
+    /// An image operation (patch warp) failed, e.g. the patch of a pose
+    /// leaves the frame.
+    #[error(transparent)]
+    Image(#[from] bayestrack_image::ImageError),
 }
 
 /// Result alias for this crate.

@@ -1,10 +1,15 @@
 #![doc = include_str!("../README.md")]
 
+pub mod dynamics;
 pub mod error;
 pub mod group;
 
+pub use dynamics::BrownianDynamics;
 pub use error::{AffineError, Result};
 pub use group::{Affine2, AffineParams, AlgebraVector, BBox, basis, hat, vee};
 pub mod lwpr;
 
 pub use lwpr::{Kernel, Lwpr, LwprConfig, Prediction};
+pub mod pose;
+
+pub use pose::{FeatureKind, PoseConfig, PoseEstimator, pose_error};
