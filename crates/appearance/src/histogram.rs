@@ -1,0 +1,493 @@
+//! RGB colour histograms (paper 001, section 3) and their distances.
+//!
+//! A window is represented by three per-channel histograms of `bins` bins
+//! each (`3 x 256` in the paper), normalised so that each channel sums to
+//! one. Distances: L2 (the paper's choice, footnote 3) and Bhattacharyya.
+
+use bayestrack_image::{ImageError, ImageView, Rect};
+
+use crate::error::check_window;
+use crate::{AppearanceError, Result};
+
+/// Which histogram distance.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub enum HistogramDistance {
+    /// `sqrt(sum_c sum_b (p_cb - q_cb)^2)` (paper 001, footnote 3).
+    #[default]
+    L2,
+    /// `sqrt(1 - BC)`, `BC = (1/3) sum_c sum_b sqrt(p_cb q_cb)`, in `[0, 1]`.
+    Bhattacharyya,
+}
+
+/// Three per-channel histograms over an RGB window.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RgbHistogram {
+    bins: usize,
+    counts: Vec<u32>,
+    pixels: u32,
+}
+
+impl RgbHistogram {
+    /// The paper's resolution: 256 bins per channel.
+    pub const FULL_BINS: usize = 256;
+
+    /// An empty histogram with `bins` bins per channel (1..=256; a value
+    /// `v` falls in bin `v * bins / 256`).
+    ///
+    /// # Errors
+    /// [`AppearanceError::InvalidParameter`] for 0 or more than 256 bins.
+    pub fn new(bins: usize) -> Result<Self> {
+        if bins == 0 || bins > 256 {
+            return Err(AppearanceError::InvalidParameter {
+                name: "bins",
+                value: bins.to_string(),
+                reason: "must be in 1..=256",
+            });
+        }
+        Ok(Self {
+            bins,
+            counts: vec![0; 3 * bins],
+            pixels: 0,
+        })
+    }
+
+    /// The histogram of `window` in a 3-channel frame.
+    ///
+    /// # Errors
+    /// As [`RgbHistogram::new`] and [`RgbHistogram::compute`].
+    pub fn from_window(frame: ImageView<'_, u8>, window: Rect, bins: usize) -> Result<Self> {
+        let mut h = Self::new(bins)?;
+        h.compute(frame, window)?;
+        Ok(h)
+    }
+
+    /// Bins per channel.
+    pub fn bins(&self) -> usize {
+        self.bins
+    }
+
+    /// Pixels counted.
+    pub fn pixels(&self) -> u32 {
+        self.pixels
+    }
+
+    /// Raw counts, channel-major: `counts[c * bins + b]`.
+    pub fn counts(&self) -> &[u32] {
+        &self.counts
+    }
+
+    /// Normalised value of bin `b` of channel `c` (count / pixels), 0 if empty.
+    pub fn probability(&self, c: usize, b: usize) -> f64 {
+        if self.pixels == 0 {
+            0.0
+        } else {
+            f64::from(self.counts[c * self.bins + b]) / f64::from(self.pixels)
+        }
+    }
+
+    /// Empties the histogram.
+    pub fn clear(&mut self) {
+        self.counts.fill(0);
+        self.pixels = 0;
+    }
+
+    #[inline]
+    fn bin(&self, v: u8) -> usize {
+        (usize::from(v) * self.bins) >> 8
+    }
+
+    /// Adds one RGB pixel.
+    #[inline]
+    pub fn add(&mut self, rgb: [u8; 3]) {
+        let b = self.bins;
+        for (c, &v) in rgb.iter().enumerate() {
+            let k = c * b + self.bin(v);
+            self.counts[k] += 1;
+        }
+        self.pixels += 1;
+    }
+
+    /// Replaces the contents with the histogram of `window` (allocation-free).
+    ///
+    /// # Errors
+    /// [`ImageError::Channels`] unless the frame has 3 channels;
+    /// [`AppearanceError::WindowOutside`] unless the window is inside.
+    pub fn compute(&mut self, frame: ImageView<'_, u8>, window: Rect) -> Result<()> {
+        frame.expect_channels("RgbHistogram", 3)?;
+        check_window("RgbHistogram", window, frame.width(), frame.height())?;
+        self.clear();
+        let b = self.bins;
+        let (r, rest) = self.counts.split_at_mut(b);
+        let (g, bl) = rest.split_at_mut(b);
+        for y in window.y..window.bottom() {
+            let row = &frame.row(y)[window.x * 3..window.right() * 3];
+            if b == 256 {
+                for p in row.chunks_exact(3) {
+                    r[usize::from(p[0])] += 1;
+                    g[usize::from(p[1])] += 1;
+                    bl[usize::from(p[2])] += 1;
+                }
+            } else {
+                for p in row.chunks_exact(3) {
+                    r[(usize::from(p[0]) * b) >> 8] += 1;
+                    g[(usize::from(p[1]) * b) >> 8] += 1;
+                    bl[(usize::from(p[2]) * b) >> 8] += 1;
+                }
+            }
+        }
+        self.pixels = u32::try_from(window.area()).unwrap_or(u32::MAX);
+        Ok(())
+    }
+
+    /// Replaces the contents with the histogram of a 3-channel `f32` patch
+    /// whose values are on the 0..=255 scale (for example a warped patch);
+    /// values are rounded and clamped.
+    ///
+    /// # Errors
+    /// [`ImageError::Channels`] unless the patch has 3 channels.
+    pub fn compute_f32(&mut self, patch: ImageView<'_, f32>) -> Result<()> {
+        patch.expect_channels("RgbHistogram", 3)?;
+        self.clear();
+        for y in 0..patch.height() {
+            for p in patch.row(y).chunks_exact(3) {
+                let q = |v: f32| v.round().clamp(0.0, 255.0) as u8;
+                self.add([q(p[0]), q(p[1]), q(p[2])]);
+            }
+        }
+        Ok(())
+    }
+
+    fn check_pair(&self, other: &Self, operation: &'static str) -> Result<()> {
+        if self.bins != other.bins {
+            return Err(AppearanceError::Incompatible {
+                operation,
+                detail: format!("{} vs {} bins", self.bins, other.bins),
+            });
+        }
+        if self.pixels == 0 || other.pixels == 0 {
+            return Err(AppearanceError::Incompatible {
+                operation,
+                detail: "empty histogram".to_string(),
+            });
+        }
+        Ok(())
+    }
+
+    /// L2 distance between normalised histograms (paper 001, footnote 3).
+    ///
+    /// # Errors
+    /// [`AppearanceError::Incompatible`] for different bin counts or an empty histogram.
+    pub fn l2_distance(&self, other: &Self) -> Result<f64> {
+        self.check_pair(other, "l2_distance")?;
+        let (na, nb) = (f64::from(self.pixels), f64::from(other.pixels));
+        let s: f64 = self
+            .counts
+            .iter()
+            .zip(&other.counts)
+            .map(|(&a, &b)| {
+                let d = f64::from(a) / na - f64::from(b) / nb;
+                d * d
+            })
+            .sum();
+        Ok(s.sqrt())
+    }
+
+    /// Bhattacharyya distance `sqrt(1 - BC)` with the coefficient averaged
+    /// over the three channels.
+    ///
+    /// # Errors
+    /// [`AppearanceError::Incompatible`] for different bin counts or an empty histogram.
+    pub fn bhattacharyya_distance(&self, other: &Self) -> Result<f64> {
+        self.check_pair(other, "bhattacharyya_distance")?;
+        let s: f64 = self
+            .counts
+            .iter()
+            .zip(&other.counts)
+            .map(|(&a, &b)| (f64::from(a) * f64::from(b)).sqrt())
+            .sum();
+        let bc = s / (3.0 * (f64::from(self.pixels) * f64::from(other.pixels)).sqrt());
+        Ok((1.0 - bc).max(0.0).sqrt())
+    }
+
+    /// The distance chosen by `kind`.
+    ///
+    /// # Errors
+    /// As the individual distances.
+    pub fn distance(&self, other: &Self, kind: HistogramDistance) -> Result<f64> {
+        match kind {
+            HistogramDistance::L2 => self.l2_distance(other),
+            HistogramDistance::Bhattacharyya => self.bhattacharyya_distance(other),
+        }
+    }
+}
+
+/// The best window of a histogram search.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HistogramMatch {
+    /// Left column of the best window (0-based).
+    pub x: usize,
+    /// Top row of the best window (0-based).
+    pub y: usize,
+    /// Its distance to the reference.
+    pub distance: f64,
+}
+
+/// Incremental distance between a sliding window's counts `c` and a fixed
+/// reference distribution `q` (per bin), updated in O(1) per count change.
+struct Running<'a> {
+    q: &'a [f64],
+    n: f64,
+    kind: HistogramDistance,
+    acc: f64,
+}
+
+impl Running<'_> {
+    #[inline]
+    fn term(&self, c: u32, k: usize) -> f64 {
+        match self.kind {
+            HistogramDistance::L2 => {
+                let d = f64::from(c) / self.n - self.q[k];
+                d * d
+            }
+            _ => (f64::from(c) * self.q[k]).sqrt(),
+        }
+    }
+    fn reset(&mut self, counts: &[u32]) {
+        self.acc = counts
+            .iter()
+            .enumerate()
+            .map(|(k, &c)| self.term(c, k))
+            .sum();
+    }
+    #[inline]
+    fn bump(&mut self, counts: &mut [u32], k: usize, up: bool) {
+        let old = counts[k];
+        let new = if up { old + 1 } else { old - 1 };
+        self.acc += self.term(new, k) - self.term(old, k);
+        counts[k] = new;
+    }
+    fn distance(&self) -> f64 {
+        match self.kind {
+            HistogramDistance::L2 => self.acc.max(0.0).sqrt(),
+            _ => {
+                let bc = self.acc / (3.0 * self.n.sqrt());
+                (1.0 - bc).max(0.0).sqrt()
+            }
+        }
+    }
+}
+
+/// Exhaustive search for the `width x height` window inside `region` whose
+/// histogram is closest to `reference`. Sliding: moving one column right
+/// removes one column and adds one, and the distance is updated per changed
+/// bin, so a step costs O(height) instead of O(width x height + bins).
+/// Ties go to the first window in raster order.
+///
+/// # Errors
+/// [`ImageError::Channels`] unless the frame has 3 channels;
+/// [`AppearanceError::WindowOutside`] if the region leaves the frame;
+/// [`AppearanceError::TemplateLargerThanRegion`] if the window does not fit;
+/// [`AppearanceError::Incompatible`] for an empty reference.
+pub fn histogram_search(
+    frame: ImageView<'_, u8>,
+    reference: &RgbHistogram,
+    width: usize,
+    height: usize,
+    region: Rect,
+    kind: HistogramDistance,
+) -> Result<HistogramMatch> {
+    frame.expect_channels("histogram_search", 3)?;
+    check_window("histogram_search", region, frame.width(), frame.height())?;
+    if width == 0 || height == 0 {
+        return Err(ImageError::ZeroSize {
+            width,
+            height,
+            channels: 3,
+        }
+        .into());
+    }
+    if width > region.width || height > region.height {
+        return Err(AppearanceError::TemplateLargerThanRegion {
+            template_width: width,
+            template_height: height,
+            region,
+        });
+    }
+    if reference.pixels == 0 {
+        return Err(AppearanceError::Incompatible {
+            operation: "histogram_search",
+            detail: "empty reference histogram".to_string(),
+        });
+    }
+    let bins = reference.bins;
+    let q: Vec<f64> = (0..3 * bins)
+        .map(|k| f64::from(reference.counts[k]) / f64::from(reference.pixels))
+        .collect();
+    let mut hist = RgbHistogram::new(bins)?;
+    let mut run = Running {
+        q: &q,
+        n: (width * height) as f64,
+        kind,
+        acc: 0.0,
+    };
+    let mut best = HistogramMatch {
+        x: region.x,
+        y: region.y,
+        distance: f64::INFINITY,
+    };
+    let bin = |v: u8| (usize::from(v) * bins) >> 8;
+    for y in region.y..=region.bottom() - height {
+        hist.compute(frame, Rect::new(region.x, y, width, height))?;
+        run.reset(&hist.counts);
+        let mut x = region.x;
+        loop {
+            let d = run.distance();
+            if d < best.distance {
+                best = HistogramMatch { x, y, distance: d };
+            }
+            if x + width >= region.right() {
+                break;
+            }
+            for yy in y..y + height {
+                let row = frame.row(yy);
+                let out = &row[x * 3..x * 3 + 3];
+                let inn = &row[(x + width) * 3..(x + width) * 3 + 3];
+                for c in 0..3 {
+                    run.bump(&mut hist.counts, c * bins + bin(out[c]), false);
+                    run.bump(&mut hist.counts, c * bins + bin(inn[c]), true);
+                }
+            }
+            x += 1;
+        }
+    }
+    Ok(best)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use bayestrack_image::Image;
+
+    fn rgb(w: usize, h: usize, f: impl Fn(usize, usize) -> [u8; 3]) -> Image<u8> {
+        let mut img = Image::new(w, h, 3, 0u8).unwrap();
+        for y in 0..h {
+            for x in 0..w {
+                for (c, v) in f(x, y).into_iter().enumerate() {
+                    img.set(x, y, c, v);
+                }
+            }
+        }
+        img
+    }
+
+    #[test]
+    fn histogram_of_a_known_image() {
+        // 2x2: red, red, white, black.
+        let img = rgb(2, 2, |x, y| match (x, y) {
+            (_, 0) => [255, 0, 0],
+            (0, 1) => [255, 255, 255],
+            _ => [0, 0, 0],
+        });
+        let h = RgbHistogram::from_window(img.view(), Rect::new(0, 0, 2, 2), 256).unwrap();
+        assert_eq!(h.pixels(), 4);
+        assert_eq!(h.counts()[255], 3); // red channel: 3 x 255
+        assert_eq!(h.counts()[0], 1);
+        assert_eq!(h.counts()[256], 3); // green: 0, 0, 0 (black) ...
+        assert_eq!(h.counts()[256 + 255], 1);
+        assert_eq!(h.probability(2, 255), 0.25);
+        let coarse = RgbHistogram::from_window(img.view(), Rect::new(0, 0, 2, 2), 4).unwrap();
+        assert_eq!(coarse.counts(), &[1, 0, 0, 3, 3, 0, 0, 1, 3, 0, 0, 1]);
+        // Black window vs red window: per channel p = e_0 vs e_255 in R only.
+        let red = RgbHistogram::from_window(img.view(), Rect::new(0, 0, 1, 1), 256).unwrap();
+        let black = RgbHistogram::from_window(img.view(), Rect::new(1, 1, 1, 1), 256).unwrap();
+        assert!((red.l2_distance(&black).unwrap() - 2f64.sqrt()).abs() < 1e-12);
+        // BC = (0 + 1 + 1) / 3.
+        let bd = red.bhattacharyya_distance(&black).unwrap();
+        assert!((bd - (1.0f64 / 3.0).sqrt()).abs() < 1e-12);
+        assert_eq!(h.l2_distance(&h).unwrap(), 0.0);
+        assert!(h.bhattacharyya_distance(&h).unwrap() < 1e-7);
+        // The mixed window vs red: R p = (1/4 @0, 3/4 @255) vs (1 @255): (1/4)^2 + (1/4)^2;
+        // G and B: (3/4 @0, 1/4 @255) vs (1 @0): 2 x ((1/4)^2 + (1/4)^2).
+        let want = (6.0 * 0.0625f64).sqrt();
+        assert!((h.l2_distance(&red).unwrap() - want).abs() < 1e-12);
+    }
+
+    #[test]
+    fn bad_histogram_inputs() {
+        assert!(RgbHistogram::new(0).is_err());
+        assert!(RgbHistogram::new(257).is_err());
+        let img = Image::new(10, 10, 3, 0u8).unwrap();
+        assert!(matches!(
+            RgbHistogram::from_window(img.view(), Rect::new(5, 5, 6, 2), 16),
+            Err(AppearanceError::WindowOutside { .. })
+        ));
+        let gray = Image::new(10, 10, 1, 0u8).unwrap();
+        assert!(matches!(
+            RgbHistogram::from_window(gray.view(), Rect::new(0, 0, 2, 2), 16),
+            Err(AppearanceError::Image(ImageError::Channels { .. }))
+        ));
+        let a = RgbHistogram::from_window(img.view(), Rect::new(0, 0, 2, 2), 16).unwrap();
+        let b = RgbHistogram::from_window(img.view(), Rect::new(0, 0, 2, 2), 8).unwrap();
+        assert!(a.l2_distance(&b).is_err());
+        assert!(a.l2_distance(&RgbHistogram::new(16).unwrap()).is_err());
+        assert!(matches!(
+            histogram_search(
+                img.view(),
+                &a,
+                11,
+                2,
+                Rect::new(0, 0, 10, 10),
+                HistogramDistance::L2
+            ),
+            Err(AppearanceError::TemplateLargerThanRegion { .. })
+        ));
+    }
+
+    #[test]
+    fn sliding_search_matches_direct_computation() {
+        let mut s = 99u32;
+        let mut next = move || {
+            s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (s >> 24) as u8
+        };
+        let mut img = rgb(60, 40, |_, _| [0, 0, 0]);
+        for v in img.as_mut_slice() {
+            *v = next() / 2; // dark noise
+        }
+        // A bright orange patch at (37, 12), 8x6.
+        for y in 12..18 {
+            for x in 37..45 {
+                img.set(x, y, 0, 250);
+                img.set(x, y, 1, 140);
+                img.set(x, y, 2, 20);
+            }
+        }
+        for bins in [256, 16] {
+            let reference =
+                RgbHistogram::from_window(img.view(), Rect::new(37, 12, 8, 6), bins).unwrap();
+            for kind in [HistogramDistance::L2, HistogramDistance::Bhattacharyya] {
+                let region = Rect::new(3, 2, 55, 37);
+                let m = histogram_search(img.view(), &reference, 8, 6, region, kind).unwrap();
+                assert_eq!((m.x, m.y), (37, 12), "{bins} {kind:?}");
+                assert!(m.distance < 1e-6);
+                // Spot-check the running distance against direct computation.
+                let h =
+                    RgbHistogram::from_window(img.view(), Rect::new(20, 30, 8, 6), bins).unwrap();
+                let direct = h.distance(&reference, kind).unwrap();
+                let r =
+                    histogram_search(img.view(), &reference, 8, 6, Rect::new(20, 30, 8, 6), kind)
+                        .unwrap();
+                assert!(
+                    (r.distance - direct).abs() < 1e-9,
+                    "{direct} {}",
+                    r.distance
+                );
+                let r =
+                    histogram_search(img.view(), &reference, 8, 6, Rect::new(10, 30, 18, 6), kind)
+                        .unwrap();
+                assert!(r.distance <= direct + 1e-12);
+            }
+        }
+    }
+}

@@ -1,0 +1,379 @@
+//! Target and background similarity distributions (TSD, BSD) with template
+//! update (paper 002, section 1).
+//!
+//! The similarity of an observed patch to the target template is the
+//! zero-clamped normalised cross-correlation `S = max(0, NCC)` in `[0, 1]`
+//! (paper 002 needs `S` in `[0, 1]`: it scales the particle spread by
+//! `1 - S_max`; it does not name the measure, and NCC is insensitive to the
+//! illumination changes of its test sequences). TSD `N(mu_T, sigma_T)` is the
+//! distribution of `S` for the tracked target, BSD `N(mu_B, sigma_B)` that of
+//! patches from the background around it. Both are learnt online with
+//! exponential forgetting. The models (template, TSD, BSD) are updated only
+//! when the frame's final score exceeds `mu_B + sigma_B` (paper 002 text;
+//! Algorithm 1 step 7 prints `mu_B - sigma_B`), and pose tuning stops once a
+//! particle reaches `mu_T - sigma_T` ([`TargetModel::stop_threshold`]).
+
+use bayestrack_image::{Image, ImageView};
+
+use crate::{AppearanceError, Result};
+
+/// Normalised cross-correlation of two equal-size 1-channel patches, in
+/// `[-1, 1]`; 0 when either patch is flat (no texture to correlate).
+///
+/// # Errors
+/// [`bayestrack_image::ImageError::SizeMismatch`] / [`bayestrack_image::ImageError::Channels`];
+/// [`AppearanceError::NonFinite`] for NaN or infinite pixels.
+pub fn ncc(a: ImageView<'_, f32>, b: ImageView<'_, f32>) -> Result<f64> {
+    a.expect_channels("ncc", 1)?;
+    a.expect_same_shape("ncc", &b)?;
+    let n = (a.width() * a.height()) as f64;
+    let (mut sa, mut sb) = (0f64, 0f64);
+    for y in 0..a.height() {
+        for (&p, &q) in a.row(y).iter().zip(b.row(y)) {
+            sa += f64::from(p);
+            sb += f64::from(q);
+        }
+    }
+    if !sa.is_finite() || !sb.is_finite() {
+        return Err(AppearanceError::NonFinite { what: "patch" });
+    }
+    let (ma, mb) = (sa / n, sb / n);
+    let (mut sab, mut saa, mut sbb) = (0f64, 0f64, 0f64);
+    for y in 0..a.height() {
+        for (&p, &q) in a.row(y).iter().zip(b.row(y)) {
+            let (da, db) = (f64::from(p) - ma, f64::from(q) - mb);
+            sab += da * db;
+            saa += da * da;
+            sbb += db * db;
+        }
+    }
+    let den = (saa * sbb).sqrt();
+    if den <= 1e-12 * n {
+        return Ok(0.0);
+    }
+    Ok((sab / den).clamp(-1.0, 1.0))
+}
+
+/// A 1-D Gaussian learnt online with exponential forgetting.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OnlineGaussian {
+    mean: f64,
+    var: f64,
+    rate: f64,
+    count: u64,
+}
+
+impl OnlineGaussian {
+    /// A prior `N(mean, std^2)`; each update moves it by `rate` in `(0, 1]`.
+    ///
+    /// # Errors
+    /// [`AppearanceError::InvalidParameter`] / [`AppearanceError::NonFinite`].
+    pub fn new(mean: f64, std: f64, rate: f64) -> Result<Self> {
+        if !mean.is_finite() {
+            return Err(AppearanceError::NonFinite { what: "mean" });
+        }
+        if !(std.is_finite() && std >= 0.0) {
+            return Err(AppearanceError::InvalidParameter {
+                name: "std",
+                value: std.to_string(),
+                reason: "must be finite and >= 0",
+            });
+        }
+        check_rate("rate", rate)?;
+        Ok(Self {
+            mean,
+            var: std * std,
+            rate,
+            count: 0,
+        })
+    }
+
+    /// Sample mean and standard deviation of `samples` (at least 2).
+    ///
+    /// # Errors
+    /// [`AppearanceError::TooFewSamples`]; [`AppearanceError::NonFinite`].
+    pub fn from_samples(samples: &[f64], rate: f64) -> Result<Self> {
+        if samples.len() < 2 {
+            return Err(AppearanceError::TooFewSamples {
+                what: "OnlineGaussian",
+                needed: 2,
+                got: samples.len(),
+            });
+        }
+        if samples.iter().any(|v| !v.is_finite()) {
+            return Err(AppearanceError::NonFinite { what: "samples" });
+        }
+        let n = samples.len() as f64;
+        let mean = samples.iter().sum::<f64>() / n;
+        let var = samples.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / (n - 1.0);
+        let mut g = Self::new(mean, var.sqrt(), rate)?;
+        g.count = samples.len() as u64;
+        Ok(g)
+    }
+
+    /// Mean.
+    pub fn mean(&self) -> f64 {
+        self.mean
+    }
+    /// Standard deviation.
+    pub fn std(&self) -> f64 {
+        self.var.sqrt()
+    }
+    /// Samples seen.
+    pub fn count(&self) -> u64 {
+        self.count
+    }
+
+    /// Folds in one sample: `mean += r (x - mean)`,
+    /// `var = (1 - r) (var + r (x - mean_old)^2)`.
+    ///
+    /// # Errors
+    /// [`AppearanceError::NonFinite`] for a NaN or infinite sample.
+    pub fn update(&mut self, x: f64) -> Result<()> {
+        if !x.is_finite() {
+            return Err(AppearanceError::NonFinite { what: "sample" });
+        }
+        let d = x - self.mean;
+        self.mean += self.rate * d;
+        self.var = (1.0 - self.rate) * (self.var + self.rate * d * d);
+        self.count += 1;
+        Ok(())
+    }
+}
+
+fn check_rate(name: &'static str, rate: f64) -> Result<f64> {
+    if rate.is_finite() && rate > 0.0 && rate <= 1.0 {
+        Ok(rate)
+    } else {
+        Err(AppearanceError::InvalidParameter {
+            name,
+            value: rate.to_string(),
+            reason: "must be in (0, 1]",
+        })
+    }
+}
+
+/// The target appearance model of paper 002: template patch, TSD and BSD.
+#[derive(Clone, Debug)]
+pub struct TargetModel {
+    template: Image<f32>,
+    tsd: OnlineGaussian,
+    bsd: OnlineGaussian,
+    template_rate: f32,
+}
+
+impl TargetModel {
+    /// A model from a template patch (1 channel, the patch size used for
+    /// every observation, e.g. 36x36), TSD and BSD priors, and the template
+    /// blending rate in `(0, 1]` (1 replaces the template on update).
+    ///
+    /// # Errors
+    /// [`bayestrack_image::ImageError::Channels`]; [`AppearanceError::InvalidParameter`].
+    pub fn new(
+        template: Image<f32>,
+        tsd: OnlineGaussian,
+        bsd: OnlineGaussian,
+        template_rate: f64,
+    ) -> Result<Self> {
+        template.view().expect_channels("TargetModel", 1)?;
+        if template.as_slice().iter().any(|v| !v.is_finite()) {
+            return Err(AppearanceError::NonFinite { what: "template" });
+        }
+        let template_rate = check_rate("template_rate", template_rate)? as f32;
+        Ok(Self {
+            template,
+            tsd,
+            bsd,
+            template_rate,
+        })
+    }
+
+    /// Learns TSD and BSD from similarity samples (target patches, e.g. the
+    /// initial box under small perturbations; background patches around it),
+    /// both forgetting at `rate`.
+    ///
+    /// # Errors
+    /// As [`OnlineGaussian::from_samples`] and [`TargetModel::new`].
+    pub fn from_samples(
+        template: Image<f32>,
+        target_scores: &[f64],
+        background_scores: &[f64],
+        rate: f64,
+        template_rate: f64,
+    ) -> Result<Self> {
+        let tsd = OnlineGaussian::from_samples(target_scores, rate)?;
+        let bsd = OnlineGaussian::from_samples(background_scores, rate)?;
+        Self::new(template, tsd, bsd, template_rate)
+    }
+
+    /// The template patch.
+    pub fn template(&self) -> ImageView<'_, f32> {
+        self.template.view()
+    }
+    /// Target-patch similarity distribution.
+    pub fn tsd(&self) -> &OnlineGaussian {
+        &self.tsd
+    }
+    /// Background-patch similarity distribution.
+    pub fn bsd(&self) -> &OnlineGaussian {
+        &self.bsd
+    }
+
+    /// `S = max(0, NCC(patch, template))` in `[0, 1]`.
+    ///
+    /// # Errors
+    /// [`AppearanceError::WindowSize`] unless the patch has the template's size.
+    pub fn similarity(&self, patch: ImageView<'_, f32>) -> Result<f64> {
+        if patch.width() != self.template.width() || patch.height() != self.template.height() {
+            return Err(AppearanceError::WindowSize {
+                operation: "TargetModel::similarity",
+                got_width: patch.width(),
+                got_height: patch.height(),
+                want_width: self.template.width(),
+                want_height: self.template.height(),
+            });
+        }
+        Ok(ncc(patch, self.template.view())?.max(0.0))
+    }
+
+    /// `mu_T - sigma_T`: a tuned particle at or above this is good enough
+    /// to stop pose tuning (Algorithm 1, step 4).
+    pub fn stop_threshold(&self) -> f64 {
+        self.tsd.mean() - self.tsd.std()
+    }
+
+    /// `mu_B + sigma_B`: a final score above this updates the models.
+    pub fn update_threshold(&self) -> f64 {
+        self.bsd.mean() + self.bsd.std()
+    }
+
+    /// Model update at the end of a frame. If `score > mu_B + sigma_B`, the
+    /// template moves towards `patch` (`T = (1 - a) T + a patch`), TSD
+    /// absorbs `score` and BSD absorbs every background score; returns
+    /// whether it updated.
+    ///
+    /// # Errors
+    /// [`AppearanceError::WindowSize`]; [`AppearanceError::NonFinite`] for a
+    /// non-finite score or patch (nothing is changed then).
+    pub fn update(
+        &mut self,
+        patch: ImageView<'_, f32>,
+        score: f64,
+        background_scores: &[f64],
+    ) -> Result<bool> {
+        if patch.width() != self.template.width() || patch.height() != self.template.height() {
+            return Err(AppearanceError::WindowSize {
+                operation: "TargetModel::update",
+                got_width: patch.width(),
+                got_height: patch.height(),
+                want_width: self.template.width(),
+                want_height: self.template.height(),
+            });
+        }
+        patch.expect_channels("TargetModel::update", 1)?;
+        if !score.is_finite() || background_scores.iter().any(|v| !v.is_finite()) {
+            return Err(AppearanceError::NonFinite { what: "score" });
+        }
+        if (0..patch.height()).any(|y| patch.row(y).iter().any(|v| !v.is_finite())) {
+            return Err(AppearanceError::NonFinite { what: "patch" });
+        }
+        if score <= self.update_threshold() {
+            return Ok(false);
+        }
+        let a = self.template_rate;
+        for y in 0..patch.height() {
+            for (t, &p) in self.template.row_mut(y).iter_mut().zip(patch.row(y)) {
+                *t += a * (p - *t);
+            }
+        }
+        self.tsd.update(score)?;
+        for &b in background_scores {
+            self.bsd.update(b)?;
+        }
+        Ok(true)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn texture(w: usize, h: usize, seed: u32) -> Image<f32> {
+        let mut s = seed;
+        Image::from_fn(w, h, |_, _| {
+            s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (s >> 24) as f32 / 255.0
+        })
+        .unwrap()
+    }
+
+    #[test]
+    fn ncc_values() {
+        let a = Image::from_vec(2, 2, 1, vec![0.0f32, 1.0, 2.0, 3.0]).unwrap();
+        let b = a.map(|v| 5.0 + 2.0 * v); // affine brightness change
+        assert!((ncc(a.view(), b.view()).unwrap() - 1.0).abs() < 1e-12);
+        let c = a.map(|v| -v);
+        assert!((ncc(a.view(), c.view()).unwrap() + 1.0).abs() < 1e-12);
+        let flat = Image::new(2, 2, 1, 0.5f32).unwrap();
+        assert_eq!(ncc(a.view(), flat.view()).unwrap(), 0.0);
+        // Hand value: a = [1, 0, 0, 0], b = [1, 1, 0, 0]:
+        // da = [.75, -.25, -.25, -.25], db = [.5, .5, -.5, -.5];
+        // sab = .375 - .125 + .125 + .125 = .5, saa = .75, sbb = 1 -> .5 / sqrt(.75).
+        let p = Image::from_vec(2, 2, 1, vec![1.0f32, 0.0, 0.0, 0.0]).unwrap();
+        let q = Image::from_vec(2, 2, 1, vec![1.0f32, 1.0, 0.0, 0.0]).unwrap();
+        assert!((ncc(p.view(), q.view()).unwrap() - 0.5 / 0.75f64.sqrt()).abs() < 1e-12);
+        let small = Image::new(1, 2, 1, 0f32).unwrap();
+        assert!(ncc(a.view(), small.view()).is_err());
+    }
+
+    #[test]
+    fn online_gaussian() {
+        let g = OnlineGaussian::from_samples(&[1.0, 2.0, 3.0], 0.1).unwrap();
+        assert_eq!((g.mean(), g.std(), g.count()), (2.0, 1.0, 3));
+        let mut g = OnlineGaussian::new(0.0, 0.0, 0.5).unwrap();
+        g.update(2.0).unwrap();
+        assert_eq!(g.mean(), 1.0);
+        assert!((g.std() - 1.0).abs() < 1e-12); // 0.5 * (0 + 0.5 * 4) = 1
+        // Converges to a constant stream.
+        for _ in 0..100 {
+            g.update(7.0).unwrap();
+        }
+        assert!((g.mean() - 7.0).abs() < 1e-9 && g.std() < 1e-9);
+        assert!(OnlineGaussian::from_samples(&[1.0], 0.1).is_err());
+        assert!(OnlineGaussian::new(0.0, 1.0, 0.0).is_err());
+        assert!(OnlineGaussian::new(0.0, -1.0, 0.5).is_err());
+        assert!(g.update(f64::NAN).is_err());
+    }
+
+    #[test]
+    fn template_update_only_above_bsd_band() {
+        let tpl = texture(36, 36, 1);
+        let tsd = OnlineGaussian::new(0.9, 0.05, 0.1).unwrap();
+        let bsd = OnlineGaussian::new(0.2, 0.1, 0.1).unwrap();
+        let mut m = TargetModel::new(tpl.clone(), tsd, bsd, 0.5).unwrap();
+        assert!((m.stop_threshold() - 0.85).abs() < 1e-12);
+        assert!((m.update_threshold() - 0.3).abs() < 1e-12);
+        assert!((m.similarity(tpl.view()).unwrap() - 1.0).abs() < 1e-9);
+        let other = texture(36, 36, 2);
+        let s = m.similarity(other.view()).unwrap();
+        assert!(s < 0.2, "unrelated textures correlate little: {s}");
+        // Below mu_B + sigma_B: nothing changes.
+        assert!(!m.update(other.view(), 0.25, &[0.1]).unwrap());
+        assert_eq!(m.template().as_slice(), tpl.as_slice());
+        assert_eq!(m.tsd().count(), 0);
+        // Above: template blends halfway, TSD and BSD absorb the scores.
+        assert!(m.update(other.view(), 0.95, &[0.1, 0.3]).unwrap());
+        let want = (tpl.as_slice()[0] + other.as_slice()[0]) / 2.0;
+        assert!((m.template().as_slice()[0] - want).abs() < 1e-6);
+        assert!((m.tsd().mean() - 0.905).abs() < 1e-12);
+        assert_eq!(m.bsd().count(), 2);
+        let wrong = texture(10, 10, 3);
+        assert!(matches!(
+            m.similarity(wrong.view()),
+            Err(AppearanceError::WindowSize { .. })
+        ));
+        assert!(m.update(other.view(), f64::NAN, &[]).is_err());
+        let learnt = TargetModel::from_samples(tpl, &[0.9, 0.8], &[0.1, 0.3], 0.1, 0.2).unwrap();
+        assert!((learnt.tsd().mean() - 0.85).abs() < 1e-12);
+    }
+}
