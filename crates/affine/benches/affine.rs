@@ -3,7 +3,8 @@
 
 use std::hint::black_box;
 
-use bayestrack_affine::{Affine2, AlgebraVector, Lwpr, LwprConfig};
+use bayestrack_affine::{Affine2, AlgebraVector, Lwpr, LwprConfig, PoseConfig, PoseEstimator};
+use bayestrack_image::Image;
 use criterion::{Criterion, criterion_group, criterion_main};
 use rand::{RngExt, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
@@ -103,5 +104,44 @@ fn lwpr_1296(c: &mut Criterion) {
     });
 }
 
-criterion_group!(benches, group, lwpr_cross, lwpr_1296);
+fn pose_tuning(c: &mut Criterion) {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(3);
+    let blobs: Vec<(f64, f64, f64, f64)> = (0..120)
+        .map(|_| {
+            (
+                rng.random_range(0.0..160.0),
+                rng.random_range(0.0..160.0),
+                rng.random_range(3.0..9.0),
+                rng.random_range(-1.0..1.0),
+            )
+        })
+        .collect();
+    let frame = Image::from_fn(160, 160, |x, y| {
+        let mut v = 0.5;
+        for &(cx, cy, s, a) in &blobs {
+            let d2 = (x as f64 - cx).powi(2) + (y as f64 - cy).powi(2);
+            v += 0.3 * a * (-d2 / (2.0 * s * s)).exp();
+        }
+        v as f32
+    })
+    .unwrap();
+    let m_star = Affine2::translation(80.0, 80.0).unwrap();
+    for pool in [3usize, 1] {
+        let cfg = PoseConfig {
+            pool,
+            ..PoseConfig::default()
+        };
+        let mut pe = PoseEstimator::new(cfg, 40.0, 40.0).unwrap();
+        let n = if pool == 1 { 300 } else { 1200 };
+        pe.train(frame.view(), &m_star, n, &mut rng).unwrap();
+        let m = m_star
+            .compose(&Affine2::exp(&AlgebraVector::new(0.02, 0.0, 0.03, 0.0, 1.0, -1.0)).unwrap());
+        let name = format!("pose_tune_step_{}feat", pe.feature_dim());
+        c.bench_function(&name, |b| {
+            b.iter(|| pe.tune_step(frame.view(), black_box(&m)).unwrap())
+        });
+    }
+}
+
+criterion_group!(benches, group, lwpr_cross, lwpr_1296, pose_tuning);
 criterion_main!(benches);

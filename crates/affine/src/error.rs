@@ -78,6 +78,9 @@ pub enum AffineError {
     /// leaves the frame.
     #[error(transparent)]
     Image(#[from] bayestrack_image::ImageError),
+    /// The Kalman filter that predicts the global displacement failed.
+    #[error(transparent)]
+    Kalman(#[from] bayestrack_kalman::KalmanError),
 }
 
 /// Result alias for this crate.

@@ -1,9 +1,11 @@
 #![doc = include_str!("../README.md")]
 
+pub mod displacement;
 pub mod dynamics;
 pub mod error;
 pub mod group;
 
+pub use displacement::DisplacementPredictor;
 pub use dynamics::BrownianDynamics;
 pub use error::{AffineError, Result};
 pub use group::{Affine2, AffineParams, AlgebraVector, BBox, basis, hat, vee};
