@@ -1,0 +1,191 @@
+//! Importance proposals `q(x_k | x_{k-1}, z_k)` (paper 000 eq. 7-10).
+//!
+//! A proposal draws a new particle from its parent and returns it with the
+//! log of the incremental importance weight
+//!
+//! `log p(z_k | x_k) + log p(x_k | x_{k-1}) - log q(x_k | x_{k-1}, z_k)`.
+//!
+//! - [`Bootstrap`]: `q` is the transition prior (SIR); the weight is the
+//!   likelihood alone.
+//! - [`KalmanProposal`]: each particle carries its own Gaussian, which a
+//!   [`LocalFilter`] (EKF, UKF, IEKF or the hybrid UKF -> IEKF of HIKPF, all
+//!   from `bayestrack-kalman`) moves to `N(mu_k, P_k)` using `z_k`; the
+//!   particle is drawn from it and keeps `P_k`.
+
+use bayestrack_kalman::Additive;
+use bayestrack_kalman::{
+    Dynamics, DynamicsJacobian, Ekf, Gaussian, HybridUkfIekf, Iekf, KalmanError, Measurement,
+    MeasurementJacobian, Ukf,
+};
+use nalgebra::SVector;
+use rand::Rng;
+
+use crate::set::KalmanParticle;
+
+/// The model a particle filter targets: a transition density one can sample
+/// and evaluate, and a likelihood.
+pub trait StateSpaceModel<const N: usize, const M: usize>: Sync {
+    /// Draws `x_k ~ p(. | x_{k-1})`.
+    fn sample_transition<R: Rng + ?Sized>(
+        &self,
+        x_prev: &SVector<f64, N>,
+        rng: &mut R,
+    ) -> SVector<f64, N>;
+    /// `log p(x_k | x_{k-1})` (minus infinity outside the support).
+    fn log_transition(&self, x_prev: &SVector<f64, N>, x: &SVector<f64, N>) -> f64;
+    /// `log p(z_k | x_k)`.
+    fn log_likelihood(&self, x: &SVector<f64, N>, z: &SVector<f64, M>) -> f64;
+}
+
+/// An importance proposal for particles of type `T` and measurements `Z`.
+pub trait Proposal<T, Z: ?Sized>: Sync {
+    /// Draws a child of `parent` given `z`; returns it with the log
+    /// incremental weight.
+    ///
+    /// # Errors
+    /// The local filter's error, for Kalman proposals.
+    fn propose<R: Rng + ?Sized>(
+        &self,
+        parent: &T,
+        z: &Z,
+        rng: &mut R,
+    ) -> Result<(T, f64), KalmanError>;
+}
+
+/// The transition prior as proposal (bootstrap / SIR filter).
+#[derive(Debug, Clone, Copy)]
+pub struct Bootstrap<'a, S>(pub &'a S);
+
+impl<const N: usize, const M: usize, S: StateSpaceModel<N, M>>
+    Proposal<SVector<f64, N>, SVector<f64, M>> for Bootstrap<'_, S>
+{
+    #[inline]
+    fn propose<R: Rng + ?Sized>(
+        &self,
+        parent: &SVector<f64, N>,
+        z: &SVector<f64, M>,
+        rng: &mut R,
+    ) -> Result<(SVector<f64, N>, f64), KalmanError> {
+        let x = self.0.sample_transition(parent, rng);
+        let lw = self.0.log_likelihood(&x, z);
+        Ok((x, lw))
+    }
+}
+
+/// A Kalman step that turns a particle's Gaussian and the measurement into
+/// the proposal `N(mu_k, P_k)`, with local model `D`.
+pub trait LocalFilter<const N: usize, const M: usize, D>: Sync {
+    /// The proposal Gaussian for the particle belief `prior`.
+    ///
+    /// # Errors
+    /// Whatever the filter reports (a non-positive-definite matrix, ...).
+    fn proposal(
+        &self,
+        prior: &Gaussian<N>,
+        model: &D,
+        z: &SVector<f64, M>,
+    ) -> Result<Gaussian<N>, KalmanError>;
+}
+
+impl<const N: usize, const M: usize, D> LocalFilter<N, M, D> for Ekf
+where
+    D: DynamicsJacobian<N> + MeasurementJacobian<N, M>,
+{
+    fn proposal(
+        &self,
+        prior: &Gaussian<N>,
+        model: &D,
+        z: &SVector<f64, M>,
+    ) -> Result<Gaussian<N>, KalmanError> {
+        let predicted = self.predict(prior, model)?;
+        Ok(self.update(&predicted, model, Some(z))?.posterior)
+    }
+}
+
+impl<const N: usize, const M: usize, D> LocalFilter<N, M, D> for Iekf
+where
+    D: DynamicsJacobian<N> + MeasurementJacobian<N, M>,
+{
+    fn proposal(
+        &self,
+        prior: &Gaussian<N>,
+        model: &D,
+        z: &SVector<f64, M>,
+    ) -> Result<Gaussian<N>, KalmanError> {
+        let predicted = self.predict(prior, model)?;
+        Ok(self.update(&predicted, model, Some(z))?.posterior)
+    }
+}
+
+/// The unscented particle filter's local step: the augmented-state UKF of
+/// paper 000 sec. 3.3 (a), one sigma-point set of `[x, v, n]` through `f`
+/// and `h` (additive noise).
+impl<const N: usize, const M: usize, D> LocalFilter<N, M, D> for Ukf
+where
+    D: Dynamics<N> + Measurement<N, M> + Sync,
+{
+    fn proposal(
+        &self,
+        prior: &Gaussian<N>,
+        model: &D,
+        z: &SVector<f64, M>,
+    ) -> Result<Gaussian<N>, KalmanError> {
+        let step = self.step_augmented(prior, &Additive(model), &Additive(model), Some(z))?;
+        Ok(step.update.posterior)
+    }
+}
+
+/// HIKPF's local step: augmented UKF, then IEKF refinement.
+impl<const N: usize, const M: usize, D> LocalFilter<N, M, D> for HybridUkfIekf
+where
+    D: Dynamics<N> + MeasurementJacobian<N, M> + Sync,
+{
+    fn proposal(
+        &self,
+        prior: &Gaussian<N>,
+        model: &D,
+        z: &SVector<f64, M>,
+    ) -> Result<Gaussian<N>, KalmanError> {
+        Ok(self
+            .step(prior, &Additive(model), model, Some(z))?
+            .update
+            .posterior)
+    }
+}
+
+/// A particle filter proposal from a bank of local Kalman filters, one per
+/// particle: `model` gives the true densities of the weight, `local` the
+/// Gaussian model the filters use (their `Q` and `R` may differ from the
+/// truth: a wider proposal is often better), `filter` the kind of filter.
+#[derive(Debug, Clone, Copy)]
+pub struct KalmanProposal<'a, S, D, F> {
+    /// The target model.
+    pub model: &'a S,
+    /// The local filters' Gaussian model.
+    pub local: &'a D,
+    /// The local filter.
+    pub filter: F,
+}
+
+impl<const N: usize, const M: usize, S, D, F> Proposal<KalmanParticle<N>, SVector<f64, M>>
+    for KalmanProposal<'_, S, D, F>
+where
+    S: StateSpaceModel<N, M>,
+    D: Sync,
+    F: LocalFilter<N, M, D>,
+{
+    fn propose<R: Rng + ?Sized>(
+        &self,
+        parent: &KalmanParticle<N>,
+        z: &SVector<f64, M>,
+        rng: &mut R,
+    ) -> Result<(KalmanParticle<N>, f64), KalmanError> {
+        let prior = Gaussian::new(parent.x, parent.cov)?;
+        let q = self.filter.proposal(&prior, self.local, z)?;
+        let fq = q.factor()?;
+        let x = fq.sample(rng);
+        let lw = self.model.log_likelihood(&x, z) + self.model.log_transition(&parent.x, &x)
+            - fq.log_pdf(&x)?;
+        Ok((KalmanParticle { x, cov: *q.cov() }, lw))
+    }
+}

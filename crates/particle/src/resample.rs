@@ -1,0 +1,224 @@
+//! Resampling: draw `M` ancestor indices with probabilities proportional to
+//! the weights. All four schemes are O(N + M) and unbiased: the expected
+//! number of copies of particle `i` is `M w_i`.
+//!
+//! - multinomial: `M` independent draws (sorted uniforms from exponential
+//!   spacings, then one pass over the cumulative weights; paper 001
+//!   footnote 2, paper 003's "roulette wheel");
+//! - residual: `floor(M w_i)` copies, the remainder multinomial on the
+//!   residual weights (Liu and Chen 1998; paper 000 uses it);
+//! - systematic: one uniform `u`, points `(u + j) / M`;
+//! - stratified: one uniform per stratum, points `(j + u_j) / M`.
+//!
+//! Systematic and residual give every particle `floor(M w_i)` or
+//! `ceil(M w_i)` copies; stratified and systematic have lower variance than
+//! multinomial.
+
+use rand::Rng;
+use rand::RngExt;
+use rand_distr::{Distribution, Exp1};
+
+use crate::error::{ParticleError, Result};
+
+/// A resampling scheme.
+pub trait Resampler {
+    /// Fills `ancestors` (its length is the number of draws `M`) with indices
+    /// into `weights`, drawn with probabilities proportional to the weights
+    /// (which need not be normalised).
+    ///
+    /// # Errors
+    /// [`ParticleError::Empty`] for no weights,
+    /// [`ParticleError::NonFiniteWeight`] for a NaN, infinite or negative
+    /// weight, [`ParticleError::AllWeightsZero`] when they sum to zero.
+    fn resample<R: Rng + ?Sized>(
+        &self,
+        weights: &[f64],
+        rng: &mut R,
+        ancestors: &mut [usize],
+    ) -> Result<()>;
+}
+
+/// The four schemes, chosen at run time.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+pub enum Resampling {
+    /// Independent draws.
+    Multinomial,
+    /// Deterministic integer parts, multinomial remainder.
+    Residual,
+    /// One uniform offset for evenly spaced points.
+    #[default]
+    Systematic,
+    /// One uniform per stratum.
+    Stratified,
+}
+
+impl Resampling {
+    /// Every scheme, for loops in tests and experiments.
+    pub const ALL: [Resampling; 4] = [
+        Resampling::Multinomial,
+        Resampling::Residual,
+        Resampling::Systematic,
+        Resampling::Stratified,
+    ];
+
+    /// Lower-case name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Resampling::Multinomial => "multinomial",
+            Resampling::Residual => "residual",
+            Resampling::Systematic => "systematic",
+            Resampling::Stratified => "stratified",
+        }
+    }
+}
+
+/// Checks weights and returns their sum.
+pub(crate) fn checked_total(weights: &[f64]) -> Result<f64> {
+    if weights.is_empty() {
+        return Err(ParticleError::Empty);
+    }
+    let mut total = 0.0;
+    for (index, &w) in weights.iter().enumerate() {
+        if !(w >= 0.0 && w.is_finite()) {
+            return Err(ParticleError::NonFiniteWeight { index, value: w });
+        }
+        total += w;
+    }
+    if total <= 0.0 {
+        return Err(ParticleError::AllWeightsZero {
+            count: weights.len(),
+        });
+    }
+    Ok(total)
+}
+
+/// Walks the cumulative weights once for sorted points `point(j)` in
+/// `[0, total)`, writing the index whose cumulative interval holds each.
+#[inline]
+fn walk(weights: &[f64], ancestors: &mut [usize], mut point: impl FnMut(usize) -> f64) {
+    let last = weights.iter().rposition(|&w| w > 0.0).unwrap_or(0);
+    let mut i = 0;
+    let mut cum = weights[0];
+    for (j, a) in ancestors.iter_mut().enumerate() {
+        let u = point(j);
+        while cum <= u && i < last {
+            i += 1;
+            cum += weights[i];
+        }
+        *a = i;
+    }
+}
+
+/// Multinomial draws of `ancestors.len()` indices with weights summing to
+/// `total`.
+fn multinomial<R: Rng + ?Sized>(weights: &[f64], total: f64, rng: &mut R, ancestors: &mut [usize]) {
+    let m = ancestors.len();
+    if m == 0 {
+        return;
+    }
+    // Sorted uniforms: normalised partial sums of m + 1 exponentials.
+    let mut spacings = Vec::with_capacity(m);
+    let mut s = 0.0;
+    for _ in 0..m {
+        let e: f64 = Exp1.sample(rng);
+        s += e;
+        spacings.push(s);
+    }
+    let e: f64 = Exp1.sample(rng);
+    let scale = total / (s + e);
+    walk(weights, ancestors, |j| spacings[j] * scale);
+}
+
+impl Resampler for Resampling {
+    fn resample<R: Rng + ?Sized>(
+        &self,
+        weights: &[f64],
+        rng: &mut R,
+        ancestors: &mut [usize],
+    ) -> Result<()> {
+        let total = checked_total(weights)?;
+        let m = ancestors.len();
+        if m == 0 {
+            return Ok(());
+        }
+        let step = total / m as f64;
+        match self {
+            Resampling::Multinomial => multinomial(weights, total, rng, ancestors),
+            Resampling::Systematic => {
+                let u: f64 = rng.random::<f64>() * step;
+                walk(weights, ancestors, |j| u + j as f64 * step);
+            }
+            Resampling::Stratified => {
+                walk(weights, ancestors, |j| {
+                    (j as f64 + rng.random::<f64>()) * step
+                });
+            }
+            Resampling::Residual => {
+                let mut filled = 0;
+                let mut residual = Vec::with_capacity(weights.len());
+                for (i, &w) in weights.iter().enumerate() {
+                    let expected = w / step;
+                    let copies = (expected.floor() as usize).min(m - filled);
+                    ancestors[filled..filled + copies].fill(i);
+                    filled += copies;
+                    residual.push((expected - copies as f64).max(0.0));
+                }
+                if filled < m {
+                    let rest: f64 = residual.iter().sum();
+                    if rest > 0.0 {
+                        multinomial(&residual, rest, rng, &mut ancestors[filled..]);
+                    } else {
+                        // round-off left draws without residual mass
+                        multinomial(weights, total, rng, &mut ancestors[filled..]);
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::seed::stream_rng;
+
+    #[test]
+    fn degenerate_weight_vectors() {
+        let mut rng = stream_rng(&[1]);
+        let mut a = [0usize; 4];
+        for scheme in Resampling::ALL {
+            scheme
+                .resample(&[0.0, 0.0, 1.0, 0.0], &mut rng, &mut a)
+                .unwrap();
+            assert_eq!(a, [2, 2, 2, 2], "{scheme:?}");
+            assert_eq!(
+                scheme.resample(&[], &mut rng, &mut a),
+                Err(ParticleError::Empty)
+            );
+            assert_eq!(
+                scheme.resample(&[0.0, 0.0], &mut rng, &mut a),
+                Err(ParticleError::AllWeightsZero { count: 2 })
+            );
+            assert!(matches!(
+                scheme.resample(&[0.5, f64::NAN], &mut rng, &mut a),
+                Err(ParticleError::NonFiniteWeight { index: 1, .. })
+            ));
+            assert!(matches!(
+                scheme.resample(&[0.5, -0.1], &mut rng, &mut a),
+                Err(ParticleError::NonFiniteWeight { index: 1, .. })
+            ));
+        }
+    }
+
+    #[test]
+    fn output_size_may_differ_from_input_size() {
+        let mut rng = stream_rng(&[2]);
+        let mut a = [0usize; 7];
+        for scheme in Resampling::ALL {
+            scheme.resample(&[1.0, 3.0], &mut rng, &mut a).unwrap();
+            assert!(a.iter().all(|&i| i < 2));
+            assert!(a.windows(2).all(|w| w[0] <= w[1]) || scheme == Resampling::Residual);
+        }
+    }
+}

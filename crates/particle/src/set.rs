@@ -1,0 +1,374 @@
+//! Weighted particle sets with weights kept in the log domain.
+
+use nalgebra::{SMatrix, SVector};
+use rand::Rng;
+
+use crate::error::{ParticleError, Result};
+use crate::resample::Resampler;
+
+/// A particle: anything with a state vector (a plain state, or a state with
+/// its own Gaussian for Kalman proposals).
+pub trait Particle<const N: usize>: Clone + Send + Sync {
+    /// The state `x`.
+    fn state(&self) -> &SVector<f64, N>;
+}
+
+impl<const N: usize> Particle<N> for SVector<f64, N> {
+    #[inline]
+    fn state(&self) -> &SVector<f64, N> {
+        self
+    }
+}
+
+/// A particle that carries the covariance of its own Gaussian, for the
+/// Kalman-proposal filters (paper 000 sec. 2.3.2: each particle is the mean
+/// of an EKF/UKF/IEKF whose covariance it keeps).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct KalmanParticle<const N: usize> {
+    /// The sampled state.
+    pub x: SVector<f64, N>,
+    /// The covariance of the particle's Gaussian.
+    pub cov: SMatrix<f64, N, N>,
+}
+
+impl<const N: usize> Particle<N> for KalmanParticle<N> {
+    #[inline]
+    fn state(&self) -> &SVector<f64, N> {
+        &self.x
+    }
+}
+
+/// `log sum exp` of finite-or-minus-infinity values, shifted by the maximum.
+///
+/// # Errors
+/// [`ParticleError::Empty`], [`ParticleError::NonFiniteWeight`] for NaN or
+/// plus infinity, [`ParticleError::AllWeightsZero`] when every value is minus
+/// infinity.
+pub fn log_sum_exp(log_w: &[f64]) -> Result<f64> {
+    if log_w.is_empty() {
+        return Err(ParticleError::Empty);
+    }
+    let mut max = f64::NEG_INFINITY;
+    for (index, &l) in log_w.iter().enumerate() {
+        if l.is_nan() || l == f64::INFINITY {
+            return Err(ParticleError::NonFiniteWeight { index, value: l });
+        }
+        max = max.max(l);
+    }
+    if max == f64::NEG_INFINITY {
+        return Err(ParticleError::AllWeightsZero { count: log_w.len() });
+    }
+    let s: f64 = log_w.iter().map(|&l| (l - max).exp()).sum();
+    Ok(max + s.ln())
+}
+
+/// A weighted particle set `{x_i, w_i}` with `log w_i` stored.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParticleSet<T> {
+    particles: Vec<T>,
+    log_weights: Vec<f64>,
+}
+
+impl<T: Clone> ParticleSet<T> {
+    /// Equally weighted particles.
+    ///
+    /// # Errors
+    /// [`ParticleError::Empty`] for no particles.
+    pub fn new(particles: Vec<T>) -> Result<Self> {
+        if particles.is_empty() {
+            return Err(ParticleError::Empty);
+        }
+        let lw = -(particles.len() as f64).ln();
+        let log_weights = vec![lw; particles.len()];
+        Ok(Self {
+            particles,
+            log_weights,
+        })
+    }
+
+    /// Particles with (unnormalised) log-weights; normalised here.
+    ///
+    /// # Errors
+    /// As [`log_sum_exp`], and [`ParticleError::LengthMismatch`].
+    pub fn from_log_weights(particles: Vec<T>, log_weights: Vec<f64>) -> Result<Self> {
+        if particles.len() != log_weights.len() {
+            return Err(ParticleError::LengthMismatch {
+                particles: particles.len(),
+                weights: log_weights.len(),
+            });
+        }
+        let mut set = Self {
+            particles,
+            log_weights,
+        };
+        set.normalize()?;
+        Ok(set)
+    }
+
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.particles.len()
+    }
+
+    /// Never true for a constructed set; here for API completeness.
+    pub fn is_empty(&self) -> bool {
+        self.particles.is_empty()
+    }
+
+    /// The particles.
+    pub fn particles(&self) -> &[T] {
+        &self.particles
+    }
+
+    /// The normalised log-weights.
+    pub fn log_weights(&self) -> &[f64] {
+        &self.log_weights
+    }
+
+    /// Particles and log-weights for in-place updates; call
+    /// [`ParticleSet::normalize`] afterwards.
+    pub fn parts_mut(&mut self) -> (&mut [T], &mut [f64]) {
+        (&mut self.particles, &mut self.log_weights)
+    }
+
+    /// Normalises the log-weights (max-shifted log-sum-exp) and returns the
+    /// log of their previous sum (the log marginal-likelihood increment when
+    /// the previous weights were normalised).
+    ///
+    /// # Errors
+    /// As [`log_sum_exp`]; the set is unchanged on error.
+    pub fn normalize(&mut self) -> Result<f64> {
+        let lse = log_sum_exp(&self.log_weights)?;
+        for l in &mut self.log_weights {
+            *l -= lse;
+        }
+        Ok(lse)
+    }
+
+    /// The normalised weights into `out` (resized).
+    pub fn weights_into(&self, out: &mut Vec<f64>) {
+        out.clear();
+        out.extend(self.log_weights.iter().map(|l| l.exp()));
+    }
+
+    /// The normalised weights.
+    pub fn weights(&self) -> Vec<f64> {
+        let mut w = Vec::new();
+        self.weights_into(&mut w);
+        w
+    }
+
+    /// Effective sample size `1 / sum w_i^2` (paper 003 eq. 16).
+    pub fn ess(&self) -> f64 {
+        1.0 / self
+            .log_weights
+            .iter()
+            .map(|l| (2.0 * l).exp())
+            .sum::<f64>()
+    }
+
+    /// Kong-Liu effective sample size `N / (1 + cv^2)` with `cv^2` the sample
+    /// variance (divisor `N - 1`) of `N w_i` (paper 001). With divisor `N`
+    /// it would equal [`ParticleSet::ess`] exactly.
+    pub fn ess_kong_liu(&self) -> f64 {
+        let n = self.len() as f64;
+        if self.len() < 2 {
+            return n;
+        }
+        let ss: f64 = self
+            .log_weights
+            .iter()
+            .map(|l| {
+                let d = n * l.exp() - 1.0;
+                d * d
+            })
+            .sum();
+        n / (1.0 + ss / (n - 1.0))
+    }
+
+    /// Resamples with `scheme`: particles are replaced by their drawn
+    /// ancestors and weights reset to `1/N`. `ancestors` is a caller buffer
+    /// (resized to `N`) that holds the drawn indices afterwards.
+    ///
+    /// # Errors
+    /// As [`Resampler::resample`].
+    pub fn resample<S: Resampler, R: Rng + ?Sized>(
+        &mut self,
+        scheme: &S,
+        rng: &mut R,
+        ancestors: &mut Vec<usize>,
+    ) -> Result<()> {
+        let n = self.len();
+        let weights = self.weights();
+        ancestors.resize(n, 0);
+        scheme.resample(&weights, rng, ancestors)?;
+        let old = std::mem::take(&mut self.particles);
+        self.particles = ancestors.iter().map(|&a| old[a].clone()).collect();
+        self.log_weights.fill(-(n as f64).ln());
+        Ok(())
+    }
+
+    /// Resamples only when the ESS falls below `threshold * N` (adaptive
+    /// resampling); returns whether it did.
+    ///
+    /// # Errors
+    /// [`ParticleError::InvalidParameter`] for a threshold outside [0, 1],
+    /// and as [`ParticleSet::resample`].
+    pub fn resample_if<S: Resampler, R: Rng + ?Sized>(
+        &mut self,
+        threshold: f64,
+        scheme: &S,
+        rng: &mut R,
+        ancestors: &mut Vec<usize>,
+    ) -> Result<bool> {
+        check_threshold(threshold)?;
+        if self.ess() < threshold * self.len() as f64 {
+            self.resample(scheme, rng, ancestors)?;
+            Ok(true)
+        } else {
+            Ok(false)
+        }
+    }
+
+    /// Weighted mean `sum w_i x_i`.
+    pub fn mean<const N: usize>(&self) -> SVector<f64, N>
+    where
+        T: Particle<N>,
+    {
+        self.particles
+            .iter()
+            .zip(&self.log_weights)
+            .fold(SVector::zeros(), |acc, (p, l)| acc + p.state() * l.exp())
+    }
+
+    /// Weighted covariance `sum w_i (x_i - m)(x_i - m)^T`.
+    pub fn covariance<const N: usize>(&self) -> SMatrix<f64, N, N>
+    where
+        T: Particle<N>,
+    {
+        let m = self.mean();
+        self.particles
+            .iter()
+            .zip(&self.log_weights)
+            .fold(SMatrix::zeros(), |acc, (p, l)| {
+                let d = p.state() - m;
+                acc + d * d.transpose() * l.exp()
+            })
+    }
+
+    /// The highest-weight particle (the MAP estimate among the particles).
+    pub fn map(&self) -> &T {
+        let best = self
+            .log_weights
+            .iter()
+            .enumerate()
+            .fold(0, |b, (i, &l)| if l > self.log_weights[b] { i } else { b });
+        &self.particles[best]
+    }
+}
+
+/// Checks an ESS threshold fraction.
+pub(crate) fn check_threshold(threshold: f64) -> Result<()> {
+    if !(0.0..=1.0).contains(&threshold) {
+        return Err(ParticleError::InvalidParameter {
+            name: "ess threshold",
+            value: threshold,
+            reason: "must be a fraction of N in [0, 1]",
+        });
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector1;
+
+    fn set(xs: &[f64], lw: &[f64]) -> ParticleSet<Vector1<f64>> {
+        ParticleSet::from_log_weights(xs.iter().map(|&x| Vector1::new(x)).collect(), lw.to_vec())
+            .unwrap()
+    }
+
+    #[test]
+    fn normalisation_survives_extreme_log_weights() {
+        // linear-domain weights would underflow to 0 here
+        let s = set(
+            &[0.0, 1.0, 2.0],
+            &[-2000.0, -2000.0 + 2f64.ln(), f64::NEG_INFINITY],
+        );
+        let w = s.weights();
+        assert!((w[0] - 1.0 / 3.0).abs() < 1e-12 && (w[1] - 2.0 / 3.0).abs() < 1e-12);
+        assert_eq!(w[2], 0.0);
+        assert!((s.mean()[0] - 2.0 / 3.0).abs() < 1e-12);
+        assert!((s.covariance()[(0, 0)] - 2.0 / 9.0).abs() < 1e-12);
+        assert_eq!(s.map()[0], 1.0);
+    }
+
+    #[test]
+    fn bad_weights_name_the_particle() {
+        let xs: Vec<Vector1<f64>> = vec![Vector1::new(0.0); 3];
+        assert!(matches!(
+            ParticleSet::from_log_weights(xs.clone(), vec![0.0, f64::NAN, 0.0]),
+            Err(ParticleError::NonFiniteWeight { index: 1, .. })
+        ));
+        assert!(matches!(
+            ParticleSet::from_log_weights(xs.clone(), vec![0.0, 0.0, f64::INFINITY]),
+            Err(ParticleError::NonFiniteWeight { index: 2, .. })
+        ));
+        assert_eq!(
+            ParticleSet::from_log_weights(xs.clone(), vec![f64::NEG_INFINITY; 3]).map(|_| ()),
+            Err(ParticleError::AllWeightsZero { count: 3 })
+        );
+        assert_eq!(
+            ParticleSet::<Vector1<f64>>::new(vec![]).map(|_| ()),
+            Err(ParticleError::Empty)
+        );
+        assert_eq!(
+            ParticleSet::from_log_weights(xs, vec![0.0; 2]).map(|_| ()),
+            Err(ParticleError::LengthMismatch {
+                particles: 3,
+                weights: 2
+            })
+        );
+    }
+
+    #[test]
+    fn ess_bounds_and_kong_liu() {
+        let uniform = set(&[0.0, 1.0, 2.0, 3.0], &[0.0; 4]);
+        assert!((uniform.ess() - 4.0).abs() < 1e-12);
+        assert!((uniform.ess_kong_liu() - 4.0).abs() < 1e-12);
+        let one = set(
+            &[0.0, 1.0, 2.0, 3.0],
+            &[0.0, f64::NEG_INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY],
+        );
+        assert!((one.ess() - 1.0).abs() < 1e-12);
+        // w = (0.4, 0.4, 0.1, 0.1): sum w^2 = 0.34, N w - 1 = (0.6, 0.6, -0.6, -0.6)
+        let s = set(
+            &[0.0; 4],
+            &[0.4f64.ln(), 0.4f64.ln(), 0.1f64.ln(), 0.1f64.ln()],
+        );
+        assert!((s.ess() - 1.0 / 0.34).abs() < 1e-12);
+        assert!((s.ess_kong_liu() - 4.0 / (1.0 + 1.44 / 3.0)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn adaptive_resampling_threshold() {
+        let mut rng = crate::seed::stream_rng(&[3]);
+        let mut anc = vec![];
+        let mut s = set(&[0.0, 1.0], &[0.0, -10.0]);
+        assert!(
+            s.resample_if(1.5, &crate::Resampling::Systematic, &mut rng, &mut anc)
+                .is_err()
+        );
+        assert!(
+            !s.resample_if(0.1, &crate::Resampling::Systematic, &mut rng, &mut anc)
+                .unwrap()
+        );
+        assert!(
+            s.resample_if(0.9, &crate::Resampling::Systematic, &mut rng, &mut anc)
+                .unwrap()
+        );
+        assert_eq!(anc.len(), 2);
+        assert!((s.ess() - 2.0).abs() < 1e-12);
+    }
+}
