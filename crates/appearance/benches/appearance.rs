@@ -3,8 +3,8 @@
 use std::hint::black_box;
 
 use bayestrack_appearance::{
-    Candidate, Cue, Frame, HistogramDistance, IfdCue, RgbHistogram, Scratch, SkinModel,
-    histogram_search, interframe_difference_into, mad_search,
+    Candidate, Cue, Frame, HistogramDistance, IfdCue, MadSearch, RgbHistogram, Scratch, SkinModel,
+    histogram_search, interframe_difference_into, mad_map_into, mad_search,
 };
 use bayestrack_image::{Image, Rect, rgb_to_gray};
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -36,6 +36,29 @@ fn bench_mad(c: &mut Criterion) {
     let full = Rect::new(0, 0, 320, 240);
     c.bench_function("mad_search 30x20 template over 320x240 (scene)", |b| {
         b.iter(|| mad_search(black_box(frame.view()), template.view(), full).unwrap())
+    });
+    let mut searcher = MadSearch::new();
+    c.bench_function(
+        "MadSearch (reused buffers) 30x20 over 320x240 (scene)",
+        |b| {
+            b.iter(|| {
+                searcher
+                    .search(black_box(frame.view()), template.view(), full)
+                    .unwrap()
+            })
+        },
+    );
+    let mut map = Image::new(291, 221, 1, 0f32).unwrap();
+    c.bench_function("mad_map_into full 291x221 MAD surface (no pruning)", |b| {
+        b.iter(|| {
+            mad_map_into(
+                black_box(frame.view()),
+                template.view(),
+                full,
+                &mut map.view_mut(),
+            )
+            .unwrap()
+        })
     });
     let white = noise(320, 240, 1, 3);
     let tpl_noise = white.crop(Rect::new(201, 117, 30, 20)).unwrap().to_image();

@@ -26,6 +26,8 @@ pub struct RgbHistogram {
     bins: usize,
     counts: Vec<u32>,
     pixels: u32,
+    /// Bin of each byte value.
+    lut: [u8; 256],
 }
 
 impl RgbHistogram {
@@ -49,6 +51,7 @@ impl RgbHistogram {
             bins,
             counts: vec![0; 3 * bins],
             pixels: 0,
+            lut: std::array::from_fn(|v| ((v * bins) >> 8) as u8),
         })
     }
 
@@ -129,10 +132,11 @@ impl RgbHistogram {
                     bl[usize::from(p[2])] += 1;
                 }
             } else {
+                let lut = &self.lut;
                 for p in row.chunks_exact(3) {
-                    r[(usize::from(p[0]) * b) >> 8] += 1;
-                    g[(usize::from(p[1]) * b) >> 8] += 1;
-                    bl[(usize::from(p[2]) * b) >> 8] += 1;
+                    r[usize::from(lut[usize::from(p[0])])] += 1;
+                    g[usize::from(lut[usize::from(p[1])])] += 1;
+                    bl[usize::from(lut[usize::from(p[2])])] += 1;
                 }
             }
         }

@@ -16,7 +16,9 @@ pub use crate::cue::{
 pub use crate::error::{AppearanceError, Result};
 pub use crate::histogram::{HistogramDistance, HistogramMatch, RgbHistogram, histogram_search};
 pub use crate::ifd::{PriorityIfd, Suppression, interframe_difference, interframe_difference_into};
-pub use crate::mad::{MadLikelihood, MadMatch, MadPixel, mad, mad_map_into, mad_search};
+pub use crate::mad::{
+    MadLikelihood, MadMatch, MadPixel, MadSearch, SAD_CHUNK, mad, mad_map_into, mad_search,
+};
 pub use crate::moments::{Moments, centroid_in, moments};
 pub use crate::similarity::{OnlineGaussian, TargetModel, ncc};
 pub use crate::skin::SkinModel;

@@ -107,7 +107,11 @@ impl SkinModel {
     /// Eq. 8 for one HSV pixel, in `(0, 1]`.
     #[inline]
     pub fn score_hsv(&self, h: f32, s: f32) -> f32 {
-        let dh = hue_distance(h, self.hue);
+        let mut dh = h - self.hue;
+        if !(-0.5..=0.5).contains(&dh) {
+            // Across the wrap (or a hue outside [0, 1)): the circular distance.
+            dh = hue_distance(h, self.hue);
+        }
         let ds = s - self.saturation;
         (self.k * (dh * dh + ds * ds)).exp()
     }
