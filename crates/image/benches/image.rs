@@ -2,7 +2,10 @@
 
 use std::hint::black_box;
 
-use bayestrack_image::{Affine2, Border, Image, ImageViewMut, rgb_to_hsv_into, warp_into};
+use bayestrack_image::{
+    Affine2, Border, Connectivity, Image, ImageViewMut, label_components, open, rgb_to_hsv_into,
+    warp_into,
+};
 use criterion::{Criterion, criterion_group, criterion_main};
 
 fn frame_rgb(w: usize, h: usize) -> Image<u8> {
@@ -36,5 +39,17 @@ fn bench_hsv(c: &mut Criterion) {
     });
 }
 
-criterion_group!(benches, bench_warp, bench_hsv);
+fn bench_blobs(c: &mut Criterion) {
+    // Sparse blobs: about 6% of pixels set, in small clusters.
+    let noise = frame_rgb(320, 240);
+    let mask = Image::from_fn(320, 240, |x, y| noise.get(x / 4, y / 4, 0).unwrap() > 240).unwrap();
+    c.bench_function("label_components 320x240 (8-connectivity)", |b| {
+        b.iter(|| label_components(black_box(mask.view()), Connectivity::Eight).unwrap())
+    });
+    c.bench_function("open r=1 320x240", |b| {
+        b.iter(|| open(black_box(mask.view()), 1).unwrap())
+    });
+}
+
+criterion_group!(benches, bench_warp, bench_hsv, bench_blobs);
 criterion_main!(benches);
