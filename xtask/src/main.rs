@@ -31,7 +31,23 @@ enum Command {
         /// Output root.
         #[arg(long, default_value = "target/reproduce")]
         out: PathBuf,
+        /// Override a named option of the experiment, `key=value`
+        /// (repeatable; see docs/reproduction.md for each experiment's keys).
+        #[arg(long = "set", value_parser = parse_key_value)]
+        set: Vec<(String, String)>,
     },
+    /// Rewrite tests/golden/<id>.csv from fresh quick runs and print what
+    /// changed.
+    Bless {
+        /// Experiment ids (default: every implemented one).
+        ids: Vec<String>,
+    },
+}
+
+fn parse_key_value(s: &str) -> Result<(String, String), String> {
+    s.split_once('=')
+        .map(|(k, v)| (k.trim().to_string(), v.trim().to_string()))
+        .ok_or_else(|| format!("expected key=value, got `{s}`"))
 }
 
 fn print_registry(reg: &[Box<dyn Experiment>]) {
@@ -57,14 +73,67 @@ fn run_one(e: &dyn Experiment, opts: &RunOptions) -> Result<(), experiment::Expe
     Ok(())
 }
 
+/// Rewrites the golden file of one experiment; returns whether it changed.
+fn bless(e: &dyn Experiment) -> Result<bool, String> {
+    let Some(new) = e.golden().map_err(|err| err.to_string())? else {
+        println!("{}: nothing pinned", e.id());
+        return Ok(false);
+    };
+    let path = PathBuf::from("tests/golden").join(format!("{}.csv", e.id()));
+    let old = std::fs::read_to_string(&path).unwrap_or_default();
+    if old == new {
+        println!("{}: unchanged", e.id());
+        return Ok(false);
+    }
+    let old_lines: Vec<&str> = old.lines().collect();
+    for (i, line) in new.lines().enumerate() {
+        match old_lines.get(i) {
+            Some(o) if *o == line => {}
+            Some(o) => println!("{}:{}\n  - {o}\n  + {line}", path.display(), i + 1),
+            None => println!("{}:{}\n  + {line}", path.display(), i + 1),
+        }
+    }
+    for (i, o) in old_lines.iter().enumerate().skip(new.lines().count()) {
+        println!("{}:{}\n  - {o}", path.display(), i + 1);
+    }
+    std::fs::create_dir_all("tests/golden").map_err(|err| err.to_string())?;
+    std::fs::write(&path, new).map_err(|err| format!("{}: {err}", path.display()))?;
+    println!("{}: rewritten", path.display());
+    Ok(true)
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
-        Command::ReproduceTable { target, full, out } => {
+        Command::Bless { ids } => {
+            let reg = experiment::registry();
+            let mut failed = false;
+            for e in reg.iter().filter(|e| e.implemented()) {
+                if !ids.is_empty() && !ids.iter().any(|i| i == e.id()) {
+                    continue;
+                }
+                if let Err(err) = bless(e.as_ref()) {
+                    eprintln!("error: {}: {err}", e.id());
+                    failed = true;
+                }
+            }
+            if failed {
+                ExitCode::FAILURE
+            } else {
+                ExitCode::SUCCESS
+            }
+        }
+        Command::ReproduceTable {
+            target,
+            full,
+            out,
+            set,
+        } => {
             let opts = RunOptions {
                 mode: if full { Mode::Full } else { Mode::Quick },
                 out,
                 progress: true,
+                set,
             };
             let reg = experiment::registry();
             match target.as_str() {

@@ -26,6 +26,8 @@ pub struct RunOptions {
     pub out: PathBuf,
     /// Show progress on stderr.
     pub progress: bool,
+    /// `key=value` overrides of the experiment's named options.
+    pub set: Vec<(String, String)>,
 }
 
 /// What went wrong while running an experiment.
@@ -46,6 +48,14 @@ pub enum ExperimentError {
     /// The experiment is registered but not implemented yet.
     #[error("experiment `{0}` is registered but not implemented yet")]
     NotImplemented(&'static str),
+    /// An option override that the experiment does not know.
+    #[error("unknown option or value `{key}={value}`")]
+    BadOption {
+        /// The option name.
+        key: String,
+        /// Its value.
+        value: String,
+    },
     /// A filter or tracker failed during the run.
     #[error("experiment `{id}` failed: {message}")]
     Failed {
@@ -70,6 +80,12 @@ pub trait Experiment: Sync {
     }
     /// Runs it, writes its files under `opts.out/<id>/` and returns its tables.
     fn run(&self, opts: &RunOptions) -> Result<Vec<Table>, ExperimentError>;
+    /// The quick-mode numbers that CI pins (`tests/golden/<id>.csv`), as
+    /// CSV with full precision; `None` when nothing is pinned yet.
+    /// `cargo xtask bless` rewrites the file from this.
+    fn golden(&self) -> Result<Option<String>, ExperimentError> {
+        Ok(None)
+    }
 }
 
 /// An experiment that the SPEC asks for and that is not built yet.
@@ -100,11 +116,7 @@ impl Experiment for Planned {
 /// Every experiment, in the order `all` runs them.
 pub fn registry() -> Vec<Box<dyn Experiment>> {
     vec![
-        Box::new(Planned {
-            id: "hikpf",
-            source: "paper 000 Table 1; van der Merwe et al. 2000 Table 1",
-            summary: "PF, PF-EKF, PF-UKF, PF-IEKF, HIKPF on the scalar Gamma-noise model",
-        }),
+        Box::new(crate::hikpf::HikpfExperiment),
         Box::new(Planned {
             id: "ball",
             source: "paper 001 Tables 1-3",

@@ -7,7 +7,15 @@
 //! `cargo xtask reproduce-table` knows.
 
 pub mod experiment;
+pub mod hikpf;
+pub mod metrics;
+pub mod otb;
+pub mod plot;
+pub mod scenes;
 pub mod table;
 
 pub use experiment::{Experiment, ExperimentError, Mode, RunOptions, registry};
+pub use metrics::{MetricsError, OtbScore, score_otb};
+pub use otb::{OtbError, Sequence};
+pub use scenes::{Scene, SceneError, SceneStream};
 pub use table::Table;

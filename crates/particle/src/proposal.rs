@@ -87,6 +87,17 @@ pub trait LocalFilter<const N: usize, const M: usize, D>: Sync {
     ) -> Result<Gaussian<N>, KalmanError>;
 }
 
+impl<const N: usize, const M: usize, D, F: LocalFilter<N, M, D>> LocalFilter<N, M, D> for &F {
+    fn proposal(
+        &self,
+        prior: &Gaussian<N>,
+        model: &D,
+        z: &SVector<f64, M>,
+    ) -> Result<Gaussian<N>, KalmanError> {
+        (**self).proposal(prior, model, z)
+    }
+}
+
 impl<const N: usize, const M: usize, D> LocalFilter<N, M, D> for Ekf
 where
     D: DynamicsJacobian<N> + MeasurementJacobian<N, M>,
