@@ -64,8 +64,10 @@ use crate::metrics::FeaturePoints;
 pub use affine::{AffineScene, AffineStream, TEMPLATE_POINTS};
 pub use ball::{BallMotion, BallScene, BallStream};
 pub use road::{Car, RoadGeometry, RoadScene, RoadStream};
-pub use webcam::{SkinShape, WebcamScene, WebcamStream};
-pub use write::{SCENE_NAMES, WriteSummary, named_stream, write_named_scene, write_scene};
+pub use webcam::{SKIN, SecondObject, SkinShape, WebcamScene, WebcamStream};
+pub use write::{
+    BALL_PREVIEW_FRAMES, SCENE_NAMES, WriteSummary, named_stream, write_named_scene, write_scene,
+};
 
 /// What can go wrong when building or writing a scene.
 #[derive(Debug, thiserror::Error)]
