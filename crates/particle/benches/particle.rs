@@ -1,2 +1,125 @@
-//! placeholder
-fn main() {}
+//! Criterion benchmark of the SPEC section 5 particle anchor: a bootstrap
+//! particle filter on the `hikpf` model (Gamma(3, rate 2) process noise,
+//! x^2/5 measurement with variance 1e-5), N = 10,000, systematic resampling
+//! at every step, reported per step (divide by N for ns per particle-step).
+//! smelly 0.2's particle filter runs the same model in the same run.
+#![allow(missing_docs)]
+
+use std::hint::black_box;
+
+use bayestrack_particle::{
+    Bootstrap, ParticleFilter, ParticleSet, ResamplePolicy, Resampling, StateSpaceModel, stream_rng,
+};
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use nalgebra::{Const, DMatrix, Dyn, OMatrix, SVector, Vector1};
+use rand::{Rng, RngExt};
+use rand_distr::{Distribution, Gamma};
+
+const N: usize = 10_000;
+const SIGMA: f64 = 1e-5;
+
+struct Model {
+    drift: f64,
+    gamma: Gamma<f64>,
+}
+
+impl Model {
+    fn at(t: usize) -> Self {
+        Self {
+            drift: 1.0 + (0.04 * std::f64::consts::PI * t as f64).sin(),
+            gamma: Gamma::new(3.0, 0.5).unwrap(),
+        }
+    }
+}
+
+impl StateSpaceModel<1, 1> for Model {
+    #[inline]
+    fn sample_transition<R: Rng + ?Sized>(
+        &self,
+        x: &SVector<f64, 1>,
+        rng: &mut R,
+    ) -> SVector<f64, 1> {
+        Vector1::new(self.drift + 0.5 * x[0] + self.gamma.sample(rng))
+    }
+    fn log_transition(&self, _: &SVector<f64, 1>, _: &SVector<f64, 1>) -> f64 {
+        unreachable!("the bootstrap proposal never evaluates the prior")
+    }
+    #[inline]
+    fn log_likelihood(&self, x: &SVector<f64, 1>, z: &SVector<f64, 1>) -> f64 {
+        let e = z[0] - 0.2 * x[0] * x[0];
+        -0.5 * e * e / SIGMA
+    }
+}
+
+/// A measurement sequence from the model.
+fn measurements() -> Vec<f64> {
+    let mut rng = stream_rng(&[99]);
+    let mut x = 1.0;
+    (1..=60)
+        .map(|t| {
+            let m = Model::at(t);
+            x = m.drift + 0.5 * x + m.gamma.sample(&mut rng);
+            0.2 * x * x
+        })
+        .collect()
+}
+
+fn bench_bootstrap(c: &mut Criterion) {
+    let zs = measurements();
+    let mut group = c.benchmark_group("bootstrap_pf_hikpf_n10000_step");
+    group.throughput(Throughput::Elements(N as u64));
+    let pf = ParticleFilter {
+        resampling: Resampling::Systematic,
+        policy: ResamplePolicy::Always,
+        ..ParticleFilter::default()
+    };
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        group.bench_function(format!("bayestrack_{threads}_thread"), |b| {
+            pool.install(|| {
+                let mut set = ParticleSet::new(vec![Vector1::new(1.0); N]).unwrap();
+                let mut k = 0u64;
+                b.iter(|| {
+                    let t = (k % 59) as usize + 1;
+                    let m = Model::at(t + 1);
+                    let r = pf
+                        .step(&mut set, &Bootstrap(&m), &Vector1::new(zs[t]), &[k])
+                        .unwrap();
+                    black_box(r);
+                    k += 1;
+                })
+            })
+        });
+    }
+
+    group.bench_function("smelly", |b| {
+        let particles: OMatrix<f64, Const<1>, Dyn> = DMatrix::from_element(1, N, 1.0)
+            .fixed_rows::<1>(0)
+            .into_owned();
+        let mut f = smelly::ParticleFilter::<f64, Const<1>, Dyn>::new(particles).unwrap();
+        let mut rng = stream_rng(&[5]);
+        let mut k = 0usize;
+        b.iter(|| {
+            let t = k % 59 + 1;
+            let m = Model::at(t + 1);
+            let z = zs[t];
+            f.predict(|x, out| out[0] = m.drift + 0.5 * x[0] + m.gamma.sample(&mut rng))
+                .unwrap();
+            f.update_log_likelihood(|x| {
+                let e = z - 0.2 * x[0] * x[0];
+                -0.5 * e * e / SIGMA
+            })
+            .unwrap();
+            let u: f64 = rng.random();
+            f.resample(u).unwrap();
+            k += 1;
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench_bootstrap);
+criterion_main!(benches);

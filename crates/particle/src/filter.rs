@@ -14,7 +14,7 @@ use crate::error::{ParticleError, Result};
 use crate::proposal::Proposal;
 use crate::resample::Resampling;
 use crate::seed::stream_rng;
-use crate::set::{ParticleSet, check_threshold};
+use crate::set::{ParticleSet, check_threshold, exp_flushed};
 
 /// When to resample.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -190,31 +190,50 @@ impl ParticleFilter {
         }
         // weights: w_k = w_{k-1} * increment (log domain), then normalise
         let (_, log_w) = set.parts_mut();
-        if let Some((index, &value)) = increments
-            .iter()
-            .enumerate()
-            .find(|(_, w)| w.is_nan() || **w == f64::INFINITY)
-        {
-            return Err(ParticleError::NonFiniteWeight { index, value });
-        }
-        for (l, inc) in log_w.iter_mut().zip(&increments) {
+        let mut max = f64::NEG_INFINITY;
+        for (index, (l, &inc)) in log_w.iter_mut().zip(&increments).enumerate() {
+            if inc.is_nan() || inc == f64::INFINITY {
+                log_w.copy_from_slice(&previous_log_w);
+                return Err(ParticleError::NonFiniteWeight { index, value: inc });
+            }
             *l += inc;
+            max = max.max(*l);
         }
-        let (log_evidence, degenerate) = match set.normalize() {
-            Ok(lse) => (lse, false),
-            Err(ParticleError::AllWeightsZero { count })
-                if self.degenerate == Degenerate::Error =>
-            {
-                set.parts_mut().1.copy_from_slice(&previous_log_w);
-                return Err(ParticleError::AllWeightsZero { count });
+        if max == f64::NEG_INFINITY {
+            log_w.copy_from_slice(&previous_log_w);
+            if self.degenerate == Degenerate::Error {
+                return Err(ParticleError::AllWeightsZero { count: n });
             }
-            Err(ParticleError::AllWeightsZero { .. }) => {
-                set.parts_mut().1.copy_from_slice(&previous_log_w);
-                (f64::NEG_INFINITY, true)
-            }
-            Err(e) => return Err(e),
-        };
-        let ess = set.ess();
+        }
+        let degenerate = max == f64::NEG_INFINITY;
+        if degenerate {
+            max = log_w.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        }
+        // linear weights relative to the largest, with chunked partial sums
+        // (added in chunk order: the same bits on any number of threads)
+        let mut weights = vec![0.0; n];
+        let partial: Vec<(f64, f64)> = log_w
+            .par_chunks(self.chunk_size)
+            .zip(weights.par_chunks_mut(self.chunk_size))
+            .map(|(l, w)| {
+                let (mut s, mut s2) = (0.0, 0.0);
+                for (l, w) in l.iter().zip(w.iter_mut()) {
+                    *w = exp_flushed(l - max);
+                    s += *w;
+                    s2 += *w * *w;
+                }
+                (s, s2)
+            })
+            .collect();
+        let (sum, sum2) = partial
+            .iter()
+            .fold((0.0, 0.0), |(a, b), (s, s2)| (a + s, b + s2));
+        let lse = max + sum.ln();
+        for l in log_w.iter_mut() {
+            *l -= lse;
+        }
+        let log_evidence = if degenerate { f64::NEG_INFINITY } else { lse };
+        let ess = sum * sum / sum2;
         let resample = match self.policy {
             ResamplePolicy::Always => true,
             ResamplePolicy::Ess(t) => ess < t * n as f64,
@@ -223,8 +242,10 @@ impl ParticleFilter {
         let mut accepted = 0;
         if resample {
             let mut rng = stream_rng(&[key, &[RESAMPLE_STREAM]].concat());
-            let mut ancestors = Vec::with_capacity(n);
-            set.resample(&self.resampling, &mut rng, &mut ancestors)?;
+            let mut ancestors = vec![0; n];
+            self.resampling
+                .resample_checked(&weights, sum, &mut rng, &mut ancestors);
+            set.gather(&ancestors);
             if let Some(parents) = parents {
                 accepted =
                     self.mcmc_move(set, proposal, z, key, &parents, &ancestors, &increments)?;

@@ -137,9 +137,24 @@ impl Resampler for Resampling {
         ancestors: &mut [usize],
     ) -> Result<()> {
         let total = checked_total(weights)?;
+        self.resample_checked(weights, total, rng, ancestors);
+        Ok(())
+    }
+}
+
+impl Resampling {
+    /// Resampling of weights already known to be finite, non-negative and to
+    /// sum to `total > 0` (the filter step has just computed them).
+    pub(crate) fn resample_checked<R: Rng + ?Sized>(
+        &self,
+        weights: &[f64],
+        total: f64,
+        rng: &mut R,
+        ancestors: &mut [usize],
+    ) {
         let m = ancestors.len();
         if m == 0 {
-            return Ok(());
+            return;
         }
         let step = total / m as f64;
         match self {
@@ -174,7 +189,6 @@ impl Resampler for Resampling {
                 }
             }
         }
-        Ok(())
     }
 }
 

@@ -38,6 +38,15 @@ impl<const N: usize> Particle<N> for KalmanParticle<N> {
     }
 }
 
+/// `exp(d)` for `d <= 0`, flushed to zero where the result would be
+/// subnormal (`d < -708`): such weights are invisible next to the largest one
+/// (which is 1), and the flush avoids libm's slow underflow path, which sharp
+/// likelihoods (the `hikpf` model's variance is 1e-5) hit for most particles.
+#[inline]
+pub(crate) fn exp_flushed(d: f64) -> f64 {
+    if d < -708.0 { 0.0 } else { d.exp() }
+}
+
 /// `log sum exp` of finite-or-minus-infinity values, shifted by the maximum.
 ///
 /// # Errors
@@ -58,7 +67,7 @@ pub fn log_sum_exp(log_w: &[f64]) -> Result<f64> {
     if max == f64::NEG_INFINITY {
         return Err(ParticleError::AllWeightsZero { count: log_w.len() });
     }
-    let s: f64 = log_w.iter().map(|&l| (l - max).exp()).sum();
+    let s: f64 = log_w.iter().map(|&l| exp_flushed(l - max)).sum();
     Ok(max + s.ln())
 }
 
@@ -148,7 +157,7 @@ impl<T: Clone> ParticleSet<T> {
     /// The normalised weights into `out` (resized).
     pub fn weights_into(&self, out: &mut Vec<f64>) {
         out.clear();
-        out.extend(self.log_weights.iter().map(|l| l.exp()));
+        out.extend(self.log_weights.iter().map(|&l| exp_flushed(l)));
     }
 
     /// The normalised weights.
@@ -163,7 +172,7 @@ impl<T: Clone> ParticleSet<T> {
         1.0 / self
             .log_weights
             .iter()
-            .map(|l| (2.0 * l).exp())
+            .map(|&l| exp_flushed(2.0 * l))
             .sum::<f64>()
     }
 
@@ -198,14 +207,20 @@ impl<T: Clone> ParticleSet<T> {
         rng: &mut R,
         ancestors: &mut Vec<usize>,
     ) -> Result<()> {
-        let n = self.len();
         let weights = self.weights();
-        ancestors.resize(n, 0);
+        ancestors.resize(self.len(), 0);
         scheme.resample(&weights, rng, ancestors)?;
+        self.gather(ancestors);
+        Ok(())
+    }
+
+    /// Replaces the particles by `ancestors` (one index per new particle)
+    /// and resets the weights to `1/N`.
+    pub(crate) fn gather(&mut self, ancestors: &[usize]) {
+        let n = self.len();
         let old = std::mem::take(&mut self.particles);
         self.particles = ancestors.iter().map(|&a| old[a].clone()).collect();
         self.log_weights.fill(-(n as f64).ln());
-        Ok(())
     }
 
     /// Resamples only when the ESS falls below `threshold * N` (adaptive
