@@ -2,7 +2,7 @@
 //! ground truth that matches what is rendered.
 
 use bayestrack_eval::scenes::{
-    AffineScene, BallMotion, BallScene, Car, RoadScene, Scene, SceneError, SceneStream,
+    AffineScene, BallMotion, BallScene, Car, RoadScene, Scene, SceneError, SceneStream, SkinShape,
     TEMPLATE_POINTS, Visibility, WebcamScene, otb_box,
 };
 use bayestrack_image::{Affine2, Border, Image, Rgb, warp};
@@ -422,6 +422,33 @@ fn webcam_object_enters_through_the_border() {
         is_skin(px(&full.frames[38], x, y)),
         "palm centre at ({x}, {y})"
     );
+    // What groundtruth_rect.1.txt holds: unlabelled until the hand meets the frame.
+    let boxes = full.boxes(1);
+    assert!(boxes[..=30].iter().all(Option::is_none));
+    assert!(boxes[31..].iter().all(Option::is_some));
+    assert!(full.boxes(0).iter().all(Option::is_some));
+}
+
+#[test]
+fn webcam_hand_target_is_skin_at_the_palm() {
+    let p = WebcamScene {
+        frames: 5,
+        target: SkinShape::Hand,
+        ..WebcamScene::default()
+    };
+    let s = p.generate(30).unwrap();
+    for (img, t) in s.frames.iter().zip(&s.truth) {
+        let hand = t.target().unwrap();
+        assert_eq!(
+            (hand.label, hand.bbox.width, hand.bbox.height),
+            ("hand", 31.0, 43.0)
+        );
+        let [hx, hy] = hand.center0();
+        for (dx, dy) in [(-2.5, 6.5), (-8.5, 10.0), (3.5, 12.0)] {
+            let (x, y) = ((hx + dx).round() as usize, (hy + dy).round() as usize);
+            assert!(is_skin(px(img, x, y)), "frame {} ({x}, {y})", t.index);
+        }
+    }
 }
 
 #[test]
