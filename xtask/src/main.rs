@@ -36,6 +36,21 @@ enum Command {
         #[arg(long = "set", value_parser = parse_key_value)]
         set: Vec<(String, String)>,
     },
+    /// Write a synthetic scene as PNG frames + groundtruth_rect.txt so a
+    /// person can look at it (`list` prints the names).
+    Scenes {
+        /// Scene name, or `list`.
+        name: String,
+        /// Output folder (default: target/scenes/<name>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Seed of the scene's random streams.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Number of frames (default: the scene's own length).
+        #[arg(long)]
+        frames: Option<usize>,
+    },
     /// Rewrite tests/golden/<id>.csv from fresh quick runs and print what
     /// changed.
     Bless {
@@ -105,6 +120,35 @@ fn bless(e: &dyn Experiment) -> Result<bool, String> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
+        Command::Scenes {
+            name,
+            out,
+            seed,
+            frames,
+        } => {
+            if name == "list" {
+                for n in bayestrack_eval::scenes::SCENE_NAMES {
+                    println!("{n}");
+                }
+                return ExitCode::SUCCESS;
+            }
+            let out = out.unwrap_or_else(|| PathBuf::from("target/scenes").join(&name));
+            match bayestrack_eval::scenes::write_named_scene(&name, seed, frames, &out) {
+                Ok(summary) => {
+                    println!(
+                        "{}: {} frames written to {}",
+                        name,
+                        summary.frames_written,
+                        summary.dir.display()
+                    );
+                    ExitCode::SUCCESS
+                }
+                Err(err) => {
+                    eprintln!("error: {err}");
+                    ExitCode::FAILURE
+                }
+            }
+        }
         Command::Bless { ids } => {
             let reg = experiment::registry();
             let mut failed = false;

@@ -31,7 +31,7 @@ use crate::plot::{Series, line_chart};
 use crate::table::Table;
 
 /// Key of this experiment's random streams.
-const KEY: u64 = 0x0000_6869_6b70_66; // "hikpf"
+const KEY: u64 = 0x0068_696b_7066; // "hikpf" in ASCII
 
 /// Gamma process noise: shape 3, rate 2 (scale 1/2): mean 1.5, variance 0.75.
 const GAMMA_SHAPE: f64 = 3.0;
