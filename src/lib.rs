@@ -9,3 +9,4 @@ pub use bayestrack_eval as eval;
 pub use bayestrack_image as image;
 pub use bayestrack_kalman as kalman;
 pub use bayestrack_particle as particle;
+pub use bayestrack_trackers as trackers;

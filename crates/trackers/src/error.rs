@@ -1,0 +1,75 @@
+//! The error type of the crate.
+
+use bayestrack_image::BBox;
+
+/// Everything that can go wrong while tracking.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum TrackerError {
+    /// `step` was called before `init`.
+    #[error("the tracker was not initialised")]
+    NotInitialised,
+    /// The initial box has zero (or negative, or non-finite) size.
+    #[error("box {bbox:?} has no area")]
+    EmptyBox {
+        /// The box.
+        bbox: BBox,
+    },
+    /// The initial box leaves the frame.
+    #[error("box {bbox:?} is outside the {width}x{height} frame")]
+    BoxOutsideFrame {
+        /// The box.
+        bbox: BBox,
+        /// Frame width.
+        width: usize,
+        /// Frame height.
+        height: usize,
+    },
+    /// A frame's size differs from the first frame's.
+    #[error("frame is {got_width}x{got_height}, the first frame was {width}x{height}")]
+    FrameSizeChanged {
+        /// First frame width.
+        width: usize,
+        /// First frame height.
+        height: usize,
+        /// This frame's width.
+        got_width: usize,
+        /// This frame's height.
+        got_height: usize,
+    },
+    /// The frame has a channel count this tracker cannot use.
+    #[error("{tracker} needs {expected} channels, the frame has {got}")]
+    Channels {
+        /// Tracker name.
+        tracker: &'static str,
+        /// Accepted channel counts, e.g. "1 or 3".
+        expected: &'static str,
+        /// The frame's channel count.
+        got: usize,
+    },
+    /// A parameter out of its domain.
+    #[error("invalid parameter {name} = {value}: {reason}")]
+    InvalidParameter {
+        /// Name.
+        name: &'static str,
+        /// Value.
+        value: f64,
+        /// Why.
+        reason: &'static str,
+    },
+    /// From the image crate.
+    #[error(transparent)]
+    Image(#[from] bayestrack_image::ImageError),
+    /// From the appearance crate.
+    #[error(transparent)]
+    Appearance(#[from] bayestrack_appearance::AppearanceError),
+    /// From a Kalman filter.
+    #[error(transparent)]
+    Kalman(#[from] bayestrack_kalman::KalmanError),
+    /// From a particle filter.
+    #[error(transparent)]
+    Particle(#[from] bayestrack_particle::ParticleError),
+}
+
+/// Shorthand for results of this crate.
+pub type Result<T, E = TrackerError> = std::result::Result<T, E>;

@@ -1,0 +1,10 @@
+//! The trackers of the bayestrack papers, each a composition of a filter
+//! (`bayestrack-kalman`, `bayestrack-particle`) and an appearance model
+//! (`bayestrack-appearance`), behind one [`Tracker`] trait so that the CLI,
+//! the OTB evaluation and the experiments treat them alike.
+
+mod error;
+mod tracker;
+
+pub use error::{Result, TrackerError};
+pub use tracker::{Estimate, FrameGuard, Tracker, check_initial_box};
