@@ -358,6 +358,7 @@ impl Cue for SkinCue {
         let mean = match candidate {
             Candidate::Window(r) => {
                 if let Some(hsv) = frame.hsv {
+                    hsv.expect_channels("SkinCue", 3)?;
                     check_window("skin", *r, hsv.width(), hsv.height())?;
                     let mut s = 0f64;
                     for y in r.y..r.bottom() {
@@ -762,6 +763,16 @@ mod tests {
         for (f, c) in [(&f_rgb, w(1, 1)), (&f_hsv, w(1, 1)), (&f_rgb, pose)] {
             assert!(skin.log_likelihood(f, &c, &mut s).unwrap().abs() < 1e-6);
         }
+        // A mislabelled plane is an error, not a panic.
+        let wrong = Frame::new().with_hsv(ifd.view());
+        assert!(matches!(
+            skin.log_likelihood(&wrong, &w(1, 1), &mut s),
+            Err(AppearanceError::Image(ImageError::Channels { .. }))
+        ));
+        assert!(matches!(
+            skin.log_likelihood(&Frame::new(), &w(1, 1), &mut s),
+            Err(AppearanceError::MissingPlane { .. })
+        ));
     }
 
     #[test]

@@ -370,8 +370,9 @@ impl<T: Copy> Image<T> {
         self.data[y * self.stride + x * self.channels + c] = value;
     }
 
-    /// Resizes to a new geometry, reusing the allocation, leaving contents unspecified
-    /// (they are filled with `fill`). Used by `*_into` functions that own an output image.
+    /// Changes the geometry, reusing the allocation. If the geometry changes,
+    /// every element becomes `fill`; if not, the contents are kept. Either
+    /// way, treat the contents as unspecified.
     ///
     /// # Errors
     /// [`ImageError::ZeroSize`] if any dimension is zero.
