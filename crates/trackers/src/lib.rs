@@ -3,8 +3,10 @@
 //! (`bayestrack-appearance`), behind one [`Tracker`] trait so that the CLI,
 //! the OTB evaluation and the experiments treat them alike.
 
+mod ball;
 mod error;
 mod tracker;
 
+pub use ball::{BallConfig, BallFilter, BallTracker, MotionModel};
 pub use error::{Result, TrackerError};
 pub use tracker::{Estimate, FrameGuard, Tracker, check_initial_box};
