@@ -15,3 +15,6 @@ pub use lwpr::{Kernel, Lwpr, LwprConfig, Prediction};
 pub mod pose;
 
 pub use pose::{FeatureKind, PoseConfig, PoseEstimator, pose_error};
+pub mod shape_space;
+
+pub use shape_space::{ShapeSpace, ShapeVector};
