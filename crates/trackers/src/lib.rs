@@ -4,9 +4,18 @@
 //! the OTB evaluation and the experiments treat them alike.
 
 mod ball;
+mod correlation;
 mod error;
+mod multi_target;
 mod tracker;
 
 pub use ball::{BallConfig, BallFilter, BallTracker, MotionModel};
+pub use correlation::{
+    ArpMotion, MadTracker, MadTrackerConfig, PfCorrelationConfig, PfCorrelationTracker, SearchArea,
+};
 pub use error::{Result, TrackerError};
+pub use multi_target::{
+    Association, Detection, Feature, MultiTargetConfig, MultiTargetTracker, Track,
+    measurement_matrix, transition_matrix,
+};
 pub use tracker::{Estimate, FrameGuard, Tracker, check_initial_box};
