@@ -285,6 +285,31 @@ impl Ukf {
         })
     }
 
+    /// One sigma-point set through `f` then `h`; `q_add` and `r_add` are the
+    /// additive noise covariances (zero in the augmented form, whose noise
+    /// is in the sigma points).
+    #[allow(clippy::too_many_arguments)]
+    fn joint<const N: usize, const V: usize, const W: usize, const M: usize>(
+        &self,
+        prior: &Gaussian<N>,
+        v: &Gaussian<V>,
+        w: &Gaussian<W>,
+        f: impl Fn(&SVector<f64, N>, &SVector<f64, V>) -> SVector<f64, N>,
+        h: impl Fn(&SVector<f64, N>, &SVector<f64, W>) -> SVector<f64, M>,
+        q_add: &SMatrix<f64, N, N>,
+        r_add: &SMatrix<f64, M, M>,
+        z: &SVector<f64, M>,
+    ) -> Result<UkfStep<N, M>> {
+        let mo = self.transform(prior, v, w, f, h, Step::Predict)?;
+        let predicted = Gaussian::checked(
+            mo.x_mean,
+            linalg::symmetrize(&(mo.p_xx + q_add)),
+            Step::Predict,
+        )?;
+        let update = Self::correct(&predicted, &mo.y_mean, mo.p_yy + r_add, &mo.p_xy, z)?;
+        Ok(UkfStep { predicted, update })
+    }
+
     /// Additive-noise time update: sigma points of the prior through `f`,
     /// `P = sum Wc (X - x)(X - x)^T + Q`.
     ///
@@ -365,27 +390,16 @@ impl Ukf {
                 update: Update::missing(&predicted),
             });
         };
-        let mo = self.transform(
+        self.joint(
             prior,
             &none::<0>(),
             &none::<0>(),
             |x, _| dynamics.propagate(x),
             |x, _| measurement.observe(x),
-            Step::Predict,
-        )?;
-        let predicted = Gaussian::checked(
-            mo.x_mean,
-            linalg::symmetrize(&(mo.p_xx + dynamics.process_noise())),
-            Step::Predict,
-        )?;
-        let update = Self::correct(
-            &predicted,
-            &mo.y_mean,
-            mo.p_yy + measurement.measurement_noise(),
-            &mo.p_xy,
+            &dynamics.process_noise(),
+            &measurement.measurement_noise(),
             z,
-        )?;
-        Ok(UkfStep { predicted, update })
+        )
     }
 
     /// Augmented time update: sigma points of `[x; v]` through `f(x, v)`.
@@ -463,17 +477,16 @@ impl Ukf {
                 update: Update::missing(&predicted),
             });
         };
-        let mo = self.transform(
+        self.joint(
             prior,
             &dynamics.process_noise_dist(),
             &measurement.measurement_noise_dist(),
             |x, v| dynamics.propagate_with(x, v),
             |x, n| measurement.observe_with(x, n),
-            Step::Predict,
-        )?;
-        let predicted = Gaussian::checked(mo.x_mean, linalg::symmetrize(&mo.p_xx), Step::Predict)?;
-        let update = Self::correct(&predicted, &mo.y_mean, mo.p_yy, &mo.p_xy, z)?;
-        Ok(UkfStep { predicted, update })
+            &SMatrix::zeros(),
+            &SMatrix::zeros(),
+            z,
+        )
     }
 
     /// Unscented Rauch-Tung-Striebel smoothing (Sarkka 2008) of filtered

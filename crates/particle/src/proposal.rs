@@ -98,35 +98,28 @@ impl<const N: usize, const M: usize, D, F: LocalFilter<N, M, D>> LocalFilter<N, 
     }
 }
 
-impl<const N: usize, const M: usize, D> LocalFilter<N, M, D> for Ekf
-where
-    D: DynamicsJacobian<N> + MeasurementJacobian<N, M>,
-{
-    fn proposal(
-        &self,
-        prior: &Gaussian<N>,
-        model: &D,
-        z: &SVector<f64, M>,
-    ) -> Result<Gaussian<N>, KalmanError> {
-        let predicted = self.predict(prior, model)?;
-        Ok(self.update(&predicted, model, Some(z))?.posterior)
-    }
+/// The EKF and IEKF proposals: predict, then update with `z_k`.
+macro_rules! linearised_local_filter {
+    ($filter:ty) => {
+        impl<const N: usize, const M: usize, D> LocalFilter<N, M, D> for $filter
+        where
+            D: DynamicsJacobian<N> + MeasurementJacobian<N, M>,
+        {
+            fn proposal(
+                &self,
+                prior: &Gaussian<N>,
+                model: &D,
+                z: &SVector<f64, M>,
+            ) -> Result<Gaussian<N>, KalmanError> {
+                let predicted = self.predict(prior, model)?;
+                Ok(self.update(&predicted, model, Some(z))?.posterior)
+            }
+        }
+    };
 }
 
-impl<const N: usize, const M: usize, D> LocalFilter<N, M, D> for Iekf
-where
-    D: DynamicsJacobian<N> + MeasurementJacobian<N, M>,
-{
-    fn proposal(
-        &self,
-        prior: &Gaussian<N>,
-        model: &D,
-        z: &SVector<f64, M>,
-    ) -> Result<Gaussian<N>, KalmanError> {
-        let predicted = self.predict(prior, model)?;
-        Ok(self.update(&predicted, model, Some(z))?.posterior)
-    }
-}
+linearised_local_filter!(Ekf);
+linearised_local_filter!(Iekf);
 
 /// The unscented particle filter's local step: the augmented-state UKF of
 /// paper 000 sec. 3.3 (a), one sigma-point set of `[x, v, n]` through `f`
