@@ -1,7 +1,4 @@
-//! bayestrack: Bayesian filtering and visual object tracking.
-//!
-//! The umbrella crate re-exports every workspace crate as a module; depend on
-//! a single crate (for example `bayestrack-kalman`) when that is all you need.
+#![doc = include_str!("../README.md")]
 
 pub use bayestrack_affine as affine;
 pub use bayestrack_appearance as appearance;
