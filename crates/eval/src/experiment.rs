@@ -127,11 +127,7 @@ pub fn registry() -> Vec<Box<dyn Experiment>> {
             source: "paper 002 (RMS eq. 6, particles per frame)",
             summary: "HKPF, ISPF and self-tuning HKPF on synthetic affine sequences",
         }),
-        Box::new(Planned {
-            id: "correlation",
-            source: "paper 004 Tables 1-3",
-            summary: "MAD vs PF correlation tracker through an occlusion; Kalman multi-target",
-        }),
+        Box::new(crate::correlation::CorrelationExperiment),
         Box::new(Planned {
             id: "condensation",
             source: "paper 003",

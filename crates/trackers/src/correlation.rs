@@ -321,12 +321,18 @@ pub struct PfCorrelationConfig {
     /// The tracker reports the target lost when the MAD at its output
     /// exceeds this (gray levels).
     pub lost_mad: f64,
+    /// Not in the paper: a cap on the MAD inside eq. 7,
+    /// `p = exp(-min(MAD, cap) / (2 sigma^2))`. Windows worse than the cap
+    /// are equally unlikely, so where no particle sees the target (an
+    /// occlusion) the weights are flat and the particles coast with the
+    /// ARP. `None` is eq. 7 as printed.
+    pub mad_cap: Option<f64>,
 }
 
 impl Default for PfCorrelationConfig {
     /// `Ns = 15`, spread 5 px, the [`ArpMotion::Drift`] model with `B = 4`
-    /// px and gain 0.5, `sigma = 1.5`
-    /// gray levels, systematic resampling, seed 0, lost above a MAD of 20.
+    /// px and gain 0.5, `sigma = 1.5` gray levels, systematic resampling,
+    /// seed 0, lost above a MAD of 20, no MAD cap (eq. 7 as printed).
     fn default() -> Self {
         Self {
             particles: 15,
@@ -339,6 +345,7 @@ impl Default for PfCorrelationConfig {
             resampling: Resampling::Systematic,
             seed: 0,
             lost_mad: 20.0,
+            mad_cap: None,
         }
     }
 }
@@ -368,6 +375,15 @@ impl PfCorrelationConfig {
                 reason: "must be a non-negative number",
             });
         }
+        if let Some(cap) = self.mad_cap
+            && (cap.is_nan() || cap < 0.0)
+        {
+            return Err(TrackerError::InvalidParameter {
+                name: "mad_cap",
+                value: cap,
+                reason: "must be a non-negative number",
+            });
+        }
         MadLikelihood::new(self.sigma)?;
         self.motion.check()
     }
@@ -380,6 +396,7 @@ struct Observation<'a> {
     likelihood: MadLikelihood,
     motion: ArpMotion,
     drift: Vector2<f64>,
+    cap: f64,
 }
 
 /// Centre limits that keep a `tw x th` window inside a `w x h` frame.
@@ -430,7 +447,7 @@ impl<'a> Proposal<Vector2<f64>, Observation<'a>> for ArpProposal {
         let x = clamp_centre(moved, tw, th, z.frame.width(), z.frame.height());
         let lw = z
             .likelihood
-            .log_likelihood(z.mad_at(&x))
+            .log_likelihood(z.mad_at(&x).min(z.cap))
             .unwrap_or(f64::NEG_INFINITY);
         Ok((x, lw))
     }
@@ -562,6 +579,7 @@ impl Tracker for PfCorrelationTracker {
             likelihood: self.likelihood,
             motion: self.config.motion,
             drift: self.drift,
+            cap: self.config.mad_cap.unwrap_or(f64::INFINITY),
         };
         let key = [self.config.seed, STEP_STREAM, self.frame_index];
         self.filter.step(set, &ArpProposal, &z, &key)?;
@@ -780,6 +798,10 @@ mod tests {
         for bad in [
             PfCorrelationConfig {
                 particles: 0,
+                ..Default::default()
+            },
+            PfCorrelationConfig {
+                mad_cap: Some(f64::NAN),
                 ..Default::default()
             },
             PfCorrelationConfig {
