@@ -117,11 +117,7 @@ impl Experiment for Planned {
 pub fn registry() -> Vec<Box<dyn Experiment>> {
     vec![
         Box::new(crate::hikpf::HikpfExperiment),
-        Box::new(Planned {
-            id: "ball",
-            source: "paper 001 Tables 1-3",
-            summary: "KF, UKF, PF_10/30/70 histogram ball trackers: fps, error, lost, found",
-        }),
+        Box::new(crate::ball::BallExperiment),
         Box::new(Planned {
             id: "affine",
             source: "paper 002 (RMS eq. 6, particles per frame)",

@@ -6,6 +6,7 @@
 //! prints. [`experiment::registry`] lists every experiment id that
 //! `cargo xtask reproduce-table` knows.
 
+pub mod ball;
 pub mod correlation;
 pub mod experiment;
 pub mod hikpf;

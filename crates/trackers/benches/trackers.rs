@@ -1,0 +1,168 @@
+//! Criterion benchmarks for bayestrack-trackers (frames per second; the
+//! throughput line of each benchmark is the tracker's fps).
+
+use std::hint::black_box;
+
+use bayestrack_image::{BBox, Image};
+use bayestrack_trackers::{
+    BallConfig, BallFilter, BallTracker, MadTracker, MadTrackerConfig, MultiTargetConfig,
+    MultiTargetTracker, PfCorrelationConfig, PfCorrelationTracker, SearchArea, Tracker,
+};
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use rand::SeedableRng;
+use rand_distr::{Distribution, StandardNormal};
+use rand_xoshiro::Xoshiro256PlusPlus;
+
+/// Paper 001's screen as the `ball` experiment renders it: 200x160 RGB, a
+/// dark ball of radius 10 on a light screen moving 3 px/frame and reflected
+/// at the edges, Gaussian sensor noise of 3 grey levels. Returns the frames
+/// and the first frame's OTB box.
+fn ball_frames(n: usize) -> (Vec<Image<u8>>, BBox) {
+    let (w, h, r) = (200usize, 160usize, 10.0f64);
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(1);
+    let (mut x, mut y, mut vx, mut vy) = (60.0f64, 50.0f64, 2.4f64, 1.8f64);
+    let mut frames = Vec::with_capacity(n);
+    let first = BBox::new(x - r + 1.5, y - r + 1.5, 2.0 * r, 2.0 * r);
+    for _ in 0..n {
+        let mut img = Image::new(w, h, 3, 0u8).unwrap();
+        for (i, v) in img.as_mut_slice().iter_mut().enumerate() {
+            let (px, py) = ((i / 3) % w, i / 3 / w);
+            let inside = (px as f64 - x).hypot(py as f64 - y) <= r;
+            let base = if inside { 20.0 } else { 245.0 };
+            let z: f64 = StandardNormal.sample(&mut rng);
+            *v = (base + 3.0 * z).round().clamp(0.0, 255.0) as u8;
+        }
+        frames.push(img);
+        x += vx;
+        y += vy;
+        if !(r - 0.5..=w as f64 - 0.5 - r).contains(&x) {
+            vx = -vx;
+        }
+        if !(r - 0.5..=h as f64 - 0.5 - r).contains(&y) {
+            vy = -vy;
+        }
+    }
+    (frames, first)
+}
+
+/// Paper 001's five ball trackers, one step per iteration.
+fn bench_ball(c: &mut Criterion) {
+    let (frames, first) = ball_frames(120);
+    let mut group = c.benchmark_group("ball 200x160 (paper 001)");
+    group.throughput(Throughput::Elements(1));
+    for filter in BallFilter::PAPER {
+        let mut tracker = BallTracker::new(filter, BallConfig::default(), 7).unwrap();
+        tracker.init(frames[0].view(), first).unwrap();
+        let mut k = 0;
+        group.bench_function(format!("{} step", filter.label()), |b| {
+            b.iter(|| {
+                k += 1;
+                if k == frames.len() {
+                    k = 1;
+                    tracker.init(frames[0].view(), first).unwrap();
+                }
+                black_box(tracker.step(black_box(frames[k].view())).unwrap())
+            })
+        });
+    }
+    group.finish();
+}
+
+/// Paper 004's road as the `correlation` experiment renders it, simplified:
+/// 320x240 gray, a textured road, `cars` dark 24x32 cars moving (2.56, 5)
+/// px/frame (the second 60 px to the right), a billboard over rows 118-171,
+/// noise of 2 grey levels. Returns the background, the frames and the first
+/// car's OTB box.
+fn road_frames(n: usize, cars: usize) -> (Image<u8>, Vec<Image<u8>>, BBox) {
+    let (w, h) = (320usize, 240usize);
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(2);
+    let bg = Image::from_fn(w, h, |x, y| (95 + (x * 7 + y * 13) % 11) as u8).unwrap();
+    let mut frames = Vec::with_capacity(n);
+    for k in 0..n {
+        let mut img = bg.clone();
+        for c in 0..cars {
+            let (cx, cy) = (
+                57.0 + 60.0 * c as f64 + 2.56 * k as f64,
+                85.0 + 5.0 * (k % 20) as f64,
+            );
+            for y in 0..h {
+                for x in 0..w {
+                    let (u, v) = ((x as f64 - cx + 12.0) / 24.0, (y as f64 - cy + 16.0) / 32.0);
+                    if (0.0..1.0).contains(&u) && (0.0..1.0).contains(&v) {
+                        let shade = if (0.3..0.6).contains(&v) { 200 } else { 55 };
+                        img.set(x, y, 0, shade);
+                    }
+                }
+            }
+        }
+        if cars == 1 {
+            for y in 118..172 {
+                for x in 50..140 {
+                    img.set(x, y, 0, if (y - 118) / 11 % 2 == 1 { 55 } else { 228 });
+                }
+            }
+        }
+        for v in img.as_mut_slice() {
+            let z: f64 = StandardNormal.sample(&mut rng);
+            *v = (f64::from(*v) + 2.0 * z).round().clamp(0.0, 255.0) as u8;
+        }
+        frames.push(img);
+    }
+    (bg, frames, BBox::new(46.0, 70.0, 25.0, 33.0))
+}
+
+/// Paper 004's trackers on the 320x240 road: MAD (window and whole-frame
+/// search), PF correlation (Ns = 15), and the Kalman multi-target tracker
+/// on two cars.
+fn bench_road(c: &mut Criterion) {
+    let (_, frames, first) = road_frames(20, 1);
+    let mut group = c.benchmark_group("road 320x240 (paper 004)");
+    group.throughput(Throughput::Elements(1));
+    let trackers: Vec<(&str, Box<dyn Tracker>)> = vec![
+        (
+            "MAD window step",
+            Box::new(MadTracker::new(MadTrackerConfig::default()).unwrap()),
+        ),
+        (
+            "MAD frame step",
+            Box::new(
+                MadTracker::new(MadTrackerConfig {
+                    search: SearchArea::Frame,
+                    ..MadTrackerConfig::default()
+                })
+                .unwrap(),
+            ),
+        ),
+        (
+            "PF correlation Ns=15 step",
+            Box::new(PfCorrelationTracker::new(PfCorrelationConfig::default()).unwrap()),
+        ),
+    ];
+    for (name, mut tracker) in trackers {
+        tracker.init(frames[0].view(), first).unwrap();
+        let mut k = 0;
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                k += 1;
+                if k == frames.len() {
+                    k = 1;
+                    tracker.init(frames[0].view(), first).unwrap();
+                }
+                black_box(tracker.step(black_box(frames[k].view())).unwrap())
+            })
+        });
+    }
+    let (bg, frames, _) = road_frames(20, 2);
+    let mut multi = MultiTargetTracker::new(MultiTargetConfig::default(), bg.view()).unwrap();
+    let mut k = 0;
+    group.bench_function("multi-target 2 cars step", |b| {
+        b.iter(|| {
+            k = (k + 1) % frames.len();
+            black_box(multi.step(black_box(frames[k].view())).unwrap())
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench_ball, bench_road);
+criterion_main!(benches);
