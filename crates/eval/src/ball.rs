@@ -43,7 +43,7 @@ use bayestrack_particle::stream_seed;
 use bayestrack_trackers::{BallConfig, BallFilter, BallTracker, MotionModel, Tracker};
 use rayon::prelude::*;
 
-use crate::experiment::{Experiment, ExperimentError, Mode, RunOptions};
+use crate::experiment::{Experiment, ExperimentError, Mode, RunOptions, write_text};
 use crate::metrics::center_error;
 use crate::plot::{Series, line_chart};
 use crate::scenes::{BallMotion, BallScene, SceneStream};
@@ -1003,10 +1003,7 @@ fn write_outputs(result: &BallResult, dir: &Path, tables: &[Table]) -> Result<()
     ];
     for (name, t) in names.iter().zip(tables) {
         let path = dir.join(format!("{name}.csv"));
-        std::fs::write(&path, t.to_csv()).map_err(|source| ExperimentError::Io {
-            path: path.clone(),
-            source,
-        })?;
+        write_text(&path, &t.to_csv())?;
     }
     // Error over time, first run of the noisy bouncing condition.
     let shown = Condition {
@@ -1064,11 +1061,7 @@ impl Experiment for BallExperiment {
         for (k, v) in &opts.set {
             options.apply(k, v)?;
         }
-        let dir = opts.out.join(self.id());
-        std::fs::create_dir_all(&dir).map_err(|source| ExperimentError::Io {
-            path: dir.clone(),
-            source,
-        })?;
+        let dir = opts.output_dir(self.id())?;
         let result = run(&options, Some(&dir.join("runs.csv")), opts.progress)?;
         let mut tables = vec![
             result.table1(FrameMode::Offline),

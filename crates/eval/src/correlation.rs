@@ -27,7 +27,7 @@ use bayestrack_trackers::{
 };
 use rayon::prelude::*;
 
-use crate::experiment::{Experiment, ExperimentError, Mode, RunOptions};
+use crate::experiment::{Experiment, ExperimentError, Mode, RunOptions, write_text};
 use crate::plot::{Series, line_chart};
 use crate::scenes::{FrameTruth, RoadScene};
 use crate::table::Table;
@@ -653,13 +653,6 @@ impl CorrelationResult {
     }
 }
 
-fn io(path: &Path) -> impl Fn(std::io::Error) -> ExperimentError + '_ {
-    move |source| ExperimentError::Io {
-        path: path.to_path_buf(),
-        source,
-    }
-}
-
 /// Writes the CSV files and the figures under `dir`.
 fn write_outputs(result: &CorrelationResult, dir: &Path) -> Result<(), ExperimentError> {
     for (name, table) in [
@@ -669,7 +662,7 @@ fn write_outputs(result: &CorrelationResult, dir: &Path) -> Result<(), Experimen
         ("table3_multi.csv", result.table3()),
     ] {
         let path = dir.join(name);
-        std::fs::write(&path, table.to_csv()).map_err(io(&path))?;
+        write_text(&path, &table.to_csv())?;
     }
     // Every frame of every run and tracker.
     let path = dir.join("frames.csv");
@@ -698,7 +691,7 @@ fn write_outputs(result: &CorrelationResult, dir: &Path) -> Result<(), Experimen
             text.push('\n');
         }
     }
-    std::fs::write(&path, text).map_err(io(&path))?;
+    write_text(&path, &text)?;
     // Trajectories (run 0) with the paper's, and error over time.
     let r0 = &result.runs[0];
     let mut traj = vec![
@@ -770,8 +763,7 @@ impl Experiment for CorrelationExperiment {
         for (k, v) in &opts.set {
             config.apply(k, v)?;
         }
-        let dir = opts.out.join(self.id());
-        std::fs::create_dir_all(&dir).map_err(io(&dir))?;
+        let dir = opts.output_dir(self.id())?;
         let result = run(&config)?;
         write_outputs(&result, &dir)?;
         let mut tables = result.tables();

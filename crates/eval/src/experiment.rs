@@ -30,6 +30,32 @@ pub struct RunOptions {
     pub set: Vec<(String, String)>,
 }
 
+impl RunOptions {
+    /// The experiment's output folder `out/<id>/`, created if missing.
+    ///
+    /// # Errors
+    /// [`ExperimentError::Io`] naming the folder.
+    pub fn output_dir(&self, id: &str) -> Result<PathBuf, ExperimentError> {
+        let dir = self.out.join(id);
+        std::fs::create_dir_all(&dir).map_err(|source| ExperimentError::Io {
+            path: dir.clone(),
+            source,
+        })?;
+        Ok(dir)
+    }
+}
+
+/// Writes `contents` to `path`, naming the file in the error.
+///
+/// # Errors
+/// [`ExperimentError::Io`].
+pub fn write_text(path: &std::path::Path, contents: &str) -> Result<(), ExperimentError> {
+    std::fs::write(path, contents).map_err(|source| ExperimentError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
 /// What went wrong while running an experiment.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]

@@ -26,7 +26,7 @@ use rand::Rng;
 use rand_distr::{Distribution, Gamma, StandardNormal};
 use rayon::prelude::*;
 
-use crate::experiment::{Experiment, ExperimentError, Mode, RunOptions};
+use crate::experiment::{Experiment, ExperimentError, Mode, RunOptions, write_text};
 use crate::plot::{Series, line_chart};
 use crate::table::Table;
 
@@ -814,10 +814,7 @@ pub fn run(
 /// Writes the summary CSV and the per-run error figure (paper 000 Fig. 3).
 fn write_outputs(result: &HikpfResult, dir: &Path) -> Result<(), ExperimentError> {
     let csv = dir.join("table.csv");
-    std::fs::write(&csv, result.table().to_csv()).map_err(|source| ExperimentError::Io {
-        path: csv.clone(),
-        source,
-    })?;
+    write_text(&csv, &result.table().to_csv())?;
     let series: Vec<Series> = FilterKind::ALL
         .iter()
         .enumerate()
@@ -880,11 +877,7 @@ impl Experiment for HikpfExperiment {
         for (k, v) in &opts.set {
             config.apply(k, v)?;
         }
-        let dir = opts.out.join(self.id());
-        std::fs::create_dir_all(&dir).map_err(|source| ExperimentError::Io {
-            path: dir.clone(),
-            source,
-        })?;
+        let dir = opts.output_dir(self.id())?;
         let result = run(&config, Some(&dir.join("runs.csv")), opts.progress)?;
         write_outputs(&result, &dir)?;
         let mut table = result.table();
