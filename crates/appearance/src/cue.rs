@@ -165,6 +165,18 @@ fn check_floor(floor: f64) -> Result<f64> {
     }
 }
 
+/// Checks the side of a cue's pose patch.
+fn check_patch_side(patch_side: usize) -> Result<()> {
+    if patch_side == 0 {
+        return Err(AppearanceError::InvalidParameter {
+            name: "patch_side",
+            value: "0".to_string(),
+            reason: "must be > 0",
+        });
+    }
+    Ok(())
+}
+
 /// Default floor added to scores before the log (keeps `ln 0` finite).
 pub const DEFAULT_FLOOR: f64 = 1e-12;
 
@@ -266,13 +278,7 @@ impl HistogramCue {
                 detail: "empty reference histogram".to_string(),
             });
         }
-        if patch_side == 0 {
-            return Err(AppearanceError::InvalidParameter {
-                name: "patch_side",
-                value: "0".to_string(),
-                reason: "must be > 0",
-            });
-        }
+        check_patch_side(patch_side)?;
         Ok(Self {
             reference,
             kind,
@@ -330,13 +336,7 @@ impl SkinCue {
     /// # Errors
     /// [`AppearanceError::InvalidParameter`].
     pub fn new(model: SkinModel, floor: f64, patch_side: usize) -> Result<Self> {
-        if patch_side == 0 {
-            return Err(AppearanceError::InvalidParameter {
-                name: "patch_side",
-                value: "0".to_string(),
-                reason: "must be > 0",
-            });
-        }
+        check_patch_side(patch_side)?;
         Ok(Self {
             model,
             floor: check_floor(floor)?,
@@ -409,13 +409,7 @@ impl IfdCue {
     /// # Errors
     /// [`AppearanceError::InvalidParameter`].
     pub fn new(floor: f64, patch_side: usize) -> Result<Self> {
-        if patch_side == 0 {
-            return Err(AppearanceError::InvalidParameter {
-                name: "patch_side",
-                value: "0".to_string(),
-                reason: "must be > 0",
-            });
-        }
+        check_patch_side(patch_side)?;
         Ok(Self {
             floor: check_floor(floor)?,
             patch_side,
