@@ -47,6 +47,14 @@ pub enum TrackerError {
         /// The frame's channel count.
         got: usize,
     },
+    /// No registered tracker has this name.
+    #[error("no tracker called '{name}'; the trackers are: {known}")]
+    UnknownTracker {
+        /// The name asked for.
+        name: String,
+        /// The registered names, comma separated.
+        known: String,
+    },
     /// A parameter out of its domain.
     #[error("invalid parameter {name} = {value}: {reason}")]
     InvalidParameter {

@@ -7,6 +7,7 @@ mod ball;
 mod correlation;
 mod error;
 mod multi_target;
+mod registry;
 mod tracker;
 
 pub use ball::{BallConfig, BallFilter, BallTracker, MotionModel};
@@ -18,4 +19,5 @@ pub use multi_target::{
     Association, Detection, Feature, MultiTargetConfig, MultiTargetTracker, Track,
     measurement_matrix, transition_matrix,
 };
+pub use registry::{REGISTRY, TrackerInfo, build_tracker, tracker_info};
 pub use tracker::{Estimate, FrameGuard, Tracker, check_initial_box};

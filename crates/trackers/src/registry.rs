@@ -1,0 +1,122 @@
+//! Every tracker by name, so that the CLI (`bayestrack track`,
+//! `bayestrack trackers`) and the OTB evaluation (`cargo xtask otb`) run
+//! any of them alike. A tracker added to [`REGISTRY`] joins both.
+
+use crate::ball::{BallConfig, BallTracker};
+use crate::correlation::{MadTracker, MadTrackerConfig, PfCorrelationConfig, PfCorrelationTracker};
+use crate::error::{Result, TrackerError};
+use crate::tracker::Tracker;
+
+/// One registered tracker.
+#[derive(Debug, Clone, Copy)]
+pub struct TrackerInfo {
+    /// The name given to `--tracker`.
+    pub name: &'static str,
+    /// One line: what it is and where it comes from.
+    pub summary: &'static str,
+    /// Whether it estimates the target's scale (box size or affine pose);
+    /// position-only trackers keep the initial box size.
+    pub handles_scale: bool,
+    build: fn(u64) -> Result<Box<dyn Tracker>>,
+}
+
+impl TrackerInfo {
+    /// A fresh tracker seeded with `seed` (deterministic trackers ignore it).
+    ///
+    /// # Errors
+    /// Whatever the tracker's constructor reports.
+    pub fn build(&self, seed: u64) -> Result<Box<dyn Tracker>> {
+        (self.build)(seed)
+    }
+}
+
+fn boxed<T: Tracker + 'static>(t: Result<T>) -> Result<Box<dyn Tracker>> {
+    Ok(Box::new(t?))
+}
+
+/// Every tracker, in the order `bayestrack trackers` lists them.
+pub const REGISTRY: &[TrackerInfo] = &[
+    TrackerInfo {
+        name: "mad",
+        summary: "paper 004 sec. 2: exhaustive MAD template search in a 16 px window, fixed template, translation only",
+        handles_scale: false,
+        build: |_| boxed(MadTracker::new(MadTrackerConfig::default())),
+    },
+    TrackerInfo {
+        name: "pf-correlation",
+        summary: "paper 004 sec. 3: 15-particle correlation PF, ARP drift dynamics, MAD likelihood (capped at 40), translation only",
+        handles_scale: false,
+        build: |seed| {
+            boxed(PfCorrelationTracker::new(PfCorrelationConfig {
+                seed,
+                mad_cap: Some(40.0),
+                ..PfCorrelationConfig::default()
+            }))
+        },
+    },
+    TrackerInfo {
+        name: "ball-kf",
+        summary: "paper 001: constant-velocity KF, measurement = best RGB-histogram match near the prediction, translation only",
+        handles_scale: false,
+        build: |_| boxed(BallTracker::kf(BallConfig::default())),
+    },
+    TrackerInfo {
+        name: "ball-ukf",
+        summary: "paper 001: the same with a UKF (alpha 1, beta 2, kappa 0), translation only",
+        handles_scale: false,
+        build: |_| boxed(BallTracker::ukf(BallConfig::default())),
+    },
+    TrackerInfo {
+        name: "ball-pf30",
+        summary: "paper 001: 30-particle PF weighted by RGB-histogram L2 distance, translation only",
+        handles_scale: false,
+        build: |seed| boxed(BallTracker::pf(BallConfig::default(), 30, seed)),
+    },
+];
+
+/// The tracker called `name`.
+///
+/// # Errors
+/// [`TrackerError::UnknownTracker`] listing the known names.
+pub fn tracker_info(name: &str) -> Result<&'static TrackerInfo> {
+    REGISTRY
+        .iter()
+        .find(|t| t.name == name)
+        .ok_or_else(|| TrackerError::UnknownTracker {
+            name: name.to_string(),
+            known: REGISTRY
+                .iter()
+                .map(|t| t.name)
+                .collect::<Vec<_>>()
+                .join(", "),
+        })
+}
+
+/// A fresh tracker called `name`, seeded with `seed`.
+///
+/// # Errors
+/// [`TrackerError::UnknownTracker`], or the tracker's constructor's error.
+pub fn build_tracker(name: &str, seed: u64) -> Result<Box<dyn Tracker>> {
+    tracker_info(name)?.build(seed)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_entry_builds_under_its_own_name() {
+        for info in REGISTRY {
+            let t = info.build(7).unwrap();
+            assert_eq!(t.name(), info.name, "registry entry {}", info.name);
+        }
+        let names: std::collections::HashSet<_> = REGISTRY.iter().map(|t| t.name).collect();
+        assert_eq!(names.len(), REGISTRY.len(), "duplicate names");
+    }
+
+    #[test]
+    fn unknown_names_list_the_known_ones() {
+        let err = build_tracker("csrt", 0).err().unwrap().to_string();
+        assert!(err.contains("csrt") && err.contains("mad"), "{err}");
+    }
+}
