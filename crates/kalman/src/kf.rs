@@ -18,7 +18,12 @@ fn linear_predict<const N: usize>(
     p: &SMatrix<f64, N, N>,
     q: &SMatrix<f64, N, N>,
 ) -> Result<Gaussian<N>> {
-    let cov = linalg::symmetrize(&(linalg::mul_t(&linalg::mul(f, p), f) + q));
+    let cov = linalg::mirror_lower(linalg::lower_mul_t_add(
+        &linalg::symmetrize(q),
+        1.0,
+        &linalg::mul(f, p),
+        f,
+    ));
     linalg::check_finite_vec(&mean, "predicted mean", Step::Predict)?;
     linalg::check_finite_mat(&cov, "predicted covariance", Step::Predict)?;
     Ok(Gaussian::from_parts(mean, cov))

@@ -8,24 +8,47 @@ use crate::error::{KalmanError, Result, Step};
 /// Relative tolerance of the symmetry check on user covariances.
 const SYMMETRY_TOL: f64 = 1e-9;
 
+/// Whether every entry is finite, without a branch per entry: `0 * x` is
+/// `0` for finite `x` and NaN for infinite or NaN `x`, and NaN propagates
+/// through the sums. Lane-wise partial sums keep the dependency chains short
+/// (and vectorise); the early-exit `iter().all(is_finite)` cost a branch per
+/// entry and kept the matrices in memory.
+#[inline(always)]
+pub(crate) fn all_finite(xs: &[f64]) -> bool {
+    let mut acc = [0.0f64; 4];
+    let chunks = xs.chunks_exact(4);
+    let rest = chunks.remainder();
+    for c in chunks {
+        for (a, x) in acc.iter_mut().zip(c) {
+            *a += x * 0.0;
+        }
+    }
+    for (a, x) in acc.iter_mut().zip(rest) {
+        *a += x * 0.0;
+    }
+    (acc[0] + acc[1] + acc[2] + acc[3]) == 0.0
+}
+
+#[inline(always)]
 pub(crate) fn check_finite_vec<const D: usize>(
     v: &SVector<f64, D>,
     what: &'static str,
     step: Step,
 ) -> Result<()> {
-    if v.iter().all(|x| x.is_finite()) {
+    if all_finite(v.as_slice()) {
         Ok(())
     } else {
         Err(KalmanError::NonFinite { what, step })
     }
 }
 
+#[inline(always)]
 pub(crate) fn check_finite_mat<const R: usize, const C: usize>(
     m: &SMatrix<f64, R, C>,
     what: &'static str,
     step: Step,
 ) -> Result<()> {
-    if m.iter().all(|x| x.is_finite()) {
+    if all_finite(m.as_slice()) {
         Ok(())
     } else {
         Err(KalmanError::NonFinite { what, step })
@@ -33,22 +56,24 @@ pub(crate) fn check_finite_mat<const R: usize, const C: usize>(
 }
 
 /// `A B` with fixed-size loops that unroll for small dimensions (nalgebra's
-/// general product stays an out-of-line call in the filter hot paths).
+/// general product stays an out-of-line call in the filter hot paths). The
+/// first term initialises the sum: `0 + x` is not `x` for `x = -0`, so a
+/// zero-initialised accumulator costs one addition per entry.
 #[inline(always)]
 pub(crate) fn mul<const R: usize, const K: usize, const C: usize>(
     a: &SMatrix<f64, R, K>,
     b: &SMatrix<f64, K, C>,
 ) -> SMatrix<f64, R, C> {
-    let mut out = SMatrix::<f64, R, C>::zeros();
-    for j in 0..C {
-        for k in 0..K {
-            let bkj = b[(k, j)];
-            for i in 0..R {
-                out[(i, j)] += a[(i, k)] * bkj;
-            }
-        }
+    if K == 0 {
+        return SMatrix::zeros();
     }
-    out
+    SMatrix::from_fn(|i, j| {
+        let mut s = a[(i, 0)] * b[(0, j)];
+        for k in 1..K {
+            s += a[(i, k)] * b[(k, j)];
+        }
+        s
+    })
 }
 
 /// `A B^T`, as [`mul`].
@@ -57,16 +82,54 @@ pub(crate) fn mul_t<const R: usize, const K: usize, const C: usize>(
     a: &SMatrix<f64, R, K>,
     b: &SMatrix<f64, C, K>,
 ) -> SMatrix<f64, R, C> {
-    let mut out = SMatrix::<f64, R, C>::zeros();
-    for j in 0..C {
-        for k in 0..K {
-            let bjk = b[(j, k)];
-            for i in 0..R {
-                out[(i, j)] += a[(i, k)] * bjk;
+    if K == 0 {
+        return SMatrix::zeros();
+    }
+    SMatrix::from_fn(|i, j| {
+        let mut s = a[(i, 0)] * b[(j, 0)];
+        for k in 1..K {
+            s += a[(i, k)] * b[(j, k)];
+        }
+        s
+    })
+}
+
+/// The lower triangle of `C + sign A B^T` for a product known to be
+/// symmetric (`F P F^T`, `W W^T`, ...): half the work of the full product,
+/// and exactly symmetric once [`mirror_lower`] copies it up. Only the lower
+/// triangle of `c` is read.
+#[inline(always)]
+pub(crate) fn lower_mul_t_add<const R: usize, const K: usize>(
+    c: &SMatrix<f64, R, R>,
+    sign: f64,
+    a: &SMatrix<f64, R, K>,
+    b: &SMatrix<f64, R, K>,
+) -> SMatrix<f64, R, R> {
+    let mut out = *c;
+    if K == 0 {
+        return out;
+    }
+    for j in 0..R {
+        for i in j..R {
+            let mut s = a[(i, 0)] * b[(j, 0)];
+            for k in 1..K {
+                s += a[(i, k)] * b[(j, k)];
             }
+            out[(i, j)] += sign * s;
         }
     }
     out
+}
+
+/// Copies the lower triangle onto the upper one.
+#[inline(always)]
+pub(crate) fn mirror_lower<const D: usize>(mut m: SMatrix<f64, D, D>) -> SMatrix<f64, D, D> {
+    for j in 0..D {
+        for i in (j + 1)..D {
+            m[(j, i)] = m[(i, j)];
+        }
+    }
+    m
 }
 
 /// `(A + A^T) / 2`.
@@ -106,6 +169,8 @@ pub(crate) fn check_covariance<const D: usize>(
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Llt<const D: usize> {
     l: SMatrix<f64, D, D>,
+    /// `1 / L_jj`: the substitutions multiply instead of dividing.
+    inv_diag: SVector<f64, D>,
 }
 
 impl<const D: usize> Llt<D> {
@@ -113,6 +178,7 @@ impl<const D: usize> Llt<D> {
     #[inline(always)]
     pub(crate) fn new(a: &SMatrix<f64, D, D>, matrix: &'static str, step: Step) -> Result<Self> {
         let mut l = SMatrix::<f64, D, D>::zeros();
+        let mut inv_diag = SVector::<f64, D>::zeros();
         for j in 0..D {
             let mut d = a[(j, j)];
             for k in 0..j {
@@ -125,6 +191,7 @@ impl<const D: usize> Llt<D> {
             let ljj = d.sqrt();
             l[(j, j)] = ljj;
             let inv = 1.0 / ljj;
+            inv_diag[j] = inv;
             for i in (j + 1)..D {
                 let mut s = a[(i, j)];
                 for k in 0..j {
@@ -133,7 +200,7 @@ impl<const D: usize> Llt<D> {
                 l[(i, j)] = s * inv;
             }
         }
-        Ok(Self { l })
+        Ok(Self { l, inv_diag })
     }
 
     /// The lower-triangular factor.
@@ -146,6 +213,23 @@ impl<const D: usize> Llt<D> {
     #[inline(always)]
     pub(crate) fn solve<const C: usize>(&self, b: &SMatrix<f64, D, C>) -> SMatrix<f64, D, C> {
         let l = &self.l;
+        let mut x = self.forward(b);
+        for c in 0..C {
+            for i in (0..D).rev() {
+                let mut s = x[(i, c)];
+                for k in (i + 1)..D {
+                    s -= l[(k, i)] * x[(k, c)];
+                }
+                x[(i, c)] = s * self.inv_diag[i];
+            }
+        }
+        x
+    }
+
+    /// `L^{-1} B` (forward substitution).
+    #[inline(always)]
+    pub(crate) fn forward<const C: usize>(&self, b: &SMatrix<f64, D, C>) -> SMatrix<f64, D, C> {
+        let l = &self.l;
         let mut x = *b;
         for c in 0..C {
             for i in 0..D {
@@ -153,14 +237,54 @@ impl<const D: usize> Llt<D> {
                 for k in 0..i {
                     s -= l[(i, k)] * x[(k, c)];
                 }
-                x[(i, c)] = s / l[(i, i)];
+                x[(i, c)] = s * self.inv_diag[i];
             }
-            for i in (0..D).rev() {
-                let mut s = x[(i, c)];
-                for k in (i + 1)..D {
-                    s -= l[(k, i)] * x[(k, c)];
+        }
+        x
+    }
+
+    /// `B L^{-T}`, i.e. `(L^{-1} B^T)^T`, column by column so that each
+    /// step is a whole column of `B` (vectorises over the rows).
+    #[inline(always)]
+    pub(crate) fn right_solve_lt<const R: usize>(
+        &self,
+        b: &SMatrix<f64, R, D>,
+    ) -> SMatrix<f64, R, D> {
+        let l = &self.l;
+        let mut x = *b;
+        for c in 0..D {
+            for k in 0..c {
+                let lck = l[(c, k)];
+                for i in 0..R {
+                    x[(i, c)] -= x[(i, k)] * lck;
                 }
-                x[(i, c)] = s / l[(i, i)];
+            }
+            let inv = self.inv_diag[c];
+            for i in 0..R {
+                x[(i, c)] *= inv;
+            }
+        }
+        x
+    }
+
+    /// `B L^{-1}` (the second half of `B A^{-1} = B L^{-T} L^{-1}`).
+    #[inline(always)]
+    pub(crate) fn right_solve_l<const R: usize>(
+        &self,
+        b: &SMatrix<f64, R, D>,
+    ) -> SMatrix<f64, R, D> {
+        let l = &self.l;
+        let mut x = *b;
+        for c in (0..D).rev() {
+            for k in (c + 1)..D {
+                let lkc = l[(k, c)];
+                for i in 0..R {
+                    x[(i, c)] -= x[(i, k)] * lkc;
+                }
+            }
+            let inv = self.inv_diag[c];
+            for i in 0..R {
+                x[(i, c)] *= inv;
             }
         }
         x

@@ -263,7 +263,11 @@ impl Ukf {
         })
     }
 
-    /// The measurement update from transformed moments.
+    /// The measurement update from transformed moments: with `S = L L^T`
+    /// and `W = P_xy L^{-T}` (triangular solve), `K = W L^{-1}`,
+    /// `K nu = W y` for the whitened innovation `y = L^{-1} nu`, and
+    /// `K S K^T = W W^T`.
+    #[inline(always)]
     fn correct<const N: usize, const M: usize>(
         predicted: &Gaussian<N>,
         y_mean: &SVector<f64, M>,
@@ -274,13 +278,14 @@ impl Ukf {
         linalg::check_finite_vec(z, "measurement z", Step::Update)?;
         let s = linalg::symmetrize(&s);
         let chol = linalg::Llt::new(&s, "innovation covariance S", Step::Update)?;
-        let k = chol.solve(&p_xy.transpose()).transpose();
+        let w = chol.right_solve_lt(p_xy);
         let residual = z - y_mean;
-        let mean = predicted.mean() + k * residual;
-        let cov = linalg::symmetrize(&(predicted.cov() - k * s * k.transpose()));
+        let y = chol.forward(&residual);
+        let mean = predicted.mean() + linalg::mul(&w, &y);
+        let cov = linalg::mirror_lower(linalg::lower_mul_t_add(predicted.cov(), -1.0, &w, &w));
         Ok(Update {
             posterior: Gaussian::checked(mean, cov, Step::Update)?,
-            innovation: Some(Innovation::new(residual, s, &chol)),
+            innovation: Some(Innovation::new(residual, &y, s, &chol)),
             iterations: 1,
         })
     }

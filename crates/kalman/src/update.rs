@@ -35,14 +35,16 @@ pub struct Innovation<const M: usize> {
 }
 
 impl<const M: usize> Innovation<M> {
-    /// Derives NIS and log-likelihood from the residual and the factor of `S`.
-    #[inline]
+    /// Derives NIS and log-likelihood from the residual, its whitened form
+    /// `y = L^{-1} nu` (so `nu^T S^{-1} nu = |y|^2`) and the factor of `S`.
+    #[inline(always)]
     pub(crate) fn new(
         residual: SVector<f64, M>,
+        whitened: &SVector<f64, M>,
         covariance: SMatrix<f64, M, M>,
         chol: &linalg::Llt<M>,
     ) -> Self {
-        let nis = residual.dot(&chol.solve(&residual));
+        let nis = whitened.norm_squared();
         let log_likelihood = -0.5 * (nis + chol.log_det() + M as f64 * LN_2PI);
         Self {
             residual,
@@ -86,7 +88,13 @@ pub(crate) struct GainStep<const N: usize, const M: usize> {
 /// Gain step about a linearisation `H`: `S = H P H^T + R`,
 /// `K = P H^T S^{-1}` (Cholesky solve), `x + K nu`, and the covariance in
 /// the requested form. `residual` is the (linearised) innovation.
-#[inline]
+///
+/// With `S = L L^T` and `W = P H^T L^{-T}` (a triangular solve), the gain is
+/// `K = W L^{-1}`, the mean step `K nu = W y` with the whitened innovation
+/// `y = L^{-1} nu` (whose squared norm is the NIS), and `K H P = W W^T`, so
+/// the standard form `P - W W^T` needs no second solve. Symmetric results
+/// are formed on the lower triangle and mirrored (symmetric by construction).
+#[inline(always)]
 pub(crate) fn gain_step<const N: usize, const M: usize>(
     mean: &SVector<f64, N>,
     p: &SMatrix<f64, N, N>,
@@ -95,25 +103,35 @@ pub(crate) fn gain_step<const N: usize, const M: usize>(
     r: &SMatrix<f64, M, M>,
     form: CovarianceUpdate,
 ) -> Result<GainStep<N, M>> {
-    let hp = linalg::mul(h, p);
-    let s = linalg::symmetrize(&(linalg::mul_t(&hp, h) + r));
+    // P H^T = (H P)^T for symmetric P
+    let pht = linalg::mul_t(p, h);
+    let s = linalg::mirror_lower(linalg::lower_mul_t_add(
+        &linalg::symmetrize(r),
+        1.0,
+        h,
+        &pht.transpose(),
+    ));
     let chol = linalg::Llt::new(&s, "innovation covariance S", Step::Update)?;
-    // K^T = S^{-1} H P  (P and S symmetric)
-    let k = chol.solve(&hp).transpose();
-    let new_mean = mean + linalg::mul(&k, &residual);
+    let w = chol.right_solve_lt(&pht);
+    let y = chol.forward(&residual);
+    let new_mean = mean + linalg::mul(&w, &y);
     let new_cov = match form {
         CovarianceUpdate::Joseph => {
+            let k = chol.right_solve_l(&w);
             let a = SMatrix::<f64, N, N>::identity() - linalg::mul(&k, h);
-            linalg::mul_t(&linalg::mul(&a, p), &a) + linalg::mul_t(&linalg::mul(&k, r), &k)
+            let ap = linalg::mul(&a, p);
+            let kr = linalg::mul(&k, r);
+            let lower = linalg::lower_mul_t_add(&SMatrix::zeros(), 1.0, &ap, &a);
+            linalg::lower_mul_t_add(&lower, 1.0, &kr, &k)
         }
-        CovarianceUpdate::Standard => p - linalg::mul(&k, &hp),
+        CovarianceUpdate::Standard => linalg::lower_mul_t_add(p, -1.0, &w, &w),
     };
-    let new_cov = linalg::symmetrize(&new_cov);
+    let new_cov = linalg::mirror_lower(new_cov);
     linalg::check_finite_vec(&new_mean, "posterior mean", Step::Update)?;
     linalg::check_finite_mat(&new_cov, "posterior covariance", Step::Update)?;
     Ok(GainStep {
         mean: new_mean,
         cov: new_cov,
-        innovation: Innovation::new(residual, s, &chol),
+        innovation: Innovation::new(residual, &y, s, &chol),
     })
 }
