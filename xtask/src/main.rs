@@ -4,12 +4,15 @@
 //! cargo xtask reproduce-table list         # the registry
 //! cargo xtask reproduce-table all          # every experiment, quick mode
 //! cargo xtask reproduce-table hikpf --full # one experiment at paper scale
+//! cargo xtask otb --root ../shared/data/sequences  # every tracker, every sequence
 //! ```
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use bayestrack_eval::experiment::{self, Experiment, Mode, RunOptions};
+use bayestrack_eval::suite::{SuiteOptions, run_suite};
+use bayestrack_trackers::{REGISTRY, tracker_info};
 use clap::{Parser, Subcommand};
 
 #[derive(Parser)]
@@ -50,6 +53,24 @@ enum Command {
         /// Number of frames (default: the scene's own length).
         #[arg(long)]
         frames: Option<usize>,
+    },
+    /// Run every tracker on every sequence of a folder (OTB one-pass
+    /// evaluation); print AUC / P@20 / fps per sequence and their means;
+    /// write boxes, results.csv, results.md and success/precision plots.
+    Otb {
+        /// Folder of OTB sequences (each with img/ and ground truth).
+        #[arg(long, default_value = "../shared/data/sequences")]
+        root: PathBuf,
+        /// Comma-separated tracker names (default: every tracker; see
+        /// `bayestrack trackers`).
+        #[arg(long, value_delimiter = ',')]
+        trackers: Vec<String>,
+        /// Seed given to every tracker.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Output folder.
+        #[arg(long, default_value = "target/otb")]
+        out: PathBuf,
     },
     /// Rewrite tests/golden/<id>.csv from fresh quick runs and print what
     /// changed.
@@ -117,9 +138,42 @@ fn bless(e: &dyn Experiment) -> Result<bool, String> {
     Ok(true)
 }
 
+fn otb(root: &Path, names: &[String], seed: u64, out: PathBuf) -> Result<(), String> {
+    let trackers = if names.is_empty() {
+        REGISTRY.iter().collect()
+    } else {
+        names
+            .iter()
+            .map(|n| tracker_info(n).map_err(|e| e.to_string()))
+            .collect::<Result<Vec<_>, _>>()?
+    };
+    let options = SuiteOptions {
+        trackers,
+        seed,
+        out,
+        progress: true,
+    };
+    let report = run_suite(root, &options).map_err(|e| e.to_string())?;
+    println!("{}", report.table());
+    println!("files: {}", options.out.display());
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
+        Command::Otb {
+            root,
+            trackers,
+            seed,
+            out,
+        } => match otb(&root, &trackers, seed, out) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(err) => {
+                eprintln!("error: {err}");
+                ExitCode::FAILURE
+            }
+        },
         Command::Scenes {
             name,
             out,

@@ -14,10 +14,13 @@ pub mod metrics;
 pub mod otb;
 pub mod plot;
 pub mod scenes;
+pub mod suite;
 pub mod table;
+pub mod track;
 
 pub use experiment::{Experiment, ExperimentError, Mode, RunOptions, registry};
 pub use metrics::{MetricsError, OtbScore, score_otb};
 pub use otb::{OtbError, Sequence};
 pub use scenes::{Scene, SceneError, SceneStream};
 pub use table::Table;
+pub use track::{OnBadFrame, TrackError, TrackRun, track_frames};

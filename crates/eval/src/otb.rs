@@ -13,7 +13,9 @@
 
 use std::path::{Path, PathBuf};
 
-use bayestrack_image::{BBox, Image, ImageError, OtbSequence};
+use bayestrack_image::{
+    BBox, Image, ImageError, OtbSequence, find_ground_truth, list_frames, read_ground_truth,
+};
 
 /// What can go wrong while loading an OTB sequence.
 #[derive(Debug, thiserror::Error)]
@@ -37,7 +39,7 @@ pub enum OtbError {
     },
     /// A frame that cannot be read or decoded (truncated, corrupt, not an
     /// image); the source names the file too.
-    #[error("frame {index} ({path}): {source}")]
+    #[error("frame {} ({path}): {source}", .index + 1)]
     Frame {
         /// 0-based frame index.
         index: usize,
@@ -72,9 +74,11 @@ pub struct Sequence {
     pub dir: PathBuf,
     /// Frame files in numeric order.
     pub frames: Vec<PathBuf>,
-    /// The ground-truth file read.
-    pub ground_truth_path: PathBuf,
-    /// One entry per frame; `None` where the row is `0,0,0,0` (unlabelled).
+    /// The ground-truth file read (`None` for a bare frame folder opened
+    /// with [`Sequence::open_frames`]).
+    pub ground_truth_path: Option<PathBuf>,
+    /// One entry per frame; `None` where the row is `0,0,0,0` (unlabelled)
+    /// or where there is no ground-truth file.
     pub ground_truth: Vec<Option<BBox>>,
 }
 
@@ -102,16 +106,54 @@ impl Sequence {
                 rows: seq.ground_truth.len(),
             });
         }
-        let name = dir
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_else(|| dir.display().to_string());
         Ok(Self {
-            name,
+            name: folder_name(dir),
             dir: seq.dir,
             frames: seq.frames,
-            ground_truth_path: seq.ground_truth_path,
+            ground_truth_path: Some(seq.ground_truth_path),
             ground_truth: seq.ground_truth,
+        })
+    }
+
+    /// Opens any folder of numbered PNG/JPEG frames (the folder itself or
+    /// its `img/` sub-folder); its ground truth is read when the folder has
+    /// one (`groundtruth_rect.txt` or `*_gt.txt`), and every frame is
+    /// unlabelled otherwise.
+    ///
+    /// # Errors
+    /// [`OtbError::MissingFolder`]; [`OtbError::Image`] for a folder without
+    /// frames and for a ground-truth row that does not parse;
+    /// [`OtbError::RowCount`] when a ground-truth file is present without
+    /// exactly one row per frame.
+    pub fn open_frames(dir: impl AsRef<Path>) -> Result<Self, OtbError> {
+        let dir = dir.as_ref();
+        if !dir.is_dir() {
+            return Err(OtbError::MissingFolder {
+                path: dir.to_path_buf(),
+            });
+        }
+        let frames = list_frames(dir)?;
+        let (ground_truth_path, ground_truth) = match find_ground_truth(dir) {
+            Ok(path) => {
+                let rows = read_ground_truth(&path)?;
+                if rows.len() != frames.len() {
+                    return Err(OtbError::RowCount {
+                        path,
+                        frames: frames.len(),
+                        rows: rows.len(),
+                    });
+                }
+                (Some(path), rows)
+            }
+            Err(ImageError::NoGroundTruth { .. }) => (None, vec![None; frames.len()]),
+            Err(e) => return Err(e.into()),
+        };
+        Ok(Self {
+            name: folder_name(dir),
+            dir: dir.to_path_buf(),
+            frames,
+            ground_truth_path,
+            ground_truth,
         })
     }
 
@@ -212,6 +254,12 @@ impl Sequence {
         }
         Ok(shape)
     }
+}
+
+fn folder_name(dir: &Path) -> String {
+    dir.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| dir.display().to_string())
 }
 
 /// The sub-folders of `root` that look like sequences (they hold an `img/`

@@ -49,6 +49,25 @@ impl Table {
         }
         out
     }
+
+    /// The table as a Markdown (GitHub) table, the title as a bold line
+    /// above it when it is not empty.
+    pub fn to_markdown(&self) -> String {
+        let row = |cells: &[String]| format!("| {} |\n", cells.join(" | ").replace('\n', " "));
+        let mut out = String::new();
+        if !self.title.is_empty() {
+            out.push_str(&format!("**{}**\n\n", self.title));
+        }
+        out.push_str(&row(&self.header));
+        let rule: Vec<String> = (0..self.header.len())
+            .map(|i| if i == 0 { "---".into() } else { "---:".into() })
+            .collect();
+        out.push_str(&row(&rule));
+        for r in &self.rows {
+            out.push_str(&row(r));
+        }
+        out
+    }
 }
 
 impl fmt::Display for Table {
@@ -95,6 +114,16 @@ mod tests {
         let mut t = Table::new("t", &["a", "b"]);
         t.push(vec!["x,y".into(), "1".into()]);
         assert_eq!(t.to_csv(), "a,b\n\"x,y\",1\n");
+    }
+
+    #[test]
+    fn markdown_has_a_rule_under_the_header() {
+        let mut t = Table::new("T", &["a", "b"]);
+        t.push(vec!["x".into(), "1".into()]);
+        assert_eq!(
+            t.to_markdown(),
+            "**T**\n\n| a | b |\n| --- | ---: |\n| x | 1 |\n"
+        );
     }
 
     #[test]

@@ -170,7 +170,7 @@ fn truncated_or_non_image_frames_name_the_file() {
             Err(e @ OtbError::Frame { .. }) => {
                 let text = e.to_string();
                 assert!(text.contains(file), "{text}");
-                assert!(text.contains(&format!("frame {index}")), "{text}");
+                assert!(text.contains(&format!("frame {} ", index + 1)), "{text}");
             }
             other => panic!("frame {index}: expected a Frame error, got {other:?}"),
         }
