@@ -1,0 +1,55 @@
+//! Trackers on real video nobody on this project made: the OTB sequence
+//! Crossing from `../shared/data/sequences` (see its README), one-pass
+//! evaluation as `cargo xtask otb` runs it.
+
+use std::borrow::Cow;
+use std::path::{Path, PathBuf};
+
+use bayestrack::eval::metrics::score_otb;
+use bayestrack::eval::otb::Sequence;
+use bayestrack::eval::track::{OnBadFrame, track_frames};
+use bayestrack::trackers::tracker_info;
+
+fn sequence(name: &str) -> Option<Sequence> {
+    let dir: PathBuf = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/sequences");
+    if !dir.is_dir() {
+        eprintln!(
+            "SKIPPED: the real sequences are not at {} (expected ../shared/data/sequences next \
+             to the repository); nothing checked",
+            dir.display()
+        );
+        return None;
+    }
+    Some(Sequence::open(dir.join(name)).expect("the shared sequence opens"))
+}
+
+/// Runs `tracker` with seed 0 on `seq` and returns (AUC, P@20).
+fn one_pass(tracker: &str, seq: &Sequence) -> (f64, f64) {
+    let mut t = tracker_info(tracker).unwrap().build(0).unwrap();
+    let run = track_frames(
+        t.as_mut(),
+        seq.len(),
+        |i| seq.frame(i).map(Cow::Owned),
+        |i| seq.frames[i].clone(),
+        seq.initial_box().unwrap(),
+        OnBadFrame::Stop,
+        |_| Ok(()),
+    )
+    .unwrap();
+    let s = score_otb(&run.boxes, &seq.ground_truth).unwrap();
+    (s.auc, s.precision_20)
+}
+
+/// The fastest tracker (docs/results.md) follows the pedestrian of
+/// Crossing: measured AUC 0.600, P@20 1.000; the floor leaves room for
+/// changes that do not break it, and is far above the 0.040 of a box that
+/// stays where frame 1 put it.
+#[test]
+fn the_fastest_tracker_follows_crossing() {
+    let Some(seq) = sequence("Crossing") else {
+        return;
+    };
+    let (auc, p20) = one_pass("ball-pf30", &seq);
+    assert!(auc >= 0.45, "AUC {auc:.3} below the floor 0.45");
+    assert!(p20 >= 0.9, "P@20 {p20:.3} below the floor 0.9");
+}
