@@ -50,8 +50,7 @@ impl<const N: usize> Gaussian<N> {
         cov: SMatrix<f64, N, N>,
         step: Step,
     ) -> Result<Self> {
-        linalg::check_finite_vec(&mean, "mean", step)?;
-        linalg::check_finite_mat(&cov, "covariance", step)?;
+        linalg::check_finite_belief(&mean, "mean", &cov, "covariance", step)?;
         Ok(Self { mean, cov })
     }
 

@@ -24,8 +24,13 @@ fn linear_predict<const N: usize>(
         &linalg::mul(f, p),
         f,
     ));
-    linalg::check_finite_vec(&mean, "predicted mean", Step::Predict)?;
-    linalg::check_finite_mat(&cov, "predicted covariance", Step::Predict)?;
+    linalg::check_finite_belief(
+        &mean,
+        "predicted mean",
+        &cov,
+        "predicted covariance",
+        Step::Predict,
+    )?;
     Ok(Gaussian::from_parts(mean, cov))
 }
 

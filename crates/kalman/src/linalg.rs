@@ -8,25 +8,39 @@ use crate::error::{KalmanError, Result, Step};
 /// Relative tolerance of the symmetry check on user covariances.
 const SYMMETRY_TOL: f64 = 1e-9;
 
-/// Whether every entry is finite, without a branch per entry: `0 * x` is
-/// `0` for finite `x` and NaN for infinite or NaN `x`, and NaN propagates
-/// through the sums. Lane-wise partial sums keep the dependency chains short
-/// (and vectorise); the early-exit `iter().all(is_finite)` cost a branch per
-/// entry and kept the matrices in memory.
+/// Whether every entry is finite. Fast path: a sum containing an infinite
+/// or NaN term is not finite, and a sum of finite terms is finite unless it
+/// overflows, so a finite sum (lane-wise partial sums: additions only,
+/// vectorised, no branch per entry) proves every entry finite; a non-finite
+/// sum is resolved entry by entry.
 #[inline(always)]
 pub(crate) fn all_finite(xs: &[f64]) -> bool {
-    let mut acc = [0.0f64; 4];
-    let chunks = xs.chunks_exact(4);
-    let rest = chunks.remainder();
-    for c in chunks {
+    sum_is_finite(xs, &[]) || xs.iter().all(|x| x.is_finite())
+}
+
+#[inline(always)]
+fn sum_is_finite(xs: &[f64], ys: &[f64]) -> bool {
+    let s = lane_sum(xs) + lane_sum(ys);
+    s.is_finite()
+}
+
+/// The sum of `xs` over four interleaved lanes (short dependency chains).
+#[inline(always)]
+fn lane_sum(xs: &[f64]) -> f64 {
+    let mut lanes = xs.chunks_exact(4);
+    let Some(first) = lanes.next() else {
+        return xs.iter().sum();
+    };
+    let mut acc = [first[0], first[1], first[2], first[3]];
+    for c in lanes.by_ref() {
         for (a, x) in acc.iter_mut().zip(c) {
-            *a += x * 0.0;
+            *a += x;
         }
     }
-    for (a, x) in acc.iter_mut().zip(rest) {
-        *a += x * 0.0;
+    for (a, x) in acc.iter_mut().zip(lanes.remainder()) {
+        *a += x;
     }
-    (acc[0] + acc[1] + acc[2] + acc[3]) == 0.0
+    (acc[0] + acc[1]) + (acc[2] + acc[3])
 }
 
 #[inline(always)]
@@ -55,10 +69,27 @@ pub(crate) fn check_finite_mat<const R: usize, const C: usize>(
     }
 }
 
+/// [`check_finite_vec`] then [`check_finite_mat`], with one fast test for
+/// both (a filter output: mean and covariance).
+#[inline(always)]
+pub(crate) fn check_finite_belief<const D: usize>(
+    mean: &SVector<f64, D>,
+    mean_what: &'static str,
+    cov: &SMatrix<f64, D, D>,
+    cov_what: &'static str,
+    step: Step,
+) -> Result<()> {
+    if sum_is_finite(mean.as_slice(), cov.as_slice()) {
+        return Ok(());
+    }
+    check_finite_vec(mean, mean_what, step)?;
+    check_finite_mat(cov, cov_what, step)
+}
+
 /// `A B` with fixed-size loops that unroll for small dimensions (nalgebra's
 /// general product stays an out-of-line call in the filter hot paths). The
-/// first term initialises the sum: `0 + x` is not `x` for `x = -0`, so a
-/// zero-initialised accumulator costs one addition per entry.
+/// first term initialises each sum: `0 + x` is not `x` for `x = -0`, so a
+/// zero-initialised accumulator costs an addition per entry.
 #[inline(always)]
 pub(crate) fn mul<const R: usize, const K: usize, const C: usize>(
     a: &SMatrix<f64, R, K>,
@@ -95,9 +126,9 @@ pub(crate) fn mul_t<const R: usize, const K: usize, const C: usize>(
 }
 
 /// The lower triangle of `C + sign A B^T` for a product known to be
-/// symmetric (`F P F^T`, `W W^T`, ...): half the work of the full product,
-/// and exactly symmetric once [`mirror_lower`] copies it up. Only the lower
-/// triangle of `c` is read.
+/// symmetric (`F P F^T`, `W W^T`, ...), to be copied up by
+/// [`mirror_lower`] (exactly symmetric); about half the work of the full
+/// product. Only the lower triangle of `c` matters.
 #[inline(always)]
 pub(crate) fn lower_mul_t_add<const R: usize, const K: usize>(
     c: &SMatrix<f64, R, R>,

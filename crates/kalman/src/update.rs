@@ -127,8 +127,13 @@ pub(crate) fn gain_step<const N: usize, const M: usize>(
         CovarianceUpdate::Standard => linalg::lower_mul_t_add(p, -1.0, &w, &w),
     };
     let new_cov = linalg::mirror_lower(new_cov);
-    linalg::check_finite_vec(&new_mean, "posterior mean", Step::Update)?;
-    linalg::check_finite_mat(&new_cov, "posterior covariance", Step::Update)?;
+    linalg::check_finite_belief(
+        &new_mean,
+        "posterior mean",
+        &new_cov,
+        "posterior covariance",
+        Step::Update,
+    )?;
     Ok(GainStep {
         mean: new_mean,
         cov: new_cov,
