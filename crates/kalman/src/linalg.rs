@@ -216,7 +216,7 @@ impl<const D: usize> Llt<D> {
                 d -= l[(j, k)] * l[(j, k)];
             }
             // also rejects NaN
-            if !(d > 0.0 && d.is_finite()) {
+            if !(d > 0.0 && d < f64::INFINITY) {
                 return Err(KalmanError::NotPositiveDefinite { matrix, step });
             }
             let ljj = d.sqrt();
