@@ -334,9 +334,13 @@ impl<const D: usize> Llt<D> {
     }
 }
 
-/// A square root `L` with `L L^T = m` of a symmetric positive semi-definite
-/// matrix: the Cholesky factor when it exists, otherwise the symmetric
-/// eigen-decomposition with round-off-negative eigenvalues clamped to zero.
+/// A lower-triangular square root `L` with `L L^T = m` of a symmetric
+/// positive semi-definite matrix: the Cholesky factor when it exists,
+/// otherwise one from the symmetric eigen-decomposition (round-off-negative
+/// eigenvalues clamped to zero), made triangular by a QR factorisation
+/// (`S^T = Q R` gives `S S^T = R^T R`). Triangular in both cases, so its
+/// structural zeros are constants to the optimiser, and the fallback is the
+/// limit of the Cholesky factor as `m` becomes singular.
 #[inline(always)]
 pub(crate) fn psd_sqrt<const D: usize>(
     m: &SMatrix<f64, D, D>,
@@ -349,22 +353,51 @@ pub(crate) fn psd_sqrt<const D: usize>(
     if let Ok(llt) = Llt::new(m, matrix, step) {
         return Ok(llt.l);
     }
+    let r = semidefinite_sqrt_t(m.as_slice(), D, matrix, step)?;
+    let mut l = SMatrix::<f64, D, D>::zeros();
+    for j in 0..D {
+        for i in j..D {
+            l[(i, j)] = r[(j, i)];
+        }
+    }
+    Ok(l)
+}
+
+/// The rare path of [`psd_sqrt`] (semi-definite), out of line and with
+/// dynamic sizes: an upper-triangular `R` with `R^T R = m` (column-major
+/// `m`, `d x d`).
+#[cold]
+#[inline(never)]
+fn semidefinite_sqrt_t(
+    m: &[f64],
+    d: usize,
+    matrix: &'static str,
+    step: Step,
+) -> Result<nalgebra::DMatrix<f64>> {
     if !m.iter().all(|x| x.is_finite()) {
         return Err(KalmanError::NonFinite { what: matrix, step });
     }
-    // Rare path (semi-definite): a dynamic-size eigen-decomposition.
-    let sym = symmetrize(m);
-    let eig = nalgebra::DMatrix::from_column_slice(D, D, sym.as_slice()).symmetric_eigen();
+    let m = nalgebra::DMatrix::from_column_slice(d, d, m);
+    let sym = (&m + m.transpose()) * 0.5;
+    let eig = sym.symmetric_eigen();
     let largest = eig.eigenvalues.amax();
-    let tol = 1e-12 * largest.max(f64::MIN_POSITIVE) * D as f64;
+    let tol = 1e-12 * largest.max(f64::MIN_POSITIVE) * d as f64;
     if eig.eigenvalues.iter().any(|&l| l < -tol) {
         return Err(KalmanError::NotPositiveDefinite { matrix, step });
     }
-    let mut l = SMatrix::<f64, D, D>::from_column_slice(eig.eigenvectors.as_slice());
+    let mut s = eig.eigenvectors;
     for (j, &lambda) in eig.eigenvalues.iter().enumerate() {
-        l.column_mut(j).scale_mut(lambda.max(0.0).sqrt());
+        s.column_mut(j).scale_mut(lambda.max(0.0).sqrt());
     }
-    Ok(l)
+    // S S^T = m and S^T = Q R give m = R^T R; rows of R with a negative
+    // diagonal are negated (R^T R is unchanged) for a non-negative diagonal.
+    let mut r = s.transpose().qr().r();
+    for i in 0..d {
+        if r[(i, i)] < 0.0 {
+            r.row_mut(i).neg_mut();
+        }
+    }
+    Ok(r)
 }
 
 #[cfg(test)]
@@ -399,6 +432,12 @@ mod tests {
         let m = Matrix2::new(1.0, 1.0, 1.0, 1.0);
         let l = psd_sqrt(&m, "m", Step::Evaluate).unwrap();
         assert!((l * l.transpose() - m).amax() < 1e-12);
+        assert_eq!(l[(0, 1)], 0.0, "lower triangular");
+        let m3 = nalgebra::Matrix3::new(1.0, 2.0, 0.0, 2.0, 5.0, 1.0, 0.0, 1.0, 1.0);
+        let l3 = psd_sqrt(&m3, "m", Step::Evaluate).unwrap();
+        assert!((l3 * l3.transpose() - m3).amax() < 1e-12);
+        assert!(l3.upper_triangle() == nalgebra::Matrix3::from_diagonal(&l3.diagonal()));
+        assert!(l3.diagonal().iter().all(|&d| d >= 0.0));
     }
 
     #[test]

@@ -190,9 +190,14 @@ impl Ukf {
         step: Step,
     ) -> Result<Moments<N, K, M>> {
         let wt = self.weights_for(N + V + W)?;
-        let sp = linalg::psd_sqrt(prior.cov(), "state covariance P", step)? * wt.scale;
-        let sv = linalg::psd_sqrt(v.cov(), "process noise covariance", step)? * wt.scale;
-        let sw = linalg::psd_sqrt(w.cov(), "measurement noise covariance", step)? * wt.scale;
+        // The factor of `c P` rather than `sqrt(c)` times the factor of `P`:
+        // the structural zeros of the triangular factor stay exact constants,
+        // so `m - 0` folds to `m` and a model that reads only the leading
+        // coordinates is not re-evaluated on identical inputs.
+        let c = wt.scale * wt.scale;
+        let sp = linalg::psd_sqrt(&(prior.cov() * c), "state covariance P", step)?;
+        let sv = linalg::psd_sqrt(&(v.cov() * c), "process noise covariance", step)?;
+        let sw = linalg::psd_sqrt(&(w.cov() * c), "measurement noise covariance", step)?;
         let (m, mv, mw) = (prior.mean(), v.mean(), w.mean());
 
         let xf0 = f(m, mv);
