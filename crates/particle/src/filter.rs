@@ -4,17 +4,19 @@
 //!
 //! Particles are propagated in fixed chunks of [`ParticleFilter::chunk_size`],
 //! each chunk with its own random stream seeded from `(key, chunk)`, in
-//! parallel with rayon; every reduction runs sequentially in particle order.
-//! The same key therefore gives the same bits on any number of threads.
+//! parallel with rayon; the weights, their sums and the resampling run over
+//! the same chunks, with per-chunk results combined in chunk order. The same
+//! key therefore gives the same bits on any number of threads.
 
-use rand::RngExt;
+use rand::{RngExt, SeedableRng};
+use rand_xoshiro::Xoshiro256PlusPlus;
 use rayon::prelude::*;
 
 use crate::error::{ParticleError, Result};
 use crate::proposal::Proposal;
-use crate::resample::Resampling;
-use crate::seed::stream_rng;
-use crate::set::{ParticleSet, check_threshold, exp_flushed};
+use crate::resample::{ChunkedCumulative, Resampling};
+use crate::seed::{extend_seed, stream_rng, stream_seed};
+use crate::set::{ParticleSet, Scratch, check_threshold, exp_flushed};
 
 /// When to resample.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -81,6 +83,88 @@ pub struct StepReport {
     pub degenerate: bool,
 }
 
+/// One chunk's proposal pass.
+struct Proposed {
+    /// The largest updated log-weight.
+    max: f64,
+    /// The first NaN or `+inf` log increment, with its particle.
+    bad: Option<(usize, f64)>,
+}
+
+impl Proposed {
+    /// The chunk of log-weights `lw` (finite or minus infinity) updated by
+    /// the increments `inc`, its first particle being `offset`.
+    fn of(lw: &[f64], inc: &[f64], offset: usize) -> Self {
+        let mut max = f64::NEG_INFINITY;
+        let mut ok = true;
+        for (&l, &x) in lw.iter().zip(inc) {
+            ok &= x < f64::INFINITY;
+            let y = l + x;
+            max = if y > max { y } else { max };
+        }
+        let bad = if ok {
+            None
+        } else {
+            inc.iter()
+                .position(|x| !(*x < f64::INFINITY))
+                .map(|i| (offset + i, inc[i]))
+        };
+        Self { max, bad }
+    }
+}
+
+/// One chunk's weight pass.
+struct Weighed {
+    /// Sum of the weights.
+    sum: f64,
+    /// Sum of their squares.
+    sum2: f64,
+    /// The last particle with a positive weight.
+    last: Option<usize>,
+}
+
+impl Weighed {
+    /// Weights `exp(l + x - max)` of the log-weights `lw` updated by the
+    /// increments `inc` (none: the log-weights alone), into `out`, or with
+    /// `cumulative` their running sums; the chunk's first particle is
+    /// `offset`.
+    fn of(
+        lw: &[f64],
+        inc: Option<&[f64]>,
+        max: f64,
+        out: &mut [f64],
+        cumulative: bool,
+        offset: usize,
+    ) -> Self {
+        let (mut sum, mut sum2) = (0.0, 0.0);
+        let mut last = 0;
+        let mut add = |i: usize, l: f64, o: &mut f64| {
+            let w = exp_flushed(l - max);
+            sum += w;
+            sum2 += w * w;
+            last = if w > 0.0 { i + 1 } else { last };
+            *o = if cumulative { sum } else { w };
+        };
+        match inc {
+            Some(inc) => {
+                for (i, ((&l, &x), o)) in lw.iter().zip(inc).zip(out.iter_mut()).enumerate() {
+                    add(i, l + x, o);
+                }
+            }
+            None => {
+                for (i, (&l, o)) in lw.iter().zip(out.iter_mut()).enumerate() {
+                    add(i, l, o);
+                }
+            }
+        }
+        Self {
+            sum,
+            sum2,
+            last: last.checked_sub(1).map(|i| offset + i),
+        }
+    }
+}
+
 /// Stream ids beyond any chunk index.
 const RESAMPLE_STREAM: u64 = u64::MAX;
 const MCMC_STREAM: u64 = u64::MAX - 1;
@@ -143,6 +227,11 @@ impl ParticleFilter {
     /// the policy, and move (MCMC) if enabled. `key` identifies the step's
     /// random streams (for example `[experiment, run, k]`).
     ///
+    /// Every pass over the particles (proposal, weights, resampling and
+    /// gathering) runs chunk by chunk in parallel; the chunk results are
+    /// combined in chunk order, so the same key gives the same bits on any
+    /// number of threads. The buffers of the step live in the set.
+    ///
     /// On error the weights are those before the step; the particles may
     /// already have been moved by the proposal.
     ///
@@ -165,73 +254,94 @@ impl ParticleFilter {
     {
         self.validate()?;
         let n = set.len();
+        let cs = self.chunk_size;
         let parents: Option<Vec<T>> = self.mcmc.then(|| set.particles().to_vec());
-        let previous_log_w = set.log_weights().to_vec();
-        let mut increments = vec![0.0; n];
-        {
-            let (particles, _) = set.parts_mut();
-            self.chunked(particles, &mut increments, key, |offset, ps, inc, rng| {
+        let ParticleSet {
+            particles,
+            log_weights: log_w,
+            scratch,
+        } = set;
+        let Scratch {
+            increments,
+            weights,
+            ancestors,
+            spare,
+        } = scratch;
+        increments.resize(n, 0.0);
+        weights.resize(n, 0.0);
+
+        // propose; per chunk the largest updated log-weight and the first
+        // NaN or +inf increment
+        let seed = stream_seed(key);
+        let proposed: Vec<Result<Proposed>> = particles
+            .par_chunks_mut(cs)
+            .zip(increments.par_chunks_mut(cs))
+            .zip(log_w.par_chunks(cs))
+            .enumerate()
+            .map(|(c, ((ps, inc), lw))| {
+                let mut rng = Xoshiro256PlusPlus::seed_from_u64(extend_seed(seed, c as u64));
+                let offset = c * cs;
                 for (i, (p, w)) in ps.iter_mut().zip(inc.iter_mut()).enumerate() {
-                    let (child, lw) =
-                        proposal
-                            .propose(p, z, rng)
-                            .map_err(|source| ParticleError::Proposal {
-                                index: offset + i,
-                                source,
-                            })?;
+                    let (child, x) = proposal.propose(p, z, &mut rng).map_err(|source| {
+                        ParticleError::Proposal {
+                            index: offset + i,
+                            source,
+                        }
+                    })?;
                     if !child.state().iter().all(|v| v.is_finite()) {
                         return Err(ParticleError::NonFiniteState { index: offset + i });
                     }
                     *p = child;
-                    *w = lw;
+                    *w = x;
                 }
-                Ok(())
-            })?;
-        }
-        // weights: w_k = w_{k-1} * increment (log domain), then normalise
-        let (_, log_w) = set.parts_mut();
+                Ok(Proposed::of(lw, inc, offset))
+            })
+            .collect();
         let mut max = f64::NEG_INFINITY;
-        for (index, (l, &inc)) in log_w.iter_mut().zip(&increments).enumerate() {
-            if inc.is_nan() || inc == f64::INFINITY {
-                log_w.copy_from_slice(&previous_log_w);
-                return Err(ParticleError::NonFiniteWeight { index, value: inc });
-            }
-            *l += inc;
-            max = max.max(*l);
+        let mut bad = None;
+        for chunk in proposed {
+            let chunk = chunk?;
+            max = max.max(chunk.max);
+            bad = bad.or(chunk.bad);
         }
-        if max == f64::NEG_INFINITY {
-            log_w.copy_from_slice(&previous_log_w);
+        if let Some((index, value)) = bad {
+            return Err(ParticleError::NonFiniteWeight { index, value });
+        }
+        // weights: w_k = w_{k-1} * increment (log domain); all zero ignores
+        // the measurement (the previous weights) or fails
+        let degenerate = max == f64::NEG_INFINITY;
+        if degenerate {
             if self.degenerate == Degenerate::Error {
                 return Err(ParticleError::AllWeightsZero { count: n });
             }
-        }
-        let degenerate = max == f64::NEG_INFINITY;
-        if degenerate {
             max = log_w.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         }
-        // linear weights relative to the largest, with chunked partial sums
-        // (added in chunk order: the same bits on any number of threads)
-        let mut weights = vec![0.0; n];
-        let partial: Vec<(f64, f64)> = log_w
-            .par_chunks(self.chunk_size)
-            .zip(weights.par_chunks_mut(self.chunk_size))
-            .map(|(l, w)| {
-                let (mut s, mut s2) = (0.0, 0.0);
-                for (l, w) in l.iter().zip(w.iter_mut()) {
-                    *w = exp_flushed(l - max);
-                    s += *w;
-                    s2 += *w * *w;
-                }
-                (s, s2)
+        let log_w_k = |l: f64, x: f64| if degenerate { l } else { l + x };
+        // linear weights relative to the largest, with chunk sums (added in
+        // chunk order), the last positive weight of each chunk, and for
+        // systematic resampling the running sums within each chunk instead
+        // of the weights
+        let cumulative = self.resampling == Resampling::Systematic;
+        let partial: Vec<Weighed> = log_w
+            .par_chunks(cs)
+            .zip(increments.par_chunks(cs))
+            .zip(weights.par_chunks_mut(cs))
+            .enumerate()
+            .map(|(c, ((lw, inc), out))| {
+                let inc = if degenerate { None } else { Some(inc) };
+                Weighed::of(lw, inc, max, out, cumulative, c * cs)
             })
             .collect();
-        let (sum, sum2) = partial
-            .iter()
-            .fold((0.0, 0.0), |(a, b), (s, s2)| (a + s, b + s2));
-        let lse = max + sum.ln();
-        for l in log_w.iter_mut() {
-            *l -= lse;
+        let mut prefix = Vec::with_capacity(partial.len() + 1);
+        prefix.push(0.0);
+        let (mut sum, mut sum2, mut last) = (0.0, 0.0, 0);
+        for chunk in &partial {
+            sum += chunk.sum;
+            sum2 += chunk.sum2;
+            prefix.push(sum);
+            last = chunk.last.unwrap_or(last);
         }
+        let lse = max + sum.ln();
         let log_evidence = if degenerate { f64::NEG_INFINITY } else { lse };
         let ess = sum * sum / sum2;
         let resample = match self.policy {
@@ -239,22 +349,72 @@ impl ParticleFilter {
             ResamplePolicy::Ess(t) => ess < t * n as f64,
             ResamplePolicy::Never => false,
         };
-        let mut accepted = 0;
-        if resample {
-            let mut rng = stream_rng(&[key, &[RESAMPLE_STREAM]].concat());
-            let mut ancestors = vec![0; n];
-            self.resampling
-                .resample_checked(&weights, sum, &mut rng, &mut ancestors);
-            set.gather(&ancestors);
-            if let Some(parents) = parents {
-                accepted =
-                    self.mcmc_move(set, proposal, z, key, &parents, &ancestors, &increments)?;
-            }
+        if !resample {
+            log_w
+                .par_chunks_mut(cs)
+                .zip(increments.par_chunks(cs))
+                .for_each(|(lw, inc)| {
+                    for (l, &x) in lw.iter_mut().zip(inc) {
+                        *l = log_w_k(*l, x) - lse;
+                    }
+                });
+            return Ok(StepReport {
+                log_evidence,
+                ess,
+                resampled: false,
+                accepted: 0,
+                degenerate,
+            });
         }
+        let mut rng = stream_rng(&[key, &[RESAMPLE_STREAM]].concat());
+        ancestors.resize(n, 0);
+        if spare.len() != n {
+            spare.clone_from(particles);
+        }
+        let systematic = cumulative.then(|| {
+            let step = sum / n as f64;
+            let u: f64 = rng.random::<f64>() * step;
+            (u, step)
+        });
+        if !cumulative {
+            self.resampling
+                .resample_checked(weights, sum, &mut rng, ancestors);
+        }
+        let cum = ChunkedCumulative {
+            cum: weights,
+            prefix: &prefix,
+            chunk: cs,
+            last,
+        };
+        let from: &[T] = particles;
+        spare
+            .par_chunks_mut(cs)
+            .zip(ancestors.par_chunks_mut(cs))
+            .enumerate()
+            .for_each(|(o, (out, anc))| match systematic {
+                Some((u, step)) => {
+                    let owners = cum.systematic(u, step, o * cs);
+                    for ((p, a), i) in out.iter_mut().zip(anc.iter_mut()).zip(owners) {
+                        *a = i;
+                        p.clone_from(&from[i]);
+                    }
+                }
+                None => {
+                    for (p, &a) in out.iter_mut().zip(anc.iter()) {
+                        p.clone_from(&from[a]);
+                    }
+                }
+            });
+        std::mem::swap(particles, spare);
+        log_w.fill(-(n as f64).ln());
+        let accepted = match parents {
+            Some(parents) => self.mcmc_move(set, proposal, z, key, &parents)?,
+            None => 0,
+        };
         Ok(StepReport {
             log_evidence,
             ess,
-            resampled: resample,
+            resampled: true,
             accepted,
             degenerate,
         })
@@ -272,8 +432,6 @@ impl ParticleFilter {
         z: &Z,
         key: &[u64],
         parents: &[T],
-        ancestors: &[usize],
-        increments: &[f64],
     ) -> Result<usize>
     where
         T: crate::set::Particle<N>,
@@ -281,7 +439,10 @@ impl ParticleFilter {
         P: Proposal<T, Z>,
     {
         let mut accepted = vec![0.0; set.len()];
-        let (particles, _) = set.parts_mut();
+        let ParticleSet {
+            particles, scratch, ..
+        } = set;
+        let (ancestors, increments) = (&scratch.ancestors, &scratch.increments);
         let mcmc_key = [key, &[MCMC_STREAM]].concat();
         self.chunked(
             particles,

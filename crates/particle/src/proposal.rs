@@ -59,7 +59,7 @@ pub struct Bootstrap<'a, S>(pub &'a S);
 impl<const N: usize, const M: usize, S: StateSpaceModel<N, M>>
     Proposal<SVector<f64, N>, SVector<f64, M>> for Bootstrap<'_, S>
 {
-    #[inline]
+    #[inline(always)]
     fn propose<R: Rng + ?Sized>(
         &self,
         parent: &SVector<f64, N>,

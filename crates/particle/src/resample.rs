@@ -109,6 +109,105 @@ fn walk(weights: &[f64], ancestors: &mut [usize], mut point: impl FnMut(usize) -
     }
 }
 
+/// Cumulative weights kept chunk by chunk, so that a parallel pass can build
+/// them and resampling can start anywhere: `cum[i]` is the running sum of the
+/// weights of `i`'s chunk up to `i` (inclusive), `prefix[c]` the total of the
+/// chunks before chunk `c` (`prefix[0] = 0`, one entry per chunk plus the
+/// grand total), both summed in particle order. Particle `i` of chunk `c`
+/// owns the points in `[B_{i-1}, B_i)`, `B_i = prefix[c] + cum[i]`; the last
+/// `B` of a chunk is the next chunk's prefix, so the `B_i` never decrease and
+/// each point has one owner, whichever range of points a task walks. With a
+/// single chunk `B_i` is the running sum of [`walk`].
+pub(crate) struct ChunkedCumulative<'a> {
+    /// Running sums within each chunk.
+    pub(crate) cum: &'a [f64],
+    /// Chunk totals summed in chunk order, from 0.
+    pub(crate) prefix: &'a [f64],
+    /// Particles per chunk.
+    pub(crate) chunk: usize,
+    /// The last particle with a positive weight: points at or beyond the
+    /// total (round-off) are its.
+    pub(crate) last: usize,
+}
+
+impl ChunkedCumulative<'_> {
+    /// The owner of point `p >= 0`: the first particle with `B_i > p`, or
+    /// `last` when there is none.
+    fn owner(&self, p: f64) -> usize {
+        let c = self.prefix[1..].partition_point(|&b| b <= p);
+        if c + 1 == self.prefix.len() {
+            return self.last;
+        }
+        let start = c * self.chunk;
+        let end = (start + self.chunk).min(self.cum.len());
+        let base = self.prefix[c];
+        let k = self.cum[start..end].partition_point(|&l| base + l <= p);
+        (start + k).min(self.last)
+    }
+
+    /// Systematic resampling from output slot `first` on: the owners of
+    /// the points `u + j step`, `j = first, first + 1, ...`.
+    pub(crate) fn systematic(&self, u: f64, step: f64, first: usize) -> Systematic<'_> {
+        let j = first as f64;
+        let i = self.owner(u + j * step);
+        let c = i / self.chunk;
+        Systematic {
+            cum: self,
+            u,
+            step,
+            j,
+            i,
+            c,
+            base: self.prefix[c],
+            next: self.prefix[c + 1],
+        }
+    }
+}
+
+/// The owners of successive systematic points (see
+/// [`ChunkedCumulative::systematic`]); endless.
+pub(crate) struct Systematic<'a> {
+    cum: &'a ChunkedCumulative<'a>,
+    u: f64,
+    step: f64,
+    /// The next point's index, as a float (exact below 2^53): no integer
+    /// conversion per point.
+    j: f64,
+    /// The owner of the previous point (a lower bound for the next one).
+    i: usize,
+    /// Its chunk, with the chunk's prefix and the next chunk's.
+    c: usize,
+    base: f64,
+    next: f64,
+}
+
+impl Iterator for Systematic<'_> {
+    type Item = usize;
+
+    #[inline]
+    fn next(&mut self) -> Option<usize> {
+        let cum = self.cum;
+        let p = self.u + self.j * self.step;
+        self.j += 1.0;
+        if p >= self.next {
+            let total = cum.prefix[cum.prefix.len() - 1];
+            if p >= total {
+                return Some(cum.last);
+            }
+            while cum.prefix[self.c + 1] <= p {
+                self.c += 1;
+            }
+            (self.base, self.next) = (cum.prefix[self.c], cum.prefix[self.c + 1]);
+            self.i = self.c * cum.chunk;
+        }
+        // ends inside chunk c: its last bound is `next > p`
+        while self.base + cum.cum[self.i] <= p {
+            self.i += 1;
+        }
+        Some(self.i)
+    }
+}
+
 /// Multinomial draws of `ancestors.len()` indices with weights summing to
 /// `total`.
 fn multinomial<R: Rng + ?Sized>(weights: &[f64], total: f64, rng: &mut R, ancestors: &mut [usize]) {
@@ -223,6 +322,90 @@ mod tests {
                 Err(ParticleError::NonFiniteWeight { index: 1, .. })
             ));
         }
+    }
+
+    /// The running sums and chunk prefixes of the filter step.
+    fn chunked(weights: &[f64], chunk: usize) -> (Vec<f64>, Vec<f64>, usize) {
+        let mut cum = Vec::with_capacity(weights.len());
+        let mut prefix = vec![0.0];
+        for c in weights.chunks(chunk) {
+            let mut s = 0.0;
+            for &w in c {
+                s += w;
+                cum.push(s);
+            }
+            prefix.push(prefix[prefix.len() - 1] + s);
+        }
+        let last = weights.iter().rposition(|&w| w > 0.0).unwrap();
+        (cum, prefix, last)
+    }
+
+    fn chunked_systematic(weights: &[f64], chunk: usize, u: f64, task: usize) -> Vec<usize> {
+        let (cum, prefix, last) = chunked(weights, chunk);
+        let c = ChunkedCumulative {
+            cum: &cum,
+            prefix: &prefix,
+            chunk,
+            last,
+        };
+        let step = prefix[prefix.len() - 1] / weights.len() as f64;
+        let mut a = vec![usize::MAX; weights.len()];
+        for (t, part) in a.chunks_mut(task).enumerate() {
+            for (a, i) in part.iter_mut().zip(c.systematic(u * step, step, t * task)) {
+                *a = i;
+            }
+        }
+        a
+    }
+
+    #[test]
+    fn chunked_systematic_resampling_is_the_sequential_walk() {
+        let mut rng = stream_rng(&[4]);
+        // uneven weights with zero runs, a zero chunk and trailing zeros
+        let mut w: Vec<f64> = (0..1000)
+            .map(|i| {
+                let x: f64 = rng.random();
+                if i % 7 == 3 || (200..264).contains(&i) || i > 990 {
+                    0.0
+                } else {
+                    x * x * x
+                }
+            })
+            .collect();
+        w[5] = 40.0;
+        for u in [0.0, 0.37, 1.0 - f64::EPSILON] {
+            let whole = chunked_systematic(&w, w.len(), u, w.len());
+            // one chunk: the running sums of `walk`
+            let mut seq = vec![0; w.len()];
+            let step = w.iter().sum::<f64>() / w.len() as f64;
+            walk(&w, &mut seq, |j| u * step + j as f64 * step);
+            assert_eq!(whole, seq, "u = {u}");
+            for chunk in [1, 7, 64, 256] {
+                let first = chunked_systematic(&w, chunk, u, w.len());
+                // the same draws (no round-off crossing here), whatever
+                // the output ranges the tasks walk
+                assert_eq!(first, seq, "chunk {chunk}, u = {u}");
+                for task in [1, 3, 64, 999] {
+                    assert_eq!(chunked_systematic(&w, chunk, u, task), first);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn chunked_systematic_points_beyond_the_total_go_to_the_last_weight() {
+        let w = [0.1, 0.2, 0.3, 0.0, 0.0];
+        let (cum, prefix, last) = chunked(&w, 2);
+        let c = ChunkedCumulative {
+            cum: &cum,
+            prefix: &prefix,
+            chunk: 2,
+            last,
+        };
+        let a: Vec<usize> = c.systematic(0.5, 0.1, 0).take(3).collect();
+        assert_eq!(a, [2, 2, 2]);
+        let a: Vec<usize> = c.systematic(0.0, 0.25, 0).take(3).collect();
+        assert_eq!(a, [0, 1, 2]);
     }
 
     #[test]

@@ -23,6 +23,13 @@ pub fn stream_seed(key: &[u64]) -> u64 {
         .fold(0x6261_7965_7374_7261, |h, &k| mix(h ^ mix(k)))
 }
 
+/// `stream_seed` of `key` followed by `part`, from `stream_seed(key)`: the
+/// per-chunk seeds of a step without building each chunk's key.
+#[inline]
+pub(crate) fn extend_seed(seed: u64, part: u64) -> u64 {
+    mix(seed ^ mix(part))
+}
+
 /// The generator for a key.
 #[inline]
 pub fn stream_rng(key: &[u64]) -> Xoshiro256PlusPlus {
@@ -43,5 +50,9 @@ mod tests {
         assert_eq!(seeds.len(), 10_000);
         assert_ne!(stream_seed(&[1, 2]), stream_seed(&[2, 1]));
         assert_eq!(stream_seed(&[7, 8, 9]), stream_seed(&[7, 8, 9]));
+        assert_eq!(
+            extend_seed(stream_seed(&[7, 8]), 9),
+            stream_seed(&[7, 8, 9])
+        );
     }
 }

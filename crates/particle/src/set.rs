@@ -72,10 +72,65 @@ pub fn log_sum_exp(log_w: &[f64]) -> Result<f64> {
 }
 
 /// A weighted particle set `{x_i, w_i}` with `log w_i` stored.
-#[derive(Debug, Clone, PartialEq)]
+///
+/// The set also keeps the buffers of [`crate::ParticleFilter::step`]
+/// (increments, weights, ancestors, the particles being gathered), so a step
+/// allocates nothing once the set has been stepped; they take no part in
+/// equality, cloning or `Debug`.
 pub struct ParticleSet<T> {
-    particles: Vec<T>,
-    log_weights: Vec<f64>,
+    pub(crate) particles: Vec<T>,
+    pub(crate) log_weights: Vec<f64>,
+    pub(crate) scratch: Scratch<T>,
+}
+
+/// Step buffers, reused from step to step (contents meaningless between
+/// steps).
+pub(crate) struct Scratch<T> {
+    /// Log incremental weights of the latest proposal.
+    pub(crate) increments: Vec<f64>,
+    /// Linear weights relative to the largest, or their running sums within
+    /// each chunk (systematic resampling).
+    pub(crate) weights: Vec<f64>,
+    /// Drawn ancestor indices.
+    pub(crate) ancestors: Vec<usize>,
+    /// The resampled particles, swapped with the set's afterwards.
+    pub(crate) spare: Vec<T>,
+}
+
+impl<T> Default for Scratch<T> {
+    fn default() -> Self {
+        Self {
+            increments: Vec::new(),
+            weights: Vec::new(),
+            ancestors: Vec::new(),
+            spare: Vec::new(),
+        }
+    }
+}
+
+impl<T: Clone> Clone for ParticleSet<T> {
+    fn clone(&self) -> Self {
+        Self {
+            particles: self.particles.clone(),
+            log_weights: self.log_weights.clone(),
+            scratch: Scratch::default(),
+        }
+    }
+}
+
+impl<T: PartialEq> PartialEq for ParticleSet<T> {
+    fn eq(&self, other: &Self) -> bool {
+        self.particles == other.particles && self.log_weights == other.log_weights
+    }
+}
+
+impl<T: std::fmt::Debug> std::fmt::Debug for ParticleSet<T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ParticleSet")
+            .field("particles", &self.particles)
+            .field("log_weights", &self.log_weights)
+            .finish()
+    }
 }
 
 impl<T: Clone> ParticleSet<T> {
@@ -92,6 +147,7 @@ impl<T: Clone> ParticleSet<T> {
         Ok(Self {
             particles,
             log_weights,
+            scratch: Scratch::default(),
         })
     }
 
@@ -109,6 +165,7 @@ impl<T: Clone> ParticleSet<T> {
         let mut set = Self {
             particles,
             log_weights,
+            scratch: Scratch::default(),
         };
         set.normalize()?;
         Ok(set)
@@ -207,19 +264,24 @@ impl<T: Clone> ParticleSet<T> {
         rng: &mut R,
         ancestors: &mut Vec<usize>,
     ) -> Result<()> {
-        let weights = self.weights();
+        let mut weights = std::mem::take(&mut self.scratch.weights);
+        self.weights_into(&mut weights);
         ancestors.resize(self.len(), 0);
-        scheme.resample(&weights, rng, ancestors)?;
+        let drawn = scheme.resample(&weights, rng, ancestors);
+        self.scratch.weights = weights;
+        drawn?;
         self.gather(ancestors);
         Ok(())
     }
 
     /// Replaces the particles by `ancestors` (one index per new particle)
     /// and resets the weights to `1/N`.
-    pub(crate) fn gather(&mut self, ancestors: &[usize]) {
+    fn gather(&mut self, ancestors: &[usize]) {
         let n = self.len();
-        let old = std::mem::take(&mut self.particles);
-        self.particles = ancestors.iter().map(|&a| old[a].clone()).collect();
+        let spare = &mut self.scratch.spare;
+        spare.clear();
+        spare.extend(ancestors.iter().map(|&a| self.particles[a].clone()));
+        std::mem::swap(&mut self.particles, spare);
         self.log_weights.fill(-(n as f64).ln());
     }
 
