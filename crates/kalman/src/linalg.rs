@@ -163,6 +163,23 @@ pub(crate) fn mirror_lower<const D: usize>(mut m: SMatrix<f64, D, D>) -> SMatrix
     m
 }
 
+/// `P + (Q + Q^T) / 2` for a symmetric `P` (only its lower triangle is
+/// read), exactly symmetric.
+#[inline(always)]
+pub(crate) fn add_sym<const D: usize>(
+    p: &SMatrix<f64, D, D>,
+    q: &SMatrix<f64, D, D>,
+) -> SMatrix<f64, D, D> {
+    let mut out = *p;
+    for j in 0..D {
+        out[(j, j)] += q[(j, j)];
+        for i in (j + 1)..D {
+            out[(i, j)] += (q[(i, j)] + q[(j, i)]) * 0.5;
+        }
+    }
+    mirror_lower(out)
+}
+
 /// `(A + A^T) / 2`.
 #[inline(always)]
 pub(crate) fn symmetrize<const D: usize>(m: &SMatrix<f64, D, D>) -> SMatrix<f64, D, D> {

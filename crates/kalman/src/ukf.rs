@@ -66,7 +66,10 @@ struct Weights {
     wm0: f64,
     wc0: f64,
     wi: f64,
-    scale: f64,
+    /// `c = alpha^2 (L + kappa)`, the squared spread of the points.
+    c: f64,
+    /// `beta - alpha^2`: the weight of the mean shift in the covariances.
+    g: f64,
 }
 
 /// Statistics of a sigma-point set pushed through `f` then `h`.
@@ -96,14 +99,6 @@ fn none<const D: usize>() -> Gaussian<D> {
 
 fn no_output<const K: usize>(_: &SVector<f64, K>, _: &SVector<f64, 0>) -> SVector<f64, 0> {
     SVector::zeros()
-}
-
-#[inline]
-fn outer<const A: usize, const B: usize>(
-    a: &SVector<f64, A>,
-    b: &SVector<f64, B>,
-) -> SMatrix<f64, A, B> {
-    a * b.transpose()
 }
 
 impl Ukf {
@@ -172,14 +167,23 @@ impl Ukf {
             wm0,
             wc0: wm0 + 1.0 - a2 + self.beta,
             wi: 0.5 / c,
-            scale: c.sqrt(),
+            c,
+            g: self.beta - a2,
         })
     }
 
     /// Pushes the sigma points of `[x; v; w] ~ N([m; mv; mw], diag(P, Qv, Rw))`
     /// through `xf = f(x, v)` and `y = h(xf, w)`.
+    ///
+    /// The moments are accumulated as deviations from the central point
+    /// (`dx_i = Xf_i - Xf_0`): since `Wm_0 + 2 L W_i = 1`,
+    /// `x = Xf_0 + d` with `d = W_i sum dx_i`, and
+    /// `P_xx = W_i sum dx_i dx_i^T + (beta - alpha^2) d d^T` (likewise
+    /// `P_yy`, `P_xy`). Algebraically the weighted sums above; without the
+    /// large weights `Wm_0`, `Wc_0` of a small `alpha` there is no
+    /// cancellation between them.
     #[allow(clippy::too_many_arguments)]
-    #[inline]
+    #[inline(always)]
     fn transform<const N: usize, const V: usize, const W: usize, const K: usize, const M: usize>(
         &self,
         prior: &Gaussian<N>,
@@ -194,77 +198,90 @@ impl Ukf {
         // the structural zeros of the triangular factor stay exact constants,
         // so `m - 0` folds to `m` and a model that reads only the leading
         // coordinates is not re-evaluated on identical inputs.
-        let c = wt.scale * wt.scale;
-        let sp = linalg::psd_sqrt(&(prior.cov() * c), "state covariance P", step)?;
-        let sv = linalg::psd_sqrt(&(v.cov() * c), "process noise covariance", step)?;
-        let sw = linalg::psd_sqrt(&(w.cov() * c), "measurement noise covariance", step)?;
+        let sp = linalg::psd_sqrt(&(prior.cov() * wt.c), "state covariance P", step)?;
+        let sv = linalg::psd_sqrt(&(v.cov() * wt.c), "process noise covariance", step)?;
+        let sw = linalg::psd_sqrt(&(w.cov() * wt.c), "measurement noise covariance", step)?;
         let (m, mv, mw) = (prior.mean(), v.mean(), w.mean());
 
         let xf0 = f(m, mv);
         let y0 = h(&xf0, mw);
-        let push = |x: SVector<f64, N>, vv: SVector<f64, V>| {
-            let xf = f(&x, &vv);
-            let y = h(&xf, mw);
-            (xf, y)
+        // Accumulators start at -0, the identity of `+` (0 + x is not x for
+        // x = -0), so the first addition folds away.
+        let mut sdx = SVector::<f64, K>::repeat(-0.0);
+        let mut sdy = SVector::<f64, M>::repeat(-0.0);
+        let mut sxx = SMatrix::<f64, K, K>::repeat(-0.0);
+        let mut syy = SMatrix::<f64, M, M>::repeat(-0.0);
+        let mut sxy = SMatrix::<f64, K, M>::repeat(-0.0);
+        let mut p_in_x = SMatrix::<f64, N, K>::repeat(-0.0);
+        let mut add = |dx: &SVector<f64, K>, dy: &SVector<f64, M>| {
+            sdx += dx;
+            sdy += dy;
+            // lower triangles of the symmetric sums
+            for j in 0..K {
+                for i in j..K {
+                    sxx[(i, j)] += dx[i] * dx[j];
+                }
+            }
+            for j in 0..M {
+                for i in j..M {
+                    syy[(i, j)] += dy[i] * dy[j];
+                }
+                for i in 0..K {
+                    sxy[(i, j)] += dx[i] * dy[j];
+                }
+            }
         };
-        let xp: [_; N] = core::array::from_fn(|j| push(m + sp.column(j), *mv));
-        let xm: [_; N] = core::array::from_fn(|j| push(m - sp.column(j), *mv));
-        let vp: [_; V] = core::array::from_fn(|j| push(*m, mv + sv.column(j)));
-        let vm: [_; V] = core::array::from_fn(|j| push(*m, mv - sv.column(j)));
-        let wp: [_; W] = core::array::from_fn(|j| h(&xf0, &(mw + sw.column(j))));
-        let wm: [_; W] = core::array::from_fn(|j| h(&xf0, &(mw - sw.column(j))));
-
-        // means
-        let mut sx = xf0 * (2 * W) as f64;
-        let mut sy = SVector::<f64, M>::zeros();
-        for (xf, y) in xp.iter().chain(&xm).chain(&vp).chain(&vm) {
-            sx += xf;
-            sy += y;
-        }
-        for y in wp.iter().chain(&wm) {
-            sy += y;
-        }
-        let x_mean = xf0 * wt.wm0 + sx * wt.wi;
-        let y_mean = y0 * wt.wm0 + sy * wt.wi;
-
-        // covariances
-        let dx0 = xf0 - x_mean;
-        let dy0 = y0 - y_mean;
-        let mut p_xx = SMatrix::<f64, K, K>::zeros();
-        let mut p_yy = SMatrix::<f64, M, M>::zeros();
-        let mut p_xy = SMatrix::<f64, K, M>::zeros();
-        for (xf, y) in xp.iter().chain(&xm).chain(&vp).chain(&vm) {
-            let dx = xf - x_mean;
-            let dy = y - y_mean;
-            p_xx += outer(&dx, &dx);
-            p_yy += outer(&dy, &dy);
-            p_xy += outer(&dx, &dy);
-        }
-        for y in wp.iter().chain(&wm) {
-            let dy = y - y_mean;
-            p_yy += outer(&dy, &dy);
-            p_xy += outer(&dx0, &dy);
-        }
-        p_xx += outer(&dx0, &dx0) * (2 * W) as f64;
-        let p_xx = p_xx * wt.wi + outer(&dx0, &dx0) * wt.wc0;
-        let p_yy = p_yy * wt.wi + outer(&dy0, &dy0) * wt.wc0;
-        let p_xy = p_xy * wt.wi + outer(&dx0, &dy0) * wt.wc0;
-        let mut p_in_x = SMatrix::<f64, N, K>::zeros();
         for j in 0..N {
-            let d = xp[j].0 - xm[j].0;
-            p_in_x += sp.column(j) * d.transpose();
+            let col = sp.column(j);
+            let xp = f(&(m + col), mv);
+            let xm = f(&(m - col), mv);
+            let (dp, dm) = (xp - xf0, xm - xf0);
+            add(&dp, &(h(&xp, mw) - y0));
+            add(&dm, &(h(&xm, mw) - y0));
+            // Cov(input, propagated) for the smoother (unused elsewhere, and
+            // then optimised away)
+            p_in_x += col * (xp - xm).transpose();
         }
-        let p_in_x = p_in_x * wt.wi;
+        for j in 0..V {
+            let col = sv.column(j);
+            for vv in [mv + col, mv - col] {
+                let xf = f(m, &vv);
+                add(&(xf - xf0), &(h(&xf, mw) - y0));
+            }
+        }
+        for j in 0..W {
+            let col = sw.column(j);
+            let dx = SVector::<f64, K>::zeros();
+            add(&dx, &(h(&xf0, &(mw + col)) - y0));
+            add(&dx, &(h(&xf0, &(mw - col)) - y0));
+        }
 
+        let d = sdx * wt.wi;
+        let e = sdy * wt.wi;
+        let x_mean = xf0 + d;
+        let y_mean = y0 + e;
         linalg::check_finite_vec(&x_mean, "sigma-point mean of f", step)?;
         linalg::check_finite_vec(&y_mean, "sigma-point mean of h", step)?;
+        let mut p_xx = SMatrix::<f64, K, K>::zeros();
+        for j in 0..K {
+            for i in j..K {
+                p_xx[(i, j)] = sxx[(i, j)] * wt.wi + wt.g * d[i] * d[j];
+            }
+        }
+        let mut p_yy = SMatrix::<f64, M, M>::zeros();
+        for j in 0..M {
+            for i in j..M {
+                p_yy[(i, j)] = syy[(i, j)] * wt.wi + wt.g * e[i] * e[j];
+            }
+        }
+        let p_xy = sxy * wt.wi + linalg::mul_t(&(d * wt.g), &e);
         Ok(Moments {
             x_mean,
-            p_xx,
+            p_xx: linalg::mirror_lower(p_xx),
             y_mean,
-            p_yy,
+            p_yy: linalg::mirror_lower(p_yy),
             p_xy,
-            p_in_x,
+            p_in_x: p_in_x * wt.wi,
         })
     }
 
@@ -281,7 +298,6 @@ impl Ukf {
         z: &SVector<f64, M>,
     ) -> Result<Update<N, M>> {
         linalg::check_finite_vec(z, "measurement z", Step::Update)?;
-        let s = linalg::symmetrize(&s);
         let chol = linalg::Llt::new(&s, "innovation covariance S", Step::Update)?;
         let w = chol.right_solve_lt(p_xy);
         let residual = z - y_mean;
@@ -311,12 +327,10 @@ impl Ukf {
         z: &SVector<f64, M>,
     ) -> Result<UkfStep<N, M>> {
         let mo = self.transform(prior, v, w, f, h, Step::Predict)?;
-        let predicted = Gaussian::checked(
-            mo.x_mean,
-            linalg::symmetrize(&(mo.p_xx + q_add)),
-            Step::Predict,
-        )?;
-        let update = Self::correct(&predicted, &mo.y_mean, mo.p_yy + r_add, &mo.p_xy, z)?;
+        let predicted =
+            Gaussian::checked(mo.x_mean, linalg::add_sym(&mo.p_xx, q_add), Step::Predict)?;
+        let s = linalg::add_sym(&mo.p_yy, r_add);
+        let update = Self::correct(&predicted, &mo.y_mean, s, &mo.p_xy, z)?;
         Ok(UkfStep { predicted, update })
     }
 
@@ -341,7 +355,7 @@ impl Ukf {
         )?;
         Gaussian::checked(
             mo.x_mean,
-            linalg::symmetrize(&(mo.p_xx + dynamics.process_noise())),
+            linalg::add_sym(&mo.p_xx, &dynamics.process_noise()),
             Step::Predict,
         )
     }
@@ -371,7 +385,7 @@ impl Ukf {
         Self::correct(
             prior,
             &mo.y_mean,
-            mo.p_yy + measurement.measurement_noise(),
+            linalg::add_sym(&mo.p_yy, &measurement.measurement_noise()),
             &mo.p_xy,
             z,
         )
@@ -429,7 +443,7 @@ impl Ukf {
             no_output,
             Step::Predict,
         )?;
-        Gaussian::checked(mo.x_mean, linalg::symmetrize(&mo.p_xx), Step::Predict)
+        Gaussian::checked(mo.x_mean, mo.p_xx, Step::Predict)
     }
 
     /// Augmented measurement update: sigma points of `[x; n]` through `h(x, n)`.
@@ -521,7 +535,7 @@ impl Ukf {
             )?;
             let predicted = Gaussian::checked(
                 mo.x_mean,
-                linalg::symmetrize(&(mo.p_xx + dynamics.process_noise())),
+                linalg::add_sym(&mo.p_xx, &dynamics.process_noise()),
                 Step::Smooth,
             )?;
             Ok((predicted, mo.p_in_x))
