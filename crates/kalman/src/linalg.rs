@@ -232,13 +232,16 @@ impl<const D: usize> Llt<D> {
             for k in 0..j {
                 d -= l[(j, k)] * l[(j, k)];
             }
-            // also rejects NaN
-            if !(d > 0.0 && d < f64::INFINITY) {
+            let ljj = d.sqrt();
+            let inv = 1.0 / ljj;
+            // `d sqrt(d)^-1 = sqrt(d) > 0` exactly when `0 < d < inf`: NaN
+            // for d = 0 (0 inf), d = inf (inf 0), d < 0 and NaN d. One float
+            // compare; `0 < d < inf` written out compiles to integer bit
+            // tests on the pivot.
+            if !(d * inv > 0.0) {
                 return Err(KalmanError::NotPositiveDefinite { matrix, step });
             }
-            let ljj = d.sqrt();
             l[(j, j)] = ljj;
-            let inv = 1.0 / ljj;
             inv_diag[j] = inv;
             for i in (j + 1)..D {
                 let mut s = a[(i, j)];
