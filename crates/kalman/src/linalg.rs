@@ -238,7 +238,8 @@ impl<const D: usize> Llt<D> {
             // for d = 0 (0 inf), d = inf (inf 0), d < 0 and NaN d. One float
             // compare; `0 < d < inf` written out compiles to integer bit
             // tests on the pivot.
-            if !(d * inv > 0.0) {
+            let positive = d * inv > 0.0;
+            if !positive {
                 return Err(KalmanError::NotPositiveDefinite { matrix, step });
             }
             l[(j, j)] = ljj;
@@ -294,53 +295,6 @@ impl<const D: usize> Llt<D> {
         x
     }
 
-    /// `B L^{-T}`, i.e. `(L^{-1} B^T)^T`, column by column so that each
-    /// step is a whole column of `B` (vectorises over the rows).
-    #[inline(always)]
-    pub(crate) fn right_solve_lt<const R: usize>(
-        &self,
-        b: &SMatrix<f64, R, D>,
-    ) -> SMatrix<f64, R, D> {
-        let l = &self.l;
-        let mut x = *b;
-        for c in 0..D {
-            for k in 0..c {
-                let lck = l[(c, k)];
-                for i in 0..R {
-                    x[(i, c)] -= x[(i, k)] * lck;
-                }
-            }
-            let inv = self.inv_diag[c];
-            for i in 0..R {
-                x[(i, c)] *= inv;
-            }
-        }
-        x
-    }
-
-    /// `B L^{-1}` (the second half of `B A^{-1} = B L^{-T} L^{-1}`).
-    #[inline(always)]
-    pub(crate) fn right_solve_l<const R: usize>(
-        &self,
-        b: &SMatrix<f64, R, D>,
-    ) -> SMatrix<f64, R, D> {
-        let l = &self.l;
-        let mut x = *b;
-        for c in (0..D).rev() {
-            for k in (c + 1)..D {
-                let lkc = l[(k, c)];
-                for i in 0..R {
-                    x[(i, c)] -= x[(i, k)] * lkc;
-                }
-            }
-            let inv = self.inv_diag[c];
-            for i in 0..R {
-                x[(i, c)] *= inv;
-            }
-        }
-        x
-    }
-
     /// `log det A = 2 sum log L_ii`, with one logarithm when the product of
     /// the pivots is representable.
     #[inline]
@@ -350,6 +304,138 @@ impl<const D: usize> Llt<D> {
             2.0 * prod.ln()
         } else {
             2.0 * (0..D).map(|i| self.l[(i, i)].ln()).sum::<f64>()
+        }
+    }
+}
+
+/// The square-root-free Cholesky factorisation `A = L D L^T` (`L` unit
+/// lower triangular, `D` diagonal) of a small symmetric positive definite
+/// matrix, for the gain steps: no square root on the dependency chain of a
+/// filter step, one division per pivot, and `log det A = log prod D_jj`.
+/// With `L_c = L D^{1/2}` (the Cholesky factor) the solves below are those
+/// of [`Llt`] with the pivots' square roots cancelled.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Ldl<const D: usize> {
+    /// Strictly lower part of `L` (unit diagonal implied).
+    l: SMatrix<f64, D, D>,
+    d: SVector<f64, D>,
+    inv_d: SVector<f64, D>,
+}
+
+impl<const D: usize> Ldl<D> {
+    /// Factors `a` (lower triangle read), or names it in the error.
+    #[inline(always)]
+    pub(crate) fn new(a: &SMatrix<f64, D, D>, matrix: &'static str, step: Step) -> Result<Self> {
+        let mut l = SMatrix::<f64, D, D>::zeros();
+        // L D, column by column
+        let mut ld = SMatrix::<f64, D, D>::zeros();
+        let mut d = SVector::<f64, D>::zeros();
+        let mut inv_d = SVector::<f64, D>::zeros();
+        for j in 0..D {
+            let mut dj = a[(j, j)];
+            for k in 0..j {
+                dj -= ld[(j, k)] * l[(j, k)];
+            }
+            let inv = 1.0 / dj;
+            // rejects dj <= 0, NaN and inf (1 / inf = 0)
+            let positive = dj > 0.0 && inv > 0.0;
+            if !positive {
+                return Err(KalmanError::NotPositiveDefinite { matrix, step });
+            }
+            d[j] = dj;
+            inv_d[j] = inv;
+            for i in (j + 1)..D {
+                let mut s = a[(i, j)];
+                for k in 0..j {
+                    s -= ld[(i, k)] * l[(j, k)];
+                }
+                ld[(i, j)] = s;
+                l[(i, j)] = s * inv;
+            }
+        }
+        Ok(Self { l, d, inv_d })
+    }
+
+    /// `1 / D_jj`.
+    #[inline(always)]
+    pub(crate) fn inv_d(&self) -> &SVector<f64, D> {
+        &self.inv_d
+    }
+
+    /// `L^{-1} B` (unit forward substitution).
+    #[inline(always)]
+    pub(crate) fn forward<const C: usize>(&self, b: &SMatrix<f64, D, C>) -> SMatrix<f64, D, C> {
+        let mut x = *b;
+        for c in 0..C {
+            for i in 1..D {
+                for k in 0..i {
+                    x[(i, c)] -= self.l[(i, k)] * x[(k, c)];
+                }
+            }
+        }
+        x
+    }
+
+    /// `B L^{-T}`, column by column (each step a whole column of `B`).
+    #[inline(always)]
+    pub(crate) fn right_solve_lt<const R: usize>(
+        &self,
+        b: &SMatrix<f64, R, D>,
+    ) -> SMatrix<f64, R, D> {
+        let mut x = *b;
+        for c in 1..D {
+            for k in 0..c {
+                let lck = self.l[(c, k)];
+                for i in 0..R {
+                    x[(i, c)] -= x[(i, k)] * lck;
+                }
+            }
+        }
+        x
+    }
+
+    /// `B L^{-1}`.
+    #[inline(always)]
+    pub(crate) fn right_solve_l<const R: usize>(
+        &self,
+        b: &SMatrix<f64, R, D>,
+    ) -> SMatrix<f64, R, D> {
+        let mut x = *b;
+        for c in (0..D).rev() {
+            for k in (c + 1)..D {
+                let lkc = self.l[(k, c)];
+                for i in 0..R {
+                    x[(i, c)] -= x[(i, k)] * lkc;
+                }
+            }
+        }
+        x
+    }
+
+    /// `B D^{-1}` (columns scaled).
+    #[inline(always)]
+    pub(crate) fn scale_columns<const R: usize>(
+        &self,
+        b: &SMatrix<f64, R, D>,
+    ) -> SMatrix<f64, R, D> {
+        let mut x = *b;
+        for c in 0..D {
+            for i in 0..R {
+                x[(i, c)] *= self.inv_d[c];
+            }
+        }
+        x
+    }
+
+    /// `log det A = log prod D_jj`, one logarithm when the product is
+    /// representable.
+    #[inline(always)]
+    pub(crate) fn log_det(&self) -> f64 {
+        let prod: f64 = (0..D).map(|i| self.d[i]).product();
+        if prod.is_normal() {
+            prod.ln()
+        } else {
+            (0..D).map(|i| self.d[i].ln()).sum::<f64>()
         }
     }
 }
@@ -445,6 +531,30 @@ mod tests {
         assert!(Llt::new(&bad, "bad", Step::Update).is_err());
         let nan = nalgebra::Matrix2::new(f64::NAN, 0.0, 0.0, 1.0);
         assert!(Llt::new(&nan, "nan", Step::Update).is_err());
+    }
+
+    #[test]
+    fn ldl_solves_and_log_det() {
+        let a = nalgebra::Matrix3::new(4.0, 1.0, 0.5, 1.0, 3.0, 0.2, 0.5, 0.2, 2.0);
+        let ldl = Ldl::new(&a, "a", Step::Evaluate).unwrap();
+        let l = ldl.l + nalgebra::Matrix3::identity();
+        let d = nalgebra::Matrix3::from_diagonal(&ldl.d);
+        assert!((l * d * l.transpose() - a).amax() < 1e-14);
+        assert!((ldl.log_det() - a.determinant().ln()).abs() < 1e-13);
+        // B A^{-1} = B L^{-T} D^{-1} L^{-1}
+        let b = nalgebra::Matrix2x3::new(1.0, 2.0, 3.0, 4.0, 5.0, 6.0);
+        let x = ldl.right_solve_l(&ldl.scale_columns(&ldl.right_solve_lt(&b)));
+        assert!((x * a - b).amax() < 1e-13);
+        let y = nalgebra::Vector3::new(1.0, -2.0, 0.5);
+        assert!((l * ldl.forward(&y) - y).amax() < 1e-15);
+        for bad in [
+            nalgebra::Matrix2::new(1.0, 2.0, 2.0, 1.0),
+            nalgebra::Matrix2::new(0.0, 0.0, 0.0, 1.0),
+            nalgebra::Matrix2::new(f64::NAN, 0.0, 0.0, 1.0),
+            nalgebra::Matrix2::new(1.0, 0.0, 0.0, f64::INFINITY),
+        ] {
+            assert!(Ldl::new(&bad, "bad", Step::Update).is_err(), "{bad}");
+        }
     }
 
     #[test]

@@ -285,10 +285,10 @@ impl Ukf {
         })
     }
 
-    /// The measurement update from transformed moments: with `S = L L^T`
-    /// and `W = P_xy L^{-T}` (triangular solve), `K = W L^{-1}`,
-    /// `K nu = W y` for the whitened innovation `y = L^{-1} nu`, and
-    /// `K S K^T = W W^T`.
+    /// The measurement update from transformed moments (`s` symmetric):
+    /// with `S = L D L^T`, `U = P_xy L^{-T}` and `V = U D^{-1}`,
+    /// `K = V L^{-1}`, `K nu = V y` for `y = L^{-1} nu`, and
+    /// `K S K^T = V U^T`.
     #[inline(always)]
     fn correct<const N: usize, const M: usize>(
         predicted: &Gaussian<N>,
@@ -298,15 +298,16 @@ impl Ukf {
         z: &SVector<f64, M>,
     ) -> Result<Update<N, M>> {
         linalg::check_finite_vec(z, "measurement z", Step::Update)?;
-        let chol = linalg::Llt::new(&s, "innovation covariance S", Step::Update)?;
-        let w = chol.right_solve_lt(p_xy);
+        let ldl = linalg::Ldl::new(&s, "innovation covariance S", Step::Update)?;
+        let u = ldl.right_solve_lt(p_xy);
+        let v = ldl.scale_columns(&u);
         let residual = z - y_mean;
-        let y = chol.forward(&residual);
-        let mean = predicted.mean() + linalg::mul(&w, &y);
-        let cov = linalg::mirror_lower(linalg::lower_mul_t_add(predicted.cov(), -1.0, &w, &w));
+        let y = ldl.forward(&residual);
+        let mean = predicted.mean() + linalg::mul(&v, &y);
+        let cov = linalg::mirror_lower(linalg::lower_mul_t_add(predicted.cov(), -1.0, &v, &u));
         Ok(Update {
             posterior: Gaussian::checked(mean, cov, Step::Update)?,
-            innovation: Some(Innovation::new(residual, &y, s, &chol)),
+            innovation: Some(Innovation::new(residual, &y, s, &ldl)),
             iterations: 1,
         })
     }

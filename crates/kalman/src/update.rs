@@ -35,17 +35,18 @@ pub struct Innovation<const M: usize> {
 }
 
 impl<const M: usize> Innovation<M> {
-    /// Derives NIS and log-likelihood from the residual, its whitened form
-    /// `y = L^{-1} nu` (so `nu^T S^{-1} nu = |y|^2`) and the factor of `S`.
+    /// Derives NIS and log-likelihood from the residual, the factorisation
+    /// `S = L D L^T` and the whitened residual `y = L^{-1} nu`
+    /// (`nu^T S^{-1} nu = sum y_j^2 / D_jj`).
     #[inline(always)]
     pub(crate) fn new(
         residual: SVector<f64, M>,
         whitened: &SVector<f64, M>,
         covariance: SMatrix<f64, M, M>,
-        chol: &linalg::Llt<M>,
+        ldl: &linalg::Ldl<M>,
     ) -> Self {
-        let nis = whitened.norm_squared();
-        let log_likelihood = -0.5 * (nis + chol.log_det() + M as f64 * LN_2PI);
+        let nis = whitened.component_mul(whitened).dot(ldl.inv_d());
+        let log_likelihood = -0.5 * (nis + ldl.log_det() + M as f64 * LN_2PI);
         Self {
             residual,
             covariance,
@@ -89,11 +90,12 @@ pub(crate) struct GainStep<const N: usize, const M: usize> {
 /// `K = P H^T S^{-1}` (Cholesky solve), `x + K nu`, and the covariance in
 /// the requested form. `residual` is the (linearised) innovation.
 ///
-/// With `S = L L^T` and `W = P H^T L^{-T}` (a triangular solve), the gain is
-/// `K = W L^{-1}`, the mean step `K nu = W y` with the whitened innovation
-/// `y = L^{-1} nu` (whose squared norm is the NIS), and `K H P = W W^T`, so
-/// the standard form `P - W W^T` needs no second solve. Symmetric results
-/// are formed on the lower triangle and mirrored (symmetric by construction).
+/// With the square-root-free Cholesky factorisation `S = L D L^T`,
+/// `U = P H^T L^{-T}` and `V = U D^{-1}` (triangular solves), the gain is
+/// `K = V L^{-1}`, the mean step `K nu = V y` with `y = L^{-1} nu` (the
+/// NIS is `sum y_j^2 / D_jj`), and `K H P = V U^T`, so the standard form
+/// `P - V U^T` needs no second solve. Symmetric results are formed on the
+/// lower triangle and mirrored (symmetric by construction).
 #[inline(always)]
 pub(crate) fn gain_step<const N: usize, const M: usize>(
     mean: &SVector<f64, N>,
@@ -111,20 +113,21 @@ pub(crate) fn gain_step<const N: usize, const M: usize>(
         h,
         &pht.transpose(),
     ));
-    let chol = linalg::Llt::new(&s, "innovation covariance S", Step::Update)?;
-    let w = chol.right_solve_lt(&pht);
-    let y = chol.forward(&residual);
-    let new_mean = mean + linalg::mul(&w, &y);
+    let ldl = linalg::Ldl::new(&s, "innovation covariance S", Step::Update)?;
+    let u = ldl.right_solve_lt(&pht);
+    let v = ldl.scale_columns(&u);
+    let y = ldl.forward(&residual);
+    let new_mean = mean + linalg::mul(&v, &y);
     let new_cov = match form {
         CovarianceUpdate::Joseph => {
-            let k = chol.right_solve_l(&w);
+            let k = ldl.right_solve_l(&v);
             let a = SMatrix::<f64, N, N>::identity() - linalg::mul(&k, h);
             let ap = linalg::mul(&a, p);
             let kr = linalg::mul(&k, r);
             let lower = linalg::lower_mul_t_add(&SMatrix::zeros(), 1.0, &ap, &a);
             linalg::lower_mul_t_add(&lower, 1.0, &kr, &k)
         }
-        CovarianceUpdate::Standard => linalg::lower_mul_t_add(p, -1.0, &w, &w),
+        CovarianceUpdate::Standard => linalg::lower_mul_t_add(p, -1.0, &v, &u),
     };
     let new_cov = linalg::mirror_lower(new_cov);
     linalg::check_finite_belief(
@@ -137,6 +140,6 @@ pub(crate) fn gain_step<const N: usize, const M: usize>(
     Ok(GainStep {
         mean: new_mean,
         cov: new_cov,
-        innovation: Innovation::new(residual, &y, s, &chol),
+        innovation: Innovation::new(residual, &y, s, &ldl),
     })
 }
