@@ -95,16 +95,22 @@ pub(crate) fn mul<const R: usize, const K: usize, const C: usize>(
     a: &SMatrix<f64, R, K>,
     b: &SMatrix<f64, K, C>,
 ) -> SMatrix<f64, R, C> {
+    // every entry is overwritten (the zero stores are optimised away);
+    // nalgebra's `from_fn` was left out of line for 4 x 4
+    let mut out = SMatrix::<f64, R, C>::zeros();
     if K == 0 {
-        return SMatrix::zeros();
+        return out;
     }
-    SMatrix::from_fn(|i, j| {
-        let mut s = a[(i, 0)] * b[(0, j)];
-        for k in 1..K {
-            s += a[(i, k)] * b[(k, j)];
+    for j in 0..C {
+        for i in 0..R {
+            let mut s = a[(i, 0)] * b[(0, j)];
+            for k in 1..K {
+                s += a[(i, k)] * b[(k, j)];
+            }
+            out[(i, j)] = s;
         }
-        s
-    })
+    }
+    out
 }
 
 /// `A B^T`, as [`mul`].
@@ -113,16 +119,22 @@ pub(crate) fn mul_t<const R: usize, const K: usize, const C: usize>(
     a: &SMatrix<f64, R, K>,
     b: &SMatrix<f64, C, K>,
 ) -> SMatrix<f64, R, C> {
+    // every entry is overwritten (the zero stores are optimised away);
+    // nalgebra's `from_fn` was left out of line for 4 x 4
+    let mut out = SMatrix::<f64, R, C>::zeros();
     if K == 0 {
-        return SMatrix::zeros();
+        return out;
     }
-    SMatrix::from_fn(|i, j| {
-        let mut s = a[(i, 0)] * b[(j, 0)];
-        for k in 1..K {
-            s += a[(i, k)] * b[(j, k)];
+    for j in 0..C {
+        for i in 0..R {
+            let mut s = a[(i, 0)] * b[(j, 0)];
+            for k in 1..K {
+                s += a[(i, k)] * b[(j, k)];
+            }
+            out[(i, j)] = s;
         }
-        s
-    })
+    }
+    out
 }
 
 /// The lower triangle of `C + sign A B^T` for a product known to be
