@@ -86,6 +86,28 @@ pub(crate) fn check_finite_belief<const D: usize>(
     check_finite_mat(cov, cov_what, step)
 }
 
+/// `sum_k term(k)` for `K >= 1` terms, in two interleaved partial sums
+/// (even and odd `k`): the dependency chain of a length-4 dot product is
+/// two additions instead of three.
+#[inline(always)]
+fn dot<const K: usize>(term: impl Fn(usize) -> f64) -> f64 {
+    let mut even = term(0);
+    if K == 1 {
+        return even;
+    }
+    let mut odd = term(1);
+    let mut k = 2;
+    while k + 1 < K {
+        even += term(k);
+        odd += term(k + 1);
+        k += 2;
+    }
+    if k < K {
+        even += term(k);
+    }
+    even + odd
+}
+
 /// `A B` with fixed-size loops that unroll for small dimensions (nalgebra's
 /// general product stays an out-of-line call in the filter hot paths). The
 /// first term initialises each sum: `0 + x` is not `x` for `x = -0`, so a
@@ -103,10 +125,7 @@ pub(crate) fn mul<const R: usize, const K: usize, const C: usize>(
     }
     for j in 0..C {
         for i in 0..R {
-            let mut s = a[(i, 0)] * b[(0, j)];
-            for k in 1..K {
-                s += a[(i, k)] * b[(k, j)];
-            }
+            let s = dot::<K>(|k| a[(i, k)] * b[(k, j)]);
             out[(i, j)] = s;
         }
     }
@@ -127,10 +146,7 @@ pub(crate) fn mul_t<const R: usize, const K: usize, const C: usize>(
     }
     for j in 0..C {
         for i in 0..R {
-            let mut s = a[(i, 0)] * b[(j, 0)];
-            for k in 1..K {
-                s += a[(i, k)] * b[(j, k)];
-            }
+            let s = dot::<K>(|k| a[(i, k)] * b[(j, k)]);
             out[(i, j)] = s;
         }
     }
@@ -138,9 +154,11 @@ pub(crate) fn mul_t<const R: usize, const K: usize, const C: usize>(
 }
 
 /// The lower triangle of `C + sign A B^T` for a product known to be
-/// symmetric (`F P F^T`, `W W^T`, ...), to be copied up by
-/// [`mirror_lower`] (exactly symmetric); about half the work of the full
-/// product. Only the lower triangle of `c` matters.
+/// symmetric (`F P F^T`, `V U^T`, ...), to be copied up by
+/// [`mirror_lower`] (exactly symmetric). Column `j` is formed from row `j`
+/// rounded down to even, a whole column of `A` per term, so that it stays
+/// in aligned pairs of rows (two-wide vectors) while skipping about half of
+/// the full product. Only the lower triangle of `c` matters.
 #[inline(always)]
 pub(crate) fn lower_mul_t_add<const R: usize, const K: usize>(
     c: &SMatrix<f64, R, R>,
@@ -149,16 +167,13 @@ pub(crate) fn lower_mul_t_add<const R: usize, const K: usize>(
     b: &SMatrix<f64, R, K>,
 ) -> SMatrix<f64, R, R> {
     let mut out = *c;
-    if K == 0 {
-        return out;
-    }
     for j in 0..R {
-        for i in j..R {
-            let mut s = a[(i, 0)] * b[(j, 0)];
-            for k in 1..K {
-                s += a[(i, k)] * b[(j, k)];
+        let i0 = j - j % 2;
+        for k in 0..K {
+            let bjk = sign * b[(j, k)];
+            for i in i0..R {
+                out[(i, j)] += a[(i, k)] * bjk;
             }
-            out[(i, j)] += sign * s;
         }
     }
     out
