@@ -106,7 +106,7 @@ impl Proposed {
             None
         } else {
             inc.iter()
-                .position(|x| !(*x < f64::INFINITY))
+                .position(|x| x.is_nan() || *x == f64::INFINITY)
                 .map(|i| (offset + i, inc[i]))
         };
         Self { max, bad }
@@ -138,22 +138,30 @@ impl Weighed {
     ) -> Self {
         let (mut sum, mut sum2) = (0.0, 0.0);
         let mut last = 0;
-        let mut add = |i: usize, l: f64, o: &mut f64| {
-            let w = exp_flushed(l - max);
+        let mut add = |i: usize, d: f64, o: &mut f64| {
+            // exp_flushed(d) == 0 leaves the sums as they are (adding +0 to
+            // a non-negative sum is exact): a branch, not a blend, keeps the
+            // flushed particles of a sharp likelihood off the sums'
+            // dependency chain
+            if d < -708.0 {
+                *o = if cumulative { sum } else { 0.0 };
+                return;
+            }
+            let w = exp_flushed(d);
             sum += w;
             sum2 += w * w;
-            last = if w > 0.0 { i + 1 } else { last };
+            last = i + 1;
             *o = if cumulative { sum } else { w };
         };
         match inc {
             Some(inc) => {
                 for (i, ((&l, &x), o)) in lw.iter().zip(inc).zip(out.iter_mut()).enumerate() {
-                    add(i, l + x, o);
+                    add(i, l + x - max, o);
                 }
             }
             None => {
                 for (i, (&l, o)) in lw.iter().zip(out.iter_mut()).enumerate() {
-                    add(i, l, o);
+                    add(i, l - max, o);
                 }
             }
         }
@@ -387,26 +395,22 @@ impl ParticleFilter {
             last,
         };
         let from: &[T] = particles;
+        let uniform = -(n as f64).ln();
         spare
             .par_chunks_mut(cs)
             .zip(ancestors.par_chunks_mut(cs))
+            .zip(log_w.par_chunks_mut(cs))
             .enumerate()
-            .for_each(|(o, (out, anc))| match systematic {
-                Some((u, step)) => {
-                    let owners = cum.systematic(u, step, o * cs);
-                    for ((p, a), i) in out.iter_mut().zip(anc.iter_mut()).zip(owners) {
-                        *a = i;
-                        p.clone_from(&from[i]);
-                    }
+            .for_each(|(o, ((out, anc), lw))| {
+                if let Some((u, step)) = systematic {
+                    cum.systematic(u, step, o * cs, anc);
                 }
-                None => {
-                    for (p, &a) in out.iter_mut().zip(anc.iter()) {
-                        p.clone_from(&from[a]);
-                    }
+                for (p, &a) in out.iter_mut().zip(anc.iter()) {
+                    p.clone_from(&from[a]);
                 }
+                lw.fill(uniform);
             });
         std::mem::swap(particles, spare);
-        log_w.fill(-(n as f64).ln());
         let accepted = match parents {
             Some(parents) => self.mcmc_move(set, proposal, z, key, &parents)?,
             None => 0,
@@ -424,7 +428,6 @@ impl ParticleFilter {
     /// fresh draw from the proposal of its parent is accepted with
     /// probability `min(1, exp(w' - w))`, `w` the log incremental weights
     /// (the target `p(z|x) p(x|x_prev)` over the proposal `q`).
-    #[allow(clippy::too_many_arguments)]
     fn mcmc_move<T, Z, P, const N: usize>(
         &self,
         set: &mut ParticleSet<T>,

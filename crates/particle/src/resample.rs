@@ -145,66 +145,38 @@ impl ChunkedCumulative<'_> {
         (start + k).min(self.last)
     }
 
-    /// Systematic resampling from output slot `first` on: the owners of
-    /// the points `u + j step`, `j = first, first + 1, ...`.
-    pub(crate) fn systematic(&self, u: f64, step: f64, first: usize) -> Systematic<'_> {
-        let j = first as f64;
-        let i = self.owner(u + j * step);
-        let c = i / self.chunk;
-        Systematic {
-            cum: self,
-            u,
-            step,
-            j,
-            i,
-            c,
-            base: self.prefix[c],
-            next: self.prefix[c + 1],
+    /// Systematic resampling of the output slots `first..first +
+    /// ancestors.len()`: the owners of the points `u + j step`.
+    pub(crate) fn systematic(&self, u: f64, step: f64, first: usize, ancestors: &mut [usize]) {
+        if ancestors.is_empty() {
+            return;
         }
-    }
-}
-
-/// The owners of successive systematic points (see
-/// [`ChunkedCumulative::systematic`]); endless.
-pub(crate) struct Systematic<'a> {
-    cum: &'a ChunkedCumulative<'a>,
-    u: f64,
-    step: f64,
-    /// The next point's index, as a float (exact below 2^53): no integer
-    /// conversion per point.
-    j: f64,
-    /// The owner of the previous point (a lower bound for the next one).
-    i: usize,
-    /// Its chunk, with the chunk's prefix and the next chunk's.
-    c: usize,
-    base: f64,
-    next: f64,
-}
-
-impl Iterator for Systematic<'_> {
-    type Item = usize;
-
-    #[inline]
-    fn next(&mut self) -> Option<usize> {
-        let cum = self.cum;
-        let p = self.u + self.j * self.step;
-        self.j += 1.0;
-        if p >= self.next {
-            let total = cum.prefix[cum.prefix.len() - 1];
-            if p >= total {
-                return Some(cum.last);
+        let total = self.prefix[self.prefix.len() - 1];
+        // j as a float counter (exact below 2^53): no integer conversion
+        let mut j = first as f64;
+        let mut i = self.owner(u + j * step);
+        let mut c = i / self.chunk;
+        let (mut base, mut next) = (self.prefix[c], self.prefix[c + 1]);
+        for a in ancestors.iter_mut() {
+            let p = u + j * step;
+            j += 1.0;
+            if p >= next {
+                if p >= total {
+                    *a = self.last;
+                    continue;
+                }
+                while self.prefix[c + 1] <= p {
+                    c += 1;
+                }
+                (base, next) = (self.prefix[c], self.prefix[c + 1]);
+                i = c * self.chunk;
             }
-            while cum.prefix[self.c + 1] <= p {
-                self.c += 1;
+            // ends inside chunk c: its last bound is `next > p`
+            while base + self.cum[i] <= p {
+                i += 1;
             }
-            (self.base, self.next) = (cum.prefix[self.c], cum.prefix[self.c + 1]);
-            self.i = self.c * cum.chunk;
+            *a = i;
         }
-        // ends inside chunk c: its last bound is `next > p`
-        while self.base + cum.cum[self.i] <= p {
-            self.i += 1;
-        }
-        Some(self.i)
     }
 }
 
@@ -351,9 +323,7 @@ mod tests {
         let step = prefix[prefix.len() - 1] / weights.len() as f64;
         let mut a = vec![usize::MAX; weights.len()];
         for (t, part) in a.chunks_mut(task).enumerate() {
-            for (a, i) in part.iter_mut().zip(c.systematic(u * step, step, t * task)) {
-                *a = i;
-            }
+            c.systematic(u * step, step, t * task, part);
         }
         a
     }
@@ -402,9 +372,10 @@ mod tests {
             chunk: 2,
             last,
         };
-        let a: Vec<usize> = c.systematic(0.5, 0.1, 0).take(3).collect();
+        let mut a = [0; 3];
+        c.systematic(0.5, 0.1, 0, &mut a);
         assert_eq!(a, [2, 2, 2]);
-        let a: Vec<usize> = c.systematic(0.0, 0.25, 0).take(3).collect();
+        c.systematic(0.0, 0.25, 0, &mut a);
         assert_eq!(a, [0, 1, 2]);
     }
 
