@@ -261,9 +261,32 @@ impl ParticleFilter {
         P: Proposal<T, Z>,
     {
         self.validate()?;
+        let mut parents = std::mem::take(&mut set.scratch.parents);
+        if self.mcmc {
+            parents.clone_from(&set.particles);
+        }
+        let outcome = self.step_from(set, proposal, z, key, &parents);
+        set.scratch.parents = parents;
+        outcome
+    }
+
+    /// [`ParticleFilter::step`] with the particles before the proposal in
+    /// `parents` (for the MCMC move; empty without it).
+    fn step_from<T, Z, P, const N: usize>(
+        &self,
+        set: &mut ParticleSet<T>,
+        proposal: &P,
+        z: &Z,
+        key: &[u64],
+        parents: &[T],
+    ) -> Result<StepReport>
+    where
+        T: crate::set::Particle<N>,
+        Z: ?Sized + Sync,
+        P: Proposal<T, Z>,
+    {
         let n = set.len();
         let cs = self.chunk_size;
-        let parents: Option<Vec<T>> = self.mcmc.then(|| set.particles().to_vec());
         let ParticleSet {
             particles,
             log_weights: log_w,
@@ -274,6 +297,7 @@ impl ParticleFilter {
             weights,
             ancestors,
             spare,
+            ..
         } = scratch;
         increments.resize(n, 0.0);
         weights.resize(n, 0.0);
@@ -411,9 +435,10 @@ impl ParticleFilter {
                 lw.fill(uniform);
             });
         std::mem::swap(particles, spare);
-        let accepted = match parents {
-            Some(parents) => self.mcmc_move(set, proposal, z, key, &parents)?,
-            None => 0,
+        let accepted = if self.mcmc {
+            self.mcmc_move(set, proposal, z, key, parents)?
+        } else {
+            0
         };
         Ok(StepReport {
             log_evidence,

@@ -95,6 +95,8 @@ pub(crate) struct Scratch<T> {
     pub(crate) ancestors: Vec<usize>,
     /// The resampled particles, swapped with the set's afterwards.
     pub(crate) spare: Vec<T>,
+    /// The particles before the proposal (for the MCMC move).
+    pub(crate) parents: Vec<T>,
 }
 
 impl<T> Default for Scratch<T> {
@@ -104,6 +106,7 @@ impl<T> Default for Scratch<T> {
             weights: Vec::new(),
             ancestors: Vec::new(),
             spare: Vec::new(),
+            parents: Vec::new(),
         }
     }
 }
