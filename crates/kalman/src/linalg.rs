@@ -383,6 +383,22 @@ impl<const D: usize> Ldl<D> {
         Ok(Self { l, d, inv_d })
     }
 
+    /// The Cholesky factor `L D^{1/2}`. Its square roots are off the
+    /// factorisation's dependency chain (which only divides), so the factor
+    /// is ready sooner than from the textbook recursion.
+    #[inline(always)]
+    pub(crate) fn cholesky_factor(&self) -> SMatrix<f64, D, D> {
+        let mut out = self.l;
+        for j in 0..D {
+            let r = self.d[j].sqrt();
+            out[(j, j)] = r;
+            for i in (j + 1)..D {
+                out[(i, j)] *= r;
+            }
+        }
+        out
+    }
+
     /// `1 / D_jj`.
     #[inline(always)]
     pub(crate) fn inv_d(&self) -> &SVector<f64, D> {
@@ -483,8 +499,8 @@ pub(crate) fn psd_sqrt<const D: usize>(
     if D == 0 {
         return Ok(SMatrix::zeros());
     }
-    if let Ok(llt) = Llt::new(m, matrix, step) {
-        return Ok(llt.l);
+    if let Ok(ldl) = Ldl::new(m, matrix, step) {
+        return Ok(ldl.cholesky_factor());
     }
     let r = semidefinite_sqrt_t(m.as_slice(), D, matrix, step)?;
     let mut l = SMatrix::<f64, D, D>::zeros();

@@ -155,7 +155,11 @@ impl Ukf {
     fn weights_for(&self, l: usize) -> Result<Weights> {
         let a2 = self.alpha * self.alpha;
         let c = a2 * (l as f64 + self.kappa);
-        if c <= 0.0 || !c.is_finite() {
+        let wi = 0.5 / c;
+        // 0 < c < inf, as two float compares (1 / inf = 0); written with
+        // `is_finite` it compiles to integer bit tests on every step
+        let valid = c > 0.0 && wi > 0.0;
+        if !valid {
             return Err(KalmanError::InvalidParameter {
                 name: "kappa",
                 value: self.kappa,
@@ -166,7 +170,7 @@ impl Ukf {
         Ok(Weights {
             wm0,
             wc0: wm0 + 1.0 - a2 + self.beta,
-            wi: 0.5 / c,
+            wi,
             c,
             g: self.beta - a2,
         })
