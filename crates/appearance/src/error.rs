@@ -81,6 +81,15 @@ pub enum AppearanceError {
         /// What differs.
         detail: String,
     },
+    /// A template with no texture (constant), which normalised
+    /// cross-correlation cannot match.
+    #[error("the {width}x{height} template is flat (no texture to correlate)")]
+    FlatTemplate {
+        /// Template width.
+        width: usize,
+        /// Template height.
+        height: usize,
+    },
     /// Not enough samples to learn a distribution.
     #[error("{what}: need at least {needed} samples, got {got}")]
     TooFewSamples {

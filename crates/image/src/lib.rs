@@ -5,6 +5,7 @@ mod components;
 mod core;
 mod draw;
 mod error;
+mod integral;
 #[cfg(feature = "io")]
 mod io;
 mod morph;
@@ -19,6 +20,7 @@ pub use crate::components::{Blob, Components, Connectivity, label_components};
 pub use crate::core::{Image, ImageView, ImageViewMut, Pixel, Rect};
 pub use crate::draw::{BBox, draw_box};
 pub use crate::error::{ImageError, Result};
+pub use crate::integral::{AreaSampler, IntegralImage, gray_region_into};
 #[cfg(feature = "io")]
 pub use crate::io::{
     OtbSequence, find_ground_truth, list_frames, parse_ground_truth, read_frame, read_frame_gray,

@@ -7,6 +7,7 @@ mod ball;
 mod correlation;
 mod error;
 mod multi_target;
+mod ncc_scale;
 mod registry;
 mod tracker;
 
@@ -19,5 +20,6 @@ pub use multi_target::{
     Association, Detection, Feature, MultiTargetConfig, MultiTargetTracker, Track,
     measurement_matrix, transition_matrix,
 };
+pub use ncc_scale::{NccScaleConfig, NccScaleTracker};
 pub use registry::{REGISTRY, TrackerInfo, build_tracker, tracker_info};
 pub use tracker::{Estimate, FrameGuard, Tracker, check_initial_box};

@@ -5,6 +5,7 @@
 use crate::ball::{BallConfig, BallTracker};
 use crate::correlation::{MadTracker, MadTrackerConfig, PfCorrelationConfig, PfCorrelationTracker};
 use crate::error::{Result, TrackerError};
+use crate::ncc_scale::{NccScaleConfig, NccScaleTracker};
 use crate::tracker::Tracker;
 
 /// One registered tracker.
@@ -71,6 +72,12 @@ pub const REGISTRY: &[TrackerInfo] = &[
         summary: "paper 001: 30-particle PF weighted by RGB-histogram L2 distance, translation only",
         handles_scale: false,
         build: |seed| boxed(BallTracker::pf(BallConfig::default(), 30, seed)),
+    },
+    TrackerInfo {
+        name: "ncc-scale",
+        summary: "real video: gray NCC template searched around a constant-velocity prediction at 3 scales (x/1.05, 1, x1.05), guarded template update; deterministic",
+        handles_scale: true,
+        build: |_| boxed(NccScaleTracker::new(NccScaleConfig::default())),
     },
 ];
 
