@@ -9,7 +9,8 @@ use crate::linalg;
 
 /// How the posterior covariance is formed after a linear(ised) update.
 ///
-/// Both forms are symmetrised afterwards.
+/// Both forms give an exactly symmetric matrix: the lower triangle is formed
+/// and mirrored.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum CovarianceUpdate {
     /// `(I - K H) P (I - K H)^T + K R K^T`: stays positive semi-definite under
