@@ -483,6 +483,25 @@ impl<const D: usize> Ldl<D> {
     }
 }
 
+/// The sigma-point pair `m + L_j`, `m - L_j` for column `j` of a lower
+/// triangular `L`: rows above `j` are copies of `m` (not `m + 0`, which is
+/// not `m` for `-0`), so the points of a column agree exactly with `m` in
+/// their leading coordinates, and a model reading only those coordinates
+/// is evaluated on identical inputs (the optimiser merges such calls).
+#[inline(always)]
+pub(crate) fn spread<const D: usize>(
+    m: &SVector<f64, D>,
+    l: &SMatrix<f64, D, D>,
+    j: usize,
+) -> (SVector<f64, D>, SVector<f64, D>) {
+    let (mut plus, mut minus) = (*m, *m);
+    for i in j..D {
+        plus[i] += l[(i, j)];
+        minus[i] -= l[(i, j)];
+    }
+    (plus, minus)
+}
+
 /// A lower-triangular square root `L` with `L L^T = m` of a symmetric
 /// positive semi-definite matrix: the Cholesky factor when it exists,
 /// otherwise one from the symmetric eigen-decomposition (round-off-negative

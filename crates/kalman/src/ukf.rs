@@ -237,8 +237,8 @@ impl Ukf {
         };
         for j in 0..N {
             let col = sp.column(j);
-            let xp = f(&(m + col), mv);
-            let xm = f(&(m - col), mv);
+            let (xp, xm) = linalg::spread(m, &sp, j);
+            let (xp, xm) = (f(&xp, mv), f(&xm, mv));
             let (dp, dm) = (xp - xf0, xm - xf0);
             add(&dp, &(h(&xp, mw) - y0));
             add(&dm, &(h(&xm, mw) - y0));
@@ -247,17 +247,17 @@ impl Ukf {
             p_in_x += col * (xp - xm).transpose();
         }
         for j in 0..V {
-            let col = sv.column(j);
-            for vv in [mv + col, mv - col] {
+            let (vp, vm) = linalg::spread(mv, &sv, j);
+            for vv in [vp, vm] {
                 let xf = f(m, &vv);
                 add(&(xf - xf0), &(h(&xf, mw) - y0));
             }
         }
         for j in 0..W {
-            let col = sw.column(j);
+            let (wp, wm) = linalg::spread(mw, &sw, j);
             let dx = SVector::<f64, K>::zeros();
-            add(&dx, &(h(&xf0, &(mw + col)) - y0));
-            add(&dx, &(h(&xf0, &(mw - col)) - y0));
+            add(&dx, &(h(&xf0, &wp) - y0));
+            add(&dx, &(h(&xf0, &wm) - y0));
         }
 
         let d = sdx * wt.wi;
