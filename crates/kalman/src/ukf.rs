@@ -320,6 +320,7 @@ impl Ukf {
     /// additive noise covariances (zero in the augmented form, whose noise
     /// is in the sigma points).
     #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
     fn joint<const N: usize, const V: usize, const W: usize, const M: usize>(
         &self,
         prior: &Gaussian<N>,
@@ -345,6 +346,7 @@ impl Ukf {
     /// # Errors
     /// [`KalmanError::NotPositiveDefinite`] when the prior covariance has no
     /// square root; [`KalmanError::NonFinite`] for a non-finite result.
+    #[inline]
     pub fn predict<const N: usize, D: Dynamics<N>>(
         &self,
         prior: &Gaussian<N>,
@@ -370,6 +372,7 @@ impl Ukf {
     /// # Errors
     /// As [`Ukf::predict`]; [`KalmanError::NotPositiveDefinite`] naming the
     /// innovation covariance when it is singular; non-finite `z`.
+    #[inline]
     pub fn update<const N: usize, const M: usize, H: Measurement<N, M>>(
         &self,
         prior: &Gaussian<N>,
@@ -405,6 +408,7 @@ impl Ukf {
     ///
     /// # Errors
     /// As [`Ukf::predict`] and [`Ukf::update`].
+    #[inline]
     pub fn step<const N: usize, const M: usize, D: Dynamics<N>, H: Measurement<N, M>>(
         &self,
         prior: &Gaussian<N>,
