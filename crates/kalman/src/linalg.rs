@@ -577,8 +577,20 @@ mod tests {
     fn products_match_nalgebra() {
         let a = nalgebra::Matrix2x3::new(1.0, 2.0, 3.0, 4.0, 5.0, 6.0);
         let b = nalgebra::Matrix3x2::new(0.5, -1.0, 2.0, 0.0, 1.5, 3.0);
-        assert_eq!(mul(&a, &b), a * b);
-        assert_eq!(mul_t(&a, &a), a * a.transpose());
+        assert!((mul(&a, &b) - a * b).amax() < 1e-14);
+        assert!((mul_t(&a, &a) - a * a.transpose()).amax() < 1e-14);
+        // symmetric products on the lower triangle, odd and even sizes
+        let c = nalgebra::Matrix3::new(1.0, 0.5, 0.2, 0.5, 2.0, 0.1, 0.2, 0.1, 3.0);
+        let f = nalgebra::Matrix3::new(1.0, 0.1, 0.0, 0.2, 1.0, 0.3, -0.5, 0.0, 1.0);
+        let fc = mul(&f, &c);
+        let full = c + fc * f.transpose();
+        let lower = mirror_lower(lower_mul_t_add(&c, 1.0, &fc, &f));
+        assert!((lower - full).amax() < 1e-14);
+        assert_eq!(lower, lower.transpose());
+        let w = nalgebra::Matrix4x2::new(1.0, 2.0, 0.5, -1.0, 3.0, 0.0, -2.0, 1.5);
+        let p = nalgebra::Matrix4::identity() * 10.0;
+        let sub = mirror_lower(lower_mul_t_add(&p, -1.0, &w, &w));
+        assert!((sub - (p - w * w.transpose())).amax() < 1e-14);
     }
 
     #[test]
