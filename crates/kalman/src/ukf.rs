@@ -198,10 +198,11 @@ impl Ukf {
         step: Step,
     ) -> Result<Moments<N, K, M>> {
         let wt = self.weights_for(N + V + W)?;
-        // The factor of `c P` rather than `sqrt(c)` times the factor of `P`:
-        // the structural zeros of the triangular factor stay exact constants,
-        // so `m - 0` folds to `m` and a model that reads only the leading
-        // coordinates is not re-evaluated on identical inputs.
+        // Lower-triangular factors of `c P`, `c Q_v`, `c R_w`
+        // (`c = alpha^2 (L + kappa)`); `spread` builds the points of column
+        // `j` from rows `j..`, so the points agree exactly with the mean in
+        // the leading coordinates and a model that reads only those is
+        // evaluated once for them (identical calls are merged).
         let sp = linalg::psd_sqrt(&(prior.cov() * wt.c), "state covariance P", step)?;
         let sv = linalg::psd_sqrt(&(v.cov() * wt.c), "process noise covariance", step)?;
         let sw = linalg::psd_sqrt(&(w.cov() * wt.c), "measurement noise covariance", step)?;
