@@ -341,6 +341,48 @@ impl KernelHistogram {
         Ok(())
     }
 
+    /// The uniform histogram of the box with centre `(cx, cy)` and
+    /// half-sizes `(a, b)` (pixel centres inside, every `step`-th pixel);
+    /// [`KernelHistogram::total`] is then the number of pixels counted.
+    ///
+    /// # Errors
+    /// As [`KernelHistogram::ellipse`].
+    pub fn rect(
+        &mut self,
+        map: &BinMap,
+        cx: f64,
+        cy: f64,
+        a: f64,
+        b: f64,
+        step: usize,
+    ) -> Result<()> {
+        Self::check_params(cx, cy, a, b, step)?;
+        self.weights.fill(0.0);
+        self.total = 0.0;
+        let r = map.rect;
+        let (_, x_lo, x_hi) = BinMap::span(cx, a, r.x, r.width);
+        let (_, y_lo, y_hi) = BinMap::span(cy, b, r.y, r.height);
+        if x_lo > x_hi || y_lo > y_hi {
+            return Ok(());
+        }
+        let nbins = self.weights.len();
+        let mut count = 0usize;
+        for y in (y_lo..=y_hi).step_by(step) {
+            let row = (y as usize - r.y) * r.width;
+            for x in (x_lo..=x_hi).step_by(step) {
+                let bin = usize::from(map.bins[row + x as usize - r.x]);
+                if bin >= nbins {
+                    return Err(incompatible(bin, nbins));
+                }
+                self.weights[bin] += 1.0;
+                count += 1;
+            }
+        }
+        self.total = count as f32;
+        self.finish();
+        Ok(())
+    }
+
     /// The uniform histogram of the rectangular ring between the box with
     /// centre `(cx, cy)` and half-sizes `(a, b)` and the same box grown by
     /// `outer` (> 1) about its centre, counting every `step`-th pixel;
@@ -399,6 +441,58 @@ impl KernelHistogram {
         }
         self.total = count as f32;
         self.finish();
+        Ok(())
+    }
+
+    /// The background weights of Ning, Zhang, Zhang and Wu ("Robust
+    /// mean-shift tracking with corrected background-weighted histogram",
+    /// IET Computer Vision 2012) from a background histogram `o` (`self`):
+    /// `v_u = min(o* / o_u, 1)`, `o*` the smallest non-zero bin; bins absent
+    /// from the background weigh 1. Colours common around the target then
+    /// count little in the target model (see [`KernelHistogram::reweight`]).
+    pub fn background_weights(&self) -> Vec<f32> {
+        let floor = self
+            .weights
+            .iter()
+            .copied()
+            .filter(|&o| o > 0.0)
+            .fold(f32::INFINITY, f32::min);
+        self.weights
+            .iter()
+            .map(|&o| if o > 0.0 { (floor / o).min(1.0) } else { 1.0 })
+            .collect()
+    }
+
+    /// Multiplies bin `u` by `v[u]` and renormalises (an all-zero result
+    /// leaves the histogram empty).
+    ///
+    /// # Errors
+    /// [`AppearanceError::Incompatible`] for a different length;
+    /// [`AppearanceError::InvalidParameter`] for negative or non-finite
+    /// weights.
+    pub fn reweight(&mut self, v: &[f32]) -> Result<()> {
+        if v.len() != self.weights.len() {
+            return Err(AppearanceError::Incompatible {
+                operation: "reweight",
+                detail: format!("{} weights for {} bins", v.len(), self.weights.len()),
+            });
+        }
+        if !v.iter().all(|x| x.is_finite() && *x >= 0.0) {
+            return Err(AppearanceError::InvalidParameter {
+                name: "bin weights",
+                value: format!("{v:?}"),
+                reason: "must be finite and >= 0",
+            });
+        }
+        for (w, &k) in self.weights.iter_mut().zip(v) {
+            *w *= k;
+        }
+        let s: f32 = self.weights.iter().sum();
+        if s > 0.0 {
+            self.weights.iter_mut().for_each(|w| *w /= s);
+        } else {
+            self.total = 0.0;
+        }
         Ok(())
     }
 
@@ -551,6 +645,52 @@ mod tests {
     }
 
     #[test]
+    fn background_weights_suppress_background_colours() {
+        let b = HsvBinning::perez();
+        let (red, green, blue) = (
+            usize::from(b.bin_rgb(220, 20, 20)),
+            usize::from(b.bin_rgb(20, 220, 20)),
+            usize::from(b.bin_rgb(20, 20, 220)),
+        );
+        // background: 75 % green, 25 % blue
+        let img = rgb(
+            40,
+            1,
+            |x, _| if x < 30 { [20, 220, 20] } else { [20, 20, 220] },
+        );
+        let mut map = BinMap::new();
+        b.bin_map_into(img.view(), Rect::new(0, 0, 40, 1), &mut map)
+            .unwrap();
+        let mut bg = KernelHistogram::new(b.len());
+        bg.ring(&map, 100.0, 0.0, 1.0, 1.0, 200.0, 1).unwrap();
+        let v = bg.background_weights();
+        assert!((v[green] - 1.0 / 3.0).abs() < 1e-5 && v[blue] == 1.0 && v[red] == 1.0);
+        // a target of half red, half green: green is down-weighted
+        let img = rgb(
+            20,
+            1,
+            |x, _| if x < 10 { [220, 20, 20] } else { [20, 220, 20] },
+        );
+        b.bin_map_into(img.view(), Rect::new(0, 0, 20, 1), &mut map)
+            .unwrap();
+        let mut t = KernelHistogram::new(b.len());
+        t.ring(&map, 100.0, 0.0, 1.0, 1.0, 200.0, 1).unwrap();
+        t.reweight(&v).unwrap();
+        assert!(
+            (t.weights()[red] - 0.75).abs() < 1e-5,
+            "{}",
+            t.weights()[red]
+        );
+        assert!((t.weights()[green] - 0.25).abs() < 1e-5);
+        assert!(t.reweight(&v[..3]).is_err());
+        let mut bad = v.clone();
+        bad[0] = f32::NAN;
+        assert!(t.reweight(&bad).is_err());
+        t.reweight(&vec![0.0; b.len()]).unwrap();
+        assert_eq!(t.total(), 0.0);
+    }
+
+    #[test]
     fn ring_sees_the_surroundings_only() {
         // a red 10x10 square in a green field
         let img = rgb(40, 40, |x, y| {
@@ -571,6 +711,10 @@ mod tests {
         // a too-small box: its ring lies on the target
         ring.ring(&map, 19.5, 19.5, 2.5, 2.5, 1.6, 1).unwrap();
         assert_eq!(ring.weights()[green], 0.0);
+        // the box itself: all red, 10 x 10 pixels
+        ring.rect(&map, 19.5, 19.5, 5.0, 5.0, 1).unwrap();
+        assert_eq!(ring.total(), 100.0);
+        assert!((ring.weights()[usize::from(b.bin_rgb(220, 20, 20))] - 1.0).abs() < 1e-6);
         // windows entirely outside the map count nothing
         ring.ellipse(&map, 100.0, 100.0, 3.0, 3.0, 1).unwrap();
         assert_eq!(ring.total(), 0.0);

@@ -6,6 +6,7 @@
 mod ball;
 mod correlation;
 mod error;
+mod hist_pf;
 mod multi_target;
 mod ncc_scale;
 mod registry;
@@ -16,6 +17,7 @@ pub use correlation::{
     ArpMotion, MadTracker, MadTrackerConfig, PfCorrelationConfig, PfCorrelationTracker, SearchArea,
 };
 pub use error::{Result, TrackerError};
+pub use hist_pf::{HistPfConfig, HistPfTracker};
 pub use multi_target::{
     Association, Detection, Feature, MultiTargetConfig, MultiTargetTracker, Track,
     measurement_matrix, transition_matrix,

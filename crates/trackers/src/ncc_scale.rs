@@ -699,8 +699,13 @@ pub(crate) mod tests {
                     let z: f64 = StandardNormal.sample(&mut rng);
                     let g = (g + noise * z).clamp(0.0, 255.0);
                     if rgb {
-                        let r = if inside { g * 0.6 } else { g };
-                        data.extend([r as u8, g as u8, (255.0 - g) as u8]);
+                        // an orange target on a green-grey background
+                        let p = if inside {
+                            [(g * 1.3 + 40.0).min(255.0), g * 0.7, g * 0.4]
+                        } else {
+                            [g * 0.8, g, g * 0.85]
+                        };
+                        data.extend(p.map(|v| v as u8));
                     } else {
                         data.push(g as u8);
                     }

@@ -5,6 +5,7 @@
 use crate::ball::{BallConfig, BallTracker};
 use crate::correlation::{MadTracker, MadTrackerConfig, PfCorrelationConfig, PfCorrelationTracker};
 use crate::error::{Result, TrackerError};
+use crate::hist_pf::{HistPfConfig, HistPfTracker};
 use crate::ncc_scale::{NccScaleConfig, NccScaleTracker};
 use crate::tracker::Tracker;
 
@@ -78,6 +79,12 @@ pub const REGISTRY: &[TrackerInfo] = &[
         summary: "real video: gray NCC template searched around a constant-velocity prediction at 3 scales (x/1.05, 1, x1.05), guarded template update; deterministic",
         handles_scale: true,
         build: |_| boxed(NccScaleTracker::new(NccScaleConfig::default())),
+    },
+    TrackerInfo {
+        name: "hist-pf-scale",
+        summary: "real video: paper 001's PF with scale in the state (x, y, vx, vy, ln s), 200 particles, kernel-weighted HSV histogram (Pérez et al.), Bhattacharyya likelihood with a background-ring term, slow guarded model update",
+        handles_scale: true,
+        build: |seed| boxed(HistPfTracker::new(HistPfConfig::default(), seed)),
     },
 ];
 
