@@ -9,32 +9,38 @@
 //! - **Template.** The initial box, in gray (the luma of RGB frames), is
 //!   resampled to at most [`NccScaleConfig::template_area`] pixels keeping
 //!   its aspect ratio (never enlarged): `tw x th` template pixels, each
-//!   covering `rx x ry` frame pixels at scale 1. NCC is invariant to gain
-//!   and offset of the intensities, which absorbs most illumination change.
+//!   covering `rx x ry` frame pixels at scale 1. The score is NCC with a
+//!   separable centre-weighted profile ([`NccScaleConfig::border_weight`]),
+//!   invariant to gain and offset of the intensities, which absorbs most
+//!   illumination change.
 //! - **State.** Centre `c` (0-based pixel coordinates), velocity `v`
 //!   (px/frame), scale `s` relative to the initial box; the box is
 //!   `s (w0, h0)` centred on `c`.
 //! - **Search.** The prediction is `p = c + v`. For each scale
 //!   `sigma in {1 / q, 1, q}` ([`NccScaleConfig::scale_step`] `q`) the frame
-//!   around `p` is resampled (bilinear, after a box prefilter when a
-//!   template pixel covers two or more frame pixels) to a
-//!   `(tw + 2m) x (th + 2m)` patch at `s sigma` frame pixels per template
-//!   pixel, `m` = [`NccScaleConfig::search_margin`] times the template's
-//!   side `sqrt(tw th)`; the template is scored at all `(2m + 1)^2` offsets
-//!   ([`bayestrack_appearance::NccSearch`], integral images for the window
-//!   norms). The best (offset, scale) wins, the scores of `sigma != 1`
-//!   multiplied by [`NccScaleConfig::scale_penalty`] so that the scale
-//!   changes only when the evidence is clear; a parabola through the
-//!   neighbouring scores gives the sub-pixel offset.
-//! - **Update.** `c` becomes the match; `v` is smoothed,
+//!   around `p` is area-resampled ([`bayestrack_image::AreaSampler`]: each
+//!   patch pixel is the mean of the frame over its cell, the same
+//!   anti-aliasing at every scale) to a `(tw + 2m) x (th + 2m)` patch at
+//!   `s sigma` cells per template pixel, `m` =
+//!   [`NccScaleConfig::search_margin`] times the template's side
+//!   `sqrt(tw th)`; the adaptive template is scored at all `(2m + 1)^2`
+//!   offsets ([`bayestrack_appearance::NccSearch`]). The peak of each scale
+//!   under a weak motion prior ([`NccScaleConfig::motion_penalty`]) gives the
+//!   position; the scales are compared by the initial template's NCC at
+//!   their peaks ([`NccScaleConfig::anchor_weight`]), the two other scales'
+//!   scores multiplied by [`NccScaleConfig::scale_penalty`]. A parabola
+//!   through the neighbouring scores gives the sub-pixel offset.
+//! - **Update.** `c` becomes the match of the best scale; `v` is smoothed,
 //!   `v <- g (c_new - c_old) + (1 - g) v` ([`NccScaleConfig::velocity_gain`]);
-//!   `s <- s sigma`, kept within [`NccScaleConfig::min_scale`],
-//!   [`NccScaleConfig::max_scale`]. When the best score reaches
-//!   [`NccScaleConfig::update_threshold`] the template moves towards the
-//!   matched window, `T <- (1 - a) T + a W` ([`NccScaleConfig::update_rate`]).
-//!   Below [`NccScaleConfig::lost_threshold`] the tracker reports the target
-//!   lost, keeps the prediction, zeroes the velocity and widens the next
-//!   search ([`NccScaleConfig::lost_margin_growth`]).
+//!   the log-scale moves by [`NccScaleConfig::scale_gain`] times the vertex
+//!   of the parabola through the three scales' scores, kept within
+//!   [`NccScaleConfig::min_scale`], [`NccScaleConfig::max_scale`]. When the
+//!   best score reaches [`NccScaleConfig::update_threshold`] the adaptive
+//!   template moves towards the matched window, `T <- (1 - a) T + a W`
+//!   ([`NccScaleConfig::update_rate`]). Below
+//!   [`NccScaleConfig::lost_threshold`] the tracker reports the target lost,
+//!   keeps the prediction, zeroes the velocity and widens the next search
+//!   ([`NccScaleConfig::lost_margin_growth`]).
 //!
 //! Deterministic: no randomness.
 //!
@@ -94,9 +100,9 @@ pub struct NccScaleConfig {
     /// template side `sqrt(tw th)` (0.75): a search window of 2.5 target
     /// sizes, as in KCF's padding of 1.5.
     pub search_margin: f64,
-    /// Ratio between neighbouring scales searched (1.05, DSST's scale step
-    /// is 1.02 over 33 scales; three scales need a coarser step to follow
-    /// a few percent of change per frame).
+    /// Ratio between neighbouring scales searched (1.03; DSST's scale step
+    /// is 1.02 over 33 scales; with three scales and the parabola through
+    /// their scores, a coarser step sees the change of a few frames).
     pub scale_step: f64,
     /// Fraction `k` of the estimated log-scale change applied per frame
     /// (0.5): `s <- s q^(k v)` with `v` the vertex of the parabola through
@@ -118,17 +124,20 @@ pub struct NccScaleConfig {
     /// Gain `g` of the velocity estimate (0.5): the velocity is the
     /// displacement smoothed over about two frames.
     pub velocity_gain: f64,
-    /// Template learning rate `a` (0.05, a time constant of 20 frames, as
-    /// the interpolation factors of correlation-filter trackers, 0.01-0.1).
+    /// Template learning rate `a` (0.2, a time constant of 5 frames; MOSSE
+    /// adapts its filter at 0.125 per frame). Raw-pixel templates need fast
+    /// adaptation under pose and illumination change; the scale does not
+    /// drift with them because it is measured against the initial template
+    /// ([`NccScaleConfig::anchor_weight`]).
     pub update_rate: f64,
-    /// Score the match needs for the template update (0.7): a weaker match
+    /// Score the match needs for the template update (0.5): a weaker match
     /// may be an occluder or background, which would corrupt the template.
     pub update_threshold: f64,
     /// Weight `l` of the initial template when choosing among the scales
-    /// (0.5): each scale's peak is scored `(1 - l) NCC_adaptive + l NCC_initial`.
+    /// (1): each scale's peak is scored `(1 - l) NCC_adaptive + l NCC_initial`.
     /// The initial template fixes what scale 1 means; an adapted template
-    /// alone lets the scale drift (a template updated from slightly
-    /// zoomed windows prefers zooming further).
+    /// lets the scale drift (a template updated from slightly zoomed
+    /// windows prefers zooming further).
     pub anchor_weight: f64,
     /// Score below which the target is reported lost (0.35).
     pub lost_threshold: f64,
@@ -151,7 +160,7 @@ impl Default for NccScaleConfig {
             velocity_gain: 0.5,
             update_rate: 0.2,
             update_threshold: 0.5,
-            anchor_weight: 0.5,
+            anchor_weight: 1.0,
             lost_threshold: 0.35,
             lost_margin_growth: 1.5,
         }
