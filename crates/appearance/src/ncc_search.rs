@@ -215,6 +215,9 @@ pub struct NccSearch {
     /// Weighted row sums of the image and its squares (separable pass 1).
     rows: Vec<f64>,
     rows_sq: Vec<f64>,
+    /// Weighted window sums of one row of positions (separable pass 2).
+    col: Vec<f64>,
+    col_sq: Vec<f64>,
 }
 
 impl NccSearch {
@@ -273,6 +276,8 @@ impl NccSearch {
         out.clear();
         out.reserve(nx * ny);
         self.acc.resize(nx, 0.0);
+        self.col.resize(nx, 0.0);
+        self.col_sq.resize(nx, 0.0);
         let mut best = NccMatch {
             x: corners.x,
             y: corners.y,
@@ -283,23 +288,48 @@ impl NccSearch {
             acc.fill(0.0);
             for (r, trow) in template.values.chunks_exact(tw).enumerate() {
                 let frow = sub.row(j + r);
-                for (c, &t) in trow.iter().enumerate() {
+                // Four template columns per pass over the accumulators:
+                // fewer loads and stores of `acc` per multiply-add.
+                let mut quads = trow.chunks_exact(4);
+                let mut c = 0;
+                for t in &mut quads {
+                    let (f0, f1) = (&frow[c..c + nx], &frow[c + 1..c + 1 + nx]);
+                    let (f2, f3) = (&frow[c + 2..c + 2 + nx], &frow[c + 3..c + 3 + nx]);
+                    for i in 0..nx {
+                        acc[i] += t[0] * f0[i] + t[1] * f1[i] + t[2] * f2[i] + t[3] * f3[i];
+                    }
+                    c += 4;
+                }
+                for &t in quads.remainder() {
                     let src = &frow[c..c + nx];
                     for (a, &f) in acc.iter_mut().zip(src) {
                         *a += t * f;
                     }
+                    c += 1;
+                }
+            }
+            if template.is_weighted() {
+                // Second separable pass: weighted sums down the columns.
+                let (ws, wq) = (&mut self.col[..nx], &mut self.col_sq[..nx]);
+                ws.fill(0.0);
+                wq.fill(0.0);
+                for (r, &k) in template.ky.iter().enumerate() {
+                    let k = f64::from(k);
+                    let at = (j + r) * nx;
+                    let (rs, rq) = (&self.rows[at..at + nx], &self.rows_sq[at..at + nx]);
+                    for (a, &v) in ws.iter_mut().zip(rs) {
+                        *a += k * v;
+                    }
+                    for (a, &v) in wq.iter_mut().zip(rq) {
+                        *a += k * v;
+                    }
                 }
             }
             for (i, &num) in acc.iter().enumerate() {
-                // Weighted variance of the window (weights summing to 1).
+                // Variance of the window (weighted: weights summing to 1).
                 let var = if template.is_weighted() {
-                    let (mut s, mut q) = (0f64, 0f64);
-                    for (r, &k) in template.ky.iter().enumerate() {
-                        let at = (j + r) * nx + i;
-                        s += f64::from(k) * self.rows[at];
-                        q += f64::from(k) * self.rows_sq[at];
-                    }
-                    q - s * s
+                    let s = self.col[i];
+                    self.col_sq[i] - s * s
                 } else {
                     let (s, q) = self.integral.sums(i, j, tw, th);
                     (q - s * s / n) / n
@@ -338,9 +368,12 @@ impl NccSearch {
             );
             for (c, &k) in t.kx.iter().enumerate() {
                 let k = f64::from(k);
-                for ((a, b), &p) in s.iter_mut().zip(q.iter_mut()).zip(&src[c..c + nx]) {
+                let src = &src[c..c + nx];
+                for (a, &p) in s.iter_mut().zip(src) {
+                    *a += k * f64::from(p);
+                }
+                for (b, &p) in q.iter_mut().zip(src) {
                     let p = f64::from(p);
-                    *a += k * p;
                     *b += k * p * p;
                 }
             }

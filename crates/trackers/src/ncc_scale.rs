@@ -24,9 +24,10 @@
 //!   `s sigma` cells per template pixel, `m` =
 //!   [`NccScaleConfig::search_margin`] times the template's side
 //!   `sqrt(tw th)`; the adaptive template is scored at all `(2m + 1)^2`
-//!   offsets ([`bayestrack_appearance::NccSearch`]). The peak of each scale
-//!   under a weak motion prior ([`NccScaleConfig::motion_penalty`]) gives the
-//!   position; the scales are compared by the initial template's NCC at
+//!   offsets at the current scale and at the few offsets around that peak
+//!   at the other two ([`bayestrack_appearance::NccSearch`]). The peak of
+//!   each scale under a weak motion prior ([`NccScaleConfig::motion_penalty`])
+//!   gives the position; the scales are compared by the initial template's NCC at
 //!   their peaks ([`NccScaleConfig::anchor_weight`]), the two other scales'
 //!   scores multiplied by [`NccScaleConfig::scale_penalty`]. A parabola
 //!   through the neighbouring scores gives the sub-pixel offset.
@@ -358,26 +359,33 @@ impl Region {
     }
 }
 
-/// The peak of an `n x n` score map centred on the prediction under the
-/// motion prior: `(score - b (d / m)^2, x, y, score)` with `d` the distance
-/// from the centre and `m = (n - 1) / 2`.
-fn prior_peak(scores: &[f32], n: usize, b: f64) -> (f64, usize, usize, f64) {
-    let m = ((n - 1) / 2).max(1) as f64;
-    let k = b / (m * m);
-    let mut best = (f64::NEG_INFINITY, 0, 0, 0.0);
-    for (j, row) in scores.chunks_exact(n).enumerate() {
-        let dy = j as f64 - m;
+/// The peak of a score map over the corners `rect` of a search whose
+/// prediction sits at corner `(m, m)`, under the motion prior:
+/// `(score - b (d / m)^2, x, y, score)` with `d` the distance from `(m, m)`
+/// and `(x, y)` absolute corners.
+fn prior_peak(scores: &[f32], rect: Rect, m: usize, b: f64) -> (f64, usize, usize, f64) {
+    let mf = m.max(1) as f64;
+    let k = b / (mf * mf);
+    let mut best = (f64::NEG_INFINITY, rect.x, rect.y, 0.0);
+    for (j, row) in scores.chunks_exact(rect.width).enumerate() {
+        let dy = (rect.y + j) as f64 - m as f64;
         for (i, &v) in row.iter().enumerate() {
-            let dx = i as f64 - m;
+            let dx = (rect.x + i) as f64 - m as f64;
             let v = f64::from(v);
             let w = v - k * (dx * dx + dy * dy);
             if w > best.0 {
-                best = (w, i, j, v);
+                best = (w, rect.x + i, rect.y + j, v);
             }
         }
     }
     best
 }
+
+/// Half-size, in template pixels, of the neighbourhood searched at the
+/// two other scales around the current scale's peak (mapped to their
+/// sampling): the peak moves by `d (1 - 1/q)` there, under a pixel for
+/// any offset `d` of the search.
+const REFINE_RADIUS: usize = 2;
 
 /// One axis of the template weights: `f + (1 - f) (1 - x^2)`, `x` the
 /// normalised distance of the pixel centre from the middle, in `(-1, 1)`.
@@ -540,6 +548,11 @@ impl Tracker for NccScaleTracker {
         let big = s.scale * q;
         let (hw, hh) = (pw as f64 * s.rx * big / 2.0, ph as f64 * s.ry * big / 2.0);
         self.region.load(&frame, px, py, hw, hh)?;
+        let n = 2 * m + 1;
+        let full = Rect::new(0, 0, n, n);
+        let mut best_rect = full;
+        // The current scale's peak, where the other scales look.
+        let mut centre = (m, m);
         for sigma in [1.0, 1.0 / q, q] {
             let scale = s.scale * sigma;
             if sigma != 1.0 && !(c.min_scale..=c.max_scale).contains(&scale) {
@@ -548,15 +561,32 @@ impl Tracker for NccScaleTracker {
             self.region
                 .sample(px, py, s.rx * scale, s.ry * scale, pw, ph, &mut self.patch)?;
             let view = ImageView::from_slice(&self.patch, pw, ph, 1, pw)?;
-            self.search.map_into(
-                view,
-                &s.template,
-                Rect::new(0, 0, 2 * m + 1, 2 * m + 1),
-                &mut self.scores,
-            )?;
-            let n = 2 * m + 1;
-            evaluations += n * n;
-            let hit = prior_peak(&self.scores, n, c.motion_penalty);
+            let corners = if sigma == 1.0 {
+                full
+            } else {
+                // The same frame point at this sampling.
+                let at = |v: usize| {
+                    let d = (v as f64 - m as f64) / sigma;
+                    (m as f64 + d).round().clamp(0.0, (n - 1) as f64) as usize
+                };
+                let (x, y) = (at(centre.0), at(centre.1));
+                let (x0, y0) = (
+                    x.saturating_sub(REFINE_RADIUS),
+                    y.saturating_sub(REFINE_RADIUS),
+                );
+                let (x1, y1) = (
+                    (x + REFINE_RADIUS).min(n - 1),
+                    (y + REFINE_RADIUS).min(n - 1),
+                );
+                Rect::new(x0, y0, x1 - x0 + 1, y1 - y0 + 1)
+            };
+            self.search
+                .map_into(view, &s.template, corners, &mut self.scores)?;
+            evaluations += corners.area();
+            let hit = prior_peak(&self.scores, corners, m, c.motion_penalty);
+            if sigma == 1.0 {
+                centre = (hit.1, hit.2);
+            }
             let sigma_weight = if sigma == 1.0 { 1.0 } else { c.scale_penalty };
             let combined = if c.anchor_weight > 0.0 {
                 let view = ImageView::from_slice(&self.patch, pw, ph, 1, pw)?;
@@ -576,19 +606,20 @@ impl Tracker for NccScaleTracker {
             }] = weighted;
             if weighted > best.0 {
                 best = (weighted, hit.1, hit.2, sigma, hit.3);
+                best_rect = corners;
                 std::mem::swap(&mut self.patch, &mut self.best_patch);
                 std::mem::swap(&mut self.scores, &mut self.best_scores);
             }
         }
         let (_, bx, by, sigma, score) = best;
-        let n = 2 * m + 1;
-        let at = |x: usize, y: usize| f64::from(self.best_scores[y * n + x]);
-        let dx = if bx > 0 && bx + 1 < n {
+        let r = best_rect;
+        let at = |x: usize, y: usize| f64::from(self.best_scores[(y - r.y) * r.width + (x - r.x)]);
+        let dx = if bx > r.x && bx + 1 < r.right() {
             parabola(at(bx - 1, by), at(bx, by), at(bx + 1, by))
         } else {
             0.0
         };
-        let dy = if by > 0 && by + 1 < n {
+        let dy = if by > r.y && by + 1 < r.bottom() {
             parabola(at(bx, by - 1), at(bx, by), at(bx, by + 1))
         } else {
             0.0
