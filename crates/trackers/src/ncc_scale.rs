@@ -40,8 +40,10 @@
 //!   template moves towards the matched window, `T <- (1 - a) T + a W`
 //!   ([`NccScaleConfig::update_rate`]). Below
 //!   [`NccScaleConfig::lost_threshold`] the tracker reports the target lost,
-//!   keeps the prediction, zeroes the velocity and widens the next search
-//!   ([`NccScaleConfig::lost_margin_growth`]).
+//!   keeps the prediction, zeroes the velocity and searches the next frame
+//!   in the wide window ([`NccScaleConfig::wide_margin`]), which also
+//!   serves a second look whenever a match is weak (the target may have
+//!   jumped out of the window with an abrupt camera motion).
 //!
 //! Deterministic: no randomness.
 //!
@@ -142,8 +144,10 @@ pub struct NccScaleConfig {
     pub anchor_weight: f64,
     /// Score below which the target is reported lost (0.35).
     pub lost_threshold: f64,
-    /// Factor on the search margin for the frame after a loss (1.5).
-    pub lost_margin_growth: f64,
+    /// Factor on the search margin of the wide search (2): a match weaker
+    /// than [`NccScaleConfig::update_threshold`] is searched for again in
+    /// the wide window, as is every frame after a loss.
+    pub wide_margin: f64,
 }
 
 impl Default for NccScaleConfig {
@@ -163,7 +167,7 @@ impl Default for NccScaleConfig {
             update_threshold: 0.5,
             anchor_weight: 1.0,
             lost_threshold: 0.35,
-            lost_margin_growth: 1.5,
+            wide_margin: 2.0,
         }
     }
 }
@@ -224,15 +228,8 @@ impl NccScaleConfig {
         if !(self.max_scale.is_finite() && self.max_scale >= 1.0) {
             return bad("max_scale", self.max_scale, "must be finite and >= 1");
         }
-        if !(self.lost_margin_growth.is_finite()
-            && self.lost_margin_growth >= 1.0
-            && self.lost_margin_growth <= 4.0)
-        {
-            return bad(
-                "lost_margin_growth",
-                self.lost_margin_growth,
-                "must be in [1, 4]",
-            );
+        if !(self.wide_margin.is_finite() && self.wide_margin >= 1.0 && self.wide_margin <= 4.0) {
+            return bad("wide_margin", self.wide_margin, "must be in [1, 4]");
         }
         Ok(())
     }
@@ -273,14 +270,158 @@ pub struct NccScaleTracker {
     config: NccScaleConfig,
     guard: FrameGuard,
     state: Option<State>,
-    /// Scratch: gray region, search patches, scores.
+    scratch: Scratch,
+}
+
+/// Buffers of the search: gray region, search patches, score maps.
+#[derive(Debug, Clone)]
+struct Scratch {
     region: Region,
     patch: Vec<f32>,
     best_patch: Vec<f32>,
     scores: Vec<f32>,
     best_scores: Vec<f32>,
-    scratch: Vec<f32>,
+    anchor_scores: Vec<f32>,
+    /// The first search's best patch and scores during a second look.
+    kept_patch: Vec<f32>,
+    kept_scores: Vec<f32>,
     search: NccSearch,
+}
+
+/// The outcome of a search over the three scales.
+#[derive(Debug, Clone, Copy)]
+struct Found {
+    /// Search margin `m` and patch size.
+    m: usize,
+    pw: usize,
+    /// Best corner (in `best_patch`), its scale factor `sigma` and raw
+    /// (adaptive template) score.
+    bx: usize,
+    by: usize,
+    sigma: f64,
+    score: f64,
+    /// Sub-pixel offsets of the peak.
+    dx: f64,
+    dy: f64,
+    /// Scale-selection scores at `1/q`, `1`, `q` (NaN if not searched).
+    per_scale: [f64; 3],
+    evaluations: usize,
+}
+
+impl Scratch {
+    /// Searches the three scales around the prediction `(px, py)` with
+    /// margin `m`; leaves the best scale's patch and scores in `best_*`.
+    fn search(
+        &mut self,
+        s: &State,
+        c: &NccScaleConfig,
+        frame: &ImageView<'_, u8>,
+        (px, py): (f64, f64),
+        m: usize,
+    ) -> Result<Found> {
+        let (tw, th) = (s.tw, s.th);
+        let (pw, ph) = (tw + 2 * m, th + 2 * m);
+        let q = c.scale_step;
+        let mut best = (f64::NEG_INFINITY, 0usize, 0usize, 1.0f64, 0.0f64);
+        let mut per_scale = [f64::NAN; 3];
+        let mut evaluations = 0;
+        let big = s.scale * q;
+        let (hw, hh) = (pw as f64 * s.rx * big / 2.0, ph as f64 * s.ry * big / 2.0);
+        self.region.load(frame, px, py, hw, hh)?;
+        let n = 2 * m + 1;
+        let full = Rect::new(0, 0, n, n);
+        let mut best_rect = full;
+        // The current scale's peak, where the other scales look.
+        let mut centre = (m, m);
+        for sigma in [1.0, 1.0 / q, q] {
+            let scale = s.scale * sigma;
+            if sigma != 1.0 && !(c.min_scale..=c.max_scale).contains(&scale) {
+                continue;
+            }
+            self.region
+                .sample(px, py, s.rx * scale, s.ry * scale, pw, ph, &mut self.patch)?;
+            let view = ImageView::from_slice(&self.patch, pw, ph, 1, pw)?;
+            let corners = if sigma == 1.0 {
+                full
+            } else {
+                // The same frame point at this sampling.
+                let at = |v: usize| {
+                    let d = (v as f64 - m as f64) / sigma;
+                    (m as f64 + d).round().clamp(0.0, (n - 1) as f64) as usize
+                };
+                let (x, y) = (at(centre.0), at(centre.1));
+                let (x0, y0) = (
+                    x.saturating_sub(REFINE_RADIUS),
+                    y.saturating_sub(REFINE_RADIUS),
+                );
+                let (x1, y1) = (
+                    (x + REFINE_RADIUS).min(n - 1),
+                    (y + REFINE_RADIUS).min(n - 1),
+                );
+                Rect::new(x0, y0, x1 - x0 + 1, y1 - y0 + 1)
+            };
+            self.search
+                .map_into(view, &s.template, corners, &mut self.scores)?;
+            evaluations += corners.area();
+            let hit = prior_peak(&self.scores, corners, m, c.motion_penalty);
+            if sigma == 1.0 {
+                centre = (hit.1, hit.2);
+            }
+            let sigma_weight = if sigma == 1.0 { 1.0 } else { c.scale_penalty };
+            let combined = if c.anchor_weight > 0.0 {
+                let window = Rect::new(hit.1, hit.2, tw, th);
+                let a = anchored(
+                    &mut self.search,
+                    view,
+                    &s.anchor,
+                    window,
+                    &mut self.anchor_scores,
+                )?;
+                (1.0 - c.anchor_weight) * hit.0 + c.anchor_weight * a
+            } else {
+                hit.0
+            };
+            let weighted = combined * sigma_weight;
+            per_scale[if sigma < 1.0 {
+                0
+            } else if sigma > 1.0 {
+                2
+            } else {
+                1
+            }] = weighted;
+            if weighted > best.0 {
+                best = (weighted, hit.1, hit.2, sigma, hit.3);
+                best_rect = corners;
+                std::mem::swap(&mut self.patch, &mut self.best_patch);
+                std::mem::swap(&mut self.scores, &mut self.best_scores);
+            }
+        }
+        let (_, bx, by, sigma, score) = best;
+        let r = best_rect;
+        let at = |x: usize, y: usize| f64::from(self.best_scores[(y - r.y) * r.width + (x - r.x)]);
+        let dx = if bx > r.x && bx + 1 < r.right() {
+            parabola(at(bx - 1, by), at(bx, by), at(bx + 1, by))
+        } else {
+            0.0
+        };
+        let dy = if by > r.y && by + 1 < r.bottom() {
+            parabola(at(bx, by - 1), at(bx, by), at(bx, by + 1))
+        } else {
+            0.0
+        };
+        Ok(Found {
+            m,
+            pw,
+            bx,
+            by,
+            sigma,
+            score,
+            dx,
+            dy,
+            per_scale,
+            evaluations,
+        })
+    }
 }
 
 /// Frame pixels per template pixel for a box, and the template size.
@@ -434,13 +575,17 @@ impl NccScaleTracker {
             config,
             guard: FrameGuard::default(),
             state: None,
-            region: Region::new()?,
-            patch: Vec::new(),
-            best_patch: Vec::new(),
-            scores: Vec::new(),
-            best_scores: Vec::new(),
-            scratch: Vec::new(),
-            search: NccSearch::new(),
+            scratch: Scratch {
+                region: Region::new()?,
+                patch: Vec::new(),
+                best_patch: Vec::new(),
+                scores: Vec::new(),
+                best_scores: Vec::new(),
+                anchor_scores: Vec::new(),
+                kept_patch: Vec::new(),
+                kept_scores: Vec::new(),
+                search: NccSearch::new(),
+            },
         })
     }
 
@@ -494,10 +639,10 @@ impl Tracker for NccScaleTracker {
         let (cx, cy) = target.center();
         let (cx, cy) = (cx - 1.0, cy - 1.0);
         let (hw, hh) = (tw as f64 * rx / 2.0, th as f64 * ry / 2.0);
-        self.region.load(&frame, cx, cy, hw, hh)?;
-        self.region
-            .sample(cx, cy, rx, ry, tw, th, &mut self.patch)?;
-        let raw = Image::from_vec(tw, th, 1, self.patch.clone())?;
+        let sc = &mut self.scratch;
+        sc.region.load(&frame, cx, cy, hw, hh)?;
+        sc.region.sample(cx, cy, rx, ry, tw, th, &mut sc.patch)?;
+        let raw = Image::from_vec(tw, th, 1, sc.patch.clone())?;
         let kx = kernel_profile(tw, self.config.border_weight);
         let ky = kernel_profile(th, self.config.border_weight);
         let mut template = NccTemplate::default();
@@ -533,97 +678,46 @@ impl Tracker for NccScaleTracker {
             return Err(TrackerError::NotInitialised);
         };
         let (tw, th) = (s.tw, s.th);
-        let mut margin = (c.search_margin * ((tw * th) as f64).sqrt()).ceil();
-        if s.lost {
-            margin = (margin * c.lost_margin_growth).ceil();
-        }
-        let m = (margin as usize).max(2);
-        let (pw, ph) = (tw + 2 * m, th + 2 * m);
+        let margin = (c.search_margin * ((tw * th) as f64).sqrt()).ceil();
+        let wide = ((margin * c.wide_margin).ceil() as usize).max(2);
+        let m = if s.lost {
+            wide
+        } else {
+            (margin as usize).max(2)
+        };
         let (px, py) = (s.cx + s.vx, s.cy + s.vy);
-        let q = c.scale_step;
-        let mut best = (f64::NEG_INFINITY, 0usize, 0usize, 1.0f64, 0.0f64);
-        // Weighted combined score per scale: 1/q, 1, q (NaN if skipped).
-        let mut per_scale = [f64::NAN; 3];
-        let mut evaluations = 0;
-        let big = s.scale * q;
-        let (hw, hh) = (pw as f64 * s.rx * big / 2.0, ph as f64 * s.ry * big / 2.0);
-        self.region.load(&frame, px, py, hw, hh)?;
-        let n = 2 * m + 1;
-        let full = Rect::new(0, 0, n, n);
-        let mut best_rect = full;
-        // The current scale's peak, where the other scales look.
-        let mut centre = (m, m);
-        for sigma in [1.0, 1.0 / q, q] {
-            let scale = s.scale * sigma;
-            if sigma != 1.0 && !(c.min_scale..=c.max_scale).contains(&scale) {
-                continue;
-            }
-            self.region
-                .sample(px, py, s.rx * scale, s.ry * scale, pw, ph, &mut self.patch)?;
-            let view = ImageView::from_slice(&self.patch, pw, ph, 1, pw)?;
-            let corners = if sigma == 1.0 {
-                full
+        let mut found = self.scratch.search(s, &c, &frame, (px, py), m)?;
+        // A weak match may mean the target jumped out of the window (an
+        // abrupt camera motion): look again in the wide window and keep
+        // whichever match is better.
+        if found.score < c.update_threshold && m < wide {
+            let sc = &mut self.scratch;
+            std::mem::swap(&mut sc.best_patch, &mut sc.kept_patch);
+            std::mem::swap(&mut sc.best_scores, &mut sc.kept_scores);
+            let again = sc.search(s, &c, &frame, (px, py), wide)?;
+            let evaluations = found.evaluations + again.evaluations;
+            if again.score > found.score {
+                found = again;
             } else {
-                // The same frame point at this sampling.
-                let at = |v: usize| {
-                    let d = (v as f64 - m as f64) / sigma;
-                    (m as f64 + d).round().clamp(0.0, (n - 1) as f64) as usize
-                };
-                let (x, y) = (at(centre.0), at(centre.1));
-                let (x0, y0) = (
-                    x.saturating_sub(REFINE_RADIUS),
-                    y.saturating_sub(REFINE_RADIUS),
-                );
-                let (x1, y1) = (
-                    (x + REFINE_RADIUS).min(n - 1),
-                    (y + REFINE_RADIUS).min(n - 1),
-                );
-                Rect::new(x0, y0, x1 - x0 + 1, y1 - y0 + 1)
-            };
-            self.search
-                .map_into(view, &s.template, corners, &mut self.scores)?;
-            evaluations += corners.area();
-            let hit = prior_peak(&self.scores, corners, m, c.motion_penalty);
-            if sigma == 1.0 {
-                centre = (hit.1, hit.2);
+                std::mem::swap(&mut sc.best_patch, &mut sc.kept_patch);
+                std::mem::swap(&mut sc.best_scores, &mut sc.kept_scores);
             }
-            let sigma_weight = if sigma == 1.0 { 1.0 } else { c.scale_penalty };
-            let combined = if c.anchor_weight > 0.0 {
-                let view = ImageView::from_slice(&self.patch, pw, ph, 1, pw)?;
-                let window = Rect::new(hit.1, hit.2, tw, th);
-                let a = anchored(&mut self.search, view, &s.anchor, window, &mut self.scratch)?;
-                (1.0 - c.anchor_weight) * hit.0 + c.anchor_weight * a
-            } else {
-                hit.0
-            };
-            let weighted = combined * sigma_weight;
-            per_scale[if sigma < 1.0 {
-                0
-            } else if sigma > 1.0 {
-                2
-            } else {
-                1
-            }] = weighted;
-            if weighted > best.0 {
-                best = (weighted, hit.1, hit.2, sigma, hit.3);
-                best_rect = corners;
-                std::mem::swap(&mut self.patch, &mut self.best_patch);
-                std::mem::swap(&mut self.scores, &mut self.best_scores);
-            }
+            found.evaluations = evaluations;
         }
-        let (_, bx, by, sigma, score) = best;
-        let r = best_rect;
-        let at = |x: usize, y: usize| f64::from(self.best_scores[(y - r.y) * r.width + (x - r.x)]);
-        let dx = if bx > r.x && bx + 1 < r.right() {
-            parabola(at(bx - 1, by), at(bx, by), at(bx + 1, by))
-        } else {
-            0.0
-        };
-        let dy = if by > r.y && by + 1 < r.bottom() {
-            parabola(at(bx, by - 1), at(bx, by), at(bx, by + 1))
-        } else {
-            0.0
-        };
+        let Found {
+            m,
+            pw,
+            bx,
+            by,
+            sigma,
+            score,
+            dx,
+            dy,
+            per_scale,
+            evaluations,
+            ..
+        } = found;
+        let q = c.scale_step;
         let lost = score.is_nan() || score < c.lost_threshold;
         let (ox, oy) = (s.cx, s.cy);
         if lost {
@@ -652,7 +746,7 @@ impl Tracker for NccScaleTracker {
             if score >= c.update_threshold && c.update_rate > 0.0 {
                 let a = c.update_rate as f32;
                 for (r, raw_row) in s.raw.as_mut_slice().chunks_exact_mut(tw).enumerate() {
-                    let src = &self.best_patch[(by + r) * pw + bx..(by + r) * pw + bx + tw];
+                    let src = &self.scratch.best_patch[(by + r) * pw + bx..(by + r) * pw + bx + tw];
                     for (t, &w) in raw_row.iter_mut().zip(src) {
                         *t = (1.0 - a) * *t + a * w;
                     }
@@ -823,6 +917,28 @@ pub(crate) mod tests {
         let got = run(&mut t, &frames, truth[0]);
         let (centre, size) = errors(&got, &truth);
         assert!(centre < 3.0 && size < 0.08, "centre {centre}, size {size}");
+    }
+
+    #[test]
+    fn finds_a_target_that_jumps_out_of_the_search_window() {
+        // A 34 px jump at frame 10: beyond the normal margin (20 px here),
+        // within the wide one.
+        let path = |k: usize| {
+            let x = 50.0 + k as f64 + if k >= 10 { 34.0 } else { 0.0 };
+            (x, 60.0, 24.0, 30.0)
+        };
+        let (frames, truth) = scene(16, false, 3.0, path);
+        let last_error = |wide_margin| {
+            let config = NccScaleConfig {
+                wide_margin,
+                ..NccScaleConfig::default()
+            };
+            let mut t = NccScaleTracker::new(config).unwrap();
+            let got = run(&mut t, &frames, truth[0]);
+            errors(&got[10..], &truth[10..]).0
+        };
+        assert!(last_error(2.0) < 2.0, "{}", last_error(2.0));
+        assert!(last_error(1.0) > 10.0, "{}", last_error(1.0));
     }
 
     #[test]
