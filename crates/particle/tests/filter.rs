@@ -232,6 +232,20 @@ fn mcmc_move_accepts_and_keeps_the_posterior() {
 }
 
 fn trajectory(threads: usize, chunk: usize) -> Vec<f64> {
+    trajectory_with(
+        threads,
+        chunk,
+        Resampling::Systematic,
+        ResamplePolicy::Always,
+    )
+}
+
+fn trajectory_with(
+    threads: usize,
+    chunk: usize,
+    resampling: Resampling,
+    policy: ResamplePolicy,
+) -> Vec<f64> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -242,6 +256,8 @@ fn trajectory(threads: usize, chunk: usize) -> Vec<f64> {
         let p0 = Gaussian::new(Vector2::new(0.0, 1.0), Matrix2::identity()).unwrap();
         let mut set = ParticleSet::new(initial_particles(&p0, 5000)).unwrap();
         let pf = ParticleFilter {
+            resampling,
+            policy,
             chunk_size: chunk,
             mcmc: true,
             ..ParticleFilter::default()
@@ -262,6 +278,15 @@ fn results_do_not_depend_on_the_thread_count() {
     let one = trajectory(1, 256);
     let two = trajectory(2, 256);
     assert_eq!(one, two);
+    // every scheme, and steps that keep their weights (ESS policy)
+    for scheme in Resampling::ALL {
+        let policy = ResamplePolicy::Ess(0.6);
+        assert_eq!(
+            trajectory_with(1, 300, scheme, policy),
+            trajectory_with(2, 300, scheme, policy),
+            "{scheme:?}"
+        );
+    }
 }
 
 #[test]
