@@ -5,8 +5,9 @@ use std::hint::black_box;
 
 use bayestrack_image::{BBox, Image};
 use bayestrack_trackers::{
-    BallConfig, BallFilter, BallTracker, MadTracker, MadTrackerConfig, MultiTargetConfig,
-    MultiTargetTracker, PfCorrelationConfig, PfCorrelationTracker, SearchArea, Tracker,
+    BallConfig, BallFilter, BallTracker, HistPfConfig, HistPfTracker, MadTracker, MadTrackerConfig,
+    MultiTargetConfig, MultiTargetTracker, NccScaleConfig, NccScaleTracker, PfCorrelationConfig,
+    PfCorrelationTracker, SearchArea, Tracker,
 };
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use rand::SeedableRng;
@@ -164,5 +165,81 @@ fn bench_road(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_ball, bench_road);
+/// A real-video-like 320x240 RGB sequence: a textured orange 26x64 target
+/// (the size of Couple's pedestrians) walking 1.5 px/frame over a textured
+/// green-grey background and growing 0.5 % per frame, noise of 3 grey
+/// levels. Returns the frames and the first OTB box.
+fn street_frames(n: usize) -> (Vec<Image<u8>>, BBox) {
+    let (w, h) = (320usize, 240usize);
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(3);
+    let bg =
+        |x: f64, y: f64| 128.0 + 40.0 * (0.21 * x + 0.13 * y).sin() * (0.07 * x - 0.17 * y).cos();
+    let fg = |u: f64, v: f64| 90.0 + 50.0 * (9.0 * u).sin() * (13.0 * v + 1.0).cos();
+    let mut frames = Vec::with_capacity(n);
+    let path = |k: usize| {
+        let s = 1.005f64.powi(k as i32);
+        (100.0 + 1.5 * k as f64, 120.0, 26.0 * s, 64.0 * s)
+    };
+    for k in 0..n {
+        let (cx, cy, tw, th) = path(k);
+        let mut data = Vec::with_capacity(w * h * 3);
+        for y in 0..h {
+            for x in 0..w {
+                let (u, v) = ((x as f64 - cx) / tw, (y as f64 - cy) / th);
+                let z: f64 = StandardNormal.sample(&mut rng);
+                let p = if u.abs() <= 0.5 && v.abs() <= 0.5 {
+                    let g = fg(u, v) + 3.0 * z;
+                    [g * 1.3 + 40.0, g * 0.7, g * 0.4]
+                } else {
+                    let g = bg(x as f64, y as f64) + 3.0 * z;
+                    [g * 0.8, g, g * 0.85]
+                };
+                data.extend(p.map(|v| v.round().clamp(0.0, 255.0) as u8));
+            }
+        }
+        frames.push(Image::from_vec(w, h, 3, data).unwrap());
+    }
+    let (cx, cy, tw, th) = path(0);
+    let first = BBox::new(
+        cx - (tw - 1.0) / 2.0 + 1.0,
+        cy - (th - 1.0) / 2.0 + 1.0,
+        tw,
+        th,
+    );
+    (frames, first)
+}
+
+/// The real-video trackers with scale (issue #7) on the 320x240 street.
+fn bench_street(c: &mut Criterion) {
+    let (frames, first) = street_frames(40);
+    let mut group = c.benchmark_group("street 320x240 RGB (real-video trackers)");
+    group.throughput(Throughput::Elements(1));
+    let trackers: Vec<(&str, Box<dyn Tracker>)> = vec![
+        (
+            "ncc-scale step",
+            Box::new(NccScaleTracker::new(NccScaleConfig::default()).unwrap()),
+        ),
+        (
+            "hist-pf-scale step",
+            Box::new(HistPfTracker::new(HistPfConfig::default(), 7).unwrap()),
+        ),
+    ];
+    for (name, mut tracker) in trackers {
+        tracker.init(frames[0].view(), first).unwrap();
+        let mut k = 0;
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                k += 1;
+                if k == frames.len() {
+                    k = 1;
+                    tracker.init(frames[0].view(), first).unwrap();
+                }
+                black_box(tracker.step(black_box(frames[k].view())).unwrap())
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_ball, bench_road, bench_street);
 criterion_main!(benches);

