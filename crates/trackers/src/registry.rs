@@ -76,7 +76,7 @@ pub const REGISTRY: &[TrackerInfo] = &[
     },
     TrackerInfo {
         name: "ncc-scale",
-        summary: "real video: gray NCC template searched around a constant-velocity prediction at 3 scales (x/1.05, 1, x1.05), guarded template update; deterministic",
+        summary: "real video: centre-weighted gray NCC template searched around a constant-velocity prediction at 3 scales (x/1.03, 1, x1.03; scale judged by the first frame's template), wide second look on weak matches, guarded template update; deterministic",
         handles_scale: true,
         build: |_| boxed(NccScaleTracker::new(NccScaleConfig::default())),
     },
