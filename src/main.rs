@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! bayestrack trackers
-//! bayestrack track --seq ../shared/data/sequences/Crossing --tracker mad --out boxes.txt
+//! bayestrack track --seq ../shared/data/sequences/Crossing --tracker ncc-scale --out boxes.txt
 //! ```
 
 use std::borrow::Cow;
@@ -19,7 +19,7 @@ use bayestrack::trackers::{REGISTRY, tracker_info};
 use clap::{Parser, Subcommand, ValueEnum};
 
 /// The tracker `track` runs when `--tracker` is not given.
-const DEFAULT_TRACKER: &str = "mad";
+const DEFAULT_TRACKER: &str = "ncc-scale";
 
 #[derive(Parser)]
 #[command(

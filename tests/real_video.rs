@@ -40,8 +40,9 @@ fn one_pass(tracker: &str, seq: &Sequence) -> (f64, f64) {
     (s.auc, s.precision_20)
 }
 
-/// The fastest tracker (docs/results.md) follows the pedestrian of
-/// Crossing: measured AUC 0.600, P@20 1.000; the floor leaves room for
+/// The fastest tracker that handles scale, and the most accurate
+/// (docs/results.md: about 2,000 fps, 40x CSRT), follows the pedestrian of
+/// Crossing: measured AUC 0.775, P@20 1.000. The floor leaves room for
 /// changes that do not break it, and is far above the 0.040 of a box that
 /// stays where frame 1 put it.
 #[test]
@@ -49,7 +50,7 @@ fn the_fastest_tracker_follows_crossing() {
     let Some(seq) = sequence("Crossing") else {
         return;
     };
-    let (auc, p20) = one_pass("ball-pf30", &seq);
-    assert!(auc >= 0.45, "AUC {auc:.3} below the floor 0.45");
+    let (auc, p20) = one_pass("ncc-scale", &seq);
+    assert!(auc >= 0.6, "AUC {auc:.3} below the floor 0.6");
     assert!(p20 >= 0.9, "P@20 {p20:.3} below the floor 0.9");
 }
