@@ -6,14 +6,12 @@
 //! ```
 
 use std::borrow::Cow;
-use std::fs::File;
-use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use bayestrack::eval::metrics::score_otb;
 use bayestrack::eval::otb::Sequence;
-use bayestrack::eval::track::{OnBadFrame, TrackError, box_row, track_frames};
+use bayestrack::eval::track::{BoxFile, OnBadFrame, TrackError, track_frames};
 use bayestrack::image::{BBox, Rgb, write_frame_with_boxes};
 use bayestrack::trackers::{REGISTRY, tracker_info};
 use clap::{Parser, Subcommand, ValueEnum};
@@ -135,37 +133,6 @@ fn list_trackers() {
     }
 }
 
-/// A box file (or standard output) written and flushed line by line.
-struct BoxWriter {
-    path: PathBuf,
-    out: Box<dyn Write>,
-}
-
-impl BoxWriter {
-    fn create(path: &Path) -> Result<Self, String> {
-        let out: Box<dyn Write> = if path == Path::new("-") {
-            Box::new(std::io::stdout())
-        } else {
-            let file =
-                File::create(path).map_err(|e| format!("cannot create {}: {e}", path.display()))?;
-            Box::new(BufWriter::new(file))
-        };
-        Ok(Self {
-            path: path.to_path_buf(),
-            out,
-        })
-    }
-
-    fn write(&mut self, b: &BBox) -> Result<(), TrackError> {
-        writeln!(self.out, "{}", box_row(b))
-            .and_then(|()| self.out.flush())
-            .map_err(|source| TrackError::Output {
-                path: self.path.clone(),
-                source,
-            })
-    }
-}
-
 fn track(args: &TrackArgs) -> Result<(), String> {
     let info = tracker_info(&args.tracker).map_err(|e| e.to_string())?;
     let seq = Sequence::open_frames(&args.seq).map_err(|e| e.to_string())?;
@@ -183,7 +150,7 @@ fn track(args: &TrackArgs) -> Result<(), String> {
             .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     }
     let mut tracker = info.build(args.seed).map_err(|e| e.to_string())?;
-    let mut writer = BoxWriter::create(&args.out)?;
+    let mut writer = BoxFile::create(&args.out).map_err(|e| e.to_string())?;
     let on_bad_frame = match args.on_bad_frame {
         BadFrame::Stop => OnBadFrame::Stop,
         BadFrame::Skip => OnBadFrame::Skip,

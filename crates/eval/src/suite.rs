@@ -12,8 +12,6 @@
 //! cell and the run goes on.
 
 use std::borrow::Cow;
-use std::fs::File;
-use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use bayestrack_image::Image;
@@ -24,7 +22,7 @@ use crate::metrics::{OtbScore, SUCCESS_THRESHOLDS, precision_at, score_otb};
 use crate::otb::{OtbError, Sequence, list_sequences};
 use crate::plot::{Series, line_chart};
 use crate::table::Table;
-use crate::track::{OnBadFrame, TrackError, box_row, track_frames};
+use crate::track::{BoxFile, OnBadFrame, track_frames};
 
 /// Centre-error thresholds of the precision plot, px.
 pub const PRECISION_PLOT_MAX: usize = 50;
@@ -145,13 +143,9 @@ fn run_cell(
         .initial_box()
         .ok_or_else(|| format!("{}: frame 1 is unlabelled", seq.name))?;
     let dir = options.out.join("boxes").join(info.name);
-    let path = dir.join(format!("{}.txt", seq.name));
-    let io = |source| TrackError::Output {
-        path: path.clone(),
-        source,
-    };
-    std::fs::create_dir_all(&dir).map_err(|e| io(e).to_string())?;
-    let mut file = BufWriter::new(File::create(&path).map_err(|e| io(e).to_string())?);
+    std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    let mut file =
+        BoxFile::create(&dir.join(format!("{}.txt", seq.name))).map_err(|e| e.to_string())?;
     let mut tracker = info.build(options.seed).map_err(|e| e.to_string())?;
     let run = track_frames(
         tracker.as_mut(),
@@ -160,11 +154,7 @@ fn run_cell(
         |i| seq.frames[i].clone(),
         init,
         OnBadFrame::Stop,
-        |f| {
-            writeln!(file, "{}", box_row(&f.bbox))
-                .and_then(|()| file.flush())
-                .map_err(io)
-        },
+        |f| file.write(&f.bbox),
     )
     .map_err(|e| e.to_string())?;
     let score = score_otb(&run.boxes, &seq.ground_truth).map_err(|e| e.to_string())?;

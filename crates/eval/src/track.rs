@@ -9,7 +9,9 @@
 //! frames and writing boxes are not part of the reported fps.
 
 use std::borrow::Cow;
-use std::path::PathBuf;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use bayestrack_image::{BBox, Image, ImageView};
@@ -193,6 +195,49 @@ where
         })?;
     }
     Ok(run)
+}
+
+/// An OTB result file, one `x,y,w,h` row per frame, flushed row by row so
+/// that an interrupted run keeps every box it wrote. The path `-` is
+/// standard output.
+pub struct BoxFile {
+    path: PathBuf,
+    out: Box<dyn Write>,
+}
+
+impl BoxFile {
+    /// Creates (truncates) the file.
+    ///
+    /// # Errors
+    /// [`TrackError::Output`] naming the file.
+    pub fn create(path: &Path) -> Result<Self, TrackError> {
+        let out: Box<dyn Write> = if path == Path::new("-") {
+            Box::new(std::io::stdout())
+        } else {
+            let file = File::create(path).map_err(|source| TrackError::Output {
+                path: path.to_path_buf(),
+                source,
+            })?;
+            Box::new(BufWriter::new(file))
+        };
+        Ok(Self {
+            path: path.to_path_buf(),
+            out,
+        })
+    }
+
+    /// Appends one row and flushes it.
+    ///
+    /// # Errors
+    /// [`TrackError::Output`] naming the file.
+    pub fn write(&mut self, b: &BBox) -> Result<(), TrackError> {
+        writeln!(self.out, "{}", box_row(b))
+            .and_then(|()| self.out.flush())
+            .map_err(|source| TrackError::Output {
+                path: self.path.clone(),
+                source,
+            })
+    }
 }
 
 /// Formats a box as an OTB result row `x,y,w,h` (at most 2 decimals,
