@@ -47,35 +47,8 @@ impl IntegralImage {
     /// [`ImageError::NonFinite`] for a NaN or infinite pixel.
     pub fn compute<T: Pixel>(&mut self, src: ImageView<'_, T>) -> Result<()> {
         src.expect_channels("integral image", 1)?;
-        let (w, h) = (src.width(), src.height());
-        let cols = w + 1;
-        self.width = w;
-        self.height = h;
-        self.sum.clear();
-        self.sum.resize(cols * (h + 1), 0.0);
-        self.sum_sq.clear();
-        self.sum_sq.resize(cols * (h + 1), 0.0);
-        for y in 0..h {
-            let (mut rs, mut rq) = (0f64, 0f64);
-            let row = src.row(y);
-            let (above, here) = self.sum.split_at_mut((y + 1) * cols);
-            let (above_q, here_q) = self.sum_sq.split_at_mut((y + 1) * cols);
-            let prev = &above[y * cols..];
-            let prev_q = &above_q[y * cols..];
-            for x in 0..w {
-                let v = f64::from(row[x].to_f32());
-                rs += v;
-                rq += v * v;
-                here[x + 1] = prev[x + 1] + rs;
-                here_q[x + 1] = prev_q[x + 1] + rq;
-            }
-            if !rs.is_finite() || !rq.is_finite() {
-                return Err(ImageError::NonFinite {
-                    what: "integral image input",
-                });
-            }
-        }
-        Ok(())
+        (self.width, self.height) = (src.width(), src.height());
+        summed_area::<T, true>(src, &mut self.sum, &mut self.sum_sq, "integral image input")
     }
 
     /// Width of the image the tables were built from.
@@ -204,27 +177,8 @@ impl AreaSampler {
     /// [`ImageError::NonFinite`] for a NaN or infinite pixel.
     pub fn compute<T: Pixel>(&mut self, src: ImageView<'_, T>) -> Result<()> {
         src.expect_channels("area sampler", 1)?;
-        let (w, h) = (src.width(), src.height());
-        let cols = w + 1;
-        self.width = w;
-        self.height = h;
-        self.sum.clear();
-        self.sum.resize(cols * (h + 1), 0.0);
-        for y in 0..h {
-            let mut rs = 0f64;
-            let (above, here) = self.sum.split_at_mut((y + 1) * cols);
-            let prev = &above[y * cols..];
-            for (x, v) in src.row(y).iter().enumerate() {
-                rs += f64::from(v.to_f32());
-                here[x + 1] = prev[x + 1] + rs;
-            }
-            if !rs.is_finite() {
-                return Err(ImageError::NonFinite {
-                    what: "area sampler input",
-                });
-            }
-        }
-        Ok(())
+        (self.width, self.height) = (src.width(), src.height());
+        summed_area::<T, false>(src, &mut self.sum, &mut Vec::new(), "area sampler input")
     }
 
     /// Width of the source.
@@ -390,6 +344,51 @@ pub fn gray_region_into(
         }
         for (o, &a) in out.row_mut(oy).iter_mut().zip(&acc) {
             *o = (a as f64 / 65536.0) as f32 * scale;
+        }
+    }
+    Ok(())
+}
+
+/// Fills `sum` (and, when `SQUARES`, `sum_sq`) with the `(w + 1) x (h + 1)`
+/// summed-area table of the 1-channel `src` (of its squares), first row and
+/// column zero.
+///
+/// # Errors
+/// [`ImageError::NonFinite`] with `what` for a NaN or infinite pixel.
+fn summed_area<T: Pixel, const SQUARES: bool>(
+    src: ImageView<'_, T>,
+    sum: &mut Vec<f64>,
+    sum_sq: &mut Vec<f64>,
+    what: &'static str,
+) -> Result<()> {
+    let (w, h) = (src.width(), src.height());
+    let cols = w + 1;
+    sum.clear();
+    sum.resize(cols * (h + 1), 0.0);
+    if SQUARES {
+        sum_sq.clear();
+        sum_sq.resize(cols * (h + 1), 0.0);
+    }
+    for y in 0..h {
+        let (mut rs, mut rq) = (0f64, 0f64);
+        let row = src.row(y);
+        let (above, here) = sum.split_at_mut((y + 1) * cols);
+        let prev = &above[y * cols..];
+        for x in 0..w {
+            rs += f64::from(row[x].to_f32());
+            here[x + 1] = prev[x + 1] + rs;
+        }
+        if SQUARES {
+            let (above_q, here_q) = sum_sq.split_at_mut((y + 1) * cols);
+            let prev_q = &above_q[y * cols..];
+            for x in 0..w {
+                let v = f64::from(row[x].to_f32());
+                rq += v * v;
+                here_q[x + 1] = prev_q[x + 1] + rq;
+            }
+        }
+        if !rs.is_finite() || !rq.is_finite() {
+            return Err(ImageError::NonFinite { what });
         }
     }
     Ok(())
