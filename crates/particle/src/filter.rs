@@ -83,62 +83,59 @@ pub struct StepReport {
     pub degenerate: bool,
 }
 
-/// One chunk's proposal pass.
+/// One chunk's proposal pass, accumulated as the particles are proposed.
 struct Proposed {
     /// The largest updated log-weight.
     max: f64,
-    /// The first NaN or `+inf` log increment, with its particle.
-    bad: Option<(usize, f64)>,
+    /// Whether every increment so far was below `+inf` (and not NaN).
+    ok: bool,
 }
 
 impl Proposed {
-    /// The chunk of log-weights `lw` (finite or minus infinity) updated by
-    /// the increments `inc`, its first particle being `offset`.
-    fn of(lw: &[f64], inc: &[f64], offset: usize) -> Self {
-        let mut max = f64::NEG_INFINITY;
-        let mut ok = true;
-        for (&l, &x) in lw.iter().zip(inc) {
-            ok &= x < f64::INFINITY;
-            let y = l + x;
-            max = if y > max { y } else { max };
+    const EMPTY: Self = Self {
+        max: f64::NEG_INFINITY,
+        ok: true,
+    };
+
+    /// Takes in the log-weight `l` and its increment `x`.
+    #[inline(always)]
+    fn add(&mut self, l: f64, x: f64) {
+        self.ok &= x < f64::INFINITY;
+        let y = l + x;
+        self.max = if y > self.max { y } else { self.max };
+    }
+
+    /// The first NaN or `+inf` increment of the chunk `inc` with first
+    /// particle `offset`.
+    fn bad(&self, inc: &[f64], offset: usize) -> Option<(usize, f64)> {
+        if self.ok {
+            return None;
         }
-        let bad = if ok {
-            None
-        } else {
-            inc.iter()
-                .position(|x| x.is_nan() || *x == f64::INFINITY)
-                .map(|i| (offset + i, inc[i]))
-        };
-        Self { max, bad }
+        inc.iter()
+            .position(|x| x.is_nan() || *x == f64::INFINITY)
+            .map(|i| (offset + i, inc[i]))
     }
 }
 
-/// One chunk's weight pass.
+/// One chunk's weights: their sum and the sum of their squares.
+#[derive(Clone, Copy)]
 struct Weighed {
-    /// Sum of the weights.
     sum: f64,
-    /// Sum of their squares.
     sum2: f64,
-    /// The last particle with a positive weight.
-    last: Option<usize>,
 }
 
 impl Weighed {
     /// Weights `exp(l + x - max)` of the log-weights `lw` updated by the
     /// increments `inc` (none: the log-weights alone), into `out`, or with
-    /// `cumulative` their running sums; the chunk's first particle is
-    /// `offset`.
-    fn of(
-        lw: &[f64],
-        inc: Option<&[f64]>,
-        max: f64,
-        out: &mut [f64],
-        cumulative: bool,
-        offset: usize,
-    ) -> Self {
+    /// `cumulative` their running sums. A `max` of minus infinity (no
+    /// positive weight) gives zeros.
+    fn of(lw: &[f64], inc: Option<&[f64]>, max: f64, out: &mut [f64], cumulative: bool) -> Self {
         let (mut sum, mut sum2) = (0.0, 0.0);
-        let mut last = 0;
-        let mut add = |i: usize, d: f64, o: &mut f64| {
+        if max == f64::NEG_INFINITY {
+            out.fill(0.0);
+            return Self { sum, sum2 };
+        }
+        let mut add = |d: f64, o: &mut f64| {
             // exp_flushed(d) == 0 leaves the sums as they are (adding +0 to
             // a non-negative sum is exact): a branch, not a blend, keeps the
             // flushed particles of a sharp likelihood off the sums'
@@ -147,30 +144,34 @@ impl Weighed {
                 *o = if cumulative { sum } else { 0.0 };
                 return;
             }
-            let w = exp_flushed(d);
+            let w = d.exp();
             sum += w;
             sum2 += w * w;
-            last = i + 1;
             *o = if cumulative { sum } else { w };
         };
         match inc {
             Some(inc) => {
-                for (i, ((&l, &x), o)) in lw.iter().zip(inc).zip(out.iter_mut()).enumerate() {
-                    add(i, l + x - max, o);
+                for ((&l, &x), o) in lw.iter().zip(inc).zip(out.iter_mut()) {
+                    add(l + x - max, o);
                 }
             }
             None => {
-                for (i, (&l, o)) in lw.iter().zip(out.iter_mut()).enumerate() {
-                    add(i, l - max, o);
+                for (&l, o) in lw.iter().zip(out.iter_mut()) {
+                    add(l - max, o);
                 }
             }
         }
-        Self {
-            sum,
-            sum2,
-            last: last.checked_sub(1).map(|i| offset + i),
-        }
+        Self { sum, sum2 }
     }
+}
+
+/// One chunk's proposal and weights.
+struct ChunkPass {
+    /// The largest updated log-weight, to which the weights are relative.
+    max: f64,
+    /// The first NaN or `+inf` log increment, with its particle.
+    bad: Option<(usize, f64)>,
+    weighed: Weighed,
 }
 
 /// Stream ids beyond any chunk index.
@@ -302,18 +303,23 @@ impl ParticleFilter {
         increments.resize(n, 0.0);
         weights.resize(n, 0.0);
 
-        // propose; per chunk the largest updated log-weight and the first
-        // NaN or +inf increment
+        // propose and weigh each chunk while it is in cache: the weights
+        // (or, for systematic resampling, their running sums) relative to
+        // the chunk's largest updated log-weight, which puts them on the
+        // common scale with one factor per chunk below
+        let cumulative = self.resampling == Resampling::Systematic;
         let seed = stream_seed(key);
-        let proposed: Vec<Result<Proposed>> = particles
+        let passes: Vec<Result<ChunkPass>> = particles
             .par_chunks_mut(cs)
             .zip(increments.par_chunks_mut(cs))
             .zip(log_w.par_chunks(cs))
+            .zip(weights.par_chunks_mut(cs))
             .enumerate()
-            .map(|(c, ((ps, inc), lw))| {
+            .map(|(c, (((ps, inc), lw), out))| {
                 let mut rng = Xoshiro256PlusPlus::seed_from_u64(extend_seed(seed, c as u64));
                 let offset = c * cs;
-                for (i, (p, w)) in ps.iter_mut().zip(inc.iter_mut()).enumerate() {
+                let mut acc = Proposed::EMPTY;
+                for (i, ((p, w), &l)) in ps.iter_mut().zip(inc.iter_mut()).zip(lw).enumerate() {
                     let (child, x) = proposal.propose(p, z, &mut rng).map_err(|source| {
                         ParticleError::Proposal {
                             index: offset + i,
@@ -325,53 +331,63 @@ impl ParticleFilter {
                     }
                     *p = child;
                     *w = x;
+                    acc.add(l, x);
                 }
-                Ok(Proposed::of(lw, inc, offset))
+                let bad = acc.bad(inc, offset);
+                let weighed = match bad {
+                    None => Weighed::of(lw, Some(inc), acc.max, out, cumulative),
+                    Some(_) => Weighed {
+                        sum: 0.0,
+                        sum2: 0.0,
+                    },
+                };
+                Ok(ChunkPass {
+                    max: acc.max,
+                    bad,
+                    weighed,
+                })
             })
             .collect();
-        let mut max = f64::NEG_INFINITY;
-        let mut bad = None;
-        for chunk in proposed {
-            let chunk = chunk?;
-            max = max.max(chunk.max);
-            bad = bad.or(chunk.bad);
+        let mut chunks = Vec::with_capacity(passes.len());
+        for pass in passes {
+            chunks.push(pass?);
         }
-        if let Some((index, value)) = bad {
+        if let Some((index, value)) = chunks.iter().find_map(|c| c.bad) {
             return Err(ParticleError::NonFiniteWeight { index, value });
         }
+        let mut max = chunks
+            .iter()
+            .map(|c| c.max)
+            .fold(f64::NEG_INFINITY, f64::max);
         // weights: w_k = w_{k-1} * increment (log domain); all zero ignores
-        // the measurement (the previous weights) or fails
+        // the measurement (the previous weights, weighed again) or fails
         let degenerate = max == f64::NEG_INFINITY;
-        if degenerate {
+        let scale: Vec<f64> = if degenerate {
             if self.degenerate == Degenerate::Error {
                 return Err(ParticleError::AllWeightsZero { count: n });
             }
             max = log_w.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        }
+            let again: Vec<Weighed> = log_w
+                .par_chunks(cs)
+                .zip(weights.par_chunks_mut(cs))
+                .map(|(lw, out)| Weighed::of(lw, None, max, out, cumulative))
+                .collect();
+            for (chunk, w) in chunks.iter_mut().zip(again) {
+                chunk.weighed = w;
+            }
+            vec![1.0; chunks.len()]
+        } else {
+            chunks.iter().map(|c| exp_flushed(c.max - max)).collect()
+        };
         let log_w_k = |l: f64, x: f64| if degenerate { l } else { l + x };
-        // linear weights relative to the largest, with chunk sums (added in
-        // chunk order), the last positive weight of each chunk, and for
-        // systematic resampling the running sums within each chunk instead
-        // of the weights
-        let cumulative = self.resampling == Resampling::Systematic;
-        let partial: Vec<Weighed> = log_w
-            .par_chunks(cs)
-            .zip(increments.par_chunks(cs))
-            .zip(weights.par_chunks_mut(cs))
-            .enumerate()
-            .map(|(c, ((lw, inc), out))| {
-                let inc = if degenerate { None } else { Some(inc) };
-                Weighed::of(lw, inc, max, out, cumulative, c * cs)
-            })
-            .collect();
-        let mut prefix = Vec::with_capacity(partial.len() + 1);
+        // the chunk sums on the common scale, added in chunk order
+        let mut prefix = Vec::with_capacity(chunks.len() + 1);
         prefix.push(0.0);
-        let (mut sum, mut sum2, mut last) = (0.0, 0.0, 0);
-        for chunk in &partial {
-            sum += chunk.sum;
-            sum2 += chunk.sum2;
+        let (mut sum, mut sum2) = (0.0, 0.0);
+        for (chunk, &f) in chunks.iter().zip(&scale) {
+            sum += f * chunk.weighed.sum;
+            sum2 += f * f * chunk.weighed.sum2;
             prefix.push(sum);
-            last = chunk.last.unwrap_or(last);
         }
         let lse = max + sum.ln();
         let log_evidence = if degenerate { f64::NEG_INFINITY } else { lse };
@@ -403,20 +419,26 @@ impl ParticleFilter {
         if spare.len() != n {
             spare.clone_from(particles);
         }
-        let systematic = cumulative.then(|| {
+        // systematic: the points u + j step, each output chunk finding its
+        // ancestors in the running sums; the other schemes draw them here
+        // from the weights on the common scale
+        let systematic = if cumulative {
             let step = sum / n as f64;
             let u: f64 = rng.random::<f64>() * step;
-            (u, step)
-        });
-        if !cumulative {
+            Some((
+                ChunkedCumulative::new(weights, &scale, &prefix, cs),
+                u,
+                step,
+            ))
+        } else {
+            for (ws, &f) in weights.chunks_mut(cs).zip(&scale) {
+                if f != 1.0 {
+                    ws.iter_mut().for_each(|w| *w *= f);
+                }
+            }
             self.resampling
                 .resample_checked(weights, sum, &mut rng, ancestors);
-        }
-        let cum = ChunkedCumulative {
-            cum: weights,
-            prefix: &prefix,
-            chunk: cs,
-            last,
+            None
         };
         let from: &[T] = particles;
         let uniform = -(n as f64).ln();
@@ -426,8 +448,8 @@ impl ParticleFilter {
             .zip(log_w.par_chunks_mut(cs))
             .enumerate()
             .for_each(|(o, ((out, anc), lw))| {
-                if let Some((u, step)) = systematic {
-                    cum.systematic(u, step, o * cs, anc);
+                if let Some((cum, u, step)) = &systematic {
+                    cum.systematic(*u, *step, o * cs, anc);
                 }
                 for (p, &a) in out.iter_mut().zip(anc.iter()) {
                     p.clone_from(&from[a]);

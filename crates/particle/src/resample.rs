@@ -109,28 +109,59 @@ fn walk(weights: &[f64], ancestors: &mut [usize], mut point: impl FnMut(usize) -
     }
 }
 
-/// Cumulative weights kept chunk by chunk, so that a parallel pass can build
-/// them and resampling can start anywhere: `cum[i]` is the running sum of the
-/// weights of `i`'s chunk up to `i` (inclusive), `prefix[c]` the total of the
-/// chunks before chunk `c` (`prefix[0] = 0`, one entry per chunk plus the
-/// grand total), both summed in particle order. Particle `i` of chunk `c`
-/// owns the points in `[B_{i-1}, B_i)`, `B_i = prefix[c] + cum[i]`; the last
-/// `B` of a chunk is the next chunk's prefix, so the `B_i` never decrease and
-/// each point has one owner, whichever range of points a task walks. With a
-/// single chunk `B_i` is the running sum of [`walk`].
+/// Cumulative weights kept chunk by chunk, so that one parallel pass can
+/// build them and resampling can start anywhere. Each chunk has its own
+/// scale (its weights are relative to its own largest one): `cum[i]` is the
+/// running sum of the weights of `i`'s chunk up to `i` (inclusive) on that
+/// chunk's scale, `scale[c]` the factor onto the common scale, `prefix[c]`
+/// the total of the chunks before chunk `c` on the common scale (`prefix[0]
+/// = 0`, one entry per chunk plus the grand total,
+/// `prefix[c + 1] = prefix[c] + scale[c] cum[last of c]`), all summed in
+/// particle order. Particle `i` of chunk `c` owns the points in
+/// `[B_{i-1}, B_i)`, `B_i = prefix[c] + scale[c] cum[i]`; the last `B` of a
+/// chunk is the next chunk's prefix, so the `B_i` never decrease and each
+/// point has one owner, whichever range of points a task walks. With a
+/// single chunk of scale 1 `B_i` is the running sum of [`walk`].
 pub(crate) struct ChunkedCumulative<'a> {
-    /// Running sums within each chunk.
-    pub(crate) cum: &'a [f64],
-    /// Chunk totals summed in chunk order, from 0.
-    pub(crate) prefix: &'a [f64],
-    /// Particles per chunk.
-    pub(crate) chunk: usize,
-    /// The last particle with a positive weight: points at or beyond the
-    /// total (round-off) are its.
-    pub(crate) last: usize,
+    cum: &'a [f64],
+    scale: &'a [f64],
+    prefix: &'a [f64],
+    chunk: usize,
+    /// The last particle that owns points: points at or beyond the total
+    /// (round-off) are its.
+    last: usize,
 }
 
-impl ChunkedCumulative<'_> {
+impl<'a> ChunkedCumulative<'a> {
+    /// The running sums `cum` in chunks of `chunk` particles, with their
+    /// scales and prefixes (see the type); the total `prefix[last]` must be
+    /// positive.
+    pub(crate) fn new(cum: &'a [f64], scale: &'a [f64], prefix: &'a [f64], chunk: usize) -> Self {
+        let mut c = Self {
+            cum,
+            scale,
+            prefix,
+            chunk,
+            last: 0,
+        };
+        // the last chunk that adds to the total, and in it the last bound
+        // above its predecessor
+        if let Some(k) = (0..scale.len()).rev().find(|&k| prefix[k + 1] > prefix[k]) {
+            let start = k * chunk;
+            c.last = (start + 1..c.chunk_end(k))
+                .rev()
+                .find(|&i| c.bound(k, i) > c.bound(k, i - 1))
+                .unwrap_or(start);
+        }
+        c
+    }
+
+    /// `B_i` for particle `i` of chunk `c`.
+    #[inline(always)]
+    fn bound(&self, c: usize, i: usize) -> f64 {
+        self.prefix[c] + self.scale[c] * self.cum[i]
+    }
+
     /// The owner of point `p >= 0`: the first particle with `B_i > p`, or
     /// `last` when there is none.
     fn owner(&self, p: f64) -> usize {
@@ -138,11 +169,15 @@ impl ChunkedCumulative<'_> {
         if c + 1 == self.prefix.len() {
             return self.last;
         }
-        let start = c * self.chunk;
-        let end = (start + self.chunk).min(self.cum.len());
-        let base = self.prefix[c];
-        let k = self.cum[start..end].partition_point(|&l| base + l <= p);
+        let (start, end) = (c * self.chunk, self.chunk_end(c));
+        let (base, scale) = (self.prefix[c], self.scale[c]);
+        let k = self.cum[start..end].partition_point(|&l| base + scale * l <= p);
         (start + k).min(self.last)
+    }
+
+    /// One past the last particle of chunk `c`.
+    fn chunk_end(&self, c: usize) -> usize {
+        ((c + 1) * self.chunk).min(self.cum.len())
     }
 
     /// Systematic resampling of the output slots `first..first +
@@ -156,7 +191,8 @@ impl ChunkedCumulative<'_> {
         let mut j = first as f64;
         let mut i = self.owner(u + j * step);
         let mut c = i / self.chunk;
-        let (mut base, mut next) = (self.prefix[c], self.prefix[c + 1]);
+        let mut end = self.chunk_end(c);
+        let (mut base, mut scale, mut next) = (self.prefix[c], self.scale[c], self.prefix[c + 1]);
         for a in ancestors.iter_mut() {
             let p = u + j * step;
             j += 1.0;
@@ -168,12 +204,20 @@ impl ChunkedCumulative<'_> {
                 while self.prefix[c + 1] <= p {
                     c += 1;
                 }
-                (base, next) = (self.prefix[c], self.prefix[c + 1]);
+                (base, scale, next) = (self.prefix[c], self.scale[c], self.prefix[c + 1]);
                 i = c * self.chunk;
+                end = self.chunk_end(c);
             }
-            // ends inside chunk c: its last bound is `next > p`
-            while base + self.cum[i] <= p {
+            // ends inside chunk c: its last bound is `next > p`. The bounds
+            // never decrease (sums of non-negative weights, and rounding is
+            // monotone), so when the eighth one ahead is still `<= p` the
+            // seven before it are too: runs of negligible weights are
+            // crossed eight at a time, with the same result
+            while base + scale * self.cum[i] <= p {
                 i += 1;
+                while i + 8 <= end && base + scale * self.cum[i + 7] <= p {
+                    i += 8;
+                }
             }
             *a = i;
         }
@@ -296,30 +340,35 @@ mod tests {
         }
     }
 
-    /// The running sums and chunk prefixes of the filter step.
-    fn chunked(weights: &[f64], chunk: usize) -> (Vec<f64>, Vec<f64>, usize) {
+    /// The running sums, scales and prefixes of the filter step, each
+    /// chunk's weights divided by `2^e` (exact) with `e` of the chunk from
+    /// `exponents` (cycled), its scale `2^e`.
+    fn chunked(weights: &[f64], chunk: usize, exponents: &[i32]) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
         let mut cum = Vec::with_capacity(weights.len());
+        let mut scale = Vec::new();
         let mut prefix = vec![0.0];
-        for c in weights.chunks(chunk) {
+        for (k, c) in weights.chunks(chunk).enumerate() {
+            let f = 2f64.powi(exponents[k % exponents.len()]);
             let mut s = 0.0;
             for &w in c {
-                s += w;
+                s += w / f;
                 cum.push(s);
             }
-            prefix.push(prefix[prefix.len() - 1] + s);
+            scale.push(f);
+            prefix.push(prefix[prefix.len() - 1] + f * s);
         }
-        let last = weights.iter().rposition(|&w| w > 0.0).unwrap();
-        (cum, prefix, last)
+        (cum, scale, prefix)
     }
 
-    fn chunked_systematic(weights: &[f64], chunk: usize, u: f64, task: usize) -> Vec<usize> {
-        let (cum, prefix, last) = chunked(weights, chunk);
-        let c = ChunkedCumulative {
-            cum: &cum,
-            prefix: &prefix,
-            chunk,
-            last,
-        };
+    fn chunked_systematic(
+        weights: &[f64],
+        chunk: usize,
+        exponents: &[i32],
+        u: f64,
+        task: usize,
+    ) -> Vec<usize> {
+        let (cum, scale, prefix) = chunked(weights, chunk, exponents);
+        let c = ChunkedCumulative::new(&cum, &scale, &prefix, chunk);
         let step = prefix[prefix.len() - 1] / weights.len() as f64;
         let mut a = vec![usize::MAX; weights.len()];
         for (t, part) in a.chunks_mut(task).enumerate() {
@@ -344,39 +393,47 @@ mod tests {
             .collect();
         w[5] = 40.0;
         for u in [0.0, 0.37, 1.0 - f64::EPSILON] {
-            let whole = chunked_systematic(&w, w.len(), u, w.len());
+            let whole = chunked_systematic(&w, w.len(), &[0], u, w.len());
             // one chunk: the running sums of `walk`
             let mut seq = vec![0; w.len()];
             let step = w.iter().sum::<f64>() / w.len() as f64;
             walk(&w, &mut seq, |j| u * step + j as f64 * step);
             assert_eq!(whole, seq, "u = {u}");
             for chunk in [1, 7, 64, 256] {
-                let first = chunked_systematic(&w, chunk, u, w.len());
+                let first = chunked_systematic(&w, chunk, &[0], u, w.len());
                 // the same draws (no round-off crossing here), whatever
                 // the output ranges the tasks walk
                 assert_eq!(first, seq, "chunk {chunk}, u = {u}");
                 for task in [1, 3, 64, 999] {
-                    assert_eq!(chunked_systematic(&w, chunk, u, task), first);
+                    assert_eq!(chunked_systematic(&w, chunk, &[0], u, task), first);
+                }
+                // chunks on scales of their own (powers of two: the same
+                // bounds), whatever the tasks
+                for task in [1, 64, 999] {
+                    let scaled = chunked_systematic(&w, chunk, &[3, -40, 0, 700], u, task);
+                    assert_eq!(scaled, first, "chunk {chunk}, u = {u}, task {task}");
                 }
             }
         }
     }
 
     #[test]
-    fn chunked_systematic_points_beyond_the_total_go_to_the_last_weight() {
+    fn chunked_systematic_points_beyond_the_total_go_to_the_last_owner() {
         let w = [0.1, 0.2, 0.3, 0.0, 0.0];
-        let (cum, prefix, last) = chunked(&w, 2);
-        let c = ChunkedCumulative {
-            cum: &cum,
-            prefix: &prefix,
-            chunk: 2,
-            last,
-        };
+        let (cum, scale, prefix) = chunked(&w, 2, &[0, 5]);
+        let c = ChunkedCumulative::new(&cum, &scale, &prefix, 2);
         let mut a = [0; 3];
         c.systematic(0.5, 0.1, 0, &mut a);
         assert_eq!(a, [2, 2, 2]);
         c.systematic(0.0, 0.25, 0, &mut a);
         assert_eq!(a, [0, 1, 2]);
+        // a weight too small to move the running sum owns no point: the
+        // last owner is the one before it
+        let w = [0.5, 1.0, 1e-30, 0.0];
+        let (cum, scale, prefix) = chunked(&w, 4, &[0]);
+        let c = ChunkedCumulative::new(&cum, &scale, &prefix, 4);
+        c.systematic(1.5, 0.1, 0, &mut a);
+        assert_eq!(a, [1, 1, 1]);
     }
 
     #[test]

@@ -385,3 +385,112 @@ fn a_failing_local_filter_names_the_particle() {
         "{r:?}"
     );
 }
+
+/// Particles that stay where they are (their state is their index) and
+/// whose log-likelihood is read from a table: the step's weights can be
+/// checked against a direct computation.
+struct Table(Vec<f64>);
+
+impl StateSpaceModel<1, 1> for Table {
+    fn sample_transition<R: Rng + ?Sized>(
+        &self,
+        x: &SVector<f64, 1>,
+        _: &mut R,
+    ) -> SVector<f64, 1> {
+        *x
+    }
+    fn log_transition(&self, _: &SVector<f64, 1>, _: &SVector<f64, 1>) -> f64 {
+        0.0
+    }
+    fn log_likelihood(&self, x: &SVector<f64, 1>, _: &SVector<f64, 1>) -> f64 {
+        self.0[x[0] as usize]
+    }
+}
+
+/// Log-likelihoods whose chunks of 4 lie on very different scales: chunk
+/// maxima 0, -1, none (all zero), -800 (flushed against the largest) and
+/// -30, with spreads inside each chunk.
+fn scaled_table() -> Table {
+    let inf = f64::NEG_INFINITY;
+    Table(vec![
+        0.0, -0.5, inf, -2.0, // chunk 0
+        -1.0, -1.0, -3.0, -1.7, // chunk 1
+        inf, inf, inf, inf, // chunk 2
+        -800.0, -801.0, -800.5, inf, // chunk 3
+        -30.0, -30.2, -31.0, -29.5, // chunk 4
+    ])
+}
+
+fn index_set(n: usize) -> ParticleSet<SVector<f64, 1>> {
+    ParticleSet::new((0..n).map(|i| Vector1::new(i as f64)).collect()).unwrap()
+}
+
+#[test]
+fn chunks_on_different_scales_give_the_direct_weights() {
+    let table = scaled_table();
+    let n = table.0.len();
+    let pf = ParticleFilter {
+        policy: ResamplePolicy::Never,
+        chunk_size: 4,
+        ..ParticleFilter::default()
+    };
+    let mut set = index_set(n);
+    let report = pf
+        .step(&mut set, &Bootstrap(&table), &Vector1::new(0.0), &[1])
+        .unwrap();
+    // direct: log w_i = -ln n + l_i, normalised over all particles at once
+    let lse = bayestrack_particle::log_sum_exp(&table.0).unwrap();
+    let w: Vec<f64> = table.0.iter().map(|l| (l - lse).exp()).collect();
+    let ess = 1.0 / w.iter().map(|w| w * w).sum::<f64>();
+    assert!((report.log_evidence - (lse - (n as f64).ln())).abs() < 1e-12);
+    assert!(
+        (report.ess - ess).abs() < 1e-12 * ess,
+        "{} vs {ess}",
+        report.ess
+    );
+    for (i, (&got, &l)) in set.log_weights().iter().zip(&table.0).enumerate() {
+        if l == f64::NEG_INFINITY {
+            assert_eq!(got, l, "particle {i}");
+        } else {
+            assert!((got - (l - lse)).abs() < 1e-12, "particle {i}: {got}");
+        }
+    }
+}
+
+#[test]
+fn chunks_on_different_scales_resample_in_proportion_to_the_weights() {
+    let table = scaled_table();
+    let n = table.0.len();
+    let lse = bayestrack_particle::log_sum_exp(&table.0).unwrap();
+    let w: Vec<f64> = table.0.iter().map(|l| (l - lse).exp()).collect();
+    let draws = 4000;
+    for scheme in Resampling::ALL {
+        let pf = ParticleFilter {
+            resampling: scheme,
+            chunk_size: 4,
+            ..ParticleFilter::default()
+        };
+        let mut copies = vec![0usize; n];
+        for k in 0..draws {
+            let mut set = index_set(n);
+            pf.step(&mut set, &Bootstrap(&table), &Vector1::new(0.0), &[2, k])
+                .unwrap();
+            for p in set.particles() {
+                copies[p[0] as usize] += 1;
+            }
+        }
+        for (i, (&c, &wi)) in copies.iter().zip(&w).enumerate() {
+            let expected = (draws as usize * n) as f64 * wi;
+            if wi < 1e-12 {
+                assert_eq!(c, 0, "{scheme:?}: particle {i} of weight {wi:e} drawn");
+            } else {
+                // at most n draws a step: a generous 6 sigma of a binomial
+                let sd = (expected * (1.0 - wi)).sqrt().max(1.0);
+                assert!(
+                    (c as f64 - expected).abs() < 6.0 * sd,
+                    "{scheme:?}: particle {i}: {c} copies, expected {expected:.1}"
+                );
+            }
+        }
+    }
+}
