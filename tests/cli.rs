@@ -179,7 +179,10 @@ fn an_initial_box_outside_the_frame_is_refused() {
     ]);
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(err.contains("outside the 80x60 frame"), "{err}");
+    assert!(
+        err.contains("box 75,10,12,12 (x,y,width,height) is outside the 80x60 frame"),
+        "{err}"
+    );
 }
 
 #[test]

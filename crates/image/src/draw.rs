@@ -16,6 +16,14 @@ pub struct BBox {
     pub height: f64,
 }
 
+/// `x,y,width,height`, the numbers of an OTB ground-truth row (and of the
+/// CLI's `--init`).
+impl std::fmt::Display for BBox {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{},{},{},{}", self.x, self.y, self.width, self.height)
+    }
+}
+
 impl BBox {
     /// A box from OTB numbers.
     pub const fn new(x: f64, y: f64, width: f64, height: f64) -> Self {

@@ -10,13 +10,13 @@ pub enum TrackerError {
     #[error("the tracker was not initialised")]
     NotInitialised,
     /// The initial box has zero (or negative, or non-finite) size.
-    #[error("box {bbox:?} has no area")]
+    #[error("box {bbox} (x,y,width,height) has no area")]
     EmptyBox {
         /// The box.
         bbox: BBox,
     },
     /// The initial box leaves the frame.
-    #[error("box {bbox:?} is outside the {width}x{height} frame")]
+    #[error("box {bbox} (x,y,width,height) is outside the {width}x{height} frame")]
     BoxOutsideFrame {
         /// The box.
         bbox: BBox,
