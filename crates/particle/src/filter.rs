@@ -125,16 +125,21 @@ struct Weighed {
 }
 
 impl Weighed {
+    const ZERO: Self = Self {
+        sum: 0.0,
+        sum2: 0.0,
+    };
+
     /// Weights `exp(l + x - max)` of the log-weights `lw` updated by the
     /// increments `inc` (none: the log-weights alone), into `out`, or with
     /// `cumulative` their running sums. A `max` of minus infinity (no
     /// positive weight) gives zeros.
     fn of(lw: &[f64], inc: Option<&[f64]>, max: f64, out: &mut [f64], cumulative: bool) -> Self {
-        let (mut sum, mut sum2) = (0.0, 0.0);
         if max == f64::NEG_INFINITY {
             out.fill(0.0);
-            return Self { sum, sum2 };
+            return Self::ZERO;
         }
+        let (mut sum, mut sum2) = (0.0, 0.0);
         let mut add = |d: f64, o: &mut f64| {
             // exp_flushed(d) == 0 leaves the sums as they are (adding +0 to
             // a non-negative sum is exact): a branch, not a blend, keeps the
@@ -336,10 +341,7 @@ impl ParticleFilter {
                 let bad = acc.bad(inc, offset);
                 let weighed = match bad {
                     None => Weighed::of(lw, Some(inc), acc.max, out, cumulative),
-                    Some(_) => Weighed {
-                        sum: 0.0,
-                        sum2: 0.0,
-                    },
+                    Some(_) => Weighed::ZERO,
                 };
                 Ok(ChunkPass {
                     max: acc.max,
