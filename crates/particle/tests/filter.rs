@@ -309,10 +309,12 @@ const PINNED_1: f64 = -0.4151795613575894;
 const PINNED_18: f64 = 6.604258955447964;
 const PINNED_19: f64 = 1.5164426129558723;
 
-/// A model whose likelihood is zero everywhere.
-struct Blind;
+/// Particles that stay where they are (their state is their index) and
+/// whose log-likelihood is read from a table: the step's weights can be
+/// checked against a direct computation.
+struct Table(Vec<f64>);
 
-impl StateSpaceModel<1, 1> for Blind {
+impl StateSpaceModel<1, 1> for Table {
     fn sample_transition<R: Rng + ?Sized>(
         &self,
         x: &SVector<f64, 1>,
@@ -324,7 +326,7 @@ impl StateSpaceModel<1, 1> for Blind {
         0.0
     }
     fn log_likelihood(&self, x: &SVector<f64, 1>, _: &SVector<f64, 1>) -> f64 {
-        if x[0] > 100.0 { 0.0 } else { f64::NEG_INFINITY }
+        self.0[x[0] as usize]
     }
 }
 
@@ -332,9 +334,10 @@ impl StateSpaceModel<1, 1> for Blind {
 fn all_zero_weights_are_an_error_or_a_counted_fallback() {
     let mut set = ParticleSet::new(vec![Vector1::new(0.0), Vector1::new(1.0)]).unwrap();
     let z = Vector1::new(0.0);
+    let blind = Table(vec![f64::NEG_INFINITY; 2]);
     let pf = ParticleFilter::default();
     assert_eq!(
-        pf.step(&mut set, &Bootstrap(&Blind), &z, &[0]),
+        pf.step(&mut set, &Bootstrap(&blind), &z, &[0]),
         Err(ParticleError::AllWeightsZero { count: 2 })
     );
     let lenient = ParticleFilter {
@@ -342,7 +345,7 @@ fn all_zero_weights_are_an_error_or_a_counted_fallback() {
         ..pf
     };
     let r = lenient
-        .step(&mut set, &Bootstrap(&Blind), &z, &[0])
+        .step(&mut set, &Bootstrap(&blind), &z, &[0])
         .unwrap();
     assert!(r.degenerate);
     assert!((set.weights()[0] - 0.5).abs() < 1e-12);
@@ -351,7 +354,7 @@ fn all_zero_weights_are_an_error_or_a_counted_fallback() {
         ..pf
     };
     assert!(matches!(
-        bad.step(&mut set, &Bootstrap(&Blind), &z, &[0]),
+        bad.step(&mut set, &Bootstrap(&blind), &z, &[0]),
         Err(ParticleError::InvalidParameter { .. })
     ));
     let bad = ParticleFilter {
@@ -384,27 +387,6 @@ fn a_failing_local_filter_names_the_particle() {
         matches!(r, Err(ParticleError::Proposal { index: 2, .. })),
         "{r:?}"
     );
-}
-
-/// Particles that stay where they are (their state is their index) and
-/// whose log-likelihood is read from a table: the step's weights can be
-/// checked against a direct computation.
-struct Table(Vec<f64>);
-
-impl StateSpaceModel<1, 1> for Table {
-    fn sample_transition<R: Rng + ?Sized>(
-        &self,
-        x: &SVector<f64, 1>,
-        _: &mut R,
-    ) -> SVector<f64, 1> {
-        *x
-    }
-    fn log_transition(&self, _: &SVector<f64, 1>, _: &SVector<f64, 1>) -> f64 {
-        0.0
-    }
-    fn log_likelihood(&self, x: &SVector<f64, 1>, _: &SVector<f64, 1>) -> f64 {
-        self.0[x[0] as usize]
-    }
 }
 
 /// Log-likelihoods whose chunks of 4 lie on very different scales: chunk
