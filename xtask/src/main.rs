@@ -102,7 +102,11 @@ fn print_registry(reg: &[Box<dyn Experiment>]) {
 
 fn run_one(e: &dyn Experiment, opts: &RunOptions) -> Result<(), experiment::ExperimentError> {
     eprintln!("== {} ({}) ==", e.id(), e.source());
-    for table in e.run(opts)? {
+    let start = std::time::Instant::now();
+    let tables = e.run(opts)?;
+    // on stderr, with the progress: stdout stays the same from run to run
+    eprintln!("{} ran in {:.2} s", e.id(), start.elapsed().as_secs_f64());
+    for table in tables {
         println!("{table}");
     }
     println!("files: {}", opts.out.join(e.id()).display());
