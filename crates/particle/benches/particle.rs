@@ -126,28 +126,32 @@ fn bench_bootstrap(c: &mut Criterion) {
                     .unwrap()
             })
             .collect();
+        let mut sets: Vec<_> = (0..2)
+            .map(|_| ParticleSet::new(vec![Vector1::new(1.0); N]).unwrap())
+            .collect();
+        let mut k0 = 0u64;
         b.iter_custom(|iters| {
+            // each filter does half the steps: the time is per particle-step
+            // of the pair (thread start-up is amortised over the steps)
+            let steps = iters.div_ceil(2);
             let start = Instant::now();
             std::thread::scope(|scope| {
-                for (i, pool) in pools.iter().enumerate() {
+                for (i, (pool, set)) in pools.iter().zip(sets.iter_mut()).enumerate() {
                     let (pf, zs) = (&pf, &zs);
-                    // each filter does half the steps: the time is per
-                    // particle-step of the pair
-                    let steps = iters.div_ceil(2);
                     scope.spawn(move || {
                         pool.install(|| {
-                            let mut set = ParticleSet::new(vec![Vector1::new(1.0); N]).unwrap();
-                            for k in 0..steps {
+                            for k in k0..k0 + steps {
                                 let t = (k % 59) as usize + 1;
                                 let m = Model::at(t + 1);
                                 let key = [i as u64, k];
                                 let z = Vector1::new(zs[t]);
-                                black_box(pf.step(&mut set, &Bootstrap(&m), &z, &key).unwrap());
+                                black_box(pf.step(set, &Bootstrap(&m), &z, &key).unwrap());
                             }
                         })
                     });
                 }
             });
+            k0 += steps;
             start.elapsed()
         })
     });
