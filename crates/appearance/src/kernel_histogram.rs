@@ -357,30 +357,7 @@ impl KernelHistogram {
         step: usize,
     ) -> Result<()> {
         Self::check_params(cx, cy, a, b, step)?;
-        self.weights.fill(0.0);
-        self.total = 0.0;
-        let r = map.rect;
-        let (_, x_lo, x_hi) = BinMap::span(cx, a, r.x, r.width);
-        let (_, y_lo, y_hi) = BinMap::span(cy, b, r.y, r.height);
-        if x_lo > x_hi || y_lo > y_hi {
-            return Ok(());
-        }
-        let nbins = self.weights.len();
-        let mut count = 0usize;
-        for y in (y_lo..=y_hi).step_by(step) {
-            let row = (y as usize - r.y) * r.width;
-            for x in (x_lo..=x_hi).step_by(step) {
-                let bin = usize::from(map.bins[row + x as usize - r.x]);
-                if bin >= nbins {
-                    return Err(incompatible(bin, nbins));
-                }
-                self.weights[bin] += 1.0;
-                count += 1;
-            }
-        }
-        self.total = count as f32;
-        self.finish();
-        Ok(())
+        self.uniform(map, (cx, cy), (a, b), None, step)
     }
 
     /// The uniform histogram of the rectangular ring between the box with
@@ -410,26 +387,44 @@ impl KernelHistogram {
                 reason: "the ring's outer box must be larger than the inner (> 1)",
             });
         }
+        let hole = [cx - a, cx + a, cy - b, cy + b];
+        self.uniform(map, (cx, cy), (a * outer, b * outer), Some(hole), step)
+    }
+
+    /// The uniform histogram of every `step`-th pixel of the box with
+    /// centre `c` and half-sizes `half` that lies in the map's region and
+    /// outside `hole` (`[x0, x1, y0, y1]`, inclusive, if any).
+    fn uniform(
+        &mut self,
+        map: &BinMap,
+        c: (f64, f64),
+        half: (f64, f64),
+        hole: Option<[f64; 4]>,
+        step: usize,
+    ) -> Result<()> {
         self.weights.fill(0.0);
         self.total = 0.0;
         let r = map.rect;
-        let (_, x_lo, x_hi) = BinMap::span(cx, a * outer, r.x, r.width);
-        let (_, y_lo, y_hi) = BinMap::span(cy, b * outer, r.y, r.height);
-        let nbins = self.weights.len();
-        let mut count = 0usize;
-        let (ix0, ix1) = (cx - a, cx + a);
-        let (iy0, iy1) = (cy - b, cy + b);
+        let (_, x_lo, x_hi) = BinMap::span(c.0, half.0, r.x, r.width);
+        let (_, y_lo, y_hi) = BinMap::span(c.1, half.1, r.y, r.height);
         if x_lo > x_hi || y_lo > y_hi {
             return Ok(());
         }
+        let nbins = self.weights.len();
+        let mut count = 0usize;
         for y in (y_lo..=y_hi).step_by(step) {
             let yf = y as f64;
-            let inner_row = yf >= iy0 && yf <= iy1;
+            // the hole's columns, on the rows it spans
+            let hole_x = hole
+                .filter(|h| yf >= h[2] && yf <= h[3])
+                .map(|h| (h[0], h[1]));
             let row = (y as usize - r.y) * r.width;
             for x in (x_lo..=x_hi).step_by(step) {
-                let xf = x as f64;
-                if inner_row && xf >= ix0 && xf <= ix1 {
-                    continue;
+                if let Some((x0, x1)) = hole_x {
+                    let xf = x as f64;
+                    if xf >= x0 && xf <= x1 {
+                        continue;
+                    }
                 }
                 let bin = usize::from(map.bins[row + x as usize - r.x]);
                 if bin >= nbins {
