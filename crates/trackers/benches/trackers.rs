@@ -9,7 +9,8 @@ use bayestrack_trackers::{
     MultiTargetConfig, MultiTargetTracker, NccScaleConfig, NccScaleTracker, PfCorrelationConfig,
     PfCorrelationTracker, SearchArea, Tracker,
 };
-use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use criterion::measurement::WallTime;
+use criterion::{BenchmarkGroup, Criterion, Throughput, criterion_group, criterion_main};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
@@ -46,6 +47,29 @@ fn ball_frames(n: usize) -> (Vec<Image<u8>>, BBox) {
     (frames, first)
 }
 
+/// One tracker step per iteration through `frames`, starting again from
+/// the first frame (re-initialised on `first`) at the end.
+fn bench_steps<T: Tracker + ?Sized>(
+    group: &mut BenchmarkGroup<'_, WallTime>,
+    name: &str,
+    tracker: &mut T,
+    frames: &[Image<u8>],
+    first: BBox,
+) {
+    tracker.init(frames[0].view(), first).unwrap();
+    let mut k = 0;
+    group.bench_function(name, |b| {
+        b.iter(|| {
+            k += 1;
+            if k == frames.len() {
+                k = 1;
+                tracker.init(frames[0].view(), first).unwrap();
+            }
+            black_box(tracker.step(black_box(frames[k].view())).unwrap())
+        })
+    });
+}
+
 /// Paper 001's five ball trackers, one step per iteration.
 fn bench_ball(c: &mut Criterion) {
     let (frames, first) = ball_frames(120);
@@ -53,18 +77,8 @@ fn bench_ball(c: &mut Criterion) {
     group.throughput(Throughput::Elements(1));
     for filter in BallFilter::PAPER {
         let mut tracker = BallTracker::new(filter, BallConfig::default(), 7).unwrap();
-        tracker.init(frames[0].view(), first).unwrap();
-        let mut k = 0;
-        group.bench_function(format!("{} step", filter.label()), |b| {
-            b.iter(|| {
-                k += 1;
-                if k == frames.len() {
-                    k = 1;
-                    tracker.init(frames[0].view(), first).unwrap();
-                }
-                black_box(tracker.step(black_box(frames[k].view())).unwrap())
-            })
-        });
+        let name = format!("{} step", filter.label());
+        bench_steps(&mut group, &name, &mut tracker, &frames, first);
     }
     group.finish();
 }
@@ -140,18 +154,7 @@ fn bench_road(c: &mut Criterion) {
         ),
     ];
     for (name, mut tracker) in trackers {
-        tracker.init(frames[0].view(), first).unwrap();
-        let mut k = 0;
-        group.bench_function(name, |b| {
-            b.iter(|| {
-                k += 1;
-                if k == frames.len() {
-                    k = 1;
-                    tracker.init(frames[0].view(), first).unwrap();
-                }
-                black_box(tracker.step(black_box(frames[k].view())).unwrap())
-            })
-        });
+        bench_steps(&mut group, name, tracker.as_mut(), &frames, first);
     }
     let (bg, frames, _) = road_frames(20, 2);
     let mut multi = MultiTargetTracker::new(MultiTargetConfig::default(), bg.view()).unwrap();
@@ -225,18 +228,7 @@ fn bench_street(c: &mut Criterion) {
         ),
     ];
     for (name, mut tracker) in trackers {
-        tracker.init(frames[0].view(), first).unwrap();
-        let mut k = 0;
-        group.bench_function(name, |b| {
-            b.iter(|| {
-                k += 1;
-                if k == frames.len() {
-                    k = 1;
-                    tracker.init(frames[0].view(), first).unwrap();
-                }
-                black_box(tracker.step(black_box(frames[k].view())).unwrap())
-            })
-        });
+        bench_steps(&mut group, name, tracker.as_mut(), &frames, first);
     }
     group.finish();
 }
