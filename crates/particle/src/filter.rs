@@ -350,10 +350,7 @@ impl ParticleFilter {
                 })
             })
             .collect();
-        let mut chunks = Vec::with_capacity(passes.len());
-        for pass in passes {
-            chunks.push(pass?);
-        }
+        let mut chunks = passes.into_iter().collect::<Result<Vec<ChunkPass>>>()?;
         if let Some((index, value)) = chunks.iter().find_map(|c| c.bad) {
             return Err(ParticleError::NonFiniteWeight { index, value });
         }
