@@ -18,3 +18,6 @@ pub use pose::{FeatureKind, PoseConfig, PoseEstimator, pose_error};
 pub mod shape_space;
 
 pub use shape_space::{ShapeSpace, ShapeVector};
+pub mod bspline;
+
+pub use bspline::{BSplineDegree, ClosedBSpline, shape_affine};

@@ -1,0 +1,403 @@
+//! Point-cloud particles (Lee, Jo and Kang 2005, sec. 2.4 and 3.1).
+//!
+//! A particle is a point with its previous position,
+//! `X = [x, y, x_prev, y_prev]`, moved by the second-order dynamics of
+//! eq. 10 (see the module docs of `condensation` for `A` and `B`) with
+//! `sigma_x = sigma_y` = [`PointCloudConfig::sigma`].
+//!
+//! **Support.** Eq. 9 sums the cues over "the particle's points"
+//! `(x_P, y_P) in dP_i`, which the paper does not define further. We take
+//! the `(2r + 1) x (2r + 1)` window of pixels centred on the particle's
+//! rounded position, `r` = [`PointCloudConfig::support_radius`], clipped
+//! to the frame: the pixels the particle stands for. The weight is
+//! `mean_S dP + lambda mean_S C` (the window's mean, which is eq. 9's sum
+//! divided by the constant `|S|` away from the border), through the
+//! `IfdCue` and `SkinCue` windows and the OR `Fusion` of
+//! `bayestrack-appearance`. A particle whose centre leaves the frame gets
+//! zero weight (sec. 2.3).
+
+use bayestrack_appearance::{Candidate, Frame, IfdCue, SkinCue, SkinModel};
+use bayestrack_image::{BBox, ImageView, Rect};
+use bayestrack_particle::stream_rng;
+use nalgebra::{SVector, Vector4};
+use rand::{Rng, RngExt};
+
+use super::{
+    CAvq, CAvqConfig, Condensation, CueSet, Engine, FLOOR, ObjectFilter, ObjectStep, Planes,
+    check_channels, check_damping, check_particles, check_positive, frame_planes, second_order,
+};
+use crate::error::{Result, TrackerError};
+use crate::tracker::{Estimate, FrameGuard, Tracker, check_initial_box};
+
+/// Key of the random streams ("c-points" in ASCII).
+const KEY: u64 = 0x632d_706f_696e_7473;
+
+/// Settings of [`PointCloudTracker`]; `Default` is sec. 3.1.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PointCloudConfig {
+    /// `N`, particles (50).
+    pub particles: usize,
+    /// The cues and their fusion (OR, eq. 9, `lambda = 1/N`).
+    pub cues: CueSet,
+    /// `sigma_x = sigma_y`, the diffusion in pixels per frame (30).
+    pub sigma: f64,
+    /// `rho` of eq. 10 (1/2; see the `condensation` module docs).
+    pub velocity_damping: f64,
+    /// `r`: a particle's support is the `(2r + 1)^2` window around it (4).
+    pub support_radius: usize,
+    /// `sigma_hs` of the skin model, eq. 8 (0.05).
+    pub sigma_hs: f64,
+    /// Selection (roulette wheel when `sum pi^2 > 2/N`).
+    pub condensation: Condensation,
+    /// c-AVQ re-initialisation from the border stripes (sec. 4); off by
+    /// default (a single-target tracker would otherwise jump to anything
+    /// that enters the frame).
+    pub avq: Option<CAvqConfig>,
+}
+
+impl Default for PointCloudConfig {
+    fn default() -> Self {
+        Self::paper(50)
+    }
+}
+
+impl PointCloudConfig {
+    /// Sec. 3.1 with `n` particles: OR fusion with `lambda = 1/n`,
+    /// `sigma_x = sigma_y = 30`, `sigma_hs = 0.05`, selection threshold
+    /// `2/n`.
+    pub fn paper(n: usize) -> Self {
+        Self {
+            particles: n,
+            cues: CueSet::Or {
+                lambda: 1.0 / n.max(1) as f64,
+            },
+            sigma: 30.0,
+            velocity_damping: 0.5,
+            support_radius: 4,
+            sigma_hs: 0.05,
+            condensation: Condensation::POINT_CLOUD,
+            avq: None,
+        }
+    }
+
+    /// Checks every field.
+    ///
+    /// # Errors
+    /// [`TrackerError::InvalidParameter`] naming the bad field.
+    pub fn validate(&self) -> Result<()> {
+        check_particles(self.particles)?;
+        self.cues.check()?;
+        check_positive("sigma", self.sigma)?;
+        check_positive("sigma_hs", self.sigma_hs)?;
+        check_damping(self.velocity_damping)?;
+        self.condensation.validate()?;
+        if let Some(a) = &self.avq {
+            a.validate()?;
+        }
+        Ok(())
+    }
+}
+
+/// The point-cloud model of one object.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct PointModel {
+    sigma: f64,
+    rho: f64,
+    radius: usize,
+    condensation: Condensation,
+    frame: (usize, usize),
+    size: (f64, f64),
+}
+
+impl PointModel {
+    /// Particles uniform over `target`, at rest, with the cue of `config`.
+    pub(super) fn object<R: Rng + ?Sized>(
+        config: &PointCloudConfig,
+        frame: ImageView<'_, u8>,
+        target: BBox,
+        rng: &mut R,
+    ) -> Result<ObjectFilter> {
+        let rect = target
+            .to_rect(frame.width(), frame.height())
+            .ok_or(TrackerError::BoxOutsideFrame {
+                bbox: target,
+                width: frame.width(),
+                height: frame.height(),
+            })?;
+        let skin = if config.cues.uses_skin() {
+            let model = SkinModel::from_window(frame, rect, config.sigma_hs)?;
+            Some(SkinCue::new(model, FLOOR, 1)?)
+        } else {
+            None
+        };
+        let cue = config.cues.build(IfdCue::new(FLOOR, 1)?, skin)?;
+        let (x0, y0) = (target.x - 1.0, target.y - 1.0);
+        let particles = (0..config.particles)
+            .map(|_| {
+                let x = x0 + target.width * rng.random::<f64>() - 0.5;
+                let y = y0 + target.height * rng.random::<f64>() - 0.5;
+                Vector4::new(x, y, x, y)
+            })
+            .collect();
+        let model = PointModel {
+            sigma: config.sigma,
+            rho: config.velocity_damping,
+            radius: config.support_radius,
+            condensation: config.condensation,
+            frame: (frame.width(), frame.height()),
+            size: (target.width, target.height),
+        };
+        Ok(ObjectFilter::Points(model, Engine::new(particles, cue)?))
+    }
+
+    /// The support window of a particle, `None` when its centre is off the
+    /// frame.
+    #[inline]
+    fn support(&self, s: &SVector<f64, 4>) -> Option<Candidate> {
+        let (w, h) = self.frame;
+        let (cx, cy) = (s[0].round(), s[1].round());
+        if !(cx >= 0.0 && cy >= 0.0 && cx < w as f64 && cy < h as f64) {
+            return None;
+        }
+        let (cx, cy, r) = (cx as usize, cy as usize, self.radius);
+        let (x0, y0) = (cx.saturating_sub(r), cy.saturating_sub(r));
+        let (x1, y1) = ((cx + r + 1).min(w), (cy + r + 1).min(h));
+        Some(Candidate::Window(Rect::new(x0, y0, x1 - x0, y1 - y0)))
+    }
+
+    pub(super) fn step<R: Rng + ?Sized>(
+        &self,
+        engine: &mut Engine<4>,
+        frame: &Frame<'_>,
+        rng: &mut R,
+    ) -> Result<ObjectStep> {
+        let (sigma, rho) = (self.sigma, self.rho);
+        let report = engine.step(
+            &self.condensation,
+            frame,
+            rng,
+            |p, rng| {
+                let (x, xp) = second_order(p[0], p[2], rho, sigma, rng);
+                let (y, yp) = second_order(p[1], p[3], rho, sigma, rng);
+                *p = Vector4::new(x, y, xp, yp);
+            },
+            |p| self.support(p),
+        )?;
+        let m = engine.mean();
+        let (w, h) = self.size;
+        Ok(ObjectStep {
+            centre: (m[0], m[1]),
+            // OTB centre = 0-based centre + 1.
+            bbox: BBox::new(m[0] + 1.0 - (w - 1.0) / 2.0, m[1] + 1.0 - (h - 1.0) / 2.0, w, h),
+            pose: None,
+            report,
+        })
+    }
+}
+
+/// Lee, Jo and Kang (2005) sec. 3.1: CONDENSATION (Isard and Blake 1998)
+/// with point-cloud particles weighted by IFD OR skin colour (eq. 9).
+/// Position only: the box keeps the initial size.
+///
+/// Frames: RGB, or gray with [`CueSet::Ifd`] (a skin cue on a gray frame is
+/// [`TrackerError::Channels`]).
+#[derive(Debug)]
+pub struct PointCloudTracker {
+    config: PointCloudConfig,
+    seed: u64,
+    k: u64,
+    guard: FrameGuard,
+    planes: Planes,
+    object: Option<ObjectFilter>,
+    avq: Option<CAvq>,
+    reinitialised: bool,
+}
+
+impl PointCloudTracker {
+    /// A tracker with `config`, its random streams keyed by `seed`.
+    ///
+    /// # Errors
+    /// [`TrackerError::InvalidParameter`] for a bad configuration.
+    pub fn new(config: PointCloudConfig, seed: u64) -> Result<Self> {
+        config.validate()?;
+        Ok(Self {
+            config,
+            seed,
+            k: 0,
+            guard: FrameGuard::default(),
+            planes: Planes::new()?,
+            object: None,
+            avq: config.avq.map(CAvq::new).transpose()?,
+            reinitialised: false,
+        })
+    }
+
+    /// The settings.
+    pub fn config(&self) -> &PointCloudConfig {
+        &self.config
+    }
+
+    /// The particles `[x, y, x_prev, y_prev]` (0-based pixels), once
+    /// initialised.
+    pub fn particles(&self) -> Option<&[Vector4<f64>]> {
+        match &self.object {
+            Some(ObjectFilter::Points(_, e)) => Some(e.set.particles()),
+            _ => None,
+        }
+    }
+
+    /// The normalised weights `pi_i`, once initialised.
+    pub fn weights(&self) -> Option<Vec<f64>> {
+        match &self.object {
+            Some(ObjectFilter::Points(_, e)) => Some(e.set.weights()),
+            _ => None,
+        }
+    }
+
+    /// The last frame's IFD map (eq. 7).
+    pub fn ifd(&self) -> ImageView<'_, f32> {
+        self.planes.ifd.view()
+    }
+
+    /// Whether c-AVQ moved the set in the last step.
+    pub fn reinitialised(&self) -> bool {
+        self.reinitialised
+    }
+}
+
+impl Tracker for PointCloudTracker {
+    fn name(&self) -> &'static str {
+        "condensation-points"
+    }
+
+    fn init(&mut self, frame: ImageView<'_, u8>, target: BBox) -> Result<()> {
+        check_channels(self.name(), self.config.cues, &frame)?;
+        check_initial_box(target, frame.width(), frame.height())?;
+        let mut rng = stream_rng(&[KEY, self.seed, u64::MAX]);
+        self.object = Some(PointModel::object(&self.config, frame, target, &mut rng)?);
+        self.planes.start(frame)?;
+        self.guard.start(&frame);
+        self.k = 0;
+        Ok(())
+    }
+
+    fn step(&mut self, frame: ImageView<'_, u8>) -> Result<Estimate> {
+        self.guard.check(&frame)?;
+        check_channels(self.name(), self.config.cues, &frame)?;
+        let object = self.object.as_mut().ok_or(TrackerError::NotInitialised)?;
+        let mut rng = stream_rng(&[KEY, self.seed, self.k]);
+        self.k += 1;
+        self.planes.update(frame)?;
+        self.reinitialised = false;
+        if let Some(avq) = &mut self.avq
+            && let Some((dx, dy)) = avq.reinitialise(self.planes.ifd.view(), object.centre())
+        {
+            object.shift(dx, dy);
+            self.reinitialised = true;
+        }
+        let planes = frame_planes(frame, self.planes.ifd.view());
+        let s = object.step(&planes, &mut rng)?;
+        Ok(Estimate {
+            bbox: s.bbox,
+            pose: None,
+            particles: object.len(),
+            evaluations: s.report.evaluations,
+            lost: s.report.lost(),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use bayestrack_image::Image;
+
+    #[test]
+    fn support_is_the_clipped_window_and_off_frame_is_impossible() {
+        let m = PointModel {
+            sigma: 1.0,
+            rho: 0.5,
+            radius: 2,
+            condensation: Condensation::POINT_CLOUD,
+            frame: (20, 10),
+            size: (5.0, 5.0),
+        };
+        let at = |x, y| m.support(&Vector4::new(x, y, x, y));
+        assert_eq!(
+            at(10.0, 5.0),
+            Some(Candidate::Window(Rect::new(8, 3, 5, 5)))
+        );
+        assert_eq!(at(0.2, 0.4), Some(Candidate::Window(Rect::new(0, 0, 3, 3))));
+        assert_eq!(
+            at(19.4, 9.0),
+            Some(Candidate::Window(Rect::new(17, 7, 3, 3)))
+        );
+        assert_eq!(at(-0.6, 5.0), None);
+        assert_eq!(at(19.6, 5.0), None);
+        assert_eq!(at(f64::NAN, 5.0), None);
+    }
+
+    #[test]
+    fn bad_configs_and_frames_are_typed_errors() {
+        for bad in [
+            PointCloudConfig {
+                particles: 0,
+                ..Default::default()
+            },
+            PointCloudConfig {
+                sigma: -1.0,
+                ..Default::default()
+            },
+            PointCloudConfig {
+                cues: CueSet::Or { lambda: 0.0 },
+                ..Default::default()
+            },
+            PointCloudConfig {
+                velocity_damping: 2.0,
+                ..Default::default()
+            },
+        ] {
+            assert!(matches!(
+                PointCloudTracker::new(bad, 0),
+                Err(TrackerError::InvalidParameter { .. })
+            ));
+        }
+        let mut t = PointCloudTracker::new(PointCloudConfig::default(), 0).unwrap();
+        let gray = Image::new(40, 30, 1, 0u8).unwrap();
+        assert!(matches!(
+            t.step(gray.view()),
+            Err(TrackerError::NotInitialised)
+        ));
+        // A skin cue on a gray frame is a typed error, not a panic.
+        assert!(matches!(
+            t.init(gray.view(), BBox::new(5.0, 5.0, 10.0, 10.0)),
+            Err(TrackerError::Channels { got: 1, .. })
+        ));
+        // IFD alone works on gray frames.
+        let mut ifd = PointCloudTracker::new(
+            PointCloudConfig {
+                cues: CueSet::Ifd,
+                ..Default::default()
+            },
+            0,
+        )
+        .unwrap();
+        ifd.init(gray.view(), BBox::new(5.0, 5.0, 10.0, 10.0))
+            .unwrap();
+        let e = ifd.step(gray.view()).unwrap();
+        assert!(e.lost, "no motion, no evidence");
+        assert!(e.bbox.x.is_finite());
+        let other = Image::new(41, 30, 1, 0u8).unwrap();
+        assert!(matches!(
+            ifd.step(other.view()),
+            Err(TrackerError::FrameSizeChanged { .. })
+        ));
+        let rgb = Image::new(40, 30, 3, 128u8).unwrap();
+        // A gray box has no skin hue to learn.
+        assert!(t.init(rgb.view(), BBox::new(5.0, 5.0, 10.0, 10.0)).is_err());
+        assert!(matches!(
+            t.init(rgb.view(), BBox::new(35.0, 5.0, 10.0, 10.0)),
+            Err(TrackerError::BoxOutsideFrame { .. })
+        ));
+    }
+}
