@@ -131,6 +131,14 @@ impl PoseEstimator {
         &self.model
     }
 
+    /// The patch `O(M)` warped by the last successful call to
+    /// [`PoseEstimator::features`] (or [`PoseEstimator::predict_increment`]),
+    /// row-major `patch_size x patch_size` grey values: a tracker can score
+    /// the pose it just tuned from it without warping the frame again.
+    pub fn patch(&self) -> &[f32] {
+        &self.patch
+    }
+
     /// Feature dimension.
     pub fn feature_dim(&self) -> usize {
         self.feat.len()

@@ -261,6 +261,24 @@ impl TargetModel {
         score: f64,
         background_scores: &[f64],
     ) -> Result<bool> {
+        self.update_above(patch, score, background_scores, self.update_threshold())
+    }
+
+    /// [`TargetModel::update`] with the caller's threshold in place of
+    /// `mu_B + sigma_B` (paper 002 prints the update condition both as
+    /// `mu_B + sigma_B`, section 1, and as `mu_B - sigma_B`, Algorithm 1
+    /// step 7): updates only if `score > threshold`.
+    ///
+    /// # Errors
+    /// As [`TargetModel::update`]; also [`AppearanceError::NonFinite`] for a
+    /// NaN threshold.
+    pub fn update_above(
+        &mut self,
+        patch: ImageView<'_, f32>,
+        score: f64,
+        background_scores: &[f64],
+        threshold: f64,
+    ) -> Result<bool> {
         if patch.width() != self.template.width() || patch.height() != self.template.height() {
             return Err(AppearanceError::WindowSize {
                 operation: "TargetModel::update",
@@ -277,7 +295,10 @@ impl TargetModel {
         if (0..patch.height()).any(|y| patch.row(y).iter().any(|v| !v.is_finite())) {
             return Err(AppearanceError::NonFinite { what: "patch" });
         }
-        if score <= self.update_threshold() {
+        if threshold.is_nan() {
+            return Err(AppearanceError::NonFinite { what: "threshold" });
+        }
+        if score <= threshold {
             return Ok(false);
         }
         let a = self.template_rate;

@@ -1,0 +1,156 @@
+//! HKPF: the hierarchical Kalman-particle filter of Yin, Na, Choi and Oh
+//! (2011), as paper 002 (Xu, Gao and Yang 2015, sections 0-2) describes it:
+//! coarse then fine, no pose tuning.
+
+use bayestrack_affine::{Affine2, AlgebraVector, BrownianDynamics, dynamics};
+use bayestrack_image::{BBox, ImageView};
+
+use super::{AppearanceConfig, Core, FrameStats, Region, RegionConfig, ScoredPose};
+use crate::error::{Result, TrackerError};
+use crate::tracker::{Estimate, Tracker};
+
+const NAME: &str = "hkpf";
+/// Key of the random streams ("hkpf" in ASCII).
+const KEY: u64 = 0x686b_7066;
+
+/// Parameters of [`HkpfTracker`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct HkpfConfig {
+    /// Particles per frame (100; paper 002 ran 150, 100 and 50 on its three
+    /// sequences).
+    pub particles: usize,
+    /// The Kalman filter and the region.
+    pub region: RegionConfig,
+    /// Standard deviations of the pose generators A1..A4 (scale, aspect,
+    /// rotation, skew) in `Psi_k` ((0.02, 0.015, 0.03, 0.015): half the pose
+    /// estimator's training spread, the same as the self-tuning filter's).
+    pub pose_sigma: [f64; 4],
+    /// Observation and appearance model (the pose estimator is not used).
+    pub appearance: AppearanceConfig,
+}
+
+impl Default for HkpfConfig {
+    fn default() -> Self {
+        Self {
+            particles: 100,
+            region: RegionConfig::default(),
+            pose_sigma: [0.02, 0.015, 0.03, 0.015],
+            appearance: AppearanceConfig::default(),
+        }
+    }
+}
+
+impl HkpfConfig {
+    /// Checks every parameter.
+    ///
+    /// # Errors
+    /// [`TrackerError::InvalidParameter`] naming the first bad one.
+    pub fn validate(&self) -> Result<()> {
+        if self.particles == 0 || self.particles > 1 << 16 {
+            return Err(TrackerError::InvalidParameter {
+                name: "particles",
+                value: self.particles as f64,
+                reason: "must be in 1..=65536",
+            });
+        }
+        self.region.validate()?;
+        super::check_pose_sigma("pose_sigma", &self.pose_sigma)?;
+        self.appearance.validate()
+    }
+}
+
+/// The hierarchical Kalman-particle filter (Yin et al. 2011).
+///
+/// Each frame: the Kalman filter predicts the displacement `d_k` and the
+/// region ([`RegionConfig`]; widened after a manoeuvre); `particles` poses
+/// `M_i = exp(d_k(1) A5 + d_k(2) A6) M_{k-1} exp(Omega_i)`,
+/// `Omega_i ~ N(0, Psi_k)` (eq. 4-5), are scored by their similarity; the
+/// best one is the estimate `M*` (eq. 2) and its centre the Kalman
+/// measurement. The template, TSD and BSD are updated as for the
+/// self-tuning filter; there is no pose estimator.
+#[derive(Debug, Clone)]
+pub struct HkpfTracker {
+    config: HkpfConfig,
+    core: Core,
+    region: Option<Region>,
+}
+
+impl HkpfTracker {
+    /// A tracker with `config`, its random streams keyed by `seed`.
+    ///
+    /// # Errors
+    /// [`TrackerError::InvalidParameter`] for a bad configuration.
+    pub fn new(config: HkpfConfig, seed: u64) -> Result<Self> {
+        config.validate()?;
+        let core = Core::new(NAME, KEY, seed, config.appearance.clone())?;
+        Ok(Self {
+            config,
+            core,
+            region: None,
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &HkpfConfig {
+        &self.config
+    }
+
+    /// The current pose estimate `M*` (`None` before `init`).
+    pub fn pose(&self) -> Option<Affine2> {
+        self.region.as_ref().map(|_| self.core.pose)
+    }
+
+    /// The particles of the last frame with their similarities.
+    pub fn particles(&self) -> &[ScoredPose] {
+        &self.core.scored
+    }
+
+    /// What the last frame cost.
+    pub fn stats(&self) -> FrameStats {
+        self.core.stats
+    }
+
+    /// The appearance model (`None` before `init`).
+    pub fn model(&self) -> Option<&bayestrack_appearance::TargetModel> {
+        self.core.model()
+    }
+}
+
+impl Tracker for HkpfTracker {
+    fn name(&self) -> &'static str {
+        NAME
+    }
+
+    fn init(&mut self, frame: ImageView<'_, u8>, target: BBox) -> Result<()> {
+        self.region = None;
+        let centre = self.core.init(&frame, target, false)?;
+        self.region = Some(Region::new(self.config.region, centre)?);
+        Ok(())
+    }
+
+    fn step(&mut self, frame: ImageView<'_, u8>) -> Result<Estimate> {
+        let region = self.region.as_mut().ok_or(TrackerError::NotInitialised)?;
+        let core = &mut self.core;
+        core.begin(&frame)?;
+        let mut rng = core.frame_rng();
+        core.stats.manoeuvre = region.manoeuvre();
+        let m_prev = core.pose;
+        let (d, psi) = region.predict(&m_prev, &self.config.pose_sigma)?;
+        let dynamics = BrownianDynamics::new(psi)?;
+        for _ in 0..self.config.particles {
+            let m = dynamics.propagate(&m_prev, d, &mut rng)?;
+            let similarity = core.score(&m)?.unwrap_or(f64::NEG_INFINITY);
+            core.scored.push(ScoredPose {
+                pose: m,
+                similarity,
+            });
+        }
+        core.stats.particles = self.config.particles;
+        core.stats.batches = 1;
+        core.stats.stop_threshold = f64::INFINITY;
+        let fallback = dynamics::step(&m_prev, d, &AlgebraVector::zeros())?;
+        let best = core.best();
+        region.update(best.map(|b| b.pose.offset()))?;
+        core.finish(fallback, false, &mut rng)
+    }
+}
