@@ -14,7 +14,11 @@
 //! `E[x_t] = w_i*`.
 //!
 //! Our reading of the unstated parts, each a named field of [`CAvqConfig`]:
-//! a pixel is "IFD data" when `dP > ifd_threshold`; the clusters start
+//! a pixel is "IFD data" when `dP > ifd_threshold`; the threshold applies
+//! to each side's stripe on its own (an object enters through one side, and
+//! a uniform object's IFD is only its edge band, far below 3 % of all four
+//! stripes together); the IFD pixels of all stripes are clustered; the
+//! clusters start
 //! equally spaced along the stripes' mid-line (so each border side has its
 //! own), the stripe pixels are presented in a fixed scrambled order (a
 //! golden-ratio stride through the raster list) for `epochs` passes, and the winner is the cluster that won the most pixels in the
@@ -31,10 +35,12 @@ use crate::error::{Result, TrackerError};
 pub struct CAvqConfig {
     /// Width of the border stripes in pixels (8).
     pub stripe_width: usize,
-    /// A stripe pixel is IFD data when `dP` exceeds this (0.1, on `[0, 1]`).
+    /// A stripe pixel is IFD data when `dP` exceeds this (0.05 on `[0, 1]`,
+    /// 13 grey levels: well above a webcam's frame-to-frame noise of a few
+    /// levels).
     pub ifd_threshold: f32,
-    /// Re-initialise when more than this share of the stripe pixels are IFD
-    /// data (0.035: the paper's 3-4 %).
+    /// Re-initialise when more than this share of one side's stripe pixels
+    /// are IFD data (0.035: the paper's 3-4 %).
     pub trigger_fraction: f64,
     /// Number of clusters (4: one per border side to start with).
     pub clusters: usize,
@@ -51,7 +57,7 @@ impl Default for CAvqConfig {
     fn default() -> Self {
         Self {
             stripe_width: 8,
-            ifd_threshold: 0.1,
+            ifd_threshold: 0.05,
             trigger_fraction: 0.035,
             clusters: 4,
             learning_rate: 0.05,
@@ -85,7 +91,11 @@ impl CAvqConfig {
             );
         }
         if !(0.0..1.0).contains(&self.trigger_fraction) {
-            return bad("trigger_fraction", self.trigger_fraction, "must be in [0, 1)");
+            return bad(
+                "trigger_fraction",
+                self.trigger_fraction,
+                "must be in [0, 1)",
+            );
         }
         if self.clusters == 0 {
             return bad("clusters", 0.0, "must be at least 1");
@@ -148,7 +158,8 @@ impl CAvq {
         &self.config
     }
 
-    /// The share of stripe pixels that were IFD data in the last call.
+    /// The largest share of IFD pixels among the four side stripes in the
+    /// last call.
     pub fn last_fraction(&self) -> f64 {
         self.fraction
     }
@@ -158,35 +169,43 @@ impl CAvq {
         self.winner.map(|[x, y]| (x, y))
     }
 
-    /// Collects the stripe pixels above the IFD threshold; returns their
-    /// share of the stripe pixels.
+    /// Collects the stripe pixels above the IFD threshold; returns the
+    /// largest share of IFD pixels among the four side stripes (each side
+    /// is the full `stripe_width`-wide band along that border, corners
+    /// counted in both sides they touch).
     fn collect(&mut self, ifd: ImageView<'_, f32>) -> f64 {
         let (w, h) = (ifd.width(), ifd.height());
-        let s = self.config.stripe_width.min(w.div_ceil(2)).min(h.div_ceil(2));
+        let s = self
+            .config
+            .stripe_width
+            .min(w.div_ceil(2))
+            .min(h.div_ceil(2));
         let t = self.config.ifd_threshold;
         self.active.clear();
-        let mut total = 0usize;
+        // Active pixels per side: top, bottom, left, right.
+        let mut count = [0usize; 4];
         for y in 0..h {
             let row = ifd.row(y);
-            let full = y < s || y + s >= h;
-            let mut visit = |x: usize| {
-                total += 1;
-                if row[x] > t {
-                    self.active.push([x as f64, y as f64]);
+            let (top, bottom) = (y < s, y + s >= h);
+            for (x, &v) in row.iter().enumerate() {
+                let (left, right) = (x < s, x + s >= w);
+                if !(top || bottom || left || right) {
+                    continue;
                 }
-            };
-            if full {
-                (0..w).for_each(&mut visit);
-            } else {
-                (0..s).for_each(&mut visit);
-                (w.saturating_sub(s).max(s)..w).for_each(&mut visit);
+                if v > t {
+                    self.active.push([x as f64, y as f64]);
+                    for (c, on) in count.iter_mut().zip([top, bottom, left, right]) {
+                        *c += usize::from(on);
+                    }
+                }
             }
         }
-        if total == 0 {
-            0.0
-        } else {
-            self.active.len() as f64 / total as f64
-        }
+        let sizes = [s * w, s * w, s * h, s * h];
+        count
+            .iter()
+            .zip(sizes)
+            .map(|(&c, n)| if n == 0 { 0.0 } else { c as f64 / n as f64 })
+            .fold(0.0, f64::max)
     }
 
     /// The clusters' starting centres: equally spaced along the mid-line of
@@ -256,7 +275,8 @@ impl CAvq {
                 }
             }
         }
-        let best = (0..self.wins.len()).fold(0, |b, j| if self.wins[j] > self.wins[b] { j } else { b });
+        let best =
+            (0..self.wins.len()).fold(0, |b, j| if self.wins[j] > self.wins[b] { j } else { b });
         Some(self.centres[best])
     }
 
@@ -291,12 +311,12 @@ mod tests {
     #[test]
     fn a_blob_in_the_left_stripe_wins_and_quiet_stripes_do_not_trigger() {
         let mut avq = CAvq::new(CAvqConfig::default()).unwrap();
-        // 100 x 80: stripes of 8 px hold 100*16 + 64*16 = 2624 pixels.
+        // 100 x 80: the left stripe of 8 px holds 640 pixels.
         let quiet = Image::new(100, 80, 1, 0.0f32).unwrap();
         assert_eq!(avq.reinitialise(quiet.view(), (50.0, 40.0)), None);
         assert_eq!(avq.last_fraction(), 0.0);
         // Motion in the left stripe, rows 30..50, columns 0..8 (160 px,
-        // 6.1 %), plus a few pixels of noise on the right (below 1 %).
+        // 25 %), plus a few pixels of noise on the right (below 1 %).
         let ifd = Image::from_fn(100, 80, |x, y| {
             if (x < 8 && (30..50).contains(&y)) || (x == 99 && y < 5) {
                 0.5f32
@@ -307,13 +327,20 @@ mod tests {
         .unwrap();
         let (dx, dy) = avq.reinitialise(ifd.view(), (50.0, 40.0)).unwrap();
         let (wx, wy) = avq.last_winner().unwrap();
-        assert!((wx - 3.5).abs() < 2.0 && (wy - 39.5).abs() < 3.0, "{wx} {wy}");
+        assert!(
+            (wx - 3.5).abs() < 2.0 && (wy - 39.5).abs() < 3.0,
+            "{wx} {wy}"
+        );
         assert!(((50.0 + dx) - wx).abs() < 1e-9 && ((40.0 + dy) - wy).abs() < 1e-9);
         // The estimate already there: no shift.
         assert_eq!(avq.reinitialise(ifd.view(), (5.0, 40.0)), None);
         // Below the trigger: 20 px of 2624 (0.8 %).
         let small = Image::from_fn(100, 80, |x, y| {
-            if x < 2 && (30..40).contains(&y) { 0.5f32 } else { 0.0 }
+            if x < 2 && (30..40).contains(&y) {
+                0.5f32
+            } else {
+                0.0
+            }
         })
         .unwrap();
         assert_eq!(avq.reinitialise(small.view(), (50.0, 40.0)), None);

@@ -227,7 +227,13 @@ impl CurveCue {
 
     /// Sum of `value(x, y)` over the mapped points inside a `w x h` frame.
     #[inline]
-    fn sum(&self, pose: &Affine2, w: usize, h: usize, mut value: impl FnMut(usize, usize) -> f32) -> f64 {
+    fn sum(
+        &self,
+        pose: &Affine2,
+        w: usize,
+        h: usize,
+        mut value: impl FnMut(usize, usize) -> f32,
+    ) -> f64 {
         let m = pose.as_array();
         let (wf, hf) = (w as f64 - 0.5, h as f64 - 0.5);
         let mut s = 0f32;
@@ -350,13 +356,14 @@ impl ContourModel {
         outline: Option<&[Vector2<f64>]>,
         rng: &mut R,
     ) -> Result<ObjectFilter> {
-        let rect = target
-            .to_rect(frame.width(), frame.height())
-            .ok_or(TrackerError::BoxOutsideFrame {
-                bbox: target,
-                width: frame.width(),
-                height: frame.height(),
-            })?;
+        let rect =
+            target
+                .to_rect(frame.width(), frame.height())
+                .ok_or(TrackerError::BoxOutsideFrame {
+                    bbox: target,
+                    width: frame.width(),
+                    height: frame.height(),
+                })?;
         let spline = Self::template(config, target, outline)?;
         let samples = spline.sample(config.samples_per_span);
         let skin = if config.cues.uses_skin() {
@@ -546,7 +553,11 @@ impl ContourTracker {
     /// # Errors
     /// As [`ContourTracker::new`], and [`TrackerError::Affine`] for too few
     /// or non-finite points.
-    pub fn with_outline(config: ContourConfig, outline: Vec<Vector2<f64>>, seed: u64) -> Result<Self> {
+    pub fn with_outline(
+        config: ContourConfig,
+        outline: Vec<Vector2<f64>>,
+        seed: u64,
+    ) -> Result<Self> {
         ClosedBSpline::new(outline.clone(), config.degree)?;
         let mut t = Self::new(config, seed)?;
         t.outline = Some(outline);
@@ -595,6 +606,11 @@ impl ContourTracker {
     /// Whether c-AVQ moved the set in the last step.
     pub fn reinitialised(&self) -> bool {
         self.reinitialised
+    }
+
+    /// The c-AVQ state (its last stripe share and winner), when enabled.
+    pub fn avq(&self) -> Option<&CAvq> {
+        self.avq.as_ref()
     }
 }
 

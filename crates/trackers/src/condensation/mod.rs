@@ -585,8 +585,14 @@ mod tests {
         assert!(r3.degenerate && r3.lost());
         assert_eq!(set.weights(), before);
         assert!(
-            c.step(&mut set, &mut rng, &mut buffers, |_, _| {}, |_| Ok(f64::NAN))
-                .is_err()
+            c.step(
+                &mut set,
+                &mut rng,
+                &mut buffers,
+                |_, _| {},
+                |_| Ok(f64::NAN)
+            )
+            .is_err()
         );
         assert!(
             Condensation {

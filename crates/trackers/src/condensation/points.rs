@@ -117,13 +117,14 @@ impl PointModel {
         target: BBox,
         rng: &mut R,
     ) -> Result<ObjectFilter> {
-        let rect = target
-            .to_rect(frame.width(), frame.height())
-            .ok_or(TrackerError::BoxOutsideFrame {
-                bbox: target,
-                width: frame.width(),
-                height: frame.height(),
-            })?;
+        let rect =
+            target
+                .to_rect(frame.width(), frame.height())
+                .ok_or(TrackerError::BoxOutsideFrame {
+                    bbox: target,
+                    width: frame.width(),
+                    height: frame.height(),
+                })?;
         let skin = if config.cues.uses_skin() {
             let model = SkinModel::from_window(frame, rect, config.sigma_hs)?;
             Some(SkinCue::new(model, FLOOR, 1)?)
@@ -188,7 +189,12 @@ impl PointModel {
         Ok(ObjectStep {
             centre: (m[0], m[1]),
             // OTB centre = 0-based centre + 1.
-            bbox: BBox::new(m[0] + 1.0 - (w - 1.0) / 2.0, m[1] + 1.0 - (h - 1.0) / 2.0, w, h),
+            bbox: BBox::new(
+                m[0] + 1.0 - (w - 1.0) / 2.0,
+                m[1] + 1.0 - (h - 1.0) / 2.0,
+                w,
+                h,
+            ),
             pose: None,
             report,
         })
@@ -262,6 +268,11 @@ impl PointCloudTracker {
     /// Whether c-AVQ moved the set in the last step.
     pub fn reinitialised(&self) -> bool {
         self.reinitialised
+    }
+
+    /// The c-AVQ state (its last stripe share and winner), when enabled.
+    pub fn avq(&self) -> Option<&CAvq> {
+        self.avq.as_ref()
     }
 }
 
