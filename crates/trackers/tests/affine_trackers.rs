@@ -66,8 +66,8 @@ struct Motion {
     frames: usize,
     /// Rotation amplitude (rad), scale amplitude, aspect amplitude.
     pose: [f64; 3],
-    /// Drift amplitude (px) of the centre.
-    drift: f64,
+    /// Drift amplitudes (px) of the centre, x and y.
+    drift: [f64; 2],
     /// Abrupt jumps of this many px every 15 frames (0: none).
     jump: f64,
 }
@@ -79,8 +79,8 @@ fn truth(m: &Motion, k: usize) -> Affine2 {
     let theta = m.pose[0] * (tau * t / 80.0).sin();
     let s = 1.0 + m.pose[1] * (tau * t / 60.0).sin();
     let a = 1.0 + m.pose[2] * (tau * t / 50.0).sin();
-    let mut cx = 160.0 + m.drift * (tau * t / 90.0).sin();
-    let mut cy = 120.0 + 0.6 * m.drift * (1.0 - (tau * t / 70.0).cos());
+    let mut cx = 160.0 + m.drift[0] * (tau * t / 90.0).sin();
+    let mut cy = 120.0 + m.drift[1] * (1.0 - (tau * t / 70.0).cos());
     if m.jump > 0.0 {
         // Alternating jumps right / down / left / up, every 15 frames.
         let n = k / 15;
@@ -205,8 +205,17 @@ fn report(name: &str, r: &Run) {
 
 const POSE_CHANGE: Motion = Motion {
     frames: 61,
-    pose: [0.35, 0.15, 0.08],
-    drift: 30.0,
+    pose: [0.6, 0.25, 0.1],
+    drift: [30.0, 18.0],
+    jump: 0.0,
+};
+
+/// Fast motion: the centre swings 90 px (up to 6.3 px per frame, beyond
+/// the pose estimator's training range of 2 template px), mild pose change.
+const FAST: Motion = Motion {
+    frames: 61,
+    pose: [0.2, 0.1, 0.05],
+    drift: [90.0, 25.0],
     jump: 0.0,
 };
 
@@ -227,10 +236,25 @@ fn stpf_follows_pose_change_with_few_particles() {
     let (frames, poses) = scene(&POSE_CHANGE, 1, 1);
     let r = run(&mut stpf(1), &frames, &poses);
     report("stpf", &r);
-    assert!(r.mean_error() < 2.0, "mean error {}", r.mean_error());
-    assert!(r.max_error() < 5.0, "max error {}", r.max_error());
-    assert!(r.mean_particles() < 15.0, "{}", r.mean_particles());
+    // Measured on seeds 1-4: mean 1.4-2.4 px, max 6.4-8.1 px, 1.4-3.1
+    // particles per frame.
+    assert!(r.mean_error() < 3.0, "mean error {}", r.mean_error());
+    assert!(r.max_error() < 10.0, "max error {}", r.max_error());
+    assert!(r.mean_particles() < 5.0, "{}", r.mean_particles());
     assert!(r.estimates.iter().all(|e| !e.lost));
+}
+
+#[test]
+fn stpf_follows_fast_motion_through_the_kalman_region() {
+    let (frames, poses) = scene(&FAST, 1, 1);
+    let r = run(&mut stpf(1), &frames, &poses);
+    report("stpf fast", &r);
+    // Measured on seeds 1-4: mean 1.3-2.1 px, max 3.3-5.4 px, 1.2-2.0
+    // particles per frame (seed 1: 1.2; 3.4 when the particles ignore the
+    // Kalman displacement).
+    assert!(r.mean_error() < 3.0, "mean error {}", r.mean_error());
+    assert!(r.max_error() < 8.0, "max error {}", r.max_error());
+    assert!(r.mean_particles() < 2.5, "{}", r.mean_particles());
 }
 
 #[test]
@@ -240,10 +264,12 @@ fn stpf_needs_fewer_particles_than_ispf_at_comparable_error() {
     let i = run(&mut ispf(2), &frames, &poses);
     report("stpf", &s);
     report("ispf", &i);
-    assert!(i.mean_error() < 3.0, "ispf mean error {}", i.mean_error());
-    assert!(s.mean_error() < 2.0, "stpf mean error {}", s.mean_error());
+    // Measured on seeds 1-4: ISPF mean error 1.4-2.6 px with 7.2-8.8
+    // particles per frame, the self-tuning filter 1.4-2.4 px with 1.4-3.1.
+    assert!(i.mean_error() < 3.5, "ispf mean error {}", i.mean_error());
+    assert!(s.mean_error() < 3.0, "stpf mean error {}", s.mean_error());
     assert!(
-        s.mean_particles() < 0.8 * i.mean_particles(),
+        s.mean_particles() < 0.6 * i.mean_particles(),
         "stpf {} ispf {}",
         s.mean_particles(),
         i.mean_particles()
@@ -257,22 +283,27 @@ fn hkpf_tracks_position_but_not_pose() {
     let s = run(&mut stpf(3), &frames, &poses);
     report("hkpf", &h);
     report("stpf", &s);
+    // Measured on seeds 1-4: HKPF mean error 4.1-4.4 px (it keeps the
+    // target: max 7.2-10.2 px), the self-tuning filter 1.4-2.4 px.
     assert!(h.estimates.iter().all(|e| e.particles == 100));
     assert!(
-        h.mean_error() > 1.5 * s.mean_error(),
+        h.mean_error() > 1.4 * s.mean_error(),
         "hkpf {} stpf {}",
         h.mean_error(),
         s.mean_error()
     );
-    assert!(h.mean_error() < 8.0, "hkpf mean error {}", h.mean_error());
+    assert!(h.mean_error() > 3.0, "hkpf mean error {}", h.mean_error());
+    assert!(h.mean_error() < 6.0, "hkpf mean error {}", h.mean_error());
 }
 
 #[test]
 fn rgb_frames_are_tracked() {
     let (frames, poses) = scene(&POSE_CHANGE, 3, 4);
     let r = run(&mut stpf(4), &frames[..31], &poses[..31]);
+    // Measured: 3.0 px over these 30 frames (the gray frames of seed 4
+    // give 2.1 px over 60).
     report("stpf rgb", &r);
-    assert!(r.mean_error() < 2.0, "mean error {}", r.mean_error());
+    assert!(r.mean_error() < 4.0, "mean error {}", r.mean_error());
 }
 
 #[test]
@@ -403,4 +434,22 @@ fn bad_input_is_a_typed_error() {
     let mut alt = alt;
     alt.appearance.update_rule = UpdateRule::MuBMinusSigma;
     assert!(StpfTracker::new(alt, 0).is_ok());
+}
+
+/// Not a test: the three trackers over seeds, for choosing bounds
+/// (`cargo test --test affine_trackers survey -- --ignored --nocapture`).
+#[test]
+#[ignore]
+fn survey() {
+    let motion = match std::env::var("AFFINE_MOTION").as_deref() {
+        Ok("fast") => FAST,
+        _ => POSE_CHANGE,
+    };
+    for seed in 1..=4 {
+        let (frames, poses) = scene(&motion, 1, seed);
+        println!("seed {seed}");
+        report("  stpf", &run(&mut stpf(seed), &frames, &poses));
+        report("  ispf", &run(&mut ispf(seed), &frames, &poses));
+        report("  hkpf", &run(&mut hkpf(seed), &frames, &poses));
+    }
 }

@@ -329,10 +329,11 @@ impl RegionConfig {
 }
 
 /// Standard deviations of the pose generators A1..A4 (scale, aspect,
-/// rotation, skew), checked.
+/// rotation, skew), checked: positive, so that `Psi_k` is positive
+/// definite.
 pub(crate) fn check_pose_sigma(name: &'static str, s: &[f64; 4]) -> Result<()> {
     for v in s {
-        check_non_negative(name, *v)?;
+        check_positive(name, *v)?;
     }
     Ok(())
 }
