@@ -122,8 +122,8 @@ fn background(seed: u64) -> Image<u8> {
                     c[k] = c[k] * (1.0 - cov) + DISTRACTOR[k] * cov;
                 }
             }
-            for k in 0..3 {
-                img.set(x, y, k, c[k].round().clamp(0.0, 255.0) as u8);
+            for (k, v) in c.iter().enumerate() {
+                img.set(x, y, k, v.round().clamp(0.0, 255.0) as u8);
             }
         }
     }
@@ -146,9 +146,9 @@ fn render(bg: &Image<u8>, faces: &[Face], k: usize, seed: u64) -> Image<u8> {
         for y in y0..y1 {
             for x in x0..x1 {
                 if let Some((cov, c)) = f.colour(x as f64, y as f64) {
-                    for k in 0..3 {
+                    for (k, ck) in c.iter().enumerate() {
                         let v = f64::from(img.get(x, y, k).unwrap());
-                        img.set(x, y, k, (v * (1.0 - cov) + c[k] * cov).round() as u8);
+                        img.set(x, y, k, (v * (1.0 - cov) + ck * cov).round() as u8);
                     }
                 }
             }
@@ -513,7 +513,7 @@ fn crossing_objects_with_and_without_priority_ifd() {
             "seed {seed}: contours {s:?} / without priority {s0:?}; points {p:?} / without priority {p0:?}"
         );
         for c in [s, s0, p, p0] {
-            assert_eq!(c.swapped + c.merged + c.kept <= 30, true);
+            assert!(c.swapped + c.merged + c.kept <= 30);
         }
     }
 }

@@ -37,7 +37,7 @@ use crate::error::{Result, TrackerError};
 use crate::tracker::{FrameGuard, check_initial_box};
 
 /// Key of the random streams ("c-multi" in ASCII).
-const KEY: u64 = 0x632d_6d75_6c74_69;
+const KEY: u64 = 0x0063_2d6d_756c_7469;
 
 /// The representation every object is tracked with.
 #[derive(Debug, Clone, Copy, PartialEq)]
