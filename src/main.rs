@@ -9,10 +9,10 @@ use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use bayestrack::eval::metrics::score_otb;
-use bayestrack::eval::otb::Sequence;
-use bayestrack::eval::track::{BoxFile, OnBadFrame, TrackError, track_frames};
 use bayestrack::image::{BBox, Rgb, write_frame_with_boxes};
+use bayestrack::otb::metrics::score_otb;
+use bayestrack::otb::sequence::Sequence;
+use bayestrack::otb::track::{BoxFile, OnBadFrame, TrackError, track_frames};
 use bayestrack::trackers::{REGISTRY, tracker_info};
 use clap::{Parser, Subcommand, ValueEnum};
 

@@ -5,8 +5,8 @@
 
 use std::sync::OnceLock;
 
-use bayestrack::eval::ball::{BallOptions, BallResult, FrameMode, run};
 use bayestrack::trackers::BallFilter;
+use bayestrack_experiments::ball::{BallOptions, BallResult, FrameMode, run};
 
 fn result() -> &'static BallResult {
     static CELL: OnceLock<BallResult> = OnceLock::new();
@@ -41,7 +41,7 @@ fn kalman_trackers_are_more_accurate_than_every_particle_filter() {
 fn every_tracker_sees_the_papers_frame_rate_in_real_time() {
     for f in BallFilter::PAPER {
         let seen = result().overall(f, FrameMode::RealTime).frames_per_second;
-        let paper = bayestrack::eval::ball::paper_row(f).unwrap().fps;
+        let paper = bayestrack_experiments::ball::paper_row(f).unwrap().fps;
         assert!(
             (seen - paper).abs() < 0.1,
             "{}: {seen} vs {paper}",

@@ -4,7 +4,7 @@
 
 use std::sync::OnceLock;
 
-use bayestrack::eval::correlation::{
+use bayestrack_experiments::correlation::{
     CorrelationConfig, CorrelationResult, Variant, VariantSummary, run,
 };
 

@@ -4,7 +4,7 @@
 
 use std::sync::OnceLock;
 
-use bayestrack::eval::hikpf::{FilterKind, FilterSummary, HikpfConfig, golden_configs, run};
+use bayestrack_experiments::hikpf::{FilterKind, FilterSummary, HikpfConfig, golden_configs, run};
 
 fn results() -> &'static [Vec<FilterSummary>; 2] {
     static CELL: OnceLock<[Vec<FilterSummary>; 2]> = OnceLock::new();

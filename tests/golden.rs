@@ -2,7 +2,7 @@
 //! `tests/golden/<id>.csv`. A deliberate change is re-pinned with
 //! `cargo xtask bless`, which prints the diff.
 
-use bayestrack::eval::experiment::registry;
+use bayestrack_experiments::REGISTRY;
 
 /// Relative tolerance: runs are seeded and bit-reproducible; this only
 /// absorbs printing round-off.
@@ -18,7 +18,7 @@ fn cells_match(a: &str, b: &str) -> bool {
 #[test]
 fn quick_reproductions_match_their_golden_files() {
     let mut checked = 0;
-    for e in registry().iter().filter(|e| e.implemented()) {
+    for e in REGISTRY.iter().filter(|e| e.implemented()) {
         let Some(now) = e.golden().unwrap_or_else(|err| panic!("{}: {err}", e.id())) else {
             continue;
         };

@@ -5,9 +5,9 @@
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
-use bayestrack::eval::metrics::score_otb;
-use bayestrack::eval::otb::Sequence;
-use bayestrack::eval::track::{OnBadFrame, track_frames};
+use bayestrack::otb::metrics::score_otb;
+use bayestrack::otb::sequence::Sequence;
+use bayestrack::otb::track::{OnBadFrame, track_frames};
 use bayestrack::trackers::tracker_info;
 
 fn sequence(name: &str) -> Option<Sequence> {

@@ -1,4 +1,5 @@
-//! `cargo xtask`: a thin command line over `bayestrack-eval`.
+//! `cargo xtask`: a thin command line over `bayestrack-experiments` (the
+//! paper experiments and scenes) and `bayestrack-otb` (the OTB suite).
 //!
 //! ```text
 //! cargo xtask reproduce-table list         # the registry
@@ -10,8 +11,10 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use bayestrack_eval::experiment::{self, Experiment, Mode, RunOptions};
-use bayestrack_eval::suite::{SuiteOptions, run_suite};
+use bayestrack_experiments::{
+    Experiment, ExperimentError, Mode, REGISTRY as EXPERIMENTS, RunOptions,
+};
+use bayestrack_otb::suite::{SuiteOptions, run_suite};
 use bayestrack_trackers::{REGISTRY, tracker_info};
 use clap::{Parser, Subcommand};
 
@@ -86,7 +89,7 @@ fn parse_key_value(s: &str) -> Result<(String, String), String> {
         .ok_or_else(|| format!("expected key=value, got `{s}`"))
 }
 
-fn print_registry(reg: &[Box<dyn Experiment>]) {
+fn print_registry(reg: &[&dyn Experiment]) {
     println!("{:<14} {:<6} {:<52} summary", "id", "state", "source");
     for e in reg {
         let state = if e.implemented() { "ready" } else { "todo" };
@@ -100,7 +103,7 @@ fn print_registry(reg: &[Box<dyn Experiment>]) {
     }
 }
 
-fn run_one(e: &dyn Experiment, opts: &RunOptions) -> Result<(), experiment::ExperimentError> {
+fn run_one(e: &dyn Experiment, opts: &RunOptions) -> Result<(), ExperimentError> {
     eprintln!("== {} ({}) ==", e.id(), e.source());
     let start = std::time::Instant::now();
     let tables = e.run(opts)?;
@@ -185,13 +188,13 @@ fn main() -> ExitCode {
             frames,
         } => {
             if name == "list" {
-                for n in bayestrack_eval::scenes::SCENE_NAMES {
-                    println!("{n}");
+                for s in bayestrack_experiments::scenes::SCENES {
+                    println!("{:<16} {}", s.name, s.summary);
                 }
                 return ExitCode::SUCCESS;
             }
             let out = out.unwrap_or_else(|| PathBuf::from("target/scenes").join(&name));
-            match bayestrack_eval::scenes::write_named_scene(&name, seed, frames, &out) {
+            match bayestrack_experiments::scenes::write_named_scene(&name, seed, frames, &out) {
                 Ok(summary) => {
                     println!(
                         "{}: {} frames written to {}",
@@ -208,13 +211,12 @@ fn main() -> ExitCode {
             }
         }
         Command::Bless { ids } => {
-            let reg = experiment::registry();
             let mut failed = false;
-            for e in reg.iter().filter(|e| e.implemented()) {
+            for e in EXPERIMENTS.iter().filter(|e| e.implemented()) {
                 if !ids.is_empty() && !ids.iter().any(|i| i == e.id()) {
                     continue;
                 }
-                if let Err(err) = bless(e.as_ref()) {
+                if let Err(err) = bless(*e) {
                     eprintln!("error: {}: {err}", e.id());
                     failed = true;
                 }
@@ -237,26 +239,19 @@ fn main() -> ExitCode {
                 progress: true,
                 set,
             };
-            let reg = experiment::registry();
             match target.as_str() {
                 "list" => {
-                    print_registry(&reg);
+                    print_registry(EXPERIMENTS);
                     ExitCode::SUCCESS
                 }
                 "all" => {
-                    let ready: Vec<_> = reg.iter().filter(|e| e.implemented()).collect();
-                    if ready.is_empty() {
-                        println!("No experiment is implemented yet; registered:");
-                        print_registry(&reg);
-                        return ExitCode::SUCCESS;
-                    }
                     let mut failed = false;
-                    for e in &reg {
+                    for e in EXPERIMENTS {
                         if !e.implemented() {
                             println!("-- {}: not implemented yet ({})\n", e.id(), e.source());
                             continue;
                         }
-                        if let Err(err) = run_one(e.as_ref(), &opts) {
+                        if let Err(err) = run_one(*e, &opts) {
                             eprintln!("error: {err}");
                             failed = true;
                         }
@@ -267,7 +262,7 @@ fn main() -> ExitCode {
                         ExitCode::SUCCESS
                     }
                 }
-                id => match experiment::find(id).and_then(|e| run_one(e.as_ref(), &opts)) {
+                id => match bayestrack_experiments::find(id).and_then(|e| run_one(e, &opts)) {
                     Ok(()) => ExitCode::SUCCESS,
                     Err(err) => {
                         eprintln!("error: {err}");

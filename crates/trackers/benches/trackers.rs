@@ -9,6 +9,9 @@ use bayestrack_trackers::{
     MultiTargetConfig, MultiTargetTracker, NccScaleConfig, NccScaleTracker, PfCorrelationConfig,
     PfCorrelationTracker, SearchArea, Tracker,
 };
+use bayestrack_trackers::{
+    HkpfConfig, HkpfTracker, IspfConfig, IspfTracker, StpfConfig, StpfTracker,
+};
 use criterion::measurement::WallTime;
 use criterion::{BenchmarkGroup, Criterion, Throughput, criterion_group, criterion_main};
 use rand::SeedableRng;
@@ -233,5 +236,215 @@ fn bench_street(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_ball, bench_road, bench_street);
+/// Paper 002's setting, simplified: 320x240 gray, a smooth textured
+/// background, a 40x48 textured patch under a known affine motion (drift
+/// of 30 px, rotation up to 0.6 rad, scale 0.75-1.25), noise of 2 grey
+/// levels. Returns the frames and the first frame's OTB box.
+fn affine_frames(n: usize) -> (Vec<Image<u8>>, BBox) {
+    let (w, h, tw, th) = (320usize, 240usize, 40.0f64, 48.0f64);
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(5);
+    let bg = |x: f64, y: f64| {
+        128.0
+            + 30.0 * (0.11 * x + 0.07 * y).sin() * (0.05 * x - 0.13 * y).cos()
+            + 15.0 * (0.31 * x).sin() * (0.27 * y).cos()
+    };
+    let fg = |u: f64, v: f64| {
+        140.0 + 50.0 * (0.35 * u + 0.6).sin() * (0.29 * v).cos() + 30.0 * (0.21 * (u - v)).sin()
+    };
+    let tau = std::f64::consts::TAU;
+    let mut frames = Vec::with_capacity(n);
+    for k in 0..n {
+        let t = k as f64;
+        let theta = 0.6 * (tau * t / 80.0).sin();
+        let s = 1.0 + 0.25 * (tau * t / 60.0).sin();
+        let (cx, cy) = (
+            160.0 + 30.0 * (tau * t / 90.0).sin(),
+            120.0 + 18.0 * (1.0 - (tau * t / 70.0).cos()),
+        );
+        let (sn, cs) = theta.sin_cos();
+        let mut data = Vec::with_capacity(w * h);
+        for y in 0..h {
+            for x in 0..w {
+                let (dx, dy) = (x as f64 - cx, y as f64 - cy);
+                let (u, v) = ((cs * dx + sn * dy) / s, (-sn * dx + cs * dy) / s);
+                let z: f64 = StandardNormal.sample(&mut rng);
+                let g = if u.abs() <= tw / 2.0 && v.abs() <= th / 2.0 {
+                    fg(u, v)
+                } else {
+                    bg(x as f64, y as f64)
+                };
+                data.push((g + 2.0 * z).round().clamp(0.0, 255.0) as u8);
+            }
+        }
+        frames.push(Image::from_vec(w, h, 1, data).unwrap());
+    }
+    let first = BBox::new(
+        160.0 - (tw - 1.0) / 2.0 + 1.0,
+        120.0 - (th - 1.0) / 2.0 + 1.0,
+        tw,
+        th,
+    );
+    (frames, first)
+}
+
+/// Paper 002's three trackers at its settings, one step per iteration (the
+/// initialisation, with the pose estimator's first training, is not timed).
+fn bench_affine(c: &mut Criterion) {
+    let (frames, first) = affine_frames(60);
+    let mut group = c.benchmark_group("affine 320x240 gray (paper 002)");
+    group.throughput(Throughput::Elements(1));
+    let trackers: Vec<(&str, Box<dyn Tracker>)> = vec![
+        (
+            "stpf step",
+            Box::new(StpfTracker::new(StpfConfig::default(), 7).unwrap()),
+        ),
+        (
+            "ispf step",
+            Box::new(IspfTracker::new(IspfConfig::default(), 7).unwrap()),
+        ),
+        (
+            "hkpf step (100 particles)",
+            Box::new(HkpfTracker::new(HkpfConfig::default(), 7).unwrap()),
+        ),
+    ];
+    for (name, mut tracker) in trackers {
+        let mut k = 0;
+        tracker.init(frames[0].view(), first).unwrap();
+        group.bench_function(name, |b| {
+            b.iter_custom(|iters| {
+                let mut total = std::time::Duration::ZERO;
+                for _ in 0..iters {
+                    k += 1;
+                    if k == frames.len() {
+                        k = 1;
+                        tracker.init(frames[0].view(), first).unwrap();
+                    }
+                    let start = std::time::Instant::now();
+                    black_box(tracker.step(black_box(frames[k].view())).unwrap());
+                    total += start.elapsed();
+                }
+                total
+            })
+        });
+    }
+    group.finish();
+}
+
+/// Paper 003's webcam at 320x240 RGB: a skin-coloured ellipse (40x52,
+/// RGB 224 172 138) wandering at up to about 4 px/frame over a textured
+/// low-saturation wall. Returns the frames and the first frame's OTB box.
+fn webcam_frames(n: usize) -> (Vec<Image<u8>>, BBox) {
+    let (w, h) = (320usize, 240usize);
+    let wall =
+        |x: usize, y: usize| (110 + (x * 7 + y * 13) % 37 + (x / 12 + y / 12) % 3 * 15) as f64;
+    let at = |k: usize| {
+        let t = k as f64;
+        (
+            150.0 + 60.0 * (std::f64::consts::TAU * t / 90.0).sin(),
+            125.0 + 40.0 * (std::f64::consts::TAU * t / 67.0 + 0.6).sin(),
+        )
+    };
+    let frames = (0..n)
+        .map(|k| {
+            let (cx, cy) = at(k);
+            let mut img = Image::new(w, h, 3, 0u8).unwrap();
+            for y in 0..h {
+                for x in 0..w {
+                    let (dx, dy) = ((x as f64 - cx) / 20.0, (y as f64 - cy) / 26.0);
+                    let c = if dx * dx + dy * dy <= 1.0 {
+                        [224.0, 172.0, 138.0]
+                    } else {
+                        let g = wall(x, y);
+                        [g, g + 3.0, g + 10.0]
+                    };
+                    for (ch, v) in c.iter().enumerate() {
+                        img.set(x, y, ch, *v as u8);
+                    }
+                }
+            }
+            img
+        })
+        .collect();
+    let (cx, cy) = at(0);
+    (
+        frames,
+        BBox::new(cx - 19.5 + 1.0, cy - 25.5 + 1.0, 40.0, 52.0),
+    )
+}
+
+/// Paper 003's CONDENSATION trackers, one step per iteration (a step
+/// includes the frame's IFD map), and one contour measurement per
+/// particle (the curve cues on one pose).
+fn bench_condensation(c: &mut Criterion) {
+    use bayestrack_appearance::{Candidate, Cue, Frame, Scratch, SkinModel};
+    use bayestrack_trackers::{
+        ContourConfig, ContourTracker, CurveCue, CurveCueKind, PointCloudConfig, PointCloudTracker,
+    };
+    let (frames, first) = webcam_frames(90);
+    let mut group = c.benchmark_group("condensation 320x240 (paper 003)");
+    group.throughput(Throughput::Elements(1));
+    let mut points = PointCloudTracker::new(PointCloudConfig::default(), 7).unwrap();
+    bench_steps(
+        &mut group,
+        "points step (N=50, OR)",
+        &mut points,
+        &frames,
+        first,
+    );
+    let mut hand = ContourTracker::new(ContourConfig::hand(), 7).unwrap();
+    bench_steps(
+        &mut group,
+        "contour step (N=200, n=45, IFD)",
+        &mut hand,
+        &frames,
+        first,
+    );
+    for n in [100, 200] {
+        let mut face = ContourTracker::new(ContourConfig::face(n), 7).unwrap();
+        let name = format!("contour step (N={n}, n=21, AND)");
+        bench_steps(&mut group, &name, &mut face, &frames, first);
+    }
+    // One contour measurement: 84 curve points (n = 21, 4 per span).
+    let ifd =
+        bayestrack_appearance::interframe_difference(frames[1].view(), frames[0].view()).unwrap();
+    let spline =
+        bayestrack_affine::ClosedBSpline::ellipse(21, 20.0, 26.0, Default::default()).unwrap();
+    let pts = spline.sample(4);
+    let skin = SkinModel::new(0.066, 0.38, 0.05).unwrap();
+    let planes = Frame::new().with_ifd(ifd.view()).with_rgb(frames[1].view());
+    let pose = Candidate::Pose(bayestrack_image::Affine2::translation(
+        first.x + 19.0,
+        first.y + 25.0,
+    ));
+    let mut scratch = Scratch::new();
+    for (name, cue) in [
+        (
+            "contour measurement, IFD (84 points)",
+            CurveCue::new(CurveCueKind::Ifd, &pts).unwrap(),
+        ),
+        (
+            "contour measurement, skin (84 points)",
+            CurveCue::new(CurveCueKind::Skin(skin), &pts).unwrap(),
+        ),
+    ] {
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                black_box(
+                    cue.log_likelihood(&planes, black_box(&pose), &mut scratch)
+                        .unwrap(),
+                )
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(
+    benches,
+    bench_ball,
+    bench_road,
+    bench_street,
+    bench_affine,
+    bench_condensation
+);
 criterion_main!(benches);

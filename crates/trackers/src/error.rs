@@ -77,6 +77,9 @@ pub enum TrackerError {
     /// From a particle filter.
     #[error(transparent)]
     Particle(#[from] bayestrack_particle::ParticleError),
+    /// From the affine group, its dynamics or the pose estimator.
+    #[error(transparent)]
+    Affine(#[from] bayestrack_affine::AffineError),
 }
 
 /// Shorthand for results of this crate.

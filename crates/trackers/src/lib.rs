@@ -3,21 +3,32 @@
 //! (`bayestrack-appearance`), behind one [`Tracker`] trait so that the CLI,
 //! the OTB evaluation and the experiments treat them alike.
 
-mod ball;
-mod correlation;
+mod affine_pf;
+mod condensation;
 mod error;
-mod hist_pf;
+mod hist_pf_scale;
+mod histogram_filters;
+mod mad_correlation;
 mod multi_target;
 mod ncc_scale;
 mod registry;
 mod tracker;
 
-pub use ball::{BallConfig, BallFilter, BallTracker, MotionModel};
-pub use correlation::{
-    ArpMotion, MadTracker, MadTrackerConfig, PfCorrelationConfig, PfCorrelationTracker, SearchArea,
+pub use affine_pf::{
+    AppearanceConfig, FrameStats, HkpfConfig, HkpfTracker, IspfConfig, IspfTracker, RegionConfig,
+    ScoredPose, StopRule, StpfConfig, StpfTracker, UpdateRule,
+};
+pub use condensation::{
+    CAvq, CAvqConfig, Condensation, CondensationReport, ContourConfig, ContourTracker, CueSet,
+    CurveCue, CurveCueKind, LOST_LOG_LIKELIHOOD, MultiCondensation, MultiConfig, ObjectConfig,
+    ObjectEstimate, PointCloudConfig, PointCloudTracker, StepBuffers,
 };
 pub use error::{Result, TrackerError};
-pub use hist_pf::{HistPfConfig, HistPfTracker};
+pub use hist_pf_scale::{HistPfConfig, HistPfTracker};
+pub use histogram_filters::{BallConfig, BallFilter, BallTracker, MotionModel};
+pub use mad_correlation::{
+    ArpMotion, MadTracker, MadTrackerConfig, PfCorrelationConfig, PfCorrelationTracker, SearchArea,
+};
 pub use multi_target::{
     Association, Detection, Feature, MultiTargetConfig, MultiTargetTracker, Track,
     measurement_matrix, transition_matrix,

@@ -27,8 +27,8 @@ use bayestrack_image::{
 use bayestrack_kalman::{Gaussian, Kf, LinearDynamics, LinearMeasurement};
 use nalgebra::{SMatrix, SVector, Vector4};
 
-use crate::correlation::to_gray;
 use crate::error::{Result, TrackerError};
+use crate::mad_correlation::to_gray;
 use crate::tracker::FrameGuard;
 
 /// Centroid and window size of a target: the measurement of eq. 19 and

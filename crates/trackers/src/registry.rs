@@ -2,10 +2,14 @@
 //! `bayestrack trackers`) and the OTB evaluation (`cargo xtask otb`) run
 //! any of them alike. A tracker added to [`REGISTRY`] joins both.
 
-use crate::ball::{BallConfig, BallTracker};
-use crate::correlation::{MadTracker, MadTrackerConfig, PfCorrelationConfig, PfCorrelationTracker};
+use crate::affine_pf::{HkpfConfig, HkpfTracker, IspfConfig, IspfTracker, StpfConfig, StpfTracker};
+use crate::condensation::{ContourConfig, ContourTracker, PointCloudConfig, PointCloudTracker};
 use crate::error::{Result, TrackerError};
-use crate::hist_pf::{HistPfConfig, HistPfTracker};
+use crate::hist_pf_scale::{HistPfConfig, HistPfTracker};
+use crate::histogram_filters::{BallConfig, BallTracker};
+use crate::mad_correlation::{
+    MadTracker, MadTrackerConfig, PfCorrelationConfig, PfCorrelationTracker,
+};
 use crate::ncc_scale::{NccScaleConfig, NccScaleTracker};
 use crate::tracker::Tracker;
 
@@ -85,6 +89,36 @@ pub const REGISTRY: &[TrackerInfo] = &[
         summary: "real video: paper 001's PF with scale in the state (x, y, vx, vy, ln s), 200 particles, kernel-weighted HSV histogram (Pérez et al.), Bhattacharyya likelihood with a background-ring term, slow guarded model update",
         handles_scale: true,
         build: |seed| boxed(HistPfTracker::new(HistPfConfig::default(), seed)),
+    },
+    TrackerInfo {
+        name: "hkpf",
+        summary: "paper 002 (Yin et al. 2011): constant-acceleration KF region, 100 particles on the affine group (eq. 4-5), best-particle NCC estimate, no pose tuning; gray",
+        handles_scale: true,
+        build: |seed| boxed(HkpfTracker::new(HkpfConfig::default(), seed)),
+    },
+    TrackerInfo {
+        name: "ispf",
+        summary: "paper 002 (Li et al. 2012): autoregressive dynamics on the affine group, batches of 5 LWPR-tuned particles up to 50, stop above mu_T - sigma_T; gray",
+        handles_scale: true,
+        build: |seed| boxed(IspfTracker::new(IspfConfig::default(), seed)),
+    },
+    TrackerInfo {
+        name: "stpf",
+        summary: "paper 002 Algorithm 1: KF region + self-tuning particles (N_max 50, dN_0 5, alpha_inc 2, 36x36 NCC, LWPR pose estimator), stop above mu_T - sigma_T; gray",
+        handles_scale: true,
+        build: |seed| boxed(StpfTracker::new(StpfConfig::default(), seed)),
+    },
+    TrackerInfo {
+        name: "condensation-points",
+        summary: "paper 003 sec. 3.1: CONDENSATION, 50 point particles (eq. 10 dynamics, 30 px diffusion), interframe difference OR skin colour (eq. 9, lambda = 1/N), translation only; RGB only (skin)",
+        handles_scale: false,
+        build: |seed| boxed(PointCloudTracker::new(PointCloudConfig::default(), seed)),
+    },
+    TrackerInfo {
+        name: "condensation-contour",
+        summary: "paper 003 sec. 3.3: CONDENSATION, 100 quadratic B-spline contours (21 control points, affine shape space: position, rotation, scale), interframe difference AND skin colour along the curve (eq. 11); RGB only (skin)",
+        handles_scale: true,
+        build: |seed| boxed(ContourTracker::new(ContourConfig::default(), seed)),
     },
 ];
 

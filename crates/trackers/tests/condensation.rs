@@ -587,3 +587,50 @@ fn ifd_only_point_cloud_needs_motion() {
     let e = t.step(still.view()).unwrap();
     assert!(e.lost);
 }
+
+#[test]
+fn both_cues_with_half_the_particles() {
+    // Sec. 3.3's claim: IFD AND skin with N/2 contours tracks better than
+    // one cue with N. Face settings (n = 21, 5 px, 1 degree, 0.01) for all.
+    let configs = [
+        ("AND N=50", ContourConfig::face(50)),
+        (
+            "IFD N=100",
+            ContourConfig {
+                cues: CueSet::Ifd,
+                ..ContourConfig::face(100)
+            },
+        ),
+        (
+            "skin N=100",
+            ContourConfig {
+                cues: CueSet::Skin,
+                ..ContourConfig::face(100)
+            },
+        ),
+    ];
+    let mut result = Vec::new();
+    for (name, config) in configs {
+        let (mut c, mut o) = (0.0, 0.0);
+        for seed in 0..3 {
+            let mut t = ContourTracker::new(config, seed).unwrap();
+            let run = run_contour(&mut t, 60, seed);
+            c += mean(&run.centre) / 3.0;
+            o += mean(&run.outline) / 3.0;
+        }
+        println!("{name}: mean centre error {c:.2} px, mean outline distance {o:.2} px");
+        result.push((c, o));
+    }
+    let [(and_c, and_o), (ifd_c, ifd_o), (skin_c, skin_o)] = result[..] else {
+        unreachable!()
+    };
+    // Measured (3 seeds, 60 frames): AND N=50 7.02 px / 5.54 px, IFD N=100
+    // 11.32 / 6.92, skin N=100 6.34 / 4.90. Against the IFD alone the claim
+    // reproduces; against the skin alone it does not in this scene (no
+    // moving non-skin distractors, the skin distractor far from the path),
+    // so that comparison is printed, not asserted.
+    let _ = (skin_c, skin_o);
+    assert!(and_c <= 9.0, "AND N=50 centre {and_c}");
+    assert!(and_c <= 0.75 * ifd_c, "AND N=50 {and_c} vs IFD N=100 {ifd_c}");
+    assert!(and_o <= 0.9 * ifd_o, "AND N=50 {and_o} vs IFD N=100 {ifd_o}");
+}

@@ -10,7 +10,8 @@
 use super::{Kernel, LwprConfig};
 
 /// Dimension from which the full-metric algebra (M D and M^T M) goes
-/// through faer's matrix product instead of plain loops.
+/// through faer's matrix product instead of plain loops (feature `faer`).
+#[cfg(feature = "faer")]
 const FAER_MIN_DIM: usize = 24;
 
 #[inline]
@@ -702,6 +703,7 @@ impl ReceptiveField {
 
 /// `out = M D` for upper-triangular M and symmetric D (N x N column-major).
 fn mat_mul_upper(m: &[f64], d: &[f64], out: &mut [f64], n: usize) {
+    #[cfg(feature = "faer")]
     if n >= FAER_MIN_DIM {
         let mm = faer::MatRef::from_column_major_slice(m, n, n);
         let dd = faer::MatRef::from_column_major_slice(d, n, n);
@@ -733,6 +735,7 @@ fn mat_mul_upper(m: &[f64], d: &[f64], out: &mut [f64], n: usize) {
 /// `D = M^T M` for upper-triangular M (N x N column-major), symmetric
 /// result.
 fn gram_upper(m: &[f64], d: &mut [f64], n: usize) {
+    #[cfg(feature = "faer")]
     if n >= FAER_MIN_DIM {
         let mm = faer::MatRef::from_column_major_slice(m, n, n);
         let dd = faer::MatMut::from_column_major_slice_mut(d, n, n);
@@ -758,6 +761,46 @@ fn gram_upper(m: &[f64], d: &mut [f64], n: usize) {
             }
             d[i + j * n] = v;
             d[j + i * n] = v;
+        }
+    }
+}
+
+#[cfg(all(test, feature = "faer"))]
+mod faer_tests {
+    use super::*;
+
+    /// An upper-triangular M and a symmetric D, column-major, n x n.
+    fn inputs(n: usize) -> (Vec<f64>, Vec<f64>) {
+        let mut m = vec![0.0; n * n];
+        let mut d = vec![0.0; n * n];
+        for j in 0..n {
+            for i in 0..n {
+                let v = ((i * 7 + j * 13) % 11) as f64 / 11.0 - 0.4;
+                if i <= j {
+                    m[i + j * n] = v + if i == j { 2.0 } else { 0.0 };
+                }
+                d[i + j * n] = ((i.min(j) * 5 + i.max(j) * 3) % 7) as f64 / 7.0;
+            }
+        }
+        (m, d)
+    }
+
+    /// The faer products (n >= FAER_MIN_DIM) equal the plain loops.
+    #[test]
+    fn faer_products_equal_the_loops() {
+        let n = FAER_MIN_DIM + 5;
+        let (m, d) = inputs(n);
+        let mut fast = vec![0.0; n * n];
+        mat_mul_upper(&m, &d, &mut fast, n);
+        let mut gram = vec![0.0; n * n];
+        gram_upper(&m, &mut gram, n);
+        for col in 0..n {
+            for row in 0..n {
+                let md: f64 = (row..n).map(|k| m[row + k * n] * d[k + col * n]).sum();
+                assert!((fast[row + col * n] - md).abs() <= 1e-12 * md.abs().max(1.0));
+                let mtm: f64 = (0..n).map(|k| m[k + row * n] * m[k + col * n]).sum();
+                assert!((gram[row + col * n] - mtm).abs() <= 1e-12 * mtm.abs().max(1.0));
+            }
         }
     }
 }

@@ -1,0 +1,967 @@
+//! The `hikpf` experiment: paper 000 Table 1 (and van der Merwe et al. 2000,
+//! Table 1) on the scalar model of the original unscented-particle-filter
+//! demo,
+//!
+//! `x_t = 1 + sin(w pi t) + 0.5 x_{t-1} + v_{t-1}`, `v ~ Gamma(3, rate 2)`,
+//! `y_t = x_t^2 / 5 + n` for `t <= 30`, `x_t / 2 - 2 + n` after,
+//! `n ~ N(0, 1e-5)`, `x_1 = 1`, `t = 1..60`.
+//!
+//! Every ambiguity of the paper is a named option of [`HikpfConfig`]; the
+//! defaults and the reasons for them are in docs/reproduction.md.
+
+use std::fmt::Write as _;
+use std::io::Write as _;
+use std::path::Path;
+
+use bayestrack_kalman::{
+    Additive, Dynamics, DynamicsJacobian, Ekf, Gaussian, HybridPrior, HybridUkfIekf, Iekf,
+    Measurement, MeasurementJacobian, Ukf,
+};
+use bayestrack_particle::{
+    Bootstrap, Degenerate, KalmanParticle, KalmanProposal, LocalFilter, ParticleError,
+    ParticleFilter, ParticleSet, ResamplePolicy, Resampling, StateSpaceModel, stream_rng,
+};
+use nalgebra::{Matrix1, SMatrix, SVector, Vector1};
+use rand::Rng;
+use rand_distr::{Distribution, Gamma, StandardNormal};
+use rayon::prelude::*;
+
+use crate::experiment::{Experiment, ExperimentError, Mode, RunOptions, write_text};
+use bayestrack_otb::Table;
+use bayestrack_otb::plot::{Series, line_chart};
+
+/// Key of this experiment's random streams.
+const KEY: u64 = 0x0068_696b_7066; // "hikpf" in ASCII
+
+/// Gamma process noise: shape 3, rate 2 (scale 1/2): mean 1.5, variance 0.75.
+const GAMMA_SHAPE: f64 = 3.0;
+const GAMMA_RATE: f64 = 2.0;
+/// Measurement noise variance.
+const SIGMA: f64 = 1e-5;
+/// Prior variance of the EKF/UKF and of each Kalman particle (the demo's P0).
+const P0: f64 = 0.75;
+
+/// The filters of the table, in row order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum FilterKind {
+    /// Extended Kalman filter alone.
+    Ekf,
+    /// Unscented Kalman filter alone (augmented state).
+    Ukf,
+    /// Bootstrap particle filter (transition prior as proposal).
+    Pf,
+    /// Bootstrap PF with a Metropolis-Hastings move.
+    PfMcmc,
+    /// PF with EKF proposals.
+    PfEkf,
+    /// PF-EKF with a Metropolis-Hastings move.
+    PfEkfMcmc,
+    /// PF with UKF proposals (the unscented particle filter).
+    PfUkf,
+    /// PF-UKF with a Metropolis-Hastings move.
+    PfUkfMcmc,
+    /// PF with IEKF proposals.
+    PfIekf,
+    /// PF with the hybrid UKF -> IEKF proposal (paper 000).
+    Hikpf,
+}
+
+impl FilterKind {
+    /// Every filter, in row order.
+    pub const ALL: [FilterKind; 10] = [
+        FilterKind::Ekf,
+        FilterKind::Ukf,
+        FilterKind::Pf,
+        FilterKind::PfMcmc,
+        FilterKind::PfEkf,
+        FilterKind::PfEkfMcmc,
+        FilterKind::PfUkf,
+        FilterKind::PfUkfMcmc,
+        FilterKind::PfIekf,
+        FilterKind::Hikpf,
+    ];
+
+    /// Row label.
+    pub fn name(self) -> &'static str {
+        match self {
+            FilterKind::Ekf => "EKF",
+            FilterKind::Ukf => "UKF",
+            FilterKind::Pf => "PF",
+            FilterKind::PfMcmc => "PF-MCMC",
+            FilterKind::PfEkf => "PF-EKF",
+            FilterKind::PfEkfMcmc => "PF-EKF-MCMC",
+            FilterKind::PfUkf => "PF-UKF",
+            FilterKind::PfUkfMcmc => "PF-UKF-MCMC",
+            FilterKind::PfIekf => "PF-IEKF",
+            FilterKind::Hikpf => "HIKPF",
+        }
+    }
+
+    /// Paper 000 Table 1: (mean, variance) of the per-run error.
+    pub fn paper(self) -> Option<(f64, f64)> {
+        match self {
+            FilterKind::Pf => Some((0.25881, 0.057151)),
+            FilterKind::PfEkf => Some((0.32392, 0.021656)),
+            FilterKind::PfUkf => Some((0.077684, 0.006589)),
+            FilterKind::PfIekf => Some((0.049368, 0.0015238)),
+            FilterKind::Hikpf => Some((0.015607, 0.00000395)),
+            _ => None,
+        }
+    }
+
+    /// Van der Merwe et al. 2000, Table 1: mean of the per-run error
+    /// (approximate, as transcribed in SPEC section 3).
+    pub fn van_der_merwe(self) -> Option<f64> {
+        match self {
+            FilterKind::Ekf => Some(0.374),
+            FilterKind::Ukf => Some(0.280),
+            FilterKind::Pf => Some(0.424),
+            FilterKind::PfMcmc => Some(0.417),
+            FilterKind::PfEkf => Some(0.310),
+            FilterKind::PfEkfMcmc => Some(0.307),
+            FilterKind::PfUkf => Some(0.070),
+            FilterKind::PfUkfMcmc => Some(0.074),
+            _ => None,
+        }
+    }
+}
+
+/// How the per-run error is computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ErrorMetric {
+    /// `sqrt(mean_t (x_hat - x)^2)`: what the demo code computes.
+    Rmse,
+    /// Paper 000 eq. 11 as printed, `(mean_t (x_hat - x))^(1/2)`, with the
+    /// absolute value taken so that a negative mean error stays real.
+    Eq11Literal,
+}
+
+/// The transition density `p(x_t | x_{t-1})` in the importance weights.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PriorDensity {
+    /// Gamma density of `x_t - f(x_{t-1})`, zero outside its support (the
+    /// model's true density; ReBEL's version of the demo).
+    Transition,
+    /// The demo's expression `d^2 exp(-2 d)` with `d = x_t - x_{t-1}`
+    /// (unnormalised, no support check): likely a bug, kept to compare.
+    DemoIncrement,
+}
+
+/// The Gaussian model of the local Kalman filters inside the proposals.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ProposalNoise {
+    /// The demo's tuning: zero-mean process noise with `Q = 7.5` for the
+    /// EKF and IEKF proposals, `Q = 1.5` for the UKF and hybrid ones,
+    /// `R = 0.1`.
+    Demo,
+    /// The true moments: process-noise mean 1.5, `Q = 0.75`, `R = 1e-5`.
+    TrueMoments,
+}
+
+/// Every choice of the experiment.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HikpfConfig {
+    /// Monte Carlo runs.
+    pub runs: usize,
+    /// Particles per filter.
+    pub particles: usize,
+    /// Time steps `T` (the state starts at `t = 1`).
+    pub steps: usize,
+    /// Frequency `w` of `sin(w pi t)`: 0.04 in the original demo, 0.4 as
+    /// paper 000 prints it.
+    pub sin_freq: f64,
+    /// Per-run error.
+    pub error: ErrorMetric,
+    /// Transition density in the weights.
+    pub prior: PriorDensity,
+    /// Local-filter model of the Kalman proposals.
+    pub proposal_noise: ProposalNoise,
+    /// Paper 000's `c`: IEKF iterations of PF-IEKF and HIKPF.
+    pub iekf_iterations: usize,
+    /// IEKF early-stopping tolerance.
+    pub iekf_tolerance: f64,
+    /// Prior of the IEKF refinement inside HIKPF.
+    pub hybrid_prior: HybridPrior,
+    /// Add the demo's `1e-99` to every likelihood (a linear-domain floor).
+    pub likelihood_floor: bool,
+    /// Resampling scheme (every step).
+    pub resampling: Resampling,
+    /// Seed of the whole experiment.
+    pub seed: u64,
+}
+
+impl HikpfConfig {
+    /// Paper scale: 100 runs of 60 steps with 200 particles.
+    pub fn paper() -> Self {
+        Self {
+            runs: 100,
+            particles: 200,
+            steps: 60,
+            sin_freq: 0.04,
+            error: ErrorMetric::Rmse,
+            prior: PriorDensity::Transition,
+            proposal_noise: ProposalNoise::Demo,
+            iekf_iterations: 10,
+            iekf_tolerance: 1e-10,
+            hybrid_prior: HybridPrior::UkfPredicted,
+            likelihood_floor: false,
+            resampling: Resampling::Residual,
+            seed: 1,
+        }
+    }
+
+    /// The CI scale: 20 runs.
+    pub fn quick() -> Self {
+        Self {
+            runs: 20,
+            ..Self::paper()
+        }
+    }
+
+    /// Applies `key=value` overrides (the named options).
+    ///
+    /// # Errors
+    /// [`ExperimentError::BadOption`] for an unknown key or value.
+    pub fn apply(&mut self, key: &str, value: &str) -> Result<(), ExperimentError> {
+        let bad = || ExperimentError::BadOption {
+            key: key.to_string(),
+            value: value.to_string(),
+        };
+        let num = || value.parse::<f64>().map_err(|_| bad());
+        let int = || value.parse::<usize>().map_err(|_| bad());
+        match key {
+            "runs" => self.runs = int()?,
+            "particles" => self.particles = int()?,
+            "steps" => self.steps = int()?,
+            "seed" => self.seed = value.parse().map_err(|_| bad())?,
+            "sin_freq" => self.sin_freq = num()?,
+            "iekf_iterations" => self.iekf_iterations = int()?,
+            "iekf_tolerance" => self.iekf_tolerance = num()?,
+            "error" => {
+                self.error = match value {
+                    "rmse" => ErrorMetric::Rmse,
+                    "eq11" => ErrorMetric::Eq11Literal,
+                    _ => return Err(bad()),
+                }
+            }
+            "prior" => {
+                self.prior = match value {
+                    "transition" => PriorDensity::Transition,
+                    "demo" => PriorDensity::DemoIncrement,
+                    _ => return Err(bad()),
+                }
+            }
+            "proposal_noise" => {
+                self.proposal_noise = match value {
+                    "demo" => ProposalNoise::Demo,
+                    "moments" => ProposalNoise::TrueMoments,
+                    _ => return Err(bad()),
+                }
+            }
+            "hybrid_prior" => {
+                self.hybrid_prior = match value {
+                    "predicted" => HybridPrior::UkfPredicted,
+                    "posterior" => HybridPrior::UkfPosterior,
+                    _ => return Err(bad()),
+                }
+            }
+            "likelihood_floor" => self.likelihood_floor = value.parse().map_err(|_| bad())?,
+            "resampling" => {
+                self.resampling = Resampling::ALL
+                    .into_iter()
+                    .find(|r| r.name() == value)
+                    .ok_or_else(bad)?
+            }
+            _ => return Err(bad()),
+        }
+        if self.runs == 0 || self.particles == 0 || self.steps < 2 || self.iekf_iterations == 0 {
+            return Err(bad());
+        }
+        Ok(())
+    }
+
+    /// One line per option, for the table footer.
+    pub fn describe(&self) -> String {
+        format!(
+            "runs={} particles={} steps={} sin_freq={} error={:?} prior={:?} proposal_noise={:?} \
+             iekf_iterations={} hybrid_prior={:?} likelihood_floor={} resampling={} seed={}",
+            self.runs,
+            self.particles,
+            self.steps,
+            self.sin_freq,
+            self.error,
+            self.prior,
+            self.proposal_noise,
+            self.iekf_iterations,
+            self.hybrid_prior,
+            self.likelihood_floor,
+            self.resampling.name(),
+            self.seed
+        )
+    }
+}
+
+/// `f(x, t) = 1 + sin(w pi t) + 0.5 x` (without noise).
+#[inline]
+fn drift(t: usize, w: f64) -> f64 {
+    1.0 + (w * std::f64::consts::PI * t as f64).sin()
+}
+
+/// `h(x, t)` and its derivative.
+#[inline]
+fn observe(x: f64, t: usize) -> (f64, f64) {
+    if t <= 30 {
+        (0.2 * x * x, 0.4 * x)
+    } else {
+        (0.5 * x - 2.0, 0.5)
+    }
+}
+
+/// The true model at time `t`, for the particle weights.
+struct TrueModel {
+    t: usize,
+    drift: f64,
+    prior: PriorDensity,
+    floor: bool,
+    gamma: Gamma<f64>,
+}
+
+impl TrueModel {
+    fn new(t: usize, c: &HikpfConfig) -> Self {
+        Self {
+            t,
+            drift: drift(t, c.sin_freq),
+            prior: c.prior,
+            floor: c.likelihood_floor,
+            gamma: Gamma::new(GAMMA_SHAPE, 1.0 / GAMMA_RATE).expect("valid Gamma parameters"),
+        }
+    }
+}
+
+/// `ln Gamma(3) = ln 2`.
+const LN_GAMMA_SHAPE: f64 = std::f64::consts::LN_2;
+
+impl StateSpaceModel<1, 1> for TrueModel {
+    #[inline]
+    fn sample_transition<R: Rng + ?Sized>(
+        &self,
+        x: &SVector<f64, 1>,
+        rng: &mut R,
+    ) -> SVector<f64, 1> {
+        Vector1::new(self.drift + 0.5 * x[0] + self.gamma.sample(rng))
+    }
+
+    fn log_transition(&self, x_prev: &SVector<f64, 1>, x: &SVector<f64, 1>) -> f64 {
+        match self.prior {
+            PriorDensity::Transition => {
+                let d = x[0] - (self.drift + 0.5 * x_prev[0]);
+                if d <= 0.0 {
+                    f64::NEG_INFINITY
+                } else {
+                    GAMMA_SHAPE * GAMMA_RATE.ln() + (GAMMA_SHAPE - 1.0) * d.ln()
+                        - GAMMA_RATE * d
+                        - LN_GAMMA_SHAPE
+                }
+            }
+            PriorDensity::DemoIncrement => {
+                let d = x[0] - x_prev[0];
+                (GAMMA_SHAPE - 1.0) * d.abs().ln() - GAMMA_RATE * d
+            }
+        }
+    }
+
+    #[inline]
+    fn log_likelihood(&self, x: &SVector<f64, 1>, z: &SVector<f64, 1>) -> f64 {
+        let e = z[0] - observe(x[0], self.t).0;
+        // the demo's unnormalised sigma^(-1/2) exp(-e^2 / (2 sigma))
+        let ll = -0.5 * e * e / SIGMA - 0.5 * SIGMA.ln();
+        if self.floor {
+            let floor = 1e-99f64.ln();
+            let m = ll.max(floor);
+            m + ((ll - m).exp() + (floor - m).exp()).ln()
+        } else {
+            ll
+        }
+    }
+}
+
+/// The Gaussian model of the local filters at time `t`.
+struct LocalModel {
+    t: usize,
+    drift: f64,
+    noise_mean: f64,
+    q: f64,
+    r: f64,
+}
+
+impl Dynamics<1> for LocalModel {
+    #[inline]
+    fn propagate(&self, x: &SVector<f64, 1>) -> SVector<f64, 1> {
+        Vector1::new(self.drift + 0.5 * x[0] + self.noise_mean)
+    }
+    #[inline]
+    fn process_noise(&self) -> SMatrix<f64, 1, 1> {
+        Matrix1::new(self.q)
+    }
+}
+
+impl DynamicsJacobian<1> for LocalModel {
+    #[inline]
+    fn jacobian(&self, _: &SVector<f64, 1>) -> SMatrix<f64, 1, 1> {
+        Matrix1::new(0.5)
+    }
+}
+
+impl Measurement<1, 1> for LocalModel {
+    #[inline]
+    fn observe(&self, x: &SVector<f64, 1>) -> SVector<f64, 1> {
+        Vector1::new(observe(x[0], self.t).0)
+    }
+    #[inline]
+    fn measurement_noise(&self) -> SMatrix<f64, 1, 1> {
+        Matrix1::new(self.r)
+    }
+}
+
+impl MeasurementJacobian<1, 1> for LocalModel {
+    #[inline]
+    fn jacobian(&self, x: &SVector<f64, 1>) -> SMatrix<f64, 1, 1> {
+        Matrix1::new(observe(x[0], self.t).1)
+    }
+}
+
+/// Local model of the standalone EKF/UKF (demo: zero-mean noise, Q = 0.75,
+/// R = 1e-5) or of a proposal with the given demo `Q`.
+fn local(t: usize, c: &HikpfConfig, demo_q: Option<f64>) -> LocalModel {
+    let (noise_mean, q, r) = match (demo_q, c.proposal_noise) {
+        (None, _) => (0.0, 0.75, SIGMA),
+        (Some(q), ProposalNoise::Demo) => (0.0, q, 0.1),
+        (Some(_), ProposalNoise::TrueMoments) => (1.5, 0.75, SIGMA),
+    };
+    LocalModel {
+        t,
+        drift: drift(t, c.sin_freq),
+        noise_mean,
+        q,
+        r,
+    }
+}
+
+/// One simulated run: states and measurements for `t = 1..T` (index 0 is
+/// `t = 1`, whose measurement is never used).
+fn simulate(c: &HikpfConfig, run: usize) -> (Vec<f64>, Vec<f64>) {
+    let mut rng = stream_rng(&[KEY, c.seed, run as u64, 0]);
+    let gamma = Gamma::new(GAMMA_SHAPE, 1.0 / GAMMA_RATE).expect("valid Gamma parameters");
+    let mut x = vec![1.0];
+    let mut y = vec![observe(1.0, 1).0];
+    for t in 2..=c.steps {
+        let xt = drift(t, c.sin_freq) + 0.5 * x[t - 2] + gamma.sample(&mut rng);
+        let n: f64 = StandardNormal.sample(&mut rng);
+        x.push(xt);
+        y.push(observe(xt, t).0 + SIGMA.sqrt() * n);
+    }
+    (x, y)
+}
+
+/// The error of one run's estimates.
+fn run_error(metric: ErrorMetric, est: &[f64], truth: &[f64]) -> f64 {
+    let n = truth.len() as f64;
+    match metric {
+        ErrorMetric::Rmse => (est
+            .iter()
+            .zip(truth)
+            .map(|(a, b)| (a - b).powi(2))
+            .sum::<f64>()
+            / n)
+            .sqrt(),
+        ErrorMetric::Eq11Literal => (est.iter().zip(truth).map(|(a, b)| a - b).sum::<f64>() / n)
+            .abs()
+            .sqrt(),
+    }
+}
+
+/// The result of one filter on one run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunOutcome {
+    /// Per-run error.
+    pub error: f64,
+    /// Steps at which every weight was zero (measurement ignored).
+    pub degenerate: usize,
+}
+
+fn failed(kind: FilterKind, run: usize, t: usize, e: impl std::fmt::Display) -> ExperimentError {
+    ExperimentError::Failed {
+        id: "hikpf",
+        message: format!("{} failed at run {run}, t = {t}: {e}", kind.name()),
+    }
+}
+
+/// The particle filter configuration shared by every PF row: resampling at
+/// every step (the demo), a step whose weights are all zero ignores its
+/// measurement and is counted.
+fn particle_filter(c: &HikpfConfig, mcmc: bool) -> ParticleFilter {
+    ParticleFilter {
+        resampling: c.resampling,
+        policy: ResamplePolicy::Always,
+        mcmc,
+        chunk_size: 1024,
+        degenerate: Degenerate::IgnoreMeasurement,
+    }
+}
+
+/// One step of a particle filter at time `t`.
+type PfStep<'a, T> = dyn Fn(
+        &ParticleFilter,
+        &mut ParticleSet<T>,
+        usize,
+        &SVector<f64, 1>,
+        &[u64],
+    ) -> Result<bayestrack_particle::StepReport, ParticleError>
+    + 'a;
+
+/// Runs one particle filter over one run; the estimate is the mean of the
+/// particles after resampling (and after the MCMC move), as in the demo.
+fn run_particles<T: bayestrack_particle::Particle<1>>(
+    c: &HikpfConfig,
+    kind: FilterKind,
+    run: usize,
+    y: &[f64],
+    initial: T,
+    step: &PfStep<'_, T>,
+) -> Result<(Vec<f64>, usize), ExperimentError> {
+    let mcmc = matches!(
+        kind,
+        FilterKind::PfMcmc | FilterKind::PfEkfMcmc | FilterKind::PfUkfMcmc
+    );
+    let pf = particle_filter(c, mcmc);
+    let mut set =
+        ParticleSet::new(vec![initial; c.particles]).map_err(|e| failed(kind, run, 1, e))?;
+    let mut est = vec![1.0];
+    let mut degenerate = 0;
+    for (t, &yt) in y.iter().enumerate().skip(1).map(|(i, v)| (i + 1, v)) {
+        let key = [KEY, c.seed, run as u64, kind as u64 + 1, t as u64];
+        let report =
+            step(&pf, &mut set, t, &Vector1::new(yt), &key).map_err(|e| failed(kind, run, t, e))?;
+        degenerate += usize::from(report.degenerate);
+        est.push(set.mean()[0]);
+    }
+    Ok((est, degenerate))
+}
+
+/// A step with Kalman proposals from `filter` on the local model with the
+/// demo's `demo_q`.
+fn kalman_step<'a, F: LocalFilter<1, 1, LocalModel> + 'a>(
+    c: &'a HikpfConfig,
+    filter: F,
+    demo_q: f64,
+) -> Box<PfStep<'a, KalmanParticle<1>>> {
+    Box::new(move |pf, set, t, z, key| {
+        let model = TrueModel::new(t, c);
+        let local = local(t, c, Some(demo_q));
+        let proposal = KalmanProposal {
+            model: &model,
+            local: &local,
+            filter: &filter,
+        };
+        pf.step(set, &proposal, z, key)
+    })
+}
+
+/// The estimates of the standalone EKF or UKF (demo: Q = 0.75, R = 1e-5,
+/// zero-mean process noise, P0 = 0.75).
+fn run_kalman(
+    c: &HikpfConfig,
+    kind: FilterKind,
+    run: usize,
+    y: &[f64],
+) -> Result<Vec<f64>, ExperimentError> {
+    let ukf = Ukf::new(1.0, 0.0, 2.0).expect("valid UT parameters");
+    let ekf = Ekf::default();
+    let mut belief =
+        Gaussian::new(Vector1::new(1.0), Matrix1::new(P0)).map_err(|e| failed(kind, run, 1, e))?;
+    let mut est = vec![1.0];
+    for (t, &yt) in y.iter().enumerate().skip(1).map(|(i, v)| (i + 1, v)) {
+        let m = local(t, c, None);
+        let z = Vector1::new(yt);
+        let next = match kind {
+            FilterKind::Ekf => ekf
+                .predict(&belief, &m)
+                .and_then(|p| ekf.update(&p, &m, Some(&z)))
+                .map(|u| u.posterior),
+            _ => ukf
+                .step_augmented(&belief, &Additive(&m), &Additive(&m), Some(&z))
+                .map(|s| s.update.posterior),
+        };
+        belief = next.map_err(|e| failed(kind, run, t, e))?;
+        est.push(belief.mean()[0]);
+    }
+    Ok(est)
+}
+
+/// Every filter on one run.
+fn one_run(c: &HikpfConfig, run: usize) -> Result<Vec<RunOutcome>, ExperimentError> {
+    let (x, y) = simulate(c, run);
+    let ukf = Ukf::new(1.0, 0.0, 2.0).expect("valid UT parameters");
+    let iekf =
+        Iekf::new(c.iekf_iterations, c.iekf_tolerance).map_err(|e| ExperimentError::Failed {
+            id: "hikpf",
+            message: e.to_string(),
+        })?;
+    let hybrid = HybridUkfIekf {
+        ukf,
+        iekf,
+        prior: c.hybrid_prior,
+    };
+    let bootstrap: Box<PfStep<'_, SVector<f64, 1>>> = Box::new(|pf, set, t, z, key| {
+        let model = TrueModel::new(t, c);
+        pf.step(set, &Bootstrap(&model), z, key)
+    });
+    let kp = KalmanParticle {
+        x: Vector1::new(1.0),
+        cov: Matrix1::new(P0),
+    };
+    FilterKind::ALL
+        .iter()
+        .map(|&kind| {
+            let (est, degenerate) = match kind {
+                FilterKind::Ekf | FilterKind::Ukf => (run_kalman(c, kind, run, &y)?, 0),
+                FilterKind::Pf | FilterKind::PfMcmc => {
+                    run_particles(c, kind, run, &y, Vector1::new(1.0), &*bootstrap)?
+                }
+                FilterKind::PfEkf | FilterKind::PfEkfMcmc => {
+                    run_particles(c, kind, run, &y, kp, &*kalman_step(c, Ekf::default(), 7.5))?
+                }
+                FilterKind::PfUkf | FilterKind::PfUkfMcmc => {
+                    run_particles(c, kind, run, &y, kp, &*kalman_step(c, ukf, 1.5))?
+                }
+                FilterKind::PfIekf => {
+                    run_particles(c, kind, run, &y, kp, &*kalman_step(c, iekf, 7.5))?
+                }
+                FilterKind::Hikpf => {
+                    run_particles(c, kind, run, &y, kp, &*kalman_step(c, hybrid, 1.5))?
+                }
+            };
+            Ok(RunOutcome {
+                error: run_error(c.error, &est, &x),
+                degenerate,
+            })
+        })
+        .collect()
+}
+
+/// Mean, variance (divisor `R - 1`, as MATLAB's `var`) and median of the
+/// per-run errors of one filter, and its degenerate steps.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FilterSummary {
+    /// Which filter.
+    pub kind: FilterKind,
+    /// Mean per-run error.
+    pub mean: f64,
+    /// Variance of the per-run errors.
+    pub var: f64,
+    /// Median per-run error.
+    pub median: f64,
+    /// Steps, over all runs, whose weights were all zero.
+    pub degenerate: usize,
+}
+
+/// The per-run outcomes of every filter: `runs[r][f]` follows
+/// [`FilterKind::ALL`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct HikpfResult {
+    /// The configuration that produced it.
+    pub config: HikpfConfig,
+    /// Outcomes per run, per filter.
+    pub runs: Vec<Vec<RunOutcome>>,
+}
+
+impl HikpfResult {
+    /// The summary of every filter, in row order.
+    pub fn summary(&self) -> Vec<FilterSummary> {
+        FilterKind::ALL
+            .iter()
+            .enumerate()
+            .map(|(f, &kind)| {
+                let mut e: Vec<f64> = self.runs.iter().map(|r| r[f].error).collect();
+                let n = e.len() as f64;
+                let mean = e.iter().sum::<f64>() / n;
+                let var = if e.len() > 1 {
+                    e.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)
+                } else {
+                    0.0
+                };
+                e.sort_by(f64::total_cmp);
+                let mid = e.len() / 2;
+                let median = if e.len() % 2 == 1 {
+                    e[mid]
+                } else {
+                    0.5 * (e[mid - 1] + e[mid])
+                };
+                FilterSummary {
+                    kind,
+                    mean,
+                    var,
+                    median,
+                    degenerate: self.runs.iter().map(|r| r[f].degenerate).sum(),
+                }
+            })
+            .collect()
+    }
+
+    /// The paper-vs-ours table.
+    pub fn table(&self) -> Table {
+        let mut t = Table::new(
+            format!(
+                "hikpf: paper 000 Table 1 and van der Merwe et al. 2000 Table 1 vs ours ({} runs)",
+                self.runs.len()
+            ),
+            &[
+                "filter",
+                "paper mean",
+                "paper var",
+                "vdM2000 mean",
+                "ours mean",
+                "ours var",
+                "ours median",
+                "ours/paper",
+                "ours/vdM",
+                "all-zero steps",
+            ],
+        );
+        let fmt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.5}"));
+        for s in self.summary() {
+            let paper = s.kind.paper();
+            let vdm = s.kind.van_der_merwe();
+            t.push(vec![
+                s.kind.name().to_string(),
+                fmt(paper.map(|p| p.0)),
+                paper.map_or("-".into(), |p| format!("{:.3e}", p.1)),
+                vdm.map_or("-".into(), |v| format!("{v:.3}")),
+                format!("{:.5}", s.mean),
+                format!("{:.3e}", s.var),
+                format!("{:.5}", s.median),
+                paper.map_or("-".into(), |p| format!("{:.2}", s.mean / p.0)),
+                vdm.map_or("-".into(), |v| format!("{:.2}", s.mean / v)),
+                s.degenerate.to_string(),
+            ]);
+        }
+        t
+    }
+}
+
+/// Runs the experiment: runs in parallel batches (each run has its own
+/// random streams, so the result does not depend on the thread count), each
+/// finished batch appended to `runs_csv` when given, so an interrupted run
+/// keeps what it already wrote.
+///
+/// # Errors
+/// [`ExperimentError::Failed`] naming the filter, run and step that failed;
+/// [`ExperimentError::Io`] when the CSV cannot be written.
+pub fn run(
+    config: &HikpfConfig,
+    runs_csv: Option<&Path>,
+    progress: bool,
+) -> Result<HikpfResult, ExperimentError> {
+    let mut file = match runs_csv {
+        Some(path) => {
+            let io = |source| ExperimentError::Io {
+                path: path.to_path_buf(),
+                source,
+            };
+            let mut f = std::fs::File::create(path).map_err(io)?;
+            let header: Vec<&str> = FilterKind::ALL.iter().map(|k| k.name()).collect();
+            writeln!(f, "run,{}", header.join(",")).map_err(io)?;
+            Some((f, path))
+        }
+        None => None,
+    };
+    let bar = if progress {
+        indicatif::ProgressBar::new(config.runs as u64)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    bar.set_message("hikpf runs");
+    let batch = 10;
+    let mut runs = Vec::with_capacity(config.runs);
+    for start in (0..config.runs).step_by(batch) {
+        let end = (start + batch).min(config.runs);
+        let outcomes: Vec<Vec<RunOutcome>> = (start..end)
+            .into_par_iter()
+            .map(|r| one_run(config, r))
+            .collect::<Result<_, _>>()?;
+        if let Some((f, path)) = file.as_mut() {
+            let mut text = String::new();
+            for (i, o) in outcomes.iter().enumerate() {
+                let cells: Vec<String> = o.iter().map(|x| format!("{:.17e}", x.error)).collect();
+                let _ = writeln!(text, "{},{}", start + i, cells.join(","));
+            }
+            f.write_all(text.as_bytes())
+                .map_err(|source| ExperimentError::Io {
+                    path: path.to_path_buf(),
+                    source,
+                })?;
+        }
+        bar.inc((end - start) as u64);
+        runs.extend(outcomes);
+    }
+    bar.finish_and_clear();
+    Ok(HikpfResult {
+        config: *config,
+        runs,
+    })
+}
+
+/// Writes the summary CSV and the per-run error figure (paper 000 Fig. 3).
+fn write_outputs(result: &HikpfResult, dir: &Path) -> Result<(), ExperimentError> {
+    let csv = dir.join("table.csv");
+    write_text(&csv, &result.table().to_csv())?;
+    let series: Vec<Series> = FilterKind::ALL
+        .iter()
+        .enumerate()
+        .filter(|(_, k)| {
+            !matches!(
+                k,
+                FilterKind::PfMcmc | FilterKind::PfEkfMcmc | FilterKind::PfUkfMcmc
+            )
+        })
+        .map(|(f, k)| Series {
+            name: k.name().to_string(),
+            points: result
+                .runs
+                .iter()
+                .enumerate()
+                .map(|(r, o)| ((r + 1) as f64, o[f].error))
+                .collect(),
+        })
+        .collect();
+    line_chart(
+        &dir.join("errors.svg"),
+        "hikpf: error of each filter per run (cf. paper 000 Fig. 3)",
+        "run",
+        "RMSE",
+        &series,
+    )?;
+    Ok(())
+}
+
+/// The quick configurations that CI pins: the defaults, and the demo's
+/// linear-domain likelihood floor.
+pub fn golden_configs() -> [(&'static str, HikpfConfig); 2] {
+    let floor = HikpfConfig {
+        likelihood_floor: true,
+        ..HikpfConfig::quick()
+    };
+    [
+        ("default", HikpfConfig::quick()),
+        ("likelihood_floor", floor),
+    ]
+}
+
+/// The registry entry.
+pub struct HikpfExperiment;
+
+impl Experiment for HikpfExperiment {
+    fn id(&self) -> &'static str {
+        "hikpf"
+    }
+    fn source(&self) -> &'static str {
+        "paper 000 Table 1; van der Merwe et al. 2000 Table 1"
+    }
+    fn summary(&self) -> &'static str {
+        "EKF, UKF, PF, PF-EKF, PF-UKF, PF-IEKF, HIKPF (+MCMC) on the Gamma-noise model"
+    }
+    fn run(&self, opts: &RunOptions) -> Result<Vec<Table>, ExperimentError> {
+        let mut config = match opts.mode {
+            Mode::Quick => HikpfConfig::quick(),
+            Mode::Full => HikpfConfig::paper(),
+        };
+        for (k, v) in &opts.set {
+            config.apply(k, v)?;
+        }
+        let dir = opts.output_dir(self.id())?;
+        let result = run(&config, Some(&dir.join("runs.csv")), opts.progress)?;
+        write_outputs(&result, &dir)?;
+        let mut table = result.table();
+        table.title = format!("{}\n  options: {}", table.title, config.describe());
+        Ok(vec![table])
+    }
+
+    fn golden(&self) -> Result<Option<String>, ExperimentError> {
+        let mut out = String::from("config,filter,mean,var,median,all_zero_steps\n");
+        for (name, config) in golden_configs() {
+            for s in run(&config, None, false)?.summary() {
+                let _ = writeln!(
+                    out,
+                    "{name},{},{:.17e},{:.17e},{:.17e},{}",
+                    s.kind.name(),
+                    s.mean,
+                    s.var,
+                    s.median,
+                    s.degenerate
+                );
+            }
+        }
+        Ok(Some(out))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gamma_log_density_integrates_to_one() {
+        let c = HikpfConfig::quick();
+        let m = TrueModel::new(5, &c);
+        let x0 = Vector1::new(0.3);
+        let f = m.drift + 0.15;
+        let h = 1e-3;
+        let total: f64 = (1..20_000)
+            .map(|i| m.log_transition(&x0, &Vector1::new(f + i as f64 * h)).exp() * h)
+            .sum();
+        assert!((total - 1.0).abs() < 1e-3, "{total}");
+        assert_eq!(
+            m.log_transition(&x0, &Vector1::new(f - 0.1)),
+            f64::NEG_INFINITY
+        );
+    }
+
+    #[test]
+    fn simulation_is_seeded_and_follows_the_model() {
+        let c = HikpfConfig::quick();
+        let (x, y) = simulate(&c, 3);
+        assert_eq!((x.len(), y.len()), (60, 60));
+        assert_eq!(simulate(&c, 3), (x.clone(), y.clone()));
+        assert_ne!(simulate(&c, 4).0, x);
+        for t in 2..=60 {
+            let d = x[t - 1] - drift(t, c.sin_freq) - 0.5 * x[t - 2];
+            assert!(d > 0.0, "Gamma noise is positive");
+            assert!((y[t - 1] - observe(x[t - 1], t).0).abs() < 0.02);
+        }
+    }
+
+    #[test]
+    fn options_parse_and_reject() {
+        let mut c = HikpfConfig::quick();
+        c.apply("sin_freq", "0.4").unwrap();
+        c.apply("prior", "demo").unwrap();
+        c.apply("resampling", "systematic").unwrap();
+        assert_eq!(
+            (c.sin_freq, c.prior, c.resampling),
+            (0.4, PriorDensity::DemoIncrement, Resampling::Systematic)
+        );
+        assert!(c.apply("prior", "nope").is_err());
+        assert!(c.apply("bogus", "1").is_err());
+        assert!(c.apply("runs", "0").is_err());
+    }
+
+    #[test]
+    fn errors_are_computed_as_documented() {
+        assert!(
+            (run_error(ErrorMetric::Rmse, &[1.0, 3.0], &[1.0, 1.0]) - 2f64.sqrt()).abs() < 1e-15
+        );
+        assert!(
+            (run_error(ErrorMetric::Eq11Literal, &[1.0, 3.0], &[1.0, 1.0]) - 1.0).abs() < 1e-15
+        );
+    }
+}

@@ -1,0 +1,24 @@
+//! The paper experiments behind `cargo xtask reproduce-table` and the
+//! synthetic scenes with exact ground truth they run on.
+//!
+//! This crate is not published: it is the project's own reproduction of the
+//! five papers. It lives in a library (not in `xtask`) so that tests can call
+//! the experiments: `xtask` only parses arguments and prints.
+//!
+//! - [`experiment`]: the [`Experiment`] trait, run options and errors;
+//! - [`REGISTRY`]: every experiment by id, in the order `all` runs them;
+//! - one module per experiment: [`hikpf`] (paper 000), [`ball`] (paper
+//!   001), [`correlation`] (paper 004);
+//! - [`scenes`]: the seeded synthetic scenes and their registry.
+//!
+//! Sequences, metrics and the tracking loop come from `bayestrack-otb`.
+
+pub mod ball;
+pub mod correlation;
+pub mod experiment;
+pub mod hikpf;
+mod registry;
+pub mod scenes;
+
+pub use experiment::{Experiment, ExperimentError, Mode, RunOptions};
+pub use registry::{REGISTRY, find};

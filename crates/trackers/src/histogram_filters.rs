@@ -1,0 +1,946 @@
+//! Paper 001's ball trackers (Bocsi and Csato, sec. 3): a Kalman filter, an
+//! unscented Kalman filter and particle filters with `N` = 10, 30, 70
+//! particles, all with the RGB histogram appearance model (3 x 256 bins, L2
+//! distance, footnote 3).
+//!
+//! # State and motion models
+//! The state is `x = [cx, cy, vx, vy]`: the box centre in 0-based pixel
+//! coordinates (pixel centres at integers) and its velocity in px/frame. The
+//! box size is the initial box's, rounded to whole pixels. A step covers
+//! `dt` camera frames (1 unless the caller says otherwise, see
+//! [`BallTracker::step_elapsed`]). Process noise is continuous white-noise
+//! acceleration with density `q^2` ([`BallConfig::acceleration_noise`]):
+//! per axis `Q = q^2 [[dt^3/3, dt^2/2], [dt^2/2, dt]]`.
+//!
+//! - [`MotionModel::Linear`]: constant velocity, `x' = F x + w`, with the
+//!   centre reflected elastically at the frame edges (the box stays inside
+//!   the frame, the velocity component flips).
+//! - [`MotionModel::Bouncing`]: the same plus gravity `g` (px/frame^2,
+//!   downwards): `x' = F x + B g + w`, `B = [0, dt^2/2, 0, dt]^T`, reflected
+//!   at the edges: paper 001's "bouncing dynamics" (footnote 4).
+//!
+//! The reflection is the non-linearity. The **KF** can only use the linear
+//! part (`F`, and gravity as the control input `B u` of eq. 1): "the merely
+//! linear model" of the paper. The **UKF** (eq. 8-12) and the **PF**
+//! propagate through the full model with the reflection. The UKF uses
+//! `alpha = 1`, `beta = 2`, `kappa = 0` (so `lambda = 0`, sigma points at
+//! `+-2` standard deviations). The paper's suggestion `alpha = 1e-3` gives
+//! `W_0 = -1e6` and `W_i = 1.25e5`: the sigma points lie within 0.002
+//! standard deviations of the mean, and when the reflection flips the
+//! velocity of one of them (a ball at the wall), that point's weight moves
+//! the mean by about `1.25e5 x 2 v` px. Measured on the test scene of this
+//! module: mean error 74 px with `alpha = 1e-3`, below 3 px with `alpha = 1`.
+//!
+//! # Measurements and weights
+//! - KF and UKF: the measurement `z = [cx, cy]` is the centre of the window
+//!   whose histogram is closest (L2) to the reference, found by an exhaustive
+//!   sliding search ([`bayestrack_appearance::histogram_search`]) in the
+//!   region made of the predicted window grown by
+//!   [`BallConfig::search_margin`] pixels on each side (clipped to the
+//!   frame); `z = H x + v`, `H = [I 0]`, `R = r^2 I`
+//!   ([`BallConfig::measurement_noise`]). There is no gating and no explicit
+//!   search for a lost ball: paper 001 says "explicit ball searching has not
+//!   been used".
+//! - PF: Algorithm 1 of the paper on a [`ParticleSet`]: draw ancestors by
+//!   importance resampling ([`Resampling::Multinomial`]: sorted uniforms
+//!   walked once over the cumulative weights, footnote 2), propagate each
+//!   through the motion model, weight by the histogram distance `d` of its
+//!   window, `w = exp(-d^2 / (2 sigma^2))` ([`BallConfig::likelihood_sigma`];
+//!   the paper gives no formula, only "proportional to their plausibility"),
+//!   normalise (log domain). The estimate is the weighted mean.
+//!
+//! The reference histogram is the initial box's in the first frame; it is
+//! never updated.
+//!
+//! # Lost and found
+//! A tracker cannot see the ground truth, so [`Estimate::lost`] is its own
+//! judgement: **lost** when the best histogram distance it saw in this frame
+//! (the KF/UKF measurement window, the PF's best particle) exceeds
+//! [`BallConfig::lost_distance`]. The experiment `ball` of `bayestrack-experiments`
+//! counts losses against the ground truth instead: the ball is lost when
+//! the estimated centre is farther than the ball's diameter from the true
+//! centre, and **found** again (the "found" time is measured from the loss)
+//! when it comes within the ball's radius; see docs/reproduction.md.
+//!
+//! # Randomness
+//! The PF draws from `stream_rng([key, seed, k])` for its `k`-th frame
+//! (`k = 0` at `init`), so a seed gives the same run on any machine; the KF
+//! and UKF are deterministic.
+//!
+//! ```
+//! use bayestrack_image::{BBox, Image};
+//! use bayestrack_trackers::{BallConfig, BallTracker, Tracker};
+//!
+//! // A dark 8x8 square on white, moving 2 px right per frame.
+//! let frame = |x0: usize| {
+//!     let data = (0..64 * 48 * 3)
+//!         .map(|i| {
+//!             let (x, y) = ((i / 3) % 64, i / 3 / 64);
+//!             if (x0..x0 + 8).contains(&x) && (20..28).contains(&y) { 20 } else { 240 }
+//!         })
+//!         .collect();
+//!     Image::from_vec(64, 48, 3, data).unwrap()
+//! };
+//! let mut pf = BallTracker::pf(BallConfig::default(), 30, 7).unwrap();
+//! pf.init(frame(10).view(), BBox::new(11.0, 21.0, 8.0, 8.0)).unwrap();
+//! let mut est = None;
+//! for k in 1..=10 {
+//!     est = Some(pf.step(frame(10 + 2 * k).view()).unwrap());
+//! }
+//! let (cx, _) = est.unwrap().bbox.center();
+//! assert!((cx - 1.0 - 33.5).abs() < 3.0);
+//! ```
+
+use bayestrack_appearance::{HistogramDistance, RgbHistogram, histogram_search};
+use bayestrack_image::{BBox, ImageView, Rect};
+use bayestrack_kalman::{Dynamics, Gaussian, Kf, LinearDynamics, LinearMeasurement, Ukf, nalgebra};
+use bayestrack_particle::{ParticleSet, Resampling, stream_rng};
+use nalgebra::{Matrix2, Matrix2x4, Matrix4, SMatrix, SVector, Vector2, Vector4};
+use rand_distr::{Distribution, StandardNormal};
+
+use crate::error::{Result, TrackerError};
+use crate::tracker::{Estimate, FrameGuard, Tracker, check_initial_box};
+
+/// Key of the particle filter's random streams ("ball" in ASCII).
+const KEY: u64 = 0x6261_6c6c;
+
+/// The motion model of a ball tracker.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum MotionModel {
+    /// Constant velocity, reflected at the frame edges.
+    Linear,
+    /// Constant velocity plus gravity (px/frame^2, downwards), reflected at
+    /// the frame edges.
+    Bouncing {
+        /// Gravity in px/frame^2.
+        gravity: f64,
+    },
+}
+
+impl MotionModel {
+    fn gravity(self) -> f64 {
+        match self {
+            MotionModel::Linear => 0.0,
+            MotionModel::Bouncing { gravity } => gravity,
+        }
+    }
+}
+
+/// Every parameter of the ball trackers. `Default` is what the `ball`
+/// experiment uses; the paper gives only the histogram and the UKF's
+/// `alpha`, `beta`, `kappa`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BallConfig {
+    /// Motion model (default [`MotionModel::Linear`]).
+    pub motion: MotionModel,
+    /// Histogram bins per channel (256, the paper's).
+    pub bins: usize,
+    /// Histogram distance (L2, the paper's).
+    pub distance: HistogramDistance,
+    /// White-noise acceleration density `q`, px/frame^2 (0.5).
+    pub acceleration_noise: f64,
+    /// Standard deviation of the initial velocity, px/frame per axis (3):
+    /// the KF/UKF prior and the PF's initial spread of velocities.
+    pub initial_speed: f64,
+    /// KF/UKF measurement noise `r`, px (1.5).
+    pub measurement_noise: f64,
+    /// KF/UKF search margin around the predicted window, px (20: one ball
+    /// diameter in the default scene).
+    pub search_margin: usize,
+    /// PF likelihood spread `sigma` of `exp(-d^2 / (2 sigma^2))` (0.1).
+    pub likelihood_sigma: f64,
+    /// Histogram distance above which the tracker reports itself lost (0.6).
+    pub lost_distance: f64,
+    /// UKF `alpha` (1; paper 001 sec. 2.2 suggests 1e-3, which puts the
+    /// sigma points within 0.002 standard deviations of the mean with
+    /// weights of 1.25e5: one point across a wall, reflected, then throws
+    /// the mean hundreds of pixels off, see the module docs).
+    pub ukf_alpha: f64,
+    /// UKF `beta` (2).
+    pub ukf_beta: f64,
+    /// UKF `kappa` (0).
+    pub ukf_kappa: f64,
+}
+
+impl Default for BallConfig {
+    fn default() -> Self {
+        Self {
+            motion: MotionModel::Linear,
+            bins: RgbHistogram::FULL_BINS,
+            distance: HistogramDistance::L2,
+            acceleration_noise: 0.5,
+            initial_speed: 3.0,
+            measurement_noise: 1.5,
+            search_margin: 20,
+            likelihood_sigma: 0.1,
+            lost_distance: 0.6,
+            ukf_alpha: 1.0,
+            ukf_beta: 2.0,
+            ukf_kappa: 0.0,
+        }
+    }
+}
+
+impl BallConfig {
+    /// Checks every parameter.
+    ///
+    /// # Errors
+    /// [`TrackerError::InvalidParameter`] naming the first bad one.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |name, value, reason| {
+            Err(TrackerError::InvalidParameter {
+                name,
+                value,
+                reason,
+            })
+        };
+        let positive = [
+            ("acceleration_noise", self.acceleration_noise),
+            ("initial_speed", self.initial_speed),
+            ("measurement_noise", self.measurement_noise),
+            ("likelihood_sigma", self.likelihood_sigma),
+            ("lost_distance", self.lost_distance),
+            ("ukf_alpha", self.ukf_alpha),
+        ];
+        for (name, v) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return bad(name, v, "must be positive and finite");
+            }
+        }
+        for (name, v) in [("ukf_beta", self.ukf_beta), ("ukf_kappa", self.ukf_kappa)] {
+            if !v.is_finite() {
+                return bad(name, v, "must be finite");
+            }
+        }
+        let g = self.motion.gravity();
+        if !g.is_finite() {
+            return bad("gravity", g, "must be finite");
+        }
+        if self.bins == 0 || self.bins > 256 {
+            return bad("bins", self.bins as f64, "must be in 1..=256");
+        }
+        Ok(())
+    }
+}
+
+/// The geometry every ball tracker shares: the box size, the range of the
+/// centre that keeps the box inside the frame, the reference histogram.
+#[derive(Debug, Clone)]
+struct Target {
+    /// Box width and height in pixels.
+    w: usize,
+    h: usize,
+    /// Frame size.
+    fw: usize,
+    fh: usize,
+    /// Centre range per axis: `[lo, hi]`.
+    bounds: [(f64, f64); 2],
+    reference: RgbHistogram,
+}
+
+impl Target {
+    /// Checks the frame and the box, and takes the reference histogram.
+    fn new(
+        name: &'static str,
+        frame: &ImageView<'_, u8>,
+        bbox: BBox,
+        config: &BallConfig,
+    ) -> Result<(Self, [f64; 2])> {
+        if frame.channels() != 3 {
+            return Err(TrackerError::Channels {
+                tracker: name,
+                expected: "3",
+                got: frame.channels(),
+            });
+        }
+        let (fw, fh) = (frame.width(), frame.height());
+        check_initial_box(bbox, fw, fh)?;
+        let rect = bbox.to_rect(fw, fh).ok_or(TrackerError::BoxOutsideFrame {
+            bbox,
+            width: fw,
+            height: fh,
+        })?;
+        let reference = RgbHistogram::from_window(*frame, rect, config.bins)?;
+        let (w, h) = (rect.width, rect.height);
+        let half = |s: usize| (s as f64 - 1.0) / 2.0;
+        let bounds = [
+            (half(w), (fw - w) as f64 + half(w)),
+            (half(h), (fh - h) as f64 + half(h)),
+        ];
+        let centre = [rect.x as f64 + half(w), rect.y as f64 + half(h)];
+        Ok((
+            Self {
+                w,
+                h,
+                fw,
+                fh,
+                bounds,
+                reference,
+            },
+            centre,
+        ))
+    }
+
+    /// The whole-pixel window of a centre, clamped inside the frame.
+    fn window(&self, cx: f64, cy: f64) -> Rect {
+        let place = |c: f64, s: usize, f: usize| {
+            let x0 = c - (s as f64 - 1.0) / 2.0;
+            if x0.is_finite() {
+                x0.round().clamp(0.0, (f - s) as f64) as usize
+            } else {
+                0
+            }
+        };
+        Rect::new(
+            place(cx, self.w, self.fw),
+            place(cy, self.h, self.fh),
+            self.w,
+            self.h,
+        )
+    }
+
+    /// The OTB box centred on `(cx, cy)` (0-based).
+    fn bbox(&self, cx: f64, cy: f64) -> BBox {
+        BBox::new(
+            cx - (self.w as f64 - 1.0) / 2.0 + 1.0,
+            cy - (self.h as f64 - 1.0) / 2.0 + 1.0,
+            self.w as f64,
+            self.h as f64,
+        )
+    }
+
+    /// The search region: the predicted window grown by `margin`, clipped.
+    fn region(&self, cx: f64, cy: f64, margin: usize) -> Rect {
+        let win = self.window(cx, cy);
+        let x0 = win.x.saturating_sub(margin);
+        let y0 = win.y.saturating_sub(margin);
+        let x1 = (win.right() + margin).min(self.fw);
+        let y1 = (win.bottom() + margin).min(self.fh);
+        Rect::new(x0, y0, x1 - x0, y1 - y0)
+    }
+
+    /// Reflects a state's centre into the bounds, flipping the velocity.
+    fn reflect(&self, x: &mut SVector<f64, 4>) {
+        for axis in 0..2 {
+            let (lo, hi) = self.bounds[axis];
+            let (mut p, mut v) = (x[axis], x[axis + 2]);
+            for _ in 0..8 {
+                if p < lo {
+                    p = 2.0 * lo - p;
+                    v = v.abs();
+                } else if p > hi {
+                    p = 2.0 * hi - p;
+                    v = -v.abs();
+                } else {
+                    break;
+                }
+            }
+            x[axis] = if p.is_finite() { p.clamp(lo, hi) } else { lo };
+            x[axis + 2] = v;
+        }
+    }
+}
+
+/// `F`, `B` and `Q` of a step of `dt` frames.
+fn matrices(dt: f64, q: f64) -> (Matrix4<f64>, SMatrix<f64, 4, 1>, Matrix4<f64>) {
+    let mut f = Matrix4::identity();
+    f[(0, 2)] = dt;
+    f[(1, 3)] = dt;
+    let b = SMatrix::<f64, 4, 1>::new(0.0, 0.5 * dt * dt, 0.0, dt);
+    let q2 = q * q;
+    let (a, c, d) = (q2 * dt.powi(3) / 3.0, q2 * dt * dt / 2.0, q2 * dt);
+    let mut qm = Matrix4::zeros();
+    for axis in 0..2 {
+        qm[(axis, axis)] = a;
+        qm[(axis, axis + 2)] = c;
+        qm[(axis + 2, axis)] = c;
+        qm[(axis + 2, axis + 2)] = d;
+    }
+    (f, b, qm)
+}
+
+/// The full (reflecting) motion model over one step, for the UKF.
+struct Reflecting<'a> {
+    target: &'a Target,
+    f: Matrix4<f64>,
+    b: SMatrix<f64, 4, 1>,
+    q: Matrix4<f64>,
+    gravity: f64,
+}
+
+impl Dynamics<4> for Reflecting<'_> {
+    fn propagate(&self, x: &SVector<f64, 4>) -> SVector<f64, 4> {
+        let mut y = self.f * x + self.b * self.gravity;
+        self.target.reflect(&mut y);
+        y
+    }
+    fn process_noise(&self) -> SMatrix<f64, 4, 4> {
+        self.q
+    }
+}
+
+fn check_dt(dt: f64) -> Result<()> {
+    if dt.is_finite() && dt > 0.0 {
+        Ok(())
+    } else {
+        Err(TrackerError::InvalidParameter {
+            name: "dt",
+            value: dt,
+            reason: "frames elapsed must be positive and finite",
+        })
+    }
+}
+
+/// Which filter a [`BallTracker`] runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum BallFilter {
+    /// Kalman filter with the linear part of the motion model.
+    Kf,
+    /// Unscented Kalman filter with the full model.
+    Ukf,
+    /// Particle filter with this many particles.
+    Pf(usize),
+}
+
+impl BallFilter {
+    /// The five trackers of paper 001, in the paper's row order.
+    pub const PAPER: [BallFilter; 5] = [
+        BallFilter::Pf(10),
+        BallFilter::Pf(30),
+        BallFilter::Pf(70),
+        BallFilter::Kf,
+        BallFilter::Ukf,
+    ];
+
+    /// Short name (`ball-kf`, `ball-ukf`, `ball-pf10`, ...; `ball-pf` for
+    /// another particle count).
+    pub fn name(self) -> &'static str {
+        match self {
+            BallFilter::Kf => "ball-kf",
+            BallFilter::Ukf => "ball-ukf",
+            BallFilter::Pf(10) => "ball-pf10",
+            BallFilter::Pf(30) => "ball-pf30",
+            BallFilter::Pf(70) => "ball-pf70",
+            BallFilter::Pf(_) => "ball-pf",
+        }
+    }
+
+    /// Row label as the paper prints it (`KF`, `UKF`, `PF10`, ...).
+    pub fn label(self) -> String {
+        match self {
+            BallFilter::Kf => "KF".to_string(),
+            BallFilter::Ukf => "UKF".to_string(),
+            BallFilter::Pf(n) => format!("PF{n}"),
+        }
+    }
+}
+
+/// The running state of one filter.
+#[derive(Debug, Clone)]
+enum Belief {
+    Gaussian(Gaussian<4>),
+    Particles(ParticleSet<SVector<f64, 4>>),
+}
+
+/// One of paper 001's ball trackers (KF, UKF or PF_N), see the module docs.
+#[derive(Debug, Clone)]
+pub struct BallTracker {
+    filter: BallFilter,
+    config: BallConfig,
+    seed: u64,
+    guard: FrameGuard,
+    target: Option<Target>,
+    belief: Option<Belief>,
+    /// Frames processed since `init` (the PF's stream index).
+    k: u64,
+    ukf: Ukf,
+    /// Scratch buffers.
+    hist: RgbHistogram,
+    ancestors: Vec<usize>,
+}
+
+impl BallTracker {
+    /// A tracker running `filter`; `seed` drives the PF's random streams
+    /// (ignored by the KF and UKF).
+    ///
+    /// # Errors
+    /// [`TrackerError::InvalidParameter`] for a bad configuration or zero
+    /// particles.
+    pub fn new(filter: BallFilter, config: BallConfig, seed: u64) -> Result<Self> {
+        config.validate()?;
+        if filter == BallFilter::Pf(0) {
+            return Err(TrackerError::InvalidParameter {
+                name: "particles",
+                value: 0.0,
+                reason: "need at least one particle",
+            });
+        }
+        let ukf = Ukf::new(config.ukf_alpha, config.ukf_beta, config.ukf_kappa)?;
+        Ok(Self {
+            filter,
+            config,
+            seed,
+            guard: FrameGuard::default(),
+            target: None,
+            belief: None,
+            k: 0,
+            ukf,
+            hist: RgbHistogram::new(config.bins)?,
+            ancestors: Vec::new(),
+        })
+    }
+
+    /// The Kalman-filter tracker.
+    ///
+    /// # Errors
+    /// As [`BallTracker::new`].
+    pub fn kf(config: BallConfig) -> Result<Self> {
+        Self::new(BallFilter::Kf, config, 0)
+    }
+
+    /// The unscented-Kalman-filter tracker.
+    ///
+    /// # Errors
+    /// As [`BallTracker::new`].
+    pub fn ukf(config: BallConfig) -> Result<Self> {
+        Self::new(BallFilter::Ukf, config, 0)
+    }
+
+    /// The particle-filter tracker with `particles` particles.
+    ///
+    /// # Errors
+    /// As [`BallTracker::new`].
+    pub fn pf(config: BallConfig, particles: usize, seed: u64) -> Result<Self> {
+        Self::new(BallFilter::Pf(particles), config, seed)
+    }
+
+    /// Which filter.
+    pub fn filter(&self) -> BallFilter {
+        self.filter
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &BallConfig {
+        &self.config
+    }
+
+    /// The current state mean `[cx, cy, vx, vy]` (0-based centre, px/frame),
+    /// `None` before `init`.
+    pub fn state(&self) -> Option<SVector<f64, 4>> {
+        match self.belief.as_ref()? {
+            Belief::Gaussian(g) => Some(*g.mean()),
+            Belief::Particles(set) => Some(set.mean()),
+        }
+    }
+
+    /// Tracks into `frame`, which arrived `dt` camera frames after the
+    /// previous one this tracker saw (1 when every frame is processed; more
+    /// when frames were dropped).
+    ///
+    /// # Errors
+    /// [`TrackerError::NotInitialised`], [`TrackerError::FrameSizeChanged`],
+    /// [`TrackerError::Channels`], [`TrackerError::InvalidParameter`] for a
+    /// non-positive `dt`, and filter errors.
+    pub fn step_elapsed(&mut self, frame: ImageView<'_, u8>, dt: f64) -> Result<Estimate> {
+        self.guard.check(&frame)?;
+        check_dt(dt)?;
+        if frame.channels() != 3 {
+            return Err(TrackerError::Channels {
+                tracker: self.filter.name(),
+                expected: "3",
+                got: frame.channels(),
+            });
+        }
+        let (Some(target), Some(belief)) = (self.target.as_ref(), self.belief.as_mut()) else {
+            return Err(TrackerError::NotInitialised);
+        };
+        let c = &self.config;
+        let (f, b, q) = matrices(dt, c.acceleration_noise);
+        let gravity = c.motion.gravity();
+        let k = self.k;
+        self.k += 1;
+        match (self.filter, belief) {
+            (BallFilter::Kf | BallFilter::Ukf, Belief::Gaussian(g)) => {
+                let predicted = if self.filter == BallFilter::Kf {
+                    let dynamics = LinearDynamics::with_control(f, b, q)?;
+                    Kf::default().predict(g, &dynamics, Some(&SVector::<f64, 1>::new(gravity)))?
+                } else {
+                    let dynamics = Reflecting {
+                        target,
+                        f,
+                        b,
+                        q,
+                        gravity,
+                    };
+                    self.ukf.predict(g, &dynamics)?
+                };
+                let (px, py) = (predicted.mean()[0], predicted.mean()[1]);
+                let region = target.region(px, py, c.search_margin);
+                let m = histogram_search(
+                    frame,
+                    &target.reference,
+                    target.w,
+                    target.h,
+                    region,
+                    c.distance,
+                )?;
+                let z = Vector2::new(
+                    m.x as f64 + (target.w as f64 - 1.0) / 2.0,
+                    m.y as f64 + (target.h as f64 - 1.0) / 2.0,
+                );
+                let sensor = LinearMeasurement::new(
+                    Matrix2x4::new(1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0),
+                    Matrix2::identity() * c.measurement_noise.powi(2),
+                )?;
+                let posterior = if self.filter == BallFilter::Kf {
+                    Kf::default().update(&predicted, &sensor, Some(&z))?
+                } else {
+                    self.ukf.update(&predicted, &sensor, Some(&z))?
+                }
+                .posterior;
+                *g = posterior;
+                let mean = g.mean();
+                let evaluations = (region.width - target.w + 1) * (region.height - target.h + 1);
+                Ok(Estimate {
+                    bbox: target.bbox(mean[0], mean[1]),
+                    pose: None,
+                    particles: 0,
+                    evaluations,
+                    lost: m.distance > c.lost_distance,
+                })
+            }
+            (BallFilter::Pf(_), Belief::Particles(set)) => {
+                let mut rng = stream_rng(&[KEY, self.seed, k]);
+                // Algorithm 1, line 6: j ~ p(j | w_{k-1}) (uniform after init).
+                set.resample(&Resampling::Multinomial, &mut rng, &mut self.ancestors)?;
+                // Lower-triangular factor of one axis' [[dt^3/3, dt^2/2], [dt^2/2, dt]].
+                let qn = c.acceleration_noise;
+                let (l11, l21, l22) = (
+                    qn * (dt.powi(3) / 3.0).sqrt(),
+                    qn * (3.0 * dt).sqrt() / 2.0,
+                    qn * (dt / 4.0).sqrt(),
+                );
+                let two_s2 = 2.0 * c.likelihood_sigma * c.likelihood_sigma;
+                let mut best = f64::INFINITY;
+                let (particles, log_w) = set.parts_mut();
+                for (x, lw) in particles.iter_mut().zip(log_w.iter_mut()) {
+                    // line 7: x_k ~ p(x_k | x_{k-1})
+                    let mut y = f * *x + b * gravity;
+                    for axis in 0..2 {
+                        let z1: f64 = StandardNormal.sample(&mut rng);
+                        let z2: f64 = StandardNormal.sample(&mut rng);
+                        y[axis] += l11 * z1;
+                        y[axis + 2] += l21 * z1 + l22 * z2;
+                    }
+                    target.reflect(&mut y);
+                    *x = y;
+                    // line 8: w_k ~ p(z_k | x_k), from the histogram distance
+                    self.hist.compute(frame, target.window(y[0], y[1]))?;
+                    let d = self.hist.distance(&target.reference, c.distance)?;
+                    best = best.min(d);
+                    *lw = -d * d / two_s2;
+                }
+                // lines 14-16: normalise
+                set.normalize()?;
+                let mean: SVector<f64, 4> = set.mean();
+                Ok(Estimate {
+                    bbox: target.bbox(mean[0], mean[1]),
+                    pose: None,
+                    particles: set.len(),
+                    evaluations: set.len(),
+                    lost: best > c.lost_distance,
+                })
+            }
+            _ => Err(TrackerError::NotInitialised),
+        }
+    }
+}
+
+impl Tracker for BallTracker {
+    fn name(&self) -> &'static str {
+        self.filter.name()
+    }
+
+    fn init(&mut self, frame: ImageView<'_, u8>, bbox: BBox) -> Result<()> {
+        let (target, centre) = Target::new(self.filter.name(), &frame, bbox, &self.config)?;
+        let v0 = self.config.initial_speed;
+        let belief = match self.filter {
+            BallFilter::Kf | BallFilter::Ukf => {
+                let mean = Vector4::new(centre[0], centre[1], 0.0, 0.0);
+                // The box is known to about a pixel; the velocity is not.
+                Belief::Gaussian(Gaussian::diagonal(
+                    mean,
+                    Vector4::new(1.0, 1.0, v0 * v0, v0 * v0),
+                )?)
+            }
+            BallFilter::Pf(n) => {
+                let mut rng = stream_rng(&[KEY, self.seed, u64::MAX]);
+                let mut draw = || -> f64 {
+                    let z: f64 = StandardNormal.sample(&mut rng);
+                    v0 * z
+                };
+                let particles = (0..n)
+                    .map(|_| Vector4::new(centre[0], centre[1], draw(), draw()))
+                    .collect();
+                Belief::Particles(ParticleSet::new(particles)?)
+            }
+        };
+        self.guard.start(&frame);
+        self.target = Some(target);
+        self.belief = Some(belief);
+        self.k = 0;
+        Ok(())
+    }
+
+    fn step(&mut self, frame: ImageView<'_, u8>) -> Result<Estimate> {
+        self.step_elapsed(frame, 1.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use bayestrack_image::Image;
+
+    /// A 200x160 white frame with a dark disc of radius 10 at (cx, cy),
+    /// plus deterministic +-2 noise.
+    fn disc(cx: f64, cy: f64) -> Image<u8> {
+        let data = (0..200 * 160 * 3)
+            .map(|i| {
+                let (c, x, y) = (i % 3, (i / 3) % 200, i / 3 / 200);
+                let d = ((x as f64 - cx).powi(2) + (y as f64 - cy).powi(2)).sqrt();
+                let n = ((x * 7 + y * 13 + c * 5) % 5) as u8;
+                if d <= 10.0 { 20 + n } else { 240 + n }
+            })
+            .collect();
+        Image::from_vec(200, 160, 3, data).unwrap()
+    }
+
+    fn ball_box(cx: f64, cy: f64) -> BBox {
+        BBox::new(cx - 9.5 + 1.0, cy - 9.5 + 1.0, 20.0, 20.0)
+    }
+
+    /// Runs `t` on a disc moving from (40, 50) at (3, 2) px/frame, bouncing
+    /// off the frame edges; returns the mean centre error, the maximum, and
+    /// the frames in which the tracker reported itself lost.
+    fn follow(t: &mut BallTracker, frames: usize) -> (f64, f64, usize) {
+        let (mut x, mut y, mut vx, mut vy) = (40.0, 50.0, 3.0, 2.0);
+        t.init(disc(x, y).view(), ball_box(x, y)).unwrap();
+        let (mut sum, mut max, mut lost) = (0.0, 0.0f64, 0);
+        for _ in 0..frames {
+            x += vx;
+            y += vy;
+            if !(10.0..=189.0).contains(&x) {
+                vx = -vx;
+                x = x.clamp(10.0, 189.0);
+            }
+            if !(10.0..=149.0).contains(&y) {
+                vy = -vy;
+                y = y.clamp(10.0, 149.0);
+            }
+            let e = t.step(disc(x, y).view()).unwrap();
+            let (ex, ey) = e.bbox.center();
+            let err = ((ex - 1.0 - x).powi(2) + (ey - 1.0 - y).powi(2)).sqrt();
+            sum += err;
+            max = max.max(err);
+            lost += usize::from(e.lost);
+        }
+        (sum / frames as f64, max, lost)
+    }
+
+    #[test]
+    fn every_tracker_follows_a_clean_ball() {
+        for filter in BallFilter::PAPER {
+            let mut t = BallTracker::new(filter, BallConfig::default(), 3).unwrap();
+            let (mean, max, lost) = follow(&mut t, 120);
+            // Ten particles on a 20 px ball are coarse; the rest lock on.
+            let bound = if filter == BallFilter::Pf(10) {
+                6.0
+            } else {
+                3.0
+            };
+            assert!(mean < bound, "{}: mean error {mean}", filter.name());
+            assert!(max < 15.0, "{}: max error {max}", filter.name());
+            assert_eq!(lost, 0, "{} reported itself lost", filter.name());
+        }
+    }
+
+    #[test]
+    fn more_particles_track_more_accurately_on_a_clean_scene() {
+        // Mean over seeds of the mean error: PF70 below PF10.
+        let mean_error = |n| {
+            (0..4)
+                .map(|s| {
+                    follow(
+                        &mut BallTracker::pf(BallConfig::default(), n, s).unwrap(),
+                        80,
+                    )
+                    .0
+                })
+                .sum::<f64>()
+                / 4.0
+        };
+        let (e10, e70) = (mean_error(10), mean_error(70));
+        assert!(e70 < e10, "PF70 {e70} vs PF10 {e10}");
+    }
+
+    #[test]
+    fn the_ukf_reflects_where_the_kf_cannot() {
+        // A ball 2 px from the right edge moving right at 6 px/frame.
+        let config = BallConfig::default();
+        let mut kf = BallTracker::kf(config).unwrap();
+        let mut ukf = BallTracker::ukf(config).unwrap();
+        let f0 = disc(120.0, 80.0);
+        for t in [&mut kf, &mut ukf] {
+            t.init(f0.view(), ball_box(120.0, 80.0)).unwrap();
+            let b = t.belief.as_mut().unwrap();
+            let Belief::Gaussian(g) = b else { panic!() };
+            *g = Gaussian::diagonal(
+                Vector4::new(187.5, 80.0, 6.0, 0.0),
+                Vector4::new(0.01, 0.01, 0.01, 0.01),
+            )
+            .unwrap();
+        }
+        // Predictions only (no update): compare means after one step.
+        let target = kf.target.clone().unwrap();
+        let (f, b, q) = matrices(1.0, 0.5);
+        let prior = Gaussian::diagonal(
+            Vector4::new(187.5, 80.0, 6.0, 0.0),
+            Vector4::new(0.01, 0.01, 0.01, 0.01),
+        )
+        .unwrap();
+        let lin = Kf::default()
+            .predict(
+                &prior,
+                &LinearDynamics::with_control(f, b, q).unwrap(),
+                Some(&SVector::<f64, 1>::new(0.0)),
+            )
+            .unwrap();
+        let refl = ukf
+            .ukf
+            .predict(
+                &prior,
+                &Reflecting {
+                    target: &target,
+                    f,
+                    b,
+                    q,
+                    gravity: 0.0,
+                },
+            )
+            .unwrap();
+        assert!((lin.mean()[0] - 193.5).abs() < 1e-9);
+        // hi = 200 - 20 + 9.5 = 189.5: 193.5 reflects to 185.5.
+        assert!((refl.mean()[0] - 185.5).abs() < 1e-6, "{}", refl.mean());
+        assert!(refl.mean()[2] < 0.0);
+    }
+
+    #[test]
+    fn pf_is_seeded() {
+        let run = |seed| {
+            let mut t = BallTracker::pf(BallConfig::default(), 10, seed).unwrap();
+            t.init(disc(50.0, 50.0).view(), ball_box(50.0, 50.0))
+                .unwrap();
+            t.step(disc(53.0, 51.0).view()).unwrap();
+            t.state().unwrap()
+        };
+        assert_eq!(run(5), run(5));
+        assert_ne!(run(5), run(6));
+    }
+
+    #[test]
+    fn reports_lost_when_the_ball_vanishes() {
+        for filter in BallFilter::PAPER {
+            let mut t = BallTracker::new(filter, BallConfig::default(), 1).unwrap();
+            t.init(disc(50.0, 50.0).view(), ball_box(50.0, 50.0))
+                .unwrap();
+            let e = t.step(disc(53.0, 51.0).view()).unwrap();
+            assert!(!e.lost);
+            let blank = Image::new(200, 160, 3, 240u8).unwrap();
+            let e = t.step(blank.view()).unwrap();
+            assert!(e.lost, "{}", filter.name());
+            assert!(e.bbox.is_valid());
+        }
+    }
+
+    #[test]
+    fn reports_its_work() {
+        let mut pf = BallTracker::pf(BallConfig::default(), 30, 0).unwrap();
+        let mut kf = BallTracker::kf(BallConfig::default()).unwrap();
+        for t in [&mut pf, &mut kf] {
+            t.init(disc(100.0, 80.0).view(), ball_box(100.0, 80.0))
+                .unwrap();
+        }
+        let e = pf.step(disc(100.0, 80.0).view()).unwrap();
+        assert_eq!((e.particles, e.evaluations), (30, 30));
+        let e = kf.step(disc(100.0, 80.0).view()).unwrap();
+        // 60x60 region (20 + 2 x 20), 41 x 41 windows.
+        assert_eq!((e.particles, e.evaluations), (0, 41 * 41));
+        assert_eq!(kf.name(), "ball-kf");
+        assert_eq!(BallFilter::Pf(70).label(), "PF70");
+    }
+
+    #[test]
+    fn bad_input_is_an_error() {
+        let frame = disc(50.0, 50.0);
+        for filter in BallFilter::PAPER {
+            let mut t = BallTracker::new(filter, BallConfig::default(), 0).unwrap();
+            assert!(matches!(
+                t.step(frame.view()),
+                Err(TrackerError::NotInitialised)
+            ));
+            assert!(matches!(
+                t.init(frame.view(), BBox::new(190.0, 10.0, 20.0, 20.0)),
+                Err(TrackerError::BoxOutsideFrame { .. })
+            ));
+            assert!(matches!(
+                t.init(frame.view(), BBox::new(10.0, 10.0, 0.0, 20.0)),
+                Err(TrackerError::EmptyBox { .. })
+            ));
+            assert!(matches!(
+                t.init(frame.view(), BBox::new(f64::NAN, 10.0, 5.0, 5.0)),
+                Err(TrackerError::EmptyBox { .. })
+            ));
+            let gray = Image::new(200, 160, 1, 0u8).unwrap();
+            assert!(matches!(
+                t.init(gray.view(), ball_box(50.0, 50.0)),
+                Err(TrackerError::Channels { .. })
+            ));
+            t.init(frame.view(), ball_box(50.0, 50.0)).unwrap();
+            let small = Image::new(100, 160, 3, 0u8).unwrap();
+            assert!(matches!(
+                t.step(small.view()),
+                Err(TrackerError::FrameSizeChanged { .. })
+            ));
+            assert!(matches!(
+                t.step_elapsed(frame.view(), 0.0),
+                Err(TrackerError::InvalidParameter { name: "dt", .. })
+            ));
+            assert!(matches!(
+                t.step_elapsed(frame.view(), f64::NAN),
+                Err(TrackerError::InvalidParameter { name: "dt", .. })
+            ));
+            // still usable after the errors
+            assert!(t.step(frame.view()).is_ok());
+        }
+        assert!(BallTracker::pf(BallConfig::default(), 0, 0).is_err());
+        let bad = BallConfig {
+            likelihood_sigma: -1.0,
+            ..BallConfig::default()
+        };
+        assert!(matches!(
+            BallTracker::kf(bad),
+            Err(TrackerError::InvalidParameter {
+                name: "likelihood_sigma",
+                ..
+            })
+        ));
+        let bad = BallConfig {
+            motion: MotionModel::Bouncing {
+                gravity: f64::INFINITY,
+            },
+            ..BallConfig::default()
+        };
+        assert!(BallTracker::ukf(bad).is_err());
+    }
+}
