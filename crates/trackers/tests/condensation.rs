@@ -631,6 +631,12 @@ fn both_cues_with_half_the_particles() {
     // so that comparison is printed, not asserted.
     let _ = (skin_c, skin_o);
     assert!(and_c <= 9.0, "AND N=50 centre {and_c}");
-    assert!(and_c <= 0.75 * ifd_c, "AND N=50 {and_c} vs IFD N=100 {ifd_c}");
-    assert!(and_o <= 0.9 * ifd_o, "AND N=50 {and_o} vs IFD N=100 {ifd_o}");
+    assert!(
+        and_c <= 0.75 * ifd_c,
+        "AND N=50 {and_c} vs IFD N=100 {ifd_c}"
+    );
+    assert!(
+        and_o <= 0.9 * ifd_o,
+        "AND N=50 {and_o} vs IFD N=100 {ifd_o}"
+    );
 }
