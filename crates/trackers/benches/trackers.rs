@@ -299,6 +299,20 @@ fn bench_affine(c: &mut Criterion) {
             Box::new(StpfTracker::new(StpfConfig::default(), 7).unwrap()),
         ),
         (
+            "stpf step, no per-frame LWPR training",
+            Box::new(
+                StpfTracker::new(
+                    {
+                        let mut c = StpfConfig::default();
+                        c.appearance.training_per_update = 0;
+                        c
+                    },
+                    7,
+                )
+                .unwrap(),
+            ),
+        ),
+        (
             "ispf step",
             Box::new(IspfTracker::new(IspfConfig::default(), 7).unwrap()),
         ),

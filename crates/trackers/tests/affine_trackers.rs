@@ -13,7 +13,7 @@ use bayestrack_affine::{Affine2, pose_error};
 use bayestrack_image::{BBox, Image};
 use bayestrack_trackers::{
     Estimate, HkpfConfig, HkpfTracker, IspfConfig, IspfTracker, StopRule, StpfConfig, StpfTracker,
-    Tracker, TrackerError, UpdateRule,
+    Tracker, TrackerError, UpdateRule, build_tracker,
 };
 use nalgebra::{Matrix2, Vector2};
 use rand::{RngExt, SeedableRng};
@@ -335,6 +335,43 @@ fn seeded_and_thread_independent() {
     });
     assert!(a == b && a == c, "same seed, same bits");
     assert_ne!(a, poses_of(8), "another seed, another run");
+}
+
+#[test]
+fn registry_builds_them_and_they_report_their_work() {
+    let (frames, poses) = scene(
+        &Motion {
+            frames: 11,
+            ..POSE_CHANGE
+        },
+        1,
+        6,
+    );
+    for name in ["hkpf", "ispf", "stpf"] {
+        let mut t = build_tracker(name, 1).unwrap();
+        assert_eq!(t.name(), name);
+        let r = run(t.as_mut(), &frames, &poses);
+        assert!(r.mean_error() < 6.0, "{name}: {}", r.mean_error());
+        assert!(r.estimates.iter().all(|e| e.evaluations >= e.particles));
+    }
+    let mut t = stpf(1);
+    t.init(frames[0].view(), initial_box(&poses[0])).unwrap();
+    assert!(t.pose().is_some() && t.model().is_some());
+    let e = t.step(frames[1].view()).unwrap();
+    let s = t.stats();
+    assert_eq!(s.particles, e.particles);
+    assert_eq!(s.evaluations, e.evaluations);
+    assert_eq!(t.particles().len(), e.particles);
+    assert!(s.pose_estimator_calls >= e.particles && s.batches >= 1);
+    assert!(s.best_similarity > s.stop_threshold || e.particles == 50);
+    assert_eq!(e.pose.unwrap(), *t.pose().unwrap().matrix());
+    // The box is the bounding box of the posed template.
+    let bb = t.pose().unwrap().bounding_box(TW, TH).unwrap();
+    assert!((e.bbox.x - (bb.x + 1.5)).abs() < 1e-9 && (e.bbox.width - bb.w).abs() < 1e-9);
+    // A frame without the target: lost, not an error.
+    let flat = Image::new(W, H, 1, 90u8).unwrap();
+    let e = t.step(flat.view()).unwrap();
+    assert!(e.lost && e.particles == 50, "{e:?}");
 }
 
 #[test]
