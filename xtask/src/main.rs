@@ -27,7 +27,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Print a paper's table beside ours; write CSV and SVG under --out/<id>/.
+    /// Print a paper's table beside ours; write CSV and SVG under `--out/<id>/`.
     ReproduceTable {
         /// `list`, `all`, or an experiment id (see `list`).
         target: String,
@@ -47,7 +47,7 @@ enum Command {
     Scenes {
         /// Scene name, or `list`.
         name: String,
-        /// Output folder (default: target/scenes/<name>).
+        /// Output folder (default: `target/scenes/<name>`).
         #[arg(long)]
         out: Option<PathBuf>,
         /// Seed of the scene's random streams.
@@ -75,7 +75,7 @@ enum Command {
         #[arg(long, default_value = "target/otb")]
         out: PathBuf,
     },
-    /// Rewrite tests/golden/<id>.csv from fresh quick runs and print what
+    /// Rewrite `tests/golden/<id>.csv` from fresh quick runs and print what
     /// changed.
     Bless {
         /// Experiment ids (default: every implemented one).

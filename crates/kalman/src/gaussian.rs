@@ -26,9 +26,9 @@ impl<const N: usize> Gaussian<N> {
     /// A belief from user data.
     ///
     /// # Errors
-    /// [`KalmanError::NonFinite`] for NaN or infinite entries,
-    /// [`KalmanError::NotSymmetric`] for an asymmetric covariance and
-    /// [`KalmanError::NotPositiveDefinite`] when it has a negative eigenvalue
+    /// [`KalmanError::NonFinite`](crate::KalmanError::NonFinite) for NaN or infinite entries,
+    /// [`KalmanError::NotSymmetric`](crate::KalmanError::NotSymmetric) for an asymmetric covariance and
+    /// [`KalmanError::NotPositiveDefinite`](crate::KalmanError::NotPositiveDefinite) when it has a negative eigenvalue
     /// (positive semi-definite is accepted).
     pub fn new(mean: SVector<f64, N>, cov: SMatrix<f64, N, N>) -> Result<Self> {
         linalg::check_finite_vec(&mean, "mean", Step::Construction)?;
@@ -84,7 +84,7 @@ impl<const N: usize> Gaussian<N> {
     /// evaluation.
     ///
     /// # Errors
-    /// [`KalmanError::NotPositiveDefinite`] when the covariance is singular.
+    /// [`KalmanError::NotPositiveDefinite`](crate::KalmanError::NotPositiveDefinite) when the covariance is singular.
     pub fn factor(&self) -> Result<FactoredGaussian<N>> {
         let llt = linalg::Llt::new(&self.cov, "covariance", Step::Evaluate)?;
         Ok(FactoredGaussian {
@@ -97,7 +97,7 @@ impl<const N: usize> Gaussian<N> {
     /// Log density at `x`.
     ///
     /// # Errors
-    /// As [`Gaussian::factor`], and [`KalmanError::NonFinite`] for a
+    /// As [`Gaussian::factor`], and [`KalmanError::NonFinite`](crate::KalmanError::NonFinite) for a
     /// non-finite `x`.
     pub fn log_pdf(&self, x: &SVector<f64, N>) -> Result<f64> {
         self.factor()?.log_pdf(x)
@@ -114,7 +114,7 @@ impl<const N: usize> Gaussian<N> {
     /// One draw; works for singular (semi-definite) covariances too.
     ///
     /// # Errors
-    /// [`KalmanError::NotPositiveDefinite`] if the covariance has a clearly
+    /// [`KalmanError::NotPositiveDefinite`](crate::KalmanError::NotPositiveDefinite) if the covariance has a clearly
     /// negative eigenvalue.
     pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R) -> Result<SVector<f64, N>> {
         let l = linalg::psd_sqrt(&self.cov, "covariance", Step::Evaluate)?;
@@ -161,7 +161,7 @@ impl<const N: usize> FactoredGaussian<N> {
     /// Squared Mahalanobis distance of `x`.
     ///
     /// # Errors
-    /// [`KalmanError::NonFinite`] for a non-finite `x`.
+    /// [`KalmanError::NonFinite`](crate::KalmanError::NonFinite) for a non-finite `x`.
     pub fn mahalanobis_sq(&self, x: &SVector<f64, N>) -> Result<f64> {
         linalg::check_finite_vec(x, "evaluation point", Step::Evaluate)?;
         let mut y = x - self.mean;
@@ -179,7 +179,7 @@ impl<const N: usize> FactoredGaussian<N> {
     /// Log density at `x`.
     ///
     /// # Errors
-    /// [`KalmanError::NonFinite`] for a non-finite `x`.
+    /// [`KalmanError::NonFinite`](crate::KalmanError::NonFinite) for a non-finite `x`.
     #[inline]
     pub fn log_pdf(&self, x: &SVector<f64, N>) -> Result<f64> {
         Ok(self.log_norm - 0.5 * self.mahalanobis_sq(x)?)

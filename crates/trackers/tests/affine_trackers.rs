@@ -490,3 +490,4 @@ fn survey() {
         report("  hkpf", &run(&mut hkpf(seed), &frames, &poses));
     }
 }
+

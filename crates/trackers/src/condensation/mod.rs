@@ -152,10 +152,11 @@ impl CueSet {
                     .with(1.0, ifd)?
                     .with(lambda, skin.ok_or_else(need)?)?,
             ),
-            CueSet::And { lambda } => {
-                let _ = (lambda, skin);
-                Box::new(ifd)
-            }
+            CueSet::And { lambda } => Box::new(
+                Fusion::new(FusionRule::And)
+                    .with(1.0, ifd)?
+                    .with(lambda, skin.ok_or_else(need)?)?,
+            ),
         })
     }
 }
