@@ -1,6 +1,6 @@
-//! The global displacement `d_k` of paper 002 eq. 4, predicted by a Kalman
+//! The global displacement `d_k` of Xu, Gao and Yang 2015 (paper 002) eq. 4, predicted by a Kalman
 //! filter (from `bayestrack-kalman`) on the constant-acceleration state
-//! `X = (x, y, vx, vy, ax, ay)` of paper 002 section 1, whose measurement is
+//! `X = (x, y, vx, vy, ax, ay)` of Xu, Gao and Yang 2015 (paper 002) section 1, whose measurement is
 //! the position of the final estimate `M_k*` (its translation).
 
 use bayestrack_kalman::{Gaussian, Kf, LinearDynamics, LinearMeasurement};

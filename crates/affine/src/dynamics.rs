@@ -1,4 +1,4 @@
-//! Dynamics on Aff(2) (paper 002 eq. 4-5):
+//! Dynamics on Aff(2) (Xu, Gao and Yang 2015 (paper 002) eq. 4-5):
 //!
 //! ```text
 //! M_k = exp(d_k(1) A5 + d_k(2) A6) * M_{k-1} * exp(Omega_k),
@@ -7,8 +7,8 @@
 //!
 //! The left factor is the global displacement `d_k` (a pure translation in
 //! image coordinates: A5 and A6 are the translation generators of eq. 3),
-//! predicted by a Kalman filter in paper 002; the right factor is Brownian
-//! motion in the body frame. Paper 002 writes the noise sum as
+//! predicted by a Kalman filter in Xu, Gao and Yang 2015 (paper 002); the right factor is Brownian
+//! motion in the body frame. Xu, Gao and Yang 2015 (paper 002) writes the noise sum as
 //! `sum_{i=5}^{6}` (extraction garbling) but defines `w_k` with all six
 //! components and uses it to perturb orientation, scale, aspect and skew,
 //! so the sum runs over all six generators here.

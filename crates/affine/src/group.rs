@@ -1,7 +1,7 @@
 //! The affine group Aff(2) as 3x3 matrices, its Lie algebra in the basis
-//! A1..A6 of paper 002 eq. 3, and exp / log.
+//! A1..A6 of Xu, Gao and Yang 2015 (paper 002) eq. 3, and exp / log.
 //!
-//! Basis (paper 002 eq. 3):
+//! Basis (Xu, Gao and Yang 2015 (paper 002) eq. 3):
 //!
 //! ```text
 //! A1 = [1 0 0; 0 1 0; 0 0 0]  scale       A2 = [1 0 0; 0 -1 0; 0 0 0]  aspect
@@ -20,7 +20,7 @@ use crate::error::{AffineError, Result, check_finite};
 /// Coordinates of a Lie-algebra element in the basis A1..A6.
 pub type AlgebraVector = Vector6<f64>;
 
-/// The six basis elements A1..A6 of paper 002 eq. 3, in order.
+/// The six basis elements A1..A6 of Xu, Gao and Yang 2015 (paper 002) eq. 3, in order.
 pub fn basis() -> [Matrix3<f64>; 6] {
     [
         Matrix3::new(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0),
@@ -77,7 +77,7 @@ fn vee_unchecked(x: &Matrix3<f64>) -> AlgebraVector {
 /// Pose parameters (dx, dy, theta, scale, aspect, skew) of an affine map.
 ///
 /// The linear part is `A = R(theta) R(-skew) diag(scale, scale * aspect) R(skew)`
-/// (the convention of Ross et al.'s IVT tracker, which ISPF and paper 002
+/// (the convention of Ross et al.'s IVT tracker, which ISPF and Xu, Gao and Yang 2015 (paper 002)
 /// follow) and the translation is `(dx, dy)`, the image position of the
 /// template centre. [`Affine2::params`] returns the canonical parameters:
 /// `scale > 0`, `0 < aspect <= 1`, `skew` in `(-pi/2, pi/2]` (0 when

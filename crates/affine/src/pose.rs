@@ -1,8 +1,8 @@
-//! The LWPR pose estimator of paper 002 section 2 (after Li et al.'s
+//! The LWPR pose estimator of Xu, Gao and Yang 2015 (paper 002) section 2 (after Li et al.'s
 //! incremental self-tuning particle filter, ISPF).
 //!
 //! A particle `M` (template -> image, see [`crate::group`]) is observed as a
-//! fixed-size patch `O(M)` (36x36 in paper 002) warped from the frame. The
+//! fixed-size patch `O(M)` (36x36 in Xu, Gao and Yang 2015 (paper 002)) warped from the frame. The
 //! estimator learns, with LWPR, the map from the features of `O(M)` to the
 //! Lie-algebra increment `Delta` such that `M exp(Delta)` is the target pose.
 //! It is trained online from random perturbations of the current estimate
@@ -33,7 +33,7 @@ pub enum FeatureKind {
 /// Parameters of the pose estimator.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PoseConfig {
-    /// Side of the square warped patch (paper 002: 36).
+    /// Side of the square warped patch (Xu, Gao and Yang 2015 (paper 002): 36).
     pub patch_size: usize,
     /// Block-average pooling factor applied to the patch (must divide
     /// `patch_size`): 1 keeps all 36 x 36 = 1296 grey values, 3 gives 144.

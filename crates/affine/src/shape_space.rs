@@ -1,4 +1,4 @@
-//! The planar affine shape space of B-spline contours (paper 003 eq. 13-14;
+//! The planar affine shape space of B-spline contours (Lee, Jo and Kang (paper 003) eq. 13-14;
 //! Blake and Isard, "Active Contours", ch. 4).
 //!
 //! A contour's control points `Q = [Q_x; Q_y]` (reference, centred on the

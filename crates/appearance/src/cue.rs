@@ -1,4 +1,4 @@
-//! One trait for every appearance cue, and OR / AND fusion (paper 003,
+//! One trait for every appearance cue, and OR / AND fusion (Lee, Jo and Kang (paper 003),
 //! eq. 9 and eq. 11).
 //!
 //! A [`Cue`] turns a [`Frame`] and a [`Candidate`] state (an axis-aligned
@@ -130,7 +130,7 @@ pub trait Cue {
     ) -> Result<f64>;
 
     /// As [`Cue::log_likelihood`], but a candidate that leaves the frame
-    /// scores `-inf` (zero likelihood, as paper 003 gives to impossible
+    /// scores `-inf` (zero likelihood, as Lee, Jo and Kang (paper 003) gives to impossible
     /// configurations) instead of failing. Other errors still fail.
     ///
     /// # Errors
@@ -188,7 +188,7 @@ fn mean_patch(p: &ImageViewMut<'_, f32>) -> f64 {
     s / (v.width() * v.height() * v.channels()) as f64
 }
 
-/// MAD template cue (paper 004, eq. 1 and 7) on the gray plane:
+/// MAD template cue (Dong and Chen (paper 004), eq. 1 and 7) on the gray plane:
 /// `ln p = -MAD / (2 sigma^2)`. A window must have the template's size; a
 /// pose warps the frame into a template-size patch.
 #[derive(Clone, Debug)]
@@ -248,7 +248,7 @@ impl Cue for MadCue {
     }
 }
 
-/// RGB histogram cue (paper 001): `ln p = -d^2 / (2 sigma^2)` with `d` the
+/// RGB histogram cue (Bócsi and Csató (paper 001)): `ln p = -d^2 / (2 sigma^2)` with `d` the
 /// chosen histogram distance to the reference. A pose is observed through a
 /// `patch_side x patch_side` warped patch.
 #[derive(Clone, Debug)]
@@ -321,7 +321,7 @@ impl Cue for HistogramCue {
     }
 }
 
-/// HSV skin cue (paper 003, eq. 8): `ln(mean C + floor)` over the window or
+/// HSV skin cue (Lee, Jo and Kang (paper 003), eq. 8): `ln(mean C + floor)` over the window or
 /// the warped patch. Uses the HSV plane for windows when present, else RGB.
 #[derive(Clone, Copy, Debug)]
 pub struct SkinCue {
@@ -394,7 +394,7 @@ impl Cue for SkinCue {
     }
 }
 
-/// Interframe-difference cue (paper 003, eq. 7): `ln(mean dP + floor)` over
+/// Interframe-difference cue (Lee, Jo and Kang (paper 003), eq. 7): `ln(mean dP + floor)` over
 /// the window or warped patch of the IFD plane (which may be a priority
 /// field `V^k`, eq. 15).
 #[derive(Clone, Copy, Debug)]
@@ -456,7 +456,7 @@ impl Cue for IfdCue {
     }
 }
 
-/// The paper 002 similarity as a cue: `ln(S + floor)`, `S = max(0, NCC)`
+/// The Xu, Gao and Yang 2015 (paper 002) similarity as a cue: `ln(S + floor)`, `S = max(0, NCC)`
 /// between the warped gray patch (template size) and the template. A window
 /// is resampled onto the template grid.
 #[derive(Clone, Debug)]

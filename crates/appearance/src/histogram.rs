@@ -1,4 +1,4 @@
-//! RGB colour histograms (paper 001, section 3) and their distances.
+//! RGB colour histograms (Bócsi and Csató (paper 001), section 3) and their distances.
 //!
 //! A window is represented by three per-channel histograms of `bins` bins
 //! each (`3 x 256` in the paper), normalised so that each channel sums to
@@ -13,7 +13,7 @@ use crate::{AppearanceError, Result};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 #[non_exhaustive]
 pub enum HistogramDistance {
-    /// `sqrt(sum_c sum_b (p_cb - q_cb)^2)` (paper 001, footnote 3).
+    /// `sqrt(sum_c sum_b (p_cb - q_cb)^2)` (Bócsi and Csató (paper 001), footnote 3).
     #[default]
     L2,
     /// `sqrt(1 - BC)`, `BC = (1/3) sum_c sum_b sqrt(p_cb q_cb)`, in `[0, 1]`.
@@ -178,7 +178,7 @@ impl RgbHistogram {
         Ok(())
     }
 
-    /// L2 distance between normalised histograms (paper 001, footnote 3).
+    /// L2 distance between normalised histograms (Bócsi and Csató (paper 001), footnote 3).
     ///
     /// # Errors
     /// [`AppearanceError::Incompatible`] for different bin counts or an empty histogram.

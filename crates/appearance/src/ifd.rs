@@ -1,5 +1,5 @@
-//! Interframe difference (paper 003, eq. 7) and the priority-subtracted IFD
-//! potential field for several objects (paper 003, eq. 15).
+//! Interframe difference (Lee, Jo and Kang (paper 003), eq. 7) and the priority-subtracted IFD
+//! potential field for several objects (Lee, Jo and Kang (paper 003), eq. 15).
 //!
 //! `dP_t(x, y) = |I_t(x, y) - I_{t-D}(x, y)|` with intensities in `[0, 1]`.
 //!

@@ -1,4 +1,4 @@
-//! MAD template matching (paper 004, eq. 1 and eq. 7).
+//! MAD template matching (Dong and Chen (paper 004), eq. 1 and eq. 7).
 //!
 //! `MAD(i, j) = 1/(M N) sum_m sum_n |T(m, n) - F(m + i, n + j)|`, the mean
 //! absolute difference between the template `T` and the frame window whose

@@ -1,4 +1,4 @@
-//! Centroid by image moments (paper 004, eq. 14-15).
+//! Centroid by image moments (Dong and Chen (paper 004), eq. 14-15).
 //!
 //! `x = m10 / m00 = sum_i sum_j i f(i, j) / sum_i sum_j f(i, j)`,
 //! `y = m01 / m00`, with `f` the gray value (or any non-negative weight map,

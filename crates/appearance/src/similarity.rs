@@ -1,15 +1,15 @@
 //! Target and background similarity distributions (TSD, BSD) with template
-//! update (paper 002, section 1).
+//! update (Xu, Gao and Yang 2015 (paper 002), section 1).
 //!
 //! The similarity of an observed patch to the target template is the
 //! zero-clamped normalised cross-correlation `S = max(0, NCC)` in `[0, 1]`
-//! (paper 002 needs `S` in `[0, 1]`: it scales the particle spread by
+//! (Xu, Gao and Yang 2015 (paper 002) needs `S` in `[0, 1]`: it scales the particle spread by
 //! `1 - S_max`; it does not name the measure, and NCC is insensitive to the
 //! illumination changes of its test sequences). TSD `N(mu_T, sigma_T)` is the
 //! distribution of `S` for the tracked target, BSD `N(mu_B, sigma_B)` that of
 //! patches from the background around it. Both are learnt online with
 //! exponential forgetting. The models (template, TSD, BSD) are updated only
-//! when the frame's final score exceeds `mu_B + sigma_B` (paper 002 text;
+//! when the frame's final score exceeds `mu_B + sigma_B` (Xu, Gao and Yang 2015 (paper 002) text;
 //! Algorithm 1 step 7 prints `mu_B - sigma_B`), and pose tuning stops once a
 //! particle reaches `mu_T - sigma_T` ([`TargetModel::stop_threshold`]).
 
@@ -153,7 +153,7 @@ fn check_rate(name: &'static str, rate: f64) -> Result<f64> {
     }
 }
 
-/// The target appearance model of paper 002: template patch, TSD and BSD.
+/// The target appearance model of Xu, Gao and Yang 2015 (paper 002): template patch, TSD and BSD.
 #[derive(Clone, Debug)]
 pub struct TargetModel {
     template: Image<f32>,
@@ -265,7 +265,7 @@ impl TargetModel {
     }
 
     /// [`TargetModel::update`] with the caller's threshold in place of
-    /// `mu_B + sigma_B` (paper 002 prints the update condition both as
+    /// `mu_B + sigma_B` (Xu, Gao and Yang 2015 (paper 002) prints the update condition both as
     /// `mu_B + sigma_B`, section 1, and as `mu_B - sigma_B`, Algorithm 1
     /// step 7): updates only if `score > threshold`.
     ///

@@ -1,4 +1,4 @@
-//! HSV skin-colour cue (paper 003, eq. 8).
+//! HSV skin-colour cue (Lee, Jo and Kang (paper 003), eq. 8).
 //!
 //! `C(x, y) = exp(-((h - h_R)^2 + (s - s_R)^2) / (2 sigma_hs^2))`, with hue
 //! in turns (`[0, 1)`) and saturation in `[0, 1]`. Hue is an angle, so

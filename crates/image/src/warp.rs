@@ -4,7 +4,7 @@
 //! centres at integer coordinates, `0..w` by `0..h`) it samples the source
 //! image bilinearly at `(x, y) = M (u, v, 1)`, where `M` is an [`Affine2`]
 //! mapping **patch coordinates to image coordinates**. This is the
-//! observation `O(M)` of paper 002: a fixed-size (36x36) patch seen through
+//! observation `O(M)` of Xu, Gao and Yang 2015 (paper 002): a fixed-size (36x36) patch seen through
 //! an affine pose.
 
 use crate::{Image, ImageError, ImageView, ImageViewMut, Pixel, Result};

@@ -1,4 +1,4 @@
-//! The hybrid UKF -> IEKF step of the HIKPF proposal (paper 000 sec. 3.3,
+//! The hybrid UKF -> IEKF step of the HIKPF proposal (Nagy, Ahmed and Zayed (paper 000) sec. 3.3,
 //! steps (a)-(b)).
 //!
 //! (a) An augmented UKF step (`x_a = [x, v, n]`, one sigma-point set through
@@ -40,7 +40,7 @@ pub enum HybridPrior {
 pub struct HybridUkfIekf {
     /// The unscented filter of step (a).
     pub ukf: Ukf,
-    /// The iterated filter of step (b); its `max_iterations` is paper 000's `c`.
+    /// The iterated filter of step (b); its `max_iterations` is Nagy, Ahmed and Zayed's (paper 000) `c`.
     pub iekf: Iekf,
     /// Prior of step (b).
     pub prior: HybridPrior,

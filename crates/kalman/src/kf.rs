@@ -1,5 +1,5 @@
-//! The linear Kalman filter (paper 001 eq. 1-7, paper 004 eq. 9-13), the
-//! extended Kalman filter and the iterated extended Kalman filter (paper 000
+//! The linear Kalman filter (Bócsi and Csató (paper 001) eq. 1-7, Dong and Chen (paper 004) eq. 9-13), the
+//! extended Kalman filter and the iterated extended Kalman filter (Nagy, Ahmed and Zayed (paper 000)
 //! sec. 3.2), and the Rauch-Tung-Striebel smoother for linear models.
 
 use nalgebra::{SMatrix, SVector};
@@ -215,13 +215,13 @@ impl Ekf {
     }
 }
 
-/// The iterated extended Kalman filter (paper 000 sec. 3.2): the measurement
+/// The iterated extended Kalman filter (Nagy, Ahmed and Zayed (paper 000) sec. 3.2): the measurement
 /// update relinearises `h` about the latest iterate,
 ///
 /// `x_{i+1} = x_f + K_i (z - h(x_i) - H_i (x_f - x_i))`,
 /// `K_i = P H_i^T (H_i P H_i^T + R)^{-1}`, `H_i = dh/dx (x_i)`, `x_0 = x_f`,
 ///
-/// the Gauss-Newton form of Bell and Cathey (1993). Paper 000 prints the
+/// the Gauss-Newton form of Bell and Cathey (1993). Nagy, Ahmed and Zayed (paper 000) prints the
 /// iterate without the `- H_i (x_f - x_i)` term; that variant does not
 /// converge to the MAP estimate and is not implemented. With one iteration
 /// this is exactly the EKF update.
@@ -234,7 +234,7 @@ pub struct Iekf {
 }
 
 impl Iekf {
-    /// At most `max_iterations` relinearisations (paper 000's `c`), stopping
+    /// At most `max_iterations` relinearisations (Nagy, Ahmed and Zayed's (paper 000) `c`), stopping
     /// early when an iterate moves less than `tolerance` (infinity norm).
     ///
     /// # Errors

@@ -3,7 +3,7 @@
 //! Additive-noise models (`x_k = f(x_{k-1}) + v`, `z = h(x) + n`) implement
 //! [`Dynamics`] and [`Measurement`], plus the `*Jacobian` traits for the EKF
 //! and IEKF. Models whose noise enters non-additively (the augmented UKF of
-//! paper 000 sec. 3.3, `x_a = [x, v, n]`) implement [`NoisyDynamics`] and
+//! Nagy, Ahmed and Zayed (paper 000) sec. 3.3, `x_a = [x, v, n]`) implement [`NoisyDynamics`] and
 //! [`NoisyMeasurement`]; [`Additive`] turns an additive model into one.
 
 use nalgebra::{SMatrix, SVector};

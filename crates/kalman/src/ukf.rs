@@ -1,6 +1,6 @@
-//! The unscented Kalman filter with scaled sigma points (paper 001 eq. 8-12;
+//! The unscented Kalman filter with scaled sigma points (Bócsi and Csató (paper 001) eq. 8-12;
 //! Julier 2002; van der Merwe 2004), in additive-noise and augmented-state
-//! forms (paper 000 sec. 3.3), and the unscented RTS smoother (Sarkka 2008).
+//! forms (Nagy, Ahmed and Zayed (paper 000) sec. 3.3), and the unscented RTS smoother (Sarkka 2008).
 //!
 //! For an `L`-dimensional (possibly augmented) state with mean `m` and
 //! covariance `P = S S^T`:
@@ -485,7 +485,7 @@ impl Ukf {
         Self::correct(prior, &mo.y_mean, mo.p_yy, &mo.p_xy, z)
     }
 
-    /// The joint augmented step of paper 000 sec. 3.3 (a): ONE sigma-point
+    /// The joint augmented step of Nagy, Ahmed and Zayed (paper 000) sec. 3.3 (a): ONE sigma-point
     /// set of `x_a = [x; v; n]`, pushed through `f(x, v)` and then `h(., n)`.
     ///
     /// # Errors

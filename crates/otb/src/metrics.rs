@@ -225,7 +225,7 @@ pub struct FeaturePoints {
     pub center: [f64; 2],
 }
 
-/// RMS error of paper 002, eq. 6, exactly as printed:
+/// RMS error of Xu, Gao and Yang 2015 (paper 002), eq. 6, exactly as printed:
 /// `RMS = sqrt( (1/14) sum_{i=1..7} |P^_i - P_i|^2 + (1/2) |C^ - C|^2 )`,
 /// i.e. the mean squared coordinate error over the 14 point coordinates plus
 /// the mean squared coordinate error of the centre.

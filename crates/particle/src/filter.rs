@@ -1,4 +1,4 @@
-//! The sequential importance sampling / resampling step (paper 000 eq. 7-10,
+//! The sequential importance sampling / resampling step (Nagy, Ahmed and Zayed (paper 000) eq. 7-10,
 //! sec. 2.3), with an optional Metropolis-Hastings move after resampling
 //! (van der Merwe et al. 2000, UPF-MCMC).
 //!
@@ -21,7 +21,7 @@ use crate::set::{ParticleSet, Scratch, check_threshold, exp_flushed};
 /// When to resample.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum ResamplePolicy {
-    /// After every step (paper 000, the original UPF demo).
+    /// After every step (Nagy, Ahmed and Zayed (paper 000), the original UPF demo).
     Always,
     /// When the ESS falls below this fraction of `N` (adaptive).
     Ess(f64),

@@ -1,4 +1,4 @@
-//! Importance proposals `q(x_k | x_{k-1}, z_k)` (paper 000 eq. 7-10).
+//! Importance proposals `q(x_k | x_{k-1}, z_k)` (Nagy, Ahmed and Zayed (paper 000) eq. 7-10).
 //!
 //! A proposal draws a new particle from its parent and returns it with the
 //! log of the incremental importance weight
@@ -129,7 +129,7 @@ linearised_local_filter!(Ekf);
 linearised_local_filter!(Iekf);
 
 /// The unscented particle filter's local step: the augmented-state UKF of
-/// paper 000 sec. 3.3 (a), one sigma-point set of `[x, v, n]` through `f`
+/// Nagy, Ahmed and Zayed (paper 000) sec. 3.3 (a), one sigma-point set of `[x, v, n]` through `f`
 /// and `h` (additive noise).
 impl<const N: usize, const M: usize, D> LocalFilter<N, M, D> for Ukf
 where

@@ -3,10 +3,10 @@
 //! number of copies of particle `i` is `M w_i`.
 //!
 //! - multinomial: `M` independent draws (sorted uniforms from exponential
-//!   spacings, then one pass over the cumulative weights; paper 001
-//!   footnote 2, paper 003's "roulette wheel");
+//!   spacings, then one pass over the cumulative weights; Bócsi and Csató (paper 001)
+//!   footnote 2, Lee, Jo and Kang's (paper 003) "roulette wheel");
 //! - residual: `floor(M w_i)` copies, the remainder multinomial on the
-//!   residual weights (Liu and Chen 1998; paper 000 uses it);
+//!   residual weights (Liu and Chen 1998; Nagy, Ahmed and Zayed (paper 000) uses it);
 //! - systematic: one uniform `u`, points `(u + j) / M`;
 //! - stratified: one uniform per stratum, points `(j + u_j) / M`.
 //!

@@ -21,7 +21,7 @@ impl<const N: usize> Particle<N> for SVector<f64, N> {
 }
 
 /// A particle that carries the covariance of its own Gaussian, for the
-/// Kalman-proposal filters (paper 000 sec. 2.3.2: each particle is the mean
+/// Kalman-proposal filters (Nagy, Ahmed and Zayed (paper 000) sec. 2.3.2: each particle is the mean
 /// of an EKF/UKF/IEKF whose covariance it keeps).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct KalmanParticle<const N: usize> {
@@ -227,7 +227,7 @@ impl<T: Clone> ParticleSet<T> {
         w
     }
 
-    /// Effective sample size `1 / sum w_i^2` (paper 003 eq. 16).
+    /// Effective sample size `1 / sum w_i^2` (Lee, Jo and Kang (paper 003) eq. 16).
     pub fn ess(&self) -> f64 {
         1.0 / self
             .log_weights
@@ -237,7 +237,7 @@ impl<T: Clone> ParticleSet<T> {
     }
 
     /// Kong-Liu effective sample size `N / (1 + cv^2)` with `cv^2` the sample
-    /// variance (divisor `N - 1`) of `N w_i` (paper 001). With divisor `N`
+    /// variance (divisor `N - 1`) of `N w_i` (Bócsi and Csató (paper 001)). With divisor `N`
     /// it would equal [`ParticleSet::ess`] exactly.
     pub fn ess_kong_liu(&self) -> f64 {
         let n = self.len() as f64;

@@ -18,7 +18,7 @@ use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
-/// Paper 001's screen as the `ball` experiment renders it: 200x160 RGB, a
+/// Bócsi and Csató's (paper 001) screen as the `ball` experiment renders it: 200x160 RGB, a
 /// dark ball of radius 10 on a light screen moving 3 px/frame and reflected
 /// at the edges, Gaussian sensor noise of 3 grey levels. Returns the frames
 /// and the first frame's OTB box.
@@ -73,7 +73,7 @@ fn bench_steps<T: Tracker + ?Sized>(
     });
 }
 
-/// Paper 001's five ball trackers, one step per iteration.
+/// Bócsi and Csató's (paper 001) five ball trackers, one step per iteration.
 fn bench_ball(c: &mut Criterion) {
     let (frames, first) = ball_frames(120);
     let mut group = c.benchmark_group("ball 200x160 (paper 001)");
@@ -86,7 +86,7 @@ fn bench_ball(c: &mut Criterion) {
     group.finish();
 }
 
-/// Paper 004's road as the `correlation` experiment renders it, simplified:
+/// Dong and Chen's (paper 004) road as the `correlation` experiment renders it, simplified:
 /// 320x240 gray, a textured road, `cars` dark 24x32 cars moving (2.56, 5)
 /// px/frame (the second 60 px to the right), a billboard over rows 118-171,
 /// noise of 2 grey levels. Returns the background, the frames and the first
@@ -129,7 +129,7 @@ fn road_frames(n: usize, cars: usize) -> (Image<u8>, Vec<Image<u8>>, BBox) {
     (bg, frames, BBox::new(46.0, 70.0, 25.0, 33.0))
 }
 
-/// Paper 004's trackers on the 320x240 road: MAD (window and whole-frame
+/// Dong and Chen's (paper 004) trackers on the 320x240 road: MAD (window and whole-frame
 /// search), PF correlation (Ns = 15), and the Kalman multi-target tracker
 /// on two cars.
 fn bench_road(c: &mut Criterion) {
@@ -236,7 +236,7 @@ fn bench_street(c: &mut Criterion) {
     group.finish();
 }
 
-/// Paper 002's setting, simplified: 320x240 gray, a smooth textured
+/// Xu, Gao and Yang's (2015, paper 002) setting, simplified: 320x240 gray, a smooth textured
 /// background, a 40x48 textured patch under a known affine motion (drift
 /// of 30 px, rotation up to 0.6 rad, scale 0.75-1.25), noise of 2 grey
 /// levels. Returns the frames and the first frame's OTB box.
@@ -287,7 +287,7 @@ fn affine_frames(n: usize) -> (Vec<Image<u8>>, BBox) {
     (frames, first)
 }
 
-/// Paper 002's three trackers at its settings, one step per iteration (the
+/// Xu, Gao and Yang's (2015, paper 002) three trackers at its settings, one step per iteration (the
 /// initialisation, with the pose estimator's first training, is not timed).
 fn bench_affine(c: &mut Criterion) {
     let (frames, first) = affine_frames(60);
@@ -344,7 +344,7 @@ fn bench_affine(c: &mut Criterion) {
     group.finish();
 }
 
-/// Paper 003's webcam at 320x240 RGB: a skin-coloured ellipse (40x52,
+/// Lee, Jo and Kang's (paper 003) webcam at 320x240 RGB: a skin-coloured ellipse (40x52,
 /// RGB 224 172 138) wandering at up to about 4 px/frame over a textured
 /// low-saturation wall. Returns the frames and the first frame's OTB box.
 fn webcam_frames(n: usize) -> (Vec<Image<u8>>, BBox) {
@@ -386,7 +386,7 @@ fn webcam_frames(n: usize) -> (Vec<Image<u8>>, BBox) {
     )
 }
 
-/// Paper 003's CONDENSATION trackers, one step per iteration (a step
+/// Lee, Jo and Kang's (paper 003) CONDENSATION trackers, one step per iteration (a step
 /// includes the frame's IFD map), and one contour measurement per
 /// particle (the curve cues on one pose).
 fn bench_condensation(c: &mut Criterion) {

@@ -1,4 +1,4 @@
-//! Paper 001's histogram particle filter extended for real video (issue
+//! Bócsi and Csató's (paper 001) histogram particle filter extended for real video (issue
 //! #7): the box size joins the state, and the colour model is the one
 //! colour-based particle filters use on real footage. The paper-exact
 //! ball trackers stay in [`crate::BallTracker`] for the reproductions.

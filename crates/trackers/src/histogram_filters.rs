@@ -1,4 +1,4 @@
-//! Paper 001's ball trackers (Bocsi and Csato, sec. 3): a Kalman filter, an
+//! Bócsi and Csató's (paper 001) ball trackers (Bocsi and Csato, sec. 3): a Kalman filter, an
 //! unscented Kalman filter and particle filters with `N` = 10, 30, 70
 //! particles, all with the RGB histogram appearance model (3 x 256 bins, L2
 //! distance, footnote 3).
@@ -17,7 +17,7 @@
 //!   the frame, the velocity component flips).
 //! - [`MotionModel::Bouncing`]: the same plus gravity `g` (px/frame^2,
 //!   downwards): `x' = F x + B g + w`, `B = [0, dt^2/2, 0, dt]^T`, reflected
-//!   at the edges: paper 001's "bouncing dynamics" (footnote 4).
+//!   at the edges: Bócsi and Csató's (paper 001) "bouncing dynamics" (footnote 4).
 //!
 //! The reflection is the non-linearity. The **KF** can only use the linear
 //! part (`F`, and gravity as the control input `B u` of eq. 1): "the merely
@@ -39,7 +39,7 @@
 //!   [`BallConfig::search_margin`] pixels on each side (clipped to the
 //!   frame); `z = H x + v`, `H = [I 0]`, `R = r^2 I`
 //!   ([`BallConfig::measurement_noise`]). There is no gating and no explicit
-//!   search for a lost ball: paper 001 says "explicit ball searching has not
+//!   search for a lost ball: Bócsi and Csató (paper 001) says "explicit ball searching has not
 //!   been used".
 //! - PF: Algorithm 1 of the paper on a [`ParticleSet`]: draw ancestors by
 //!   importance resampling ([`Resampling::Multinomial`]: sorted uniforms
@@ -151,7 +151,7 @@ pub struct BallConfig {
     pub likelihood_sigma: f64,
     /// Histogram distance above which the tracker reports itself lost (0.6).
     pub lost_distance: f64,
-    /// UKF `alpha` (1; paper 001 sec. 2.2 suggests 1e-3, which puts the
+    /// UKF `alpha` (1; Bócsi and Csató (paper 001) sec. 2.2 suggests 1e-3, which puts the
     /// sigma points within 0.002 standard deviations of the mean with
     /// weights of 1.25e5: one point across a wall, reflected, then throws
     /// the mean hundreds of pixels off, see the module docs).
@@ -403,7 +403,7 @@ pub enum BallFilter {
 }
 
 impl BallFilter {
-    /// The five trackers of paper 001, in the paper's row order.
+    /// The five trackers of Bócsi and Csató (paper 001), in the paper's row order.
     pub const PAPER: [BallFilter; 5] = [
         BallFilter::Pf(10),
         BallFilter::Pf(30),
@@ -442,7 +442,7 @@ enum Belief {
     Particles(ParticleSet<SVector<f64, 4>>),
 }
 
-/// One of paper 001's ball trackers (KF, UKF or PF_N), see the module docs.
+/// One of Bócsi and Csató's (paper 001) ball trackers (KF, UKF or PF_N), see the module docs.
 #[derive(Debug, Clone)]
 pub struct BallTracker {
     filter: BallFilter,

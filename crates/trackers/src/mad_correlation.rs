@@ -1,4 +1,4 @@
-//! Paper 004's correlation trackers: the MAD template tracker (sec. 2) and
+//! Dong and Chen's (paper 004) correlation trackers: the MAD template tracker (sec. 2) and
 //! the particle-filter correlation tracker (sec. 3).
 //!
 //! Both take the gray template inside the initial box and compare it with
@@ -104,7 +104,7 @@ impl Default for MadTrackerConfig {
     }
 }
 
-/// Paper 004 sec. 2: exhaustive MAD template matching under a translation
+/// Dong and Chen (paper 004) sec. 2: exhaustive MAD template matching under a translation
 /// model. The template is the gray content of the initial box and is never
 /// updated; each frame the window of smallest MAD (first in raster order on
 /// ties) becomes the estimate.
@@ -305,7 +305,7 @@ impl ArpMotion {
 /// Settings of [`PfCorrelationTracker`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PfCorrelationConfig {
-    /// `Ns`, the number of particles (15 in paper 004 sec. 3.3).
+    /// `Ns`, the number of particles (15 in Dong and Chen (paper 004) sec. 3.3).
     pub particles: usize,
     /// `(b1, b2)` of eq. 4: the half-widths in pixels of the uniform initial
     /// spread around the initial centre.
@@ -453,7 +453,7 @@ impl<'a> Proposal<Vector2<f64>, Observation<'a>> for ArpProposal {
     }
 }
 
-/// Paper 004 sec. 3: correlation tracking with a particle filter on the
+/// Dong and Chen (paper 004) sec. 3: correlation tracking with a particle filter on the
 /// window centre `(TX, TY)` (0-based pixel coordinates), built on
 /// [`bayestrack_particle::ParticleFilter`].
 ///

@@ -1,4 +1,4 @@
-//! Paper 004 sec. 4: Kalman multi-target tracking by background subtraction.
+//! Dong and Chen (paper 004) sec. 4: Kalman multi-target tracking by background subtraction.
 //!
 //! Each frame: the foreground `|F - B| > tau` (cleaned by a morphological
 //! opening and closing) is split into blobs by connected components; each
@@ -292,7 +292,7 @@ impl TrackState {
     }
 }
 
-/// Paper 004 sec. 4: several targets, each with its own Kalman filter on
+/// Dong and Chen (paper 004) sec. 4: several targets, each with its own Kalman filter on
 /// the 8-D state of eq. 18, found by subtracting a known background.
 #[derive(Debug, Clone)]
 pub struct MultiTargetTracker {

@@ -1,7 +1,7 @@
 //! A fast template tracker for real video that follows position and
 //! scale: normalised cross-correlation (NCC) of a gray template searched
 //! exhaustively in a window around a constant-velocity prediction, at three
-//! scales, with a guarded template update. Not from the papers: paper 004's
+//! scales, with a guarded template update. Not from the papers: Dong and Chen's (paper 004)
 //! MAD tracker (translation, fixed template, [`crate::MadTracker`]) made
 //! usable on real video (issue #7).
 //!
@@ -88,7 +88,7 @@ pub struct NccScaleConfig {
     /// Largest template, in template pixels (400, e.g. 20x20): the initial
     /// box is resampled down to this area. Template trackers work with
     /// patches of a few hundred pixels (KCF/DSST resample to about 50x50
-    /// cells of 4 pixels; paper 002 uses 36x36); the search cost grows with
+    /// cells of 4 pixels; Xu, Gao and Yang 2015 (paper 002) uses 36x36); the search cost grows with
     /// this area times the number of offsets.
     pub template_area: usize,
     /// Weight `f` of the template's edges relative to its centre (0.25):
