@@ -219,6 +219,15 @@ const FAST: Motion = Motion {
     jump: 0.0,
 };
 
+/// Abrupt motion: jumps of 12 px (right, down 7.2 px, left, up) every 15
+/// frames on a slow drift with mild pose change.
+const JUMPS: Motion = Motion {
+    frames: 61,
+    pose: [0.2, 0.1, 0.05],
+    drift: [20.0, 10.0],
+    jump: 12.0,
+};
+
 fn stpf(seed: u64) -> StpfTracker {
     StpfTracker::new(StpfConfig::default(), seed).unwrap()
 }
@@ -480,6 +489,7 @@ fn bad_input_is_a_typed_error() {
 fn survey() {
     let motion = match std::env::var("AFFINE_MOTION").as_deref() {
         Ok("fast") => FAST,
+        Ok("jumps") => JUMPS,
         _ => POSE_CHANGE,
     };
     for seed in 1..=4 {
@@ -490,4 +500,3 @@ fn survey() {
         report("  hkpf", &run(&mut hkpf(seed), &frames, &poses));
     }
 }
-
