@@ -497,6 +497,14 @@ fn survey() {
         println!("seed {seed}");
         report("  stpf", &run(&mut stpf(seed), &frames, &poses));
         report("  ispf", &run(&mut ispf(seed), &frames, &poses));
+        let each = IspfConfig {
+            stop_inside_batch: true,
+            ..IspfConfig::default()
+        };
+        report(
+            "  ispf, stop inside batches",
+            &run(&mut IspfTracker::new(each, seed).unwrap(), &frames, &poses),
+        );
         report("  hkpf", &run(&mut hkpf(seed), &frames, &poses));
     }
 }

@@ -137,7 +137,41 @@ impl UpdateRule {
 }
 
 /// The observation, appearance model and pose estimator shared by the
-/// three trackers.
+/// three paper-002 trackers ([`HkpfTracker`], [`IspfTracker`],
+/// [`StpfTracker`]; Xu, Gao and Yang 2015).
+///
+/// # Observation
+/// Frames (gray or RGB) are converted to gray `f32` in `[0, 1]`. A pose
+/// `M` (template coordinates centred on the initial box, `w x h` pixels,
+/// to 0-based image coordinates; `M_0` = translation to the box centre) is
+/// observed as the `patch_size x patch_size` patch `O(M)`
+/// ([`bayestrack_affine::PoseEstimator::patch_map`]) and scored by
+/// `S = max(0, NCC(O(M), template))`. A pose whose patch leaves the frame
+/// or whose scale `sqrt(det A)` leaves `scale_range` is rejected (not
+/// scored).
+///
+/// # Tuning a particle to its best neighbour (ISPF, STPF)
+/// The pose estimator (LWPR) predicts the increment `Delta` from the
+/// features of `O(M)` (the same warp gives the similarity of `M`); the step
+/// `M' = M exp(Delta)` is kept if its similarity is higher, up to
+/// `tune_steps` steps. A step is rejected, and tuning stops, when it does
+/// not raise the similarity, when its patch leaves the frame, when its
+/// scale leaves `scale_range`, or when `exp(Delta)` fails. The tuned
+/// particle is the best pose seen (the rule of
+/// [`bayestrack_affine::PoseEstimator::tune`]). Each step tried costs one
+/// pose-estimator prediction and one similarity evaluation.
+///
+/// # Models and their update
+/// Template: `O(M_0)`. TSD: similarities of `tsd_samples` perturbations
+/// `M_0 exp(delta)`, `delta ~ N(0, (train_sigma / 2)^2)`. BSD:
+/// similarities of the patches one box width / height away in 8 directions
+/// (inside the frame; prior `N(0.3, 0.15)` when fewer than 2 fit). After a
+/// frame whose final score passes `update_rule`: the template blends
+/// towards `O(M*)` at `template_rate`, TSD absorbs the score, BSD the
+/// scores of the 4 patches one box away from `M*`, and (ISPF, STPF) the
+/// pose estimator trains on `training_per_update` perturbations of `M*`
+/// (`initial_training` at `init`). An estimate scoring at or below
+/// `mu_B + sigma_B` is reported lost.
 #[derive(Debug, Clone, PartialEq)]
 pub struct AppearanceConfig {
     /// Pose estimator; its `patch_size` (36, paper 002 sec. 3.1) is also
