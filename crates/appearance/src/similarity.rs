@@ -397,4 +397,18 @@ mod tests {
         let learnt = TargetModel::from_samples(tpl, &[0.9, 0.8], &[0.1, 0.3], 0.1, 0.2).unwrap();
         assert!((learnt.tsd().mean() - 0.85).abs() < 1e-12);
     }
+
+    #[test]
+    fn update_above_takes_the_callers_threshold() {
+        let tpl = texture(36, 36, 1);
+        let other = texture(36, 36, 2);
+        let tsd = OnlineGaussian::new(0.9, 0.05, 0.1).unwrap();
+        let bsd = OnlineGaussian::new(0.2, 0.1, 0.1).unwrap();
+        let mut m = TargetModel::new(tpl, tsd, bsd, 0.5).unwrap();
+        // 0.25 is below mu_B + sigma_B = 0.3 but above mu_B - sigma_B = 0.1.
+        assert!(!m.clone().update(other.view(), 0.25, &[]).unwrap());
+        assert!(m.update_above(other.view(), 0.25, &[], 0.1).unwrap());
+        assert!(!m.update_above(other.view(), 0.05, &[], 0.1).unwrap());
+        assert!(m.update_above(other.view(), 0.5, &[], f64::NAN).is_err());
+    }
 }

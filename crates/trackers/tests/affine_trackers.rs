@@ -411,6 +411,15 @@ fn bad_input_is_a_typed_error() {
         t.init(gray.view(), BBox::new(1.0, 1.0, 20.0, 20.0))
             .unwrap();
         assert!(t.step(gray.view()).is_ok());
+        // A 2x2 box and a box filling the frame (no room for particles:
+        // lost, not an error).
+        t.init(gray.view(), BBox::new(30.0, 30.0, 2.0, 2.0))
+            .unwrap();
+        assert!(t.step(gray.view()).is_ok());
+        t.init(gray.view(), BBox::new(1.0, 1.0, 80.0, 60.0))
+            .unwrap();
+        let e = t.step(gray.view()).unwrap();
+        assert!(e.lost && e.bbox.x.is_finite());
         assert!(matches!(
             t.step(other.view()),
             Err(TrackerError::FrameSizeChanged { .. })
