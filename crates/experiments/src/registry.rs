@@ -1,6 +1,7 @@
 //! Every experiment by id: what `cargo xtask reproduce-table` lists and runs.
 //! An experiment added to [`REGISTRY`] joins `list`, `all` and `bless`.
 
+use crate::affine::AffineExperiment;
 use crate::ball::BallExperiment;
 use crate::correlation::CorrelationExperiment;
 use crate::experiment::{Experiment, ExperimentError, RunOptions};
@@ -36,11 +37,7 @@ impl Experiment for Planned {
 pub const REGISTRY: &[&dyn Experiment] = &[
     &HikpfExperiment,
     &BallExperiment,
-    &Planned {
-        id: "affine",
-        source: "paper 002 (RMS eq. 6, particles per frame)",
-        summary: "HKPF, ISPF and self-tuning HKPF on synthetic affine sequences",
-    },
+    &AffineExperiment,
     &CorrelationExperiment,
     &Planned {
         id: "condensation",
