@@ -325,25 +325,28 @@ fn seeded_and_thread_independent() {
         1,
         5,
     );
-    let poses_of = |seed: u64| -> Vec<[f64; 9]> {
-        run(&mut stpf(seed), &frames, &poses)
-            .estimates
-            .iter()
-            .map(|e| {
-                let m = e.pose.unwrap();
-                std::array::from_fn(|i| m.as_slice()[i])
-            })
-            .collect()
-    };
-    let a = poses_of(7);
-    // The same seed on other threads, two at once.
-    let (b, c) = std::thread::scope(|s| {
-        let b = s.spawn(|| poses_of(7));
-        let c = s.spawn(|| poses_of(7));
-        (b.join().unwrap(), c.join().unwrap())
-    });
-    assert!(a == b && a == c, "same seed, same bits");
-    assert_ne!(a, poses_of(8), "another seed, another run");
+    for name in ["stpf", "ispf", "hkpf"] {
+        let poses_of = |seed: u64| -> Vec<([f64; 9], usize)> {
+            let mut t = build_tracker(name, seed).unwrap();
+            run(t.as_mut(), &frames, &poses)
+                .estimates
+                .iter()
+                .map(|e| {
+                    let m = e.pose.unwrap();
+                    (std::array::from_fn(|i| m.as_slice()[i]), e.particles)
+                })
+                .collect()
+        };
+        let a = poses_of(7);
+        // The same seed on other threads, two at once.
+        let (b, c) = std::thread::scope(|s| {
+            let b = s.spawn(|| poses_of(7));
+            let c = s.spawn(|| poses_of(7));
+            (b.join().unwrap(), c.join().unwrap())
+        });
+        assert!(a == b && a == c, "{name}: same seed, same bits");
+        assert_ne!(a, poses_of(8), "{name}: another seed, another run");
+    }
 }
 
 #[test]
