@@ -66,7 +66,7 @@ pub use points::{PointCloudConfig, PointCloudTracker};
 use bayestrack_appearance::{
     Candidate, Cue, DEFAULT_FLOOR, Frame, Fusion, FusionRule, Scratch, interframe_difference_into,
 };
-use bayestrack_image::{BBox, Image, ImageView};
+use bayestrack_image::{BBox, Image, ImageView, rgb_to_gray_into};
 use bayestrack_particle::{ParticleSet, Resampling};
 use nalgebra::{Matrix3, SVector};
 use rand::Rng;
@@ -339,13 +339,17 @@ fn check_particles(n: usize) -> Result<()> {
     Ok(())
 }
 
-/// The planes kept from frame to frame: the previous frame and the IFD map
-/// (eq. 7, computed once per frame over the whole image; reading it at the
-/// particles' pixels afterwards is cheaper than differencing pixel by
-/// pixel when supports overlap, and the c-AVQ stripes and the priority
-/// field of eq. 15 need it anyway).
+/// The planes kept from frame to frame: the previous frame's 8-bit luma
+/// and the IFD map (eq. 7), computed once per frame over the whole image
+/// on BT.601 luma rounded to 8 bits (`rgb_to_gray_into`, then
+/// `interframe_difference_into` on the two gray planes: half the work of
+/// differencing two RGB frames, and within 1/255 of the float-luma
+/// difference). The c-AVQ stripes and the priority field of eq. 15 need the
+/// whole map; the skin cue, which costs an HSV conversion per pixel, is
+/// only evaluated at the particles' pixels.
 #[derive(Debug, Clone)]
 struct Planes {
+    luma: Image<u8>,
     previous: Image<u8>,
     ifd: Image<f32>,
 }
@@ -353,28 +357,42 @@ struct Planes {
 impl Planes {
     fn new() -> Result<Self> {
         Ok(Self {
+            luma: Image::new(1, 1, 1, 0)?,
             previous: Image::new(1, 1, 1, 0)?,
             ifd: Image::new(1, 1, 1, 0.0)?,
         })
     }
 
-    fn start(&mut self, frame: ImageView<'_, u8>) -> Result<()> {
-        let (w, h, c) = (frame.width(), frame.height(), frame.channels());
-        self.previous.reshape(w, h, c, 0)?;
-        for y in 0..h {
-            self.previous.row_mut(y).copy_from_slice(frame.row(y));
+    /// The 8-bit luma of `frame` into `out`.
+    fn luma_into(frame: ImageView<'_, u8>, out: &mut Image<u8>) -> Result<()> {
+        out.reshape(frame.width(), frame.height(), 1, 0)?;
+        if frame.channels() == 3 {
+            rgb_to_gray_into(frame, &mut out.view_mut())?;
+        } else {
+            frame.expect_channels("condensation", 1)?;
+            for y in 0..frame.height() {
+                out.row_mut(y).copy_from_slice(frame.row(y));
+            }
         }
-        self.ifd.reshape(w, h, 1, 0.0)?;
+        Ok(())
+    }
+
+    fn start(&mut self, frame: ImageView<'_, u8>) -> Result<()> {
+        Self::luma_into(frame, &mut self.previous)?;
+        self.ifd.reshape(frame.width(), frame.height(), 1, 0.0)?;
         self.ifd.fill(0.0);
         Ok(())
     }
 
     /// `dP_t = |I_t - I_{t-1}|`, then remembers `I_t`.
     fn update(&mut self, frame: ImageView<'_, u8>) -> Result<()> {
-        interframe_difference_into(frame, self.previous.view(), &mut self.ifd.view_mut())?;
-        for y in 0..frame.height() {
-            self.previous.row_mut(y).copy_from_slice(frame.row(y));
-        }
+        Self::luma_into(frame, &mut self.luma)?;
+        interframe_difference_into(
+            self.luma.view(),
+            self.previous.view(),
+            &mut self.ifd.view_mut(),
+        )?;
+        std::mem::swap(&mut self.luma, &mut self.previous);
         Ok(())
     }
 }
