@@ -30,13 +30,14 @@ fn unit(v: u64) -> f64 {
 }
 
 /// A face: an ellipse with semi-axes `(a, b)` centred at `(x, y)` (0-based
-/// pixels), with two dark eyes.
-#[derive(Debug, Clone, Copy)]
+/// pixels), with two dark eyes unless `plain` (a uniform skin blob).
+#[derive(Debug, Clone, Copy, Default)]
 struct Face {
     x: f64,
     y: f64,
     a: f64,
     b: f64,
+    plain: bool,
 }
 
 impl Face {
@@ -65,7 +66,7 @@ impl Face {
         }
         let (dx, dy) = (px - self.x, py - self.y);
         let eye = |ex: f64| ((dx - ex) / 3.6).powi(2) + ((dy + 6.0) / 2.4).powi(2) <= 1.0;
-        let c = if eye(-7.0) || eye(7.0) {
+        let c = if !self.plain && (eye(-7.0) || eye(7.0)) {
             [60.0, 40.0, 35.0]
         } else {
             // Shading scales RGB, which keeps hue and saturation.
@@ -107,6 +108,7 @@ fn background(seed: u64) -> Image<u8> {
         y: 58.0,
         a: 18.0,
         b: 22.0,
+        ..Default::default()
     };
     let mut img = Image::new(W, H, 3, 0u8).unwrap();
     for y in 0..H {
@@ -171,6 +173,7 @@ fn wander(k: usize) -> Face {
         y: 125.0 + 40.0 * (std::f64::consts::TAU * t / 67.0 + 0.6).sin(),
         a: 20.0,
         b: 26.0,
+        ..Default::default()
     }
 }
 
@@ -368,6 +371,7 @@ fn entering(k: usize, entry: usize) -> [Face; 2] {
         y: 120.0,
         a: 20.0,
         b: 26.0,
+        ..Default::default()
     };
     let x = (-20.5 + 3.0 * (k as f64 - entry as f64)).min(90.0);
     [
@@ -377,6 +381,7 @@ fn entering(k: usize, entry: usize) -> [Face; 2] {
             y: 110.0,
             a: 20.0,
             b: 26.0,
+            ..Default::default()
         },
     ]
 }
@@ -452,12 +457,14 @@ fn crossing(k: usize) -> [Face; 2] {
             y: 126.0,
             a: 20.0,
             b: 26.0,
+            ..Default::default()
         },
         Face {
             x: 160.0 - 2.5 * t,
             y: 114.0,
             a: 20.0,
             b: 26.0,
+            ..Default::default()
         },
     ]
 }

@@ -685,6 +685,12 @@ mod tests {
         let pose = Candidate::Pose(Affine2::translation(10.0, 5.0));
         let l = cue.log_likelihood(&frame, &pose, &mut s).unwrap();
         assert!((l - (0.5 + FLOOR).ln()).abs() < 1e-9);
+        // Scaled by 2 about the origin, shifted down 5: only (5, 0) lands on
+        // the column, at (10, 5): mean 1/4.
+        let scaled =
+            Candidate::Pose(Affine2::from_rows([[2.0, 0.0, 0.0], [0.0, 2.0, 5.0]]).unwrap());
+        let ls = cue.log_likelihood(&frame, &scaled, &mut s).unwrap();
+        assert!((ls - (0.25 + FLOOR).ln()).abs() < 1e-9);
         // Rounded to the nearest pixel.
         let pose = Candidate::Pose(Affine2::translation(10.4, 5.0));
         assert!((cue.log_likelihood(&frame, &pose, &mut s).unwrap() - l).abs() < 1e-9);
