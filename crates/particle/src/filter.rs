@@ -388,7 +388,8 @@ impl ParticleFilter {
             sum2 += f * f * chunk.weighed.sum2;
             prefix.push(sum);
         }
-        let lse = max + sum.ln();
+        let ln_sum = sum.ln();
+        let lse = max + ln_sum;
         let log_evidence = if degenerate { f64::NEG_INFINITY } else { lse };
         let ess = sum * sum / sum2;
         let resample = match self.policy {
@@ -401,8 +402,11 @@ impl ParticleFilter {
                 .par_chunks_mut(cs)
                 .zip(increments.par_chunks(cs))
                 .for_each(|(lw, inc)| {
+                    // shift by the largest first: at large magnitudes
+                    // `max + ln(sum)` rounds to `max`, and subtracting it
+                    // whole would leave the weights unnormalised
                     for (l, &x) in lw.iter_mut().zip(inc) {
-                        *l = log_w_k(*l, x) - lse;
+                        *l = (log_w_k(*l, x) - max) - ln_sum;
                     }
                 });
             return Ok(StepReport {

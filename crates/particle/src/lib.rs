@@ -12,4 +12,4 @@ pub use filter::{Degenerate, ParticleFilter, ResamplePolicy, StepReport};
 pub use proposal::{Bootstrap, KalmanProposal, LocalFilter, Proposal, StateSpaceModel};
 pub use resample::{Resampler, Resampling};
 pub use seed::{stream_rng, stream_seed};
-pub use set::{KalmanParticle, Particle, ParticleSet, log_sum_exp};
+pub use set::{Finite, KalmanParticle, Particle, ParticleSet, log_sum_exp};

@@ -252,7 +252,16 @@ impl Resampler for Resampling {
         ancestors: &mut [usize],
     ) -> Result<()> {
         let total = checked_total(weights)?;
-        self.resample_checked(weights, total, rng, ancestors);
+        if total.is_finite() {
+            self.resample_checked(weights, total, rng, ancestors);
+        } else {
+            // finite weights whose sum overflows (1e308 each): relative to
+            // the largest they sum to at most N
+            let max = weights.iter().copied().fold(0.0, f64::max);
+            let scaled: Vec<f64> = weights.iter().map(|&w| w / max).collect();
+            let total = scaled.iter().sum();
+            self.resample_checked(&scaled, total, rng, ancestors);
+        }
         Ok(())
     }
 }
@@ -311,6 +320,28 @@ impl Resampling {
 mod tests {
     use super::*;
     use crate::seed::stream_rng;
+
+    #[test]
+    fn weights_whose_sum_overflows_are_resampled_as_their_ratios() {
+        // 1e308 each: the total overflowed to infinity and every point
+        // landed on one particle
+        let mut rng = stream_rng(&[2]);
+        let mut a = [0usize; 1000];
+        for scheme in Resampling::ALL {
+            scheme
+                .resample(&[1e308, 1e308, 0.0, 1e308], &mut rng, &mut a)
+                .unwrap();
+            let mut counts = [0usize; 4];
+            a.iter().for_each(|&i| counts[i] += 1);
+            assert_eq!(counts[2], 0, "{scheme:?}");
+            for i in [0, 1, 3] {
+                assert!(
+                    (counts[i] as f64 - 1000.0 / 3.0).abs() < 60.0,
+                    "{scheme:?}: {counts:?}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn degenerate_weight_vectors() {

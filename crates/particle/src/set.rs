@@ -6,9 +6,38 @@ use rand::Rng;
 use crate::error::{ParticleError, Result};
 use crate::resample::Resampler;
 
+/// Whether every number a particle carries is finite: checked by
+/// [`ParticleSet::new`], so a NaN or infinite state is refused where it
+/// enters rather than turning the weighted mean into NaN later.
+pub trait Finite {
+    /// `true` when every component is finite.
+    fn is_finite(&self) -> bool;
+}
+
+impl Finite for f64 {
+    #[inline]
+    fn is_finite(&self) -> bool {
+        f64::is_finite(*self)
+    }
+}
+
+impl<const R: usize, const C: usize> Finite for SMatrix<f64, R, C> {
+    #[inline]
+    fn is_finite(&self) -> bool {
+        self.iter().all(|v| v.is_finite())
+    }
+}
+
+impl<const N: usize> Finite for KalmanParticle<N> {
+    #[inline]
+    fn is_finite(&self) -> bool {
+        Finite::is_finite(&self.x) && Finite::is_finite(&self.cov)
+    }
+}
+
 /// A particle: anything with a state vector (a plain state, or a state with
 /// its own Gaussian for Kalman proposals).
-pub trait Particle<const N: usize>: Clone + Send + Sync {
+pub trait Particle<const N: usize>: Clone + Send + Sync + Finite {
     /// The state `x`.
     fn state(&self) -> &SVector<f64, N>;
 }
@@ -54,6 +83,15 @@ pub(crate) fn exp_flushed(d: f64) -> f64 {
 /// plus infinity, [`ParticleError::AllWeightsZero`] when every value is minus
 /// infinity.
 pub fn log_sum_exp(log_w: &[f64]) -> Result<f64> {
+    let (max, ln_s) = shifted_log_sum_exp(log_w)?;
+    Ok(max + ln_s)
+}
+
+/// [`log_sum_exp`] as its two parts `(max, ln sum exp(l - max))`, so that
+/// normalising computes `(l - max) - ln_s`: at large magnitudes (all
+/// log-weights near -1e15 or beyond) `max + ln_s` rounds to `max`, and
+/// `l - (max + ln_s)` would lose the normalising constant entirely.
+pub(crate) fn shifted_log_sum_exp(log_w: &[f64]) -> Result<(f64, f64)> {
     if log_w.is_empty() {
         return Err(ParticleError::Empty);
     }
@@ -68,7 +106,7 @@ pub fn log_sum_exp(log_w: &[f64]) -> Result<f64> {
         return Err(ParticleError::AllWeightsZero { count: log_w.len() });
     }
     let s: f64 = log_w.iter().map(|&l| exp_flushed(l - max)).sum();
-    Ok(max + s.ln())
+    Ok((max, s.ln()))
 }
 
 /// A weighted particle set `{x_i, w_i}` with `log w_i` stored.
@@ -140,10 +178,18 @@ impl<T: Clone> ParticleSet<T> {
     /// Equally weighted particles.
     ///
     /// # Errors
-    /// [`ParticleError::Empty`] for no particles.
-    pub fn new(particles: Vec<T>) -> Result<Self> {
+    /// [`ParticleError::Empty`] for no particles,
+    /// [`ParticleError::NonFiniteState`] naming the first particle with a
+    /// NaN or infinite component.
+    pub fn new(particles: Vec<T>) -> Result<Self>
+    where
+        T: Finite,
+    {
         if particles.is_empty() {
             return Err(ParticleError::Empty);
+        }
+        if let Some(index) = particles.iter().position(|p| !p.is_finite()) {
+            return Err(ParticleError::NonFiniteState { index });
         }
         let lw = -(particles.len() as f64).ln();
         let log_weights = vec![lw; particles.len()];
@@ -207,11 +253,11 @@ impl<T: Clone> ParticleSet<T> {
     /// # Errors
     /// As [`log_sum_exp`]; the set is unchanged on error.
     pub fn normalize(&mut self) -> Result<f64> {
-        let lse = log_sum_exp(&self.log_weights)?;
+        let (max, ln_s) = shifted_log_sum_exp(&self.log_weights)?;
         for l in &mut self.log_weights {
-            *l -= lse;
+            *l = (*l - max) - ln_s;
         }
-        Ok(lse)
+        Ok(max + ln_s)
     }
 
     /// The normalised weights into `out` (resized).
@@ -382,6 +428,49 @@ mod tests {
         assert!((s.mean()[0] - 2.0 / 3.0).abs() < 1e-12);
         assert!((s.covariance()[(0, 0)] - 2.0 / 9.0).abs() < 1e-12);
         assert_eq!(s.map()[0], 1.0);
+    }
+
+    #[test]
+    fn normalisation_holds_at_every_magnitude() {
+        // all log-weights near -1e15 or beyond: `max + ln(sum)` rounds to
+        // `max`, so subtracting it whole left weights that summed to N
+        for m in [1.0, 1e3, 1e10, 1e15, 1e16, 1e50, 1e100, 1e200, 1e300] {
+            for sign in [-1.0, 1.0] {
+                let l = sign * m;
+                let s = set(&[1.0, 2.0, 3.0, 4.0], &[l, l, l, f64::NEG_INFINITY]);
+                let sum: f64 = s.weights().iter().sum();
+                assert!((sum - 1.0).abs() < 1e-12, "m = {l:e}: sum {sum}");
+                assert!((s.mean()[0] - 2.0).abs() < 1e-12, "m = {l:e}");
+                assert!((s.ess() - 3.0).abs() < 1e-9, "m = {l:e}: ess {}", s.ess());
+                let mut raw = s.clone();
+                raw.parts_mut()
+                    .1
+                    .copy_from_slice(&[l, l, l, f64::NEG_INFINITY]);
+                let lse = raw.normalize().unwrap();
+                assert_eq!(lse, l + 3f64.ln(), "m = {l:e}");
+                assert_eq!(raw.log_weights(), s.log_weights());
+            }
+        }
+    }
+
+    #[test]
+    fn a_non_finite_state_is_refused_where_it_enters() {
+        assert_eq!(
+            ParticleSet::new(vec![Vector1::new(0.0), Vector1::new(f64::NAN)]).map(|_| ()),
+            Err(ParticleError::NonFiniteState { index: 1 })
+        );
+        assert_eq!(
+            ParticleSet::new(vec![f64::INFINITY]).map(|_| ()),
+            Err(ParticleError::NonFiniteState { index: 0 })
+        );
+        let p = KalmanParticle {
+            x: Vector1::new(0.0),
+            cov: nalgebra::Matrix1::new(f64::NAN),
+        };
+        assert_eq!(
+            ParticleSet::new(vec![p]).map(|_| ()),
+            Err(ParticleError::NonFiniteState { index: 0 })
+        );
     }
 
     #[test]

@@ -476,3 +476,28 @@ fn chunks_on_different_scales_resample_in_proportion_to_the_weights() {
         }
     }
 }
+
+#[test]
+fn a_step_normalises_at_every_magnitude() {
+    // log-likelihoods all at or below about -1e15: the weights summed to N
+    // and the ESS fell below 1 before the normalisation was shifted
+    for m in [1.0, 1e10, 1e15, 1e16, 1e100, 1e300] {
+        for policy in [ResamplePolicy::Never, ResamplePolicy::Ess(0.01)] {
+            let pf = ParticleFilter {
+                policy,
+                chunk_size: 2,
+                ..ParticleFilter::default()
+            };
+            let mut set = index_set(5);
+            let table = Table(vec![-m, -m, -m, -m, f64::NEG_INFINITY]);
+            let r = pf.step(&mut set, &Bootstrap(&table), &Vector1::new(0.0), &[1]);
+            let r = r.unwrap();
+            assert!(!r.resampled);
+            let sum: f64 = set.weights().iter().sum();
+            assert!((sum - 1.0).abs() < 1e-12, "m = {m:e}: {sum}");
+            assert!((set.mean()[0] - 1.5).abs() < 1e-12, "m = {m:e}");
+            assert!((set.ess() - 4.0).abs() < 1e-9, "m = {m:e}");
+            assert!((r.ess - 4.0).abs() < 1e-9, "m = {m:e}");
+        }
+    }
+}
