@@ -143,9 +143,42 @@ fn gamma_p(a: f64, x: f64) -> f64 {
     }
 }
 
-/// The chi-square CDF with `k` degrees of freedom.
-pub fn chi_square_cdf(x: f64, k: f64) -> f64 {
+/// The chi-square CDF with `k` degrees of freedom: 0 for `x <= 0`, 1 for
+/// `x = +inf`.
+///
+/// # Errors
+/// [`KalmanError::InvalidParameter`] for a NaN `x` (it returned 0) or `k`
+/// not positive and finite (a negative `k` returned 0.68).
+pub fn chi_square_cdf(x: f64, k: f64) -> Result<f64> {
+    check_dof(k)?;
+    if x.is_nan() {
+        return Err(KalmanError::InvalidParameter {
+            name: "x",
+            value: x,
+            reason: "the chi-square CDF needs a number",
+        });
+    }
+    if x == f64::INFINITY {
+        return Ok(1.0);
+    }
+    Ok(cdf(x, k))
+}
+
+/// [`chi_square_cdf`] of checked arguments.
+fn cdf(x: f64, k: f64) -> f64 {
     gamma_p(0.5 * k, 0.5 * x)
+}
+
+/// Degrees of freedom must be positive and finite.
+fn check_dof(k: f64) -> Result<()> {
+    if !(k > 0.0 && k.is_finite()) {
+        return Err(KalmanError::InvalidParameter {
+            name: "k",
+            value: k,
+            reason: "degrees of freedom must be positive",
+        });
+    }
+    Ok(())
 }
 
 /// The `p`-quantile of the chi-square distribution with `k` degrees of
@@ -161,20 +194,14 @@ pub fn chi_square_quantile(p: f64, k: f64) -> Result<f64> {
             reason: "must lie in (0, 1)",
         });
     }
-    if !(k > 0.0 && k.is_finite()) {
-        return Err(KalmanError::InvalidParameter {
-            name: "k",
-            value: k,
-            reason: "degrees of freedom must be positive",
-        });
-    }
+    check_dof(k)?;
     let (mut lo, mut hi) = (0.0, k.max(1.0));
-    while chi_square_cdf(hi, k) < p {
+    while cdf(hi, k) < p {
         hi *= 2.0;
     }
     for _ in 0..200 {
         let mid = 0.5 * (lo + hi);
-        if chi_square_cdf(mid, k) < p {
+        if cdf(mid, k) < p {
             lo = mid;
         } else {
             hi = mid;
@@ -219,6 +246,31 @@ mod tests {
         assert!(band.contains(4.0) && !band.contains(4.26) && !band.contains(3.75));
         assert!(ChiSquareBand::for_average(0, 5, 0.95).is_err());
         assert!(ChiSquareBand::for_average(1, 5, 1.0).is_err());
+    }
+
+    #[test]
+    fn cdf_of_bad_arguments_is_an_error_and_of_the_edges_exact() {
+        // NaN returned 0, a negative dof 0.68
+        assert!(matches!(
+            chi_square_cdf(f64::NAN, 2.0),
+            Err(KalmanError::InvalidParameter { name: "x", .. })
+        ));
+        for k in [-1.0, 0.0, f64::NAN, f64::INFINITY] {
+            assert!(
+                matches!(
+                    chi_square_cdf(1.0, k),
+                    Err(KalmanError::InvalidParameter { name: "k", .. })
+                ),
+                "{k}"
+            );
+        }
+        assert_eq!(chi_square_cdf(f64::INFINITY, 2.0), Ok(1.0));
+        assert_eq!(chi_square_cdf(f64::NEG_INFINITY, 2.0), Ok(0.0));
+        assert_eq!(chi_square_cdf(-3.0, 2.0), Ok(0.0));
+        assert_eq!(chi_square_cdf(f64::MAX, 2.0), Ok(1.0));
+        // chi2(2) is exponential with mean 2
+        let c = chi_square_cdf(2.0, 2.0).unwrap();
+        assert!((c - (1.0 - (-1.0f64).exp())).abs() < 1e-14, "{c}");
     }
 
     #[test]

@@ -98,7 +98,8 @@ impl Kf {
     /// Measurement update with `z` (`None` = missing: the prior is returned).
     ///
     /// # Errors
-    /// [`KalmanError::NonFinite`] for a non-finite `z`;
+    /// [`KalmanError::NonFinite`] for a non-finite `z`, or for a residual so
+    /// large (1e155 and beyond) that its NIS and log-likelihood overflow;
     /// [`KalmanError::NotPositiveDefinite`] naming the innovation covariance
     /// `S` when it is singular.
     #[inline]
@@ -108,7 +109,8 @@ impl Kf {
         model: &LinearMeasurement<N, M>,
         z: Option<&SVector<f64, M>>,
     ) -> Result<Update<N, M>> {
-        Ekf::new(self.covariance_update).update(prior, model, z)
+        // R was checked when the model was built
+        Ekf::new(self.covariance_update).update_with(prior, model, model.noise(), z)
     }
 
     /// Rauch-Tung-Striebel smoothing of filtered beliefs `x_{k|k}`, k = 0..T-1,
@@ -165,7 +167,10 @@ impl Ekf {
     /// `x = f(x)`, `P = F P F^T + Q` with `F` evaluated at the prior mean.
     ///
     /// # Errors
-    /// [`KalmanError::NonFinite`] when the result is not finite.
+    /// [`KalmanError::NonFinite`] when `F`, `Q` or the result is not finite;
+    /// [`KalmanError::NotSymmetric`] or [`KalmanError::NotPositiveDefinite`]
+    /// naming "process noise Q" in the predict step when the model's `Q` is
+    /// not symmetric positive semi-definite (singular is accepted).
     pub fn predict<const N: usize, D: DynamicsJacobian<N>>(
         &self,
         prior: &Gaussian<N>,
@@ -173,23 +178,40 @@ impl Ekf {
     ) -> Result<Gaussian<N>> {
         let f = dynamics.jacobian(prior.mean());
         linalg::check_finite_mat(&f, "Jacobian F", Step::Predict)?;
-        linear_predict(
-            dynamics.propagate(prior.mean()),
-            &f,
-            prior.cov(),
-            &dynamics.process_noise(),
-        )
+        let q = dynamics.process_noise();
+        linalg::check_noise(&q, "process noise Q", Step::Predict)?;
+        linear_predict(dynamics.propagate(prior.mean()), &f, prior.cov(), &q)
     }
 
     /// Update with `nu = z - h(x)` and `H` evaluated at the prior mean.
     ///
     /// # Errors
-    /// As [`Kf::update`].
+    /// As [`Kf::update`]; [`KalmanError::NonFinite`],
+    /// [`KalmanError::NotSymmetric`] or [`KalmanError::NotPositiveDefinite`]
+    /// naming "measurement noise R" in the update step when the model's `R`
+    /// is not finite, symmetric and positive semi-definite.
     #[inline]
     pub fn update<const N: usize, const M: usize, H: MeasurementJacobian<N, M>>(
         &self,
         prior: &Gaussian<N>,
         measurement: &H,
+        z: Option<&SVector<f64, M>>,
+    ) -> Result<Update<N, M>> {
+        if z.is_none() {
+            return Ok(Update::missing(prior));
+        }
+        let r = measurement.measurement_noise();
+        linalg::check_noise(&r, "measurement noise R", Step::Update)?;
+        self.update_with(prior, measurement, &r, z)
+    }
+
+    /// [`Ekf::update`] with the measurement noise `r` already checked.
+    #[inline(always)]
+    fn update_with<const N: usize, const M: usize, H: MeasurementJacobian<N, M>>(
+        &self,
+        prior: &Gaussian<N>,
+        measurement: &H,
+        r: &SMatrix<f64, M, M>,
         z: Option<&SVector<f64, M>>,
     ) -> Result<Update<N, M>> {
         let Some(z) = z else {
@@ -204,7 +226,7 @@ impl Ekf {
             prior.cov(),
             z - measurement.observe(x),
             &h,
-            &measurement.measurement_noise(),
+            r,
             self.covariance_update,
         )?;
         Ok(Update {
@@ -319,6 +341,7 @@ impl Iekf {
         linalg::check_finite_vec(x0, "linearisation point", Step::Update)?;
         let xf = prior.mean();
         let r = measurement.measurement_noise();
+        linalg::check_noise(&r, "measurement noise R", Step::Update)?;
         let mut xi = *x0;
         let mut iterations = 0;
         loop {

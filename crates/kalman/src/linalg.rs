@@ -237,6 +237,24 @@ pub(crate) fn check_covariance<const D: usize>(
     Ok(())
 }
 
+/// Checks a noise covariance a model hands a filter at the point of use:
+/// finite, symmetric and positive semi-definite (a positive definite matrix
+/// passes on the square-root-free Cholesky factorisation; a singular one
+/// such as a rank-2 `Q_discrete_white_noise` block falls back to the
+/// eigen-decomposition of [`psd_sqrt`]).
+#[inline]
+pub(crate) fn check_noise<const D: usize>(
+    m: &SMatrix<f64, D, D>,
+    matrix: &'static str,
+    step: Step,
+) -> Result<()> {
+    check_covariance(m, matrix, step)?;
+    if D == 0 || Ldl::new(m, matrix, step).is_ok() {
+        return Ok(());
+    }
+    psd_sqrt(m, matrix, step).map(|_| ())
+}
+
 /// The Cholesky factorisation `A = L L^T` of a small symmetric positive
 /// definite matrix, written out with fixed-size loops: for the 1..6
 /// dimensional matrices of filtering these unroll completely, where the

@@ -198,6 +198,17 @@ impl Ukf {
         step: Step,
     ) -> Result<Moments<N, K, M>> {
         let wt = self.weights_for(N + V + W)?;
+        // the noise distributions come from the model: checked here, where
+        // they are used (finite, symmetric; the square roots below check
+        // that they are positive semi-definite)
+        if V > 0 {
+            linalg::check_finite_vec(v.mean(), "process noise mean", step)?;
+            linalg::check_covariance(v.cov(), "process noise covariance", step)?;
+        }
+        if W > 0 {
+            linalg::check_finite_vec(w.mean(), "measurement noise mean", step)?;
+            linalg::check_covariance(w.cov(), "measurement noise covariance", step)?;
+        }
         // Lower-triangular factors of `c P`, `c Q_v`, `c R_w`
         // (`c = alpha^2 (L + kappa)`); `spread` builds the points of column
         // `j` from rows `j..`, so the points agree exactly with the mean in
@@ -312,7 +323,7 @@ impl Ukf {
         let cov = linalg::mirror_lower(linalg::lower_mul_t_add(predicted.cov(), -1.0, &v, &u));
         Ok(Update {
             posterior: Gaussian::checked(mean, cov, Step::Update)?,
-            innovation: Some(Innovation::new(residual, &y, s, &ldl)),
+            innovation: Some(Innovation::new(residual, &y, s, &ldl)?),
             iterations: 1,
         })
     }
@@ -346,13 +357,19 @@ impl Ukf {
     ///
     /// # Errors
     /// [`KalmanError::NotPositiveDefinite`] when the prior covariance has no
-    /// square root; [`KalmanError::NonFinite`] for a non-finite result.
+    /// square root; [`KalmanError::NonFinite`] for a non-finite result;
+    /// [`KalmanError::NonFinite`], [`KalmanError::NotSymmetric`] or
+    /// [`KalmanError::NotPositiveDefinite`] naming "process noise Q" in the
+    /// predict step when the model's `Q` is not finite, symmetric and
+    /// positive semi-definite (singular is accepted).
     #[inline]
     pub fn predict<const N: usize, D: Dynamics<N>>(
         &self,
         prior: &Gaussian<N>,
         dynamics: &D,
     ) -> Result<Gaussian<N>> {
+        let q = dynamics.process_noise();
+        linalg::check_noise(&q, "process noise Q", Step::Predict)?;
         let mo = self.transform(
             prior,
             &none::<0>(),
@@ -361,18 +378,16 @@ impl Ukf {
             no_output,
             Step::Predict,
         )?;
-        Gaussian::checked(
-            mo.x_mean,
-            linalg::add_sym(&mo.p_xx, &dynamics.process_noise()),
-            Step::Predict,
-        )
+        Gaussian::checked(mo.x_mean, linalg::add_sym(&mo.p_xx, &q), Step::Predict)
     }
 
     /// Additive-noise measurement update with sigma points drawn from `prior`.
     ///
     /// # Errors
     /// As [`Ukf::predict`]; [`KalmanError::NotPositiveDefinite`] naming the
-    /// innovation covariance when it is singular; non-finite `z`.
+    /// innovation covariance when it is singular; non-finite `z`, or NIS and
+    /// log-likelihood that overflow; the checks of `Q` applied to the
+    /// model's `R` ("measurement noise R", update step).
     #[inline]
     pub fn update<const N: usize, const M: usize, H: Measurement<N, M>>(
         &self,
@@ -383,6 +398,8 @@ impl Ukf {
         let Some(z) = z else {
             return Ok(Update::missing(prior));
         };
+        let r = measurement.measurement_noise();
+        linalg::check_noise(&r, "measurement noise R", Step::Update)?;
         let mo = self.transform(
             prior,
             &none::<0>(),
@@ -394,7 +411,7 @@ impl Ukf {
         Self::correct(
             prior,
             &mo.y_mean,
-            linalg::add_sym(&mo.p_yy, &measurement.measurement_noise()),
+            linalg::add_sym(&mo.p_yy, &r),
             &mo.p_xy,
             z,
         )
@@ -424,14 +441,17 @@ impl Ukf {
                 update: Update::missing(&predicted),
             });
         };
+        let (q, r) = (dynamics.process_noise(), measurement.measurement_noise());
+        linalg::check_noise(&q, "process noise Q", Step::Predict)?;
+        linalg::check_noise(&r, "measurement noise R", Step::Update)?;
         self.joint(
             prior,
             &none::<0>(),
             &none::<0>(),
             |x, _| dynamics.propagate(x),
             |x, _| measurement.observe(x),
-            &dynamics.process_noise(),
-            &measurement.measurement_noise(),
+            &q,
+            &r,
             z,
         )
     }
@@ -534,6 +554,8 @@ impl Ukf {
         filtered: &[Gaussian<N>],
         dynamics: &D,
     ) -> Result<Vec<Gaussian<N>>> {
+        let q = dynamics.process_noise();
+        linalg::check_noise(&q, "process noise Q", Step::Smooth)?;
         crate::smoother::rts_backward(filtered, |_, g| {
             let mo = self.transform(
                 g,
@@ -543,11 +565,8 @@ impl Ukf {
                 no_output,
                 Step::Smooth,
             )?;
-            let predicted = Gaussian::checked(
-                mo.x_mean,
-                linalg::add_sym(&mo.p_xx, &dynamics.process_noise()),
-                Step::Smooth,
-            )?;
+            let predicted =
+                Gaussian::checked(mo.x_mean, linalg::add_sym(&mo.p_xx, &q), Step::Smooth)?;
             Ok((predicted, mo.p_in_x))
         })
     }

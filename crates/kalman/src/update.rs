@@ -3,7 +3,7 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use crate::error::{Result, Step};
+use crate::error::{KalmanError, Result, Step};
 use crate::gaussian::{Gaussian, LN_2PI};
 use crate::linalg;
 
@@ -45,15 +45,23 @@ impl<const M: usize> Innovation<M> {
         whitened: &SVector<f64, M>,
         covariance: SMatrix<f64, M, M>,
         ldl: &linalg::Ldl<M>,
-    ) -> Self {
+    ) -> Result<Self> {
         let nis = whitened.component_mul(whitened).dot(ldl.inv_d());
         let log_likelihood = -0.5 * (nis + ldl.log_det() + M as f64 * LN_2PI);
-        Self {
+        // a residual of 1e155 or more squares past the largest f64: the
+        // statistics would be inf and -inf, not numbers
+        if !(nis.is_finite() && log_likelihood.is_finite()) {
+            return Err(KalmanError::NonFinite {
+                what: "normalised innovation squared (NIS) and log-likelihood",
+                step: Step::Update,
+            });
+        }
+        Ok(Self {
             residual,
             covariance,
             log_likelihood,
             nis,
-        }
+        })
     }
 }
 
@@ -150,6 +158,6 @@ pub(crate) fn gain_step<const N: usize, const M: usize>(
     Ok(GainStep {
         mean: new_mean,
         cov: new_cov,
-        innovation: Innovation::new(residual, &y, s, &ldl),
+        innovation: Innovation::new(residual, &y, s, &ldl)?,
     })
 }

@@ -164,3 +164,190 @@ fn smoother_controls_of_the_wrong_length_are_rejected() {
         })
     );
 }
+
+/// A linear model that hands the filters whatever `Q` and `R` it holds,
+/// through the traits (no constructor checks them).
+struct Handed {
+    q: Matrix2<f64>,
+    r: Matrix1<f64>,
+}
+
+impl bayestrack_kalman::Dynamics<2> for Handed {
+    fn propagate(&self, x: &Vector2<f64>) -> Vector2<f64> {
+        Vector2::new(x[0] + 0.1 * x[1], x[1])
+    }
+    fn process_noise(&self) -> Matrix2<f64> {
+        self.q
+    }
+}
+
+impl bayestrack_kalman::DynamicsJacobian<2> for Handed {
+    fn jacobian(&self, _: &Vector2<f64>) -> Matrix2<f64> {
+        Matrix2::new(1.0, 0.1, 0.0, 1.0)
+    }
+}
+
+impl bayestrack_kalman::Measurement<2, 1> for Handed {
+    fn observe(&self, x: &Vector2<f64>) -> Vector1<f64> {
+        Vector1::new(x[0])
+    }
+    fn measurement_noise(&self) -> Matrix1<f64> {
+        self.r
+    }
+}
+
+impl bayestrack_kalman::MeasurementJacobian<2, 1> for Handed {
+    fn jacobian(&self, _: &Vector2<f64>) -> Matrix1x2<f64> {
+        Matrix1x2::new(1.0, 0.0)
+    }
+}
+
+/// filterpy's `Q_discrete_white_noise(2, dt, var)`: rank 1 in 2-D (the
+/// 3-D block has rank 2 in the piecewise form users combine); singular
+/// but positive semi-definite.
+fn white_noise_q(dt: f64, var: f64) -> Matrix2<f64> {
+    Matrix2::new(
+        dt.powi(4) / 4.0,
+        dt.powi(3) / 2.0,
+        dt.powi(3) / 2.0,
+        dt * dt,
+    ) * var
+}
+
+#[test]
+fn a_model_handed_noise_is_checked_where_it_is_used() {
+    let prior = Gaussian::new(Vector2::zeros(), Matrix2::identity()).unwrap();
+    let z = Vector1::new(0.3);
+    let ukf = Ukf::new(1.0, 2.0, 0.0).unwrap();
+    let iekf = Iekf::new(3, 1e-9).unwrap();
+    let good_r = Matrix1::new(0.5);
+    // an indefinite Q reached Ekf/Ukf::predict unchecked: a predicted
+    // covariance that is not positive definite, then an update with Ok
+    // and a negative variance
+    let bad_q = Handed {
+        q: Matrix2::new(-4.0, 0.0, 0.0, 0.1),
+        r: good_r,
+    };
+    let q_err: Result<Gaussian<2>, _> = Err(KalmanError::NotPositiveDefinite {
+        matrix: "process noise Q",
+        step: Step::Predict,
+    });
+    assert_eq!(Ekf::default().predict(&prior, &bad_q), q_err);
+    assert_eq!(iekf.predict(&prior, &bad_q), q_err);
+    assert_eq!(ukf.predict(&prior, &bad_q), q_err);
+    assert_eq!(
+        ukf.step(&prior, &bad_q, &bad_q, Some(&z))
+            .map(|s| s.predicted),
+        q_err
+    );
+    assert_eq!(
+        ukf.rts_smooth(&[prior, prior], &bad_q),
+        Err(KalmanError::NotPositiveDefinite {
+            matrix: "process noise Q",
+            step: Step::Smooth,
+        })
+    );
+    let asym = Handed {
+        q: Matrix2::new(1.0, 0.5, -0.5, 1.0),
+        r: good_r,
+    };
+    assert!(matches!(
+        Ekf::default().predict(&prior, &asym),
+        Err(KalmanError::NotSymmetric {
+            matrix: "process noise Q",
+            step: Step::Predict,
+            ..
+        })
+    ));
+    let nan = Handed {
+        q: Matrix2::new(f64::NAN, 0.0, 0.0, 1.0),
+        r: good_r,
+    };
+    assert_eq!(
+        ukf.predict(&prior, &nan),
+        Err(KalmanError::NonFinite {
+            what: "process noise Q",
+            step: Step::Predict
+        })
+    );
+    // a negative R: the update said Ok with a negative innovation variance
+    // whenever H P H^T outweighed it
+    let bad_r = Handed {
+        q: Matrix2::identity() * 0.01,
+        r: Matrix1::new(-0.5),
+    };
+    let r_err = Err(KalmanError::NotPositiveDefinite {
+        matrix: "measurement noise R",
+        step: Step::Update,
+    });
+    assert_eq!(Ekf::default().update(&prior, &bad_r, Some(&z)), r_err);
+    assert_eq!(iekf.update(&prior, &bad_r, Some(&z)), r_err);
+    assert_eq!(ukf.update(&prior, &bad_r, Some(&z)), r_err);
+    assert_eq!(
+        ukf.step(&prior, &bad_r, &bad_r, Some(&z)).map(|s| s.update),
+        r_err
+    );
+    let err = Ekf::default().update(&prior, &bad_r, Some(&z)).unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "measurement noise R is not positive definite in the update step"
+    );
+    // a missing measurement never reads R
+    assert!(Ekf::default().update(&prior, &bad_r, None).is_ok());
+    // singular but positive semi-definite Q stays accepted
+    let singular = Handed {
+        q: white_noise_q(0.1, 2.0),
+        r: good_r,
+    };
+    for predicted in [
+        Ekf::default().predict(&prior, &singular).unwrap(),
+        ukf.predict(&prior, &singular).unwrap(),
+        ukf.step(&prior, &singular, &singular, Some(&z))
+            .unwrap()
+            .predicted,
+    ] {
+        assert!(predicted.cov().symmetric_eigenvalues().min() > 0.0);
+    }
+    let zero_r = Handed {
+        q: Matrix2::zeros(),
+        r: Matrix1::zeros(),
+    };
+    assert!(Ekf::default().update(&prior, &zero_r, Some(&z)).is_ok());
+    assert!(ukf.predict(&prior, &zero_r).is_ok());
+}
+
+#[test]
+fn a_measurement_too_large_for_its_statistics_is_an_error() {
+    // 1e155 squares past the largest f64: NIS = inf and log-likelihood =
+    // -inf came back with Ok
+    let (dynamics, sensor) = constant_velocity(0.1, 0.1, 0.25);
+    let prior = Gaussian::new(Vector4::zeros(), nalgebra::Matrix4::identity()).unwrap();
+    let expected = Err(KalmanError::NonFinite {
+        what: "normalised innovation squared (NIS) and log-likelihood",
+        step: Step::Update,
+    });
+    let ukf = Ukf::new(1.0, 2.0, 0.0).unwrap();
+    for big in [1e155, -1e200, 1e300] {
+        let z = Vector2::new(big, 0.0);
+        assert_eq!(Kf::default().update(&prior, &sensor, Some(&z)), expected);
+        assert_eq!(Ekf::default().update(&prior, &sensor, Some(&z)), expected);
+        assert_eq!(
+            Iekf::new(3, 1e-9)
+                .unwrap()
+                .update(&prior, &sensor, Some(&z)),
+            expected
+        );
+        assert_eq!(ukf.update(&prior, &sensor, Some(&z)), expected);
+        assert_eq!(
+            ukf.step(&prior, &dynamics, &sensor, Some(&z))
+                .map(|s| s.update),
+            expected
+        );
+    }
+    // large but representable: a finite answer
+    let z = Vector2::new(1e100, 0.0);
+    let u = Kf::default().update(&prior, &sensor, Some(&z)).unwrap();
+    let inn = u.innovation.unwrap();
+    assert!(inn.nis.is_finite() && inn.log_likelihood.is_finite());
+    assert!(u.posterior.mean().iter().all(|v| v.is_finite()));
+}
