@@ -470,14 +470,24 @@ fn crossing(k: usize) -> [Face; 2] {
 }
 
 /// After the crossing (frames whose true centres are more than 45 px
-/// apart, 30 of the 80), the frames in which the two estimates are nearer
-/// the other object each (swapped), nearer the same object (merged), and
-/// each within 20 px of its own object (kept).
+/// apart, 30 of the 80), how the two estimates sit: each within 20 px of
+/// its own object (kept), each within 20 px of the other one (swapped),
+/// both within 20 px of the same object (merged), or otherwise (lost).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 struct Crossing {
+    kept: usize,
     swapped: usize,
     merged: usize,
-    kept: usize,
+    lost: usize,
+}
+
+impl std::ops::AddAssign for Crossing {
+    fn add_assign(&mut self, o: Self) {
+        self.kept += o.kept;
+        self.swapped += o.swapped;
+        self.merged += o.merged;
+        self.lost += o.lost;
+    }
 }
 
 fn crossing_run(config: MultiConfig, seed: u64) -> Crossing {
@@ -494,15 +504,17 @@ fn crossing_run(config: MultiConfig, seed: u64) -> Crossing {
         let truth = crossing(k);
         assert_eq!((out[0].id, out[1].id), (0, 1));
         if k > 40 && (truth[0].x - truth[1].x).abs() > 45.0 {
-            let d = |i: usize, j: usize| {
-                (out[i].centre.0 - truth[j].x).hypot(out[i].centre.1 - truth[j].y)
+            let on = |i: usize, j: usize| {
+                (out[i].centre.0 - truth[j].x).hypot(out[i].centre.1 - truth[j].y) <= 20.0
             };
-            let near = |i: usize| usize::from(d(i, 1) < d(i, 0));
-            match (near(0), near(1)) {
-                (0, 1) if d(0, 0) <= 20.0 && d(1, 1) <= 20.0 => c.kept += 1,
-                (0, 1) => {}
-                (1, 0) => c.swapped += 1,
-                _ => c.merged += 1,
+            if on(0, 0) && on(1, 1) {
+                c.kept += 1;
+            } else if on(0, 1) && on(1, 0) {
+                c.swapped += 1;
+            } else if (on(0, 0) && on(1, 0)) || (on(0, 1) && on(1, 1)) {
+                c.merged += 1;
+            } else {
+                c.lost += 1;
             }
         }
     }
@@ -511,25 +523,40 @@ fn crossing_run(config: MultiConfig, seed: u64) -> Crossing {
 
 #[test]
 fn crossing_objects_with_and_without_priority_ifd() {
-    for seed in 0..3 {
-        let contour = MultiConfig {
-            object: ObjectConfig::Contour(ContourConfig::face(100)),
-            ..MultiConfig::default()
-        };
-        let no = |c: MultiConfig| MultiConfig {
-            priority: false,
-            ..c
-        };
-        let s = crossing_run(contour, seed);
-        let s0 = crossing_run(no(contour), seed);
-        let p = crossing_run(MultiConfig::default(), seed);
-        let p0 = crossing_run(no(MultiConfig::default()), seed);
-        println!(
-            "seed {seed}: contours {s:?} / without priority {s0:?}; points {p:?} / without priority {p0:?}"
-        );
-        for c in [s, s0, p, p0] {
-            assert!(c.swapped + c.merged + c.kept <= 30);
+    // Sec. 5's claim: with the priority-subtracted IFD two crossing objects
+    // keep their identities. Pooled over seeds 0-4 (150 frames after the
+    // crossing), measured (kept / swapped / merged / lost): points 16 / 2 /
+    // 8 / 124 with priority, 4 / 2 / 15 / 129 without; contours 0 / 63 / 21
+    // / 66 with, 18 / 44 / 0 / 88 without. Not reproduced: the point
+    // clouds lose both objects in the overlap, and the priority-0 contour
+    // follows the object in front (the stronger IFD) whichever it is, so
+    // priority turns merges into swaps. Printed, not asserted; what the
+    // priority field does guarantee is asserted in
+    // `a_later_set_cannot_take_the_motion_an_earlier_set_explains`.
+    let contour = MultiConfig {
+        object: ObjectConfig::Contour(ContourConfig::face(100)),
+        ..MultiConfig::default()
+    };
+    let no = |c: MultiConfig| MultiConfig {
+        priority: false,
+        ..c
+    };
+    let mut result = [Crossing::default(); 4];
+    for seed in 0..5 {
+        for (r, config) in result.iter_mut().zip([
+            MultiConfig::default(),
+            no(MultiConfig::default()),
+            contour,
+            no(contour),
+        ]) {
+            *r += crossing_run(config, seed);
         }
+    }
+    let [p, p0, c, c0] = result;
+    println!("points: priority {p:?}, without {p0:?}");
+    println!("contours: priority {c:?}, without {c0:?}");
+    for r in result {
+        assert_eq!(r.kept + r.swapped + r.merged + r.lost, 150);
     }
 }
 
