@@ -250,12 +250,26 @@ impl Affine2 {
     /// or when the result overflows.
     pub fn exp(w: &AlgebraVector) -> Result<Affine2> {
         check_finite("algebra vector", w.as_slice())?;
-        let e = expm3(&hat(w));
-        Self::from_matrix(e).map_err(|_| AffineError::InvalidParameter {
+        let x = hat(w);
+        let out_of_range = || AffineError::InvalidParameter {
             name: "algebra vector norm",
             value: w.norm(),
-            reason: "exp overflows",
-        })
+            reason: "exp leaves the range of f64 (overflow, or a linear part that underflows to singular)",
+        };
+        let g = Self::from_matrix(expm3(&x)).map_err(|_| out_of_range())?;
+        // det exp(X) = e^{tr X} > 0: a determinant that underflowed to zero
+        // (or lost its digits to the squarings) is not the exponential
+        // (to the round-off of the determinant's two products)
+        let expected = (x[(0, 0)] + x[(1, 1)]).exp();
+        let det = g.det();
+        let m = g.matrix();
+        let terms = (m[(0, 0)] * m[(1, 1)]).abs() + (m[(0, 1)] * m[(1, 0)]).abs();
+        let agrees =
+            det.is_finite() && expected.is_normal() && (det - expected).abs() <= 1e-6 * terms;
+        if !agrees {
+            return Err(out_of_range());
+        }
+        Ok(g)
     }
 
     /// The exponential of a 3x3 algebra element (bottom row zero).
@@ -550,6 +564,37 @@ mod tests {
         ];
         for (a, b) in c.iter().zip(exp) {
             assert!((a - b).abs() < 1e-15 * b, "{a} vs {b}");
+        }
+    }
+
+    #[test]
+    fn exp_of_a_huge_element_is_an_error_not_a_singular_matrix() {
+        // a scale of e^-400 squares to a determinant of 0: a singular
+        // "group element" came back with Ok
+        for s in [-400.0, -1e3, -1e10, 800.0, 1e300] {
+            let w = Vector6::new(s, 0.0, 0.0, 0.0, 0.0, 0.0);
+            assert!(
+                matches!(
+                    Affine2::exp(&w),
+                    Err(AffineError::InvalidParameter {
+                        name: "algebra vector norm",
+                        ..
+                    })
+                ),
+                "s = {s:e}: {:?}",
+                Affine2::exp(&w)
+            );
+        }
+        // large but representable elements keep their exponential: scale
+        // e^-150 (det e^-300), a boost of e^30 (cancelling det 1), and
+        // 1e3 radians of rotation
+        for w in [
+            Vector6::new(-150.0, 0.0, 0.0, 0.0, 0.0, 0.0),
+            Vector6::new(0.0, 0.0, 0.0, 30.0, 1.0, 2.0),
+            Vector6::new(0.0, 0.0, 1e3, 0.0, 5.0, 0.0),
+        ] {
+            let g = Affine2::exp(&w).unwrap_or_else(|e| panic!("{w:?}: {e}"));
+            assert!(g.matrix().iter().all(|v| v.is_finite()));
         }
     }
 

@@ -399,6 +399,7 @@ impl Lwpr {
     /// scratch buffers.
     pub fn predict_into(&mut self, x: &[f64], cutoff: f64, y: &mut [f64]) -> Result<()> {
         self.check_input(x)?;
+        check_cutoff(cutoff)?;
         if y.len() != self.cfg.n_out {
             return Err(AffineError::DimensionMismatch {
                 what: "LWPR prediction buffer",
@@ -430,6 +431,7 @@ impl Lwpr {
     /// Predicts all outputs with confidence bounds and maximal activations.
     pub fn predict_conf(&mut self, x: &[f64], cutoff: f64) -> Result<Prediction> {
         self.check_input(x)?;
+        check_cutoff(cutoff)?;
         for (xn, (xi, ni)) in self.xn.iter_mut().zip(x.iter().zip(&self.cfg.norm_in)) {
             *xn = xi / ni;
         }
@@ -470,6 +472,20 @@ impl Lwpr {
         }
         Ok(out)
     }
+}
+
+/// An activation cutoff is a number in `[0, 1)` (activations lie in
+/// `[0, 1]`): a NaN cutoff activated nothing, and the prediction was a
+/// silent 0.
+fn check_cutoff(cutoff: f64) -> Result<()> {
+    if !(0.0..1.0).contains(&cutoff) {
+        return Err(AffineError::InvalidParameter {
+            name: "activation cutoff",
+            value: cutoff,
+            reason: "must lie in [0, 1)",
+        });
+    }
+    Ok(())
 }
 
 /// One update of output `dim` (the reference's `lwpr_aux_update_one`):

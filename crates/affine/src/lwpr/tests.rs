@@ -335,3 +335,28 @@ fn high_dimensional_diagonal_is_usable() {
     println!("64-D: nMSE {nmse:.4}, {} RFs", model.num_rfs(0));
     assert!(nmse < 0.2, "nMSE {nmse}");
 }
+
+#[test]
+fn a_cutoff_outside_the_activations_is_an_error() {
+    // a NaN cutoff activated nothing and predicted a silent Ok([0.0])
+    let mut model = Lwpr::new(LwprConfig::new(1, 1)).unwrap();
+    for i in 0..200 {
+        let x = f64::from(i) / 100.0 - 1.0;
+        model.update(&[x], &[2.0 * x + 1.0]).unwrap();
+    }
+    for cutoff in [f64::NAN, -0.1, 1.0, f64::INFINITY] {
+        assert!(
+            matches!(
+                model.predict(&[0.5], cutoff),
+                Err(AffineError::InvalidParameter {
+                    name: "activation cutoff",
+                    ..
+                })
+            ),
+            "{cutoff}"
+        );
+        assert!(model.predict_conf(&[0.5], cutoff).is_err(), "{cutoff}");
+    }
+    let y = model.predict(&[0.5], 0.0).unwrap()[0];
+    assert!((y - 2.0).abs() < 0.1, "{y}");
+}
