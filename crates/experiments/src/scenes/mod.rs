@@ -174,6 +174,75 @@ impl ObjectTruth {
     }
 }
 
+/// The true outline of an object: the boundary of its rendered silhouette
+/// as polylines in 0-based continuous pixel coordinates (consecutive points
+/// joined by segments, at most 0.25 px apart). The boundary is where the
+/// renderer's anti-aliased coverage is one half: on an ellipse
+/// `((x - cx) / a)^2 + ((y - cy) / b)^2 = 1`, on a rectangle's edges. A
+/// silhouette made of several primitives (the hand: palm, fingers, thumb)
+/// keeps only the parts of their boundaries that no other primitive covers,
+/// so it may be several polylines.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Outline {
+    /// The boundary pieces; a closed piece repeats its first point last.
+    pub polylines: Vec<Vec<[f64; 2]>>,
+}
+
+impl Outline {
+    /// Every vertex of every polyline.
+    pub fn points(&self) -> impl Iterator<Item = [f64; 2]> + '_ {
+        self.polylines.iter().flatten().copied()
+    }
+
+    /// Number of vertices.
+    pub fn len(&self) -> usize {
+        self.polylines.iter().map(Vec::len).sum()
+    }
+
+    /// Whether the outline has no vertex.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Euclidean distance from `p` to the nearest segment (or lone vertex);
+    /// infinite for an empty outline.
+    pub fn distance(&self, p: [f64; 2]) -> f64 {
+        let mut best = f64::INFINITY;
+        for line in &self.polylines {
+            if let [only] = line.as_slice() {
+                best = best.min((p[0] - only[0]).hypot(p[1] - only[1]));
+            }
+            for w in line.windows(2) {
+                best = best.min(segment_distance(p, w[0], w[1]));
+            }
+        }
+        best
+    }
+
+    /// The outline moved by `(dx, dy)`.
+    pub fn translated(&self, dx: f64, dy: f64) -> Self {
+        Self {
+            polylines: self
+                .polylines
+                .iter()
+                .map(|l| l.iter().map(|q| [q[0] + dx, q[1] + dy]).collect())
+                .collect(),
+        }
+    }
+}
+
+/// Distance from `p` to the segment `[a, b]`.
+fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let (ux, uy) = (b[0] - a[0], b[1] - a[1]);
+    let len2 = ux * ux + uy * uy;
+    let t = if len2 > 0.0 {
+        (((p[0] - a[0]) * ux + (p[1] - a[1]) * uy) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p[0] - a[0] - t * ux).hypot(p[1] - a[1] - t * uy)
+}
+
 /// Exact pose of paper 002's patch in one frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AffineTruth {

@@ -25,7 +25,7 @@ use super::render::{
     ValueNoise, add_noise, blend, clipped_span, ellipse_cov, pixel_span, rect_cov, to_u8,
 };
 use super::{
-    FrameTruth, ObjectTruth, Result, SceneError, SceneInfo, SceneStream, check_geometry,
+    FrameTruth, ObjectTruth, Outline, Result, SceneError, SceneInfo, SceneStream, check_geometry,
     check_range, name_key, otb_box, scene_rng, streams,
 };
 
@@ -474,6 +474,57 @@ impl Prim {
             Prim::Rect(r) => r,
         }
     }
+
+    /// Points along the primitive's boundary (where its coverage is one
+    /// half), at most `step` apart, in order; a closed loop (first point
+    /// repeated last).
+    fn boundary(&self, step: f64) -> Vec<[f64; 2]> {
+        match *self {
+            Prim::Ellipse([cx, cy, a, b]) => {
+                // Ramanujan's perimeter bounds the arc between samples.
+                let h = ((a - b) / (a + b)).powi(2);
+                let perimeter = std::f64::consts::PI
+                    * (a + b)
+                    * (1.0 + 3.0 * h / (10.0 + (4.0 - 3.0 * h).sqrt()));
+                let n = (perimeter / step).ceil().max(8.0) as usize;
+                (0..=n)
+                    .map(|i| {
+                        let t = std::f64::consts::TAU * (i % n) as f64 / n as f64;
+                        [cx + a * t.cos(), cy + b * t.sin()]
+                    })
+                    .collect()
+            }
+            Prim::Rect([x0, y0, x1, y1]) => {
+                let corners = [[x0, y0], [x1, y0], [x1, y1], [x0, y1], [x0, y0]];
+                let mut out = vec![corners[0]];
+                for w in corners.windows(2) {
+                    let len = (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]);
+                    let n = (len / step).ceil().max(1.0) as usize;
+                    for i in 1..=n {
+                        let t = i as f64 / n as f64;
+                        out.push([
+                            w[0][0] + t * (w[1][0] - w[0][0]),
+                            w[0][1] + t * (w[1][1] - w[0][1]),
+                        ]);
+                    }
+                }
+                out
+            }
+        }
+    }
+
+    /// Whether `(x, y)` is inside the primitive, more than `margin` from
+    /// its boundary (approximately, for the ellipse).
+    fn strictly_contains(&self, x: f64, y: f64, margin: f64) -> bool {
+        match *self {
+            Prim::Ellipse([cx, cy, a, b]) => {
+                ((x - cx) / (a - margin)).powi(2) + ((y - cy) / (b - margin)).powi(2) < 1.0
+            }
+            Prim::Rect([x0, y0, x1, y1]) => {
+                x > x0 + margin && x < x1 - margin && y > y0 + margin && y < y1 - margin
+            }
+        }
+    }
 }
 
 /// A skin object: a silhouette (union of primitives) in skin colour with
@@ -537,6 +588,36 @@ impl SkinShape {
 }
 
 impl Shape {
+    /// The silhouette's boundary in object coordinates: each primitive's
+    /// boundary (samples 0.25 px apart) without the parts inside another
+    /// primitive.
+    fn outline(&self) -> Outline {
+        const STEP: f64 = 0.25;
+        const MARGIN: f64 = 1e-9;
+        let mut polylines = Vec::new();
+        for (i, p) in self.silhouette.iter().enumerate() {
+            let mut line: Vec<[f64; 2]> = Vec::new();
+            for q in p.boundary(STEP) {
+                let covered = self
+                    .silhouette
+                    .iter()
+                    .enumerate()
+                    .any(|(j, o)| j != i && o.strictly_contains(q[0], q[1], MARGIN));
+                if covered {
+                    if !line.is_empty() {
+                        polylines.push(std::mem::take(&mut line));
+                    }
+                } else {
+                    line.push(q);
+                }
+            }
+            if !line.is_empty() {
+                polylines.push(line);
+            }
+        }
+        Outline { polylines }
+    }
+
     fn coverage(&self, dx: f64, dy: f64) -> f64 {
         self.silhouette
             .iter()
@@ -666,6 +747,20 @@ pub struct WebcamStream {
 }
 
 impl WebcamStream {
+    /// The true outline of every object in frame `k` (0-based), in the
+    /// order of [`FrameTruth::objects`]: the silhouette's boundary (face
+    /// ellipse; palm, fingers and thumb of the hand) at the object's
+    /// position, in 0-based pixels, also where it is hidden or outside the
+    /// frame. The positions are a function of `k` alone, so this does not
+    /// depend on how far the stream has advanced.
+    pub fn outlines(&self, k: usize) -> Vec<Outline> {
+        self.people
+            .iter()
+            .zip(self.centers(k))
+            .map(|(p, [cx, cy])| p.shape.outline().translated(cx, cy))
+            .collect()
+    }
+
     fn visible_fraction(&self, i: usize, centers: &[[f64; 2]]) -> f64 {
         let (w, h) = (self.params.width as i64, self.params.height as i64);
         let person = &self.people[i];
@@ -828,6 +923,36 @@ mod tests {
         assert_eq!(reflect(12.0, 0.0, 10.0), 8.0);
         assert_eq!(reflect(-3.0, 0.0, 10.0), 3.0);
         assert_eq!(reflect(23.0, 0.0, 10.0), 3.0);
+    }
+
+    #[test]
+    fn outlines_lie_where_the_coverage_is_one_half() {
+        for shape in [SkinShape::Face, SkinShape::Hand] {
+            let s = shape.shape();
+            let o = s.outline();
+            assert!(o.len() > 400, "{shape:?}: {} points", o.len());
+            let mut ext = [
+                f64::INFINITY,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                f64::NEG_INFINITY,
+            ];
+            for [x, y] in o.points() {
+                // On an edge 1/2, at a rectangle's corner 1/4.
+                let c = s.coverage(x, y);
+                assert!((0.24..=0.76).contains(&c), "{shape:?} ({x}, {y}): {c}");
+                ext = [ext[0].min(x), ext[1].min(y), ext[2].max(x), ext[3].max(y)];
+            }
+            for (a, b) in ext.iter().zip(s.extent) {
+                assert!((a - b).abs() < 0.01, "{shape:?}: {ext:?} vs {:?}", s.extent);
+            }
+            // Nothing of the palm's arc under the fingers is kept.
+            assert!(o.distance([0.0, -4.0]) > 1.0 || shape == SkinShape::Face);
+        }
+        // The face is one closed ellipse.
+        let face = SkinShape::Face.shape().outline();
+        assert_eq!(face.polylines.len(), 1);
+        assert!((face.distance([0.0, 0.0]) - 20.0).abs() < 1e-3);
     }
 
     #[test]
