@@ -49,21 +49,46 @@ pub fn line_chart(
     }
     let pad = 0.05 * (y1 - y0);
     let io = |e: String| WriteError::new(path, std::io::Error::other(e));
-    let root = SVGBackend::new(path, (900, 560)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| io(e.to_string()))?;
+    // drawn in memory, then written beside the old file and renamed over
+    // it: a killed run never leaves half a figure in place of a whole one
+    let mut svg = String::new();
+    draw(
+        &mut svg,
+        title,
+        x_label,
+        y_label,
+        series,
+        (x0, x1, y0 - pad, y1 + pad),
+    )
+    .map_err(io)?;
+    crate::write::write_text(path, &svg)
+}
+
+/// Draws the chart into `svg` on the ranges `(x0, x1, y0, y1)`.
+fn draw(
+    svg: &mut String,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+    (x0, x1, y0, y1): (f64, f64, f64, f64),
+) -> Result<(), String> {
+    let finite = |p: &&(f64, f64)| p.0.is_finite() && p.1.is_finite();
+    let root = SVGBackend::with_string(svg, (900, 560)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
     let mut chart = ChartBuilder::on(&root)
         .caption(title, ("sans-serif", 20))
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(60)
-        .build_cartesian_2d(x0..x1, (y0 - pad)..(y1 + pad))
-        .map_err(|e| io(e.to_string()))?;
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(|e| e.to_string())?;
     chart
         .configure_mesh()
         .x_desc(x_label)
         .y_desc(y_label)
         .draw()
-        .map_err(|e| io(e.to_string()))?;
+        .map_err(|e| e.to_string())?;
     for (i, s) in series.iter().enumerate() {
         let colour = Palette99::pick(i).to_rgba();
         chart
@@ -71,7 +96,7 @@ pub fn line_chart(
                 s.points.iter().filter(finite).copied(),
                 colour.stroke_width(2),
             ))
-            .map_err(|e| io(e.to_string()))?
+            .map_err(|e| e.to_string())?
             .label(s.name.clone())
             .legend(move |(x, y)| {
                 PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
@@ -82,8 +107,8 @@ pub fn line_chart(
         .background_style(WHITE.mix(0.8))
         .border_style(BLACK)
         .draw()
-        .map_err(|e| io(e.to_string()))?;
-    root.present().map_err(|e| io(e.to_string()))?;
+        .map_err(|e| e.to_string())?;
+    root.present().map_err(|e| e.to_string())?;
     Ok(())
 }
 

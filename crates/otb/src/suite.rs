@@ -10,6 +10,13 @@
 //! threshold) and the precision plot (fraction within each centre-error
 //! distance) as SVG. A tracker that fails on a sequence is reported in its
 //! cell and the run goes on.
+//!
+//! A run killed part-way keeps every finished cell: while it runs the
+//! folder holds `PARTIAL.txt`, each finished cell is appended to
+//! `results.partial.csv` at once, and a cell's boxes go to
+//! `boxes/<tracker>/<sequence>.partial.txt`, renamed to `<sequence>.txt`
+//! when the cell finishes. The files of the previous run (`results.csv`,
+//! the plots, box files) are only ever replaced whole, by renaming.
 
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
@@ -22,7 +29,7 @@ use crate::plot::{Series, line_chart};
 use crate::sequence::{OtbError, Sequence, list_sequences};
 use crate::table::Table;
 use crate::track::{BoxFile, OnBadFrame, track_frames};
-use crate::write::{WriteError, create_dir, write_text};
+use crate::write::{PartialCsv, WriteError, clear_partial, create_dir, mark_partial, write_text};
 
 /// Centre-error thresholds of the precision plot, px.
 pub const PRECISION_PLOT_MAX: usize = 50;
@@ -113,6 +120,9 @@ pub fn run_suite(root: &Path, options: &SuiteOptions) -> Result<SuiteReport, Sui
         trackers: options.trackers.iter().map(|t| t.name).collect(),
         cells: Vec::new(),
     };
+    let out = &options.out;
+    mark_partial(out, "the OTB one-pass suite (`cargo xtask otb`)")?;
+    let cells = PartialCsv::create(&out.join("results.csv"), CSV_HEADER.join(",").as_str())?;
     for dir in &dirs {
         let name = dir
             .file_name()
@@ -138,16 +148,63 @@ pub fn run_suite(root: &Path, options: &SuiteOptions) -> Result<SuiteReport, Sui
                     Err(e) => eprintln!("{name:<12} {:<16} failed: {e}", info.name),
                 }
             }
-            report.cells.push(Cell {
+            let cell = Cell {
                 sequence: name.clone(),
                 tracker: info.name,
                 outcome,
-            });
+            };
+            let row = csv_table(std::slice::from_ref(&cell)).to_csv();
+            cells.append(row.split_once('\n').map_or("", |(_, rows)| rows))?;
+            report.cells.push(cell);
         }
         report.sequences.push(name);
     }
-    report.write(&options.out)?;
+    cells.finish(&report.csv())?;
+    report.write_summary(out)?;
+    clear_partial(out)?;
     Ok(report)
+}
+
+/// The columns of `results.csv`.
+const CSV_HEADER: [&str; 10] = [
+    "sequence",
+    "tracker",
+    "auc",
+    "precision_20",
+    "mean_iou",
+    "mean_center_error",
+    "fps",
+    "frames_scored",
+    "lost_frames",
+    "error",
+];
+
+/// The rows of `results.csv` for `cells`.
+fn csv_table(cells: &[Cell]) -> Table {
+    let mut t = Table::new("", &CSV_HEADER);
+    for c in cells {
+        let mut row = vec![c.sequence.clone(), c.tracker.to_string()];
+        match &c.outcome {
+            Ok(s) => {
+                row.extend([
+                    format!("{:.4}", s.score.auc),
+                    format!("{:.4}", s.score.precision_20),
+                    format!("{:.4}", s.score.mean_overlap),
+                    format!("{:.2}", s.score.mean_center_error),
+                    format!("{:.1}", s.fps),
+                    s.score.frames_scored.to_string(),
+                    s.lost_frames.to_string(),
+                    String::new(),
+                ]);
+            }
+            Err(e) => {
+                row.extend(std::iter::repeat_n(String::new(), 7));
+                row.push(e.clone());
+            }
+        }
+        t.push(row);
+    }
+    t
 }
 
 fn run_cell(
@@ -161,8 +218,11 @@ fn run_cell(
         .ok_or_else(|| format!("{}: frame 1 is unlabelled", seq.name))?;
     let dir = options.out.join("boxes").join(info.name);
     std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
-    let mut file =
-        BoxFile::create(&dir.join(format!("{}.txt", seq.name))).map_err(|e| e.to_string())?;
+    // the boxes go to a partial file, renamed over the previous one only
+    // when the cell has finished
+    let boxes = dir.join(format!("{}.txt", seq.name));
+    let partial = crate::write::partial_path(&boxes);
+    let mut file = BoxFile::create(&partial).map_err(|e| e.to_string())?;
     let mut tracker = info.build(options.seed).map_err(|e| e.to_string())?;
     let run = track_frames(
         tracker.as_mut(),
@@ -174,6 +234,14 @@ fn run_cell(
         |f| file.write(&f.bbox),
     )
     .map_err(|e| e.to_string())?;
+    drop(file);
+    std::fs::rename(&partial, &boxes).map_err(|e| {
+        format!(
+            "cannot rename {} to {}: {e}",
+            partial.display(),
+            boxes.display()
+        )
+    })?;
     let score = score_otb(&run.boxes, &seq.ground_truth).map_err(|e| e.to_string())?;
     Ok(CellScore {
         score,
@@ -243,44 +311,7 @@ impl SuiteReport {
     }
 
     fn csv(&self) -> String {
-        let mut t = Table::new(
-            "",
-            &[
-                "sequence",
-                "tracker",
-                "auc",
-                "precision_20",
-                "mean_iou",
-                "mean_center_error",
-                "fps",
-                "frames_scored",
-                "lost_frames",
-                "error",
-            ],
-        );
-        for c in &self.cells {
-            let mut row = vec![c.sequence.clone(), c.tracker.to_string()];
-            match &c.outcome {
-                Ok(s) => {
-                    row.extend([
-                        format!("{:.4}", s.score.auc),
-                        format!("{:.4}", s.score.precision_20),
-                        format!("{:.4}", s.score.mean_overlap),
-                        format!("{:.2}", s.score.mean_center_error),
-                        format!("{:.1}", s.fps),
-                        s.score.frames_scored.to_string(),
-                        s.lost_frames.to_string(),
-                        String::new(),
-                    ]);
-                }
-                Err(e) => {
-                    row.extend(std::iter::repeat_n(String::new(), 7));
-                    row.push(e.clone());
-                }
-            }
-            t.push(row);
-        }
-        t.to_csv()
+        csv_table(&self.cells).to_csv()
     }
 
     /// Success and precision curves of `tracker` over the cells `pick`
@@ -363,6 +394,11 @@ impl SuiteReport {
     pub fn write(&self, out: &Path) -> Result<(), WriteError> {
         create_dir(out)?;
         write_text(&out.join("results.csv"), &self.csv())?;
+        self.write_summary(out)
+    }
+
+    /// Writes `results.md` and the plots under `out`.
+    fn write_summary(&self, out: &Path) -> Result<(), WriteError> {
         write_text(&out.join("results.md"), &self.table().to_markdown())?;
         for seq in &self.sequences {
             self.plots(out, seq, |c| &c.sequence == seq)?;

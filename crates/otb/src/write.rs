@@ -23,12 +23,144 @@ impl WriteError {
     }
 }
 
-/// Writes `contents` to `path`.
+/// Writes `contents` to `path` without ever leaving it half written: the
+/// text goes to a temporary file beside it (`.<name>.tmp`), which is then
+/// renamed over `path`. A run killed part-way leaves the previous `path`
+/// whole (and at most a stray temporary file).
 ///
 /// # Errors
 /// [`WriteError`] naming the file.
 pub fn write_text(path: &Path, contents: &str) -> Result<(), WriteError> {
-    std::fs::write(path, contents).map_err(|e| WriteError::new(path, e))
+    let tmp = temporary_path(path);
+    std::fs::write(&tmp, contents).map_err(|e| WriteError::new(&tmp, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        WriteError::new(path, e)
+    })
+}
+
+/// `dir/.name.tmp` for `dir/name`.
+fn temporary_path(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    path.with_file_name(format!(".{name}.tmp"))
+}
+
+/// `dir/stem.partial.ext` for `dir/stem.ext`: where the rows of a result
+/// that is still being computed go.
+pub fn partial_path(path: &Path) -> PathBuf {
+    let stem = path
+        .file_stem()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    match path.extension() {
+        Some(ext) => path.with_file_name(format!("{stem}.partial.{}", ext.to_string_lossy())),
+        None => path.with_file_name(format!("{stem}.partial")),
+    }
+}
+
+/// A CSV written row by row as results finish, beside the file it will
+/// replace: rows go to [`partial_path`] (`runs.partial.csv` for
+/// `runs.csv`), created fresh with its header and written through after
+/// every [`PartialCsv::append`]; [`PartialCsv::finish`] writes the complete
+/// file over `path` (atomically, [`write_text`]) and removes the partial
+/// one. A run killed part-way keeps every row it appended, under a name
+/// that says it is partial, and the previous `path` untouched.
+///
+/// Appends may come from several threads (each call writes whole rows).
+#[derive(Debug)]
+pub struct PartialCsv {
+    path: PathBuf,
+    partial: PathBuf,
+    file: std::sync::Mutex<std::fs::File>,
+}
+
+impl PartialCsv {
+    /// Creates the partial file of `path` with `header` (one line, without
+    /// its newline).
+    ///
+    /// # Errors
+    /// [`WriteError`] naming the partial file.
+    pub fn create(path: &Path, header: &str) -> Result<Self, WriteError> {
+        use std::io::Write;
+        let partial = partial_path(path);
+        let mut file = std::fs::File::create(&partial).map_err(|e| WriteError::new(&partial, e))?;
+        writeln!(file, "{header}").map_err(|e| WriteError::new(&partial, e))?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            partial,
+            file: std::sync::Mutex::new(file),
+        })
+    }
+
+    /// The file the rows go to until [`PartialCsv::finish`].
+    pub fn partial(&self) -> &Path {
+        &self.partial
+    }
+
+    /// Appends `rows` (whole lines, each ending in a newline) and hands them
+    /// to the operating system before returning.
+    ///
+    /// # Errors
+    /// [`WriteError`] naming the partial file.
+    pub fn append(&self, rows: &str) -> Result<(), WriteError> {
+        use std::io::Write;
+        let mut file = self
+            .file
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        file.write_all(rows.as_bytes())
+            .and_then(|()| file.flush())
+            .map_err(|e| WriteError::new(&self.partial, e))
+    }
+
+    /// Writes the complete `contents` (header included) over the final
+    /// path and removes the partial file.
+    ///
+    /// # Errors
+    /// [`WriteError`] naming the file.
+    pub fn finish(self, contents: &str) -> Result<(), WriteError> {
+        write_text(&self.path, contents)?;
+        drop(self.file);
+        std::fs::remove_file(&self.partial).map_err(|e| WriteError::new(&self.partial, e))
+    }
+}
+
+/// The name of the marker [`mark_partial`] writes.
+pub const PARTIAL_MARKER: &str = "PARTIAL.txt";
+
+/// Marks the folder `dir` as holding an unfinished run: writes
+/// `dir/PARTIAL.txt` saying what started (`what`) and that the files
+/// beside it may be from an earlier run, with the finished part of this
+/// one in the `*.partial.*` files. [`clear_partial`] removes it when the run
+/// has written everything.
+///
+/// # Errors
+/// [`WriteError`] naming the marker.
+pub fn mark_partial(dir: &Path, what: &str) -> Result<(), WriteError> {
+    create_dir(dir)?;
+    write_text(
+        &dir.join(PARTIAL_MARKER),
+        &format!(
+            "PARTIAL: {what} started here and has not finished (it is running, was killed, or failed).\n\
+             Files named *.partial.* hold what it finished so far; every other file here\n\
+             is from the last run that finished, not from this one.\n"
+        ),
+    )
+}
+
+/// Removes the marker of [`mark_partial`] (absent is fine).
+///
+/// # Errors
+/// [`WriteError`] naming the marker.
+pub fn clear_partial(dir: &Path) -> Result<(), WriteError> {
+    let path = dir.join(PARTIAL_MARKER);
+    match std::fs::remove_file(&path) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(WriteError::new(&path, e)),
+        _ => Ok(()),
+    }
 }
 
 /// Creates `dir` and its parents.
@@ -37,4 +169,70 @@ pub fn write_text(path: &Path, contents: &str) -> Result<(), WriteError> {
 /// [`WriteError`] naming the folder.
 pub fn create_dir(dir: &Path) -> Result<(), WriteError> {
     std::fs::create_dir_all(dir).map_err(|e| WriteError::new(dir, e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> PathBuf {
+        let dir =
+            std::env::temp_dir().join(format!("bayestrack-write-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        create_dir(&dir).unwrap();
+        dir
+    }
+
+    #[test]
+    fn a_killed_run_keeps_its_rows_and_the_previous_file() {
+        let dir = scratch("killed");
+        let path = dir.join("runs.csv");
+        write_text(&path, "a,b\nold,1\n").unwrap();
+        let log = PartialCsv::create(&path, "a,b").unwrap();
+        assert_eq!(log.partial(), dir.join("runs.partial.csv"));
+        log.append("new,1\n").unwrap();
+        log.append("new,2\n").unwrap();
+        // killed here: nothing more runs
+        drop(log);
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "a,b\nold,1\n");
+        assert_eq!(
+            std::fs::read_to_string(dir.join("runs.partial.csv")).unwrap(),
+            "a,b\nnew,1\nnew,2\n"
+        );
+        // a finished run replaces the file and removes the partial one
+        let log = PartialCsv::create(&path, "a,b").unwrap();
+        log.append("new,2\n").unwrap();
+        log.finish("a,b\nnew,1\nnew,2\n").unwrap();
+        assert_eq!(
+            std::fs::read_to_string(&path).unwrap(),
+            "a,b\nnew,1\nnew,2\n"
+        );
+        assert!(!dir.join("runs.partial.csv").exists());
+        let names: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names.len(), 1, "{names:?}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn the_marker_comes_and_goes() {
+        let dir = scratch("marker");
+        mark_partial(&dir, "test").unwrap();
+        let text = std::fs::read_to_string(dir.join(PARTIAL_MARKER)).unwrap();
+        assert!(text.starts_with("PARTIAL: test started"), "{text}");
+        clear_partial(&dir).unwrap();
+        clear_partial(&dir).unwrap();
+        assert!(!dir.join(PARTIAL_MARKER).exists());
+        assert_eq!(
+            partial_path(Path::new("x/results.csv")),
+            Path::new("x/results.partial.csv")
+        );
+        assert_eq!(
+            partial_path(Path::new("x/boxes")),
+            Path::new("x/boxes.partial")
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }
