@@ -106,7 +106,8 @@ fn print_registry(reg: &[&dyn Experiment]) {
 fn run_one(e: &dyn Experiment, opts: &RunOptions) -> Result<(), ExperimentError> {
     eprintln!("== {} ({}) ==", e.id(), e.source());
     let start = std::time::Instant::now();
-    let tables = e.run(opts)?;
+    // the output folder says PARTIAL until every file is written
+    let tables = bayestrack_experiments::experiment::run_marked(e, opts)?;
     // on stderr, with the progress: stdout stays the same from run to run
     eprintln!("{} ran in {:.2} s", e.id(), start.elapsed().as_secs_f64());
     for table in tables {

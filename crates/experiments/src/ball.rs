@@ -34,7 +34,6 @@
 //! centre error in px over every processed frame (lost ones included).
 
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
@@ -48,6 +47,7 @@ use crate::scenes::{BallMotion, BallScene, SceneStream};
 use bayestrack_otb::Table;
 use bayestrack_otb::metrics::center_error;
 use bayestrack_otb::plot::{Series, line_chart};
+use bayestrack_otb::write::PartialCsv;
 
 /// Key of this experiment's random streams ("ball" in ASCII).
 const KEY: u64 = 0x6261_6c6c;
@@ -902,9 +902,40 @@ fn cell(v: Option<f64>, digits: usize) -> String {
     }
 }
 
+/// The header of `runs.csv`.
+const RUNS_HEADER: &str = "condition,run,alg,mode,frames,mean_error_px,losses,found_times_s,unresolved,self_lost_frames,wall_s";
+
+/// The `runs.csv` rows of one finished (condition, run) pair.
+fn run_rows(r: &RunResult) -> String {
+    let mut text = String::new();
+    for o in &r.outcomes {
+        let found: Vec<String> = o.found_times.iter().map(|t| format!("{t:.4}")).collect();
+        let _ = writeln!(
+            text,
+            "{},{},{},{},{},{:.6},{},{},{},{},{:.4}",
+            r.condition.name(),
+            r.run,
+            o.filter.label(),
+            o.mode.name(),
+            o.frames,
+            o.error_sum / o.frames.max(1) as f64,
+            o.losses,
+            found.join(";"),
+            o.unresolved,
+            o.self_lost,
+            o.wall
+        );
+    }
+    text
+}
+
 /// Runs the experiment: every (condition, run) pair in parallel (each has
 /// its own seeded streams, so the result does not depend on the thread
-/// count), in batches appended to `runs_csv` as they finish.
+/// count). With `runs_csv`, each pair's rows are appended to
+/// `runs.partial.csv` beside it the moment the pair finishes, and the
+/// complete file, in (condition, run) order, replaces `runs_csv` at the end
+/// (see [`PartialCsv`]): a run killed part-way keeps every finished pair
+/// and the previous `runs.csv`.
 ///
 /// # Errors
 /// [`ExperimentError::Failed`] naming the tracker, condition and run that
@@ -920,22 +951,9 @@ pub fn run(
             value: "0".to_string(),
         });
     }
-    let mut file = match runs_csv {
-        Some(path) => {
-            let io = |source| ExperimentError::Io {
-                path: path.to_path_buf(),
-                source,
-            };
-            let mut f = std::fs::File::create(path).map_err(io)?;
-            writeln!(
-                f,
-                "condition,run,alg,mode,frames,mean_error_px,losses,found_times_s,unresolved,self_lost_frames,wall_s"
-            )
-            .map_err(io)?;
-            Some((f, path))
-        }
-        None => None,
-    };
+    let log = runs_csv
+        .map(|path| PartialCsv::create(path, RUNS_HEADER))
+        .transpose()?;
     let jobs: Vec<(Condition, usize)> = (0..opts.runs)
         .flat_map(|r| Condition::ALL.into_iter().map(move |c| (c, r)))
         .collect();
@@ -944,48 +962,25 @@ pub fn run(
     } else {
         indicatif::ProgressBar::hidden()
     };
-    let batch = rayon::current_num_threads().max(1) * 2;
-    let mut runs = Vec::with_capacity(jobs.len());
-    for chunk in jobs.chunks(batch) {
-        let done: Vec<RunResult> = chunk
-            .par_iter()
-            .map(|&(c, r)| run_one(opts, c, r, r == 0))
-            .collect::<Result<_, _>>()?;
-        if let Some((f, path)) = file.as_mut() {
-            let mut text = String::new();
-            for r in &done {
-                for o in &r.outcomes {
-                    let found: Vec<String> =
-                        o.found_times.iter().map(|t| format!("{t:.4}")).collect();
-                    let _ = writeln!(
-                        text,
-                        "{},{},{},{},{},{:.6},{},{},{},{},{:.4}",
-                        r.condition.name(),
-                        r.run,
-                        o.filter.label(),
-                        o.mode.name(),
-                        o.frames,
-                        o.error_sum / o.frames.max(1) as f64,
-                        o.losses,
-                        found.join(";"),
-                        o.unresolved,
-                        o.self_lost,
-                        o.wall
-                    );
-                }
+    let mut runs: Vec<RunResult> = jobs
+        .par_iter()
+        .map(|&(c, r)| {
+            let done = run_one(opts, c, r, r == 0)?;
+            if let Some(log) = &log {
+                log.append(&run_rows(&done))?;
             }
-            f.write_all(text.as_bytes())
-                .map_err(|source| ExperimentError::Io {
-                    path: path.to_path_buf(),
-                    source,
-                })?;
-        }
-        bar.inc(done.len() as u64);
-        runs.extend(done);
-    }
+            bar.inc(1);
+            Ok(done)
+        })
+        .collect::<Result<_, ExperimentError>>()?;
     bar.finish_and_clear();
     // conditions in Condition::ALL order, runs in order within each
     runs.sort_by_key(|r| (Condition::ALL.iter().position(|c| *c == r.condition), r.run));
+    if let Some(log) = log {
+        let mut text = format!("{RUNS_HEADER}\n");
+        runs.iter().for_each(|r| text.push_str(&run_rows(r)));
+        log.finish(&text)?;
+    }
     Ok(BallResult {
         options: opts.clone(),
         runs,

@@ -31,6 +31,7 @@ use crate::experiment::{Experiment, ExperimentError, Mode, RunOptions, write_tex
 use crate::scenes::{FrameTruth, RoadScene};
 use bayestrack_otb::Table;
 use bayestrack_otb::plot::{Series, line_chart};
+use bayestrack_otb::write::PartialCsv;
 
 /// Paper 004 Table 1 (MAD tracker): `(frame, x, y)`.
 pub const PAPER_TABLE1: [(usize, f64, f64); 10] = [
@@ -497,10 +498,25 @@ fn multi_run(c: &CorrelationConfig) -> Result<MultiResult, ExperimentError> {
 /// # Errors
 /// [`ExperimentError::Failed`] naming the tracker, run and frame.
 pub fn run(config: &CorrelationConfig) -> Result<CorrelationResult, ExperimentError> {
+    run_logged(config, None)
+}
+
+/// [`run`], with each run's rows of `frames.csv` appended to `frames` the
+/// moment the run finishes (the caller finishes the file).
+fn run_logged(
+    config: &CorrelationConfig,
+    frames: Option<&PartialCsv>,
+) -> Result<CorrelationResult, ExperimentError> {
     let runs = (0..config.runs)
         .into_par_iter()
-        .map(|r| one_run(config, r))
-        .collect::<Result<Vec<_>, _>>()?;
+        .map(|r| {
+            let done = one_run(config, r)?;
+            if let Some(log) = frames {
+                log.append(&frame_rows(r, &done))?;
+            }
+            Ok(done)
+        })
+        .collect::<Result<Vec<_>, ExperimentError>>()?;
     Ok(CorrelationResult {
         config: *config,
         runs,
@@ -653,7 +669,41 @@ impl CorrelationResult {
     }
 }
 
-/// Writes the CSV files and the figures under `dir`.
+/// The header of `frames.csv` (without its newline).
+fn frames_header() -> String {
+    let mut text = String::from("run,frame,truth_x,truth_y,visible");
+    for v in Variant::ALL {
+        let _ = write!(text, ",{0} x,{0} y,{0} lost", v.name());
+    }
+    text
+}
+
+/// The `frames.csv` rows of run `r`: every frame of every tracker.
+fn frame_rows(r: usize, run: &RunResult) -> String {
+    let mut text = String::new();
+    for k in 0..run.truth.len() {
+        let _ = write!(
+            text,
+            "{r},{},{:.3},{:.3},{:.4}",
+            k + 1,
+            run.truth[k][0],
+            run.truth[k][1],
+            run.visible[k]
+        );
+        for tr in &run.tracks {
+            let _ = write!(
+                text,
+                ",{:.3},{:.3},{}",
+                tr.centres[k][0], tr.centres[k][1], tr.lost[k]
+            );
+        }
+        text.push('\n');
+    }
+    text
+}
+
+/// Writes the CSV files (all but `frames.csv`, which the run writes as it
+/// goes) and the figures under `dir`.
 fn write_outputs(result: &CorrelationResult, dir: &Path) -> Result<(), ExperimentError> {
     for (name, table) in [
         ("table1_mad.csv", result.table1()),
@@ -664,34 +714,6 @@ fn write_outputs(result: &CorrelationResult, dir: &Path) -> Result<(), Experimen
         let path = dir.join(name);
         write_text(&path, &table.to_csv())?;
     }
-    // Every frame of every run and tracker.
-    let path = dir.join("frames.csv");
-    let mut text = String::from("run,frame,truth_x,truth_y,visible");
-    for v in Variant::ALL {
-        let _ = write!(text, ",{0} x,{0} y,{0} lost", v.name());
-    }
-    text.push('\n');
-    for (r, run) in result.runs.iter().enumerate() {
-        for k in 0..run.truth.len() {
-            let _ = write!(
-                text,
-                "{r},{},{:.3},{:.3},{:.4}",
-                k + 1,
-                run.truth[k][0],
-                run.truth[k][1],
-                run.visible[k]
-            );
-            for tr in &run.tracks {
-                let _ = write!(
-                    text,
-                    ",{:.3},{:.3},{}",
-                    tr.centres[k][0], tr.centres[k][1], tr.lost[k]
-                );
-            }
-            text.push('\n');
-        }
-    }
-    write_text(&path, &text)?;
     // Trajectories (run 0) with the paper's, and error over time.
     let r0 = &result.runs[0];
     let mut traj = vec![
@@ -765,7 +787,15 @@ impl Experiment for CorrelationExperiment {
             config.apply(k, v)?;
         }
         let dir = opts.output_dir(self.id())?;
-        let result = run(&config)?;
+        // every frame of every run, written as each run finishes
+        let header = frames_header();
+        let frames = PartialCsv::create(&dir.join("frames.csv"), &header)?;
+        let result = run_logged(&config, Some(&frames))?;
+        let mut text = format!("{header}\n");
+        for (r, run) in result.runs.iter().enumerate() {
+            text.push_str(&frame_rows(r, run));
+        }
+        frames.finish(&text)?;
         write_outputs(&result, &dir)?;
         let mut tables = result.tables();
         if let Some(first) = tables.first_mut() {

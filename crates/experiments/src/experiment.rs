@@ -47,7 +47,32 @@ impl RunOptions {
     }
 }
 
-/// Writes `contents` to `path`, naming the file in the error.
+/// Runs `e` with its output folder `opts.out/<id>/` marked partial
+/// (`PARTIAL.txt`, see [`bayestrack_otb::write::mark_partial`]) until every
+/// file is written: a run that is killed or fails leaves the marker, which
+/// says that the `*.partial.*` files hold the finished part and that every
+/// other file is from the last run that finished.
+///
+/// # Errors
+/// Those of [`Experiment::run`], and [`ExperimentError::Io`] for the
+/// marker.
+pub fn run_marked(e: &dyn Experiment, opts: &RunOptions) -> Result<Vec<Table>, ExperimentError> {
+    let dir = opts.output_dir(e.id())?;
+    let mode = match opts.mode {
+        Mode::Quick => "",
+        Mode::Full => " --full",
+    };
+    bayestrack_otb::write::mark_partial(
+        &dir,
+        &format!("`cargo xtask reproduce-table {}{mode}`", e.id()),
+    )?;
+    let tables = e.run(opts)?;
+    bayestrack_otb::write::clear_partial(&dir)?;
+    Ok(tables)
+}
+
+/// Writes `contents` to `path` whole (a temporary file renamed over it),
+/// naming the file in the error.
 ///
 /// # Errors
 /// [`ExperimentError::Io`].
@@ -119,5 +144,56 @@ pub trait Experiment: Sync {
     /// `cargo xtask bless` rewrites the file from this.
     fn golden(&self) -> Result<Option<String>, ExperimentError> {
         Ok(None)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Writes one file, then fails when asked to.
+    struct Fails(bool);
+
+    impl Experiment for Fails {
+        fn id(&self) -> &'static str {
+            "marker-test"
+        }
+        fn source(&self) -> &'static str {
+            "test"
+        }
+        fn summary(&self) -> &'static str {
+            "test"
+        }
+        fn run(&self, opts: &RunOptions) -> Result<Vec<Table>, ExperimentError> {
+            write_text(&opts.output_dir(self.id())?.join("a.csv"), "x\n")?;
+            if self.0 {
+                return Err(ExperimentError::Failed {
+                    id: "marker-test",
+                    message: "on purpose".into(),
+                });
+            }
+            Ok(vec![])
+        }
+    }
+
+    #[test]
+    fn an_unfinished_run_leaves_its_folder_marked_partial() {
+        let out = std::env::temp_dir().join(format!("bayestrack-marker-{}", std::process::id()));
+        let opts = RunOptions {
+            mode: Mode::Full,
+            out: out.clone(),
+            progress: false,
+            set: vec![],
+        };
+        let marker = out.join("marker-test").join("PARTIAL.txt");
+        assert!(run_marked(&Fails(true), &opts).is_err());
+        let text = std::fs::read_to_string(&marker).unwrap();
+        assert!(
+            text.contains("reproduce-table marker-test --full"),
+            "{text}"
+        );
+        run_marked(&Fails(false), &opts).unwrap();
+        assert!(!marker.exists());
+        std::fs::remove_dir_all(&out).unwrap();
     }
 }

@@ -10,7 +10,6 @@
 //! defaults and the reasons for them are in docs/reproduction.md.
 
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::path::Path;
 
 use bayestrack_kalman::{
@@ -29,6 +28,7 @@ use rayon::prelude::*;
 use crate::experiment::{Experiment, ExperimentError, Mode, RunOptions, write_text};
 use bayestrack_otb::Table;
 use bayestrack_otb::plot::{Series, line_chart};
+use bayestrack_otb::write::PartialCsv;
 
 /// Key of this experiment's random streams.
 const KEY: u64 = 0x0068_696b_7066; // "hikpf" in ASCII
@@ -749,10 +749,21 @@ impl HikpfResult {
     }
 }
 
-/// Runs the experiment: runs in parallel batches (each run has its own
-/// random streams, so the result does not depend on the thread count), each
-/// finished batch appended to `runs_csv` when given, so an interrupted run
-/// keeps what it already wrote.
+/// The `runs.csv` row of run `r`.
+fn run_row(r: usize, outcomes: &[RunOutcome]) -> String {
+    let cells: Vec<String> = outcomes
+        .iter()
+        .map(|x| format!("{:.17e}", x.error))
+        .collect();
+    format!("{r},{}\n", cells.join(","))
+}
+
+/// Runs the experiment: runs in parallel (each run has its own random
+/// streams, so the result does not depend on the thread count). With
+/// `runs_csv`, each run's row is appended to `runs.partial.csv` beside it
+/// the moment the run finishes, and the complete file, in run order,
+/// replaces `runs_csv` at the end (see [`PartialCsv`]): an interrupted run
+/// keeps every finished run and the previous `runs.csv`.
 ///
 /// # Errors
 /// [`ExperimentError::Failed`] naming the filter, run and step that failed;
@@ -762,49 +773,36 @@ pub fn run(
     runs_csv: Option<&Path>,
     progress: bool,
 ) -> Result<HikpfResult, ExperimentError> {
-    let mut file = match runs_csv {
-        Some(path) => {
-            let io = |source| ExperimentError::Io {
-                path: path.to_path_buf(),
-                source,
-            };
-            let mut f = std::fs::File::create(path).map_err(io)?;
-            let header: Vec<&str> = FilterKind::ALL.iter().map(|k| k.name()).collect();
-            writeln!(f, "run,{}", header.join(",")).map_err(io)?;
-            Some((f, path))
-        }
-        None => None,
-    };
+    let names: Vec<&str> = FilterKind::ALL.iter().map(|k| k.name()).collect();
+    let header = format!("run,{}", names.join(","));
+    let log = runs_csv
+        .map(|path| PartialCsv::create(path, &header))
+        .transpose()?;
     let bar = if progress {
         indicatif::ProgressBar::new(config.runs as u64)
     } else {
         indicatif::ProgressBar::hidden()
     };
     bar.set_message("hikpf runs");
-    let batch = 10;
-    let mut runs = Vec::with_capacity(config.runs);
-    for start in (0..config.runs).step_by(batch) {
-        let end = (start + batch).min(config.runs);
-        let outcomes: Vec<Vec<RunOutcome>> = (start..end)
-            .into_par_iter()
-            .map(|r| one_run(config, r))
-            .collect::<Result<_, _>>()?;
-        if let Some((f, path)) = file.as_mut() {
-            let mut text = String::new();
-            for (i, o) in outcomes.iter().enumerate() {
-                let cells: Vec<String> = o.iter().map(|x| format!("{:.17e}", x.error)).collect();
-                let _ = writeln!(text, "{},{}", start + i, cells.join(","));
+    let runs: Vec<Vec<RunOutcome>> = (0..config.runs)
+        .into_par_iter()
+        .map(|r| {
+            let outcomes = one_run(config, r)?;
+            if let Some(log) = &log {
+                log.append(&run_row(r, &outcomes))?;
             }
-            f.write_all(text.as_bytes())
-                .map_err(|source| ExperimentError::Io {
-                    path: path.to_path_buf(),
-                    source,
-                })?;
-        }
-        bar.inc((end - start) as u64);
-        runs.extend(outcomes);
-    }
+            bar.inc(1);
+            Ok(outcomes)
+        })
+        .collect::<Result<_, ExperimentError>>()?;
     bar.finish_and_clear();
+    if let Some(log) = log {
+        let mut text = format!("{header}\n");
+        for (r, o) in runs.iter().enumerate() {
+            text.push_str(&run_row(r, o));
+        }
+        log.finish(&text)?;
+    }
     Ok(HikpfResult {
         config: *config,
         runs,
@@ -908,6 +906,29 @@ impl Experiment for HikpfExperiment {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn runs_csv_is_replaced_whole_in_run_order() {
+        let dir = std::env::temp_dir().join(format!("bayestrack-hikpf-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("runs.csv");
+        std::fs::write(&path, "previous\n").unwrap();
+        let config = HikpfConfig {
+            runs: 3,
+            particles: 20,
+            ..HikpfConfig::quick()
+        };
+        let result = run(&config, Some(&path), false).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines.len(), 4, "{text}");
+        assert!(lines[0].starts_with("run,"));
+        for (r, line) in lines[1..].iter().enumerate() {
+            assert_eq!(*line, run_row(r, &result.runs[r]).trim_end());
+        }
+        assert!(!dir.join("runs.partial.csv").exists());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn gamma_log_density_integrates_to_one() {
