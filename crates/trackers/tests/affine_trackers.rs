@@ -520,3 +520,33 @@ fn survey() {
         report("  hkpf", &run(&mut hkpf(seed), &frames, &poses));
     }
 }
+
+#[test]
+fn a_target_leaving_the_frame_does_not_carry_the_pose_away() {
+    // The target drifts out through the right edge (centre up to x = 360
+    // at frame 22) and comes back. While no particle can be scored (every
+    // patch outside the frame) the pose stays at the last scored one and
+    // the Kalman filter restarts there; coasting on the predicted velocity
+    // and acceleration carried the pose out of the frame for good (the
+    // Dudek setting of the `affine` experiment, RMS in the thousands).
+    let out = Motion {
+        frames: 40,
+        pose: [0.0, 0.0, 0.0],
+        drift: [200.0, 0.0],
+        jump: 0.0,
+    };
+    let (frames, poses) = scene(&out, 1, 1);
+    let trackers: [Box<dyn Tracker>; 2] = [Box::new(stpf(1)), Box::new(hkpf(1))];
+    for mut t in trackers {
+        let r = run(t.as_mut(), &frames, &poses);
+        for (k, e) in r.estimates.iter().enumerate() {
+            let c = Affine2::from_matrix(e.pose.unwrap()).unwrap().offset();
+            assert!(
+                (0.0..W as f64).contains(&c[0]) && (0.0..H as f64).contains(&c[1]),
+                "{} frame {}: centre {c:?}",
+                t.name(),
+                k + 2
+            );
+        }
+    }
+}

@@ -2,7 +2,7 @@
 //! (2011), as paper 002 (Xu, Gao and Yang 2015, sections 0-2) describes it:
 //! coarse then fine, no pose tuning.
 
-use bayestrack_affine::{Affine2, AlgebraVector, BrownianDynamics, dynamics};
+use bayestrack_affine::{Affine2, BrownianDynamics};
 use bayestrack_image::{BBox, ImageView};
 
 use super::{AppearanceConfig, Core, FrameStats, Region, RegionConfig, ScoredPose};
@@ -148,9 +148,12 @@ impl Tracker for HkpfTracker {
         core.stats.particles = self.config.particles;
         core.stats.batches = 1;
         core.stats.stop_threshold = f64::INFINITY;
-        let fallback = dynamics::step(&m_prev, d, &AlgebraVector::zeros())?;
-        let best = core.best();
-        region.update(best.map(|b| b.pose.offset()))?;
-        core.finish(fallback, false, &mut rng)
+        // No particle scored: keep M_{k-1} and restart the Kalman filter
+        // there ([`Region::restart`]).
+        match core.best() {
+            Some(b) => region.update(Some(b.pose.offset()))?,
+            None => region.restart(m_prev.offset())?,
+        }
+        core.finish(m_prev, false, &mut rng)
     }
 }

@@ -416,6 +416,19 @@ impl Region {
         Ok((d, psi))
     }
 
+    /// Restarts the Kalman filter at `centre` with zero velocity and
+    /// acceleration and the initial covariance: called when no particle of
+    /// a frame could be scored (every one left the frame or the scale
+    /// range), so that there is no measurement. Coasting instead would
+    /// carry the pose on by the predicted velocity and acceleration, out of
+    /// the frame where no particle can be scored again (the pose then runs
+    /// away quadratically; seen on the Dudek setting of the `affine`
+    /// experiment, RMS in the thousands of pixels).
+    pub(crate) fn restart(&mut self, centre: Vector2<f64>) -> Result<()> {
+        *self = Self::new(self.cfg, centre)?;
+        Ok(())
+    }
+
     /// Measurement update with the estimate's centre; sets the manoeuvre
     /// flag for the next frame.
     pub(crate) fn update(&mut self, z: Option<Vector2<f64>>) -> Result<()> {

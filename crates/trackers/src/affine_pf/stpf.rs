@@ -1,7 +1,7 @@
 //! The self-tuning hierarchical Kalman-particle filter of paper 002 (Xu,
 //! Gao and Yang 2015, Algorithm 1).
 
-use bayestrack_affine::{Affine2, AlgebraVector, BrownianDynamics, dynamics};
+use bayestrack_affine::{Affine2, BrownianDynamics};
 use bayestrack_image::{BBox, ImageView};
 use nalgebra::Vector2;
 
@@ -240,9 +240,12 @@ impl Tracker for StpfTracker {
         }
         core.stats.particles = n;
         // Steps 5-7.
-        let fallback = dynamics::step(&m_prev, d, &AlgebraVector::zeros())?;
-        let best = core.best();
-        region.update(best.map(|b| b.pose.offset()))?;
-        core.finish(fallback, true, &mut rng)
+        // No particle scored: keep M_{k-1} and restart the Kalman filter
+        // there ([`Region::restart`]).
+        match core.best() {
+            Some(b) => region.update(Some(b.pose.offset()))?,
+            None => region.restart(m_prev.offset())?,
+        }
+        core.finish(m_prev, true, &mut rng)
     }
 }
