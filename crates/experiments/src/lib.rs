@@ -8,13 +8,15 @@
 //! - [`experiment`]: the [`Experiment`] trait, run options and errors;
 //! - [`REGISTRY`]: every experiment by id, in the order `all` runs them;
 //! - one module per experiment: [`hikpf`] (paper 000), [`ball`] (paper
-//!   001), [`affine`] (paper 002), [`correlation`] (paper 004);
+//!   001), [`affine`] (paper 002), [`condensation`] (paper 003),
+//!   [`correlation`] (paper 004);
 //! - [`scenes`]: the seeded synthetic scenes and their registry.
 //!
 //! Sequences, metrics and the tracking loop come from `bayestrack-otb`.
 
 pub mod affine;
 pub mod ball;
+pub mod condensation;
 pub mod correlation;
 pub mod experiment;
 pub mod hikpf;

@@ -3,35 +3,10 @@
 
 use crate::affine::AffineExperiment;
 use crate::ball::BallExperiment;
+use crate::condensation::CondensationExperiment;
 use crate::correlation::CorrelationExperiment;
-use crate::experiment::{Experiment, ExperimentError, RunOptions};
+use crate::experiment::{Experiment, ExperimentError};
 use crate::hikpf::HikpfExperiment;
-use bayestrack_otb::Table;
-
-/// An experiment that the SPEC asks for and that is not built yet.
-struct Planned {
-    id: &'static str,
-    source: &'static str,
-    summary: &'static str,
-}
-
-impl Experiment for Planned {
-    fn id(&self) -> &'static str {
-        self.id
-    }
-    fn source(&self) -> &'static str {
-        self.source
-    }
-    fn summary(&self) -> &'static str {
-        self.summary
-    }
-    fn implemented(&self) -> bool {
-        false
-    }
-    fn run(&self, _opts: &RunOptions) -> Result<Vec<Table>, ExperimentError> {
-        Err(ExperimentError::NotImplemented(self.id))
-    }
-}
 
 /// Every experiment, in the order `all` runs them.
 pub const REGISTRY: &[&dyn Experiment] = &[
@@ -39,11 +14,7 @@ pub const REGISTRY: &[&dyn Experiment] = &[
     &BallExperiment,
     &AffineExperiment,
     &CorrelationExperiment,
-    &Planned {
-        id: "condensation",
-        source: "paper 003",
-        summary: "CONDENSATION with IFD, skin, OR and AND cues; c-AVQ; priority IFD",
-    },
+    &CondensationExperiment,
 ];
 
 /// The experiment called `id`.
