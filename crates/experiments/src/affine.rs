@@ -59,8 +59,9 @@ pub enum Setting {
     /// filters search in the jump frame itself. The widest first-frame
     /// region of the three is ISPF's shift spread (5 px, so 3 sigma =
     /// 15 px); the Kalman region of HKPF and the self-tuning filter is
-    /// narrower (about 1.8 px per axis in steady state, 3x after a
-    /// detected manoeuvre, which is detected from the innovation of the
+    /// narrower (`S = P_xy + r^2 I` is 5.1 px^2 in steady state, 2.25 px
+    /// per axis, so 3 sigma = 6.8 px; 3x wider after a detected
+    /// manoeuvre, but a manoeuvre is detected from the innovation of the
     /// jump frame's own estimate, so only from the next frame on), and the
     /// pose estimator corrects shifts of a few pixels (trained at 2 px).
     /// The first version jumped 30 px (0.6 of the target's width in one
@@ -69,8 +70,8 @@ pub enum Setting {
     /// frames lost), which says nothing about the filters. The size is
     /// this reach; a sweep (80 frames, 2 seeds) agrees with it: at 6-10 px
     /// no filter loses a frame, at 15 px HKPF loses some on one seed, at
-    /// 20 px all three lose the target on one seed of two, at 30 px on
-    /// both. Cock
+    /// 20 px HKPF loses frames on both seeds and all three lose the target
+    /// on one, at 30 px all three on both. Cock
     /// stays the most abrupt setting by frequency: a jump every 8 frames
     /// against Dudek's 20 px every 15 (beyond the 15 px reach, so Dudek's
     /// jump frames test recovery rather than following).
