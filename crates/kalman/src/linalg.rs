@@ -237,6 +237,26 @@ pub(crate) fn check_covariance<const D: usize>(
     Ok(())
 }
 
+/// Checks that the posterior covariance `cov` of an update from a prior
+/// covariance `prior` has no variance below the round-off of the prior
+/// (`-1e-9 max |prior|`): a larger negative variance is a wrong number (the
+/// UKF's `P - K S K^T` when the sigma points cannot resolve `P` at the
+/// mean's magnitude, or a model's noise below its round-off), and is
+/// reported as a covariance that is not positive semi-definite.
+#[inline]
+pub(crate) fn check_variances<const D: usize>(
+    cov: &SMatrix<f64, D, D>,
+    prior: &SMatrix<f64, D, D>,
+    matrix: &'static str,
+    step: Step,
+) -> Result<()> {
+    let floor = -1e-9 * prior.amax();
+    if (0..D).any(|i| cov[(i, i)] < floor) {
+        return Err(KalmanError::NotPositiveDefinite { matrix, step });
+    }
+    Ok(())
+}
+
 /// Checks a noise covariance a model hands a filter at the point of use:
 /// finite, symmetric and positive semi-definite (a positive definite matrix
 /// passes on the square-root-free Cholesky factorisation; a singular one

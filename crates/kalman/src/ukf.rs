@@ -321,6 +321,7 @@ impl Ukf {
         let y = ldl.forward(&residual);
         let mean = predicted.mean() + linalg::mul(&v, &y);
         let cov = linalg::mirror_lower(linalg::lower_mul_t_add(predicted.cov(), -1.0, &v, &u));
+        linalg::check_variances(&cov, predicted.cov(), "posterior covariance", Step::Update)?;
         Ok(Update {
             posterior: Gaussian::checked(mean, cov, Step::Update)?,
             innovation: Some(Innovation::new(residual, &y, s, &ldl)?),

@@ -148,6 +148,7 @@ pub(crate) fn gain_step<const N: usize, const M: usize>(
         CovarianceUpdate::Standard => linalg::lower_mul_t_add(p, -1.0, &v, &u),
     };
     let new_cov = linalg::mirror_lower(new_cov);
+    linalg::check_variances(&new_cov, p, "posterior covariance", Step::Update)?;
     linalg::check_finite_belief(
         &new_mean,
         "posterior mean",

@@ -1,0 +1,120 @@
+//! Property tests: arbitrary text and bytes into the ground-truth reader
+//! and the frame decoder never panic, and what comes back `Ok` is finite.
+
+#![cfg(feature = "io")]
+
+use bayestrack_image::{Image, parse_ground_truth, read_frame, read_ground_truth, write_png};
+use proptest::prelude::*;
+
+/// A token of a ground-truth row: numbers of every kind and junk.
+fn token() -> impl Strategy<Value = String> {
+    prop_oneof![
+        any::<f64>().prop_map(|v| v.to_string()),
+        (-1e4f64..1e4).prop_map(|v| format!("{v:.3}")),
+        Just("0".to_string()),
+        Just("nan".to_string()),
+        Just("-inf".to_string()),
+        Just("1e309".to_string()),
+        "[ -~]{0,6}",
+    ]
+}
+
+/// Rows of 2 to 5 tokens joined by commas, tabs or spaces.
+fn ground_truth_text() -> impl Strategy<Value = String> {
+    prop::collection::vec(
+        (
+            prop::collection::vec(token(), 2..6),
+            prop::sample::select(vec![",", "\t", " ", ", "]),
+        ),
+        0..6,
+    )
+    .prop_map(|rows| {
+        rows.into_iter()
+            .map(|(t, sep)| t.join(sep))
+            .collect::<Vec<_>>()
+            .join("\n")
+    })
+}
+
+fn scratch(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("bayestrack-fuzz-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+
+    #[test]
+    fn ground_truth_rows_parse_to_finite_boxes_or_name_the_line(text in ground_truth_text()) {
+        match parse_ground_truth(&text, "gt.txt") {
+            Ok(rows) => {
+                for b in rows.iter().flatten() {
+                    prop_assert!([b.x, b.y, b.width, b.height].iter().all(|v| v.is_finite()));
+                    prop_assert!(b.width >= 0.0 && b.height >= 0.0);
+                }
+            }
+            Err(e) => prop_assert!(e.to_string().contains("gt.txt"), "{e}"),
+        }
+    }
+
+    #[test]
+    fn arbitrary_text_never_panics_the_ground_truth_parser(text in "\\PC{0,80}") {
+        let _ = parse_ground_truth(&text, "gt.txt");
+    }
+}
+
+proptest! {
+    // each case writes and decodes a file: few cases
+    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+
+    #[test]
+    fn arbitrary_bytes_never_panic_the_readers(bytes in prop::collection::vec(any::<u8>(), 0..256)) {
+        let dir = scratch("bytes");
+        let path = dir.join("0001.png");
+        std::fs::write(&path, &bytes).unwrap();
+        if let Ok(img) = read_frame(&path) {
+            prop_assert!(img.width() > 0 && img.height() > 0);
+        }
+        let gt = dir.join("groundtruth_rect.txt");
+        std::fs::write(&gt, &bytes).unwrap();
+        if let Ok(rows) = read_ground_truth(&gt) {
+            for b in rows.iter().flatten() {
+                prop_assert!([b.x, b.y, b.width, b.height].iter().all(|v| v.is_finite()));
+            }
+        }
+    }
+
+    #[test]
+    fn damaged_png_frames_decode_whole_or_fail(
+        w in 1usize..12,
+        h in 1usize..12,
+        seed in any::<u64>(),
+        cut in 0.0f64..1.0,
+        flips in prop::collection::vec((0.0f64..1.0, any::<u8>()), 0..4),
+    ) {
+        let dir = scratch("png");
+        let path = dir.join(format!("{seed}.png"));
+        let data: Vec<u8> = (0..w * h * 3).map(|i| (seed.wrapping_mul(i as u64 + 7) >> 13) as u8).collect();
+        write_png(&path, Image::from_vec(w, h, 3, data).unwrap().view()).unwrap();
+        let mut bytes = std::fs::read(&path).unwrap();
+        let whole = bytes.len();
+        let damaged = !flips.is_empty();
+        for (at, v) in flips {
+            let i = ((bytes.len() - 1) as f64 * at) as usize;
+            bytes[i] ^= v;
+        }
+        let keep = ((bytes.len() as f64) * (0.5 + cut / 2.0)) as usize;
+        bytes.truncate(keep.max(1));
+        std::fs::write(&path, &bytes).unwrap();
+        match read_frame(&path) {
+            Ok(img) => {
+                prop_assert!(img.width() > 0 && img.height() > 0);
+                // a truncated file is never decoded as a whole frame
+                prop_assert!(damaged || bytes.len() == whole, "{} of {whole} bytes", bytes.len());
+            }
+            Err(e) => prop_assert!(e.to_string().contains(&format!("{seed}.png")), "{e}"),
+        }
+        let _ = std::fs::remove_file(&path);
+    }
+}

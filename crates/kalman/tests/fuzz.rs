@@ -1,0 +1,188 @@
+//! Property tests on hostile input: random matrices (indefinite,
+//! asymmetric, singular, at huge and tiny scales) and measurements through
+//! every filter. Nothing panics, and whatever comes back `Ok` is finite,
+//! symmetric and has no negative variance.
+
+use bayestrack_kalman::{
+    Dynamics, DynamicsJacobian, Ekf, Gaussian, Iekf, Kf, LinearDynamics, LinearMeasurement,
+    Measurement, MeasurementJacobian, Ukf, Update, chi_square_cdf, chi_square_quantile,
+};
+use nalgebra::{Matrix2, Matrix2x3, Matrix3, Vector2, Vector3};
+use proptest::prelude::*;
+
+/// A number at any scale from 1e-300 to 1e300, either sign, sometimes 0.
+fn scaled() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        4 => (-1.0f64..1.0, -300i32..300).prop_map(|(m, e)| m * 10f64.powi(e)),
+        4 => -10.0f64..10.0,
+        1 => Just(0.0),
+    ]
+}
+
+/// A 3x3 matrix: symmetric PSD (possibly singular), symmetric indefinite,
+/// or arbitrary, at a random scale.
+fn matrix3() -> impl Strategy<Value = Matrix3<f64>> {
+    (
+        prop::array::uniform9(-2.0f64..2.0),
+        0usize..4,
+        -300i32..300,
+        0u8..3,
+    )
+        .prop_map(|(a, rank, e, kind)| {
+            let a = Matrix3::from_row_slice(&a);
+            let s = 10f64.powi(e);
+            match kind {
+                0 => {
+                    // rank `rank` PSD: sum of `rank` outer products
+                    let mut m = Matrix3::zeros();
+                    for j in 0..rank {
+                        let c = a.column(j);
+                        m += c * c.transpose();
+                    }
+                    m * s
+                }
+                1 => (a + a.transpose()) * s,
+                _ => a * s,
+            }
+        })
+}
+
+/// Finite, symmetric, and no variance below round-off of `scale` (the
+/// largest covariance entry the filter started from: the UKF's `P - K S
+/// K^T` is positive semi-definite only to round-off).
+/// A symmetric positive semi-definite 3x3 matrix of random rank and scale.
+fn psd3() -> impl Strategy<Value = Matrix3<f64>> {
+    (prop::array::uniform9(-2.0f64..2.0), 0usize..4, -300i32..300).prop_map(|(a, rank, e)| {
+        let a = Matrix3::from_row_slice(&a);
+        let mut m = Matrix3::zeros();
+        for j in 0..rank {
+            let c = a.column(j);
+            m += c * c.transpose();
+        }
+        m * 10f64.powi(e)
+    })
+}
+
+fn finite_gaussian<const N: usize>(g: &Gaussian<N>, scale: f64) -> bool {
+    g.mean().iter().all(|v| v.is_finite())
+        && g.cov().iter().all(|v| v.is_finite())
+        && (0..N).all(|i| g.cov()[(i, i)] >= -1e-9 * scale)
+        && g.cov() == &g.cov().transpose()
+}
+
+fn finite_update<const N: usize, const M: usize>(u: &Update<N, M>, scale: f64) -> bool {
+    finite_gaussian(&u.posterior, scale)
+        && u.innovation.as_ref().is_none_or(|i| {
+            i.nis.is_finite()
+                && i.nis >= 0.0
+                && i.log_likelihood.is_finite()
+                && i.residual.iter().all(|v| v.is_finite())
+        })
+}
+
+/// A nonlinear model that hands over whatever noise it holds.
+struct Model {
+    q: Matrix3<f64>,
+    r: Matrix2<f64>,
+    h: Matrix2x3<f64>,
+}
+
+impl Dynamics<3> for Model {
+    fn propagate(&self, x: &Vector3<f64>) -> Vector3<f64> {
+        Vector3::new(x[0] + 0.1 * x[1], x[1] + 0.1 * x[2].sin(), 0.9 * x[2])
+    }
+    fn process_noise(&self) -> Matrix3<f64> {
+        self.q
+    }
+}
+
+impl DynamicsJacobian<3> for Model {
+    fn jacobian(&self, x: &Vector3<f64>) -> Matrix3<f64> {
+        Matrix3::new(1.0, 0.1, 0.0, 0.0, 1.0, 0.1 * x[2].cos(), 0.0, 0.0, 0.9)
+    }
+}
+
+impl Measurement<3, 2> for Model {
+    fn observe(&self, x: &Vector3<f64>) -> Vector2<f64> {
+        self.h * x
+    }
+    fn measurement_noise(&self) -> Matrix2<f64> {
+        self.r
+    }
+}
+
+impl MeasurementJacobian<3, 2> for Model {
+    fn jacobian(&self, _: &Vector3<f64>) -> Matrix2x3<f64> {
+        self.h
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 192, ..ProptestConfig::default() })]
+
+    #[test]
+    fn every_filter_answers_hostile_models_with_finite_numbers_or_an_error(
+        p in psd3(),
+        q in matrix3(),
+        r in prop::array::uniform4(scaled()),
+        h in prop::array::uniform6(-3.0f64..3.0),
+        mean in prop::array::uniform3(scaled()),
+        z in prop::array::uniform2(scaled()),
+    ) {
+        let model = Model {
+            q,
+            r: Matrix2::from_row_slice(&r),
+            h: Matrix2x3::from_row_slice(&h),
+        };
+        let z = Vector2::from(z);
+        let Ok(prior) = Gaussian::new(Vector3::from(mean), p) else {
+            return Ok(());
+        };
+        // the largest covariance a filter starts from or adds
+        let scale = p.amax().max(q.amax()).max(model.r.amax());
+        let ekf = Ekf::default();
+        let iekf = Iekf::new(4, 1e-9).unwrap();
+        let ukf = Ukf::new(0.5, 2.0, 0.0).unwrap();
+        for predicted in [ekf.predict(&prior, &model), iekf.predict(&prior, &model), ukf.predict(&prior, &model)]
+            .into_iter()
+            .flatten()
+        {
+            prop_assert!(finite_gaussian(&predicted, scale), "{predicted:?}");
+        }
+        for u in [
+            ekf.update(&prior, &model, Some(&z)),
+            iekf.update(&prior, &model, Some(&z)),
+            ukf.update(&prior, &model, Some(&z)),
+        ]
+        .into_iter()
+        .flatten()
+        {
+            prop_assert!(finite_update(&u, scale), "{u:?}");
+        }
+        if let Ok(s) = ukf.step(&prior, &model, &model, Some(&z)) {
+            prop_assert!(finite_gaussian(&s.predicted, scale) && finite_update(&s.update, scale), "{s:?}");
+        }
+        // the linear filter, when the constructors accept the matrices
+        if let (Ok(d), Ok(m)) = (
+            LinearDynamics::new(Matrix3::new(1.0, 0.1, 0.0, 0.0, 1.0, 0.1, 0.0, 0.0, 1.0), q),
+            LinearMeasurement::new(model.h, model.r),
+        ) {
+            if let Ok(pr) = Kf::default().predict(&prior, &d, None) {
+                prop_assert!(finite_gaussian(&pr, scale), "{pr:?}");
+                if let Ok(u) = Kf::default().update(&pr, &m, Some(&z)) {
+                    prop_assert!(finite_update(&u, scale), "{u:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn chi_square_functions_take_any_number(x in any::<f64>(), k in any::<f64>(), p in any::<f64>()) {
+        if let Ok(c) = chi_square_cdf(x, k) {
+            prop_assert!((0.0..=1.0).contains(&c), "cdf({x}, {k}) = {c}");
+        }
+        if let Ok(q) = chi_square_quantile(p, k.abs().min(1e6)) {
+            prop_assert!(q.is_finite() && q >= 0.0, "quantile({p}, {k}) = {q}");
+        }
+    }
+}
