@@ -1,0 +1,142 @@
+//! Property tests over the whole f64 range: log-weights, particle steps
+//! with arbitrary log-likelihoods, and the resamplers. Nothing panics; what
+//! comes back `Ok` is finite and normalised.
+
+use bayestrack_particle::{
+    Bootstrap, Degenerate, ParticleFilter, ParticleSet, ResamplePolicy, Resampler, Resampling,
+    StateSpaceModel, log_sum_exp, stream_rng,
+};
+use nalgebra::{SVector, Vector1};
+use proptest::prelude::*;
+use rand::Rng;
+
+/// Any log-weight: ordinary, huge of either sign, minus infinity, NaN,
+/// plus infinity, subnormal.
+fn log_weight() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        4 => -50.0f64..5.0,
+        4 => (-1.0f64..1.0, 0i32..308).prop_map(|(m, e)| m * 10f64.powi(e)),
+        2 => any::<f64>(),
+        1 => Just(f64::NEG_INFINITY),
+        1 => Just(-f64::MAX),
+    ]
+}
+
+/// Particles that stay where they are (their state is their index) with
+/// log-likelihoods read from a table.
+struct Table(Vec<f64>);
+
+impl StateSpaceModel<1, 1> for Table {
+    fn sample_transition<R: Rng + ?Sized>(
+        &self,
+        x: &SVector<f64, 1>,
+        _: &mut R,
+    ) -> SVector<f64, 1> {
+        *x
+    }
+    fn log_transition(&self, _: &SVector<f64, 1>, _: &SVector<f64, 1>) -> f64 {
+        0.0
+    }
+    fn log_likelihood(&self, x: &SVector<f64, 1>, _: &SVector<f64, 1>) -> f64 {
+        self.0[x[0] as usize]
+    }
+}
+
+fn normalised(set: &ParticleSet<SVector<f64, 1>>) -> Result<(), TestCaseError> {
+    let w = set.weights();
+    let sum: f64 = w.iter().sum();
+    prop_assert!((sum - 1.0).abs() < 1e-9, "weights sum to {sum}");
+    prop_assert!(w.iter().all(|v| v.is_finite() && *v >= 0.0));
+    let ess = set.ess();
+    prop_assert!(
+        ess >= 1.0 - 1e-9 && ess <= set.len() as f64 * (1.0 + 1e-9),
+        "ess {ess}"
+    );
+    let m = set.mean()[0];
+    prop_assert!(
+        m.is_finite() && m >= -1e-9 && m <= (set.len() - 1) as f64 * (1.0 + 1e-9),
+        "mean {m}"
+    );
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+
+    #[test]
+    fn log_weights_normalise_or_fail(lw in prop::collection::vec(log_weight(), 1..40)) {
+        let n = lw.len();
+        let lse = log_sum_exp(&lw);
+        let set = ParticleSet::from_log_weights((0..n).map(|i| Vector1::new(i as f64)).collect(), lw.clone());
+        prop_assert_eq!(lse.is_ok(), set.is_ok());
+        if let Ok(set) = set {
+            prop_assert!(!lse.unwrap().is_nan());
+            normalised(&set)?;
+        }
+    }
+
+    #[test]
+    fn a_step_with_any_log_likelihoods_normalises_or_fails(
+        table in prop::collection::vec(log_weight(), 1..40),
+        scheme in prop::sample::select(Resampling::ALL.to_vec()),
+        policy in prop::sample::select(vec![ResamplePolicy::Always, ResamplePolicy::Never, ResamplePolicy::Ess(0.5)]),
+        chunk in 1usize..8,
+        lenient in any::<bool>(),
+    ) {
+        let n = table.len();
+        let pf = ParticleFilter {
+            resampling: scheme,
+            policy,
+            chunk_size: chunk,
+            degenerate: if lenient { Degenerate::IgnoreMeasurement } else { Degenerate::Error },
+            ..ParticleFilter::default()
+        };
+        let mut set = ParticleSet::new((0..n).map(|i| Vector1::new(i as f64)).collect()).unwrap();
+        let model = Table(table);
+        for k in 0..2u64 {
+            match pf.step(&mut set, &Bootstrap(&model), &Vector1::new(0.0), &[k]) {
+                Ok(r) => {
+                    prop_assert!(r.ess.is_finite() && r.ess >= 1.0 - 1e-9, "{r:?}");
+                    prop_assert!(!r.log_evidence.is_nan(), "{r:?}");
+                    normalised(&set)?;
+                }
+                Err(_) => break,
+            }
+        }
+    }
+
+    #[test]
+    fn resamplers_take_any_weights(
+        weights in prop::collection::vec(
+            prop_oneof![4 => 0.0f64..1.0, 2 => 0.0f64..f64::MAX, 1 => Just(0.0), 1 => any::<f64>()],
+            0..40,
+        ),
+        m in 0usize..64,
+        seed in any::<u64>(),
+    ) {
+        let mut rng = stream_rng(&[seed]);
+        let mut ancestors = vec![usize::MAX; m];
+        for scheme in Resampling::ALL {
+            if scheme.resample(&weights, &mut rng, &mut ancestors).is_ok() {
+                for &a in &ancestors {
+                    prop_assert!(a < weights.len() && weights[a] > 0.0, "{scheme:?}: {a} of {weights:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_set_of_any_states_is_finite_or_refused(xs in prop::collection::vec(any::<f64>(), 0..20)) {
+        let n = xs.len();
+        match ParticleSet::new(xs.iter().map(|&x| Vector1::new(x)).collect()) {
+            Ok(set) => {
+                prop_assert!(xs.iter().all(|x| x.is_finite()));
+                let m = set.mean()[0];
+                // the mean of finite states may still overflow their sum
+                let huge = xs.iter().any(|x| x.abs() > f64::MAX / n as f64);
+                prop_assert!(m.is_finite() || huge, "{m}");
+            }
+            Err(_) => prop_assert!(n == 0 || xs.iter().any(|x| !x.is_finite())),
+        }
+    }
+}
