@@ -97,6 +97,9 @@ fn not_reproduced_the_self_tuning_filter_and_ispf_lose_dudek_jumps() {
         summary(Setting::Dudek, Filter::Stpf),
         summary(Setting::Dudek, Filter::Ispf),
     );
-    assert!(s.lost_frames >= 15.0 && i.lost_frames >= 15.0, "{s:?} {i:?}");
+    assert!(
+        s.lost_frames >= 15.0 && i.lost_frames >= 15.0,
+        "{s:?} {i:?}"
+    );
     assert!(s.particles <= 0.5 * i.particles, "{s:?} {i:?}");
 }
