@@ -163,15 +163,15 @@ proptest! {
             prop_assert!(finite_gaussian(&s.predicted, scale) && finite_update(&s.update, scale), "{s:?}");
         }
         // the linear filter, when the constructors accept the matrices
-        if let (Ok(d), Ok(m)) = (
-            LinearDynamics::new(Matrix3::new(1.0, 0.1, 0.0, 0.0, 1.0, 0.1, 0.0, 0.0, 1.0), q),
-            LinearMeasurement::new(model.h, model.r),
-        ) {
-            if let Ok(pr) = Kf::default().predict(&prior, &d, None) {
-                prop_assert!(finite_gaussian(&pr, scale), "{pr:?}");
-                if let Ok(u) = Kf::default().update(&pr, &m, Some(&z)) {
-                    prop_assert!(finite_update(&u, scale), "{u:?}");
-                }
+        let f = Matrix3::new(1.0, 0.1, 0.0, 0.0, 1.0, 0.1, 0.0, 0.0, 1.0);
+        let linear = LinearDynamics::new(f, q).and_then(|d| {
+            let m = LinearMeasurement::new(model.h, model.r)?;
+            Ok((Kf::default().predict(&prior, &d, None)?, m))
+        });
+        if let Ok((pr, m)) = linear {
+            prop_assert!(finite_gaussian(&pr, scale), "{pr:?}");
+            if let Ok(u) = Kf::default().update(&pr, &m, Some(&z)) {
+                prop_assert!(finite_update(&u, scale), "{u:?}");
             }
         }
     }

@@ -331,7 +331,8 @@ impl Lwpr {
                 got: x.len(),
             });
         }
-        check_finite("LWPR input", x)
+        check_finite("LWPR input", x)?;
+        check_magnitude("LWPR input", x, &self.cfg.norm_in)
     }
 
     /// Trains on one sample; returns the model's prediction for `x` made
@@ -360,6 +361,7 @@ impl Lwpr {
             });
         }
         check_finite("LWPR target", y)?;
+        check_magnitude("LWPR target", y, &self.cfg.norm_out)?;
         // Model statistics of the raw inputs.
         let nd = self.n_data as f64;
         self.n_data += 1;
@@ -471,6 +473,27 @@ impl Lwpr {
             out.max_w[dim] = w_max;
         }
         Ok(out)
+    }
+}
+
+/// The largest normalised input or target magnitude: the receptive
+/// fields keep sums of squares and cross-products, which overflow (and
+/// turn the model's predictions into NaN for good) for values near 1e154.
+const MAX_MAGNITUDE: f64 = 1e100;
+
+/// Checks that `|v_i / norm_i| <= MAX_MAGNITUDE`.
+fn check_magnitude(what: &'static str, v: &[f64], norm: &[f64]) -> Result<()> {
+    match v
+        .iter()
+        .zip(norm)
+        .find(|(x, n)| (*x / *n).abs() > MAX_MAGNITUDE)
+    {
+        Some((&value, _)) => Err(AffineError::InvalidParameter {
+            name: what,
+            value,
+            reason: "normalised magnitude above 1e100: the receptive fields' sums of squares would overflow",
+        }),
+        None => Ok(()),
     }
 }
 

@@ -360,3 +360,32 @@ fn a_cutoff_outside_the_activations_is_an_error() {
     let y = model.predict(&[0.5], 0.0).unwrap()[0];
     assert!((y - 2.0).abs() < 0.1, "{y}");
 }
+
+#[test]
+fn samples_whose_squares_overflow_are_refused_and_leave_the_model_usable() {
+    // a target of -3.8e307 overflowed the RF statistics: every later
+    // update and prediction returned NaN with Ok
+    let mut model = Lwpr::new(LwprConfig::new(2, 1).init_d_spherical(25.0)).unwrap();
+    model.update(&[0.0, 0.0], &[0.0]).unwrap();
+    assert!(matches!(
+        model.update(&[0.0, 0.0], &[-3.8e307]),
+        Err(AffineError::InvalidParameter {
+            name: "LWPR target",
+            ..
+        })
+    ));
+    assert!(matches!(
+        model.update(&[1e200, 0.0], &[1.0]),
+        Err(AffineError::InvalidParameter {
+            name: "LWPR input",
+            ..
+        })
+    ));
+    assert!(model.predict(&[1e200, 0.0], 0.001).is_err());
+    for i in 0..50 {
+        let x = f64::from(i) / 50.0;
+        let p = model.update(&[x, 0.1], &[x]).unwrap();
+        assert!(p[0].is_finite());
+    }
+    assert!(model.predict(&[0.5, 0.1], 0.001).unwrap()[0].is_finite());
+}

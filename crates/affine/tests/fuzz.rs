@@ -1,0 +1,77 @@
+//! Property tests: Aff(2) exp/log and LWPR update/predict on arbitrary
+//! numbers. Nothing panics; what comes back `Ok` is finite.
+
+use bayestrack_affine::{Affine2, AlgebraVector, Lwpr, LwprConfig};
+use nalgebra::Matrix3;
+use proptest::prelude::*;
+
+/// A number at any scale, sometimes not finite.
+fn wide() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        4 => -5.0f64..5.0,
+        3 => (-1.0f64..1.0, -300i32..308).prop_map(|(m, e)| m * 10f64.powi(e)),
+        1 => any::<f64>(),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+
+    #[test]
+    fn exp_and_log_are_finite_or_errors(w in prop::array::uniform6(wide())) {
+        let w = AlgebraVector::from(w);
+        if let Ok(g) = Affine2::exp(&w) {
+            prop_assert!(g.matrix().iter().all(|v| v.is_finite()), "{w:?} -> {g:?}");
+            if let Ok(l) = g.log() {
+                prop_assert!(l.iter().all(|v| v.is_finite()), "{g:?} -> {l:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn log_of_any_matrix_is_finite_or_an_error(a in prop::array::uniform6(wide())) {
+        let m = Matrix3::new(a[0], a[1], a[2], a[3], a[4], a[5], 0.0, 0.0, 1.0);
+        if let Ok(g) = Affine2::from_matrix(m) {
+            if let Ok(l) = g.log() {
+                prop_assert!(l.iter().all(|v| v.is_finite()), "{g:?} -> {l:?}");
+                if let Ok(back) = Affine2::exp(&l) {
+                    prop_assert!(back.matrix().iter().all(|v| v.is_finite()));
+                }
+            }
+            if let Ok(inv) = g.inverse() {
+                prop_assert!(inv.matrix().iter().all(|v| v.is_finite()));
+            }
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+
+    #[test]
+    fn lwpr_update_and_predict_are_finite_or_errors(
+        samples in prop::collection::vec(
+            (
+                prop_oneof![3 => prop::array::uniform2(-1.0f64..1.0), 1 => prop::array::uniform2(wide())],
+                prop_oneof![3 => -2.0f64..2.0, 1 => wide()],
+            ),
+            1..40,
+        ),
+        queries in prop::collection::vec(
+            (prop::array::uniform2(wide()), prop_oneof![3 => 0.0f64..1.0, 1 => wide()]),
+            1..6,
+        ),
+    ) {
+        let mut model = Lwpr::new(LwprConfig::new(2, 1).init_d_spherical(25.0)).unwrap();
+        for (x, y) in &samples {
+            if let Ok(p) = model.update(x, &[*y]) {
+                prop_assert!(p.iter().all(|v| v.is_finite()), "update({x:?}, {y}) -> {p:?}");
+            }
+        }
+        for (x, cutoff) in &queries {
+            if let Ok(p) = model.predict(x, *cutoff) {
+                prop_assert!(p.iter().all(|v| v.is_finite()), "predict({x:?}, {cutoff}) -> {p:?}");
+            }
+        }
+    }
+}
