@@ -1354,7 +1354,10 @@ impl Experiment for CondensationExperiment {
                 ("outline", s.outline),
                 ("lost", s.loss),
             ] {
-                let _ = writeln!(out, "grid,{row},{col},{v:.17e}");
+                // The point cloud has no outline (NaN never equals itself).
+                if v.is_finite() {
+                    let _ = writeln!(out, "grid,{row},{col},{v:.17e}");
+                }
             }
         }
         for (i, rr) in r.reinit.iter().enumerate() {
