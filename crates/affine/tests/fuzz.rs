@@ -5,6 +5,14 @@ use bayestrack_affine::{Affine2, AlgebraVector, Lwpr, LwprConfig};
 use nalgebra::Matrix3;
 use proptest::prelude::*;
 
+/// The case count: `n`, or `PROPTEST_CASES` when set (a longer hunt).
+fn cases(n: u32) -> u32 {
+    std::env::var("PROPTEST_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(n)
+}
+
 /// A number at any scale, sometimes not finite.
 fn wide() -> impl Strategy<Value = f64> {
     prop_oneof![
@@ -15,7 +23,7 @@ fn wide() -> impl Strategy<Value = f64> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: cases(256), ..ProptestConfig::default() })]
 
     #[test]
     fn exp_and_log_are_finite_or_errors(w in prop::array::uniform6(wide())) {
@@ -46,7 +54,7 @@ proptest! {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: cases(64), ..ProptestConfig::default() })]
 
     #[test]
     fn lwpr_update_and_predict_are_finite_or_errors(

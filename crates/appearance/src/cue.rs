@@ -264,7 +264,8 @@ impl HistogramCue {
     /// patch side used for poses.
     ///
     /// # Errors
-    /// [`AppearanceError::InvalidParameter`] for sigma <= 0 or a zero patch side;
+    /// [`AppearanceError::InvalidParameter`] for sigma below 1e-100 (its
+    /// square underflows) or a zero patch side;
     /// [`AppearanceError::Incompatible`] for an empty reference.
     pub fn new(
         reference: RgbHistogram,
@@ -282,7 +283,7 @@ impl HistogramCue {
         Ok(Self {
             reference,
             kind,
-            sigma: positive("sigma", sigma)?,
+            sigma: crate::error::spread("sigma", sigma)?,
             patch_side,
         })
     }

@@ -123,6 +123,32 @@ pub(crate) fn check_window(
     }
 }
 
+/// The smallest spread a Gaussian-shaped likelihood `-d / (2 sigma^2)`
+/// accepts: below it `2 sigma^2` underflows, and a distance of 0 scored NaN
+/// (0 / 0) and any other `-inf`, with `Ok`.
+pub(crate) const MIN_SIGMA: f64 = 1e-100;
+
+/// The smallest spread of a likelihood computed in `f32` (the skin model).
+pub(crate) const MIN_SIGMA_F32: f64 = 1e-15;
+
+/// A likelihood spread: finite and at least [`MIN_SIGMA`].
+pub(crate) fn spread(name: &'static str, v: f64) -> Result<f64> {
+    spread_at_least(name, v, MIN_SIGMA)
+}
+
+/// A likelihood spread: finite and at least `min`.
+pub(crate) fn spread_at_least(name: &'static str, v: f64, min: f64) -> Result<f64> {
+    if v.is_finite() && v >= min {
+        Ok(v)
+    } else {
+        Err(AppearanceError::InvalidParameter {
+            name,
+            value: v.to_string(),
+            reason: "must be finite and large enough that its square does not underflow (1e-100; 1e-15 in f32)",
+        })
+    }
+}
+
 pub(crate) fn positive(name: &'static str, v: f64) -> Result<f64> {
     if v.is_finite() && v > 0.0 {
         Ok(v)

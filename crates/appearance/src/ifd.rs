@@ -179,7 +179,7 @@ impl PriorityIfd {
                         what: "suppression centre",
                     });
                 }
-                let sigma = crate::error::positive("sigma", sigma)?;
+                let sigma = crate::error::spread("sigma", sigma)?;
                 let reach = 4.0 * sigma;
                 let lo = |c: f64| (c - reach).floor().max(0.0) as usize;
                 let hi =

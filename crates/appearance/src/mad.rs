@@ -8,7 +8,7 @@
 
 use bayestrack_image::{ImageError, ImageView, ImageViewMut, Pixel, Rect};
 
-use crate::error::{check_window, positive};
+use crate::error::check_window;
 use crate::{AppearanceError, Result};
 
 /// Most positions one call of [`MadPixel::sad_positions`] handles.
@@ -491,10 +491,12 @@ impl MadLikelihood {
     /// With spread `sigma` (in the MAD's own units, e.g. gray levels).
     ///
     /// # Errors
-    /// [`AppearanceError::InvalidParameter`] unless `sigma` is finite and > 0.
+    /// [`AppearanceError::InvalidParameter`] unless `sigma` is finite and at
+    /// least 1e-100 (below it `2 sigma^2` underflows and a MAD of 0 scored
+    /// NaN).
     pub fn new(sigma: f64) -> Result<Self> {
         Ok(Self {
-            sigma: positive("sigma", sigma)?,
+            sigma: crate::error::spread("sigma", sigma)?,
         })
     }
 

@@ -7,7 +7,7 @@
 
 use bayestrack_image::{Hsv, ImageError, ImageView, ImageViewMut, Rect, Rgb, hue_distance};
 
-use crate::error::{check_window, positive};
+use crate::error::check_window;
 use crate::{AppearanceError, Result};
 
 /// A skin-colour reference (hue, saturation) with its spread.
@@ -42,7 +42,8 @@ impl SkinModel {
                 reason: "must be in [0, 1]",
             });
         }
-        let sigma = positive("sigma", sigma)? as f32;
+        let sigma =
+            crate::error::spread_at_least("sigma", sigma, crate::error::MIN_SIGMA_F32)? as f32;
         Ok(Self {
             hue: hue.rem_euclid(1.0) as f32,
             saturation: saturation as f32,

@@ -10,6 +10,14 @@ use bayestrack_kalman::{
 use nalgebra::{Matrix2, Matrix2x3, Matrix3, Vector2, Vector3};
 use proptest::prelude::*;
 
+/// The case count: `n`, or `PROPTEST_CASES` when set (a longer hunt).
+fn cases(n: u32) -> u32 {
+    std::env::var("PROPTEST_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(n)
+}
+
 /// A number at any scale from 1e-300 to 1e300, either sign, sometimes 0.
 fn scaled() -> impl Strategy<Value = f64> {
     prop_oneof![
@@ -118,7 +126,7 @@ impl MeasurementJacobian<3, 2> for Model {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 192, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: cases(192), ..ProptestConfig::default() })]
 
     #[test]
     fn every_filter_answers_hostile_models_with_finite_numbers_or_an_error(

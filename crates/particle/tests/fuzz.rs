@@ -10,6 +10,14 @@ use nalgebra::{SVector, Vector1};
 use proptest::prelude::*;
 use rand::Rng;
 
+/// The case count: `n`, or `PROPTEST_CASES` when set (a longer hunt).
+fn cases(n: u32) -> u32 {
+    std::env::var("PROPTEST_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(n)
+}
+
 /// Any log-weight: ordinary, huge of either sign, minus infinity, NaN,
 /// plus infinity, subnormal.
 fn log_weight() -> impl Strategy<Value = f64> {
@@ -61,7 +69,7 @@ fn normalised(set: &ParticleSet<SVector<f64, 1>>) -> Result<(), TestCaseError> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: cases(256), ..ProptestConfig::default() })]
 
     #[test]
     fn log_weights_normalise_or_fail(lw in prop::collection::vec(log_weight(), 1..40)) {
