@@ -227,7 +227,14 @@ impl HikpfConfig {
             key: key.to_string(),
             value: value.to_string(),
         };
-        let num = || value.parse::<f64>().map_err(|_| bad());
+        // `inf` and `NaN` parse as f64: refused here, not later as NaN errors
+        let num = || {
+            value
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(bad)
+        };
         let int = || value.parse::<usize>().map_err(|_| bad());
         match key {
             "runs" => self.runs = int()?,

@@ -1,0 +1,134 @@
+//! Property tests of `--set key=value` parsing: any key and any value give
+//! either a typed error or options whose every number is finite.
+
+use bayestrack_experiments::ExperimentError;
+use bayestrack_experiments::ball::BallOptions;
+use bayestrack_experiments::correlation::CorrelationConfig;
+use bayestrack_experiments::hikpf::HikpfConfig;
+use proptest::prelude::*;
+
+/// The case count: `n`, or `PROPTEST_CASES` when set.
+fn cases(n: u32) -> u32 {
+    std::env::var("PROPTEST_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(n)
+}
+
+const KEYS: &[&str] = &[
+    // hikpf
+    "runs",
+    "particles",
+    "steps",
+    "seed",
+    "sin_freq",
+    "iekf_iterations",
+    "iekf_tolerance",
+    "error",
+    "prior",
+    "proposal_noise",
+    "hybrid_prior",
+    "likelihood_floor",
+    "resampling",
+    // ball
+    "seconds",
+    "motion_noise",
+    "bounce_noise",
+    "lost_radius",
+    "found_radius",
+    "rt_elapsed",
+    "model",
+    "acceleration_noise",
+    "initial_speed",
+    "measurement_noise",
+    "search_margin",
+    "likelihood_sigma",
+    "lost_distance",
+    "bins",
+    "ukf_alpha",
+    "ukf_beta",
+    "ukf_kappa",
+    // correlation
+    "scene_seed",
+    "mad_margin",
+    "sigma",
+    "spread",
+    "b",
+    "gain",
+    "printed_b",
+    "cap",
+];
+
+fn value() -> impl Strategy<Value = String> {
+    prop_oneof![
+        any::<f64>().prop_map(|v| v.to_string()),
+        (-1e3f64..1e3).prop_map(|v| v.to_string()),
+        any::<u64>().prop_map(|v| v.to_string()),
+        prop::sample::select(vec![
+            "inf",
+            "-inf",
+            "NaN",
+            "nan",
+            "infinity",
+            "1e309",
+            "-0",
+            "0",
+            "1",
+            "true",
+            "false",
+            "rmse",
+            "eq11",
+            "transition",
+            "demo",
+            "moments",
+            "predicted",
+            "posterior",
+            "systematic",
+            "multinomial",
+            "matched",
+            "linear",
+            "",
+            " ",
+            "18446744073709551616",
+        ])
+        .prop_map(String::from),
+        "\\PC{0,12}",
+    ]
+}
+
+/// Every number in a `describe()` line is finite.
+fn finite_line(line: &str) -> bool {
+    let lower = line.to_ascii_lowercase();
+    !lower.contains("nan") && !lower.contains("inf")
+}
+
+fn typed(e: &ExperimentError) -> bool {
+    matches!(e, ExperimentError::BadOption { .. })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: cases(512), ..ProptestConfig::default() })]
+
+    #[test]
+    fn any_option_is_applied_finite_or_refused(
+        sets in prop::collection::vec((prop_oneof![3 => prop::sample::select(KEYS).prop_map(String::from), 1 => "\\PC{0,8}"], value()), 1..4),
+    ) {
+        let mut hikpf = HikpfConfig::quick();
+        let mut ball = BallOptions::quick();
+        let mut corr = CorrelationConfig::quick();
+        for (k, v) in &sets {
+            match hikpf.apply(k, v) {
+                Ok(()) => prop_assert!(finite_line(&hikpf.describe()), "hikpf {k}={v}: {}", hikpf.describe()),
+                Err(e) => prop_assert!(typed(&e), "{e}"),
+            }
+            match ball.apply(k, v) {
+                Ok(()) => prop_assert!(finite_line(&ball.describe()), "ball {k}={v}: {}", ball.describe()),
+                Err(e) => prop_assert!(typed(&e), "{e}"),
+            }
+            match corr.apply(k, v) {
+                Ok(()) => prop_assert!(finite_line(&corr.describe()), "correlation {k}={v}: {}", corr.describe()),
+                Err(e) => prop_assert!(typed(&e), "{e}"),
+            }
+        }
+    }
+}
