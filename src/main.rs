@@ -98,7 +98,14 @@ fn parse_box(s: &str) -> Result<BBox, String> {
         .collect::<Result<_, _>>()
         .map_err(|e| format!("`{s}`: {e} (expected x,y,w,h)"))?;
     match v[..] {
-        [x, y, w, h] if v.iter().all(|c| c.is_finite()) && w > 0.0 && h > 0.0 => {
+        // the far edges must be numbers too (1e308 + 1e308 is not)
+        [x, y, w, h]
+            if v.iter().all(|c| c.is_finite())
+                && w > 0.0
+                && h > 0.0
+                && (x + w).is_finite()
+                && (y + h).is_finite() =>
+        {
             Ok(BBox::new(x, y, w, h))
         }
         _ => Err(format!(
@@ -214,4 +221,45 @@ fn track(args: &TrackArgs) -> Result<(), String> {
         );
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_box;
+    use proptest::prelude::*;
+
+    fn number() -> impl Strategy<Value = String> {
+        prop_oneof![
+            any::<f64>().prop_map(|v| v.to_string()),
+            (-1e4f64..1e4).prop_map(|v| format!("{v:.2}")),
+            prop::sample::select(vec!["inf", "NaN", "-0", "1e309", "", " 3 ", "0x10", "1,5"])
+                .prop_map(String::from),
+            "\\PC{0,6}",
+        ]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 512, ..ProptestConfig::default() })]
+
+        #[test]
+        fn init_boxes_parse_finite_or_are_refused(parts in prop::collection::vec(number(), 0..6)) {
+            let s = parts.join(",");
+            if let Ok(b) = parse_box(&s) {
+                let v = [b.x, b.y, b.width, b.height, b.x + b.width, b.y + b.height];
+                prop_assert!(v.iter().all(|c| c.is_finite()), "{s} -> {b:?}");
+                prop_assert!(b.width > 0.0 && b.height > 0.0);
+            }
+        }
+
+        #[test]
+        fn any_text_never_panics_the_init_parser(s in "\\PC{0,40}") {
+            let _ = parse_box(&s);
+        }
+    }
+
+    #[test]
+    fn a_box_whose_far_edge_overflows_is_refused() {
+        assert!(parse_box("1e308,0,1e308,5").is_err());
+        assert!(parse_box("1,2,3,4").is_ok());
+    }
 }
