@@ -83,19 +83,25 @@ fn has_end_marker(bytes: &[u8], format: image::ImageFormat) -> bool {
 
 fn decode(path: &Path) -> Result<image::DynamicImage> {
     let bytes = fs::read(path).map_err(io_err(path))?;
-    let format = image::guess_format(&bytes)
+    decode_bytes(&bytes, path)
+}
+
+/// Decodes a PNG/JPEG file's `bytes`; `path` names it in errors (and
+/// gives the format when the bytes do not).
+fn decode_bytes(bytes: &[u8], path: &Path) -> Result<image::DynamicImage> {
+    let format = image::guess_format(bytes)
         .or_else(|_| image::ImageFormat::from_path(path))
         .map_err(|source| ImageError::Decode {
             path: path.to_path_buf(),
             source,
         })?;
-    if !has_end_marker(&bytes, format) {
+    if !has_end_marker(bytes, format) {
         return Err(ImageError::Truncated {
             path: path.to_path_buf(),
             format: format!("{format:?}"),
         });
     }
-    image::load_from_memory_with_format(&bytes, format).map_err(|source| ImageError::Decode {
+    image::load_from_memory_with_format(bytes, format).map_err(|source| ImageError::Decode {
         path: path.to_path_buf(),
         source,
     })
@@ -123,6 +129,19 @@ fn from_dynamic(img: image::DynamicImage, gray: bool) -> Image<u8> {
 pub fn read_frame(path: impl AsRef<Path>) -> Result<Image<u8>> {
     let path = path.as_ref();
     let img = decode(path)?;
+    check_nonempty(&img)?;
+    let gray = !img.color().has_color();
+    Ok(from_dynamic(img, gray))
+}
+
+/// Decodes a PNG/JPEG frame held in memory, as [`read_frame`] does a file;
+/// `path` only names the source in errors (and gives the format by its
+/// extension when the bytes do not).
+///
+/// # Errors
+/// As [`read_frame`], without [`ImageError::Io`].
+pub fn decode_frame(bytes: &[u8], path: impl AsRef<Path>) -> Result<Image<u8>> {
+    let img = decode_bytes(bytes, path.as_ref())?;
     check_nonempty(&img)?;
     let gray = !img.color().has_color();
     Ok(from_dynamic(img, gray))
