@@ -7,6 +7,7 @@ mod hybrid;
 mod kf;
 mod linalg;
 mod model;
+mod motion;
 mod smoother;
 mod ukf;
 mod update;
@@ -20,6 +21,7 @@ pub use model::{
     Additive, Dynamics, DynamicsJacobian, LinearDynamics, LinearMeasurement, Measurement,
     MeasurementJacobian, NoisyDynamics, NoisyMeasurement,
 };
+pub use motion::{NoiseModel, white_noise};
 pub use ukf::{Ukf, UkfStep};
 pub use update::{CovarianceUpdate, Innovation, Update};
 
