@@ -254,7 +254,13 @@ impl CondensationConfig {
             "lock_frames" => self.lock_frames = int()?,
             "reinit_frames" => self.reinit_frames = int()?,
             "separation" => self.separation = num()?,
-            "avq_threshold" => self.avq.ifd_threshold = num()? as f32,
+            "avq_threshold" => {
+                let v = num()? as f32;
+                if !v.is_finite() {
+                    return Err(bad());
+                }
+                self.avq.ifd_threshold = v;
+            }
             "avq_trigger" => self.avq.trigger_fraction = num()?,
             _ => return Err(bad()),
         }
