@@ -36,6 +36,7 @@ use bayestrack_image::Image;
 use bayestrack_otb::Table;
 use bayestrack_otb::metrics::{FeaturePoints, rms_error_eq6};
 use bayestrack_otb::plot::{Series, line_chart};
+use bayestrack_otb::write::PartialCsv;
 use bayestrack_trackers::{
     FrameStats, HkpfConfig, HkpfTracker, IspfConfig, IspfTracker, StpfConfig, StpfTracker, Tracker,
 };
@@ -514,6 +515,47 @@ fn track(
 /// [`ExperimentError::Failed`] naming the filter, setting, run and frame;
 /// [`ExperimentError::BadOption`] for zero frames or runs.
 pub fn run(config: &AffineConfig, progress: bool) -> Result<AffineResult, ExperimentError> {
+    run_logged(config, progress, None)
+}
+
+/// The header of `frames.csv`.
+const FRAMES_HEADER: &str = "setting,run,filter,frame,rms,lost,particles,evaluations,pe_calls";
+
+/// The `frames.csv` rows of one setting's run (every filter, every scored
+/// frame).
+fn frame_rows(setting: Setting, run: usize, tracks: &[TrackRun]) -> String {
+    let mut text = String::new();
+    for (f, tr) in Filter::ALL.iter().zip(tracks) {
+        for k in 0..tr.rms.len() {
+            let _ = writeln!(
+                text,
+                "{},{run},{},{},{:.4},{},{},{},{}",
+                setting.name(),
+                f.name(),
+                k + 2,
+                tr.rms[k],
+                tr.lost[k],
+                tr.particles[k],
+                tr.evaluations[k],
+                tr.pose_estimator_calls[k]
+            );
+        }
+    }
+    text
+}
+
+/// [`run`], appending each finished setting x run's frames to `log` as it
+/// finishes (in completion order), so that a run killed part-way keeps
+/// them.
+///
+/// # Errors
+/// Those of [`run`], and [`ExperimentError::Io`] when `log` cannot be
+/// written.
+pub fn run_logged(
+    config: &AffineConfig,
+    progress: bool,
+    log: Option<&PartialCsv>,
+) -> Result<AffineResult, ExperimentError> {
     if config.frames < 2 || config.runs == 0 {
         return Err(ExperimentError::BadOption {
             key: "frames/runs".into(),
@@ -544,6 +586,9 @@ pub fn run(config: &AffineConfig, progress: bool) -> Result<AffineResult, Experi
                 .par_iter()
                 .map(|&f| track(f, setting, config, r, &scene.frames, &scene.truth))
                 .collect::<Result<Vec<_>, _>>()?;
+            if let Some(log) = log {
+                log.append(&frame_rows(setting, r, &runs))?;
+            }
             bar.inc(1);
             Ok(runs)
         })
@@ -702,33 +747,11 @@ impl AffineResult {
     }
 }
 
-/// Writes the CSV files and the figures under `dir`.
+/// Writes the summary CSV files and the figures under `dir` (`frames.csv`
+/// is written by [`AffineExperiment`] as the runs finish).
 fn write_outputs(result: &AffineResult, dir: &Path) -> Result<(), ExperimentError> {
     write_text(&dir.join("summary.csv"), &result.table().to_csv())?;
     write_text(&dir.join("claims.csv"), &result.claims_table().to_csv())?;
-    let mut text =
-        String::from("setting,run,filter,frame,rms,lost,particles,evaluations,pe_calls\n");
-    for (s, setting) in Setting::ALL.iter().enumerate() {
-        for (r, run) in result.runs[s].iter().enumerate() {
-            for (f, tr) in Filter::ALL.iter().zip(run) {
-                for k in 0..tr.rms.len() {
-                    let _ = writeln!(
-                        text,
-                        "{},{r},{},{},{:.4},{},{},{},{}",
-                        setting.name(),
-                        f.name(),
-                        k + 2,
-                        tr.rms[k],
-                        tr.lost[k],
-                        tr.particles[k],
-                        tr.evaluations[k],
-                        tr.pose_estimator_calls[k]
-                    );
-                }
-            }
-        }
-    }
-    write_text(&dir.join("frames.csv"), &text)?;
     for (s, setting) in Setting::ALL.iter().enumerate() {
         let run0 = &result.runs[s][0];
         let series = |f: &dyn Fn(&TrackRun, usize) -> f64| -> Vec<Series> {
@@ -790,7 +813,20 @@ impl Experiment for AffineExperiment {
             config.apply(k, v)?;
         }
         let dir = opts.output_dir(self.id())?;
-        let result = run(&config, opts.progress && opts.mode == Mode::Full)?;
+        // every frame of every run, appended as each run finishes
+        let frames = PartialCsv::create(&dir.join("frames.csv"), FRAMES_HEADER)?;
+        let result = run_logged(
+            &config,
+            opts.progress && opts.mode == Mode::Full,
+            Some(&frames),
+        )?;
+        let mut text = format!("{FRAMES_HEADER}\n");
+        for (setting, runs) in Setting::ALL.iter().zip(&result.runs) {
+            for (r, tracks) in runs.iter().enumerate() {
+                text.push_str(&frame_rows(*setting, r, tracks));
+            }
+        }
+        frames.finish(&text)?;
         write_outputs(&result, &dir)?;
         let mut main = result.table();
         main.title = format!("{}\n  options: {}", main.title, config.describe());

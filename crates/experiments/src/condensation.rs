@@ -42,6 +42,7 @@ use crate::experiment::{Experiment, ExperimentError, Mode, RunOptions, write_tex
 use crate::scenes::{FrameTruth, Outline, SceneStream, WebcamScene};
 use bayestrack_otb::Table;
 use bayestrack_otb::plot::{Series, line_chart};
+use bayestrack_otb::write::PartialCsv;
 
 const ID: &str = "condensation";
 
@@ -736,6 +737,45 @@ pub fn run(
     config: &CondensationConfig,
     progress: bool,
 ) -> Result<CondensationResult, ExperimentError> {
+    run_logged(config, progress, None)
+}
+
+/// The header of `frames.csv`.
+const FRAMES_HEADER: &str = "representation,cue,particles,run,frame,centre,outline,lost";
+
+/// The `frames.csv` rows of one grid cell's run.
+fn frame_rows(key: GridKey, run: usize, tr: &TrackRun) -> String {
+    let mut text = String::new();
+    for k in 0..tr.centre.len() {
+        let _ = writeln!(
+            text,
+            "{},{},{},{run},{},{:.4},{},{}",
+            key.representation.name(),
+            key.cue.name(),
+            key.particles,
+            k + 1,
+            tr.centre[k],
+            tr.outline
+                .get(k)
+                .map_or(String::new(), |o| format!("{o:.4}")),
+            tr.lost[k]
+        );
+    }
+    text
+}
+
+/// [`run`], appending each finished grid run's frames to `log` as it
+/// finishes (in completion order), so that a run killed part-way keeps
+/// them.
+///
+/// # Errors
+/// Those of [`run`], and [`ExperimentError::Io`] when `log` cannot be
+/// written.
+pub fn run_logged(
+    config: &CondensationConfig,
+    progress: bool,
+    log: Option<&PartialCsv>,
+) -> Result<CondensationResult, ExperimentError> {
     if config.runs == 0 || config.frames < 2 {
         return Err(ExperimentError::BadOption {
             key: "runs/frames".into(),
@@ -785,7 +825,11 @@ pub fn run(
             let out = match *job {
                 Job::Grid(key, r) => {
                     let s = &scenes[r][0];
-                    JobOut::Grid(track(key, config, r, &s.frames, &s.truth, &s.outlines)?)
+                    let tr = track(key, config, r, &s.frames, &s.truth, &s.outlines)?;
+                    if let Some(log) = log {
+                        log.append(&frame_rows(key, r, &tr))?;
+                    }
+                    JobOut::Grid(tr)
                 }
                 Job::Reinit(key, avq, r) => {
                     JobOut::Reinit(reinit_run(key, avq, config, r, &scenes[r][1], entry)?)
@@ -1207,7 +1251,8 @@ fn particle_svg(s: &ParticleSnapshot, png: &str) -> String {
     svg
 }
 
-/// Writes the CSV files and the figures under `dir`.
+/// Writes the summary CSV files and the figures under `dir` (`frames.csv`
+/// is written by [`CondensationExperiment`] as the runs finish).
 fn write_outputs(result: &CondensationResult, dir: &Path) -> Result<(), ExperimentError> {
     for (name, table) in [
         ("grid.csv", result.grid_table()),
@@ -1217,27 +1262,6 @@ fn write_outputs(result: &CondensationResult, dir: &Path) -> Result<(), Experime
     ] {
         write_text(&dir.join(name), &table.to_csv())?;
     }
-    let mut text = String::from("representation,cue,particles,run,frame,centre,outline,lost\n");
-    for (key, runs) in &result.grid {
-        for (r, tr) in runs.iter().enumerate() {
-            for k in 0..tr.centre.len() {
-                let _ = writeln!(
-                    text,
-                    "{},{},{},{r},{},{:.4},{},{}",
-                    key.representation.name(),
-                    key.cue.name(),
-                    key.particles,
-                    k + 1,
-                    tr.centre[k],
-                    tr.outline
-                        .get(k)
-                        .map_or(String::new(), |o| format!("{o:.4}")),
-                    tr.lost[k]
-                );
-            }
-        }
-    }
-    write_text(&dir.join("frames.csv"), &text)?;
     // Error per frame per configuration, averaged over runs.
     let per_frame = |runs: &[TrackRun], f: fn(&TrackRun) -> &Vec<f64>| -> Vec<(f64, f64)> {
         let len = runs.iter().map(|r| f(r).len()).min().unwrap_or(0);
@@ -1341,7 +1365,20 @@ impl Experiment for CondensationExperiment {
             config.apply(k, v)?;
         }
         let dir = opts.output_dir(self.id())?;
-        let result = run(&config, opts.progress && opts.mode == Mode::Full)?;
+        // every frame of every grid run, appended as each run finishes
+        let frames = PartialCsv::create(&dir.join("frames.csv"), FRAMES_HEADER)?;
+        let result = run_logged(
+            &config,
+            opts.progress && opts.mode == Mode::Full,
+            Some(&frames),
+        )?;
+        let mut text = format!("{FRAMES_HEADER}\n");
+        for (key, runs) in &result.grid {
+            for (r, tr) in runs.iter().enumerate() {
+                text.push_str(&frame_rows(*key, r, tr));
+            }
+        }
+        frames.finish(&text)?;
         write_outputs(&result, &dir)?;
         let mut tables = result.tables();
         if let Some(first) = tables.first_mut() {
