@@ -138,15 +138,19 @@ impl Kf {
             }
         }
         let f = model.transition();
-        crate::smoother::rts_backward(filtered, |k, g| {
-            let mut mean = f * g.mean();
-            if let Some(u) = controls {
-                mean += model.control() * u[k];
-            }
-            let predicted = linear_predict(mean, f, g.cov(), model.noise())?;
-            // cross-covariance of x_k and x_{k+1}: P_k F^T
-            Ok((predicted, g.cov() * f.transpose()))
-        })
+        crate::smoother::rts_backward(
+            filtered,
+            |a, b| a - b,
+            |k, g| {
+                let mut mean = f * g.mean();
+                if let Some(u) = controls {
+                    mean += model.control() * u[k];
+                }
+                let predicted = linear_predict(mean, f, g.cov(), model.noise())?;
+                // cross-covariance of x_k and x_{k+1}: P_k F^T
+                Ok((predicted, g.cov() * f.transpose()))
+            },
+        )
     }
 }
 
@@ -183,7 +187,8 @@ impl Ekf {
         linear_predict(dynamics.propagate(prior.mean()), &f, prior.cov(), &q)
     }
 
-    /// Update with `nu = z - h(x)` and `H` evaluated at the prior mean.
+    /// Update with `nu = z - h(x)` (taken by [`Measurement::residual_z`](crate::Measurement::residual_z))
+    /// and `H` evaluated at the prior mean.
     ///
     /// # Errors
     /// As [`Kf::update`]; [`KalmanError::NonFinite`],
@@ -224,7 +229,7 @@ impl Ekf {
         let step = gain_step(
             x,
             prior.cov(),
-            z - measurement.observe(x),
+            measurement.residual_z(z, &measurement.observe(x)),
             &h,
             r,
             self.covariance_update,
@@ -348,7 +353,7 @@ impl Iekf {
             iterations += 1;
             let h = measurement.jacobian(&xi);
             linalg::check_finite_mat(&h, "Jacobian H", Step::Update)?;
-            let residual = z - measurement.observe(&xi) - h * (xf - xi);
+            let residual = measurement.residual_z(z, &measurement.observe(&xi)) - h * (xf - xi);
             let step = gain_step(xf, prior.cov(), residual, &h, &r, self.covariance_update)?;
             let moved = (step.mean - xi).amax();
             xi = step.mean;

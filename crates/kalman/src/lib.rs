@@ -2,6 +2,7 @@
 
 mod consistency;
 mod error;
+mod filter;
 mod gaussian;
 mod hybrid;
 mod kf;
@@ -14,6 +15,7 @@ mod update;
 
 pub use consistency::{ChiSquareBand, chi_square_cdf, chi_square_quantile, nees};
 pub use error::{KalmanError, Result, Step};
+pub use filter::KalmanFilter;
 pub use gaussian::{FactoredGaussian, Gaussian};
 pub use hybrid::{HybridPrior, HybridStep, HybridUkfIekf};
 pub use kf::{Ekf, Iekf, Kf};

@@ -18,6 +18,28 @@ pub trait Dynamics<const N: usize> {
     fn propagate(&self, x: &SVector<f64, N>) -> SVector<f64, N>;
     /// `Q`, the covariance of the additive process noise.
     fn process_noise(&self) -> SMatrix<f64, N, N>;
+
+    /// The difference `a - b` of two states (filterpy's `residual_x`), used
+    /// by the UKF wherever it differences propagated sigma points. Override
+    /// it for states with angles (wrap the angle components to
+    /// `(-pi, pi]`); the default is plain subtraction.
+    #[inline(always)]
+    fn residual_x(&self, a: &SVector<f64, N>, b: &SVector<f64, N>) -> SVector<f64, N> {
+        a - b
+    }
+
+    /// The mean of the propagated sigma points (filterpy's `x_mean_fn`), given
+    /// as the central point `center` and the weighted mean `offset` of the
+    /// residuals [`Dynamics::residual_x`] of the other points from it: the
+    /// mean is `center (+) offset`, one step of the mean on a manifold
+    /// (Hertzberg et al. 2013). The default is `center + offset`, the
+    /// ordinary weighted mean (since the weights sum to one); for angles,
+    /// add and wrap the result, which with a wrapping residual gives the
+    /// circular mean of points that span less than half a turn.
+    #[inline(always)]
+    fn mean_x(&self, center: &SVector<f64, N>, offset: &SVector<f64, N>) -> SVector<f64, N> {
+        center + offset
+    }
 }
 
 /// The Jacobian `F = df/dx` of a [`Dynamics`] (EKF, IEKF).
@@ -32,6 +54,26 @@ pub trait Measurement<const N: usize, const M: usize> {
     fn observe(&self, x: &SVector<f64, N>) -> SVector<f64, M>;
     /// `R`, the covariance of the additive measurement noise.
     fn measurement_noise(&self) -> SMatrix<f64, M, M>;
+
+    /// The difference `a - b` of two measurements (filterpy's `residual_z`):
+    /// the innovation `z - z_hat` of every filter, and the differences of
+    /// the UKF's sigma points in measurement space. Override it for
+    /// measurements with angles (a bearing: wrap to `(-pi, pi]`); the default
+    /// is plain subtraction.
+    #[inline(always)]
+    fn residual_z(&self, a: &SVector<f64, M>, b: &SVector<f64, M>) -> SVector<f64, M> {
+        a - b
+    }
+
+    /// The mean of the UKF's sigma points in measurement space (filterpy's
+    /// `z_mean_fn`), as `center (+) offset` with `offset` the weighted mean
+    /// of the residuals [`Measurement::residual_z`] from the central point
+    /// `center` (see [`Dynamics::mean_x`]). The default is
+    /// `center + offset`; for angles, add and wrap.
+    #[inline(always)]
+    fn mean_z(&self, center: &SVector<f64, M>, offset: &SVector<f64, M>) -> SVector<f64, M> {
+        center + offset
+    }
 }
 
 /// The Jacobian `H = dh/dx` of a [`Measurement`] (EKF, IEKF).

@@ -48,11 +48,28 @@ use crate::update::{Innovation, Update};
 /// }
 ///
 /// let ukf = Ukf::new(1e-3, 2.0, 0.0)?;
-/// let belief = Gaussian::new(Vector2::new(0.5, 0.0), Matrix2::identity() * 0.1)?;
-/// let step = ukf.step(&belief, &Pendulum, &Pendulum, Some(&Vector1::new(0.47)))?;
+/// let mut belief = Gaussian::new(Vector2::new(0.5, 0.0), Matrix2::identity() * 0.1)?;
+/// for z in [0.47, 0.46, 0.44] {
+///     // the default: predict, then redraw the sigma points from the
+///     // prediction for the update (as filterpy and most references do)
+///     let prior = ukf.predict(&belief, &Pendulum)?;
+///     let update = ukf.update(&prior, &Pendulum, Some(&Vector1::new(z)))?;
+///     assert!(update.innovation.is_some());
+///     belief = update.posterior;
+/// }
+///
+/// // the faster variant: one sigma-point set through `f` and then `h`
+/// // (no redraw; a slightly different answer unless `f` is linear and Q = 0)
+/// let step = ukf.step(&belief, &Pendulum, &Pendulum, Some(&Vector1::new(0.43)))?;
 /// assert!(step.update.innovation.is_some());
 /// # Ok::<(), bayestrack_kalman::KalmanError>(())
 /// ```
+///
+/// Angles in the state or the measurement (a heading, a bearing): override
+/// the residual and mean hooks of the model ([`Dynamics::residual_x`],
+/// [`Dynamics::mean_x`], [`Measurement::residual_z`],
+/// [`Measurement::mean_z`]) to wrap; the UKF forms every sigma-point
+/// difference, mean and innovation through them.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Ukf {
     alpha: f64,
@@ -95,6 +112,56 @@ pub struct UkfStep<const N: usize, const M: usize> {
 /// The zero-dimensional Gaussian: "no noise block".
 fn none<const D: usize>() -> Gaussian<D> {
     Gaussian::from_parts(SVector::zeros(), SMatrix::zeros())
+}
+
+/// Differences and means in one space (state or measurement) of the
+/// sigma points: the hooks of [`Dynamics`] and [`Measurement`], or plain
+/// arithmetic.
+trait Space<const D: usize> {
+    fn residual(&self, a: &SVector<f64, D>, b: &SVector<f64, D>) -> SVector<f64, D>;
+    fn mean(&self, center: &SVector<f64, D>, offset: &SVector<f64, D>) -> SVector<f64, D>;
+}
+
+/// Plain subtraction and addition.
+struct Plain;
+
+impl<const D: usize> Space<D> for Plain {
+    #[inline(always)]
+    fn residual(&self, a: &SVector<f64, D>, b: &SVector<f64, D>) -> SVector<f64, D> {
+        a - b
+    }
+    #[inline(always)]
+    fn mean(&self, center: &SVector<f64, D>, offset: &SVector<f64, D>) -> SVector<f64, D> {
+        center + offset
+    }
+}
+
+/// The state-space hooks of a [`Dynamics`].
+struct StateSpace<'a, T>(&'a T);
+
+impl<const N: usize, T: Dynamics<N>> Space<N> for StateSpace<'_, T> {
+    #[inline(always)]
+    fn residual(&self, a: &SVector<f64, N>, b: &SVector<f64, N>) -> SVector<f64, N> {
+        self.0.residual_x(a, b)
+    }
+    #[inline(always)]
+    fn mean(&self, center: &SVector<f64, N>, offset: &SVector<f64, N>) -> SVector<f64, N> {
+        self.0.mean_x(center, offset)
+    }
+}
+
+/// The measurement-space hooks of a [`Measurement`].
+struct MeasurementSpace<'a, T, const N: usize>(&'a T);
+
+impl<const N: usize, const M: usize, T: Measurement<N, M>> Space<M> for MeasurementSpace<'_, T, N> {
+    #[inline(always)]
+    fn residual(&self, a: &SVector<f64, M>, b: &SVector<f64, M>) -> SVector<f64, M> {
+        self.0.residual_z(a, b)
+    }
+    #[inline(always)]
+    fn mean(&self, center: &SVector<f64, M>, offset: &SVector<f64, M>) -> SVector<f64, M> {
+        self.0.mean_z(center, offset)
+    }
 }
 
 fn no_output<const K: usize>(_: &SVector<f64, K>, _: &SVector<f64, 0>) -> SVector<f64, 0> {
@@ -186,6 +253,10 @@ impl Ukf {
     /// `P_yy`, `P_xy`). Algebraically the weighted sums above; without the
     /// large weights `Wm_0`, `Wc_0` of a small `alpha` there is no
     /// cancellation between them.
+    ///
+    /// The deviations are the residuals of `sx` (state) and `sz`
+    /// (measurement), and the means `sx.mean(Xf_0, d)`, `sz.mean(Y_0, e)`:
+    /// plain arithmetic unless the model overrides its hooks.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn transform<const N: usize, const V: usize, const W: usize, const K: usize, const M: usize>(
@@ -195,6 +266,8 @@ impl Ukf {
         w: &Gaussian<W>,
         f: impl Fn(&SVector<f64, N>, &SVector<f64, V>) -> SVector<f64, K>,
         h: impl Fn(&SVector<f64, K>, &SVector<f64, W>) -> SVector<f64, M>,
+        sx: &impl Space<K>,
+        sz: &impl Space<M>,
         step: Step,
     ) -> Result<Moments<N, K, M>> {
         let wt = self.weights_for(N + V + W)?;
@@ -251,31 +324,31 @@ impl Ukf {
             let col = sp.column(j);
             let (xp, xm) = linalg::spread(m, &sp, j);
             let (xp, xm) = (f(&xp, mv), f(&xm, mv));
-            let (dp, dm) = (xp - xf0, xm - xf0);
-            add(&dp, &(h(&xp, mw) - y0));
-            add(&dm, &(h(&xm, mw) - y0));
+            let (dp, dm) = (sx.residual(&xp, &xf0), sx.residual(&xm, &xf0));
+            add(&dp, &sz.residual(&h(&xp, mw), &y0));
+            add(&dm, &sz.residual(&h(&xm, mw), &y0));
             // Cov(input, propagated) for the smoother (unused elsewhere, and
             // then optimised away)
-            p_in_x += col * (xp - xm).transpose();
+            p_in_x += col * sx.residual(&xp, &xm).transpose();
         }
         for j in 0..V {
             let (vp, vm) = linalg::spread(mv, &sv, j);
             for vv in [vp, vm] {
                 let xf = f(m, &vv);
-                add(&(xf - xf0), &(h(&xf, mw) - y0));
+                add(&sx.residual(&xf, &xf0), &sz.residual(&h(&xf, mw), &y0));
             }
         }
         for j in 0..W {
             let (wp, wm) = linalg::spread(mw, &sw, j);
             let dx = SVector::<f64, K>::zeros();
-            add(&dx, &(h(&xf0, &wp) - y0));
-            add(&dx, &(h(&xf0, &wm) - y0));
+            add(&dx, &sz.residual(&h(&xf0, &wp), &y0));
+            add(&dx, &sz.residual(&h(&xf0, &wm), &y0));
         }
 
         let d = sdx * wt.wi;
         let e = sdy * wt.wi;
-        let x_mean = xf0 + d;
-        let y_mean = y0 + e;
+        let x_mean = sx.mean(&xf0, &d);
+        let y_mean = sz.mean(&y0, &e);
         linalg::check_finite_vec(&x_mean, "sigma-point mean of f", step)?;
         linalg::check_finite_vec(&y_mean, "sigma-point mean of h", step)?;
         let mut p_xx = SMatrix::<f64, K, K>::zeros();
@@ -312,12 +385,13 @@ impl Ukf {
         s: SMatrix<f64, M, M>,
         p_xy: &SMatrix<f64, N, M>,
         z: &SVector<f64, M>,
+        sz: &impl Space<M>,
     ) -> Result<Update<N, M>> {
         linalg::check_finite_vec(z, "measurement z", Step::Update)?;
         let ldl = linalg::Ldl::new(&s, "innovation covariance S", Step::Update)?;
         let u = ldl.right_solve_lt(p_xy);
         let v = ldl.scale_columns(&u);
-        let residual = z - y_mean;
+        let residual = sz.residual(z, y_mean);
         let y = ldl.forward(&residual);
         let mean = predicted.mean() + linalg::mul(&v, &y);
         let cov = linalg::mirror_lower(linalg::lower_mul_t_add(predicted.cov(), -1.0, &v, &u));
@@ -344,12 +418,14 @@ impl Ukf {
         q_add: &SMatrix<f64, N, N>,
         r_add: &SMatrix<f64, M, M>,
         z: &SVector<f64, M>,
+        sx: &impl Space<N>,
+        sz: &impl Space<M>,
     ) -> Result<UkfStep<N, M>> {
-        let mo = self.transform(prior, v, w, f, h, Step::Predict)?;
+        let mo = self.transform(prior, v, w, f, h, sx, sz, Step::Predict)?;
         let predicted =
             Gaussian::checked(mo.x_mean, linalg::add_sym(&mo.p_xx, q_add), Step::Predict)?;
         let s = linalg::add_sym(&mo.p_yy, r_add);
-        let update = Self::correct(&predicted, &mo.y_mean, s, &mo.p_xy, z)?;
+        let update = Self::correct(&predicted, &mo.y_mean, s, &mo.p_xy, z, sz)?;
         Ok(UkfStep { predicted, update })
     }
 
@@ -377,6 +453,8 @@ impl Ukf {
             &none::<0>(),
             |x, _| dynamics.propagate(x),
             no_output,
+            &StateSpace(dynamics),
+            &Plain,
             Step::Predict,
         )?;
         Gaussian::checked(mo.x_mean, linalg::add_sym(&mo.p_xx, &q), Step::Predict)
@@ -407,6 +485,8 @@ impl Ukf {
             &none::<0>(),
             |x, _| *x,
             |x, _| measurement.observe(x),
+            &Plain,
+            &MeasurementSpace(measurement),
             Step::Update,
         )?;
         Self::correct(
@@ -415,15 +495,17 @@ impl Ukf {
             linalg::add_sym(&mo.p_yy, &r),
             &mo.p_xy,
             z,
+            &MeasurementSpace(measurement),
         )
     }
 
-    /// Predict and update with ONE sigma-point set: the points of the prior
-    /// go through `f`, and the propagated points through `h`, without
-    /// redrawing them from `x_{k|k-1}` (`Q` enters `P_{k|k-1}` but not the
-    /// cross-covariance). Cheaper than [`Ukf::predict`] + [`Ukf::update`],
-    /// which redraw (as filterpy 1.4.5 and later do); identical for linear `f`
-    /// only when `Q = 0`.
+    /// The faster variant of [`Ukf::predict`] followed by [`Ukf::update`]
+    /// (the default, which redraws the sigma points from `x_{k|k-1}`, as
+    /// filterpy 1.4.5 and later do): predict and update with ONE sigma-point
+    /// set, the points of the prior through `f` and the propagated points
+    /// through `h` (`Q` enters `P_{k|k-1}` but not the cross-covariance).
+    /// One square root and one pass instead of two; identical to the default
+    /// for linear `f` only when `Q = 0`.
     ///
     /// # Errors
     /// As [`Ukf::predict`] and [`Ukf::update`].
@@ -454,6 +536,8 @@ impl Ukf {
             &q,
             &r,
             z,
+            &StateSpace(dynamics),
+            &MeasurementSpace(measurement),
         )
     }
 
@@ -472,6 +556,8 @@ impl Ukf {
             &none::<0>(),
             |x, v| dynamics.propagate_with(x, v),
             no_output,
+            &Plain,
+            &Plain,
             Step::Predict,
         )?;
         Gaussian::checked(mo.x_mean, mo.p_xx, Step::Predict)
@@ -501,9 +587,11 @@ impl Ukf {
             &measurement.measurement_noise_dist(),
             |x, _| *x,
             |x, n| measurement.observe_with(x, n),
+            &Plain,
+            &Plain,
             Step::Update,
         )?;
-        Self::correct(prior, &mo.y_mean, mo.p_yy, &mo.p_xy, z)
+        Self::correct(prior, &mo.y_mean, mo.p_yy, &mo.p_xy, z, &Plain)
     }
 
     /// The joint augmented step of Nagy, Ahmed and Zayed (paper 000) sec. 3.3 (a): ONE sigma-point
@@ -541,6 +629,8 @@ impl Ukf {
             &SMatrix::zeros(),
             &SMatrix::zeros(),
             z,
+            &Plain,
+            &Plain,
         )
     }
 
@@ -557,13 +647,17 @@ impl Ukf {
     ) -> Result<Vec<Gaussian<N>>> {
         let q = dynamics.process_noise();
         linalg::check_noise(&q, "process noise Q", Step::Smooth)?;
-        crate::smoother::rts_backward(filtered, |_, g| {
+        let space = StateSpace(dynamics);
+        let residual = |a: &SVector<f64, N>, b: &SVector<f64, N>| space.residual(a, b);
+        crate::smoother::rts_backward(filtered, residual, |_, g| {
             let mo = self.transform(
                 g,
                 &none::<0>(),
                 &none::<0>(),
                 |x, _| dynamics.propagate(x),
                 no_output,
+                &space,
+                &Plain,
                 Step::Smooth,
             )?;
             let predicted =
