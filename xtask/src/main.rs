@@ -7,6 +7,11 @@
 //! cargo xtask reproduce-table hikpf --full # one experiment at paper scale
 //! cargo xtask otb --root ../shared/data/sequences  # every tracker, every sequence
 //! ```
+//!
+//! Default paths (`target/reproduce`, `tests/golden`,
+//! `../shared/data/sequences`, ...) are relative to the project root, so
+//! `cargo xtask` works from any subfolder; paths given on the command line
+//! are relative to the current folder, as usual.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -34,9 +39,9 @@ enum Command {
         /// Paper scale instead of the quick CI scale.
         #[arg(long)]
         full: bool,
-        /// Output root.
-        #[arg(long, default_value = "target/reproduce")]
-        out: PathBuf,
+        /// Output root [default: `<project root>/target/reproduce`].
+        #[arg(long)]
+        out: Option<PathBuf>,
         /// Override a named option of the experiment, `key=value`
         /// (repeatable; see docs/reproduction.md for each experiment's keys).
         #[arg(long = "set", value_parser = parse_key_value)]
@@ -47,7 +52,7 @@ enum Command {
     Scenes {
         /// Scene name, or `list`.
         name: String,
-        /// Output folder (default: `target/scenes/<name>`).
+        /// Output folder (default: `<project root>/target/scenes/<name>`).
         #[arg(long)]
         out: Option<PathBuf>,
         /// Seed of the scene's random streams.
@@ -61,9 +66,10 @@ enum Command {
     /// evaluation); print AUC / P@20 / fps per sequence and their means;
     /// write boxes, results.csv, results.md and success/precision plots.
     Otb {
-        /// Folder of OTB sequences (each with img/ and ground truth).
-        #[arg(long, default_value = "../shared/data/sequences")]
-        root: PathBuf,
+        /// Folder of OTB sequences (each with img/ and ground truth)
+        /// [default: `<project root>/../shared/data/sequences`].
+        #[arg(long)]
+        root: Option<PathBuf>,
         /// Comma-separated tracker names (default: every tracker; see
         /// `bayestrack trackers`).
         #[arg(long, value_delimiter = ',')]
@@ -71,9 +77,9 @@ enum Command {
         /// Seed given to every tracker.
         #[arg(long, default_value_t = 0)]
         seed: u64,
-        /// Output folder.
-        #[arg(long, default_value = "target/otb")]
-        out: PathBuf,
+        /// Output folder [default: `<project root>/target/otb`].
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
     /// Rewrite `tests/golden/<id>.csv` from fresh quick runs and print what
     /// changed.
@@ -81,6 +87,19 @@ enum Command {
         /// Experiment ids (default: every implemented one).
         ids: Vec<String>,
     },
+}
+
+/// The project root: the folder above xtask's own.
+fn project_root() -> PathBuf {
+    let xtask = Path::new(env!("CARGO_MANIFEST_DIR"));
+    xtask.parent().unwrap_or(xtask).to_path_buf()
+}
+
+/// `explicit` as given (relative to the current folder), else `default`
+/// under the project root: cargo runs xtask from the folder it was invoked
+/// in, and a default must not depend on that.
+fn resolve(explicit: Option<PathBuf>, default: &str) -> PathBuf {
+    explicit.unwrap_or_else(|| project_root().join(default))
 }
 
 fn parse_key_value(s: &str) -> Result<(String, String), String> {
@@ -123,7 +142,8 @@ fn bless(e: &dyn Experiment) -> Result<bool, String> {
         println!("{}: nothing pinned", e.id());
         return Ok(false);
     };
-    let path = PathBuf::from("tests/golden").join(format!("{}.csv", e.id()));
+    let golden = project_root().join("tests/golden");
+    let path = golden.join(format!("{}.csv", e.id()));
     let old = std::fs::read_to_string(&path).unwrap_or_default();
     if old == new {
         println!("{}: unchanged", e.id());
@@ -140,7 +160,7 @@ fn bless(e: &dyn Experiment) -> Result<bool, String> {
     for (i, o) in old_lines.iter().enumerate().skip(new.lines().count()) {
         println!("{}:{}\n  - {o}", path.display(), i + 1);
     }
-    std::fs::create_dir_all("tests/golden").map_err(|err| err.to_string())?;
+    std::fs::create_dir_all(&golden).map_err(|err| format!("{}: {err}", golden.display()))?;
     std::fs::write(&path, new).map_err(|err| format!("{}: {err}", path.display()))?;
     println!("{}: rewritten", path.display());
     Ok(true)
@@ -164,7 +184,22 @@ fn otb(root: &Path, names: &[String], seed: u64, out: PathBuf) -> Result<(), Str
     let report = run_suite(root, &options).map_err(|e| e.to_string())?;
     println!("{}", report.table());
     println!("files: {}", options.out.display());
-    Ok(())
+    // cells marked n/a (a tracker that cannot run on the input by design,
+    // see `CellError`) are not failures; every other error fails the run
+    let failed = report.failures();
+    if failed.is_empty() {
+        return Ok(());
+    }
+    let cells: Vec<String> = failed
+        .iter()
+        .map(|c| format!("{} x {}", c.tracker, c.sequence))
+        .collect();
+    Err(format!(
+        "{} tracker x sequence cell(s) failed: {} (reasons in the `error` column of {})",
+        failed.len(),
+        cells.join(", "),
+        options.out.join("results.csv").display()
+    ))
 }
 
 fn main() -> ExitCode {
@@ -175,7 +210,12 @@ fn main() -> ExitCode {
             trackers,
             seed,
             out,
-        } => match otb(&root, &trackers, seed, out) {
+        } => match otb(
+            &resolve(root, "../shared/data/sequences"),
+            &trackers,
+            seed,
+            resolve(out, "target/otb"),
+        ) {
             Ok(()) => ExitCode::SUCCESS,
             Err(err) => {
                 eprintln!("error: {err}");
@@ -194,7 +234,7 @@ fn main() -> ExitCode {
                 }
                 return ExitCode::SUCCESS;
             }
-            let out = out.unwrap_or_else(|| PathBuf::from("target/scenes").join(&name));
+            let out = resolve(out, &format!("target/scenes/{name}"));
             match bayestrack_experiments::scenes::write_named_scene(&name, seed, frames, &out) {
                 Ok(summary) => {
                     println!(
@@ -236,7 +276,7 @@ fn main() -> ExitCode {
         } => {
             let opts = RunOptions {
                 mode: if full { Mode::Full } else { Mode::Quick },
-                out,
+                out: resolve(out, "target/reproduce"),
                 progress: true,
                 set,
             };
@@ -272,5 +312,22 @@ fn main() -> ExitCode {
                 },
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_resolve_from_the_project_root_and_given_paths_stay_as_given() {
+        let golden = resolve(None, "tests/golden");
+        assert!(golden.is_absolute(), "{}", golden.display());
+        assert!(golden.is_dir(), "{}", golden.display());
+        assert!(project_root().join("Cargo.toml").is_file());
+        assert_eq!(
+            resolve(Some(PathBuf::from("out")), "target/otb"),
+            PathBuf::from("out")
+        );
     }
 }

@@ -43,7 +43,9 @@ use bayestrack_trackers::{
 use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
 
-use crate::experiment::{Experiment, ExperimentError, Mode, RunOptions, write_text};
+use crate::experiment::{
+    Experiment, ExperimentError, MAX_FRAMES, MAX_PARTICLES, MAX_RUNS, Mode, RunOptions, write_text,
+};
 use crate::scenes::{AffineScene, TEMPLATE_POINTS};
 
 /// The three synthetic settings, each mirroring one of the paper's videos.
@@ -236,27 +238,32 @@ impl AffineConfig {
         }
     }
 
+    /// The keys [`AffineConfig::apply`] accepts, with their domains (listed
+    /// by [`ExperimentError::BadOption`]).
+    pub const KEYS: &'static str = "frames (1..=1000000; 1 reads as 2), runs (1..=100000), \
+        scene_seed (u64), lost_fraction (> 0, finite), hkpf_particles (1..=1000000), \
+        max_particles (1..=1000000)";
+
     /// Applies `key=value` overrides: `frames`, `runs`, `scene_seed`,
     /// `lost_fraction`, `hkpf_particles`, `max_particles` (N_max of both
     /// self-tuning filters).
     ///
     /// # Errors
-    /// [`ExperimentError::BadOption`] for an unknown key or value.
+    /// [`ExperimentError::BadOption`] for an unknown key or value (listing
+    /// [`AffineConfig::KEYS`]).
     pub fn apply(&mut self, key: &str, value: &str) -> Result<(), ExperimentError> {
-        let bad = || ExperimentError::BadOption {
-            key: key.to_string(),
-            value: value.to_string(),
-        };
-        let int = || {
+        let bad = || ExperimentError::bad_option("affine", Self::KEYS, key, value);
+        let int_to = |max: usize| {
             value
                 .parse::<usize>()
                 .ok()
-                .filter(|&v| v > 0)
+                .filter(|&v| v > 0 && v <= max)
                 .ok_or_else(bad)
         };
+        let int = || int_to(MAX_PARTICLES);
         match key {
-            "frames" => self.frames = int()?.max(2),
-            "runs" => self.runs = int()?,
+            "frames" => self.frames = int_to(MAX_FRAMES)?.max(2),
+            "runs" => self.runs = int_to(MAX_RUNS)?,
             "scene_seed" => self.scene_seed = value.parse().map_err(|_| bad())?,
             "lost_fraction" => {
                 self.lost_fraction = value
@@ -557,10 +564,12 @@ pub fn run_logged(
     log: Option<&PartialCsv>,
 ) -> Result<AffineResult, ExperimentError> {
     if config.frames < 2 || config.runs == 0 {
-        return Err(ExperimentError::BadOption {
-            key: "frames/runs".into(),
-            value: format!("{}/{}", config.frames, config.runs),
-        });
+        return Err(ExperimentError::bad_option(
+            "affine",
+            AffineConfig::KEYS,
+            "frames/runs",
+            &format!("{}/{}", config.frames, config.runs),
+        ));
     }
     let jobs: Vec<(usize, usize)> = (0..Setting::ALL.len())
         .flat_map(|s| (0..config.runs).map(move |r| (s, r)))

@@ -42,7 +42,7 @@ use bayestrack_particle::stream_seed;
 use bayestrack_trackers::{BallConfig, BallFilter, BallTracker, MotionModel, Tracker};
 use rayon::prelude::*;
 
-use crate::experiment::{Experiment, ExperimentError, Mode, RunOptions, write_text};
+use crate::experiment::{Experiment, ExperimentError, MAX_RUNS, Mode, RunOptions, write_text};
 use crate::scenes::{BallMotion, BallScene, SceneStream};
 use bayestrack_otb::Table;
 use bayestrack_otb::metrics::center_error;
@@ -227,15 +227,28 @@ impl BallOptions {
         ((self.seconds * CAMERA_FPS).round() as usize).max(2)
     }
 
+    /// The keys [`BallOptions::apply`] accepts, with their domains (listed
+    /// by [`ExperimentError::BadOption`]).
+    pub const KEYS: &'static str = "runs (1..=100000), seconds (> 0, at most 86400: a day), \
+        seed (u64), motion_noise (>= 0), bounce_noise (>= 0), lost_radius (> 0), \
+        found_radius (> 0, at most lost_radius), rt_elapsed (true|false), \
+        model (matched|linear), acceleration_noise (> 0), initial_speed (> 0), \
+        measurement_noise (> 0), search_margin (0..=4096 px), likelihood_sigma (> 0), \
+        lost_distance (> 0), bins (1..=256), ukf_alpha (> 0), ukf_beta (finite), \
+        ukf_kappa (finite)";
+
+    /// Longest run an option may ask for, seconds of video (a day).
+    pub const MAX_SECONDS: f64 = 86_400.0;
+
+    /// Widest search margin an option may ask for, px (wider than any frame).
+    pub const MAX_SEARCH_MARGIN: usize = 4096;
+
     /// Applies a `key=value` override.
     ///
     /// # Errors
     /// [`ExperimentError::BadOption`] for an unknown key or a bad value.
     pub fn apply(&mut self, key: &str, value: &str) -> Result<(), ExperimentError> {
-        let bad = || ExperimentError::BadOption {
-            key: key.to_string(),
-            value: value.to_string(),
-        };
+        let bad = || ExperimentError::bad_option("ball", Self::KEYS, key, value);
         let num = || value.parse::<f64>().map_err(|_| bad());
         let int = || value.parse::<usize>().map_err(|_| bad());
         let t = &mut self.tracker;
@@ -269,8 +282,10 @@ impl BallOptions {
         }
         let ok_num = |v: f64| v.is_finite() && v > 0.0;
         let ok_noise = |v: f64| v.is_finite() && v >= 0.0;
-        if self.runs == 0
+        if !(1..=MAX_RUNS).contains(&self.runs)
             || !ok_num(self.seconds)
+            || self.seconds > Self::MAX_SECONDS
+            || t.search_margin > Self::MAX_SEARCH_MARGIN
             || !ok_noise(self.motion_noise)
             || !ok_noise(self.bounce_noise)
             || !ok_num(self.lost_radius)
@@ -946,10 +961,12 @@ pub fn run(
     progress: bool,
 ) -> Result<BallResult, ExperimentError> {
     if opts.runs == 0 {
-        return Err(ExperimentError::BadOption {
-            key: "runs".to_string(),
-            value: "0".to_string(),
-        });
+        return Err(ExperimentError::bad_option(
+            "ball",
+            BallOptions::KEYS,
+            "runs",
+            "0",
+        ));
     }
     let log = runs_csv
         .map(|path| PartialCsv::create(path, RUNS_HEADER))

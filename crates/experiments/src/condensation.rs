@@ -38,7 +38,9 @@ use bayestrack_trackers::{
 };
 use rayon::prelude::*;
 
-use crate::experiment::{Experiment, ExperimentError, Mode, RunOptions, write_text};
+use crate::experiment::{
+    Experiment, ExperimentError, MAX_FRAMES, MAX_RUNS, Mode, RunOptions, write_text,
+};
 use crate::scenes::{FrameTruth, Outline, SceneStream, WebcamScene};
 use bayestrack_otb::Table;
 use bayestrack_otb::plot::{Series, line_chart};
@@ -227,6 +229,13 @@ impl CondensationConfig {
         }
     }
 
+    /// The keys [`CondensationConfig::apply`] accepts, with their domains
+    /// (listed by [`ExperimentError::BadOption`]).
+    pub const KEYS: &'static str = "runs (1..=100000), frames (2..=1000000), scene_seed (u64), \
+        lost_fraction (> 0), lock_distance (> 0), lock_frames (1..=1000000), \
+        reinit_frames (1..=1000000), separation (> 0), avq_threshold (> 0), \
+        avq_trigger (0 < v < 1)";
+
     /// Applies `key=value` overrides (`runs`, `frames`, `scene_seed`,
     /// `lost_fraction`, `lock_distance`, `lock_frames`, `reinit_frames`,
     /// `separation`, `avq_threshold`, `avq_trigger`).
@@ -234,10 +243,7 @@ impl CondensationConfig {
     /// # Errors
     /// [`ExperimentError::BadOption`] for an unknown key or value.
     pub fn apply(&mut self, key: &str, value: &str) -> Result<(), ExperimentError> {
-        let bad = || ExperimentError::BadOption {
-            key: key.to_string(),
-            value: value.to_string(),
-        };
+        let bad = || ExperimentError::bad_option(ID, Self::KEYS, key, value);
         let num = || {
             value
                 .parse::<f64>()
@@ -265,7 +271,11 @@ impl CondensationConfig {
             "avq_trigger" => self.avq.trigger_fraction = num()?,
             _ => return Err(bad()),
         }
-        if self.runs == 0 || self.frames < 2 || self.lock_frames == 0 || self.reinit_frames == 0 {
+        if !(1..=MAX_RUNS).contains(&self.runs)
+            || !(2..=MAX_FRAMES).contains(&self.frames)
+            || !(1..=MAX_FRAMES).contains(&self.lock_frames)
+            || !(1..=MAX_FRAMES).contains(&self.reinit_frames)
+        {
             return Err(bad());
         }
         self.avq.validate().map_err(|_| bad())?;
@@ -777,10 +787,12 @@ pub fn run_logged(
     log: Option<&PartialCsv>,
 ) -> Result<CondensationResult, ExperimentError> {
     if config.runs == 0 || config.frames < 2 {
-        return Err(ExperimentError::BadOption {
-            key: "runs/frames".into(),
-            value: format!("{}/{}", config.runs, config.frames),
-        });
+        return Err(ExperimentError::bad_option(
+            ID,
+            CondensationConfig::KEYS,
+            "runs/frames",
+            &format!("{}/{}", config.runs, config.frames),
+        ));
     }
     let (enter, entry) = entering_scene(config);
     let cross = WebcamScene::crossing();

@@ -27,7 +27,9 @@ use bayestrack_trackers::{
 };
 use rayon::prelude::*;
 
-use crate::experiment::{Experiment, ExperimentError, Mode, RunOptions, write_text};
+use crate::experiment::{
+    Experiment, ExperimentError, MAX_PARTICLES, MAX_RUNS, Mode, RunOptions, write_text,
+};
 use crate::scenes::{FrameTruth, RoadScene};
 use bayestrack_otb::Table;
 use bayestrack_otb::plot::{Series, line_chart};
@@ -153,15 +155,22 @@ impl CorrelationConfig {
         }
     }
 
+    /// The keys [`CorrelationConfig::apply`] accepts, with their domains
+    /// (listed by [`ExperimentError::BadOption`]).
+    pub const KEYS: &'static str = "runs (1..=100000), scene_seed (u64), \
+        mad_margin (0..=4096 px), particles (1..=1000000), sigma, spread, b, gain \
+        (finite; the tracker checks their range), printed_b (finite), cap (finite)";
+
+    /// Widest MAD search margin an option may ask for, px (wider than any
+    /// frame).
+    pub const MAX_MAD_MARGIN: usize = 4096;
+
     /// Applies `key=value` overrides.
     ///
     /// # Errors
     /// [`ExperimentError::BadOption`] for an unknown key or value.
     pub fn apply(&mut self, key: &str, value: &str) -> Result<(), ExperimentError> {
-        let bad = || ExperimentError::BadOption {
-            key: key.to_string(),
-            value: value.to_string(),
-        };
+        let bad = || ExperimentError::bad_option("correlation", Self::KEYS, key, value);
         let num = || {
             value
                 .parse::<f64>()
@@ -197,7 +206,10 @@ impl CorrelationConfig {
             "cap" => self.cap = num()?,
             _ => return Err(bad()),
         }
-        if self.runs == 0 {
+        if !(1..=MAX_RUNS).contains(&self.runs)
+            || self.mad_margin > Self::MAX_MAD_MARGIN
+            || self.pf.particles > MAX_PARTICLES
+        {
             return Err(bad());
         }
         PfCorrelationTracker::new(self.pf).map_err(|_| bad())?;

@@ -107,13 +107,18 @@ pub enum ExperimentError {
     /// The experiment is registered but not implemented yet.
     #[error("experiment `{0}` is registered but not implemented yet")]
     NotImplemented(&'static str),
-    /// An option override that the experiment does not know.
-    #[error("unknown option or value `{key}={value}`")]
+    /// An option override that the experiment does not know, or a value
+    /// outside the option's domain; the message lists the valid keys.
+    #[error("unknown option or value `{key}={value}` for {experiment}; valid keys: {valid}")]
     BadOption {
         /// The option name.
         key: String,
         /// Its value.
         value: String,
+        /// The experiment's id.
+        experiment: &'static str,
+        /// The experiment's keys with their domains (the config's `KEYS`).
+        valid: &'static str,
     },
     /// A filter or tracker failed during the run.
     #[error("experiment `{id}` failed: {message}")]
@@ -124,6 +129,31 @@ pub enum ExperimentError {
         message: String,
     },
 }
+
+impl ExperimentError {
+    /// [`ExperimentError::BadOption`] for `key=value` of `experiment`, whose
+    /// valid keys (with their domains) are `valid`.
+    pub fn bad_option(
+        experiment: &'static str,
+        valid: &'static str,
+        key: &str,
+        value: &str,
+    ) -> Self {
+        Self::BadOption {
+            key: key.to_string(),
+            value: value.to_string(),
+            experiment,
+            valid,
+        }
+    }
+}
+
+/// Most runs an option may ask for: more is a typo, not an experiment.
+pub const MAX_RUNS: usize = 100_000;
+/// Most frames or time steps an option may ask for.
+pub const MAX_FRAMES: usize = 1_000_000;
+/// Most particles an option may ask for.
+pub const MAX_PARTICLES: usize = 1_000_000;
 
 /// One reproducible experiment.
 pub trait Experiment: Sync {

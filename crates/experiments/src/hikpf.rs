@@ -25,7 +25,9 @@ use rand::Rng;
 use rand_distr::{Distribution, Gamma, StandardNormal};
 use rayon::prelude::*;
 
-use crate::experiment::{Experiment, ExperimentError, Mode, RunOptions, write_text};
+use crate::experiment::{
+    Experiment, ExperimentError, MAX_FRAMES, MAX_PARTICLES, MAX_RUNS, Mode, RunOptions, write_text,
+};
 use bayestrack_otb::Table;
 use bayestrack_otb::plot::{Series, line_chart};
 use bayestrack_otb::write::PartialCsv;
@@ -218,15 +220,21 @@ impl HikpfConfig {
         }
     }
 
+    /// The keys [`HikpfConfig::apply`] accepts, with their domains (listed
+    /// by [`ExperimentError::BadOption`]).
+    pub const KEYS: &'static str = "runs (1..=100000), particles (1..=1000000), \
+        steps (2..=1000000), seed (u64), sin_freq (finite), iekf_iterations (1..=10000), \
+        iekf_tolerance (finite), error (rmse|eq11), prior (transition|demo), \
+        proposal_noise (demo|moments), hybrid_prior (predicted|posterior), \
+        likelihood_floor (true|false), \
+        resampling (multinomial|residual|systematic|stratified)";
+
     /// Applies `key=value` overrides (the named options).
     ///
     /// # Errors
     /// [`ExperimentError::BadOption`] for an unknown key or value.
     pub fn apply(&mut self, key: &str, value: &str) -> Result<(), ExperimentError> {
-        let bad = || ExperimentError::BadOption {
-            key: key.to_string(),
-            value: value.to_string(),
-        };
+        let bad = || ExperimentError::bad_option("hikpf", Self::KEYS, key, value);
         // `inf` and `NaN` parse as f64: refused here, not later as NaN errors
         let num = || {
             value
@@ -281,7 +289,11 @@ impl HikpfConfig {
             }
             _ => return Err(bad()),
         }
-        if self.runs == 0 || self.particles == 0 || self.steps < 2 || self.iekf_iterations == 0 {
+        if !(1..=MAX_RUNS).contains(&self.runs)
+            || !(1..=MAX_PARTICLES).contains(&self.particles)
+            || !(2..=MAX_FRAMES).contains(&self.steps)
+            || !(1..=10_000).contains(&self.iekf_iterations)
+        {
             return Err(bad());
         }
         Ok(())

@@ -2,7 +2,9 @@
 //! either a typed error or options whose every number is finite.
 
 use bayestrack_experiments::ExperimentError;
+use bayestrack_experiments::affine::AffineConfig;
 use bayestrack_experiments::ball::BallOptions;
+use bayestrack_experiments::condensation::CondensationConfig;
 use bayestrack_experiments::correlation::CorrelationConfig;
 use bayestrack_experiments::hikpf::HikpfConfig;
 use proptest::prelude::*;
@@ -131,4 +133,75 @@ proptest! {
             }
         }
     }
+}
+
+#[test]
+fn a_bad_key_lists_the_valid_keys() {
+    let e = HikpfConfig::quick().apply("foo", "1").unwrap_err();
+    let msg = e.to_string();
+    assert!(
+        msg.contains("`foo=1` for hikpf; valid keys: runs (1..=100000)"),
+        "{msg}"
+    );
+    assert!(
+        msg.contains("particles") && msg.contains("resampling"),
+        "{msg}"
+    );
+    let msg = BallOptions::quick()
+        .apply("model", "curved")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.contains("for ball; valid keys:") && msg.contains("matched|linear"),
+        "{msg}"
+    );
+    let msg = CorrelationConfig::quick()
+        .apply("runs", "x")
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("for correlation; valid keys:"), "{msg}");
+    let msg = AffineConfig::quick()
+        .apply("fames", "3")
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("for affine; valid keys: frames"), "{msg}");
+    let msg = CondensationConfig::quick()
+        .apply("frames", "1")
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("for condensation; valid keys: runs"), "{msg}");
+}
+
+#[test]
+fn absurd_values_are_refused_not_run() {
+    let refused =
+        |r: Result<(), ExperimentError>| matches!(r, Err(ExperimentError::BadOption { .. }));
+    assert!(refused(HikpfConfig::quick().apply("runs", "100001")));
+    assert!(refused(HikpfConfig::quick().apply("steps", "1000001")));
+    assert!(refused(HikpfConfig::quick().apply("particles", "1000001")));
+    assert!(refused(BallOptions::quick().apply("runs", "100001")));
+    assert!(refused(BallOptions::quick().apply("seconds", "1e300")));
+    assert!(refused(BallOptions::quick().apply("seconds", "86401")));
+    assert!(refused(
+        BallOptions::quick().apply("search_margin", "100000")
+    ));
+    assert!(refused(CorrelationConfig::quick().apply("runs", "100001")));
+    assert!(refused(
+        CorrelationConfig::quick().apply("mad_margin", "100000")
+    ));
+    assert!(refused(AffineConfig::quick().apply("frames", "1000001")));
+    assert!(refused(AffineConfig::quick().apply("runs", "100001")));
+    assert!(refused(
+        CondensationConfig::quick().apply("frames", "1000001")
+    ));
+    assert!(refused(CondensationConfig::quick().apply("runs", "100001")));
+    // the limits themselves are accepted
+    assert!(HikpfConfig::quick().apply("runs", "100000").is_ok());
+    assert!(BallOptions::quick().apply("seconds", "86400").is_ok());
+    assert!(AffineConfig::quick().apply("frames", "1000000").is_ok());
+    assert!(
+        CondensationConfig::quick()
+            .apply("frames", "1000000")
+            .is_ok()
+    );
 }

@@ -9,7 +9,10 @@
 //! all of them, the success plot (fraction of frames with IoU above each
 //! threshold) and the precision plot (fraction within each centre-error
 //! distance) as SVG. A tracker that fails on a sequence is reported in its
-//! cell and the run goes on.
+//! cell and the run goes on; [`SuiteReport::failures`] lists those cells
+//! (`cargo xtask otb` exits non-zero when there is any). A tracker that
+//! cannot run on a sequence by design (see [`CellError::NotApplicable`])
+//! is not a failure.
 //!
 //! A run killed part-way keeps every finished cell: while it runs the
 //! folder holds `PARTIAL.txt`, each finished cell is appended to
@@ -22,13 +25,13 @@ use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
 use bayestrack_image::Image;
-use bayestrack_trackers::TrackerInfo;
+use bayestrack_trackers::{TrackerError, TrackerInfo};
 
 use crate::metrics::{OtbScore, SUCCESS_THRESHOLDS, precision_at, score_otb};
 use crate::plot::{Series, line_chart};
 use crate::sequence::{OtbError, Sequence, list_sequences};
 use crate::table::Table;
-use crate::track::{BoxFile, OnBadFrame, track_frames};
+use crate::track::{BoxFile, OnBadFrame, TrackError, track_frames};
 use crate::write::{PartialCsv, WriteError, clear_partial, create_dir, mark_partial, write_text};
 
 /// Centre-error thresholds of the precision plot, px.
@@ -72,7 +75,77 @@ pub struct Cell {
     /// Tracker name.
     pub tracker: &'static str,
     /// The scores, or why there are none.
-    pub outcome: Result<CellScore, String>,
+    pub outcome: Result<CellScore, CellError>,
+}
+
+/// Why a cell has no scores.
+///
+/// A tracker that refuses the first frame's channel count
+/// ([`TrackerError::Channels`] on frame 1, e.g. the skin-colour
+/// `condensation-*` trackers on a gray sequence such as David) cannot run
+/// on that input by design: the cell is [`CellError::NotApplicable`],
+/// shown as `n/a (needs colour)`, and does not fail the run, since no fix
+/// to the tracker or the data is wanted. Every other error (a bad frame,
+/// a tracker error on a later frame, including a channel count that
+/// changes mid-sequence, an output that cannot be written) is
+/// [`CellError::Failed`]: something that should have worked did not.
+#[derive(Debug, Clone, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum CellError {
+    /// The tracker cannot run on this input by design.
+    NotApplicable {
+        /// What the tracker needs, e.g. `needs colour`.
+        needs: String,
+        /// The tracker's error.
+        message: String,
+    },
+    /// A real failure.
+    Failed(String),
+}
+
+impl std::fmt::Display for CellError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::NotApplicable { needs, message } => write!(f, "n/a ({needs}): {message}"),
+            Self::Failed(message) => f.write_str(message),
+        }
+    }
+}
+
+impl CellError {
+    /// Whether this is a real failure (not [`CellError::NotApplicable`]).
+    pub fn is_failure(&self) -> bool {
+        matches!(self, Self::Failed(_))
+    }
+
+    /// The short label of a table cell: `n/a (...)` or `failed`.
+    pub fn label(&self) -> String {
+        match self {
+            Self::NotApplicable { needs, .. } => format!("n/a ({needs})"),
+            Self::Failed(_) => "failed".into(),
+        }
+    }
+
+    /// Classifies a tracking error (see the type's documentation).
+    fn from_track(e: TrackError) -> Self {
+        if let TrackError::Tracker {
+            frame: 1, source, ..
+        } = &e
+            && let TrackerError::Channels { expected, .. } = source.as_ref()
+        {
+            // `expected` may carry an explanation: "3 (RGB: the skin cue ...)"
+            let needs = if expected.starts_with('3') {
+                "needs colour".to_string()
+            } else {
+                format!("needs {expected} channels")
+            };
+            return Self::NotApplicable {
+                needs,
+                message: e.to_string(),
+            };
+        }
+        Self::Failed(e.to_string())
+    }
 }
 
 /// Scores of a finished run.
@@ -137,7 +210,7 @@ pub fn run_suite(root: &Path, options: &SuiteOptions) -> Result<SuiteReport, Sui
         for info in &options.trackers {
             let outcome = match &loaded {
                 Ok((seq, frames)) => run_cell(info, seq, frames, options),
-                Err(e) => Err(e.to_string()),
+                Err(e) => Err(CellError::Failed(e.to_string())),
             };
             if options.progress {
                 match &outcome {
@@ -145,7 +218,10 @@ pub fn run_suite(root: &Path, options: &SuiteOptions) -> Result<SuiteReport, Sui
                         "{name:<12} {:<16} AUC {:.3}  P@20 {:.3}  {:>8.0} fps",
                         info.name, c.score.auc, c.score.precision_20, c.fps
                     ),
-                    Err(e) => eprintln!("{name:<12} {:<16} failed: {e}", info.name),
+                    Err(e @ CellError::Failed(_)) => {
+                        eprintln!("{name:<12} {:<16} failed: {e}", info.name)
+                    }
+                    Err(e) => eprintln!("{name:<12} {:<16} {e}", info.name),
                 }
             }
             let cell = Cell {
@@ -199,7 +275,7 @@ fn csv_table(cells: &[Cell]) -> Table {
             }
             Err(e) => {
                 row.extend(std::iter::repeat_n(String::new(), 7));
-                row.push(e.clone());
+                row.push(e.to_string());
             }
         }
         t.push(row);
@@ -212,18 +288,21 @@ fn run_cell(
     seq: &Sequence,
     frames: &[Image<u8>],
     options: &SuiteOptions,
-) -> Result<CellScore, String> {
+) -> Result<CellScore, CellError> {
     let init = seq
         .initial_box()
-        .ok_or_else(|| format!("{}: frame 1 is unlabelled", seq.name))?;
+        .ok_or_else(|| CellError::Failed(format!("{}: frame 1 is unlabelled", seq.name)))?;
     let dir = options.out.join("boxes").join(info.name);
-    std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    std::fs::create_dir_all(&dir)
+        .map_err(|e| CellError::Failed(format!("cannot create {}: {e}", dir.display())))?;
     // the boxes go to a partial file, renamed over the previous one only
     // when the cell has finished
     let boxes = dir.join(format!("{}.txt", seq.name));
     let partial = crate::write::partial_path(&boxes);
-    let mut file = BoxFile::create(&partial).map_err(|e| e.to_string())?;
-    let mut tracker = info.build(options.seed).map_err(|e| e.to_string())?;
+    let mut file = BoxFile::create(&partial).map_err(|e| CellError::Failed(e.to_string()))?;
+    let mut tracker = info
+        .build(options.seed)
+        .map_err(|e| CellError::Failed(e.to_string()))?;
     let run = track_frames(
         tracker.as_mut(),
         frames.len(),
@@ -233,16 +312,24 @@ fn run_cell(
         OnBadFrame::Stop,
         |f| file.write(&f.bbox),
     )
-    .map_err(|e| e.to_string())?;
+    .map_err(|e| {
+        let e = CellError::from_track(e);
+        if !e.is_failure() {
+            // nothing to keep: the tracker cannot run on this sequence
+            drop(std::fs::remove_file(&partial));
+        }
+        e
+    })?;
     drop(file);
     std::fs::rename(&partial, &boxes).map_err(|e| {
-        format!(
+        CellError::Failed(format!(
             "cannot rename {} to {}: {e}",
             partial.display(),
             boxes.display()
-        )
+        ))
     })?;
-    let score = score_otb(&run.boxes, &seq.ground_truth).map_err(|e| e.to_string())?;
+    let score =
+        score_otb(&run.boxes, &seq.ground_truth).map_err(|e| CellError::Failed(e.to_string()))?;
     Ok(CellScore {
         score,
         fps: run.fps(),
@@ -256,6 +343,15 @@ impl SuiteReport {
         self.cells
             .iter()
             .find(|c| c.sequence == sequence && c.tracker == tracker)
+    }
+
+    /// The cells that failed for real (not the
+    /// [`CellError::NotApplicable`] ones), in run order.
+    pub fn failures(&self) -> Vec<&Cell> {
+        self.cells
+            .iter()
+            .filter(|c| c.outcome.as_ref().is_err_and(CellError::is_failure))
+            .collect()
     }
 
     /// Mean AUC, P@20 and fps of `tracker` over the sequences it finished
@@ -295,7 +391,8 @@ impl SuiteReport {
                         "{:.3} / {:.3} / {:.0}",
                         c.score.auc, c.score.precision_20, c.fps
                     ),
-                    _ => "failed".into(),
+                    Some(Err(e)) => e.label(),
+                    None => "failed".into(),
                 });
             }
             row.push(match self.mean(tracker) {
@@ -303,7 +400,9 @@ impl SuiteReport {
                     format!("{auc:.3} / {p:.3} / {fps:.0}")
                 }
                 Some((auc, p, fps, n)) => format!("{auc:.3} / {p:.3} / {fps:.0} ({n} seq.)"),
-                None => "failed".into(),
+                None if self.failures().iter().any(|c| c.tracker == tracker) => "failed".into(),
+                // every cell of the tracker is n/a
+                None => "n/a".into(),
             });
             t.push(row);
         }
@@ -404,5 +503,64 @@ impl SuiteReport {
             self.plots(out, seq, |c| &c.sequence == seq)?;
         }
         self.plots(out, "overall", |_| true)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tracker_error(frame: usize, source: TrackerError) -> TrackError {
+        TrackError::Tracker {
+            tracker: "t",
+            frame,
+            path: PathBuf::from("0001.jpg"),
+            source: Box::new(source),
+        }
+    }
+
+    #[test]
+    fn a_colour_tracker_on_a_gray_sequence_is_not_a_failure() {
+        let channels = || TrackerError::Channels {
+            tracker: "t",
+            expected: "3 (RGB)",
+            got: 1,
+        };
+        let e = CellError::from_track(tracker_error(1, channels()));
+        assert!(!e.is_failure());
+        assert_eq!(e.label(), "n/a (needs colour)");
+        assert!(e.to_string().starts_with("n/a (needs colour): "), "{e}");
+        // the channel count changing mid-sequence is a real failure
+        assert!(CellError::from_track(tracker_error(7, channels())).is_failure());
+        assert!(CellError::from_track(tracker_error(1, TrackerError::NotInitialised)).is_failure());
+        assert!(CellError::from_track(TrackError::NoFrames).is_failure());
+    }
+
+    #[test]
+    fn failures_leave_out_the_cells_that_cannot_run() {
+        let cell = |tracker, outcome| Cell {
+            sequence: "David".into(),
+            tracker,
+            outcome,
+        };
+        let report = SuiteReport {
+            sequences: vec!["David".into()],
+            trackers: vec!["a", "b"],
+            cells: vec![
+                cell(
+                    "a",
+                    Err(CellError::NotApplicable {
+                        needs: "needs colour".into(),
+                        message: "m".into(),
+                    }),
+                ),
+                cell("b", Err(CellError::Failed("boom".into()))),
+            ],
+        };
+        let failed: Vec<&str> = report.failures().iter().map(|c| c.tracker).collect();
+        assert_eq!(failed, ["b"]);
+        let table = report.table().to_csv();
+        assert!(table.contains("n/a (needs colour),n/a"), "{table}");
+        assert!(table.contains("failed,failed"), "{table}");
     }
 }
