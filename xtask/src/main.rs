@@ -39,7 +39,7 @@ enum Command {
         /// Paper scale instead of the quick CI scale.
         #[arg(long)]
         full: bool,
-        /// Output root [default: `<project root>/target/reproduce`].
+        /// Output root (default: `<project root>/target/reproduce`).
         #[arg(long)]
         out: Option<PathBuf>,
         /// Override a named option of the experiment, `key=value`
@@ -67,7 +67,7 @@ enum Command {
     /// write boxes, results.csv, results.md and success/precision plots.
     Otb {
         /// Folder of OTB sequences (each with img/ and ground truth)
-        /// [default: `<project root>/../shared/data/sequences`].
+        /// (default: `<project root>/../shared/data/sequences`).
         #[arg(long)]
         root: Option<PathBuf>,
         /// Comma-separated tracker names (default: every tracker; see
@@ -77,7 +77,7 @@ enum Command {
         /// Seed given to every tracker.
         #[arg(long, default_value_t = 0)]
         seed: u64,
-        /// Output folder [default: `<project root>/target/otb`].
+        /// Output folder (default: `<project root>/target/otb`).
         #[arg(long)]
         out: Option<PathBuf>,
     },
