@@ -46,13 +46,7 @@ impl HkpfConfig {
     /// # Errors
     /// [`TrackerError::InvalidParameter`] naming the first bad one.
     pub fn validate(&self) -> Result<()> {
-        if self.particles == 0 || self.particles > 1 << 16 {
-            return Err(TrackerError::InvalidParameter {
-                name: "particles",
-                value: self.particles as f64,
-                reason: "must be in 1..=65536",
-            });
-        }
+        super::check_particles("particles", self.particles)?;
         self.region.validate()?;
         super::check_pose_sigma("pose_sigma", &self.pose_sigma)?;
         self.appearance.validate()

@@ -67,13 +67,7 @@ impl IspfConfig {
     /// # Errors
     /// [`TrackerError::InvalidParameter`] naming the first bad one.
     pub fn validate(&self) -> Result<()> {
-        if self.max_particles == 0 || self.max_particles > 1 << 16 {
-            return Err(TrackerError::InvalidParameter {
-                name: "max_particles",
-                value: self.max_particles as f64,
-                reason: "must be in 1..=65536",
-            });
-        }
+        super::check_particles("max_particles", self.max_particles)?;
         if self.batch == 0 || self.batch > self.max_particles {
             return Err(TrackerError::InvalidParameter {
                 name: "batch",

@@ -231,6 +231,18 @@ pub(crate) fn check_positive(name: &'static str, v: f64) -> Result<()> {
     }
 }
 
+/// A particle count, checked: in `1..=65536`.
+pub(crate) fn check_particles(name: &'static str, n: usize) -> Result<()> {
+    if n == 0 || n > 1 << 16 {
+        return Err(TrackerError::InvalidParameter {
+            name,
+            value: n as f64,
+            reason: "must be in 1..=65536",
+        });
+    }
+    Ok(())
+}
+
 pub(crate) fn check_non_negative(name: &'static str, v: f64) -> Result<()> {
     if v.is_finite() && v >= 0.0 {
         Ok(())
