@@ -32,7 +32,9 @@ impl Table {
         self.rows.push(row);
     }
 
-    /// The table as CSV (RFC 4180 quoting where a cell needs it).
+    /// The table as CSV (RFC 4180 quoting where a cell needs it), the
+    /// header as keys without spaces ([`crate::write::csv_key`]: `paper
+    /// mean` is `paper_mean`); the cells are the printed ones.
     pub fn to_csv(&self) -> String {
         fn cell(s: &str) -> String {
             if s.contains([',', '"', '\n']) {
@@ -42,7 +44,12 @@ impl Table {
             }
         }
         let mut out = String::new();
-        for row in std::iter::once(&self.header).chain(&self.rows) {
+        let keys: Vec<String> = self
+            .header
+            .iter()
+            .map(|h| crate::write::csv_key(h))
+            .collect();
+        for row in std::iter::once(&keys).chain(&self.rows) {
             let line: Vec<String> = row.iter().map(|c| cell(c)).collect();
             out.push_str(&line.join(","));
             out.push('\n');

@@ -128,6 +128,137 @@ impl PartialCsv {
     }
 }
 
+/// `rows` as CSV text, written by the `csv` crate from typed rows: the
+/// header is the field names of `R` (serde), every float is written with
+/// full precision (the shortest text that reads back to the same `f64`),
+/// `None` is an empty cell, and text is quoted where RFC 4180 needs it.
+/// No rows give an empty text (the header comes from the first row).
+///
+/// # Panics
+/// When `R` is not a flat record (a field that is itself a sequence or a
+/// map): a programming error, which the first test that writes the row
+/// finds.
+pub fn csv_text<R: serde::Serialize>(rows: &[R]) -> String {
+    let mut out = csv::Writer::from_writer(Vec::new());
+    for row in rows {
+        out.serialize(row).unwrap_or_else(|e| {
+            panic!(
+                "{} is not a flat CSV record: {e}",
+                std::any::type_name::<R>()
+            )
+        });
+    }
+    let bytes = out
+        .into_inner()
+        .unwrap_or_else(|e| panic!("writing CSV to memory: {e}"));
+    String::from_utf8(bytes).unwrap_or_else(|e| panic!("CSV of UTF-8 text is UTF-8: {e}"))
+}
+
+/// Writes `rows` to `path` as [`csv_text`] does, atomically ([`write_text`]).
+///
+/// # Errors
+/// [`WriteError`] naming the file.
+pub fn write_csv<R: serde::Serialize>(path: &Path, rows: &[R]) -> Result<(), WriteError> {
+    write_text(path, &csv_text(rows))
+}
+
+/// A CSV of typed rows written as results finish, beside the file it will
+/// replace: rows go to [`partial_path`] (`runs.partial.csv` for
+/// `runs.csv`), created fresh, and are handed to the operating system after
+/// every [`PartialRows::append`] (the header with the first rows);
+/// [`PartialRows::finish`] writes the complete file over `path`
+/// (atomically, [`write_text`]) and removes the partial one. A run killed
+/// part-way keeps every row it appended, under a name that says it is
+/// partial, and the previous `path` untouched.
+///
+/// Appends may come from several threads (each call writes whole rows).
+#[derive(Debug)]
+pub struct PartialRows<R> {
+    path: PathBuf,
+    partial: PathBuf,
+    file: std::sync::Mutex<(std::fs::File, bool)>,
+    rows: std::marker::PhantomData<fn(&R)>,
+}
+
+impl<R: serde::Serialize> PartialRows<R> {
+    /// Creates the (empty) partial file of `path`.
+    ///
+    /// # Errors
+    /// [`WriteError`] naming the partial file.
+    pub fn create(path: &Path) -> Result<Self, WriteError> {
+        let partial = partial_path(path);
+        let file = std::fs::File::create(&partial).map_err(|e| WriteError::new(&partial, e))?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            partial,
+            file: std::sync::Mutex::new((file, false)),
+            rows: std::marker::PhantomData,
+        })
+    }
+
+    /// The file the rows go to until [`PartialRows::finish`].
+    pub fn partial(&self) -> &Path {
+        &self.partial
+    }
+
+    /// Appends `rows` (with the header, the first time rows come) and
+    /// hands them to the operating system before returning.
+    ///
+    /// # Errors
+    /// [`WriteError`] naming the partial file.
+    pub fn append(&self, rows: &[R]) -> Result<(), WriteError> {
+        use std::io::Write;
+        if rows.is_empty() {
+            return Ok(());
+        }
+        let mut guard = self
+            .file
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let (file, has_header) = &mut *guard;
+        let text = csv_text(rows);
+        let text = if *has_header {
+            text.split_once('\n').map_or("", |(_, body)| body)
+        } else {
+            text.as_str()
+        };
+        file.write_all(text.as_bytes())
+            .and_then(|()| file.flush())
+            .map_err(|e| WriteError::new(&self.partial, e))?;
+        *has_header = true;
+        Ok(())
+    }
+
+    /// Writes the complete `rows` over the final path and removes the
+    /// partial file.
+    ///
+    /// # Errors
+    /// [`WriteError`] naming the file.
+    pub fn finish(self, rows: &[R]) -> Result<(), WriteError> {
+        write_csv(&self.path, rows)?;
+        drop(self.file);
+        std::fs::remove_file(&self.partial).map_err(|e| WriteError::new(&self.partial, e))
+    }
+}
+
+/// A column header as a CSV key: lower case, every run of characters other
+/// than letters and digits one `_` (`%` reads `pct`), none at the ends
+/// (`"centre (px)"` is `centre_px`, `"ours/paper"` is `ours_paper`).
+pub fn csv_key(header: &str) -> String {
+    let mut key = String::with_capacity(header.len());
+    for c in header.replace('%', " pct ").chars() {
+        if c.is_alphanumeric() {
+            key.extend(c.to_lowercase());
+        } else if !key.is_empty() && !key.ends_with('_') {
+            key.push('_');
+        }
+    }
+    while key.ends_with('_') {
+        key.pop();
+    }
+    key
+}
+
 /// The name of the marker [`mark_partial`] writes.
 pub const PARTIAL_MARKER: &str = "PARTIAL.txt";
 
@@ -214,6 +345,86 @@ mod tests {
             .collect();
         assert_eq!(names.len(), 1, "{names:?}");
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[derive(serde::Serialize)]
+    struct Row {
+        name: &'static str,
+        x: f64,
+        missing: Option<f64>,
+    }
+
+    #[test]
+    fn typed_rows_keep_full_precision_and_leave_missing_cells_empty() {
+        let rows = [
+            Row {
+                name: "a, b",
+                x: 0.1 + 0.2,
+                missing: None,
+            },
+            Row {
+                name: "c",
+                x: 1e-300,
+                missing: Some(2.5),
+            },
+        ];
+        let text = csv_text(&rows);
+        assert_eq!(
+            text,
+            "name,x,missing\n\"a, b\",0.30000000000000004,\nc,1e-300,2.5\n"
+        );
+        let read: Vec<f64> = text
+            .lines()
+            .skip(1)
+            .map(|l| l.rsplitn(3, ',').nth(1).unwrap().parse().unwrap())
+            .collect();
+        assert_eq!(read, [0.1 + 0.2, 1e-300]);
+        assert_eq!(csv_text::<Row>(&[]), "");
+    }
+
+    #[test]
+    fn partial_rows_write_the_header_once_and_finish_whole() {
+        let dir = scratch("rows");
+        let path = dir.join("frames.csv");
+        let log = PartialRows::<Row>::create(&path).unwrap();
+        log.append(&[]).unwrap();
+        log.append(&[Row {
+            name: "a",
+            x: 1.0,
+            missing: None,
+        }])
+        .unwrap();
+        log.append(&[Row {
+            name: "b",
+            x: 2.0,
+            missing: Some(3.0),
+        }])
+        .unwrap();
+        assert_eq!(
+            std::fs::read_to_string(log.partial()).unwrap(),
+            "name,x,missing\na,1.0,\nb,2.0,3.0\n"
+        );
+        log.finish(&[Row {
+            name: "a",
+            x: 1.0,
+            missing: None,
+        }])
+        .unwrap();
+        assert_eq!(
+            std::fs::read_to_string(&path).unwrap(),
+            "name,x,missing\na,1.0,\n"
+        );
+        assert!(!dir.join("frames.partial.csv").exists());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn headers_become_keys_without_spaces() {
+        assert_eq!(csv_key("centre (px)"), "centre_px");
+        assert_eq!(csv_key("ours/paper"), "ours_paper");
+        assert_eq!(csv_key("ours self-lost %"), "ours_self_lost_pct");
+        assert_eq!(csv_key("PF eq.6 printed x"), "pf_eq_6_printed_x");
+        assert_eq!(csv_key("run"), "run");
     }
 
     #[test]
