@@ -91,6 +91,19 @@ pub trait NoisyDynamics<const N: usize, const V: usize> {
     fn propagate_with(&self, x: &SVector<f64, N>, v: &SVector<f64, V>) -> SVector<f64, N>;
     /// The distribution of `v`.
     fn process_noise_dist(&self) -> Gaussian<V>;
+
+    /// The difference `a - b` of two states, as [`Dynamics::residual_x`]
+    /// (the augmented UKF differences its propagated sigma points with it).
+    #[inline(always)]
+    fn residual_x(&self, a: &SVector<f64, N>, b: &SVector<f64, N>) -> SVector<f64, N> {
+        a - b
+    }
+
+    /// The mean of the propagated sigma points, as [`Dynamics::mean_x`].
+    #[inline(always)]
+    fn mean_x(&self, center: &SVector<f64, N>, offset: &SVector<f64, N>) -> SVector<f64, N> {
+        center + offset
+    }
 }
 
 /// Measurement with general noise: `z = h(x, n)`, `n ~ N(mu_n, R_n)`.
@@ -99,10 +112,26 @@ pub trait NoisyMeasurement<const N: usize, const M: usize, const W: usize> {
     fn observe_with(&self, x: &SVector<f64, N>, n: &SVector<f64, W>) -> SVector<f64, M>;
     /// The distribution of `n`.
     fn measurement_noise_dist(&self) -> Gaussian<W>;
+
+    /// The difference `a - b` of two measurements, as
+    /// [`Measurement::residual_z`] (the innovation and the augmented UKF's
+    /// sigma-point differences).
+    #[inline(always)]
+    fn residual_z(&self, a: &SVector<f64, M>, b: &SVector<f64, M>) -> SVector<f64, M> {
+        a - b
+    }
+
+    /// The mean of the sigma points in measurement space, as
+    /// [`Measurement::mean_z`].
+    #[inline(always)]
+    fn mean_z(&self, center: &SVector<f64, M>, offset: &SVector<f64, M>) -> SVector<f64, M> {
+        center + offset
+    }
 }
 
 /// Adapter: an additive-noise model seen as a general-noise one
-/// (`f(x, v) = f(x) + v`, `v ~ N(0, Q)`), for the augmented UKF.
+/// (`f(x, v) = f(x) + v`, `v ~ N(0, Q)`), for the augmented UKF. The
+/// model's residual and mean hooks carry over.
 #[derive(Debug, Clone, Copy)]
 pub struct Additive<'a, T>(pub &'a T);
 
@@ -112,6 +141,12 @@ impl<const N: usize, T: Dynamics<N>> NoisyDynamics<N, N> for Additive<'_, T> {
     }
     fn process_noise_dist(&self) -> Gaussian<N> {
         Gaussian::from_parts(SVector::zeros(), self.0.process_noise())
+    }
+    fn residual_x(&self, a: &SVector<f64, N>, b: &SVector<f64, N>) -> SVector<f64, N> {
+        self.0.residual_x(a, b)
+    }
+    fn mean_x(&self, center: &SVector<f64, N>, offset: &SVector<f64, N>) -> SVector<f64, N> {
+        self.0.mean_x(center, offset)
     }
 }
 
@@ -123,6 +158,12 @@ impl<const N: usize, const M: usize, T: Measurement<N, M>> NoisyMeasurement<N, M
     }
     fn measurement_noise_dist(&self) -> Gaussian<M> {
         Gaussian::from_parts(SVector::zeros(), self.0.measurement_noise())
+    }
+    fn residual_z(&self, a: &SVector<f64, M>, b: &SVector<f64, M>) -> SVector<f64, M> {
+        self.0.residual_z(a, b)
+    }
+    fn mean_z(&self, center: &SVector<f64, M>, offset: &SVector<f64, M>) -> SVector<f64, M> {
+        self.0.mean_z(center, offset)
     }
 }
 

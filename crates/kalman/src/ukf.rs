@@ -68,8 +68,9 @@ use crate::update::{Innovation, Update};
 /// Angles in the state or the measurement (a heading, a bearing): override
 /// the residual and mean hooks of the model ([`Dynamics::residual_x`],
 /// [`Dynamics::mean_x`], [`Measurement::residual_z`],
-/// [`Measurement::mean_z`]) to wrap; the UKF forms every sigma-point
-/// difference, mean and innovation through them.
+/// [`Measurement::mean_z`], and the same hooks of [`NoisyDynamics`] and
+/// [`NoisyMeasurement`] for the augmented form) to wrap; the UKF forms
+/// every sigma-point difference, mean and innovation through them.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Ukf {
     alpha: f64,
@@ -154,6 +155,38 @@ impl<const N: usize, T: Dynamics<N>> Space<N> for StateSpace<'_, T> {
 struct MeasurementSpace<'a, T, const N: usize>(&'a T);
 
 impl<const N: usize, const M: usize, T: Measurement<N, M>> Space<M> for MeasurementSpace<'_, T, N> {
+    #[inline(always)]
+    fn residual(&self, a: &SVector<f64, M>, b: &SVector<f64, M>) -> SVector<f64, M> {
+        self.0.residual_z(a, b)
+    }
+    #[inline(always)]
+    fn mean(&self, center: &SVector<f64, M>, offset: &SVector<f64, M>) -> SVector<f64, M> {
+        self.0.mean_z(center, offset)
+    }
+}
+
+/// The state-space hooks of a [`NoisyDynamics`].
+struct NoisyStateSpace<'a, T, const V: usize>(&'a T);
+
+impl<const N: usize, const V: usize, T: NoisyDynamics<N, V>> Space<N>
+    for NoisyStateSpace<'_, T, V>
+{
+    #[inline(always)]
+    fn residual(&self, a: &SVector<f64, N>, b: &SVector<f64, N>) -> SVector<f64, N> {
+        self.0.residual_x(a, b)
+    }
+    #[inline(always)]
+    fn mean(&self, center: &SVector<f64, N>, offset: &SVector<f64, N>) -> SVector<f64, N> {
+        self.0.mean_x(center, offset)
+    }
+}
+
+/// The measurement-space hooks of a [`NoisyMeasurement`].
+struct NoisyMeasurementSpace<'a, T, const N: usize, const W: usize>(&'a T);
+
+impl<const N: usize, const M: usize, const W: usize, T: NoisyMeasurement<N, M, W>> Space<M>
+    for NoisyMeasurementSpace<'_, T, N, W>
+{
     #[inline(always)]
     fn residual(&self, a: &SVector<f64, M>, b: &SVector<f64, M>) -> SVector<f64, M> {
         self.0.residual_z(a, b)
@@ -556,7 +589,7 @@ impl Ukf {
             &none::<0>(),
             |x, v| dynamics.propagate_with(x, v),
             no_output,
-            &Plain,
+            &NoisyStateSpace(dynamics),
             &Plain,
             Step::Predict,
         )?;
@@ -588,10 +621,17 @@ impl Ukf {
             |x, _| *x,
             |x, n| measurement.observe_with(x, n),
             &Plain,
-            &Plain,
+            &NoisyMeasurementSpace(measurement),
             Step::Update,
         )?;
-        Self::correct(prior, &mo.y_mean, mo.p_yy, &mo.p_xy, z, &Plain)
+        Self::correct(
+            prior,
+            &mo.y_mean,
+            mo.p_yy,
+            &mo.p_xy,
+            z,
+            &NoisyMeasurementSpace(measurement),
+        )
     }
 
     /// The joint augmented step of Nagy, Ahmed and Zayed (paper 000) sec. 3.3 (a): ONE sigma-point
@@ -629,8 +669,8 @@ impl Ukf {
             &SMatrix::zeros(),
             &SMatrix::zeros(),
             z,
-            &Plain,
-            &Plain,
+            &NoisyStateSpace(dynamics),
+            &NoisyMeasurementSpace(measurement),
         )
     }
 

@@ -5,7 +5,7 @@
 use std::f64::consts::PI;
 
 use bayestrack_kalman::{
-    Dynamics, Ekf, Gaussian, Iekf, KalmanFilter, Kf, LinearDynamics, LinearMeasurement,
+    Additive, Dynamics, Ekf, Gaussian, Iekf, KalmanFilter, Kf, LinearDynamics, LinearMeasurement,
     Measurement, Result, Ukf, Update,
 };
 use nalgebra::{Matrix2, Matrix2x4, Matrix4, SMatrix, SVector, Vector2, Vector4};
@@ -268,4 +268,46 @@ fn state_hooks_fix_the_ukf_prediction_across_the_cut() {
     let plain = ukf.predict(&prior, &Heading { hooks: false }).unwrap();
     assert!((plain.mean()[0] - (PI - 0.005)).abs() > 1.0);
     assert!(plain.cov()[(0, 0)] > 1.0);
+}
+
+#[test]
+fn the_augmented_forms_use_the_hooks_too() {
+    // The same models seen through `Additive` (noise in the sigma points):
+    // with the hooks the augmented UKF matches the additive one across the
+    // cut; `Additive` carries the hooks over, so breaking that forwarding
+    // (or the augmented forms ignoring it) fails here.
+    let ukf = Ukf::new(1.0, 2.0, 0.0).unwrap();
+    let heading = Heading { hooks: true };
+    let prior = Gaussian::new(
+        SVector::from([PI - 0.01]),
+        SMatrix::from([[0.02f64.powi(2)]]),
+    )
+    .unwrap();
+    let additive = ukf.predict(&prior, &heading).unwrap();
+    let augmented = ukf.predict_augmented(&prior, &Additive(&heading)).unwrap();
+    assert!((augmented.mean()[0] - additive.mean()[0]).abs() < 1e-9);
+    assert!((augmented.cov()[(0, 0)] - additive.cov()[(0, 0)]).abs() < 1e-9);
+
+    let r = 10.0;
+    let truth = Vector2::new(r * (PI - 0.01).cos(), r * (PI - 0.01).sin());
+    let prior = Gaussian::new(truth + Vector2::new(0.0, 0.1), Matrix2::identity() * 0.25).unwrap();
+    let sensor = RangeBearing { hooks: true };
+    let z = sensor.observe(&truth);
+    let plain = ukf.update(&prior, &sensor, Some(&z)).unwrap();
+    let aug = ukf
+        .update_augmented(&prior, &Additive(&sensor), Some(&z))
+        .unwrap();
+    // the augmented set has two more dimensions (other weights), so the
+    // two agree to the accuracy of the unscented transform, not bitwise
+    let gap = (aug.posterior.mean() - plain.posterior.mean()).norm();
+    assert!(gap < 0.02, "augmented vs additive posterior: {gap}");
+    let err = (aug.posterior.mean() - truth).norm();
+    assert!(err < 0.05, "augmented posterior error {err}");
+    let nis = aug.innovation.unwrap().nis;
+    assert!(nis < 1.0, "augmented NIS {nis}");
+    // without the hooks the augmented update is as wrong as the plain one
+    let broken = ukf
+        .update_augmented(&prior, &Additive(&RangeBearing { hooks: false }), Some(&z))
+        .unwrap();
+    assert!((broken.posterior.mean() - truth).norm() > 10.0 * err);
 }
