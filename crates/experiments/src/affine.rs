@@ -36,7 +36,7 @@ use bayestrack_image::Image;
 use bayestrack_otb::Table;
 use bayestrack_otb::metrics::{FeaturePoints, rms_error_eq6};
 use bayestrack_otb::plot::{Series, line_chart};
-use bayestrack_otb::write::PartialCsv;
+use bayestrack_otb::write::PartialRows;
 use bayestrack_trackers::{
     FrameStats, HkpfConfig, HkpfTracker, IspfConfig, IspfTracker, StpfConfig, StpfTracker, Tracker,
 };
@@ -525,30 +525,49 @@ pub fn run(config: &AffineConfig, progress: bool) -> Result<AffineResult, Experi
     run_logged(config, progress, None)
 }
 
-/// The header of `frames.csv`.
-const FRAMES_HEADER: &str = "setting,run,filter,frame,rms,lost,particles,evaluations,pe_calls";
+/// One row of `frames.csv`: one filter on one scored frame of one run.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct FrameRow {
+    /// [`Setting::name`].
+    pub setting: &'static str,
+    /// Run index (0-based).
+    pub run: usize,
+    /// [`Filter::name`].
+    pub filter: &'static str,
+    /// Frame number (1-based; frame 1 initialises).
+    pub frame: usize,
+    /// RMS error of eq. 6 (pixels).
+    pub rms: f64,
+    /// Whether the frame is lost.
+    pub lost: bool,
+    /// Particles used.
+    pub particles: usize,
+    /// Appearance evaluations.
+    pub evaluations: usize,
+    /// Pose-estimator calls.
+    pub pe_calls: usize,
+}
 
 /// The `frames.csv` rows of one setting's run (every filter, every scored
 /// frame).
-fn frame_rows(setting: Setting, run: usize, tracks: &[TrackRun]) -> String {
-    let mut text = String::new();
+fn frame_rows(setting: Setting, run: usize, tracks: &[TrackRun]) -> Vec<FrameRow> {
+    let mut rows = Vec::new();
     for (f, tr) in Filter::ALL.iter().zip(tracks) {
         for k in 0..tr.rms.len() {
-            let _ = writeln!(
-                text,
-                "{},{run},{},{},{:.4},{},{},{},{}",
-                setting.name(),
-                f.name(),
-                k + 2,
-                tr.rms[k],
-                tr.lost[k],
-                tr.particles[k],
-                tr.evaluations[k],
-                tr.pose_estimator_calls[k]
-            );
+            rows.push(FrameRow {
+                setting: setting.name(),
+                run,
+                filter: f.name(),
+                frame: k + 2,
+                rms: tr.rms[k],
+                lost: tr.lost[k],
+                particles: tr.particles[k],
+                evaluations: tr.evaluations[k],
+                pe_calls: tr.pose_estimator_calls[k],
+            });
         }
     }
-    text
+    rows
 }
 
 /// [`run`], appending each finished setting x run's frames to `log` as it
@@ -561,7 +580,7 @@ fn frame_rows(setting: Setting, run: usize, tracks: &[TrackRun]) -> String {
 pub fn run_logged(
     config: &AffineConfig,
     progress: bool,
-    log: Option<&PartialCsv>,
+    log: Option<&PartialRows<FrameRow>>,
 ) -> Result<AffineResult, ExperimentError> {
     if config.frames < 2 || config.runs == 0 {
         return Err(ExperimentError::bad_option(
@@ -574,12 +593,7 @@ pub fn run_logged(
     let jobs: Vec<(usize, usize)> = (0..Setting::ALL.len())
         .flat_map(|s| (0..config.runs).map(move |r| (s, r)))
         .collect();
-    let bar = if progress {
-        indicatif::ProgressBar::new(jobs.len() as u64)
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
-    bar.set_message("affine sequences");
+    let bar = crate::experiment::progress_bar(jobs.len(), progress, "affine sequences");
     let done: Vec<Vec<TrackRun>> = jobs
         .par_iter()
         .map(|&(s, r)| {
@@ -823,19 +837,19 @@ impl Experiment for AffineExperiment {
         }
         let dir = opts.output_dir(self.id())?;
         // every frame of every run, appended as each run finishes
-        let frames = PartialCsv::create(&dir.join("frames.csv"), FRAMES_HEADER)?;
+        let frames = PartialRows::create(&dir.join("frames.csv"))?;
         let result = run_logged(
             &config,
             opts.progress && opts.mode == Mode::Full,
             Some(&frames),
         )?;
-        let mut text = format!("{FRAMES_HEADER}\n");
+        let mut rows = Vec::new();
         for (setting, runs) in Setting::ALL.iter().zip(&result.runs) {
             for (r, tracks) in runs.iter().enumerate() {
-                text.push_str(&frame_rows(*setting, r, tracks));
+                rows.extend(frame_rows(*setting, r, tracks));
             }
         }
-        frames.finish(&text)?;
+        frames.finish(&rows)?;
         write_outputs(&result, &dir)?;
         let mut main = result.table();
         main.title = format!("{}\n  options: {}", main.title, config.describe());

@@ -44,7 +44,7 @@ use crate::experiment::{
 use crate::scenes::{FrameTruth, Outline, SceneStream, WebcamScene};
 use bayestrack_otb::Table;
 use bayestrack_otb::plot::{Series, line_chart};
-use bayestrack_otb::write::PartialCsv;
+use bayestrack_otb::write::PartialRows;
 
 const ID: &str = "condensation";
 
@@ -750,28 +750,41 @@ pub fn run(
     run_logged(config, progress, None)
 }
 
-/// The header of `frames.csv`.
-const FRAMES_HEADER: &str = "representation,cue,particles,run,frame,centre,outline,lost";
+/// One row of `frames.csv`: one frame of one grid run.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct FrameRow {
+    /// [`Representation::name`].
+    pub representation: &'static str,
+    /// [`Cue::name`].
+    pub cue: &'static str,
+    /// Particles (contours or points).
+    pub particles: usize,
+    /// Run index (0-based).
+    pub run: usize,
+    /// Frame number (1-based).
+    pub frame: usize,
+    /// Centre error (pixels).
+    pub centre: f64,
+    /// Outline error (pixels); empty for the point clouds (no outline).
+    pub outline: Option<f64>,
+    /// Whether the frame is lost.
+    pub lost: bool,
+}
 
 /// The `frames.csv` rows of one grid cell's run.
-fn frame_rows(key: GridKey, run: usize, tr: &TrackRun) -> String {
-    let mut text = String::new();
-    for k in 0..tr.centre.len() {
-        let _ = writeln!(
-            text,
-            "{},{},{},{run},{},{:.4},{},{}",
-            key.representation.name(),
-            key.cue.name(),
-            key.particles,
-            k + 1,
-            tr.centre[k],
-            tr.outline
-                .get(k)
-                .map_or(String::new(), |o| format!("{o:.4}")),
-            tr.lost[k]
-        );
-    }
-    text
+fn frame_rows(key: GridKey, run: usize, tr: &TrackRun) -> Vec<FrameRow> {
+    (0..tr.centre.len())
+        .map(|k| FrameRow {
+            representation: key.representation.name(),
+            cue: key.cue.name(),
+            particles: key.particles,
+            run,
+            frame: k + 1,
+            centre: tr.centre[k],
+            outline: tr.outline.get(k).copied(),
+            lost: tr.lost[k],
+        })
+        .collect()
 }
 
 /// [`run`], appending each finished grid run's frames to `log` as it
@@ -784,7 +797,7 @@ fn frame_rows(key: GridKey, run: usize, tr: &TrackRun) -> String {
 pub fn run_logged(
     config: &CondensationConfig,
     progress: bool,
-    log: Option<&PartialCsv>,
+    log: Option<&PartialRows<FrameRow>>,
 ) -> Result<CondensationResult, ExperimentError> {
     if config.runs == 0 || config.frames < 2 {
         return Err(ExperimentError::bad_option(
@@ -825,12 +838,7 @@ pub fn run_logged(
             }
         }
     }
-    let bar = if progress {
-        indicatif::ProgressBar::new(jobs.len() as u64)
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
-    bar.set_message("condensation jobs");
+    let bar = crate::experiment::progress_bar(jobs.len(), progress, "condensation jobs");
     let done = jobs
         .par_iter()
         .map(|job| {
@@ -1378,19 +1386,19 @@ impl Experiment for CondensationExperiment {
         }
         let dir = opts.output_dir(self.id())?;
         // every frame of every grid run, appended as each run finishes
-        let frames = PartialCsv::create(&dir.join("frames.csv"), FRAMES_HEADER)?;
+        let frames = PartialRows::create(&dir.join("frames.csv"))?;
         let result = run_logged(
             &config,
             opts.progress && opts.mode == Mode::Full,
             Some(&frames),
         )?;
-        let mut text = format!("{FRAMES_HEADER}\n");
+        let mut rows = Vec::new();
         for (key, runs) in &result.grid {
             for (r, tr) in runs.iter().enumerate() {
-                text.push_str(&frame_rows(*key, r, tr));
+                rows.extend(frame_rows(*key, r, tr));
             }
         }
-        frames.finish(&text)?;
+        frames.finish(&rows)?;
         write_outputs(&result, &dir)?;
         let mut tables = result.tables();
         if let Some(first) = tables.first_mut() {

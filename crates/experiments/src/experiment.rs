@@ -51,7 +51,9 @@ impl RunOptions {
 /// (`PARTIAL.txt`, see [`bayestrack_otb::write::mark_partial`]) until every
 /// file is written: a run that is killed or fails leaves the marker, which
 /// says that the `*.partial.*` files hold the finished part and that every
-/// other file is from the last run that finished.
+/// other file is from the last run that finished. A run refused for a bad
+/// `--set` option ([`ExperimentError::BadOption`], which every experiment
+/// checks before it writes) leaves no marker.
 ///
 /// # Errors
 /// Those of [`Experiment::run`], and [`ExperimentError::Io`] for the
@@ -66,9 +68,29 @@ pub fn run_marked(e: &dyn Experiment, opts: &RunOptions) -> Result<Vec<Table>, E
         &dir,
         &format!("`cargo xtask reproduce-table {}{mode}`", e.id()),
     )?;
-    let tables = e.run(opts)?;
-    bayestrack_otb::write::clear_partial(&dir)?;
-    Ok(tables)
+    let result = e.run(opts);
+    // A refused option is found before anything is written: no marker.
+    if matches!(result, Ok(_) | Err(ExperimentError::BadOption { .. })) {
+        bayestrack_otb::write::clear_partial(&dir)?;
+    }
+    result
+}
+
+/// A progress bar on stderr for `len` jobs of `what` (e.g. "affine
+/// sequences"), showing what runs, elapsed time, done/total and the time
+/// left; hidden when `show` is false or stderr is not a terminal.
+pub fn progress_bar(len: usize, show: bool, what: &str) -> indicatif::ProgressBar {
+    if !show {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(len as u64);
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "{msg} [{elapsed_precise}] {wide_bar} {pos}/{len} (ETA {eta})",
+    ) {
+        bar.set_style(style);
+    }
+    bar.set_message(what.to_string());
+    bar
 }
 
 /// Writes `contents` to `path` whole (a temporary file renamed over it),
@@ -181,7 +203,7 @@ pub trait Experiment: Sync {
 mod tests {
     use super::*;
 
-    /// Writes one file, then fails when asked to.
+    /// Writes one file, then fails when asked to; refuses every `--set`.
     struct Fails(bool);
 
     impl Experiment for Fails {
@@ -195,6 +217,9 @@ mod tests {
             "test"
         }
         fn run(&self, opts: &RunOptions) -> Result<Vec<Table>, ExperimentError> {
+            if let Some((k, v)) = opts.set.first() {
+                return Err(ExperimentError::bad_option("marker-test", "none", k, v));
+            }
             write_text(&opts.output_dir(self.id())?.join("a.csv"), "x\n")?;
             if self.0 {
                 return Err(ExperimentError::Failed {
@@ -224,6 +249,15 @@ mod tests {
         );
         run_marked(&Fails(false), &opts).unwrap();
         assert!(!marker.exists());
+        let refused = RunOptions {
+            set: vec![("typo".into(), "1".into())],
+            ..opts.clone()
+        };
+        assert!(matches!(
+            run_marked(&Fails(true), &refused),
+            Err(ExperimentError::BadOption { .. })
+        ));
+        assert!(!marker.exists(), "a refused option leaves no marker");
         std::fs::remove_dir_all(&out).unwrap();
     }
 }
