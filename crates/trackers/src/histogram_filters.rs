@@ -41,6 +41,15 @@
 //!   ([`BallConfig::measurement_noise`]). There is no gating and no explicit
 //!   search for a lost ball: Bócsi and Csató (paper 001) says "explicit ball searching has not
 //!   been used".
+//!   With an evaluation budget ([`BallConfig::max_evaluations`], `B`
+//!   windows per frame, fewer than the region holds) the search visits only
+//!   a `k x k` grid of window positions, `k = floor(sqrt(B))`, spread evenly
+//!   over the same region (first and last positions included, so the
+//!   region's reach is kept and its resolution lost), and takes the best of
+//!   them; the measurement is then quantised to the grid step `s`, so `R`
+//!   becomes `(r^2 + s^2 / 12) I` (the variance of a uniform quantisation
+//!   error). This models a tracker that, like paper 001's, must finish a
+//!   frame within a time its fps allows.
 //! - PF: Algorithm 1 of the paper on a [`ParticleSet`]: draw ancestors by
 //!   importance resampling ([`Resampling::Multinomial`]: sorted uniforms
 //!   walked once over the cumulative weights, footnote 2), propagate each
@@ -91,7 +100,7 @@
 //! assert!((cx - 1.0 - 33.5).abs() < 3.0);
 //! ```
 
-use bayestrack_appearance::{HistogramDistance, RgbHistogram, histogram_search};
+use bayestrack_appearance::{HistogramDistance, HistogramMatch, RgbHistogram, histogram_search};
 use bayestrack_image::{BBox, ImageView, Rect};
 use bayestrack_kalman::{Dynamics, Gaussian, Kf, LinearDynamics, LinearMeasurement, Ukf, nalgebra};
 use bayestrack_particle::{ParticleSet, Resampling, stream_rng};
@@ -160,6 +169,15 @@ pub struct BallConfig {
     pub ukf_beta: f64,
     /// UKF `kappa` (0).
     pub ukf_kappa: f64,
+    /// Evaluation budget of the KF/UKF measurement: at most this many
+    /// histogram windows per frame (`None`, the default: every window of the
+    /// search region, the exhaustive search). With a budget `B` smaller than
+    /// the region's windows the search visits a `k x k` grid, `k =
+    /// floor(sqrt(B))`, spread evenly over the same region, and the
+    /// measurement noise grows by the grid's quantisation variance
+    /// `s^2 / 12` per axis (`s` the larger grid step), see the module docs.
+    /// The PF evaluates exactly its `N` particles' windows whatever this is.
+    pub max_evaluations: Option<usize>,
 }
 
 impl Default for BallConfig {
@@ -177,6 +195,7 @@ impl Default for BallConfig {
             ukf_alpha: 1.0,
             ukf_beta: 2.0,
             ukf_kappa: 0.0,
+            max_evaluations: None,
         }
     }
 }
@@ -218,6 +237,9 @@ impl BallConfig {
         }
         if self.bins == 0 || self.bins > 256 {
             return bad("bins", self.bins as f64, "must be in 1..=256");
+        }
+        if self.max_evaluations == Some(0) {
+            return bad("max_evaluations", 0.0, "need at least one window per frame");
         }
         Ok(())
     }
@@ -376,6 +398,70 @@ impl Dynamics<4> for Reflecting<'_> {
     }
     fn process_noise(&self) -> SMatrix<f64, 4, 4> {
         self.q
+    }
+}
+
+/// Evenly spread positions `0..n`: `k` of them (all `n` when `k >= n`),
+/// the first and last included.
+fn grid_positions(n: usize, k: usize) -> Vec<usize> {
+    if k >= n || n <= 1 {
+        return (0..n).collect();
+    }
+    if k <= 1 {
+        return vec![(n - 1) / 2];
+    }
+    let mut p: Vec<usize> = (0..k)
+        .map(|i| ((i * (n - 1)) as f64 / (k - 1) as f64).round() as usize)
+        .collect();
+    p.dedup();
+    p
+}
+
+/// The KF/UKF measurement: the best window in `region`, exhaustively or, on
+/// a budget, over a grid (see [`BallConfig::max_evaluations`]). Returns the
+/// match, the windows evaluated and the grid step (0 when exhaustive).
+fn search(
+    frame: ImageView<'_, u8>,
+    target: &Target,
+    region: Rect,
+    c: &BallConfig,
+    hist: &mut RgbHistogram,
+) -> Result<(HistogramMatch, usize, f64)> {
+    let (nx, ny) = (region.width - target.w + 1, region.height - target.h + 1);
+    let all = nx * ny;
+    match c.max_evaluations {
+        Some(budget) if budget < all => {
+            let k = budget.isqrt().max(1);
+            let (xs, ys) = (grid_positions(nx, k), grid_positions(ny, k));
+            let step = |p: &[usize]| p.windows(2).map(|w| w[1] - w[0]).max().unwrap_or(0) as f64;
+            let mut best = HistogramMatch {
+                x: region.x + xs[0],
+                y: region.y + ys[0],
+                distance: f64::INFINITY,
+            };
+            for &dy in &ys {
+                for &dx in &xs {
+                    let (x, y) = (region.x + dx, region.y + dy);
+                    hist.compute(frame, Rect::new(x, y, target.w, target.h))?;
+                    let d = hist.distance(&target.reference, c.distance)?;
+                    if d < best.distance {
+                        best = HistogramMatch { x, y, distance: d };
+                    }
+                }
+            }
+            Ok((best, xs.len() * ys.len(), step(&xs).max(step(&ys))))
+        }
+        _ => {
+            let m = histogram_search(
+                frame,
+                &target.reference,
+                target.w,
+                target.h,
+                region,
+                c.distance,
+            )?;
+            Ok((m, all, 0.0))
+        }
     }
 }
 
@@ -576,21 +662,14 @@ impl BallTracker {
                 };
                 let (px, py) = (predicted.mean()[0], predicted.mean()[1]);
                 let region = target.region(px, py, c.search_margin);
-                let m = histogram_search(
-                    frame,
-                    &target.reference,
-                    target.w,
-                    target.h,
-                    region,
-                    c.distance,
-                )?;
+                let (m, evaluations, step) = search(frame, target, region, c, &mut self.hist)?;
                 let z = Vector2::new(
                     m.x as f64 + (target.w as f64 - 1.0) / 2.0,
                     m.y as f64 + (target.h as f64 - 1.0) / 2.0,
                 );
                 let sensor = LinearMeasurement::new(
                     Matrix2x4::new(1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0),
-                    Matrix2::identity() * c.measurement_noise.powi(2),
+                    Matrix2::identity() * (c.measurement_noise.powi(2) + step * step / 12.0),
                 )?;
                 let posterior = if self.filter == BallFilter::Kf {
                     Kf::default().update(&predicted, &sensor, Some(&z))?
@@ -600,7 +679,6 @@ impl BallTracker {
                 .posterior;
                 *g = posterior;
                 let mean = g.mean();
-                let evaluations = (region.width - target.w + 1) * (region.height - target.h + 1);
                 Ok(Estimate {
                     bbox: target.bbox(mean[0], mean[1]),
                     pose: None,
@@ -766,6 +844,41 @@ mod tests {
     }
 
     #[test]
+    fn grid_positions_span_the_region() {
+        assert_eq!(grid_positions(41, 6), vec![0, 8, 16, 24, 32, 40]);
+        assert_eq!(grid_positions(7, 6), vec![0, 1, 2, 4, 5, 6]);
+        assert_eq!(grid_positions(5, 9), vec![0, 1, 2, 3, 4]);
+        assert_eq!(grid_positions(41, 1), vec![20]);
+    }
+
+    #[test]
+    fn a_budgeted_kalman_tracker_follows_a_clean_ball_more_coarsely() {
+        // 36 windows 8 px apart: the measurement is quantised, so the error
+        // grows but the ball (20 px) is never lost.
+        let budget = BallConfig {
+            max_evaluations: Some(37),
+            ..BallConfig::default()
+        };
+        for filter in [BallFilter::Kf, BallFilter::Ukf] {
+            let (full, _, _) = follow(
+                &mut BallTracker::new(filter, BallConfig::default(), 0).unwrap(),
+                120,
+            );
+            let (mean, max, lost) = follow(&mut BallTracker::new(filter, budget, 0).unwrap(), 120);
+            assert!(mean < 6.0 && max < 15.0, "{}: {mean} {max}", filter.name());
+            assert!(mean > full, "{}: {mean} vs {full}", filter.name());
+            assert_eq!(lost, 0, "{}", filter.name());
+        }
+        assert!(
+            BallTracker::kf(BallConfig {
+                max_evaluations: Some(0),
+                ..BallConfig::default()
+            })
+            .is_err()
+        );
+    }
+
+    #[test]
     fn more_particles_track_more_accurately_on_a_clean_scene() {
         // Mean over seeds of the mean error: PF70 below PF10.
         let mean_error = |n| {
@@ -877,6 +990,28 @@ mod tests {
         // 60x60 region (20 + 2 x 20), 41 x 41 windows.
         assert_eq!((e.particles, e.evaluations), (0, 41 * 41));
         assert_eq!(kf.name(), "ball-kf");
+        // On a budget of 37 windows: a 6 x 6 grid over the same region.
+        let budget = BallConfig {
+            max_evaluations: Some(37),
+            ..BallConfig::default()
+        };
+        let mut ukf = BallTracker::ukf(budget).unwrap();
+        ukf.init(disc(100.0, 80.0).view(), ball_box(100.0, 80.0))
+            .unwrap();
+        let e = ukf.step(disc(100.0, 80.0).view()).unwrap();
+        assert_eq!((e.particles, e.evaluations), (0, 36));
+        // A budget above the region's windows is the exhaustive search.
+        let big = BallConfig {
+            max_evaluations: Some(5000),
+            ..BallConfig::default()
+        };
+        let mut kf = BallTracker::kf(big).unwrap();
+        kf.init(disc(100.0, 80.0).view(), ball_box(100.0, 80.0))
+            .unwrap();
+        assert_eq!(
+            kf.step(disc(100.0, 80.0).view()).unwrap().evaluations,
+            41 * 41
+        );
         assert_eq!(BallFilter::Pf(70).label(), "PF70");
     }
 
