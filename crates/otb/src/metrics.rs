@@ -15,9 +15,19 @@
 //!   with overlap `> t`; AUC: the mean of those 21 values (so a perfect
 //!   tracker scores 20/21, as in the OTB toolkit);
 //! - precision at 20 px: the fraction of scored frames with centre error
-//!   `<= 20`.
+//!   `<= 20`;
+//! - success rate at IoU 0.5: the fraction of scored frames with overlap
+//!   `> 0.5` (strictly), the success curve's value at `t = 0.5`, as the
+//!   benchmark's success plot counts it (a frame at exactly 0.5 fails);
+//! - mean overlap of the frames with overlap: the mean IoU over the scored
+//!   frames whose IoU is `> 0`, the benchmark's per-sequence "overlap
+//!   score" (`overlapScores` of its result files; the frames the tracker
+//!   lost are left out, so it is higher than AUC and the mean IoU).
 //!
-//! Frames whose ground truth is `None` (an OTB row `0,0,0,0`) are not scored.
+//! Frames whose ground truth is `None` (an OTB row `0,0,0,0`) are not scored:
+//! they count in no numerator and no denominator. (The benchmark's own code
+//! keeps them in the denominator as failures; every frame of the OTB
+//! sequences we compare with is labelled, so the two agree there.)
 //!
 //! ```
 //! use bayestrack_otb::metrics::{iou, score_otb};
@@ -47,6 +57,9 @@ pub const SUCCESS_THRESHOLDS: [f64; 21] = {
 
 /// Centre-error threshold of the OTB precision score, in pixels.
 pub const PRECISION_THRESHOLD: f64 = 20.0;
+
+/// Overlap threshold of the OTB success rate (`SUCCESS_THRESHOLDS[10]`).
+pub const SUCCESS_RATE_THRESHOLD: f64 = 0.5;
 
 /// What can be wrong with the input of a metric.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -108,18 +121,26 @@ pub fn iou(a: &BBox, b: &BBox) -> f64 {
     }
 }
 
+/// Fraction of overlaps strictly greater than `threshold`. An empty list
+/// gives 0.
+pub fn success_rate(overlaps: &[f64], threshold: f64) -> f64 {
+    if overlaps.is_empty() {
+        return 0.0;
+    }
+    overlaps.iter().filter(|&&o| o > threshold).count() as f64 / overlaps.len() as f64
+}
+
 /// OTB success curve of a list of overlaps: entry `i` is the fraction of
 /// overlaps greater than `SUCCESS_THRESHOLDS[i]`. An empty list gives zeros.
 pub fn success_curve(overlaps: &[f64]) -> [f64; 21] {
-    let mut curve = [0.0; 21];
-    if overlaps.is_empty() {
-        return curve;
-    }
-    let n = overlaps.len() as f64;
-    for (c, t) in curve.iter_mut().zip(SUCCESS_THRESHOLDS) {
-        *c = overlaps.iter().filter(|&&o| o > t).count() as f64 / n;
-    }
-    curve
+    SUCCESS_THRESHOLDS.map(|t| success_rate(overlaps, t))
+}
+
+/// Mean of the overlaps that are `> 0` (the benchmark's overlap score);
+/// `None` when no overlap is positive.
+pub fn mean_overlap_of_frames_with_overlap(overlaps: &[f64]) -> Option<f64> {
+    let positive: Vec<f64> = overlaps.iter().copied().filter(|&o| o > 0.0).collect();
+    (!positive.is_empty()).then(|| positive.iter().sum::<f64>() / positive.len() as f64)
 }
 
 /// Area under the success curve: the mean of its 21 values.
@@ -150,6 +171,13 @@ pub struct OtbScore {
     pub auc: f64,
     /// Fraction of scored frames with centre error `<= 20` px.
     pub precision_20: f64,
+    /// Fraction of scored frames with overlap `> 0.5` (the benchmark's
+    /// success rate; equal to `success[10]`).
+    pub success_rate_50: f64,
+    /// Mean overlap over the scored frames with overlap `> 0` (the
+    /// benchmark's overlap score, not the mean IoU); `None` when the box
+    /// never overlaps the target.
+    pub mean_overlap_of_frames_with_overlap: Option<f64>,
     /// Mean overlap over scored frames.
     pub mean_overlap: f64,
     /// Mean centre error over scored frames (pixels).
@@ -208,6 +236,8 @@ pub fn score_otb(predicted: &[BBox], truth: &[Option<BBox>]) -> Result<OtbScore,
         auc: success_auc(&success),
         success,
         precision_20: precision_at(&scored_e, PRECISION_THRESHOLD),
+        success_rate_50: success_rate(&scored_o, SUCCESS_RATE_THRESHOLD),
+        mean_overlap_of_frames_with_overlap: mean_overlap_of_frames_with_overlap(&scored_o),
         mean_overlap: scored_o.iter().sum::<f64>() / n,
         mean_center_error: scored_e.iter().sum::<f64>() / n,
         overlaps,
@@ -355,6 +385,31 @@ mod tests {
         assert!((s.mean_overlap - (1.0 + 1.0 / 3.0) / 3.0).abs() < 1e-15);
         let want_err = (5.0 + 100.0 * 2f64.sqrt()) / 3.0;
         assert!((s.mean_center_error - want_err).abs() < 1e-12);
+    }
+
+    #[test]
+    fn success_rate_at_half_and_overlap_score_by_hand() {
+        let t = b(1., 1., 10., 10.); // 100 pixels
+        let gt = vec![Some(t), None, Some(t), Some(t), Some(t)];
+        let pred = vec![
+            t,                     // IoU 1: success
+            t,                     // unlabelled: neither success nor failure
+            b(1., 1., 10., 5.),    // 50 / (100 + 50 - 50) = 0.5 exactly: failure
+            b(1., 1., 10., 6.),    // 60 / 100 = 0.6: success
+            b(50., 50., 10., 10.), // IoU 0: failure, and no overlap
+        ];
+        let s = score_otb(&pred, &gt).unwrap();
+        assert_eq!(s.frames_scored, 4);
+        // 2 successes of 4 scored frames (not 3 of 4 with IoU >= 0.5, not
+        // 3 of 5 with the unlabelled frame in, not 2 of 5 with it failing)
+        assert_eq!(s.success_rate_50, 0.5);
+        assert_eq!(s.success_rate_50, s.success[10]);
+        // (1 + 0.5 + 0.6) / 3: the frame with IoU 0 is left out (with it: 0.525)
+        let overlap = s.mean_overlap_of_frames_with_overlap.unwrap();
+        assert!((overlap - 0.7).abs() < 1e-15, "{overlap}");
+        assert!((s.mean_overlap - 0.525).abs() < 1e-15, "{}", s.mean_overlap);
+        assert_eq!(success_rate(&[], 0.5), 0.0);
+        assert_eq!(mean_overlap_of_frames_with_overlap(&[0.0, 0.0]), None);
     }
 
     #[test]

@@ -1,0 +1,564 @@
+//! The published one-pass (OPE) results of the OTB benchmark (Wu, Lim and
+//! Yang, "Object Tracking Benchmark", TPAMI 2015), to print our trackers
+//! beside them.
+//!
+//! [`PublishedOpe::read`] reads `published_ope.csv` (one row per tracker
+//! and sequence, from the benchmark's result files):
+//!
+//! ```text
+//! tracker,sequence,success_rate_iou_0.5,mean_overlap_of_frames_with_overlap
+//! ASLA,BasketBall,0.5559,0.3839
+//! ```
+//!
+//! - `success_rate_iou_0.5`: the fraction of the sequence's frames with
+//!   IoU at least 0.5 (`1 - errorNum / 10` of the benchmark's files, which
+//!   count IoU `< 0.5` as an error). Ours, [`crate::OtbScore::success_rate_50`],
+//!   counts IoU `> 0.5` as the success plot does; the two differ only on a
+//!   frame whose IoU is exactly 0.5.
+//! - `mean_overlap_of_frames_with_overlap`: the mean IoU over the frames
+//!   with IoU `> 0` only (the benchmark's `overlapScores`), higher than AUC
+//!   and than the mean IoU: compare it with
+//!   [`crate::OtbScore::mean_overlap_of_frames_with_overlap`], never with
+//!   AUC.
+//!
+//! [`OtbFrameRanges::read`] reads the benchmark's sequence table
+//! (`sequences.csv`, the same folder) for the frames each published number
+//! covers (OTB's David is frames 300-770): a published number is
+//! comparable with ours only when our copy of the sequence has those frames
+//! ([`OtbFrameRanges::same_frames`]).
+//!
+//! ```
+//! use bayestrack_otb::published::PublishedOpe;
+//! use std::path::Path;
+//!
+//! let text = "tracker,sequence,success_rate_iou_0.5,mean_overlap_of_frames_with_overlap\n\
+//!             IVT,Crossing,0.2417,0.2966\n";
+//! let published = PublishedOpe::parse(text, Path::new("published_ope.csv")).unwrap();
+//! let ivt = published.score("IVT", "crossing").unwrap();
+//! assert_eq!(ivt.success_rate_50, 0.2417);
+//! assert_eq!(published.trackers(), ["IVT"]);
+//! ```
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// File name of the published results in the OTB data folder.
+pub const PUBLISHED_OPE_FILE: &str = "published_ope.csv";
+
+/// File name of the benchmark's sequence table in the OTB data folder.
+pub const OTB_SEQUENCES_FILE: &str = "sequences.csv";
+
+/// The header of `published_ope.csv`.
+pub const PUBLISHED_OPE_HEADER: [&str; 4] = [
+    "tracker",
+    "sequence",
+    "success_rate_iou_0.5",
+    "mean_overlap_of_frames_with_overlap",
+];
+
+/// What is wrong with a table of published results or OTB sequence facts.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PublishedError {
+    /// The file cannot be read.
+    #[error("cannot read {}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// The first line is not the expected header.
+    #[error("{}:1: expected the header `{expected}`, found `{found}`", path.display())]
+    Header {
+        /// The file.
+        path: PathBuf,
+        /// What the header should be (or contain).
+        expected: String,
+        /// The first line as found.
+        found: String,
+    },
+    /// A row that cannot be read.
+    #[error("{}:{line}: {message}", path.display())]
+    Row {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number.
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// The same tracker and sequence (or sequence name) twice.
+    #[error("{}:{line}: {what} repeats line {first}", path.display())]
+    Duplicate {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line of the repetition.
+        line: usize,
+        /// 1-based line of the first occurrence.
+        first: usize,
+        /// The repeated key.
+        what: String,
+    },
+    /// A header and no rows.
+    #[error("{}: no rows after the header", path.display())]
+    Empty {
+        /// The file.
+        path: PathBuf,
+    },
+}
+
+/// One published tracker on one sequence.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PublishedScore {
+    /// Fraction of frames with IoU `>= 0.5` (column `success_rate_iou_0.5`).
+    pub success_rate_50: f64,
+    /// Mean IoU over the frames with IoU `> 0` (column
+    /// `mean_overlap_of_frames_with_overlap`).
+    pub mean_overlap_of_frames_with_overlap: f64,
+}
+
+/// The published results: trackers in file order, scores by tracker and
+/// sequence (sequence names compare as [`sequence_key`] does: the file
+/// spells `BasketBall` and `Jogging-1`, the dataset `Basketball` and
+/// `Jogging_1`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PublishedOpe {
+    trackers: Vec<String>,
+    sequences: Vec<String>,
+    scores: HashMap<(String, String), PublishedScore>,
+}
+
+/// A sequence name as compared across the benchmark's files: lower case,
+/// `-` read as `_`.
+pub fn sequence_key(name: &str) -> String {
+    name.to_lowercase().replace('-', "_")
+}
+
+/// The non-empty lines of `text` with their 1-based numbers, a UTF-8 byte
+/// order mark and CRLF endings removed.
+fn lines(text: &str) -> impl Iterator<Item = (usize, &str)> {
+    text.strip_prefix('\u{feff}')
+        .unwrap_or(text)
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim_end_matches('\r')))
+        .filter(|(_, l)| !l.trim().is_empty())
+}
+
+fn read_text(path: &Path) -> Result<String, PublishedError> {
+    std::fs::read_to_string(path).map_err(|source| PublishedError::Read {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+impl PublishedOpe {
+    /// Reads `path` (see the module docs for the format).
+    ///
+    /// # Errors
+    /// [`PublishedError`] naming the file, and the line for a bad row.
+    pub fn read(path: &Path) -> Result<Self, PublishedError> {
+        Self::parse(&read_text(path)?, path)
+    }
+
+    /// Parses the text of a `published_ope.csv`; `path` names it in errors.
+    ///
+    /// # Errors
+    /// [`PublishedError::Header`] for another header;
+    /// [`PublishedError::Row`] for a row without four fields, an empty name
+    /// or a value that is not a number in `[0, 1]`;
+    /// [`PublishedError::Duplicate`] for a tracker and sequence given twice;
+    /// [`PublishedError::Empty`] for a file with no rows.
+    pub fn parse(text: &str, path: &Path) -> Result<Self, PublishedError> {
+        let mut lines = lines(text);
+        let header = PUBLISHED_OPE_HEADER.join(",");
+        match lines.next() {
+            Some((_, found)) if found.split(',').map(str::trim).eq(PUBLISHED_OPE_HEADER) => {}
+            found => {
+                return Err(PublishedError::Header {
+                    path: path.to_path_buf(),
+                    expected: header,
+                    found: found.map_or_else(String::new, |(_, l)| l.to_string()),
+                });
+            }
+        }
+        let mut out = Self {
+            trackers: Vec::new(),
+            sequences: Vec::new(),
+            scores: HashMap::new(),
+        };
+        let mut first_line: HashMap<(String, String), usize> = HashMap::new();
+        for (line, row) in lines {
+            let bad = |message: String| PublishedError::Row {
+                path: path.to_path_buf(),
+                line,
+                message,
+            };
+            let fields: Vec<&str> = row.split(',').map(str::trim).collect();
+            let [tracker, sequence, success, overlap] = fields[..] else {
+                return Err(bad(format!(
+                    "{} fields, expected 4 ({header})",
+                    fields.len()
+                )));
+            };
+            if tracker.is_empty() || sequence.is_empty() {
+                return Err(bad("empty tracker or sequence name".into()));
+            }
+            let value = |column: &str, text: &str| match text.parse::<f64>() {
+                Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
+                _ => Err(bad(format!("{column} `{text}` is not a number in [0, 1]"))),
+            };
+            let score = PublishedScore {
+                success_rate_50: value(PUBLISHED_OPE_HEADER[2], success)?,
+                mean_overlap_of_frames_with_overlap: value(PUBLISHED_OPE_HEADER[3], overlap)?,
+            };
+            let key = (tracker.to_string(), sequence_key(sequence));
+            if let Some(&first) = first_line.get(&key) {
+                return Err(PublishedError::Duplicate {
+                    path: path.to_path_buf(),
+                    line,
+                    first,
+                    what: format!("{tracker} on {sequence}"),
+                });
+            }
+            first_line.insert(key.clone(), line);
+            if !out.trackers.iter().any(|t| t == tracker) {
+                out.trackers.push(tracker.to_string());
+            }
+            if !out.sequences.iter().any(|s| sequence_key(s) == key.1) {
+                out.sequences.push(sequence.to_string());
+            }
+            out.scores.insert(key, score);
+        }
+        if out.scores.is_empty() {
+            return Err(PublishedError::Empty {
+                path: path.to_path_buf(),
+            });
+        }
+        Ok(out)
+    }
+
+    /// Tracker names, in the order of the file.
+    pub fn trackers(&self) -> &[String] {
+        &self.trackers
+    }
+
+    /// Sequence names as the file spells them, in the order of the file.
+    pub fn sequences(&self) -> &[String] {
+        &self.sequences
+    }
+
+    /// Whether some tracker has a result on `sequence` ([`sequence_key`]).
+    pub fn has_sequence(&self, sequence: &str) -> bool {
+        let key = sequence_key(sequence);
+        self.sequences.iter().any(|s| sequence_key(s) == key)
+    }
+
+    /// The result of `tracker` on `sequence` ([`sequence_key`]).
+    pub fn score(&self, tracker: &str, sequence: &str) -> Option<PublishedScore> {
+        self.scores
+            .get(&(tracker.to_string(), sequence_key(sequence)))
+            .copied()
+    }
+
+    /// Mean success rate at IoU 0.5 of `tracker` over `sequences`; `None`
+    /// if a sequence has no result for it (or the list is empty).
+    pub fn mean_success_rate(&self, tracker: &str, sequences: &[&str]) -> Option<f64> {
+        let rates: Option<Vec<f64>> = sequences
+            .iter()
+            .map(|s| self.score(tracker, s).map(|p| p.success_rate_50))
+            .collect();
+        let rates = rates?;
+        (!rates.is_empty()).then(|| rates.iter().sum::<f64>() / rates.len() as f64)
+    }
+}
+
+/// The frames the benchmark scores on one sequence.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct OtbFrameRange {
+    /// Sequence name as the table spells it.
+    pub name: String,
+    /// First scored frame number (1-based file number).
+    pub start_frame: usize,
+    /// Last scored frame number.
+    pub end_frame: usize,
+}
+
+impl OtbFrameRange {
+    /// Number of frames the benchmark scores.
+    pub fn len(&self) -> usize {
+        self.end_frame + 1 - self.start_frame
+    }
+
+    /// Whether the range is empty (never, for a range read by
+    /// [`OtbFrameRanges`]).
+    pub fn is_empty(&self) -> bool {
+        self.end_frame < self.start_frame
+    }
+}
+
+/// The frame ranges of the benchmark's sequence table (`sequences.csv`:
+/// the columns `name`, `start_frame` and `end_frame` are read, in any
+/// position; the other columns are the loader's).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct OtbFrameRanges {
+    ranges: Vec<OtbFrameRange>,
+}
+
+impl OtbFrameRanges {
+    /// Reads `path`.
+    ///
+    /// # Errors
+    /// [`PublishedError`] naming the file, and the line for a bad row.
+    pub fn read(path: &Path) -> Result<Self, PublishedError> {
+        Self::parse(&read_text(path)?, path)
+    }
+
+    /// Parses the text of a `sequences.csv`; `path` names it in errors.
+    ///
+    /// # Errors
+    /// [`PublishedError::Header`] when a needed column is missing;
+    /// [`PublishedError::Row`] for a short row or a frame number that is not
+    /// a positive integer, or an end before the start;
+    /// [`PublishedError::Duplicate`] for a name given twice;
+    /// [`PublishedError::Empty`] for a file with no rows.
+    pub fn parse(text: &str, path: &Path) -> Result<Self, PublishedError> {
+        const NEEDED: [&str; 3] = ["name", "start_frame", "end_frame"];
+        let mut lines = lines(text);
+        let header: Vec<&str> = lines
+            .next()
+            .map(|(_, l)| l.split(',').map(str::trim).collect())
+            .unwrap_or_default();
+        let column = |name: &str| header.iter().position(|h| *h == name);
+        let (Some(name_col), Some(start_col), Some(end_col)) =
+            (column(NEEDED[0]), column(NEEDED[1]), column(NEEDED[2]))
+        else {
+            return Err(PublishedError::Header {
+                path: path.to_path_buf(),
+                expected: format!("columns {}", NEEDED.join(", ")),
+                found: header.join(","),
+            });
+        };
+        let mut ranges: Vec<OtbFrameRange> = Vec::new();
+        let mut first_line: HashMap<String, usize> = HashMap::new();
+        for (line, row) in lines {
+            let bad = |message: String| PublishedError::Row {
+                path: path.to_path_buf(),
+                line,
+                message,
+            };
+            let fields: Vec<&str> = row.split(',').map(str::trim).collect();
+            if fields.len() != header.len() {
+                return Err(bad(format!(
+                    "{} fields, the header has {}",
+                    fields.len(),
+                    header.len()
+                )));
+            }
+            let frame = |col: usize| match fields[col].parse::<usize>() {
+                Ok(v) if v >= 1 => Ok(v),
+                _ => Err(bad(format!(
+                    "{} `{}` is not a frame number (1, 2, ...)",
+                    header[col], fields[col]
+                ))),
+            };
+            let name = fields[name_col];
+            let (start_frame, end_frame) = (frame(start_col)?, frame(end_col)?);
+            if name.is_empty() {
+                return Err(bad("empty sequence name".into()));
+            }
+            if end_frame < start_frame {
+                return Err(bad(format!(
+                    "end_frame {end_frame} before start_frame {start_frame}"
+                )));
+            }
+            if let Some(&first) = first_line.get(&sequence_key(name)) {
+                return Err(PublishedError::Duplicate {
+                    path: path.to_path_buf(),
+                    line,
+                    first,
+                    what: format!("sequence {name}"),
+                });
+            }
+            first_line.insert(sequence_key(name), line);
+            ranges.push(OtbFrameRange {
+                name: name.to_string(),
+                start_frame,
+                end_frame,
+            });
+        }
+        if ranges.is_empty() {
+            return Err(PublishedError::Empty {
+                path: path.to_path_buf(),
+            });
+        }
+        Ok(Self { ranges })
+    }
+
+    /// The range of `sequence` ([`sequence_key`]).
+    pub fn get(&self, sequence: &str) -> Option<&OtbFrameRange> {
+        let key = sequence_key(sequence);
+        self.ranges.iter().find(|r| sequence_key(&r.name) == key)
+    }
+
+    /// Every range, in the order of the file.
+    pub fn ranges(&self) -> &[OtbFrameRange] {
+        &self.ranges
+    }
+
+    /// Whether our copy of `sequence`, with `frames` frames, covers the
+    /// benchmark's frames: same name and as many frames as the benchmark's
+    /// range (our copies start at the range's first frame; a copy with
+    /// another count is another cut of the video, such as the MIL tracker's
+    /// 462-frame David beside OTB's frames 300-770).
+    pub fn same_frames(&self, sequence: &str, frames: usize) -> bool {
+        self.get(sequence).is_some_and(|r| r.len() == frames)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const HEADER: &str =
+        "tracker,sequence,success_rate_iou_0.5,mean_overlap_of_frames_with_overlap\n";
+
+    fn parse(body: &str) -> Result<PublishedOpe, PublishedError> {
+        PublishedOpe::parse(&format!("{HEADER}{body}"), Path::new("p.csv"))
+    }
+
+    fn message(r: Result<impl std::fmt::Debug, PublishedError>) -> String {
+        r.unwrap_err().to_string()
+    }
+
+    #[test]
+    fn reads_rows_in_order_with_case_free_sequences() {
+        let p = PublishedOpe::parse(
+            &format!(
+                "\u{feff}{}MIL,BasketBall,0.2,0.3\r\nIVT,Crossing,0.2417,0.2966\r\n\r\nMIL,Crossing,1,0.9\nMIL,Jogging-1,0,0\n",
+                HEADER.replace('\n', "\r\n")
+            ),
+            Path::new("p.csv"),
+        )
+        .unwrap();
+        assert_eq!(p.trackers(), ["MIL", "IVT"]);
+        assert_eq!(p.sequences(), ["BasketBall", "Crossing", "Jogging-1"]);
+        assert!(p.has_sequence("basketball"));
+        assert!(p.has_sequence("Jogging_1"));
+        assert!(!p.has_sequence("Jogging_2"));
+        assert_eq!(
+            p.score("MIL", "Basketball"),
+            Some(PublishedScore {
+                success_rate_50: 0.2,
+                mean_overlap_of_frames_with_overlap: 0.3
+            })
+        );
+        assert_eq!(p.score("IVT", "BasketBall"), None);
+        assert_eq!(
+            p.mean_success_rate("MIL", &["Crossing", "basketball"]),
+            Some(0.6)
+        );
+        assert_eq!(
+            p.mean_success_rate("IVT", &["Crossing", "Basketball"]),
+            None
+        );
+        assert_eq!(p.mean_success_rate("MIL", &[]), None);
+    }
+
+    #[test]
+    fn bad_files_name_the_file_and_line() {
+        let header = message(PublishedOpe::parse(
+            "tracker,sequence,auc,mean_iou\nA,B,0.1,0.2\n",
+            Path::new("p.csv"),
+        ));
+        assert!(
+            header.starts_with("p.csv:1: expected the header"),
+            "{header}"
+        );
+        assert!(
+            message(PublishedOpe::parse("", Path::new("p.csv"))).contains("found ``"),
+            "empty file"
+        );
+        assert_eq!(message(parse("")), "p.csv: no rows after the header");
+        assert_eq!(
+            message(parse("A,B,0.1,0.2\nA,B,0.1\n")),
+            format!(
+                "p.csv:3: 3 fields, expected 4 ({})",
+                PUBLISHED_OPE_HEADER.join(",")
+            )
+        );
+        assert_eq!(
+            message(parse("A,B,0.1,0.2\n,B,0.1,0.2\n")),
+            "p.csv:3: empty tracker or sequence name"
+        );
+        assert_eq!(
+            message(parse("A,B,1.5,0.2\n")),
+            "p.csv:2: success_rate_iou_0.5 `1.5` is not a number in [0, 1]"
+        );
+        assert_eq!(
+            message(parse("A,B,0.5,NaN\n")),
+            "p.csv:2: mean_overlap_of_frames_with_overlap `NaN` is not a number in [0, 1]"
+        );
+        assert_eq!(
+            message(parse("A,B,0.5,\n")),
+            "p.csv:2: mean_overlap_of_frames_with_overlap `` is not a number in [0, 1]"
+        );
+        assert_eq!(
+            message(parse("A,Bolt,0.5,0.5\nB,Bolt,0.5,0.5\nA,bolt,0.1,0.1\n")),
+            "p.csv:4: A on bolt repeats line 2"
+        );
+        let missing = PublishedOpe::read(Path::new("/nonexistent/published_ope.csv"));
+        assert!(
+            message(missing).starts_with("cannot read /nonexistent/published_ope.csv: "),
+            "read error"
+        );
+    }
+
+    #[test]
+    fn frame_ranges_and_same_frames() {
+        let text = "name,img_dir,start_frame,end_frame\n\
+                    Crossing,Crossing/img,1,120\n\
+                    David,David/img,300,770\n";
+        let r = OtbFrameRanges::parse(text, Path::new("s.csv")).unwrap();
+        let david = r.get("david").unwrap();
+        assert_eq!(
+            (david.start_frame, david.end_frame, david.len()),
+            (300, 770, 471)
+        );
+        assert!(!david.is_empty());
+        assert!(r.same_frames("Crossing", 120));
+        assert!(!r.same_frames("Crossing", 119));
+        assert!(!r.same_frames("David", 462));
+        assert!(!r.same_frames("Couple", 140));
+        let err = |body: &str| {
+            message(OtbFrameRanges::parse(
+                &format!("name,img_dir,start_frame,end_frame\n{body}"),
+                Path::new("s.csv"),
+            ))
+        };
+        assert_eq!(
+            err("David,David/img,300,x\n"),
+            "s.csv:2: end_frame `x` is not a frame number (1, 2, ...)"
+        );
+        assert_eq!(
+            err("David,David/img,300,200\n"),
+            "s.csv:2: end_frame 200 before start_frame 300"
+        );
+        assert_eq!(
+            err("David,300,770\n"),
+            "s.csv:2: 3 fields, the header has 4"
+        );
+        assert_eq!(
+            err("David,a,1,2\ndavid,b,1,2\n"),
+            "s.csv:3: sequence david repeats line 2"
+        );
+        assert_eq!(
+            message(OtbFrameRanges::parse(
+                "name,first,last\nA,1,2\n",
+                Path::new("s.csv")
+            )),
+            "s.csv:1: expected the header `columns name, start_frame, end_frame`, found `name,first,last`"
+        );
+    }
+}
