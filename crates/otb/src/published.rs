@@ -108,6 +108,46 @@ pub enum PublishedError {
     },
 }
 
+/// The OTB data folder's two tables, read together: the published results
+/// and the frame ranges they cover.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Published {
+    /// The folder read.
+    pub dir: PathBuf,
+    /// `published_ope.csv`.
+    pub results: PublishedOpe,
+    /// `sequences.csv`.
+    pub ranges: OtbFrameRanges,
+}
+
+impl Published {
+    /// Reads [`PUBLISHED_OPE_FILE`] and [`OTB_SEQUENCES_FILE`] in `dir`.
+    ///
+    /// # Errors
+    /// [`PublishedError`] naming the file (and the line) that cannot be
+    /// read; [`Published::is_missing`] says whether it is simply absent.
+    pub fn read(dir: &Path) -> Result<Self, PublishedError> {
+        Ok(Self {
+            dir: dir.to_path_buf(),
+            results: PublishedOpe::read(&dir.join(PUBLISHED_OPE_FILE))?,
+            ranges: OtbFrameRanges::read(&dir.join(OTB_SEQUENCES_FILE))?,
+        })
+    }
+
+    /// Whether `error` says that a file is not there (rather than
+    /// unreadable or malformed).
+    pub fn is_missing(error: &PublishedError) -> bool {
+        matches!(error, PublishedError::Read { source, .. }
+            if source.kind() == std::io::ErrorKind::NotFound)
+    }
+
+    /// Whether the published numbers of `sequence` are for the frames of
+    /// our copy, which has `frames` frames ([`OtbFrameRanges::same_frames`]).
+    pub fn same_frames(&self, sequence: &str, frames: usize) -> bool {
+        self.results.has_sequence(sequence) && self.ranges.same_frames(sequence, frames)
+    }
+}
+
 /// One published tracker on one sequence.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PublishedScore {

@@ -20,6 +20,17 @@
 //! `boxes/<tracker>/<sequence>.partial.txt`, renamed to `<sequence>.txt`
 //! when the cell finishes. The files of the previous run (`results.csv`,
 //! the plots, box files) are only ever replaced whole, by renaming.
+//!
+//! Given the published OTB results ([`SuiteOptions::published`], read from
+//! `../shared/data/otb`), the report also sets our trackers beside the 34
+//! published ones on the sequences both ran ([`SuiteReport::beside_published`]:
+//! success rate at IoU 0.5, with our AUC and precision at 20 px), says
+//! which published numbers are for the frames of our copies
+//! ([`SuiteReport::published_notes`]), and the success plots draw the
+//! published success rates at IoU 0.5 as reference marks.
+//!
+//! [`run_suite_with`] reports what it is doing ([`SuiteEvent`]: the cell
+//! running, each frame tracked) so that a caller can draw a progress bar.
 
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
@@ -27,8 +38,11 @@ use std::path::{Path, PathBuf};
 use bayestrack_image::Image;
 use bayestrack_trackers::{TrackerError, TrackerInfo};
 
-use crate::metrics::{OtbScore, SUCCESS_THRESHOLDS, precision_at, score_otb};
-use crate::plot::{Series, line_chart};
+use crate::metrics::{
+    OtbScore, SUCCESS_RATE_THRESHOLD, SUCCESS_THRESHOLDS, precision_at, score_otb,
+};
+use crate::plot::{Marks, Series, line_chart, line_chart_with_marks};
+use crate::published::Published;
 use crate::sequence::{OtbError, Sequence, list_sequences};
 use crate::table::Table;
 use crate::track::{BoxFile, OnBadFrame, TrackError, track_frames};
@@ -63,8 +77,55 @@ pub struct SuiteOptions {
     pub seed: u64,
     /// Output folder.
     pub out: PathBuf,
-    /// Print one line per tracker and sequence on stderr.
+    /// Print one line per tracker and sequence on stderr ([`run_suite`];
+    /// [`run_suite_with`] leaves the printing to its caller).
     pub progress: bool,
+    /// The published OTB results to set ours beside (`None`: ours alone).
+    pub published: Option<Published>,
+}
+
+/// What a suite run is doing, for a progress display ([`run_suite_with`]).
+/// Work is counted in tracked frames: every tracker on every frame of
+/// every sequence.
+#[derive(Debug, Clone, Copy)]
+#[non_exhaustive]
+pub enum SuiteEvent<'a> {
+    /// Before anything runs: the frames to track in all.
+    Start {
+        /// Number of sequences.
+        sequences: usize,
+        /// Number of trackers.
+        trackers: usize,
+        /// Frames x trackers, summed over sequences.
+        total: u64,
+    },
+    /// A sequence's frames are being decoded.
+    Decoding {
+        /// Sequence name.
+        sequence: &'a str,
+    },
+    /// A tracker starts on a sequence.
+    CellStarted {
+        /// Sequence name.
+        sequence: &'a str,
+        /// Tracker name.
+        tracker: &'static str,
+        /// Frames of the sequence.
+        frames: usize,
+    },
+    /// One more frame tracked.
+    Frame {
+        /// Frames tracked so far (of every cell).
+        done: u64,
+    },
+    /// A cell has finished or failed; the frames it did not track count as
+    /// done.
+    CellFinished {
+        /// The cell.
+        cell: &'a Cell,
+        /// Frames done so far.
+        done: u64,
+    },
 }
 
 /// One tracker on one sequence.
@@ -159,18 +220,41 @@ pub struct CellScore {
     pub lost_frames: usize,
 }
 
+impl Cell {
+    /// One line for a log: the sequence, the tracker and its success rate
+    /// at IoU 0.5, AUC, P@20 and fps, or why it has none.
+    pub fn summary(&self) -> String {
+        let (seq, tracker) = (&self.sequence, self.tracker);
+        match &self.outcome {
+            Ok(c) => format!(
+                "{seq:<12} {tracker:<20} SR@0.5 {:.3}  AUC {:.3}  P@20 {:.3}  {:>8.0} fps",
+                c.score.success_rate_50, c.score.auc, c.score.precision_20, c.fps
+            ),
+            Err(e @ CellError::Failed(_)) => format!("{seq:<12} {tracker:<20} failed: {e}"),
+            Err(e) => format!("{seq:<12} {tracker:<20} {e}"),
+        }
+    }
+}
+
 /// Everything a suite run measured.
 #[derive(Debug, Clone)]
 pub struct SuiteReport {
     /// Sequence names, in order.
     pub sequences: Vec<String>,
+    /// Frames of each sequence, in the order of `sequences` (0 for a
+    /// sequence that could not be opened).
+    pub frames: Vec<usize>,
+    /// The published results the report sets ours beside, if given.
+    pub published: Option<Published>,
     /// Tracker names, in order.
     pub trackers: Vec<&'static str>,
     /// One cell per (sequence, tracker), sequence-major.
     pub cells: Vec<Cell>,
 }
 
-/// Runs every tracker of `options` on every sequence under `root`.
+/// Runs every tracker of `options` on every sequence under `root`,
+/// printing [`Cell::summary`] on stderr as cells finish when
+/// `options.progress` is set.
 ///
 /// # Errors
 /// [`SuiteError::Write`] when an output file cannot be written;
@@ -178,6 +262,23 @@ pub struct SuiteReport {
 /// be listed. Failures of a tracker or of a sequence's frames are not
 /// errors of the run: they fill the affected cells.
 pub fn run_suite(root: &Path, options: &SuiteOptions) -> Result<SuiteReport, SuiteError> {
+    run_suite_with(root, options, |event| {
+        if let (true, SuiteEvent::CellFinished { cell, .. }) = (options.progress, event) {
+            eprintln!("{}", cell.summary());
+        }
+    })
+}
+
+/// Runs the suite as [`run_suite`] does, handing `observe` every
+/// [`SuiteEvent`] (and printing nothing itself).
+///
+/// # Errors
+/// As [`run_suite`].
+pub fn run_suite_with(
+    root: &Path,
+    options: &SuiteOptions,
+    mut observe: impl FnMut(SuiteEvent<'_>),
+) -> Result<SuiteReport, SuiteError> {
     let bad_root = |reason: String| SuiteError::NoSequences {
         root: root.to_path_buf(),
         reason,
@@ -190,50 +291,67 @@ pub fn run_suite(root: &Path, options: &SuiteOptions) -> Result<SuiteReport, Sui
     }
     let mut report = SuiteReport {
         sequences: Vec::new(),
+        frames: Vec::new(),
+        published: options.published.clone(),
         trackers: options.trackers.iter().map(|t| t.name).collect(),
         cells: Vec::new(),
     };
     let out = &options.out;
     mark_partial(out, "the OTB one-pass suite (`cargo xtask otb`)")?;
     let cells = PartialCsv::create(&out.join("results.csv"), CSV_HEADER.join(",").as_str())?;
-    for dir in &dirs {
+    // listing the frames is cheap: it gives the total work for the progress
+    // display before any frame is decoded
+    let opened: Vec<Result<Sequence, OtbError>> = dirs.iter().map(Sequence::open).collect();
+    let lengths: Vec<usize> = opened
+        .iter()
+        .map(|s| s.as_ref().map_or(0, Sequence::len))
+        .collect();
+    let trackers = options.trackers.len() as u64;
+    observe(SuiteEvent::Start {
+        sequences: dirs.len(),
+        trackers: options.trackers.len(),
+        total: lengths.iter().map(|&n| n as u64).sum::<u64>() * trackers,
+    });
+    let mut done = 0u64;
+    for ((dir, opened), len) in dirs.iter().zip(opened).zip(lengths) {
         let name = dir
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default();
-        let loaded = Sequence::open(dir).and_then(|seq| {
+        observe(SuiteEvent::Decoding { sequence: &name });
+        let loaded = opened.and_then(|seq| {
             let frames = (0..seq.len())
                 .map(|i| seq.frame(i))
                 .collect::<Result<Vec<_>, OtbError>>()?;
             Ok((seq, frames))
         });
         for info in &options.trackers {
+            observe(SuiteEvent::CellStarted {
+                sequence: &name,
+                tracker: info.name,
+                frames: len,
+            });
             let outcome = match &loaded {
-                Ok((seq, frames)) => run_cell(info, seq, frames, options),
+                Ok((seq, frames)) => run_cell(info, seq, frames, options, &mut |k| {
+                    observe(SuiteEvent::Frame {
+                        done: done + k as u64,
+                    })
+                }),
                 Err(e) => Err(CellError::Failed(e.to_string())),
             };
-            if options.progress {
-                match &outcome {
-                    Ok(c) => eprintln!(
-                        "{name:<12} {:<16} AUC {:.3}  P@20 {:.3}  {:>8.0} fps",
-                        info.name, c.score.auc, c.score.precision_20, c.fps
-                    ),
-                    Err(e @ CellError::Failed(_)) => {
-                        eprintln!("{name:<12} {:<16} failed: {e}", info.name)
-                    }
-                    Err(e) => eprintln!("{name:<12} {:<16} {e}", info.name),
-                }
-            }
+            done += len as u64;
             let cell = Cell {
                 sequence: name.clone(),
                 tracker: info.name,
                 outcome,
             };
+            observe(SuiteEvent::CellFinished { cell: &cell, done });
             let row = csv_table(std::slice::from_ref(&cell)).to_csv();
             cells.append(row.split_once('\n').map_or("", |(_, rows)| rows))?;
             report.cells.push(cell);
         }
         report.sequences.push(name);
+        report.frames.push(len);
     }
     cells.finish(&report.csv())?;
     report.write_summary(out)?;
@@ -242,12 +360,14 @@ pub fn run_suite(root: &Path, options: &SuiteOptions) -> Result<SuiteReport, Sui
 }
 
 /// The columns of `results.csv`.
-const CSV_HEADER: [&str; 10] = [
+const CSV_HEADER: [&str; 12] = [
     "sequence",
     "tracker",
+    "success_rate_50",
     "auc",
     "precision_20",
     "mean_iou",
+    "mean_overlap_of_frames_with_overlap",
     "mean_center_error",
     "fps",
     "frames_scored",
@@ -263,9 +383,13 @@ fn csv_table(cells: &[Cell]) -> Table {
         match &c.outcome {
             Ok(s) => {
                 row.extend([
+                    format!("{:.4}", s.score.success_rate_50),
                     format!("{:.4}", s.score.auc),
                     format!("{:.4}", s.score.precision_20),
                     format!("{:.4}", s.score.mean_overlap),
+                    s.score
+                        .mean_overlap_of_frames_with_overlap
+                        .map_or_else(String::new, |o| format!("{o:.4}")),
                     format!("{:.2}", s.score.mean_center_error),
                     format!("{:.1}", s.fps),
                     s.score.frames_scored.to_string(),
@@ -274,7 +398,7 @@ fn csv_table(cells: &[Cell]) -> Table {
                 ]);
             }
             Err(e) => {
-                row.extend(std::iter::repeat_n(String::new(), 7));
+                row.extend(std::iter::repeat_n(String::new(), 9));
                 row.push(e.to_string());
             }
         }
@@ -283,11 +407,14 @@ fn csv_table(cells: &[Cell]) -> Table {
     t
 }
 
+/// Runs one tracker on one decoded sequence; `on_frame(k)` after the
+/// `k`-th frame's box (1-based) is written.
 fn run_cell(
     info: &TrackerInfo,
     seq: &Sequence,
     frames: &[Image<u8>],
     options: &SuiteOptions,
+    on_frame: &mut dyn FnMut(usize),
 ) -> Result<CellScore, CellError> {
     let init = seq
         .initial_box()
@@ -310,7 +437,11 @@ fn run_cell(
         |i| seq.frames[i].clone(),
         init,
         OnBadFrame::Stop,
-        |f| file.write(&f.bbox),
+        |f| {
+            file.write(&f.bbox)?;
+            on_frame(f.index + 1);
+            Ok(())
+        },
     )
     .map_err(|e| {
         let e = CellError::from_track(e);
@@ -413,6 +544,208 @@ impl SuiteReport {
         csv_table(&self.cells).to_csv()
     }
 
+    /// The sequences we ran that have published results, with whether the
+    /// published numbers are for the frames of our copy.
+    fn compared(&self) -> Vec<(&str, bool)> {
+        let Some(published) = &self.published else {
+            return Vec::new();
+        };
+        self.sequences
+            .iter()
+            .zip(&self.frames)
+            .filter(|(s, _)| published.results.has_sequence(s))
+            .map(|(s, &n)| (s.as_str(), published.same_frames(s, n)))
+            .collect()
+    }
+
+    /// The sequences with published results for the frames of our copies.
+    pub fn same_frame_sequences(&self) -> Vec<&str> {
+        self.compared()
+            .into_iter()
+            .filter_map(|(s, same)| same.then_some(s))
+            .collect()
+    }
+
+    /// Our trackers beside the published ones: one row per tracker, ours
+    /// (`SR@0.5 / AUC / P@20`, marked `(ours)`) and published (`SR@0.5`),
+    /// one column per sequence both ran (headed `(other frames)` where the
+    /// published numbers are not for our copy's frames), then the mean over
+    /// the sequences with the same frames, by which the rows are sorted
+    /// (ours first on ties; rows without that mean last). `None` without
+    /// published results or when no sequence we ran has any.
+    pub fn beside_published(&self) -> Option<Table> {
+        let published = self.published.as_ref()?;
+        let compared = self.compared();
+        if compared.is_empty() {
+            return None;
+        }
+        let same = self.same_frame_sequences();
+        let mut header: Vec<String> = vec!["tracker".into()];
+        for &(s, same) in &compared {
+            header.push(if same {
+                s.to_string()
+            } else {
+                format!("{s} (other frames)")
+            });
+        }
+        if !same.is_empty() {
+            header.push(format!("mean over {}", same.join(", ")));
+        }
+        let mut rows: Vec<(Option<f64>, Vec<String>)> = Vec::new();
+        for &tracker in &self.trackers {
+            let mut row = vec![format!("{tracker} (ours)")];
+            for &(s, _) in &compared {
+                row.push(match self.cell(s, tracker).map(|c| &c.outcome) {
+                    Some(Ok(c)) => format!(
+                        "{:.3} / {:.3} / {:.3}",
+                        c.score.success_rate_50, c.score.auc, c.score.precision_20
+                    ),
+                    Some(Err(e)) => e.label(),
+                    None => "failed".into(),
+                });
+            }
+            let done: Vec<&OtbScore> = same
+                .iter()
+                .filter_map(|s| self.cell(s, tracker)?.outcome.as_ref().ok())
+                .map(|c| &c.score)
+                .collect();
+            let mut key = None;
+            if !same.is_empty() {
+                row.push(if done.is_empty() {
+                    "-".into()
+                } else {
+                    let n = done.len() as f64;
+                    let mean = |f: fn(&OtbScore) -> f64| done.iter().map(|s| f(s)).sum::<f64>() / n;
+                    let sr = mean(|s| s.success_rate_50);
+                    let text = format!(
+                        "{sr:.3} / {:.3} / {:.3}",
+                        mean(|s| s.auc),
+                        mean(|s| s.precision_20)
+                    );
+                    if done.len() == same.len() {
+                        key = Some(sr);
+                        text
+                    } else {
+                        format!("{text} ({} of {} seq.)", done.len(), same.len())
+                    }
+                });
+            }
+            rows.push((key, row));
+        }
+        for tracker in published.results.trackers() {
+            let mut row = vec![tracker.clone()];
+            for &(s, _) in &compared {
+                row.push(
+                    published
+                        .results
+                        .score(tracker, s)
+                        .map_or_else(|| "-".into(), |p| format!("{:.3}", p.success_rate_50)),
+                );
+            }
+            let key = published.results.mean_success_rate(tracker, &same);
+            if !same.is_empty() {
+                row.push(key.map_or_else(|| "-".into(), |m| format!("{m:.3}")));
+            }
+            rows.push((key, row));
+        }
+        // stable: ours (pushed first) stay first on ties
+        rows.sort_by(|a, b| match (a.0, b.0) {
+            (Some(x), Some(y)) => y.total_cmp(&x),
+            (Some(_), None) => std::cmp::Ordering::Less,
+            (None, Some(_)) => std::cmp::Ordering::Greater,
+            (None, None) => std::cmp::Ordering::Equal,
+        });
+        let header: Vec<&str> = header.iter().map(String::as_str).collect();
+        let mut t = Table::new(
+            format!(
+                "Beside the {} published OTB trackers: success rate at IoU 0.5 \
+                 (ours: SR@0.5 / AUC / P@20)",
+                published.results.trackers().len()
+            ),
+            &header,
+        );
+        for (_, row) in rows {
+            t.push(row);
+        }
+        Some(t)
+    }
+
+    /// What the comparison with the published results rests on, one line
+    /// per sequence we ran: the frames of our copy against the benchmark's
+    /// range, or that the sequence has no published results; or why there
+    /// is no comparison at all.
+    pub fn published_notes(&self) -> Vec<String> {
+        let Some(published) = &self.published else {
+            return vec!["no published results given: ours alone".into()];
+        };
+        let mut notes = vec![format!(
+            "published: {} trackers x {} sequences from {} (the benchmark's \
+             one-pass results; its success rate counts IoU >= 0.5, ours IoU > 0.5: \
+             they differ only on frames at exactly 0.5)",
+            published.results.trackers().len(),
+            published.results.sequences().len(),
+            published.dir.display()
+        )];
+        for (s, &n) in self.sequences.iter().zip(&self.frames) {
+            let range = published.ranges.get(s);
+            notes.push(match (published.results.has_sequence(s), range) {
+                (false, _) => format!("{s}: no published results"),
+                (true, None) => format!("{s}: no frame range in the OTB table: not compared"),
+                (true, Some(r)) if r.len() == n => format!(
+                    "{s}: ours {n} frames, the benchmark's frames {}-{}: the same frames",
+                    r.start_frame, r.end_frame
+                ),
+                (true, Some(r)) => format!(
+                    "{s}: ours {n} frames, the benchmark's frames {}-{} ({}): other \
+                     frames, the published numbers are not for our copy (shown, not in the mean)",
+                    r.start_frame,
+                    r.end_frame,
+                    r.len()
+                ),
+            });
+        }
+        notes
+    }
+
+    /// Reference marks of the published success rates at IoU 0.5 on
+    /// `sequences` (each tracker's mean over them); the best three are
+    /// labelled. Empty without published results or sequences.
+    fn published_marks(&self, sequences: &[&str]) -> Marks {
+        let Some(published) = &self.published else {
+            return Marks::default();
+        };
+        if sequences.is_empty() {
+            return Marks::default();
+        }
+        let mut rates: Vec<(f64, &str)> = published
+            .results
+            .trackers()
+            .iter()
+            .filter_map(|t| {
+                Some((
+                    published.results.mean_success_rate(t, sequences)?,
+                    t.as_str(),
+                ))
+            })
+            .collect();
+        rates.sort_by(|a, b| b.0.total_cmp(&a.0));
+        Marks {
+            name: format!(
+                "{} published trackers, success rate at IoU 0.5 ({})",
+                rates.len(),
+                sequences.join(", ")
+            ),
+            points: rates
+                .iter()
+                .enumerate()
+                .map(|(i, &(r, t))| {
+                    let label = (i < 3).then(|| format!("{t} {r:.3}"));
+                    (SUCCESS_RATE_THRESHOLD, r, label)
+                })
+                .collect(),
+        }
+    }
+
     /// Success and precision curves of `tracker` over the cells `pick`
     /// selects, averaged; legend labels carry the AUC and P@20.
     fn curves(&self, tracker: &str, pick: impl Fn(&Cell) -> bool) -> Option<(Series, Series)> {
@@ -464,18 +797,20 @@ impl SuiteReport {
         out: &Path,
         label: &str,
         pick: impl Fn(&Cell) -> bool,
+        marks: &Marks,
     ) -> Result<(), WriteError> {
         let (success, precision): (Vec<Series>, Vec<Series>) = self
             .trackers
             .iter()
             .filter_map(|t| self.curves(t, &pick))
             .unzip();
-        line_chart(
+        line_chart_with_marks(
             &out.join(format!("success_{label}.svg")),
             &format!("Success plot, OPE, {label} [AUC]"),
             "overlap threshold",
             "success rate",
             &success,
+            marks,
         )?;
         line_chart(
             &out.join(format!("precision_{label}.svg")),
@@ -496,13 +831,37 @@ impl SuiteReport {
         self.write_summary(out)
     }
 
-    /// Writes `results.md` and the plots under `out`.
-    fn write_summary(&self, out: &Path) -> Result<(), WriteError> {
-        write_text(&out.join("results.md"), &self.table().to_markdown())?;
-        for seq in &self.sequences {
-            self.plots(out, seq, |c| &c.sequence == seq)?;
+    /// `results.md`: our table, then ours beside the published trackers
+    /// and the notes on the frames compared.
+    pub fn markdown(&self) -> String {
+        let mut md = self.table().to_markdown();
+        if let Some(t) = self.beside_published() {
+            md.push('\n');
+            md.push_str(&t.to_markdown());
         }
-        self.plots(out, "overall", |_| true)
+        md.push('\n');
+        for note in self.published_notes() {
+            md.push_str(&format!("- {note}\n"));
+        }
+        md
+    }
+
+    /// Writes `results.md` and the plots under `out`; the success plots of
+    /// the sequences with the same frames as the published results, and
+    /// the overall one, carry the published success rates at IoU 0.5 as
+    /// marks (the overall marks: the mean over those sequences).
+    fn write_summary(&self, out: &Path) -> Result<(), WriteError> {
+        write_text(&out.join("results.md"), &self.markdown())?;
+        let same = self.same_frame_sequences();
+        for seq in &self.sequences {
+            let marks = if same.contains(&seq.as_str()) {
+                self.published_marks(&[seq])
+            } else {
+                Marks::default()
+            };
+            self.plots(out, seq, |c| &c.sequence == seq, &marks)?;
+        }
+        self.plots(out, "overall", |_| true, &self.published_marks(&same))
     }
 }
 
@@ -536,6 +895,128 @@ mod tests {
         assert!(CellError::from_track(TrackError::NoFrames).is_failure());
     }
 
+    /// A score whose success rate at 0.5 is `hits / frames` (IoU 1 on the
+    /// hits, 0 elsewhere).
+    fn score(hits: usize, frames: usize) -> CellScore {
+        use bayestrack_image::BBox;
+        let t = BBox::new(1.0, 1.0, 10.0, 10.0);
+        let far = BBox::new(100.0, 100.0, 10.0, 10.0);
+        let pred: Vec<BBox> = (0..frames)
+            .map(|i| if i < hits { t } else { far })
+            .collect();
+        CellScore {
+            score: score_otb(&pred, &vec![Some(t); frames]).unwrap(),
+            fps: 100.0,
+            lost_frames: 0,
+        }
+    }
+
+    fn published() -> Published {
+        use crate::published::{OtbFrameRanges, PublishedOpe};
+        let results = PublishedOpe::parse(
+            "tracker,sequence,success_rate_iou_0.5,mean_overlap_of_frames_with_overlap\n\
+             IVT,Crossing,0.25,0.3\nIVT,David,0.8,0.6\nIVT,Couple,0.1,0.1\n\
+             MIL,Crossing,0.95,0.7\nMIL,David,0.2,0.4\nMIL,Couple,0.6,0.5\n",
+            Path::new("published_ope.csv"),
+        )
+        .unwrap();
+        let ranges = OtbFrameRanges::parse(
+            "name,start_frame,end_frame\nCrossing,1,4\nCouple,1,140\nDavid,300,770\n",
+            Path::new("sequences.csv"),
+        )
+        .unwrap();
+        Published {
+            dir: PathBuf::from("otb"),
+            results,
+            ranges,
+        }
+    }
+
+    #[test]
+    fn ours_beside_the_published_on_the_same_frames() {
+        let cell = |sequence: &str, tracker, outcome| Cell {
+            sequence: sequence.into(),
+            tracker,
+            outcome,
+        };
+        let mut report = SuiteReport {
+            sequences: vec!["Crossing".into(), "David".into(), "Own".into()],
+            frames: vec![4, 5, 4],
+            published: Some(published()),
+            trackers: vec!["a", "b"],
+            cells: vec![
+                cell("Crossing", "a", Ok(score(3, 4))),
+                cell("Crossing", "b", Err(CellError::Failed("boom".into()))),
+                cell("David", "a", Ok(score(5, 5))),
+                cell("David", "b", Ok(score(1, 5))),
+                cell("Own", "a", Ok(score(1, 4))),
+                cell("Own", "b", Ok(score(1, 4))),
+            ],
+        };
+        assert_eq!(report.same_frame_sequences(), ["Crossing"]);
+        let t = report.beside_published().unwrap();
+        assert_eq!(
+            t.header,
+            [
+                "tracker",
+                "Crossing",
+                "David (other frames)",
+                "mean over Crossing"
+            ]
+        );
+        let rows: Vec<String> = t.rows.iter().map(|r| r.join(" | ")).collect();
+        // sorted by the mean over the same-frame sequences (Crossing alone);
+        // a: SR 3/4; AUC (20 * 3/4 + 0) / 21 = 0.714; P@20 3/4
+        assert_eq!(
+            rows,
+            [
+                "MIL | 0.950 | 0.200 | 0.950",
+                "a (ours) | 0.750 / 0.714 / 0.750 | 1.000 / 0.952 / 1.000 | 0.750 / 0.714 / 0.750",
+                "IVT | 0.250 | 0.800 | 0.250",
+                "b (ours) | failed | 0.200 / 0.190 / 0.200 | -",
+            ]
+        );
+        assert!(t.title.starts_with("Beside the 2 published OTB trackers"));
+        let notes = report.published_notes();
+        assert!(
+            notes[1].starts_with("Crossing: ours 4 frames, the benchmark's frames 1-4: the same"),
+            "{notes:?}"
+        );
+        assert!(
+            notes[2].starts_with(
+                "David: ours 5 frames, the benchmark's frames 300-770 (471): other frames"
+            ),
+            "{notes:?}"
+        );
+        assert_eq!(notes[3], "Own: no published results");
+        let marks = report.published_marks(&["Crossing"]);
+        let points: Vec<(f64, f64, Option<&str>)> = marks
+            .points
+            .iter()
+            .map(|(x, y, l)| (*x, *y, l.as_deref()))
+            .collect();
+        assert_eq!(
+            points,
+            [
+                (0.5, 0.95, Some("MIL 0.950")),
+                (0.5, 0.25, Some("IVT 0.250"))
+            ]
+        );
+        // without the published results: ours alone, said so
+        report.published = None;
+        assert!(report.beside_published().is_none());
+        assert_eq!(
+            report.published_notes(),
+            ["no published results given: ours alone"]
+        );
+        assert!(report.published_marks(&["Crossing"]).points.is_empty());
+        assert!(
+            report
+                .markdown()
+                .contains("- no published results given: ours alone")
+        );
+    }
+
     #[test]
     fn failures_leave_out_the_cells_that_cannot_run() {
         let cell = |tracker, outcome| Cell {
@@ -545,6 +1026,8 @@ mod tests {
         };
         let report = SuiteReport {
             sequences: vec!["David".into()],
+            frames: vec![462],
+            published: None,
             trackers: vec!["a", "b"],
             cells: vec![
                 cell(

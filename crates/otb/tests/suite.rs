@@ -5,7 +5,8 @@
 
 use std::path::{Path, PathBuf};
 
-use bayestrack_otb::suite::{SuiteOptions, run_suite};
+use bayestrack_otb::published::{OtbFrameRanges, Published, PublishedOpe};
+use bayestrack_otb::suite::{SuiteEvent, SuiteOptions, run_suite, run_suite_with};
 use bayestrack_trackers::tracker_info;
 
 /// A 3-frame sequence of a bright square moving right by 1 px a frame.
@@ -57,12 +58,16 @@ fn a_finished_suite_replaces_the_previous_results_and_leaves_nothing_partial() {
         seed: 0,
         out: out.clone(),
         progress: false,
+        published: None,
     };
     let report = run_suite(&seqs, &options).unwrap();
     assert_eq!(report.cells.len(), 1);
     assert!(report.cells[0].outcome.is_ok(), "{:?}", report.cells[0]);
     let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
-    assert!(csv.starts_with("sequence,tracker,auc"), "{csv}");
+    assert!(
+        csv.starts_with("sequence,tracker,success_rate_50,auc,"),
+        "{csv}"
+    );
     assert!(csv.contains("square,mad,"), "{csv}");
     let all = files(&out);
     assert!(
@@ -74,4 +79,126 @@ fn a_finished_suite_replaces_the_previous_results_and_leaves_nothing_partial() {
     let boxes = std::fs::read_to_string(out.join("boxes/mad/square.txt")).unwrap();
     assert_eq!(boxes.lines().count(), 3);
     std::fs::remove_dir_all(&root).unwrap();
+}
+
+#[test]
+fn published_results_sit_beside_ours_in_the_table_and_the_plot() {
+    let root = std::env::temp_dir().join(format!("bayestrack-suite-pub-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&root);
+    let seqs = root.join("seqs");
+    sequence(&seqs);
+    let published = Published {
+        dir: PathBuf::from("otb"),
+        results: PublishedOpe::parse(
+            "tracker,sequence,success_rate_iou_0.5,mean_overlap_of_frames_with_overlap\n\
+             TLD,Square,0.6667,0.8\nMIL,square,0.3333,0.5\n",
+            Path::new("published_ope.csv"),
+        )
+        .unwrap(),
+        ranges: OtbFrameRanges::parse(
+            "name,start_frame,end_frame\nSquare,1,3\n",
+            Path::new("sequences.csv"),
+        )
+        .unwrap(),
+    };
+    let options = SuiteOptions {
+        trackers: vec![tracker_info("mad").unwrap()],
+        seed: 0,
+        out: root.join("out"),
+        progress: false,
+        published: Some(published),
+    };
+    let mut events = Vec::new();
+    let report = run_suite_with(&seqs, &options, |e| {
+        events.push(match e {
+            SuiteEvent::Start { total, .. } => format!("start {total}"),
+            SuiteEvent::Decoding { sequence } => format!("decoding {sequence}"),
+            SuiteEvent::CellStarted {
+                sequence, tracker, ..
+            } => format!("{tracker} on {sequence}"),
+            SuiteEvent::Frame { done } => format!("frame {done}"),
+            SuiteEvent::CellFinished { cell, done } => format!("{} {done}", cell.tracker),
+            _ => "other".into(),
+        })
+    })
+    .unwrap();
+    assert_eq!(
+        events,
+        [
+            "start 3",
+            "decoding square",
+            "mad on square",
+            "frame 1",
+            "frame 2",
+            "frame 3",
+            "mad 3"
+        ]
+    );
+    let score = &report.cells[0].outcome.as_ref().unwrap().score;
+    let md = std::fs::read_to_string(root.join("out/results.md")).unwrap();
+    let ours = format!(
+        "| mad (ours) | {sr:.3} / {:.3} / {:.3} | {sr:.3} / {:.3} / {:.3} |",
+        score.auc,
+        score.precision_20,
+        score.auc,
+        score.precision_20,
+        sr = score.success_rate_50
+    );
+    assert!(
+        md.contains("| tracker | square | mean over square |"),
+        "{md}"
+    );
+    assert!(md.contains(&ours), "{md}");
+    assert!(md.contains("| TLD | 0.667 | 0.667 |"), "{md}");
+    assert!(
+        md.contains("- square: ours 3 frames, the benchmark's frames 1-3: the same frames"),
+        "{md}"
+    );
+    for plot in ["success_square.svg", "success_overall.svg"] {
+        let svg = std::fs::read_to_string(root.join("out").join(plot)).unwrap();
+        assert!(
+            svg.contains("TLD 0.667") && svg.contains("MIL 0.333"),
+            "{plot}"
+        );
+    }
+    let precision = std::fs::read_to_string(root.join("out/precision_overall.svg")).unwrap();
+    assert!(!precision.contains("TLD"));
+    std::fs::remove_dir_all(&root).unwrap();
+}
+
+/// `../shared/data/otb` as shipped: the 34 trackers on the 100 sequences,
+/// each sequence with its frame range, and which of our three copies have
+/// the benchmark's frames.
+#[test]
+fn the_shipped_published_results_read_whole() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/otb");
+    if !dir.is_dir() {
+        eprintln!(
+            "skipped: {} is absent (the published OTB results are not part of the repository)",
+            dir.display()
+        );
+        return;
+    }
+    let p = Published::read(&dir).unwrap();
+    assert_eq!(p.results.trackers().len(), 34);
+    assert_eq!(p.results.sequences().len(), 100);
+    assert_eq!(p.ranges.ranges().len(), 100);
+    for t in p.results.trackers() {
+        for s in p.results.sequences() {
+            assert!(p.results.score(t, s).is_some(), "{t} on {s}");
+            assert!(p.ranges.get(s).is_some(), "no frame range for {s}");
+        }
+    }
+    let david = p.ranges.get("David").unwrap();
+    assert_eq!((david.start_frame, david.end_frame), (300, 770));
+    // our copies (../shared/data/sequences): Crossing and Couple are the
+    // benchmark's frames, David is the MIL tracker's 462-frame cut
+    assert!(p.same_frames("Crossing", 120));
+    assert!(p.same_frames("Couple", 140));
+    assert!(!p.same_frames("David", 462));
+    let muster = p.results.score("MUSTer", "Couple").unwrap();
+    assert_eq!(muster.success_rate_50, 0.8);
+    assert!(Published::is_missing(
+        &Published::read(&dir.join("absent")).unwrap_err()
+    ));
 }
