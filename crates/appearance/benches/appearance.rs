@@ -19,52 +19,107 @@ fn noise(w: usize, h: usize, ch: usize, seed: u32) -> Image<u8> {
     img
 }
 
-/// A smooth-ish 320x240 gray scene (sum of ramps plus noise), closer to a
-/// real frame than white noise for the early-termination search.
-fn scene(seed: u32) -> Image<u8> {
-    let n = noise(320, 240, 1, seed);
-    Image::from_fn(320, 240, |x, y| {
-        let base = (x as f32 * 0.5 + (y as f32 * 0.07).sin() * 40.0 + 60.0) as u32;
-        ((base + u32::from(n.get(x, y, 0).unwrap()) / 8) % 256) as u8
-    })
-    .unwrap()
+/// Two consecutive frames of a real sequence (`../shared/data/sequences`)
+/// and the 30x20 template cut from the first, at the target (a tracker's
+/// case: the template comes from the previous frame). Falls back to a
+/// rendered pair (the scene moved by (3, 2) pixels, fresh noise) when the
+/// data folder is absent; the label says which.
+fn template_pair(rgb: bool) -> (String, Image<u8>, Image<u8>, Image<u8>) {
+    let root =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/sequences");
+    // 0-based top-left of the template: inside the first ground-truth box.
+    let (seq, f0, f1, x, y) = if rgb {
+        ("Couple", "img/0001.jpg", "img/0002.jpg", 48, 67)
+    } else {
+        ("David", "img/img00001.png", "img/img00002.png", 143, 95)
+    };
+    let read = |f: &str| {
+        let p = root.join(seq).join(f);
+        if rgb {
+            bayestrack_image::read_frame_rgb(p)
+        } else {
+            bayestrack_image::read_frame_gray(p)
+        }
+    };
+    let (label, a, b) = match (read(f0), read(f1)) {
+        (Ok(a), Ok(b)) => (format!("{seq} frames 1->2"), a, b),
+        _ => {
+            let ch = if rgb { 3 } else { 1 };
+            let a = rendered(0, 0, ch, 1);
+            let b = rendered(3, 2, ch, 2);
+            ("rendered pair (no ../shared data)".to_string(), a, b)
+        }
+    };
+    let template = a.crop(Rect::new(x, y, 30, 20)).unwrap().to_image();
+    (label, a, b, template)
+}
+
+/// A smooth scene (sum of ramps plus noise) shifted by `(dx, dy)`, `ch`
+/// channels: closer to a real frame than white noise.
+fn rendered(dx: usize, dy: usize, ch: usize, seed: u32) -> Image<u8> {
+    let n = noise(320, 240, ch, seed);
+    let mut img = Image::new(320, 240, ch, 0u8).unwrap();
+    for y in 0..240 {
+        for x in 0..320 {
+            for c in 0..ch {
+                let (sx, sy) = (x as f32 - dx as f32, y as f32 - dy as f32);
+                let base = (sx * 0.5 + (sy * 0.07).sin() * 40.0 + 60.0 + 30.0 * c as f32) as u32;
+                let v = (base + u32::from(n.get(x, y, c).unwrap()) / 8) % 256;
+                img.set(x, y, c, v as u8);
+            }
+        }
+    }
+    img
 }
 
 fn bench_mad(c: &mut Criterion) {
-    let frame = scene(1);
-    let template = frame.crop(Rect::new(201, 117, 30, 20)).unwrap().to_image();
     let full = Rect::new(0, 0, 320, 240);
-    c.bench_function("mad_search 30x20 template over 320x240 (scene)", |b| {
-        b.iter(|| mad_search(black_box(frame.view()), template.view(), full).unwrap())
-    });
     let mut searcher = MadSearch::new();
-    c.bench_function(
-        "MadSearch (reused buffers) 30x20 over 320x240 (scene)",
-        |b| {
-            b.iter(|| {
-                searcher
-                    .search(black_box(frame.view()), template.view(), full)
-                    .unwrap()
-            })
-        },
-    );
     let mut map = Image::new(291, 221, 1, 0f32).unwrap();
-    c.bench_function("mad_map_into full 291x221 MAD surface (no pruning)", |b| {
-        b.iter(|| {
-            mad_map_into(
-                black_box(frame.view()),
-                template.view(),
-                full,
-                &mut map.view_mut(),
-            )
-            .unwrap()
-        })
-    });
+    for rgb in [false, true] {
+        let (label, first, next, template) = template_pair(rgb);
+        let kind = if rgb { "RGB" } else { "gray" };
+        c.bench_function(
+            &format!("mad_search {kind} 30x20 over 320x240, next-frame template ({label})"),
+            |b| b.iter(|| mad_search(black_box(next.view()), template.view(), full).unwrap()),
+        );
+        c.bench_function(
+            &format!("MadSearch (reused) {kind} 30x20 over 320x240, next-frame template ({label})"),
+            |b| {
+                b.iter(|| {
+                    searcher
+                        .search(black_box(next.view()), template.view(), full)
+                        .unwrap()
+                })
+            },
+        );
+        c.bench_function(
+            &format!(
+                "mad_search {kind} 30x20 over 320x240, SAME-frame template ({label}, exact match)"
+            ),
+            |b| b.iter(|| mad_search(black_box(first.view()), template.view(), full).unwrap()),
+        );
+        c.bench_function(
+            &format!("mad_map_into {kind} full 291x221 MAD surface ({label})"),
+            |b| {
+                b.iter(|| {
+                    mad_map_into(
+                        black_box(next.view()),
+                        template.view(),
+                        full,
+                        &mut map.view_mut(),
+                    )
+                    .unwrap()
+                })
+            },
+        );
+    }
     let white = noise(320, 240, 1, 3);
     let tpl_noise = white.crop(Rect::new(201, 117, 30, 20)).unwrap().to_image();
-    c.bench_function("mad_search 30x20 template over 320x240 (noise)", |b| {
-        b.iter(|| mad_search(black_box(white.view()), tpl_noise.view(), full).unwrap())
-    });
+    c.bench_function(
+        "mad_search gray 30x20 over 320x240, SAME-frame template (white noise)",
+        |b| b.iter(|| mad_search(black_box(white.view()), tpl_noise.view(), full).unwrap()),
+    );
 }
 
 fn bench_histogram(c: &mut Criterion) {

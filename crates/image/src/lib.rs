@@ -10,6 +10,7 @@ mod integral;
 mod io;
 mod morph;
 mod ops;
+mod simd;
 mod warp;
 
 pub use crate::color::{
@@ -28,6 +29,7 @@ pub use crate::io::{
 };
 pub use crate::morph::{close, dilate, erode, open};
 pub use crate::ops::{Mask, abs_diff, abs_diff_into, motion_mask, threshold, threshold_into};
+pub use crate::simd::{SadTemplate, SimdLevel, sad_u8, sad_u8_at};
 pub use crate::warp::{Affine2, Border, sample_bilinear, sample_bilinear_border, warp, warp_into};
 
 /// Patch side used by paper 002 (36x36 patches).
