@@ -21,6 +21,37 @@
 //!   a second"). The tracker is told how many camera frames passed
 //!   ([`BallOptions::rt_elapsed`]).
 //!
+//! # Evaluation budget
+//! Paper 001's trackers ran in real time: its fps column fits a frame cost
+//! of about 51 ms plus 1.25 ms per particle ([`paper_cost_model`]), so its
+//! KF and UKF, at 10.3 and 10.2 fps, could afford about 37 histogram
+//! evaluations per frame ([`paper_budget`]); ours search 41 x 41 = 1,681
+//! windows. Beside the exhaustive KF and UKF every run drives a KF and a
+//! UKF capped at that budget ([`BallOptions::budget`]; rows `KF@37`,
+//! `UKF@37`): they search a 6 x 6 grid over the same region (see
+//! `BallConfig::max_evaluations`). The PFs evaluate their `N` particles,
+//! their budget by construction.
+//!
+//! # Scoring late
+//! In real time the estimate of a frame captured at `t_k` becomes available
+//! when the computation ends, `start + 1 / fps_paper` (at least
+//! `1 / fps_paper` after `t_k`); by then the ball has moved on. Each real-
+//! time estimate is scored twice: against the ball in the processed frame
+//! (as offline), and "late", against the ball's centre at the moment the
+//! estimate becomes available (interpolated between the camera frames
+//! around it), as the paper, filming a moving screen, necessarily measured.
+//!
+//! # The camera
+//! The scene adds what a webcam filming a screen adds
+//! ([`crate::scenes::BallScene`]'s webcam effects): motion blur
+//! ([`BallOptions::exposure`]), flicker ([`BallOptions::flicker`]),
+//! auto-exposure ([`BallOptions::auto_exposure`]), frame-time jitter
+//! ([`BallOptions::frame_jitter`]) and JPEG compression
+//! ([`BallOptions::jpeg_quality`]); `webcam=off` turns all five off. The
+//! paper ran its ball "with different speeds and different levels of
+//! additive noises": [`BallOptions::sweep`] runs every tracker on linear
+//! motion with heading noise over a grid of speeds and noise levels.
+//!
 //! # Lost and found
 //! Scored against the ground truth on the frames a tracker processes: the
 //! ball is **lost** at the first processed frame whose centre error exceeds
@@ -192,8 +223,91 @@ pub struct BallOptions {
     pub lost_radius: f64,
     /// Centre error (px) at or below which a lost ball counts as found (10).
     pub found_radius: f64,
+    /// The evaluation budget of the KF and UKF run beside the exhaustive
+    /// ones (see [`Budget`]; default [`Budget::Paper`]).
+    pub budget: Budget,
+    /// Ball speed, px/frame (3: the scene's default).
+    pub speed: f64,
+    /// Webcam motion blur: shutter open for this fraction of the frame
+    /// interval (0.5: an indoor webcam at 22 fps exposes 1/50 to 1/30 s of
+    /// its 1/22 s frame, 0.44 to 0.73).
+    pub exposure: f64,
+    /// Webcam flicker: relative std of the per-frame light (0.02: the
+    /// screen's refresh and the room's mains light beating against the
+    /// camera's 22 fps, a few percent).
+    pub flicker: f64,
+    /// Webcam auto-exposure time constant, s (0.5: consumer webcams settle
+    /// in about a second; 0 turns it off).
+    pub auto_exposure: f64,
+    /// Webcam frame-time jitter, std in ms (3: USB webcam frame timestamps
+    /// scatter by a few ms, 7% of the 45 ms interval).
+    pub frame_jitter: f64,
+    /// Webcam JPEG quality, 0 for none (75: the IJG/libjpeg default, and a
+    /// webcam streaming MJPEG at 200x160 compresses its frames).
+    pub jpeg_quality: u8,
+    /// Whether to run the speed x motion-noise sweep ([`BallOptions::sweep_speeds`]
+    /// x [`BallOptions::sweep_noises`], linear motion; default: in `--full` only).
+    pub sweep: bool,
+    /// Ball speeds of the sweep, px/frame (2, 3, 5, 8).
+    pub sweep_speeds: Vec<f64>,
+    /// Motion-noise levels of the sweep, px/frame per axis (0, 0.5, 1, 2).
+    pub sweep_noises: Vec<f64>,
+    /// Runs per sweep cell (2), each [`BallOptions::sweep_seconds`] long.
+    pub sweep_runs: usize,
+    /// Length of a sweep run, s (60).
+    pub sweep_seconds: f64,
     /// Seed of the whole experiment.
     pub seed: u64,
+}
+
+/// The evaluation budget of the KF and UKF: how many histogram windows they
+/// may evaluate per frame (the PFs evaluate their `N` particles, their
+/// budget by construction).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Budget {
+    /// No budgeted KF/UKF (only the exhaustive search).
+    Off,
+    /// What paper 001's measured fps allowed: a frame costs
+    /// `a + b N` s, `a` and `b` fitted to the PF10 and PF70 fps (50.8 ms and
+    /// 1.25 ms per particle), so a tracker at `fps` can afford
+    /// `floor((1 / fps - a) / b)` evaluations: 37 for the KF (10.28 fps)
+    /// and the UKF (10.19 fps). See [`paper_budget`].
+    Paper,
+    /// The same cap for the KF and the UKF.
+    Fixed(usize),
+}
+
+/// The per-frame cost model of paper 001's trackers, fitted to the fps of
+/// PF10 and PF70: `(a, b)` with a frame costing `a + b N` s.
+pub fn paper_cost_model() -> (f64, f64) {
+    let t = |n| paper_row(BallFilter::Pf(n)).map_or(f64::NAN, |p| 1.0 / p.fps);
+    let b = (t(70) - t(10)) / 60.0;
+    (t(10) - 10.0 * b, b)
+}
+
+/// The histogram evaluations per frame paper 001's fps allowed `filter`
+/// (`N` for a PF; from [`paper_cost_model`] for the KF and UKF).
+pub fn paper_budget(filter: BallFilter) -> Option<usize> {
+    match filter {
+        BallFilter::Pf(n) => Some(n),
+        _ => {
+            let (a, b) = paper_cost_model();
+            let fps = paper_row(filter)?.fps;
+            let n = ((1.0 / fps - a) / b).floor();
+            (n.is_finite() && n >= 1.0).then_some(n as usize)
+        }
+    }
+}
+
+impl Budget {
+    /// The cap of a KF or UKF, `None` for the PFs and when off.
+    pub fn cap(self, filter: BallFilter) -> Option<usize> {
+        match (self, filter) {
+            (_, BallFilter::Pf(_)) | (Budget::Off, _) => None,
+            (Budget::Paper, f) => paper_budget(f),
+            (Budget::Fixed(n), _) => Some(n),
+        }
+    }
 }
 
 impl BallOptions {
@@ -209,17 +323,39 @@ impl BallOptions {
             rt_elapsed: true,
             lost_radius: 20.0,
             found_radius: 10.0,
+            budget: Budget::Paper,
+            speed: 3.0,
+            exposure: 0.5,
+            flicker: 0.02,
+            auto_exposure: 0.5,
+            frame_jitter: 3.0,
+            jpeg_quality: 75,
+            sweep: true,
+            sweep_speeds: vec![2.0, 3.0, 5.0, 8.0],
+            sweep_noises: vec![0.0, 0.5, 1.0, 2.0],
+            sweep_runs: 2,
+            sweep_seconds: 60.0,
             seed: 1,
         }
     }
 
-    /// The CI scale: one run of 20 s per condition.
+    /// The CI scale: one run of 20 s per condition, no sweep.
     pub fn quick() -> Self {
         Self {
             runs: 1,
             seconds: 20.0,
+            sweep: false,
             ..Self::paper()
         }
+    }
+
+    /// Turns every webcam effect off: the clean scene (`webcam=off`).
+    pub fn clean_camera(&mut self) {
+        self.exposure = 0.0;
+        self.flicker = 0.0;
+        self.auto_exposure = 0.0;
+        self.frame_jitter = 0.0;
+        self.jpeg_quality = 0;
     }
 
     /// Frames per run.
@@ -235,7 +371,11 @@ impl BallOptions {
         model (matched|linear), acceleration_noise (> 0), initial_speed (> 0), \
         measurement_noise (> 0), search_margin (0..=4096 px), likelihood_sigma (> 0), \
         lost_distance (> 0), bins (1..=256), ukf_alpha (> 0), ukf_beta (finite), \
-        ukf_kappa (finite)";
+        ukf_kappa (finite), budget (paper|off|1..=100000 windows), speed (0..=40 px/frame), \
+        exposure (0..=1), flicker (0..=0.5), auto_exposure (0..=1e6 s), frame_jitter (0..=1000 ms), \
+        jpeg_quality (0..=100), webcam (off), sweep (true|false), \
+        sweep_speeds (comma list, 0..=40), sweep_noises (comma list, 0..=10), \
+        sweep_runs (1..=100000), sweep_seconds (> 0, at most 86400)";
 
     /// Longest run an option may ask for, seconds of video (a day).
     pub const MAX_SECONDS: f64 = 86_400.0;
@@ -278,6 +418,42 @@ impl BallOptions {
             "ukf_alpha" => t.ukf_alpha = num()?,
             "ukf_beta" => t.ukf_beta = num()?,
             "ukf_kappa" => t.ukf_kappa = num()?,
+            "budget" => {
+                self.budget = match value {
+                    "paper" => Budget::Paper,
+                    "off" => Budget::Off,
+                    _ => Budget::Fixed(int()?),
+                }
+            }
+            "speed" => self.speed = num()?,
+            "exposure" => self.exposure = num()?,
+            "flicker" => self.flicker = num()?,
+            "auto_exposure" => self.auto_exposure = num()?,
+            "frame_jitter" => self.frame_jitter = num()?,
+            "jpeg_quality" => self.jpeg_quality = value.parse().map_err(|_| bad())?,
+            "webcam" if value == "off" => {
+                // As `clean_camera` (which would borrow all of `self`).
+                self.exposure = 0.0;
+                self.flicker = 0.0;
+                self.auto_exposure = 0.0;
+                self.frame_jitter = 0.0;
+                self.jpeg_quality = 0;
+            }
+            "sweep" => self.sweep = value.parse().map_err(|_| bad())?,
+            "sweep_speeds" | "sweep_noises" => {
+                let list = value
+                    .split(',')
+                    .map(|v| v.trim().parse::<f64>())
+                    .collect::<Result<Vec<_>, _>>()
+                    .map_err(|_| bad())?;
+                if key == "sweep_speeds" {
+                    self.sweep_speeds = list;
+                } else {
+                    self.sweep_noises = list;
+                }
+            }
+            "sweep_runs" => self.sweep_runs = int()?,
+            "sweep_seconds" => self.sweep_seconds = num()?,
             _ => return Err(bad()),
         }
         let ok_num = |v: f64| v.is_finite() && v > 0.0;
@@ -292,21 +468,74 @@ impl BallOptions {
             || !ok_num(self.found_radius)
             || self.found_radius > self.lost_radius
             || t.validate().is_err()
+            || !self.scene_ok()
         {
             return Err(bad());
         }
         Ok(())
     }
 
+    /// Whether the scene options (and the sweep's) are in range.
+    fn scene_ok(&self) -> bool {
+        let within = |v: f64, hi: f64| v.is_finite() && (0.0..=hi).contains(&v);
+        let speed_ok = |v: f64| within(v, 40.0);
+        let budget_ok = match self.budget {
+            Budget::Fixed(n) => (1..=MAX_RUNS).contains(&n),
+            _ => true,
+        };
+        speed_ok(self.speed)
+            && within(self.exposure, 1.0)
+            && within(self.flicker, 0.5)
+            && within(self.auto_exposure, 1e6)
+            && within(self.frame_jitter, 1e3)
+            && self.jpeg_quality <= 100
+            && budget_ok
+            && !self.sweep_speeds.is_empty()
+            && !self.sweep_noises.is_empty()
+            && self.sweep_speeds.len() <= 64
+            && self.sweep_noises.len() <= 64
+            && self.sweep_speeds.iter().all(|&v| speed_ok(v))
+            && self.sweep_noises.iter().all(|&v| within(v, 10.0))
+            && (1..=MAX_RUNS).contains(&self.sweep_runs)
+            && self.sweep_seconds.is_finite()
+            && self.sweep_seconds > 0.0
+            && self.sweep_seconds <= Self::MAX_SECONDS
+            && within(self.motion_noise, 10.0)
+            && within(self.bounce_noise, 10.0)
+    }
+
     /// One line with every option, for the table footer.
     pub fn describe(&self) -> String {
         let t = &self.tracker;
+        let budget = match self.budget {
+            Budget::Off => "off".to_string(),
+            Budget::Paper => format!(
+                "paper (KF {}, UKF {})",
+                self.budget.cap(BallFilter::Kf).unwrap_or(0),
+                self.budget.cap(BallFilter::Ukf).unwrap_or(0)
+            ),
+            Budget::Fixed(n) => n.to_string(),
+        };
+        let list = |v: &[f64]| v.iter().map(f64::to_string).collect::<Vec<_>>().join(",");
         format!(
-            "runs={}x4 seconds={} motion_noise={} bounce_noise={} model={:?} rt_elapsed={} lost_radius={} \
+            "runs={}x4 seconds={} speed={} exposure={} flicker={} auto_exposure={} frame_jitter={} \
+             jpeg_quality={} budget={budget} sweep={} (speeds {} x noises {}, {} runs of {} s) \
+             motion_noise={} bounce_noise={} model={:?} rt_elapsed={} lost_radius={} \
              found_radius={} acceleration_noise={} initial_speed={} measurement_noise={} \
              search_margin={} likelihood_sigma={} lost_distance={} bins={} ukf=({}, {}, {}) seed={}",
             self.runs,
             self.seconds,
+            self.speed,
+            self.exposure,
+            self.flicker,
+            self.auto_exposure,
+            self.frame_jitter,
+            self.jpeg_quality,
+            self.sweep,
+            list(&self.sweep_speeds),
+            list(&self.sweep_noises),
+            self.sweep_runs,
+            self.sweep_seconds,
             self.motion_noise,
             self.bounce_noise,
             self.model,
@@ -332,11 +561,17 @@ impl BallOptions {
         BallScene {
             frames: self.frames(),
             motion: condition.motion,
+            speed: self.speed,
             motion_noise: match (condition.noisy, condition.motion) {
                 (false, _) => 0.0,
                 (true, BallMotion::Linear) => self.motion_noise,
                 (true, BallMotion::Bouncing) => self.bounce_noise,
             },
+            exposure: self.exposure,
+            flicker: self.flicker,
+            auto_exposure: self.auto_exposure,
+            frame_jitter: self.frame_jitter,
+            jpeg_quality: self.jpeg_quality,
             ..BallScene::default()
         }
     }
@@ -356,23 +591,64 @@ impl BallOptions {
     }
 }
 
-/// What one tracker did in one run, in one mode.
-#[derive(Debug, Clone, PartialEq)]
-pub struct TrackOutcome {
-    /// Which tracker.
-    pub filter: BallFilter,
-    /// Offline or real time.
-    pub mode: FrameMode,
-    /// Frames processed (after the initial one).
-    pub frames: usize,
+/// Lost / found / error bookkeeping of one tracker under one scoring (see
+/// the module docs).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Score {
     /// Sum of the centre errors over the processed frames (px).
     pub error_sum: f64,
-    /// Losses (see the module docs).
+    /// Losses.
     pub losses: usize,
     /// Time from each re-found loss to its re-finding (s).
     pub found_times: Vec<f64>,
     /// Losses not re-found before the end of the run.
     pub unresolved: usize,
+    /// When the current loss began (s), `None` while the ball is held.
+    lost_since: Option<f64>,
+}
+
+impl Score {
+    /// Scores one estimate whose centre error is `err` at time `time` (s).
+    fn record(&mut self, time: f64, err: f64, lost_radius: f64, found_radius: f64) {
+        self.error_sum += err;
+        match self.lost_since {
+            None if err > lost_radius => {
+                self.losses += 1;
+                self.lost_since = Some(time);
+            }
+            Some(since) if err <= found_radius => {
+                self.found_times.push(time - since);
+                self.lost_since = None;
+            }
+            _ => {}
+        }
+    }
+
+    /// Closes the run: a loss still open is unresolved.
+    fn finish(&mut self) {
+        self.unresolved = usize::from(self.lost_since.take().is_some());
+    }
+}
+
+/// What one tracker did in one run, in one mode.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrackOutcome {
+    /// Which tracker.
+    pub filter: BallFilter,
+    /// Its evaluation budget (windows per frame) for a budgeted KF/UKF,
+    /// `None` for the exhaustive search and the PFs.
+    pub budget: Option<usize>,
+    /// Offline or real time.
+    pub mode: FrameMode,
+    /// Frames processed (after the initial one).
+    pub frames: usize,
+    /// Histogram evaluations over the processed frames.
+    pub evaluations: usize,
+    /// Scored against the ball in the processed frame.
+    pub score: Score,
+    /// Real time only: scored against where the ball is when the estimate
+    /// becomes available (the frame's capture time plus `1 / fps_paper`).
+    pub delayed: Option<Score>,
     /// Processed frames in which the tracker reported itself lost.
     pub self_lost: usize,
     /// Wall-clock seconds spent in `step` (not deterministic; never pinned).
@@ -380,6 +656,21 @@ pub struct TrackOutcome {
     /// `(time, centre error)` of every processed frame (first run of a
     /// condition only, for the figure).
     pub trace: Vec<(f64, f64)>,
+}
+
+impl TrackOutcome {
+    /// The row label: `PF10`, `KF`, or `KF@37` for a budgeted KF.
+    pub fn label(&self) -> String {
+        label(self.filter, self.budget)
+    }
+}
+
+/// Row label of a tracker with an optional budget (`KF@37`).
+fn label(filter: BallFilter, budget: Option<usize>) -> String {
+    match budget {
+        Some(b) => format!("{}@{b}", filter.label()),
+        None => filter.label(),
+    }
 }
 
 /// Every outcome of one run of one condition.
@@ -391,14 +682,73 @@ pub struct RunResult {
     pub run: usize,
     /// Seconds of video.
     pub seconds: f64,
-    /// One outcome per tracker and mode: `BallFilter::PAPER` x `FrameMode::ALL`.
+    /// One outcome per tracker and mode: `BallFilter::PAPER` x
+    /// `FrameMode::ALL`, then the budgeted KF and UKF in both modes.
     pub outcomes: Vec<TrackOutcome>,
 }
 
-/// The loss / found bookkeeping of one tracker.
-#[derive(Debug, Clone, Default)]
-struct Scorer {
-    lost_since: Option<f64>,
+/// How the estimates are scored, and whether the KF/UKF are on the budget.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct View {
+    /// Which frames are processed.
+    pub mode: FrameMode,
+    /// Real time only: score against where the ball is when the estimate
+    /// becomes available.
+    pub delayed: bool,
+    /// KF and UKF on the evaluation budget (the PFs are the same either way).
+    pub budgeted: bool,
+}
+
+impl View {
+    /// Every frame, scored on it, exhaustive KF/UKF.
+    pub const OFFLINE: View = View {
+        mode: FrameMode::Offline,
+        delayed: false,
+        budgeted: false,
+    };
+    /// Real time, scored on the processed frame, exhaustive KF/UKF.
+    pub const REALTIME: View = View {
+        mode: FrameMode::RealTime,
+        delayed: false,
+        budgeted: false,
+    };
+
+    /// The views of the findings table: offline, real time, real time
+    /// scored when available; each without and then with the budget.
+    pub const ALL: [View; 6] = [
+        View::OFFLINE,
+        View::REALTIME,
+        View::REALTIME.scored_late(),
+        View::OFFLINE.on_budget(),
+        View::REALTIME.on_budget(),
+        View::REALTIME.scored_late().on_budget(),
+    ];
+
+    /// This view with the KF/UKF on the budget.
+    pub const fn on_budget(self) -> View {
+        View {
+            budgeted: true,
+            ..self
+        }
+    }
+
+    /// This view scored when the estimate becomes available.
+    pub const fn scored_late(self) -> View {
+        View {
+            delayed: true,
+            ..self
+        }
+    }
+
+    /// Short name (`offline`, `realtime`, `realtime+delay`, with `@budget`).
+    pub fn name(self) -> String {
+        format!(
+            "{}{}{}",
+            self.mode.name(),
+            if self.delayed { "+delay" } else { "" },
+            if self.budgeted { "@budget" } else { "" }
+        )
+    }
 }
 
 /// Time of the next frame a real-time tracker processes after starting
@@ -433,11 +783,33 @@ struct Lane {
     start: f64,
     cost: f64,
     last_seen: usize,
-    scorer: Scorer,
     out: TrackOutcome,
 }
 
-/// Runs every tracker in both modes on run `run` of `condition`.
+/// The ball's centre at time `t` (s): the ground truth of the camera frames
+/// around `t`, interpolated linearly (the last frame's after the end).
+fn centre_at(centres: &[[f64; 2]], t: f64) -> [f64; 2] {
+    let x = (t * CAMERA_FPS).max(0.0);
+    let i = (x.floor() as usize).min(centres.len().saturating_sub(1));
+    let Some(&a) = centres.get(i) else {
+        return [f64::NAN; 2];
+    };
+    let Some(&b) = centres.get(i + 1) else {
+        return a;
+    };
+    let u = x - i as f64;
+    [a[0] + u * (b[0] - a[0]), a[1] + u * (b[1] - a[1])]
+}
+
+fn scene_failed(condition: Condition, e: impl std::fmt::Display) -> ExperimentError {
+    ExperimentError::Failed {
+        id: "ball",
+        message: format!("scene {}: {e}", condition.name()),
+    }
+}
+
+/// Runs every tracker in both modes on run `run` of `condition` (and the
+/// budgeted KF/UKF unless the budget is off).
 ///
 /// # Errors
 /// [`ExperimentError::Failed`] naming the tracker, condition and run.
@@ -455,10 +827,19 @@ pub fn run_one(
     let scene = opts.scene(condition);
     let mut stream = scene
         .stream(scene_seed)
-        .map_err(|e| ExperimentError::Failed {
-            id: "ball",
-            message: format!("scene {}: {e}", condition.name()),
-        })?;
+        .map_err(|e| scene_failed(condition, e))?;
+    // The whole trajectory first (no rendering), for the delayed scoring.
+    let mut centres = Vec::with_capacity(scene.frames);
+    let mut ahead = scene
+        .stream(scene_seed)
+        .map_err(|e| scene_failed(condition, e))?;
+    while let Some(t) = ahead.skip_frame() {
+        let c = t.target().map_or([f64::NAN; 2], |o| {
+            let (x, y) = o.bbox.center();
+            [x, y]
+        });
+        centres.push(c);
+    }
     let config = opts.tracker_config(condition);
     let mut frame =
         Image::new(scene.width, scene.height, 3, 0u8).map_err(|e| ExperimentError::Failed {
@@ -477,10 +858,21 @@ pub fn run_one(
             message: "scene without a ball".to_string(),
         });
     };
+    let mut variants: Vec<(BallFilter, Option<usize>)> =
+        BallFilter::PAPER.into_iter().map(|f| (f, None)).collect();
+    for f in [BallFilter::Kf, BallFilter::Ukf] {
+        if let Some(cap) = opts.budget.cap(f) {
+            variants.push((f, Some(cap)));
+        }
+    }
     let mut lanes = Vec::new();
     for (m, mode) in FrameMode::ALL.into_iter().enumerate() {
-        for (f, filter) in BallFilter::PAPER.into_iter().enumerate() {
+        for (f, &(filter, budget)) in variants.iter().enumerate() {
             let seed = stream_seed(&[KEY, opts.seed, cond_index, run as u64, f as u64, m as u64]);
+            let config = BallConfig {
+                max_evaluations: budget,
+                ..config
+            };
             let mut tracker = BallTracker::new(filter, config, seed)
                 .map_err(|e| failed(filter, condition, run, e))?;
             tracker
@@ -498,15 +890,14 @@ pub fn run_one(
                 start,
                 cost,
                 last_seen: 0,
-                scorer: Scorer::default(),
                 out: TrackOutcome {
                     filter,
+                    budget,
                     mode,
                     frames: 0,
-                    error_sum: 0.0,
-                    losses: 0,
-                    found_times: Vec::new(),
-                    unresolved: 0,
+                    evaluations: 0,
+                    score: Score::default(),
+                    delayed: (mode == FrameMode::RealTime).then(Score::default),
                     self_lost: 0,
                     wall: 0.0,
                     trace: Vec::new(),
@@ -514,6 +905,7 @@ pub fn run_one(
             });
         }
     }
+    let (lost_r, found_r) = (opts.lost_radius, opts.found_radius);
     for k in 1..scene.frames {
         let wanted = lanes.iter().any(|l| l.next == k);
         let truth = if wanted {
@@ -545,25 +937,23 @@ pub fn run_one(
             let err = center_error(&est.bbox, &ball);
             let out = &mut lane.out;
             out.frames += 1;
-            out.error_sum += err;
+            out.evaluations += est.evaluations;
             out.self_lost += usize::from(est.lost);
             if trace {
                 out.trace.push((truth.time, err));
             }
-            match lane.scorer.lost_since {
-                None if err > opts.lost_radius => {
-                    out.losses += 1;
-                    lane.scorer.lost_since = Some(truth.time);
-                }
-                Some(since) if err <= opts.found_radius => {
-                    out.found_times.push(truth.time - since);
-                    lane.scorer.lost_since = None;
-                }
-                _ => {}
-            }
+            out.score.record(truth.time, err, lost_r, found_r);
             match lane.mode {
                 FrameMode::Offline => lane.next = k + 1,
                 FrameMode::RealTime => {
+                    // Available when the computation ends: `start + cost`.
+                    let done = lane.start + lane.cost;
+                    if let Some(late) = out.delayed.as_mut() {
+                        let [x, y] = centre_at(&centres, done);
+                        let (ex, ey) = est.bbox.center();
+                        let late_err = (ex - x).hypot(ey - y);
+                        late.record(done, late_err, lost_r, found_r);
+                    }
                     let (next, start) = next_realtime(k, lane.start, lane.cost);
                     lane.next = next;
                     lane.start = start;
@@ -578,24 +968,29 @@ pub fn run_one(
         outcomes: lanes
             .into_iter()
             .map(|mut l| {
-                l.out.unresolved = usize::from(l.scorer.lost_since.is_some());
+                l.out.score.finish();
+                if let Some(late) = l.out.delayed.as_mut() {
+                    late.finish();
+                }
                 l.out
             })
             .collect(),
     })
 }
 
-/// Pooled numbers of one tracker in one mode over a set of runs.
+/// Pooled numbers of one tracker in one view over a set of runs.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Summary {
     /// Which tracker.
     pub filter: BallFilter,
-    /// Offline or real time.
-    pub mode: FrameMode,
+    /// How it was run and scored.
+    pub view: View,
     /// Runs pooled.
     pub runs: usize,
     /// Frames processed per second of video.
     pub frames_per_second: f64,
+    /// Histogram evaluations per processed frame.
+    pub evaluations: f64,
     /// Mean centre error over the processed frames (px).
     pub error: f64,
     /// Losses per 10 minutes of video.
@@ -612,6 +1007,72 @@ pub struct Summary {
     pub wall_fps: f64,
 }
 
+/// Pools the outcomes of `filter` in `view` over `runs`.
+fn summarize<'a>(
+    runs: impl Iterator<Item = &'a RunResult>,
+    filter: BallFilter,
+    view: View,
+) -> Summary {
+    let (mut n, mut frames, mut evaluations, mut err, mut losses, mut unresolved, mut self_lost) =
+        (0, 0, 0, 0.0, 0, 0, 0);
+    let (mut seconds, mut wall) = (0.0, 0.0);
+    let mut found = Vec::new();
+    let budgeted = view.budgeted && !matches!(filter, BallFilter::Pf(_));
+    for r in runs {
+        for o in r
+            .outcomes
+            .iter()
+            .filter(|o| o.filter == filter && o.mode == view.mode && o.budget.is_some() == budgeted)
+        {
+            let score = if view.delayed {
+                o.delayed.as_ref().unwrap_or(&o.score)
+            } else {
+                &o.score
+            };
+            n += 1;
+            frames += o.frames;
+            evaluations += o.evaluations;
+            err += score.error_sum;
+            losses += score.losses;
+            unresolved += score.unresolved;
+            self_lost += o.self_lost;
+            found.extend_from_slice(&score.found_times);
+            seconds += r.seconds;
+            wall += o.wall;
+        }
+    }
+    let nf = frames.max(1) as f64;
+    Summary {
+        filter,
+        view,
+        runs: n,
+        frames_per_second: frames as f64 / f64::max(seconds, 1e-12),
+        evaluations: evaluations as f64 / nf,
+        error: err / nf,
+        lost_per_10min: losses as f64 * 600.0 / f64::max(seconds, 1e-12),
+        losses,
+        found: if found.is_empty() {
+            f64::NAN
+        } else {
+            found.iter().sum::<f64>() / found.len() as f64
+        },
+        unresolved,
+        self_lost: self_lost as f64 / nf,
+        wall_fps: frames as f64 / f64::max(wall, 1e-12),
+    }
+}
+
+/// One cell of the speed x motion-noise sweep.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepCell {
+    /// Ball speed, px/frame.
+    pub speed: f64,
+    /// Motion noise, px/frame per axis (linear motion, heading kicks).
+    pub noise: f64,
+    /// Its runs (condition `linear+noise`).
+    pub runs: Vec<RunResult>,
+}
+
 /// Every run of the experiment.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BallResult {
@@ -619,94 +1080,99 @@ pub struct BallResult {
     pub options: BallOptions,
     /// Every run, conditions in [`Condition::ALL`] order.
     pub runs: Vec<RunResult>,
+    /// The speed x motion-noise sweep (empty unless
+    /// [`BallOptions::sweep`]), speeds outer, noises inner.
+    pub sweep: Vec<SweepCell>,
+}
+
+/// The trackers of the tables in a view: the five, with the KF and UKF
+/// labelled by their budget when on it.
+fn rows(opts: &BallOptions, view: View) -> Vec<(BallFilter, Option<usize>)> {
+    BallFilter::PAPER
+        .into_iter()
+        .map(|f| {
+            (
+                f,
+                if view.budgeted {
+                    opts.budget.cap(f)
+                } else {
+                    None
+                },
+            )
+        })
+        .collect()
 }
 
 impl BallResult {
-    /// The pooled summary of `filter` in `mode` over the runs whose
+    /// The pooled summary of `filter` in `view` over the runs whose
     /// condition passes `keep`.
     pub fn summary(
         &self,
         filter: BallFilter,
-        mode: FrameMode,
+        view: View,
         keep: impl Fn(Condition) -> bool,
     ) -> Summary {
-        let (mut runs, mut frames, mut err, mut losses, mut unresolved, mut self_lost) =
-            (0, 0, 0.0, 0, 0, 0);
-        let (mut seconds, mut wall) = (0.0, 0.0);
-        let mut found = Vec::new();
-        for r in self.runs.iter().filter(|r| keep(r.condition)) {
-            for o in r
-                .outcomes
-                .iter()
-                .filter(|o| o.filter == filter && o.mode == mode)
-            {
-                runs += 1;
-                frames += o.frames;
-                err += o.error_sum;
-                losses += o.losses;
-                unresolved += o.unresolved;
-                self_lost += o.self_lost;
-                found.extend_from_slice(&o.found_times);
-                seconds += r.seconds;
-                wall += o.wall;
-            }
-        }
-        let nf = frames.max(1) as f64;
-        Summary {
-            filter,
-            mode,
-            runs,
-            frames_per_second: frames as f64 / seconds.max(1e-12),
-            error: err / nf,
-            lost_per_10min: losses as f64 * 600.0 / seconds.max(1e-12),
-            losses,
-            found: if found.is_empty() {
-                f64::NAN
-            } else {
-                found.iter().sum::<f64>() / found.len() as f64
-            },
-            unresolved,
-            self_lost: self_lost as f64 / nf,
-            wall_fps: frames as f64 / wall.max(1e-12),
-        }
+        summarize(self.runs.iter().filter(|r| keep(r.condition)), filter, view)
     }
 
     /// Summary over every condition.
-    pub fn overall(&self, filter: BallFilter, mode: FrameMode) -> Summary {
-        self.summary(filter, mode, |_| true)
+    pub fn overall(&self, filter: BallFilter, view: View) -> Summary {
+        self.summary(filter, view, |_| true)
     }
 
-    /// Table 1 in one mode.
-    pub fn table1(&self, mode: FrameMode) -> Table {
+    /// Table 1 in one mode, exhaustive or budgeted KF/UKF; in real time
+    /// with both scorings.
+    pub fn table1(&self, mode: FrameMode, budgeted: bool) -> Table {
         let n = self.runs.len();
+        let view = View {
+            mode,
+            delayed: false,
+            budgeted,
+        };
+        let mut header = vec![
+            "alg",
+            "paper fps",
+            "ours frames/s seen",
+            "ours evals/frame",
+            "ours wall fps",
+            "paper error",
+            "ours error",
+            "paper lost",
+            "ours lost",
+            "paper found",
+            "ours found",
+            "ours unresolved",
+            "ours self-lost %",
+        ];
+        if mode == FrameMode::RealTime {
+            header.extend(["ours error (late)", "ours lost (late)", "ours found (late)"]);
+        }
         let mut t = Table::new(
             format!(
-                "ball ({}): paper 001 Table 1 vs ours ({n} runs of {} s; lost per 10 min; found in s)",
+                "ball ({}{}): paper 001 Table 1 vs ours ({n} runs of {} s; lost per 10 min; found in s{})",
                 mode.name(),
-                self.options.seconds
+                if budgeted {
+                    ", KF/UKF on the paper's evaluation budget"
+                } else {
+                    ""
+                },
+                self.options.seconds,
+                if mode == FrameMode::RealTime {
+                    "; late: scored where the ball is when the estimate is available"
+                } else {
+                    ""
+                }
             ),
-            &[
-                "alg",
-                "paper fps",
-                "ours frames/s seen",
-                "ours wall fps",
-                "paper error",
-                "ours error",
-                "paper lost",
-                "ours lost",
-                "paper found",
-                "ours found",
-                "ours unresolved",
-                "ours self-lost %",
-            ],
+            &header,
         );
-        for filter in BallFilter::PAPER {
-            let s = self.overall(filter, mode);
+        for (filter, budget) in rows(&self.options, view) {
+            let s = self.overall(filter, view);
             let p = paper_row(filter);
-            t.push(vec![
-                filter.label(),
+            let mut row = vec![
+                label(filter, budget),
                 cell(p.map(|p| p.fps), 2),
                 format!("{:.2}", s.frames_per_second),
+                format!("{:.0}", s.evaluations),
                 format!("{:.0}", s.wall_fps),
                 cell(p.map(|p| p.error), 2),
                 format!("{:.2}", s.error),
@@ -716,12 +1182,22 @@ impl BallResult {
                 cell(Some(s.found), 2),
                 s.unresolved.to_string(),
                 format!("{:.1}", 100.0 * s.self_lost),
-            ]);
+            ];
+            if mode == FrameMode::RealTime {
+                let late = self.overall(filter, view.scored_late());
+                row.extend([
+                    format!("{:.2}", late.error),
+                    format!("{:.2}", late.lost_per_10min),
+                    cell(Some(late.found), 2),
+                ]);
+            }
+            t.push(row);
         }
         t
     }
 
-    /// Table 2 (noise) or Table 3 (motion), both modes.
+    /// Table 2 (noise) or Table 3 (motion), both modes, exhaustive and
+    /// (when on) budgeted KF/UKF.
     pub fn table_split(&self, noise: bool) -> Table {
         let (title, a, b) = if noise {
             (
@@ -747,16 +1223,29 @@ impl BallResult {
         ];
         let hdr: Vec<&str> = header.iter().map(String::as_str).collect();
         let mut t = Table::new(format!("ball: paper 001 {title} (ours per 10 min)"), &hdr);
-        for filter in BallFilter::PAPER {
-            let p = paper_row(filter).map(|p| if noise { p.noise } else { p.motion });
+        let mut all = rows(&self.options, View::OFFLINE);
+        all.extend(
+            rows(&self.options, View::OFFLINE.on_budget())
+                .into_iter()
+                .filter(|(_, b)| b.is_some()),
+        );
+        for (filter, budget) in all {
+            let p = paper_row(filter)
+                .filter(|_| budget.is_none())
+                .map(|p| if noise { p.noise } else { p.motion });
             let mut row = vec![
-                filter.label(),
+                label(filter, budget),
                 cell(p.map(|p| p[0]), 1),
                 cell(p.map(|p| p[1]), 1),
             ];
             for mode in FrameMode::ALL {
+                let view = View {
+                    mode,
+                    delayed: false,
+                    budgeted: budget.is_some(),
+                };
                 for second in [false, true] {
-                    let s = self.summary(filter, mode, |c| {
+                    let s = self.summary(filter, view, |c| {
                         if noise {
                             c.noisy == second
                         } else {
@@ -771,64 +1260,122 @@ impl BallResult {
         t
     }
 
-    /// The paper's findings and whether each mode reproduces them.
+    /// The speed x motion-noise sweep: lost per 10 min (or, with `error`,
+    /// the mean centre error in px) of every tracker in real time, scored on
+    /// the processed frame; `None` without a sweep.
+    pub fn sweep_table(&self, error: bool) -> Option<Table> {
+        if self.sweep.is_empty() {
+            return None;
+        }
+        let o = &self.options;
+        let mut variants = rows(o, View::REALTIME);
+        variants.extend(
+            rows(o, View::REALTIME.on_budget())
+                .into_iter()
+                .filter(|(_, b)| b.is_some()),
+        );
+        let labels: Vec<String> = variants.iter().map(|&(f, b)| label(f, b)).collect();
+        let mut header = vec!["speed px/frame", "noise px/frame"];
+        header.extend(labels.iter().map(String::as_str));
+        let mut t = Table::new(
+            format!(
+                "ball sweep (real time, linear motion + heading noise, {} runs of {} s per cell): {}",
+                o.sweep_runs,
+                o.sweep_seconds,
+                if error {
+                    "mean centre error (px)"
+                } else {
+                    "lost per 10 min"
+                }
+            ),
+            &header,
+        );
+        for c in &self.sweep {
+            let mut row = vec![format!("{}", c.speed), format!("{}", c.noise)];
+            for &(filter, budget) in &variants {
+                let view = View {
+                    budgeted: budget.is_some(),
+                    ..View::REALTIME
+                };
+                let s = summarize(c.runs.iter(), filter, view);
+                row.push(if error {
+                    format!("{:.2}", s.error)
+                } else {
+                    format!("{:.1}", s.lost_per_10min)
+                });
+            }
+            t.push(row);
+        }
+        Some(t)
+    }
+
+    /// The paper's findings and whether each view reproduces them.
     pub fn findings(&self) -> Vec<Finding> {
         FINDINGS
             .iter()
             .map(|&(id, text, check)| Finding {
                 id,
                 text,
-                offline: check(self, FrameMode::Offline),
-                realtime: check(self, FrameMode::RealTime),
+                verdicts: View::ALL.map(|v| {
+                    let budget_runs = !v.budgeted || self.options.budget != Budget::Off;
+                    budget_runs.then(|| check(self, v))
+                }),
             })
             .collect()
     }
 
-    /// The findings as a table.
+    /// The findings as a table (one column per [`View::ALL`]).
     pub fn findings_table(&self) -> Table {
+        let names: Vec<String> = View::ALL.iter().map(|v| v.name()).collect();
+        let mut header = vec!["id", "finding"];
+        header.extend(names.iter().map(String::as_str));
         let mut t = Table::new(
-            "ball: paper 001 findings, reproduced? (offline / real time)",
-            &["id", "finding", "offline", "realtime"],
+            "ball: paper 001 findings, reproduced? (offline / real time / real time scored late; \
+             then with the KF/UKF on the paper's evaluation budget)",
+            &header,
         );
-        let yn = |b: bool| if b { "yes" } else { "no" }.to_string();
         for f in self.findings() {
-            t.push(vec![
-                f.id.to_string(),
-                f.text.to_string(),
-                yn(f.offline),
-                yn(f.realtime),
-            ]);
+            let mut row = vec![f.id.to_string(), f.text.to_string()];
+            row.extend(f.verdicts.iter().map(|v| match v {
+                Some(true) => "yes".to_string(),
+                Some(false) => "no".to_string(),
+                None => "-".to_string(),
+            }));
+            t.push(row);
         }
         t
     }
 }
 
-/// A finding of paper 001 and whether each mode reproduces it.
+/// A finding of paper 001 and whether each view reproduces it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Finding {
     /// Short id.
     pub id: &'static str,
     /// What the paper says.
     pub text: &'static str,
-    /// Reproduced offline.
-    pub offline: bool,
-    /// Reproduced in real time.
-    pub realtime: bool,
+    /// Reproduced in each of [`View::ALL`] (`None`: the budget is off).
+    pub verdicts: [Option<bool>; 6],
 }
 
-type Check = fn(&BallResult, FrameMode) -> bool;
-
-fn lost(r: &BallResult, f: BallFilter, m: FrameMode) -> f64 {
-    r.overall(f, m).lost_per_10min
+impl Finding {
+    /// The verdict in `view` (`None`: not run).
+    pub fn in_view(&self, view: View) -> Option<bool> {
+        View::ALL
+            .iter()
+            .position(|v| *v == view)
+            .and_then(|i| self.verdicts[i])
+    }
 }
 
-fn lost_where(
-    r: &BallResult,
-    f: BallFilter,
-    m: FrameMode,
-    keep: impl Fn(Condition) -> bool,
-) -> f64 {
-    r.summary(f, m, keep).lost_per_10min
+type Check = fn(&BallResult, View) -> bool;
+
+fn lost(r: &BallResult, f: BallFilter, v: View) -> f64 {
+    r.overall(f, v).lost_per_10min
+}
+
+fn lost_where(r: &BallResult, f: BallFilter, v: View, keep: impl Fn(Condition) -> bool) -> f64 {
+    r.summary(f, v, keep).lost_per_10min
 }
 
 const PF10: BallFilter = BallFilter::Pf(10);
@@ -918,25 +1465,49 @@ fn cell(v: Option<f64>, digits: usize) -> String {
 }
 
 /// The header of `runs.csv`.
-const RUNS_HEADER: &str = "condition,run,alg,mode,frames,mean_error_px,losses,found_times_s,unresolved,self_lost_frames,wall_s";
+const RUNS_HEADER: &str = "condition,run,alg,mode,frames,evaluations,mean_error_px,losses,found_times_s,unresolved,\
+    late_mean_error_px,late_losses,late_found_times_s,late_unresolved,self_lost_frames,wall_s";
+
+/// `error,losses,found times,unresolved` of a score (`,,,` when absent).
+fn score_cells(score: Option<&Score>, frames: usize, precise: bool) -> String {
+    let Some(s) = score else {
+        return ",,,".to_string();
+    };
+    let times: Vec<String> = s
+        .found_times
+        .iter()
+        .map(|t| {
+            if precise {
+                format!("{t:.17e}")
+            } else {
+                format!("{t:.4}")
+            }
+        })
+        .collect();
+    let error = s.error_sum / frames.max(1) as f64;
+    let error = if precise {
+        format!("{error:.17e}")
+    } else {
+        format!("{error:.6}")
+    };
+    format!("{error},{},{},{}", s.losses, times.join(";"), s.unresolved)
+}
 
 /// The `runs.csv` rows of one finished (condition, run) pair.
 fn run_rows(r: &RunResult) -> String {
     let mut text = String::new();
     for o in &r.outcomes {
-        let found: Vec<String> = o.found_times.iter().map(|t| format!("{t:.4}")).collect();
         let _ = writeln!(
             text,
-            "{},{},{},{},{},{:.6},{},{},{},{},{:.4}",
+            "{},{},{},{},{},{},{},{},{},{:.4}",
             r.condition.name(),
             r.run,
-            o.filter.label(),
+            o.label(),
             o.mode.name(),
             o.frames,
-            o.error_sum / o.frames.max(1) as f64,
-            o.losses,
-            found.join(";"),
-            o.unresolved,
+            o.evaluations,
+            score_cells(Some(&o.score), o.frames, false),
+            score_cells(o.delayed.as_ref(), o.frames, false),
             o.self_lost,
             o.wall
         );
@@ -946,11 +1517,12 @@ fn run_rows(r: &RunResult) -> String {
 
 /// Runs the experiment: every (condition, run) pair in parallel (each has
 /// its own seeded streams, so the result does not depend on the thread
-/// count). With `runs_csv`, each pair's rows are appended to
-/// `runs.partial.csv` beside it the moment the pair finishes, and the
-/// complete file, in (condition, run) order, replaces `runs_csv` at the end
-/// (see [`PartialCsv`]): a run killed part-way keeps every finished pair
-/// and the previous `runs.csv`.
+/// count), then the sweep when asked for. With `runs_csv`, each pair's rows
+/// are appended to `runs.partial.csv` beside it the moment the pair
+/// finishes, and the complete file, in (condition, run) order, replaces
+/// `runs_csv` at the end (see [`PartialCsv`]): a run killed part-way keeps
+/// every finished pair and the previous `runs.csv`. The sweep's runs are
+/// not logged (its tables are).
 ///
 /// # Errors
 /// [`ExperimentError::Failed`] naming the tracker, condition and run that
@@ -974,8 +1546,20 @@ pub fn run(
     let jobs: Vec<(Condition, usize)> = (0..opts.runs)
         .flat_map(|r| Condition::ALL.into_iter().map(move |c| (c, r)))
         .collect();
+    // The sweep's jobs: (speed index, noise index, run).
+    let cells: Vec<(usize, usize)> = if opts.sweep {
+        (0..opts.sweep_speeds.len())
+            .flat_map(|i| (0..opts.sweep_noises.len()).map(move |j| (i, j)))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let sweep_jobs: Vec<(usize, usize, usize)> = cells
+        .iter()
+        .flat_map(|&(i, j)| (0..opts.sweep_runs).map(move |r| (i, j, r)))
+        .collect();
     let bar = if progress {
-        indicatif::ProgressBar::new(jobs.len() as u64)
+        indicatif::ProgressBar::new((jobs.len() + sweep_jobs.len()) as u64)
     } else {
         indicatif::ProgressBar::hidden()
     };
@@ -990,7 +1574,6 @@ pub fn run(
             Ok(done)
         })
         .collect::<Result<_, ExperimentError>>()?;
-    bar.finish_and_clear();
     // conditions in Condition::ALL order, runs in order within each
     runs.sort_by_key(|r| (Condition::ALL.iter().position(|c| *c == r.condition), r.run));
     if let Some(log) = log {
@@ -998,22 +1581,51 @@ pub fn run(
         runs.iter().for_each(|r| text.push_str(&run_rows(r)));
         log.finish(&text)?;
     }
+    let swept: Vec<((usize, usize, usize), RunResult)> = sweep_jobs
+        .par_iter()
+        .map(|&(i, j, r)| {
+            let cell_opts = BallOptions {
+                speed: opts.sweep_speeds[i],
+                motion_noise: opts.sweep_noises[j],
+                seconds: opts.sweep_seconds,
+                ..opts.clone()
+            };
+            let linear_noisy = Condition {
+                motion: BallMotion::Linear,
+                noisy: true,
+            };
+            let done = run_one(&cell_opts, linear_noisy, r, false)?;
+            bar.inc(1);
+            Ok(((i, j, r), done))
+        })
+        .collect::<Result<_, ExperimentError>>()?;
+    bar.finish_and_clear();
+    let sweep = cells
+        .iter()
+        .map(|&(i, j)| SweepCell {
+            speed: opts.sweep_speeds[i],
+            noise: opts.sweep_noises[j],
+            runs: swept
+                .iter()
+                .filter(|((a, b, _), _)| (*a, *b) == (i, j))
+                .map(|(_, r)| r.clone())
+                .collect(),
+        })
+        .collect();
     Ok(BallResult {
         options: opts.clone(),
         runs,
+        sweep,
     })
 }
 
 /// Writes the table CSVs and the error-over-time figures.
-fn write_outputs(result: &BallResult, dir: &Path, tables: &[Table]) -> Result<(), ExperimentError> {
-    let names = [
-        "table1_offline",
-        "table1_realtime",
-        "table2",
-        "table3",
-        "findings",
-    ];
-    for (name, t) in names.iter().zip(tables) {
+fn write_outputs(
+    result: &BallResult,
+    dir: &Path,
+    tables: &[(&str, Table)],
+) -> Result<(), ExperimentError> {
+    for (name, t) in tables {
         let path = dir.join(format!("{name}.csv"));
         write_text(&path, &t.to_csv())?;
     }
@@ -1033,7 +1645,7 @@ fn write_outputs(result: &BallResult, dir: &Path, tables: &[Table]) -> Result<()
                 .iter()
                 .filter(|o| o.mode == mode)
                 .map(|o| Series {
-                    name: o.filter.label(),
+                    name: o.label(),
                     points: o.trace.clone(),
                 })
                 .collect();
@@ -1075,14 +1687,29 @@ impl Experiment for BallExperiment {
         }
         let dir = opts.output_dir(self.id())?;
         let result = run(&options, Some(&dir.join("runs.csv")), opts.progress)?;
-        let mut tables = vec![
-            result.table1(FrameMode::Offline),
-            result.table1(FrameMode::RealTime),
-            result.table_split(true),
-            result.table_split(false),
-            result.findings_table(),
+        let mut named = vec![
+            ("table1_offline", result.table1(FrameMode::Offline, false)),
+            ("table1_realtime", result.table1(FrameMode::RealTime, false)),
         ];
-        write_outputs(&result, &dir, &tables)?;
+        if options.budget != Budget::Off {
+            named.push((
+                "table1_offline_budget",
+                result.table1(FrameMode::Offline, true),
+            ));
+            named.push((
+                "table1_realtime_budget",
+                result.table1(FrameMode::RealTime, true),
+            ));
+        }
+        named.extend([
+            ("table2", result.table_split(true)),
+            ("table3", result.table_split(false)),
+            ("findings", result.findings_table()),
+        ]);
+        named.extend(result.sweep_table(false).map(|t| ("sweep_lost", t)));
+        named.extend(result.sweep_table(true).map(|t| ("sweep_error", t)));
+        write_outputs(&result, &dir, &named)?;
+        let mut tables: Vec<Table> = named.into_iter().map(|(_, t)| t).collect();
         tables[0].title = format!("{}\n  options: {}", tables[0].title, options.describe());
         Ok(tables)
     }
@@ -1090,29 +1717,29 @@ impl Experiment for BallExperiment {
     fn golden(&self) -> Result<Option<String>, ExperimentError> {
         let result = run(&BallOptions::quick(), None, false)?;
         let mut out = String::from(
-            "condition,alg,mode,frames,mean_error_px,losses,found_times_s,unresolved,self_lost_frames\n",
+            "condition,alg,mode,frames,evaluations,mean_error_px,losses,found_times_s,unresolved,\
+             late_mean_error_px,late_losses,late_found_times_s,late_unresolved,self_lost_frames\n",
         );
         for r in &result.runs {
             for o in &r.outcomes {
-                let found: Vec<String> =
-                    o.found_times.iter().map(|t| format!("{t:.17e}")).collect();
                 let _ = writeln!(
                     out,
-                    "{},{},{},{},{:.17e},{},{},{},{}",
+                    "{},{},{},{},{},{},{},{}",
                     r.condition.name(),
-                    o.filter.label(),
+                    o.label(),
                     o.mode.name(),
                     o.frames,
-                    o.error_sum / o.frames.max(1) as f64,
-                    o.losses,
-                    found.join(";"),
-                    o.unresolved,
+                    o.evaluations,
+                    score_cells(Some(&o.score), o.frames, true),
+                    score_cells(o.delayed.as_ref(), o.frames, true),
                     o.self_lost
                 );
             }
         }
+        let yn = |v: Option<bool>| v.map_or("-".to_string(), |b| b.to_string());
         for f in result.findings() {
-            let _ = writeln!(out, "finding,{},{},{}", f.id, f.offline, f.realtime);
+            let cells: Vec<String> = f.verdicts.iter().map(|&v| yn(v)).collect();
+            let _ = writeln!(out, "finding,{},{}", f.id, cells.join(","));
         }
         Ok(Some(out))
     }
@@ -1153,6 +1780,99 @@ mod tests {
         assert!(o.apply("runs", "0").is_err());
         let mut o = BallOptions::quick();
         assert!(o.apply("found_radius", "30").is_err());
+    }
+
+    #[test]
+    fn the_papers_fps_allow_37_windows_to_the_kalman_trackers() {
+        let (a, b) = paper_cost_model();
+        assert!(
+            (a - 0.0508).abs() < 5e-4 && (b - 0.001248).abs() < 1e-5,
+            "{a} {b}"
+        );
+        assert_eq!(paper_budget(BallFilter::Kf), Some(37));
+        assert_eq!(paper_budget(BallFilter::Ukf), Some(37));
+        assert_eq!(paper_budget(BallFilter::Pf(30)), Some(30));
+        assert_eq!(Budget::Paper.cap(BallFilter::Pf(10)), None);
+        assert_eq!(Budget::Off.cap(BallFilter::Kf), None);
+        assert_eq!(Budget::Fixed(9).cap(BallFilter::Ukf), Some(9));
+    }
+
+    #[test]
+    fn the_late_truth_is_interpolated_between_frames() {
+        let c = [[0.0, 0.0], [22.0, 11.0], [44.0, 22.0]];
+        assert_eq!(centre_at(&c, 0.5 / 22.0), [11.0, 5.5]);
+        assert_eq!(centre_at(&c, 1.0), [44.0, 22.0]);
+        assert!(centre_at(&[], 0.0)[0].is_nan());
+    }
+
+    #[test]
+    fn the_new_options_parse_and_reject() {
+        let mut o = BallOptions::quick();
+        o.apply("budget", "off").unwrap();
+        assert_eq!(o.budget, Budget::Off);
+        o.apply("budget", "25").unwrap();
+        assert_eq!(o.budget, Budget::Fixed(25));
+        o.apply("sweep_speeds", "2, 4").unwrap();
+        assert_eq!(o.sweep_speeds, vec![2.0, 4.0]);
+        o.apply("webcam", "off").unwrap();
+        assert_eq!((o.jpeg_quality, o.exposure, o.frame_jitter), (0, 0.0, 0.0));
+        for (k, v) in [
+            ("budget", "0"),
+            ("budget", "some"),
+            ("speed", "41"),
+            ("exposure", "1.5"),
+            ("flicker", "-0.1"),
+            ("jpeg_quality", "101"),
+            ("frame_jitter", "NaN"),
+            ("sweep_speeds", ""),
+            ("sweep_noises", "1,x"),
+            ("sweep_noises", "11"),
+            ("webcam", "on"),
+            ("sweep_runs", "0"),
+        ] {
+            assert!(BallOptions::quick().apply(k, v).is_err(), "{k}={v}");
+        }
+    }
+
+    #[test]
+    fn a_small_run_fills_every_table() {
+        let mut o = BallOptions::quick();
+        for (k, v) in [
+            ("seconds", "1"),
+            ("sweep", "true"),
+            ("sweep_speeds", "3"),
+            ("sweep_noises", "0,2"),
+            ("sweep_runs", "1"),
+            ("sweep_seconds", "1"),
+        ] {
+            o.apply(k, v).unwrap();
+        }
+        let r = run(&o, None, false).unwrap();
+        assert_eq!(r.sweep.len(), 2);
+        assert_eq!(r.sweep_table(false).unwrap().rows.len(), 2);
+        // 5 trackers + 2 budgeted, both modes.
+        assert_eq!(r.runs[0].outcomes.len(), 14);
+        let kf = r.overall(BallFilter::Kf, View::OFFLINE.on_budget());
+        assert_eq!((kf.runs, kf.evaluations), (4, 36.0));
+        let kf = r.overall(BallFilter::Kf, View::OFFLINE);
+        assert!(kf.evaluations > 1000.0, "{}", kf.evaluations);
+        assert_eq!(r.table1(FrameMode::RealTime, true).rows.len(), 5);
+        assert_eq!(r.table_split(true).rows.len(), 7);
+        assert!(
+            r.findings()
+                .iter()
+                .all(|f| f.verdicts.iter().all(Option::is_some))
+        );
+        o.apply("budget", "off").unwrap();
+        o.apply("sweep", "false").unwrap();
+        let r = run(&o, None, false).unwrap();
+        assert_eq!(r.runs[0].outcomes.len(), 10);
+        assert!(r.sweep_table(true).is_none());
+        assert!(
+            r.findings()
+                .iter()
+                .all(|f| f.verdicts[3..].iter().all(Option::is_none))
+        );
     }
 
     #[test]

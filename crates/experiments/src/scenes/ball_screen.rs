@@ -16,8 +16,36 @@
 //!
 //! The ball's radius and speed are not in the paper; the defaults (10 px,
 //! 3 px/frame) are ours.
+//!
+//! # Webcam effects
+//! The paper filmed a screen with a 200x160 webcam; five effects of such a
+//! camera are modelled, each off in `Default` (the clean scene) and set by
+//! the `ball` experiment's options:
+//! - [`BallScene::exposure`]: motion blur. The shutter is open for this
+//!   fraction of the frame interval, centred on the capture time; the ball
+//!   is rendered as the mean of its coverage along that stretch of its path
+//!   (one sample per pixel of travel), and the ground truth is the centre of
+//!   the stretch.
+//! - [`BallScene::flicker`]: the light (screen refresh and room light beating
+//!   against the camera's rate) scales each frame by an i.i.d. factor
+//!   `1 + flicker z`, `z ~ N(0, 1)` (clamped to `[0.5, 1.5]`).
+//! - [`BallScene::auto_exposure`]: the camera's auto-exposure, a gain `e`
+//!   that meters the previous frame and moves towards cancelling its light
+//!   with time constant `tau` s: `e_k = e_{k-1} + a (1 / g_{k-1} - e_{k-1})`,
+//!   `a = 1 - exp(-1 / (tau fps))`, `g` the light (drift times flicker); the
+//!   frame is rendered at `g_k e_k`. It removes slow drift and lags behind
+//!   fast changes.
+//! - [`BallScene::frame_jitter`]: frame `k` is captured at `k / fps + d`,
+//!   `d ~ N(0, jitter)` (clamped to half a frame interval): the ball is
+//!   rendered, and its ground truth taken, where it is at that instant
+//!   (its position moved by velocity times `d`).
+//! - [`BallScene::jpeg_quality`]: every frame goes through a JPEG encoder
+//!   and decoder at this quality (the `image` crate's baseline encoder,
+//!   4:2:0 chroma), as a webcam streaming MJPEG delivers it.
 
 use bayestrack_image::{Image, Rgb};
+use image::ImageEncoder;
+use image::codecs::jpeg::{JpegDecoder, JpegEncoder};
 use rand::RngExt;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
@@ -30,6 +58,10 @@ use super::{
 
 const NAME: &str = "ball";
 const KEY: u64 = name_key(NAME);
+/// Stream ids of the webcam effects (beyond [`streams`]' shared ids, so the
+/// clean scene's streams are unchanged).
+const FLICKER: u64 = 101;
+const JITTER: u64 = 102;
 
 /// How the ball moves.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -75,6 +107,19 @@ pub struct BallScene {
     pub ball_color: Rgb,
     /// Screen colour under nominal light.
     pub screen_color: Rgb,
+    /// Motion blur: fraction of the frame interval the shutter is open, in
+    /// `[0, 1]` (0: instantaneous).
+    pub exposure: f64,
+    /// Relative standard deviation of the per-frame light factor, in
+    /// `[0, 0.5]` (0: no flicker).
+    pub flicker: f64,
+    /// Auto-exposure time constant in seconds (0: no auto-exposure).
+    pub auto_exposure: f64,
+    /// Standard deviation of the capture-time jitter in milliseconds
+    /// (0: frames exactly `1 / fps` apart).
+    pub frame_jitter: f64,
+    /// JPEG quality `1..=100` each frame is compressed at (0: none).
+    pub jpeg_quality: u8,
 }
 
 impl Default for BallScene {
@@ -94,6 +139,11 @@ impl Default for BallScene {
             sensor_noise: 3.0,
             ball_color: Rgb::new(20, 20, 24),
             screen_color: Rgb::new(245, 245, 240),
+            exposure: 0.0,
+            flicker: 0.0,
+            auto_exposure: 0.0,
+            frame_jitter: 0.0,
+            jpeg_quality: 0,
         }
     }
 }
@@ -123,6 +173,17 @@ impl BallScene {
         )?;
         check_range(NAME, "drift_period", self.drift_period, 1e-3, 1e9)?;
         check_range(NAME, "sensor_noise", self.sensor_noise, 0.0, 255.0)?;
+        check_range(NAME, "exposure", self.exposure, 0.0, 1.0)?;
+        check_range(NAME, "flicker", self.flicker, 0.0, 0.5)?;
+        check_range(NAME, "auto_exposure", self.auto_exposure, 0.0, 1e6)?;
+        check_range(NAME, "frame_jitter", self.frame_jitter, 0.0, 1e3)?;
+        if self.jpeg_quality > 100 {
+            return Err(super::SceneError::InvalidParameter {
+                scene: NAME,
+                name: "jpeg_quality",
+                reason: format!("{} is not in 0..=100", self.jpeg_quality),
+            });
+        }
         Ok(())
     }
 
@@ -165,6 +226,19 @@ impl BallScene {
             }
         };
         let blank = Image::new(self.width, self.height, 3, 0u8)?;
+        let mut jpeg = Vec::new();
+        if self.jpeg_quality > 0 {
+            // Round-trip a blank frame once, so that a codec that cannot
+            // handle this size is an error here and not a silent raw frame.
+            let mut probe = blank.clone();
+            jpeg_round_trip(&mut probe, self.jpeg_quality, &mut jpeg).map_err(|reason| {
+                super::SceneError::InvalidParameter {
+                    scene: NAME,
+                    name: "jpeg_quality",
+                    reason,
+                }
+            })?;
+        }
         Ok(BallStream {
             params: self.clone(),
             seed,
@@ -172,7 +246,11 @@ impl BallScene {
             next: 0,
             pos: [x, y],
             vel: [vx, vy],
+            shown: [x, y],
+            exposure_gain: 1.0,
+            light: 1.0,
             blank,
+            jpeg,
         })
     }
 
@@ -206,7 +284,39 @@ pub struct BallStream {
     next: usize,
     pos: [f64; 2],
     vel: [f64; 2],
+    /// Where the camera sees the ball in the current frame (`pos` moved to
+    /// the jittered capture time).
+    shown: [f64; 2],
+    /// Auto-exposure gain `e` of the current frame.
+    exposure_gain: f64,
+    /// Light `g` (drift times flicker) of the current frame.
+    light: f64,
     blank: Image<u8>,
+    /// Scratch buffer of the JPEG codec.
+    jpeg: Vec<u8>,
+}
+
+/// Compresses `frame` (RGB, packed rows) to JPEG at `quality` and decodes it
+/// back in place.
+fn jpeg_round_trip(frame: &mut Image<u8>, quality: u8, buf: &mut Vec<u8>) -> Result<(), String> {
+    let (w, h) = (frame.width(), frame.height());
+    let (w32, h32) = (
+        u32::try_from(w).map_err(|e| e.to_string())?,
+        u32::try_from(h).map_err(|e| e.to_string())?,
+    );
+    buf.clear();
+    JpegEncoder::new_with_quality(&mut *buf, quality)
+        .write_image(frame.as_slice(), w32, h32, image::ExtendedColorType::Rgb8)
+        .map_err(|e| format!("JPEG encoding failed: {e}"))?;
+    let decoder = JpegDecoder::new(std::io::Cursor::new(&buf[..]))
+        .map_err(|e| format!("JPEG decoding failed: {e}"))?;
+    let out = frame.as_mut_slice();
+    if image::ImageDecoder::total_bytes(&decoder) != out.len() as u64 {
+        return Err(format!(
+            "JPEG decoder returned another size than {w}x{h} RGB"
+        ));
+    }
+    image::ImageDecoder::read_image(decoder, out).map_err(|e| format!("JPEG decoding failed: {e}"))
 }
 
 impl BallStream {
@@ -259,12 +369,55 @@ impl BallStream {
         bounced
     }
 
-    fn gain(&self, index: usize) -> f64 {
+    /// The illumination drift's gain at frame `index`.
+    fn drift(&self, index: usize) -> f64 {
         let p = &self.params;
         let t = index as f64 / p.fps;
         1.0 - p.illumination_drift
             * 0.5
             * (1.0 - (std::f64::consts::TAU * t / p.drift_period).cos())
+    }
+
+    /// Light and auto-exposure of frame `index` (after those of `index - 1`).
+    fn expose(&mut self, index: usize) {
+        let p = &self.params;
+        let flicker = if p.flicker > 0.0 {
+            let mut rng = scene_rng(self.seed, KEY, FLICKER, index as u64);
+            let z: f64 = StandardNormal.sample(&mut rng);
+            (1.0 + p.flicker * z).clamp(0.5, 1.5)
+        } else {
+            1.0
+        };
+        if p.auto_exposure > 0.0 && index > 0 {
+            // Meter the previous frame's light, move a towards cancelling it.
+            let a = 1.0 - (-1.0 / (p.auto_exposure * p.fps)).exp();
+            self.exposure_gain += a * (1.0 / self.light - self.exposure_gain);
+        }
+        self.light = self.drift(index) * flicker;
+    }
+
+    /// Where the camera sees the ball: `pos` moved to the jittered capture
+    /// time of frame `index`.
+    fn capture(&mut self, index: usize) {
+        let p = &self.params;
+        self.shown = self.pos;
+        if p.frame_jitter <= 0.0 {
+            return;
+        }
+        let mut rng = scene_rng(self.seed, KEY, JITTER, index as u64);
+        let z: f64 = StandardNormal.sample(&mut rng);
+        // Offset in frame intervals, at most half a frame either way.
+        let d = (z * p.frame_jitter * 1e-3 * p.fps).clamp(-0.5, 0.5);
+        let g = if p.motion == BallMotion::Bouncing {
+            p.gravity
+        } else {
+            0.0
+        };
+        let (lo_x, hi_x, lo_y, hi_y) = p.bounds();
+        self.shown = [
+            (self.pos[0] + self.vel[0] * d).clamp(lo_x, hi_x),
+            (self.pos[1] + self.vel[1] * d + 0.5 * g * d * d).clamp(lo_y, hi_y),
+        ];
     }
 
     fn advance(&mut self) -> Option<FrameTruth> {
@@ -274,6 +427,8 @@ impl BallStream {
         }
         let index = self.next;
         let bounce = index > 0 && self.step();
+        self.expose(index);
+        self.capture(index);
         self.next += 1;
         let r = self.params.radius;
         Some(FrameTruth {
@@ -282,16 +437,16 @@ impl BallStream {
             objects: vec![ObjectTruth {
                 id: 0,
                 label: "ball",
-                bbox: otb_box(self.pos[0] - r, self.pos[1] - r, 2.0 * r, 2.0 * r),
+                bbox: otb_box(self.shown[0] - r, self.shown[1] - r, 2.0 * r, 2.0 * r),
                 visible_fraction: 1.0,
             }],
-            gain: self.gain(index),
+            gain: self.light * self.exposure_gain,
             bounce,
             affine: None,
         })
     }
 
-    fn render(&self, index: usize, gain: f64, out: &mut Image<u8>) {
+    fn render(&mut self, index: usize, gain: f64, out: &mut Image<u8>) {
         let p = &self.params;
         let bg = p.screen_color.to_array().map(|c| f64::from(c) * gain);
         let fg = p.ball_color.to_array().map(|c| f64::from(c) * gain);
@@ -300,12 +455,42 @@ impl BallStream {
             px.copy_from_slice(&bg8);
         }
         let r = p.radius;
-        let [cx, cy] = self.pos;
+        let [cx, cy] = self.shown;
+        // Motion blur: the path during the exposure, centred on the capture.
+        let half = [
+            0.5 * p.exposure * self.vel[0],
+            0.5 * p.exposure * self.vel[1],
+        ];
+        let travel = 2.0 * half[0].hypot(half[1]);
+        let samples = if travel > 0.0 {
+            (travel.ceil() as usize + 1).min(64)
+        } else {
+            1
+        };
+        let offset = |j: usize| {
+            if samples == 1 {
+                0.0
+            } else {
+                2.0 * j as f64 / (samples - 1) as f64 - 1.0
+            }
+        };
+        let (bx, by) = (half[0].abs(), half[1].abs());
         let stride = out.stride();
         let buf = out.as_mut_slice();
-        for y in clipped_span(cy - r, cy + r, p.height) {
-            for x in clipped_span(cx - r, cx + r, p.width) {
-                let c = ellipse_cov(x as f64 - cx, y as f64 - cy, r, r);
+        for y in clipped_span(cy - r - by, cy + r + by, p.height) {
+            for x in clipped_span(cx - r - bx, cx + r + bx, p.width) {
+                let c = (0..samples)
+                    .map(|j| {
+                        let u = offset(j);
+                        ellipse_cov(
+                            x as f64 - cx - u * half[0],
+                            y as f64 - cy - u * half[1],
+                            r,
+                            r,
+                        )
+                    })
+                    .sum::<f64>()
+                    / samples as f64;
                 if c > 0.0 {
                     let o = y * stride + 3 * x;
                     for k in 0..3 {
@@ -316,6 +501,12 @@ impl BallStream {
         }
         let mut noise = scene_rng(self.seed, KEY, streams::NOISE, index as u64);
         add_noise(buf, p.sensor_noise, &mut noise);
+        if p.jpeg_quality > 0 {
+            // The size was checked by the round trip in `stream`, and the
+            // encoder writes into a `Vec`: with the same size it has no way
+            // left to fail (a failure would leave the raw frame).
+            let _ = jpeg_round_trip(out, p.jpeg_quality, &mut self.jpeg);
+        }
     }
 }
 
