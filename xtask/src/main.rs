@@ -8,6 +8,11 @@
 //! cargo xtask otb --root ../shared/data/sequences  # every tracker, every sequence
 //! ```
 //!
+//! `cargo xtask otb` sets our trackers beside the published OTB results
+//! when `--otb-data` (default `../shared/data/otb`) holds them, and shows a
+//! progress bar (elapsed time, ETA, the tracker and sequence running) when
+//! stderr is a terminal.
+//!
 //! Default paths (`target/reproduce`, `tests/golden`,
 //! `../shared/data/sequences`, ...) are relative to the project root, so
 //! `cargo xtask` works from any subfolder; paths given on the command line
@@ -19,7 +24,8 @@ use std::process::ExitCode;
 use bayestrack_experiments::{
     Experiment, ExperimentError, Mode, REGISTRY as EXPERIMENTS, RunOptions,
 };
-use bayestrack_otb::suite::{SuiteOptions, run_suite};
+use bayestrack_otb::published::{PUBLISHED_OPE_FILE, Published};
+use bayestrack_otb::suite::{SuiteEvent, SuiteOptions, run_suite_with};
 use bayestrack_trackers::{REGISTRY, tracker_info};
 use clap::{Parser, Subcommand};
 
@@ -63,8 +69,10 @@ enum Command {
         frames: Option<usize>,
     },
     /// Run every tracker on every sequence of a folder (OTB one-pass
-    /// evaluation); print AUC / P@20 / fps per sequence and their means;
-    /// write boxes, results.csv, results.md and success/precision plots.
+    /// evaluation); print AUC / P@20 / fps per sequence and their means,
+    /// then ours beside the published OTB trackers (success rate at IoU
+    /// 0.5); write boxes, results.csv, results.md and success/precision
+    /// plots.
     Otb {
         /// Folder of OTB sequences (each with img/ and ground truth)
         /// (default: `<project root>/../shared/data/sequences`).
@@ -80,6 +88,11 @@ enum Command {
         /// Output folder (default: `<project root>/target/otb`).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Folder with the published OTB results, `published_ope.csv` and
+        /// `sequences.csv` (default: `<project root>/../shared/data/otb`;
+        /// without it ours are printed alone).
+        #[arg(long)]
+        otb_data: Option<PathBuf>,
     },
     /// Rewrite `tests/golden/<id>.csv` from fresh quick runs and print what
     /// changed.
@@ -166,7 +179,44 @@ fn bless(e: &dyn Experiment) -> Result<bool, String> {
     Ok(true)
 }
 
-fn otb(root: &Path, names: &[String], seed: u64, out: PathBuf) -> Result<(), String> {
+/// The published OTB results in `dir`, or `None` with a note on stderr
+/// when the folder or its files are absent (ours are then printed alone);
+/// a file that is there but cannot be read or parsed is an error.
+fn read_published(dir: &Path) -> Result<Option<Published>, String> {
+    match Published::read(dir) {
+        Ok(p) => Ok(Some(p)),
+        Err(e) if Published::is_missing(&e) => {
+            eprintln!(
+                "note: no published OTB results ({e}); printing ours alone. They are \
+                 {PUBLISHED_OPE_FILE} and sequences.csv in ../shared/data/otb (or --otb-data DIR)."
+            );
+            Ok(None)
+        }
+        Err(e) => Err(format!("published OTB results: {e}")),
+    }
+}
+
+/// A progress bar on stderr for the suite, drawn only when stderr is a
+/// terminal: elapsed time, frames tracked of all, ETA, what is running.
+fn suite_bar() -> indicatif::ProgressBar {
+    use std::io::IsTerminal;
+    if !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let style = indicatif::ProgressStyle::with_template(
+        "{elapsed_precise} [{wide_bar}] {pos}/{len} frames, ETA {eta_precise}  {msg}",
+    )
+    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar());
+    indicatif::ProgressBar::new(0).with_style(style)
+}
+
+fn otb(
+    root: &Path,
+    names: &[String],
+    seed: u64,
+    out: PathBuf,
+    otb_data: &Path,
+) -> Result<(), String> {
     let trackers = if names.is_empty() {
         REGISTRY.iter().collect()
     } else {
@@ -175,31 +225,64 @@ fn otb(root: &Path, names: &[String], seed: u64, out: PathBuf) -> Result<(), Str
             .map(|n| tracker_info(n).map_err(|e| e.to_string()))
             .collect::<Result<Vec<_>, _>>()?
     };
+    // a broken published file is reported after our results, not instead
+    let (published, published_error) = match read_published(otb_data) {
+        Ok(p) => (p, None),
+        Err(e) => (None, Some(e)),
+    };
     let options = SuiteOptions {
         trackers,
         seed,
         out,
         progress: true,
+        published,
     };
-    let report = run_suite(root, &options).map_err(|e| e.to_string())?;
+    let bar = suite_bar();
+    let report = run_suite_with(root, &options, |event| match event {
+        SuiteEvent::Start { total, .. } => bar.set_length(total),
+        SuiteEvent::Decoding { sequence } => bar.set_message(format!("decoding {sequence}")),
+        SuiteEvent::CellStarted {
+            sequence, tracker, ..
+        } => bar.set_message(format!("{tracker} on {sequence}")),
+        SuiteEvent::Frame { done } => bar.set_position(done),
+        SuiteEvent::CellFinished { cell, done } => {
+            bar.set_position(done);
+            // above the bar, or plainly when it is hidden
+            bar.suspend(|| eprintln!("{}", cell.summary()));
+        }
+        _ => {}
+    });
+    bar.finish_and_clear();
+    let report = report.map_err(|e| e.to_string())?;
     println!("{}", report.table());
-    println!("files: {}", options.out.display());
+    if let Some(beside) = report.beside_published() {
+        println!("{beside}");
+    }
+    for note in report.published_notes() {
+        println!("- {note}");
+    }
+    println!("\nfiles: {}", options.out.display());
+    let mut errors: Vec<String> = published_error.into_iter().collect();
     // cells marked n/a (a tracker that cannot run on the input by design,
     // see `CellError`) are not failures; every other error fails the run
     let failed = report.failures();
-    if failed.is_empty() {
-        return Ok(());
+    if !failed.is_empty() {
+        let cells: Vec<String> = failed
+            .iter()
+            .map(|c| format!("{} x {}", c.tracker, c.sequence))
+            .collect();
+        errors.push(format!(
+            "{} tracker x sequence cell(s) failed: {} (reasons in the `error` column of {})",
+            failed.len(),
+            cells.join(", "),
+            options.out.join("results.csv").display()
+        ));
     }
-    let cells: Vec<String> = failed
-        .iter()
-        .map(|c| format!("{} x {}", c.tracker, c.sequence))
-        .collect();
-    Err(format!(
-        "{} tracker x sequence cell(s) failed: {} (reasons in the `error` column of {})",
-        failed.len(),
-        cells.join(", "),
-        options.out.join("results.csv").display()
-    ))
+    if errors.is_empty() {
+        Ok(())
+    } else {
+        Err(errors.join("\nerror: "))
+    }
 }
 
 fn main() -> ExitCode {
@@ -210,11 +293,13 @@ fn main() -> ExitCode {
             trackers,
             seed,
             out,
+            otb_data,
         } => match otb(
             &resolve(root, "../shared/data/sequences"),
             &trackers,
             seed,
             resolve(out, "target/otb"),
+            &resolve(otb_data, "../shared/data/otb"),
         ) {
             Ok(()) => ExitCode::SUCCESS,
             Err(err) => {
@@ -318,6 +403,21 @@ fn main() -> ExitCode {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn published_results_absent_are_a_note_and_broken_ones_an_error() {
+        let dir = std::env::temp_dir().join(format!("xtask-otb-data-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        assert_eq!(read_published(&dir), Ok(None));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join(PUBLISHED_OPE_FILE), "tracker,sequence\n").unwrap();
+        let err = read_published(&dir).unwrap_err();
+        assert!(
+            err.starts_with("published OTB results: ") && err.contains("published_ope.csv:1:"),
+            "{err}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn defaults_resolve_from_the_project_root_and_given_paths_stay_as_given() {
