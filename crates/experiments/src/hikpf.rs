@@ -190,6 +190,11 @@ pub struct HikpfConfig {
     pub resampling: Resampling,
     /// Seed of the whole experiment.
     pub seed: u64,
+    /// Also run the sweep of [`sweep`] (error formula x likelihood floor x
+    /// IEKF iterations) and print it after the main table: on in full mode,
+    /// off in quick mode (`--set sweep=true` turns it on there: 10 more
+    /// runs of the table).
+    pub sweep: bool,
 }
 
 impl HikpfConfig {
@@ -209,13 +214,15 @@ impl HikpfConfig {
             likelihood_floor: false,
             resampling: Resampling::Residual,
             seed: 1,
+            sweep: true,
         }
     }
 
-    /// The CI scale: 20 runs.
+    /// The CI scale: 20 runs, no sweep.
     pub fn quick() -> Self {
         Self {
             runs: 20,
+            sweep: false,
             ..Self::paper()
         }
     }
@@ -226,7 +233,7 @@ impl HikpfConfig {
         steps (2..=1000000), seed (u64), sin_freq (finite), iekf_iterations (1..=10000), \
         iekf_tolerance (finite), error (rmse|eq11), prior (transition|demo), \
         proposal_noise (demo|moments), hybrid_prior (predicted|posterior), \
-        likelihood_floor (true|false), \
+        likelihood_floor (true|false), sweep (true|false), \
         resampling (multinomial|residual|systematic|stratified)";
 
     /// Applies `key=value` overrides (the named options).
@@ -281,6 +288,7 @@ impl HikpfConfig {
                 }
             }
             "likelihood_floor" => self.likelihood_floor = value.parse().map_err(|_| bad())?,
+            "sweep" => self.sweep = value.parse().map_err(|_| bad())?,
             "resampling" => {
                 self.resampling = Resampling::ALL
                     .into_iter()
@@ -303,7 +311,7 @@ impl HikpfConfig {
     pub fn describe(&self) -> String {
         format!(
             "runs={} particles={} steps={} sin_freq={} error={:?} prior={:?} proposal_noise={:?} \
-             iekf_iterations={} hybrid_prior={:?} likelihood_floor={} resampling={} seed={}",
+             iekf_iterations={} hybrid_prior={:?} likelihood_floor={} resampling={} seed={} sweep={}",
             self.runs,
             self.particles,
             self.steps,
@@ -315,7 +323,8 @@ impl HikpfConfig {
             self.hybrid_prior,
             self.likelihood_floor,
             self.resampling.name(),
-            self.seed
+            self.seed,
+            self.sweep
         )
     }
 }
@@ -502,10 +511,15 @@ fn run_error(metric: ErrorMetric, est: &[f64], truth: &[f64]) -> f64 {
 /// The result of one filter on one run.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RunOutcome {
-    /// Per-run error.
+    /// Per-run error (the configured [`ErrorMetric`]).
     pub error: f64,
+    /// The same run's error under the other [`ErrorMetric`] (for the
+    /// sweep, which reads both from one run).
+    pub other_error: f64,
     /// Steps at which every weight was zero (measurement ignored).
     pub degenerate: usize,
+    /// Metropolis-Hastings moves accepted over the run (0 without MCMC).
+    pub accepted: usize,
 }
 
 fn failed(kind: FilterKind, run: usize, t: usize, e: impl std::fmt::Display) -> ExperimentError {
@@ -547,7 +561,7 @@ fn run_particles<T: bayestrack_particle::Particle<1>>(
     y: &[f64],
     initial: T,
     step: &PfStep<'_, T>,
-) -> Result<(Vec<f64>, usize), ExperimentError> {
+) -> Result<(Vec<f64>, usize, usize), ExperimentError> {
     let mcmc = matches!(
         kind,
         FilterKind::PfMcmc | FilterKind::PfEkfMcmc | FilterKind::PfUkfMcmc
@@ -556,15 +570,16 @@ fn run_particles<T: bayestrack_particle::Particle<1>>(
     let mut set =
         ParticleSet::new(vec![initial; c.particles]).map_err(|e| failed(kind, run, 1, e))?;
     let mut est = vec![1.0];
-    let mut degenerate = 0;
+    let (mut degenerate, mut accepted) = (0, 0);
     for (t, &yt) in y.iter().enumerate().skip(1).map(|(i, v)| (i + 1, v)) {
         let key = [KEY, c.seed, run as u64, kind as u64 + 1, t as u64];
         let report =
             step(&pf, &mut set, t, &Vector1::new(yt), &key).map_err(|e| failed(kind, run, t, e))?;
         degenerate += usize::from(report.degenerate);
+        accepted += report.accepted;
         est.push(set.mean()[0]);
     }
-    Ok((est, degenerate))
+    Ok((est, degenerate, accepted))
 }
 
 /// A step with Kalman proposals from `filter` on the local model with the
@@ -642,8 +657,8 @@ fn one_run(c: &HikpfConfig, run: usize) -> Result<Vec<RunOutcome>, ExperimentErr
     FilterKind::ALL
         .iter()
         .map(|&kind| {
-            let (est, degenerate) = match kind {
-                FilterKind::Ekf | FilterKind::Ukf => (run_kalman(c, kind, run, &y)?, 0),
+            let (est, degenerate, accepted) = match kind {
+                FilterKind::Ekf | FilterKind::Ukf => (run_kalman(c, kind, run, &y)?, 0, 0),
                 FilterKind::Pf | FilterKind::PfMcmc => {
                     run_particles(c, kind, run, &y, Vector1::new(1.0), &*bootstrap)?
                 }
@@ -660,9 +675,15 @@ fn one_run(c: &HikpfConfig, run: usize) -> Result<Vec<RunOutcome>, ExperimentErr
                     run_particles(c, kind, run, &y, kp, &*kalman_step(c, hybrid, 1.5))?
                 }
             };
+            let other = match c.error {
+                ErrorMetric::Rmse => ErrorMetric::Eq11Literal,
+                ErrorMetric::Eq11Literal => ErrorMetric::Rmse,
+            };
             Ok(RunOutcome {
                 error: run_error(c.error, &est, &x),
+                other_error: run_error(other, &est, &x),
                 degenerate,
+                accepted,
             })
         })
         .collect()
@@ -682,6 +703,9 @@ pub struct FilterSummary {
     pub median: f64,
     /// Steps, over all runs, whose weights were all zero.
     pub degenerate: usize,
+    /// Fraction of the Metropolis-Hastings moves accepted, over all
+    /// particles, steps and runs (0 for the rows without MCMC).
+    pub acceptance: f64,
 }
 
 /// The per-run outcomes of every filter: `runs[r][f]` follows
@@ -722,6 +746,10 @@ impl HikpfResult {
                     var,
                     median,
                     degenerate: self.runs.iter().map(|r| r[f].degenerate).sum(),
+                    acceptance: self.runs.iter().map(|r| r[f].accepted).sum::<usize>() as f64
+                        / (self.runs.len()
+                            * self.config.particles
+                            * self.config.steps.saturating_sub(1)) as f64,
                 }
             })
             .collect()
@@ -745,6 +773,7 @@ impl HikpfResult {
                 "ours/paper",
                 "ours/vdM",
                 "all-zero steps",
+                "MCMC accepted",
             ],
         );
         let fmt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.5}"));
@@ -762,10 +791,170 @@ impl HikpfResult {
                 paper.map_or("-".into(), |p| format!("{:.2}", s.mean / p.0)),
                 vdm.map_or("-".into(), |v| format!("{:.2}", s.mean / v)),
                 s.degenerate.to_string(),
+                if s.acceptance > 0.0 {
+                    format!("{:.1}%", 100.0 * s.acceptance)
+                } else {
+                    "-".into()
+                },
             ]);
         }
         t
     }
+}
+
+/// The IEKF iteration counts `c` of the sweep.
+pub const SWEEP_ITERATIONS: [usize; 5] = [1, 2, 3, 5, 10];
+
+/// The filters of paper 000's Table 1, in its row order (the sweep's
+/// columns).
+pub const PAPER_ROWS: [FilterKind; 5] = [
+    FilterKind::Pf,
+    FilterKind::PfEkf,
+    FilterKind::PfUkf,
+    FilterKind::PfIekf,
+    FilterKind::Hikpf,
+];
+
+/// One cell of the sweep: a reading of paper 000's experiment and the
+/// summaries it gives.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepCell {
+    /// Error formula of the cell.
+    pub error: ErrorMetric,
+    /// Whether the demo's `1e-99` likelihood floor is on.
+    pub likelihood_floor: bool,
+    /// IEKF iterations `c` of PF-IEKF and HIKPF.
+    pub iekf_iterations: usize,
+    /// Every filter's summary, in [`FilterKind::ALL`] order.
+    pub summary: Vec<FilterSummary>,
+}
+
+impl SweepCell {
+    /// The summary of filter `kind`.
+    pub fn filter(&self, kind: FilterKind) -> &FilterSummary {
+        let i = FilterKind::ALL.iter().position(|&k| k == kind).unwrap_or(0);
+        &self.summary[i]
+    }
+}
+
+/// Paper 000's unstated parameters swept: error formula {RMSE, eq. 11} x
+/// likelihood floor {off, on} x IEKF iterations [`SWEEP_ITERATIONS`], every
+/// other option as in `base`. Each (floor, iterations) pair is one run of
+/// the table, scored by both error formulas; every cell uses the same
+/// random streams, so cells differ only by the reading.
+///
+/// # Errors
+/// As [`run`].
+pub fn sweep(base: &HikpfConfig, progress: bool) -> Result<Vec<SweepCell>, ExperimentError> {
+    let mut cells = vec![];
+    for likelihood_floor in [false, true] {
+        for iekf_iterations in SWEEP_ITERATIONS {
+            let config = HikpfConfig {
+                error: ErrorMetric::Rmse,
+                likelihood_floor,
+                iekf_iterations,
+                sweep: false,
+                ..*base
+            };
+            let rmse = run(&config, None, progress)?;
+            // the same runs scored by eq. 11
+            let eq11 = HikpfResult {
+                config: HikpfConfig {
+                    error: ErrorMetric::Eq11Literal,
+                    ..config
+                },
+                runs: rmse
+                    .runs
+                    .iter()
+                    .map(|r| {
+                        r.iter()
+                            .map(|o| RunOutcome {
+                                error: o.other_error,
+                                other_error: o.error,
+                                ..*o
+                            })
+                            .collect()
+                    })
+                    .collect(),
+            };
+            for result in [rmse, eq11] {
+                cells.push(SweepCell {
+                    error: result.config.error,
+                    likelihood_floor,
+                    iekf_iterations,
+                    summary: result.summary(),
+                });
+            }
+        }
+    }
+    // the table's order: error formula, then floor, then iterations
+    cells.sort_by_key(|c| {
+        (
+            c.error == ErrorMetric::Eq11Literal,
+            c.likelihood_floor,
+            c.iekf_iterations,
+        )
+    });
+    Ok(cells)
+}
+
+/// The sweep as a table: per cell, mean and variance of paper 000's five
+/// filters, each mean's ratio to the paper's, and PF-IEKF / HIKPF (the
+/// paper: 3.16); the paper's row first.
+pub fn sweep_table(cells: &[SweepCell], runs: usize) -> Table {
+    let mut header = vec!["error", "floor", "c"];
+    let names: Vec<String> = PAPER_ROWS
+        .iter()
+        .flat_map(|k| {
+            [
+                format!("{} mean (x paper)", k.name()),
+                format!("{} var", k.name()),
+            ]
+        })
+        .collect();
+    header.extend(names.iter().map(String::as_str));
+    header.push("PF-IEKF/HIKPF");
+    let mut t = Table::new(
+        format!(
+            "hikpf: sweep of paper 000's unstated parameters ({runs} runs each): \
+             mean (ours/paper) and variance of the per-run error"
+        ),
+        &header,
+    );
+    let mut paper = vec!["paper 000".to_string(), "-".into(), "-".into()];
+    for k in PAPER_ROWS {
+        let (m, v) = k.paper().unwrap_or((f64::NAN, f64::NAN));
+        paper.push(format!("{m:.5}"));
+        paper.push(format!("{v:.2e}"));
+    }
+    let (pi, ph) = (
+        FilterKind::PfIekf.paper().map_or(f64::NAN, |p| p.0),
+        FilterKind::Hikpf.paper().map_or(f64::NAN, |p| p.0),
+    );
+    paper.push(format!("{:.2}", pi / ph));
+    t.push(paper);
+    for c in cells {
+        let mut row = vec![
+            match c.error {
+                ErrorMetric::Rmse => "rmse".to_string(),
+                ErrorMetric::Eq11Literal => "eq11".to_string(),
+            },
+            if c.likelihood_floor { "on" } else { "off" }.to_string(),
+            c.iekf_iterations.to_string(),
+        ];
+        for k in PAPER_ROWS {
+            let s = c.filter(k);
+            let p = k.paper().map_or(f64::NAN, |p| p.0);
+            row.push(format!("{:.5} ({:.2})", s.mean, s.mean / p));
+            row.push(format!("{:.2e}", s.var));
+        }
+        row.push(format!(
+            "{:.2}",
+            c.filter(FilterKind::PfIekf).mean / c.filter(FilterKind::Hikpf).mean
+        ));
+        t.push(row);
+    }
+    t
 }
 
 /// The `runs.csv` row of run `r`.
@@ -900,7 +1089,14 @@ impl Experiment for HikpfExperiment {
         write_outputs(&result, &dir)?;
         let mut table = result.table();
         table.title = format!("{}\n  options: {}", table.title, config.describe());
-        Ok(vec![table])
+        let mut tables = vec![table];
+        if config.sweep {
+            let cells = sweep(&config, opts.progress)?;
+            let t = sweep_table(&cells, config.runs);
+            write_text(&dir.join("sweep.csv"), &t.to_csv())?;
+            tables.push(t);
+        }
+        Ok(tables)
     }
 
     fn golden(&self) -> Result<Option<String>, ExperimentError> {
