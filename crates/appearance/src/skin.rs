@@ -18,7 +18,32 @@ pub struct SkinModel {
     sigma: f32,
     /// `-1 / (2 sigma^2)`.
     k: f32,
+    /// The batch kernel's constants (see [`SkinLanes`]).
+    lanes: SkinLanes,
 }
+
+/// Constants of the batch kernel behind [`SkinModel::map_rgb_into`] and
+/// [`SkinModel::window_mean`], which evaluates eq. 8 for [`LANES`] pixels
+/// at a time in straight-line `f32` code the compiler vectorises.
+///
+/// With `M = max(r, g, b)`, `m = min(r, g, b)`, `d = M - m`, the hexcone hue
+/// in sixths of a turn is `6 h = o + n / d` (`o = 0, 2, 4` and
+/// `n = g - b, b - r, r - g` as `M` is `r`, `g` or `b`). The kernel forms
+/// `6 (h - h_R) = (n / d + c_hi[o]) + c_lo[o]` with
+/// `c[o] = o - 6 h_R` split into two `f32`s, so the only rounding that
+/// grows with the hue is that of `n / d`: evaluating `6 h` first and then
+/// subtracting would round `6 h` (up to 6) to 2.4e-7 and, at the steepest
+/// point of eq. 8 with `sigma = 0.05`, move the cue by 5e-7.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct SkinLanes {
+    c_hi: [f32; 3],
+    c_lo: [f32; 3],
+    /// `k / 36`: the exponent's weight on `(6 dh)^2`.
+    k36: f32,
+}
+
+/// Pixels per step of the batch kernel.
+const LANES: usize = 16;
 
 impl SkinModel {
     /// The paper's spread, `sigma_hs = 0.05`.
@@ -44,11 +69,24 @@ impl SkinModel {
         }
         let sigma =
             crate::error::spread_at_least("sigma", sigma, crate::error::MIN_SIGMA_F32)? as f32;
+        let hue = hue.rem_euclid(1.0) as f32;
+        let k = -1.0 / (2.0 * sigma * sigma);
+        let c = [0.0, 2.0, 4.0].map(|o| o - 6.0 * f64::from(hue));
+        let c_hi = c.map(|c| c as f32);
+        let mut c_lo = [0f32; 3];
+        for i in 0..3 {
+            c_lo[i] = (c[i] - f64::from(c_hi[i])) as f32;
+        }
         Ok(Self {
-            hue: hue.rem_euclid(1.0) as f32,
+            hue,
             saturation: saturation as f32,
             sigma,
-            k: -1.0 / (2.0 * sigma * sigma),
+            k,
+            lanes: SkinLanes {
+                c_hi,
+                c_lo,
+                k36: (f64::from(k) / 36.0) as f32,
+            },
         })
     }
 
@@ -137,11 +175,9 @@ impl SkinModel {
     ) -> Result<()> {
         rgb.expect_channels("skin map", 3)?;
         check_out(&rgb, out)?;
+        let w = rgb.width();
         for y in 0..rgb.height() {
-            let row = rgb.row(y);
-            for (d, p) in out.row_mut(y).iter_mut().zip(row.chunks_exact(3)) {
-                *d = self.score_rgb(Rgb::new(p[0], p[1], p[2]));
-            }
+            self.score_row(&rgb.row(y)[..3 * w], &mut out.row_mut(y)[..w]);
         }
         Ok(())
     }
@@ -176,13 +212,102 @@ impl SkinModel {
         rgb.expect_channels("skin window", 3)?;
         check_window("skin window", window, rgb.width(), rgb.height())?;
         let mut s = 0f64;
+        let mut buf = [0f32; 4 * LANES];
         for y in window.y..window.bottom() {
-            for p in rgb.row(y)[window.x * 3..window.right() * 3].chunks_exact(3) {
-                s += f64::from(self.score_rgb(Rgb::new(p[0], p[1], p[2])));
+            for px in rgb.row(y)[window.x * 3..window.right() * 3].chunks(3 * buf.len()) {
+                let out = &mut buf[..px.len() / 3];
+                self.score_row(px, out);
+                s += out.iter().map(|&v| f64::from(v)).sum::<f64>();
             }
         }
         Ok(s / window.area() as f64)
     }
+
+    /// Eq. 8 for the RGB pixels of `rgb` (`3 x out.len()` bytes) into `out`,
+    /// [`LANES`] at a time; a short tail goes through a zero-padded block.
+    fn score_row(&self, rgb: &[u8], out: &mut [f32]) {
+        let mut px = rgb.chunks_exact(3 * LANES);
+        let mut o = out.chunks_exact_mut(LANES);
+        for (p, d) in (&mut px).zip(&mut o) {
+            let (Ok(p), Ok(d)) = (p.try_into(), d.try_into()) else {
+                unreachable!("chunks_exact gives whole blocks")
+            };
+            self.lanes.score(self.saturation, self.k, p, d);
+        }
+        let (p, d) = (px.remainder(), o.into_remainder());
+        if !d.is_empty() {
+            let mut block = [0u8; 3 * LANES];
+            let mut res = [0f32; LANES];
+            block[..p.len()].copy_from_slice(p);
+            self.lanes.score(self.saturation, self.k, &block, &mut res);
+            d.copy_from_slice(&res[..d.len()]);
+        }
+    }
+}
+
+impl SkinLanes {
+    /// Eq. 8 for [`LANES`] interleaved RGB pixels.
+    #[inline(always)]
+    fn score(&self, s_ref: f32, k: f32, rgb: &[u8; 3 * LANES], out: &mut [f32; LANES]) {
+        let mut arg = [0f32; LANES];
+        for i in 0..LANES {
+            let (r, g, b) = (rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]);
+            let max = r.max(g).max(b);
+            let min = r.min(g).min(b);
+            let d = i32::from(max - min);
+            // The sector as in `bayestrack_image::Hsv::from_rgb`: red
+            // first, then green (ties, gray pixels included, go to red).
+            let (n, c_hi, c_lo) = if max == r {
+                (i32::from(g) - i32::from(b), self.c_hi[0], self.c_lo[0])
+            } else if max == g {
+                (i32::from(b) - i32::from(r), self.c_hi[1], self.c_lo[1])
+            } else {
+                (i32::from(r) - i32::from(g), self.c_hi[2], self.c_lo[2])
+            };
+            // A gray pixel has n = d = 0: hue 0, saturation 0.
+            let q = n as f32 / d.max(1) as f32;
+            let mut dh6 = q + c_hi;
+            // Into [-3, 3]: both corrections are exact (Sterbenz).
+            if dh6 > 3.0 {
+                dh6 -= 6.0;
+            } else if dh6 < -3.0 {
+                dh6 += 6.0;
+            }
+            dh6 += c_lo;
+            let ds = d as f32 / i32::from(max).max(1) as f32 - s_ref;
+            arg[i] = self.k36 * (dh6 * dh6) + k * (ds * ds);
+        }
+        for (o, &a) in out.iter_mut().zip(&arg) {
+            *o = exp_nonpositive(a);
+        }
+    }
+}
+
+/// `e^x` for `x <= 0` (`x` is never NaN here), relative error below 2e-7;
+/// `e^-87` (1.6e-38) for any `x < -87`. Cody and Waite's
+/// reduction `x = n ln 2 + r`, `|r| <= ln 2 / 2`, Cephes' degree-6
+/// polynomial for `e^r`, and `2^n` built in the exponent bits, all
+/// branch-free so that a loop over it vectorises.
+#[inline(always)]
+fn exp_nonpositive(x: f32) -> f32 {
+    const LOG2E: f32 = std::f32::consts::LOG2_E;
+    // 1.5 x 2^23: adding it rounds to an integer, kept in the low mantissa bits.
+    const ROUND: f32 = 12_582_912.0;
+    const LN2_HI: f32 = 0.693_359_4;
+    const LN2_LO: f32 = -2.121_944_4e-4;
+    let x = x.max(-87.0);
+    let t = x * LOG2E + ROUND;
+    let n = t - ROUND;
+    let r = x - n * LN2_HI - n * LN2_LO;
+    let p = ((((1.987_569_1e-4 * r + 1.398_199_9e-3) * r + 8.333_452e-3) * r + 4.166_579_6e-2) * r
+        + 1.666_666_5e-1)
+        * r
+        + 5.000_000_1e-1;
+    let e = p * (r * r) + r + 1.0;
+    // n in [-126, 0]: the biased exponent n + 127 is in [1, 127].
+    let bits = (t.to_bits() as i32 - ROUND.to_bits() as i32 + 127) as u32;
+    let scale = f32::from_bits(bits << 23);
+    e * scale
 }
 
 fn check_out<T: Copy>(src: &ImageView<'_, T>, out: &ImageViewMut<'_, f32>) -> Result<()> {
@@ -294,7 +419,10 @@ mod tests {
         let mut b = Image::new(8, 4, 1, 0f32).unwrap();
         m.map_rgb_into(img.view(), &mut a.view_mut()).unwrap();
         m.map_hsv_into(hsv.view(), &mut b.view_mut()).unwrap();
-        assert_eq!(a, b);
+        // The batch kernel and score_hsv are each within 1e-6 of eq. 8.
+        for (x, y) in a.as_slice().iter().zip(b.as_slice()) {
+            assert!((x - y).abs() <= 2e-6, "{x} {y}");
+        }
         let mean = m.window_mean(img.view(), Rect::new(0, 0, 8, 4)).unwrap();
         let want: f64 = a.as_slice().iter().map(|&v| f64::from(v)).sum::<f64>() / 32.0;
         assert!((mean - want).abs() < 1e-6);
@@ -311,5 +439,138 @@ mod tests {
         assert!(SkinModel::from_window(gray3.view(), Rect::new(0, 0, 4, 4), 0.05).is_err());
         let mut wrong = Image::new(3, 3, 1, 0f32).unwrap();
         assert!(m.map_rgb_into(img.view(), &mut wrong.view_mut()).is_err());
+    }
+    /// Eq. 8 in `f64` from the exact hexcone hue and saturation of an 8-bit
+    /// RGB colour, with the model's reference and spread.
+    fn eq8(m: &SkinModel, r: u8, g: u8, b: u8) -> f64 {
+        let (rf, gf, bf) = (f64::from(r), f64::from(g), f64::from(b));
+        let max = rf.max(gf).max(bf);
+        let d = max - rf.min(gf).min(bf);
+        let s = if max > 0.0 { d / max } else { 0.0 };
+        let h6 = if d == 0.0 {
+            0.0
+        } else if max == rf {
+            (gf - bf) / d
+        } else if max == gf {
+            (bf - rf) / d + 2.0
+        } else {
+            (rf - gf) / d + 4.0
+        };
+        let mut dh = (h6 / 6.0 - m.hue()).rem_euclid(1.0);
+        if dh > 0.5 {
+            dh -= 1.0;
+        }
+        let ds = s - m.saturation();
+        (-(dh * dh + ds * ds) / (2.0 * m.sigma() * m.sigma())).exp()
+    }
+
+    /// The largest `|C - eq8|` of the batch kernel (through the map, in
+    /// rows of 256 blues) over the RGB colours with `r, g` on a grid of
+    /// `step`, and of the scalar `score_rgb` on the same colours.
+    fn max_errors(m: &SkinModel, step: usize) -> (f64, f64) {
+        let mut row = Image::new(256, 1, 3, 0u8).unwrap();
+        let mut out = Image::new(256, 1, 1, 0f32).unwrap();
+        let (mut fast, mut scalar) = (0f64, 0f64);
+        for r in (0..256).step_by(step) {
+            for g in (0..256).step_by(step) {
+                for (b, p) in row.as_mut_slice().chunks_exact_mut(3).enumerate() {
+                    p.copy_from_slice(&[r as u8, g as u8, b as u8]);
+                }
+                m.map_rgb_into(row.view(), &mut out.view_mut()).unwrap();
+                for (b, &c) in out.as_slice().iter().enumerate() {
+                    let want = eq8(m, r as u8, g as u8, b as u8);
+                    fast = fast.max((f64::from(c) - want).abs());
+                    let sc = m.score_rgb(Rgb::new(r as u8, g as u8, b as u8));
+                    scalar = scalar.max((f64::from(sc) - want).abs());
+                }
+            }
+        }
+        (fast, scalar)
+    }
+
+    #[test]
+    fn batch_kernel_matches_eq8_to_1e6() {
+        // The full cube (step 1) with SKIN_FULL_CUBE=1; CI checks every
+        // third red and green level, all blues (1.4 M colours per model).
+        let step = if std::env::var_os("SKIN_FULL_CUBE").is_some() {
+            1
+        } else {
+            3
+        };
+        let skin = Rgb::new(220, 160, 130).to_hsv();
+        for (h, s, sigma) in [
+            (f64::from(skin.h), f64::from(skin.s), SkinModel::PAPER_SIGMA),
+            (0.0, 0.5, SkinModel::PAPER_SIGMA),
+            (0.98, 0.8, SkinModel::PAPER_SIGMA),
+            (0.5, 0.2, SkinModel::PAPER_SIGMA),
+            (0.7, 1.0, 0.2),
+        ] {
+            let m = SkinModel::new(h, s, sigma).unwrap();
+            let (fast, scalar) = max_errors(&m, step);
+            eprintln!("h {h:.4} s {s:.3} sigma {sigma}: batch {fast:.3e}, score_rgb {scalar:.3e}");
+            assert!(
+                fast <= 1e-6,
+                "batch kernel off eq. 8 by {fast:e} ({h}, {s}, {sigma})"
+            );
+        }
+    }
+
+    #[test]
+    fn window_mean_and_map_agree_on_odd_widths() {
+        // Widths around the block size exercise the padded tail.
+        let m = SkinModel::new(0.05, 0.4, 0.05).unwrap();
+        let mut seed = 7u32;
+        for w in [1, 5, 15, 16, 17, 33, 70] {
+            let mut img = Image::new(w, 3, 3, 0u8).unwrap();
+            for v in img.as_mut_slice() {
+                seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                *v = (seed >> 24) as u8;
+            }
+            let mut out = Image::new(w, 3, 1, 0f32).unwrap();
+            m.map_rgb_into(img.view(), &mut out.view_mut()).unwrap();
+            let mut sum = 0f64;
+            for y in 0..3 {
+                for x in 0..w {
+                    let p = img.pixel(x, y).unwrap();
+                    let want = eq8(&m, p[0], p[1], p[2]);
+                    let got = f64::from(out.get(x, y, 0).unwrap());
+                    assert!(
+                        (got - want).abs() <= 1e-6,
+                        "{w} ({x}, {y}): {got} vs {want}"
+                    );
+                    sum += got;
+                }
+            }
+            let mean = m.window_mean(img.view(), Rect::new(0, 0, w, 3)).unwrap();
+            assert!((mean - sum / (3 * w) as f64).abs() < 1e-12);
+            let inner = m
+                .window_mean(img.view(), Rect::new(w / 2, 1, w - w / 2, 2))
+                .unwrap();
+            let mut s2 = 0f64;
+            for y in 1..3 {
+                for x in w / 2..w {
+                    s2 += f64::from(out.get(x, y, 0).unwrap());
+                }
+            }
+            assert!((inner - s2 / (2 * (w - w / 2)) as f64).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn exp_nonpositive_is_accurate() {
+        let mut worst = 0f64;
+        let mut x = 0f32;
+        while x > -90.0 {
+            let got = f64::from(exp_nonpositive(x));
+            let want = f64::from(x).exp();
+            if x > -87.0 {
+                worst = worst.max((got - want).abs() / want);
+            } else {
+                assert!(got < 2e-38);
+            }
+            x -= 0.001_3;
+        }
+        assert!(worst < 2e-7, "{worst:e}");
+        assert_eq!(exp_nonpositive(0.0), 1.0);
     }
 }
