@@ -1,10 +1,10 @@
-//! Track a real OTB sequence with any registered tracker and score it.
+//! Track a real OTB sequence with any registered tracker and score it. The
+//! frames stream from the folder one at a time (`Sequence::source`); a
+//! video decoder or a camera plugs in the same way, as a `FrameSource`.
 //!
 //! `cargo run --release --example track_sequence -- ../shared/data/sequences/Crossing ncc-scale`
 
-use std::borrow::Cow;
-
-use bayestrack::otb::{OnBadFrame, Sequence, score_otb, track_frames};
+use bayestrack::otb::{OnBadFrame, Sequence, score_otb, track_source};
 use bayestrack::trackers::build_tracker;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -17,11 +17,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let seq = Sequence::open(&dir)?;
     let init = seq.initial_box().ok_or("frame 1 has no ground-truth box")?;
     let mut tracker = build_tracker(&name, 0)?;
-    let run = track_frames(
+    let run = track_source(
         tracker.as_mut(),
-        seq.len(),
-        |i| seq.frame(i).map(Cow::Owned),
-        |i| seq.frames[i].clone(),
+        &mut seq.source(),
         init,
         OnBadFrame::Stop,
         |_| Ok(()),

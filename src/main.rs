@@ -3,16 +3,20 @@
 //! ```text
 //! bayestrack trackers
 //! bayestrack track --seq ../shared/data/sequences/Crossing --tracker ncc-scale --out boxes.txt
+//! bayestrack track --seq clip.mp4 --init 120,80,40,60 --out boxes.txt
+//! ffmpeg -i clip.mp4 -f yuv4mpegpipe - | bayestrack track --seq - --init 120,80,40,60
 //! ```
 
-use std::borrow::Cow;
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::time::Instant;
 
-use bayestrack::image::{BBox, Rgb, write_frame_with_boxes};
+use bayestrack::image::{BBox, Rgb, read_ground_truth, write_frame_with_boxes};
 use bayestrack::otb::metrics::score_otb;
-use bayestrack::otb::sequence::Sequence;
-use bayestrack::otb::track::{BoxFile, OnBadFrame, TrackError, track_frames};
+use bayestrack::otb::sequence::{OtbError, Sequence};
+use bayestrack::otb::source::{FrameSelection, FrameSource, Select, VideoSource, Y4mSource};
+use bayestrack::otb::track::{BoxFile, OnBadFrame, TrackError, box_row, track_source};
 use bayestrack::trackers::{REGISTRY, tracker_info};
 use clap::{Parser, Subcommand, ValueEnum};
 
@@ -24,7 +28,8 @@ const DEFAULT_TRACKER: &str = "ncc-scale";
     name = "bayestrack",
     version,
     about = "Bayesian filtering and visual object tracking on real video",
-    long_about = "Runs the bayestrack trackers on a folder of video frames. \
+    long_about = "Runs the bayestrack trackers on real video: a folder of frames, an OTB \
+                  sequence, a video file (through ffmpeg) or a Y4M stream on standard input. \
                   `bayestrack trackers` lists them; `bayestrack track` runs one."
 )]
 struct Cli {
@@ -43,37 +48,58 @@ enum Command {
 }
 
 const TRACK_AFTER_HELP: &str = "\
+Video: `--seq clip.mp4` decodes through the ffmpeg on PATH (or BAYESTRACK_FFMPEG);
+any decoder can pipe Y4M instead:
+  ffmpeg -i clip.mp4 -f yuv4mpegpipe - | bayestrack track --seq - --init x,y,w,h
+
 Boxes use the OTB convention: x,y is the 1-based top-left pixel, w,h the size.
-Frame 1's box is the initial box; one box per frame is written as soon as it
-is known, so an interrupted or failed run keeps every box written so far.
-Scores (when the folder has ground truth): success AUC (mean of the success
-curve at IoU thresholds 0, 0.05, ..., 1), precision at 20 px centre error,
-mean IoU; unlabelled rows (0,0,0,0) are not scored. fps counts only the
-tracker's own time (not decoding frames or writing files).
+The first frame's box is the initial box; one box per frame run is written as
+soon as it is known (a row whole or not at all), so an interrupted or failed
+run keeps every box written so far. Scores (with ground truth): success AUC
+(mean of the success curve at IoU thresholds 0, 0.05, ..., 1), precision at
+20 px centre error, mean IoU; unlabelled rows (0,0,0,0) and frames past the
+last ground-truth row are not scored. fps counts only the tracker's own time
+(not decoding frames or writing files). Progress goes to standard error when
+it is a terminal.
 
 Exit status: 0 on success, 1 when the run failed (the message names the file
 or frame), 2 for bad arguments.";
 
 #[derive(clap::Args)]
 struct TrackArgs {
-    /// Sequence folder: OTB layout (`img/0001.jpg ...` plus
-    /// `groundtruth_rect.txt` or `*_gt.txt`), or any folder of numbered
-    /// PNG/JPEG frames (then `--init` is required).
-    #[arg(long, value_name = "DIR")]
+    /// What to track: a folder of numbered PNG/JPEG frames (OTB layout
+    /// `img/0001.jpg ...` plus `groundtruth_rect.txt` or `*_gt.txt`; an
+    /// OTB-100 sequence runs on the benchmark's frames), `-` for a Y4M
+    /// stream on standard input (`ffmpeg -i clip.mp4 -f yuv4mpegpipe - |
+    /// bayestrack track --seq - ...`), a `.y4m` file, or a video file
+    /// (decoded by the `ffmpeg` on PATH).
+    #[arg(long, value_name = "DIR|FILE|-")]
     seq: PathBuf,
     /// Tracker name (see `bayestrack trackers`).
     #[arg(long, default_value = DEFAULT_TRACKER)]
     tracker: String,
-    /// Initial box `x,y,w,h` on frame 1 (default: the first ground-truth
-    /// row).
-    #[arg(long, value_name = "X,Y,W,H", value_parser = parse_box)]
+    /// Initial box `x,y,w,h` on the first frame run (default: its
+    /// ground-truth row). A box partly outside the frame is clipped to it.
+    #[arg(long, value_name = "X,Y,W,H", value_parser = parse_box, allow_hyphen_values = true)]
     init: Option<BBox>,
-    /// Where to write the boxes, one `x,y,w,h` line per frame (`-` for
-    /// standard output, the default).
+    /// Ground-truth file to score with instead of the folder's own (one row
+    /// per frame from the source's first; Jogging's second target:
+    /// `Jogging/groundtruth_rect.2.txt`); also scores a video or a stream.
+    #[arg(long, value_name = "FILE")]
+    groundtruth: Option<PathBuf>,
+    /// Frames to run, `a..b` (1-based, inclusive, counted from the
+    /// source's first frame), `a..` or `a`.
+    #[arg(long, value_name = "A..B")]
+    frames: Option<String>,
+    /// Run on every Nth frame of the range only.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    every: usize,
+    /// Where to write the boxes, one `x,y,w,h` line per frame run (`-` for
+    /// standard output, the default). An input file is refused.
     #[arg(long, value_name = "FILE", default_value = "-")]
     out: PathBuf,
-    /// Also write every frame as a PNG into this folder with the tracker's
-    /// box in green and, where labelled, the ground truth in red.
+    /// Also write every frame run as a PNG into this folder with the
+    /// tracker's box in green and, where labelled, the ground truth in red.
     #[arg(long, value_name = "DIR")]
     draw: Option<PathBuf>,
     /// Seed of the tracker's random streams (same seed, same boxes).
@@ -140,17 +166,203 @@ fn list_trackers() {
     }
 }
 
-fn track(args: &TrackArgs) -> Result<(), String> {
-    let info = tracker_info(&args.tracker).map_err(|e| e.to_string())?;
-    let seq = Sequence::open_frames(&args.seq).map_err(|e| e.to_string())?;
-    let init = match (args.init, seq.initial_box()) {
-        (Some(b), _) | (None, Some(b)) => b,
-        (None, None) => {
+/// What `--seq` names, opened.
+enum Input {
+    /// A folder of frames (or an OTB-100 sequence).
+    Folder(Sequence),
+    /// A Y4M stream or a video decoded by ffmpeg.
+    Stream(Box<dyn FrameSource>, PathBuf),
+}
+
+fn open_input(args: &TrackArgs) -> Result<Input, String> {
+    let seq = &args.seq;
+    let e = |e: OtbError| e.to_string();
+    if seq == Path::new("-") {
+        return Ok(Input::Stream(
+            Box::new(Y4mSource::stdin().map_err(e)?),
+            seq.clone(),
+        ));
+    }
+    if seq.is_file() {
+        let y4m = seq
+            .extension()
+            .is_some_and(|x| x.eq_ignore_ascii_case("y4m"));
+        let source: Box<dyn FrameSource> = if y4m {
+            Box::new(Y4mSource::open(seq).map_err(e)?)
+        } else {
+            Box::new(VideoSource::open(seq).map_err(e)?)
+        };
+        return Ok(Input::Stream(source, seq.clone()));
+    }
+    let folder = match &args.groundtruth {
+        Some(gt) => Sequence::open_with_ground_truth(seq, gt),
+        None => Sequence::open_frames(seq),
+    };
+    folder.map(Input::Folder).map_err(e)
+}
+
+/// The canonical form of `path`; `None` when it does not exist.
+fn canonical(path: &Path) -> Option<PathBuf> {
+    std::fs::canonicalize(path).ok()
+}
+
+/// Refuses an `--out` that is one of the inputs, before anything is
+/// written.
+fn check_out(out: &Path, inputs: &[&Path]) -> Result<(), String> {
+    if out == Path::new("-") {
+        return Ok(());
+    }
+    let Some(out_c) = canonical(out) else {
+        return Ok(()); // it does not exist, so it is no input
+    };
+    for input in inputs {
+        if input.file_name() == out_c.file_name() && canonical(input).as_ref() == Some(&out_c) {
             return Err(format!(
-                "{}: no ground truth for frame 1; give the initial box with --init x,y,w,h",
-                seq.dir.display()
+                "--out {} is an input of this run ({}): it would be overwritten; write the \
+                 boxes elsewhere",
+                out.display(),
+                input.display()
             ));
         }
+    }
+    Ok(())
+}
+
+/// Writes a drawn frame whole or not at all: into a `.part` file renamed
+/// over `path`, which is removed when writing fails part-way.
+fn write_drawn(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>) -> Result<(), String> {
+    let mut part = path.as_os_str().to_owned();
+    part.push(".part");
+    let part = PathBuf::from(part);
+    let done = write(&part).and_then(|()| {
+        std::fs::rename(&part, path).map_err(|e| format!("cannot write {}: {e}", path.display()))
+    });
+    if done.is_err() {
+        let _ = std::fs::remove_file(&part);
+    }
+    done
+}
+
+/// Progress on standard error when it is a terminal: frames done, elapsed
+/// time and, when the length is known, the time left.
+struct Progress {
+    on: bool,
+    total: Option<usize>,
+    start: Instant,
+    shown: Option<Instant>,
+}
+
+impl Progress {
+    fn new(total: Option<usize>) -> Self {
+        Self {
+            on: std::io::stderr().is_terminal(),
+            total,
+            start: Instant::now(),
+            shown: None,
+        }
+    }
+
+    fn update(&mut self, done: usize) {
+        if !self.on || self.shown.is_some_and(|t| t.elapsed().as_millis() < 100) {
+            return;
+        }
+        self.shown = Some(Instant::now());
+        let elapsed = self.start.elapsed().as_secs_f64();
+        let clock = |s: f64| {
+            let s = s.round() as u64;
+            format!("{}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60)
+        };
+        let line = match self.total {
+            Some(total) if total > 0 => {
+                let left = elapsed / done.max(1) as f64 * total.saturating_sub(done) as f64;
+                format!(
+                    "frame {done}/{total} ({:.0}%), elapsed {}, ETA {}",
+                    100.0 * done as f64 / total as f64,
+                    clock(elapsed),
+                    clock(left)
+                )
+            }
+            _ => format!("frame {done}, elapsed {}", clock(elapsed)),
+        };
+        eprint!("\r{line}\x1b[K");
+    }
+
+    fn finish(&self) {
+        if self.on && self.shown.is_some() {
+            eprint!("\r\x1b[K");
+        }
+    }
+}
+
+fn track(args: &TrackArgs) -> Result<(), String> {
+    let info = tracker_info(&args.tracker).map_err(|e| e.to_string())?;
+    let selection = FrameSelection::parse(args.frames.as_deref(), args.every)?;
+    let input = open_input(args)?;
+    // The ground truth, one entry per source position.
+    let (truth, truth_rows, notes): (Vec<Option<BBox>>, usize, Vec<String>) = match &input {
+        Input::Folder(seq) => (
+            seq.ground_truth.clone(),
+            seq.ground_truth_rows,
+            seq.notes.clone(),
+        ),
+        Input::Stream(..) => match &args.groundtruth {
+            Some(gt) => {
+                let rows = read_ground_truth(gt).map_err(|e| e.to_string())?;
+                let n = rows.len();
+                (rows, n, Vec::new())
+            }
+            None => (Vec::new(), 0, Vec::new()),
+        },
+    };
+    for note in &notes {
+        eprintln!("note: {note}");
+    }
+    let mut inputs: Vec<&Path> = Vec::new();
+    if let Input::Folder(seq) = &input {
+        inputs.extend(seq.frames.iter().map(PathBuf::as_path));
+        inputs.extend(seq.ground_truth_path.as_deref());
+    } else {
+        inputs.push(&args.seq);
+    }
+    inputs.extend(args.groundtruth.as_deref());
+    check_out(&args.out, &inputs)?;
+    if let (Some(dir), Input::Folder(seq)) = (&args.draw, &input) {
+        let frame_dir = seq.frames.first().and_then(|f| f.parent());
+        if frame_dir
+            .and_then(canonical)
+            .is_some_and(|f| canonical(dir) == Some(f))
+        {
+            return Err(format!(
+                "--draw {} is the folder of the input frames: drawn frames could overwrite them",
+                dir.display()
+            ));
+        }
+    }
+    let (folder, stream) = match input {
+        Input::Folder(seq) => (Some(seq), None),
+        Input::Stream(stream, _) => (None, Some(stream)),
+    };
+    let name = folder
+        .as_ref()
+        .map_or_else(|| args.seq.display().to_string(), |s| s.name.clone());
+    let mut source: Box<dyn FrameSource + '_> = match (&folder, stream) {
+        (Some(seq), _) => Box::new(Select::new(seq.source(), selection)),
+        (None, Some(stream)) => Box::new(Select::new(stream, selection)),
+        (None, None) => unreachable!("the input is a folder or a stream"),
+    };
+    let init = match args.init {
+        Some(b) => b,
+        None => truth
+            .get(selection.first - 1)
+            .copied()
+            .flatten()
+            .ok_or_else(|| {
+                format!(
+                    "{name}: no ground truth for frame {} (the first run); give the initial box \
+                     with --init x,y,w,h",
+                    selection.first
+                )
+            })?,
     };
     if let Some(dir) = &args.draw {
         std::fs::create_dir_all(dir)
@@ -165,32 +377,36 @@ fn track(args: &TrackArgs) -> Result<(), String> {
     let green = Rgb::new(0, 220, 0);
     let red = Rgb::new(230, 0, 0);
     let mut written = 0usize;
-    let result = track_frames(
-        tracker.as_mut(),
-        seq.len(),
-        |i| seq.frame(i).map(Cow::Owned),
-        |i| seq.frames[i].clone(),
-        init,
-        on_bad_frame,
-        |f| {
-            writer.write(&f.bbox)?;
-            written += 1;
-            if let (Some(dir), Some(frame)) = (&args.draw, f.frame) {
-                let mut boxes = vec![(f.bbox, green)];
-                if let Some(truth) = seq.ground_truth[f.index] {
-                    boxes.push((truth, red));
-                }
-                let path = dir.join(format!("{:04}.png", f.index + 1));
-                write_frame_with_boxes(&path, frame, &boxes, 1).map_err(|e| {
-                    TrackError::Output {
-                        path,
-                        source: std::io::Error::other(e.to_string()),
-                    }
-                })?;
+    let mut progress = Progress::new(source.remaining());
+    let result = track_source(tracker.as_mut(), source.as_mut(), init, on_bad_frame, |f| {
+        writer.write(&f.bbox)?;
+        written += 1;
+        progress.update(written);
+        if let (Some(dir), Some(frame)) = (&args.draw, f.frame) {
+            let mut boxes = vec![(f.bbox, green)];
+            if let Some(t) = truth.get(f.number - 1).copied().flatten() {
+                boxes.push((t, red));
             }
-            Ok(())
-        },
-    );
+            let stem = folder
+                .as_ref()
+                .and_then(|s| s.frames.get(f.number - 1))
+                .and_then(|p| p.file_stem())
+                .map_or_else(
+                    || format!("{:04}", f.number),
+                    |s| s.to_string_lossy().into_owned(),
+                );
+            let path = dir.join(format!("{stem}.png"));
+            write_drawn(&path, |part| {
+                write_frame_with_boxes(part, frame, &boxes, 1).map_err(|e| e.to_string())
+            })
+            .map_err(|e| TrackError::Output {
+                path,
+                source: std::io::Error::other(e),
+            })?;
+        }
+        Ok(())
+    });
+    progress.finish();
     let run = result.map_err(|e| {
         let kept = if args.out == Path::new("-") {
             String::new()
@@ -202,19 +418,46 @@ fn track(args: &TrackArgs) -> Result<(), String> {
         };
         format!("{e}{kept}")
     })?;
+    drop(source);
+    if run.init != init {
+        eprintln!(
+            "note: the initial box {} reaches outside the first frame: clipped to {}",
+            box_row(&init),
+            box_row(&run.init)
+        );
+    }
     for (index, why) in &run.skipped {
-        eprintln!("skipped frame {}: {why}", index + 1);
+        eprintln!("skipped frame {}: {why}", run.numbers[*index]);
+    }
+    if let Some(first) = run.converted.first() {
+        let n = run.converted.len();
+        eprintln!(
+            "note: {n} frames (the first: frame {first}) had another channel count than the \
+             first frame and were converted to it"
+        );
     }
     eprintln!(
-        "{}: {} on {} frames, {:.0} fps (tracker time only), target lost on {} frames",
-        seq.name,
+        "{name}: {} on {} frames, {:.0} fps (tracker time only), target lost on {} frames",
         info.name,
         run.boxes.len(),
         run.fps(),
         run.lost_frames
     );
-    if seq.ground_truth.iter().any(Option::is_some) {
-        let score = score_otb(&run.boxes, &seq.ground_truth).map_err(|e| e.to_string())?;
+    let scored: Vec<Option<BBox>> = run
+        .numbers
+        .iter()
+        .map(|&n| truth.get(n - 1).copied().flatten())
+        .collect();
+    let unscored = run.numbers.iter().filter(|&&n| n > truth_rows).count();
+    if truth_rows > 0 && unscored > 0 {
+        eprintln!(
+            "note: {unscored} of the {} frames run have no ground-truth row: tracked, written, \
+             not scored",
+            run.numbers.len()
+        );
+    }
+    if scored.iter().any(Option::is_some) {
+        let score = score_otb(&run.boxes, &scored).map_err(|e| e.to_string())?;
         eprintln!(
             "success AUC {:.3}, precision@20px {:.3}, mean IoU {:.3} over {} labelled frames",
             score.auc, score.precision_20, score.mean_overlap, score.frames_scored

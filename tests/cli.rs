@@ -165,7 +165,7 @@ fn frames_of_changing_size_are_refused_keeping_the_boxes() {
 }
 
 #[test]
-fn an_initial_box_outside_the_frame_is_refused() {
+fn an_initial_box_wholly_outside_the_frame_is_refused() {
     let dir = tmpdir("outside");
     write_sequence(&dir, 3, 3);
     let o = bayestrack(&[
@@ -173,27 +173,355 @@ fn an_initial_box_outside_the_frame_is_refused() {
         "--seq",
         dir.to_str().unwrap(),
         "--init",
-        "75,10,12,12",
+        "95,10,12,12",
         "--out",
         dir.join("b.txt").to_str().unwrap(),
     ]);
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(
-        err.contains("box 75,10,12,12 (x,y,width,height) is outside the 80x60 frame"),
+        err.contains("box 95,10,12,12 (x,y,width,height) is outside the 80x60 frame"),
         "{err}"
     );
 }
 
 #[test]
-fn ground_truth_with_too_few_rows_is_refused() {
-    let dir = tmpdir("short-gt");
-    write_sequence(&dir, 4, 3);
-    let o = bayestrack(&["track", "--seq", dir.to_str().unwrap()]);
+fn an_initial_box_partly_outside_is_clipped_and_negative_numbers_parse() {
+    let dir = tmpdir("partly");
+    write_sequence(&dir, 4, 4);
+    let out = dir.join("b.txt");
+    // Written as a separate argument, a leading minus is a number, not a flag.
+    let o = bayestrack(&[
+        "track",
+        "--seq",
+        dir.to_str().unwrap(),
+        "--tracker",
+        "mad",
+        "--init",
+        "-5,20,20,12",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("clipped to 1,20,14,12"), "{err}");
+    let boxes = fs::read_to_string(&out).unwrap();
+    assert_eq!(boxes.lines().next(), Some("1,20,14,12"));
+    // Partly outside on the far side too.
+    let seq = dir.to_str().unwrap();
+    let o = bayestrack(&[
+        "track",
+        "--seq",
+        seq,
+        "--tracker",
+        "mad",
+        "--init",
+        "75,10,12,12",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("clipped to 75,10,6,12"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn frames_past_the_last_ground_truth_row_are_tracked_not_scored() {
+    // Football1 as shipped: 81 images, 74 rows. Under its own name the
+    // OTB-100 table runs frames 1-74; under another name every frame runs
+    // and the 7 without a row are not scored.
+    let root = std::env::temp_dir().join(format!("bayestrack-cli-fb-{}", std::process::id()));
+    let _ = fs::remove_dir_all(&root);
+    let dir = root.join("Football1");
+    fs::create_dir_all(dir.join("img")).unwrap();
+    write_sequence(&dir, 30, 30);
+    // The table's names are .jpg: PNG bytes decode by their content.
+    for k in 1..=30 {
+        fs::rename(
+            dir.join(format!("img/{k:04}.png")),
+            dir.join(format!("img/{k:04}.jpg")),
+        )
+        .unwrap();
+    }
+    for k in 31..=81 {
+        fs::copy(
+            dir.join("img/0030.jpg"),
+            dir.join(format!("img/{k:04}.jpg")),
+        )
+        .unwrap();
+    }
+    let gt = fs::read_to_string(dir.join("groundtruth_rect.txt")).unwrap();
+    let last = gt.lines().last().unwrap().to_string();
+    let rows: String = gt
+        .lines()
+        .chain(std::iter::repeat_n(last.as_str(), 44))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    fs::write(dir.join("groundtruth_rect.txt"), rows).unwrap();
+    let out = root.join("boxes.txt");
+    let run = |seq: &Path| {
+        let (seq, out) = (seq.to_str().unwrap(), out.to_str().unwrap());
+        bayestrack(&["track", "--seq", seq, "--tracker", "mad", "--out", out])
+    };
+    let o = run(&dir);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert_eq!(lines(&out), 74);
+    assert!(err.contains("Football1: mad on 74 frames"), "{err}");
+    assert!(err.contains("over 74 labelled frames"), "{err}");
+    let plain = root.join("MyFootball");
+    fs::rename(&dir, &plain).unwrap();
+    let o = run(&plain);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert_eq!(lines(&out), 81);
+    assert!(
+        err.contains("frames 75-81 have no ground-truth row"),
+        "{err}"
+    );
+    assert!(
+        err.contains("7 of the 81 frames run have no ground-truth row"),
+        "{err}"
+    );
+    assert!(err.contains("over 74 labelled frames"), "{err}");
+    let _ = fs::remove_dir_all(&root);
+}
+
+#[test]
+fn out_naming_an_input_is_refused_before_anything_is_written() {
+    let dir = tmpdir("out-input");
+    write_sequence(&dir, 3, 3);
+    let frame = dir.join("img/0002.png");
+    let before = fs::read(&frame).unwrap();
+    let seq = dir.to_str().unwrap();
+    for target in [
+        frame.clone(),
+        dir.join("groundtruth_rect.txt"),
+        dir.join("img/../img/0002.png"),
+    ] {
+        let o = bayestrack(&["track", "--seq", seq, "--out", target.to_str().unwrap()]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(err.contains("is an input of this run"), "{err}");
+    }
+    assert_eq!(fs::read(&frame).unwrap(), before);
+    let img = dir.join("img");
+    let o = bayestrack(&["track", "--seq", seq, "--draw", img.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("folder of the input frames"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(fs::read(&frame).unwrap(), before);
+}
+
+#[test]
+fn a_full_disk_is_an_error_naming_the_file() {
+    if !Path::new("/dev/full").exists() {
+        eprintln!("SKIPPED: no /dev/full on this system; the disk-full case is not checked");
+        return;
+    }
+    let dir = tmpdir("full");
+    write_sequence(&dir, 3, 3);
+    let seq = dir.to_str().unwrap();
+    let o = bayestrack(&["track", "--seq", seq, "--out", "/dev/full"]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("cannot write /dev/full"), "{err}");
+}
+
+#[test]
+fn frames_and_every_pick_the_frames_run_and_scored() {
+    let dir = tmpdir("select");
+    write_sequence(&dir, 10, 10);
+    let out = dir.join("boxes.txt");
+    let draw = dir.join("drawn");
+    let o = bayestrack(&[
+        "track",
+        "--seq",
+        dir.to_str().unwrap(),
+        "--tracker",
+        "mad",
+        "--frames",
+        "3..8",
+        "--every",
+        "2",
+        "--out",
+        out.to_str().unwrap(),
+        "--draw",
+        draw.to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    // Frames 3, 5 and 7; frame 3's ground truth is the initial box.
+    let boxes = fs::read_to_string(&out).unwrap();
+    assert_eq!(boxes.lines().next(), Some("15,21,12,12"));
+    assert_eq!(boxes.lines().count(), 3);
+    assert!(err.contains("over 3 labelled frames"), "{err}");
+    let mut drawn: Vec<String> = fs::read_dir(&draw)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    drawn.sort();
+    assert_eq!(drawn, ["0003.png", "0005.png", "0007.png"]);
+    let seq = dir.to_str().unwrap();
+    for (frames, every) in [("0..3", "1"), ("4..2", "1"), ("1..3", "0")] {
+        let o = bayestrack(&["track", "--seq", seq, "--frames", frames, "--every", every]);
+        assert_eq!(o.status.code(), Some(1), "{frames} {every}");
+    }
+}
+
+/// The synthetic sequence of [`write_sequence`] as a 4:2:0 Y4M stream
+/// (gray frames: Y is the gray level, full range, chroma neutral).
+fn y4m_sequence(n: usize) -> Vec<u8> {
+    let (w, h) = (80, 60);
+    let mut out = b"YUV4MPEG2 W80 H60 F25:1 Ip A1:1 C420jpeg XCOLORRANGE=FULL\n".to_vec();
+    for k in 0..n {
+        out.extend(b"FRAME\n");
+        out.extend(frame(w, h, 10 + 2 * k, 20).as_slice());
+        out.extend(vec![128u8; 2 * (w / 2) * (h / 2)]);
+    }
+    out
+}
+
+fn bayestrack_stdin(args: &[&str], input: &[u8], env: &[(&str, &str)]) -> Output {
+    use std::io::Write;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_bayestrack"))
+        .args(args)
+        .envs(env.iter().copied())
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stdin = child.stdin.take().unwrap();
+    let input = input.to_vec();
+    let writer = std::thread::spawn(move || {
+        let _ = stdin.write_all(&input);
+    });
+    let out = child.wait_with_output().unwrap();
+    writer.join().unwrap();
+    out
+}
+
+#[test]
+fn y4m_on_standard_input_tracks() {
+    let dir = tmpdir("y4m");
+    write_sequence(&dir, 8, 8);
+    let gt = dir.join("groundtruth_rect.txt");
+    let args = [
+        "track",
+        "--seq",
+        "-",
+        "--tracker",
+        "mad",
+        "--init",
+        "11,21,12,12",
+        "--groundtruth",
+        gt.to_str().unwrap(),
+    ];
+    let o = bayestrack_stdin(&args, &y4m_sequence(8), &[]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    let boxes = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(boxes.lines().count(), 8);
+    assert_eq!(boxes.lines().last(), Some("25,21,12,12"));
+    assert!(err.contains("precision@20px 1.000"), "{err}");
+    // A stream cut inside frame 6 keeps the 5 boxes before it.
+    let bytes = y4m_sequence(8);
+    let o = bayestrack_stdin(&args[..7], &bytes[..bytes.len() * 5 / 8 + 100], &[]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("stdin: Y4M frame 6: cut short"), "{err}");
+    assert_eq!(String::from_utf8_lossy(&o.stdout).lines().count(), 5);
+}
+
+#[test]
+fn a_video_file_without_ffmpeg_says_how_to_get_it() {
+    let dir = tmpdir("noffmpeg");
+    let clip = dir.join("clip.mp4");
+    fs::write(&clip, b"not really a video").unwrap();
+    let o = bayestrack_stdin(
+        &[
+            "track",
+            "--seq",
+            clip.to_str().unwrap(),
+            "--init",
+            "1,1,5,5",
+        ],
+        b"",
+        &[("BAYESTRACK_FFMPEG", "/nonexistent/ffmpeg")],
+    );
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(
-        err.contains("groundtruth_rect.txt") && err.contains("3 ground-truth rows for 4 frames"),
+        err.contains("clip.mp4") && err.contains("install it"),
+        "{err}"
+    );
+    assert!(
+        err.contains("yuv4mpegpipe - | bayestrack track --seq -"),
+        "{err}"
+    );
+}
+
+/// A stand-in for ffmpeg: a script that writes a prepared Y4M file, or
+/// fails as ffmpeg does on a file it cannot read.
+#[cfg(unix)]
+fn fake_ffmpeg(dir: &Path, name: &str, body: &str) -> PathBuf {
+    use std::os::unix::fs::PermissionsExt;
+    let script = dir.join(name);
+    fs::write(&script, format!("#!/bin/sh\n{body}\n")).unwrap();
+    fs::set_permissions(&script, fs::Permissions::from_mode(0o755)).unwrap();
+    script
+}
+
+#[cfg(unix)]
+#[test]
+fn a_video_file_is_decoded_through_ffmpeg() {
+    let dir = tmpdir("fakeffmpeg");
+    write_sequence(&dir, 8, 8);
+    let stream = dir.join("stream.y4m");
+    fs::write(&stream, y4m_sequence(8)).unwrap();
+    let ok = fake_ffmpeg(&dir, "ok.sh", &format!("cat '{}'", stream.display()));
+    let clip = dir.join("clip.mp4");
+    fs::write(&clip, b"stand-in").unwrap();
+    let clip = clip.to_str().unwrap();
+    let args = [
+        "track",
+        "--seq",
+        clip,
+        "--tracker",
+        "mad",
+        "--init",
+        "11,21,12,12",
+    ];
+    let o = bayestrack_stdin(&args, b"", &[("BAYESTRACK_FFMPEG", ok.to_str().unwrap())]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(out.lines().last(), Some("25,21,12,12"));
+    // A .y4m file is read directly, without ffmpeg.
+    let mut direct = args;
+    direct[2] = stream.to_str().unwrap();
+    let o = bayestrack_stdin(
+        &direct,
+        b"",
+        &[("BAYESTRACK_FFMPEG", "/nonexistent/ffmpeg")],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    // ffmpeg's own message when it cannot decode.
+    let bad = fake_ffmpeg(
+        &dir,
+        "bad.sh",
+        "echo 'clip.mp4: Invalid data found when processing input' >&2; exit 1",
+    );
+    let o = bayestrack_stdin(&args, b"", &[("BAYESTRACK_FFMPEG", bad.to_str().unwrap())]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("Invalid data found when processing input"),
         "{err}"
     );
 }

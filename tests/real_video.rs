@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use bayestrack::otb::metrics::score_otb;
 use bayestrack::otb::sequence::Sequence;
-use bayestrack::otb::track::{OnBadFrame, track_frames};
+use bayestrack::otb::track::{OnBadFrame, track_frames, track_source};
 use bayestrack::trackers::tracker_info;
 
 fn sequence(name: &str) -> Option<Sequence> {
@@ -53,4 +53,36 @@ fn the_fastest_tracker_follows_crossing() {
     let (auc, p20) = one_pass("ncc-scale", &seq);
     assert!(auc >= 0.6, "AUC {auc:.3} below the floor 0.6");
     assert!(p20 >= 0.9, "P@20 {p20:.3} below the floor 0.9");
+}
+
+/// The streaming loop (frames pulled one at a time from the folder) gives
+/// the indexed loop's boxes on real video, frame for frame.
+#[test]
+fn streaming_and_indexed_loops_agree_on_crossing() {
+    let Some(seq) = sequence("Crossing") else {
+        return;
+    };
+    let init = seq.initial_box().unwrap();
+    let mut a = tracker_info("ncc-scale").unwrap().build(0).unwrap();
+    let indexed = track_frames(
+        a.as_mut(),
+        seq.len(),
+        |i| seq.frame(i).map(Cow::Owned),
+        |i| seq.frames[i].clone(),
+        init,
+        OnBadFrame::Stop,
+        |_| Ok(()),
+    )
+    .unwrap();
+    let mut b = tracker_info("ncc-scale").unwrap().build(0).unwrap();
+    let streamed = track_source(
+        b.as_mut(),
+        &mut seq.source(),
+        init,
+        OnBadFrame::Stop,
+        |_| Ok(()),
+    )
+    .unwrap();
+    assert_eq!(streamed.boxes, indexed.boxes);
+    assert_eq!(streamed.numbers, (1..=seq.len()).collect::<Vec<_>>());
 }

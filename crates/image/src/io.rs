@@ -69,15 +69,89 @@ fn frames_in(dir: &Path) -> Result<Vec<PathBuf>> {
     Ok(out)
 }
 
-/// Whether the end of the file carries the format's end marker. The JPEG
-/// decoder fills a truncated scan with gray instead of failing, so a missing
-/// EOI (`FF D9`) or PNG `IEND` is how truncation is caught.
+/// Whether the file holds the format's whole stream, wherever it ends.
+///
+/// The JPEG decoder fills a truncated scan with gray instead of failing,
+/// so truncation is caught here: the JPEG markers are walked from the
+/// start of image (segments by their lengths, entropy-coded data up to the
+/// next marker) until the end-of-image marker (`FF D9`), and the PNG chunks
+/// by their lengths until `IEND`. Bytes after that end are ignored: cameras
+/// and editors append data (thumbnails, maker notes) after the image, and
+/// decoders stop at its end.
 fn has_end_marker(bytes: &[u8], format: image::ImageFormat) -> bool {
-    let tail = &bytes[bytes.len().saturating_sub(64)..];
     match format {
-        image::ImageFormat::Jpeg => tail.windows(2).any(|w| w == [0xFF, 0xD9]),
-        image::ImageFormat::Png => tail.windows(4).any(|w| w == b"IEND"),
+        image::ImageFormat::Jpeg => jpeg_end(bytes).is_some(),
+        image::ImageFormat::Png => png_end(bytes).is_some(),
         _ => true,
+    }
+}
+
+/// The offset just past a JPEG's end-of-image marker, walking its
+/// structure from the start-of-image marker; `None` when the stream ends
+/// first (a file cut short) or is not a JPEG.
+fn jpeg_end(bytes: &[u8]) -> Option<usize> {
+    if bytes.get(..2)? != [0xFF, 0xD8] {
+        return None;
+    }
+    let mut at = 2;
+    loop {
+        // A marker: 0xFF, optional fill bytes 0xFF, then the code.
+        if *bytes.get(at)? != 0xFF {
+            return None;
+        }
+        while *bytes.get(at)? == 0xFF {
+            at += 1;
+        }
+        let code = *bytes.get(at)?;
+        at += 1;
+        match code {
+            0xD9 => return Some(at),
+            // Markers without a length: TEM, RSTn, a stray SOI.
+            0x01 | 0xD0..=0xD8 => continue,
+            _ => {}
+        }
+        let len = usize::from(u16::from_be_bytes([*bytes.get(at)?, *bytes.get(at + 1)?]));
+        if len < 2 {
+            return None;
+        }
+        at += len;
+        if code == 0xDA {
+            // Entropy-coded data after a start of scan: it ends at the first
+            // 0xFF that is not a stuffed 0x00, a fill 0xFF or a restart marker.
+            loop {
+                let ff = at + bytes.get(at..)?.iter().position(|&b| b == 0xFF)?;
+                match *bytes.get(ff + 1)? {
+                    0x00 | 0xD0..=0xD7 => at = ff + 2,
+                    0xFF => at = ff + 1,
+                    _ => {
+                        at = ff;
+                        break;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The offset just past a PNG's `IEND` chunk, walking the chunks by their
+/// lengths; `None` when the file ends first.
+fn png_end(bytes: &[u8]) -> Option<usize> {
+    const SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0D, 0x0A, 0x1A, 0x0A];
+    if bytes.get(..8)? != SIGNATURE {
+        return None;
+    }
+    let mut at = 8usize;
+    loop {
+        let head = bytes.get(at..at + 8)?;
+        let len = u32::from_be_bytes([head[0], head[1], head[2], head[3]]) as usize;
+        let end = at.checked_add(12)?.checked_add(len)?;
+        if end > bytes.len() {
+            return None;
+        }
+        if &head[4..8] == b"IEND" {
+            return Some(end);
+        }
+        at = end;
     }
 }
 
@@ -179,15 +253,23 @@ fn check_nonempty(img: &image::DynamicImage) -> Result<()> {
 }
 
 /// Parses OTB ground truth: one `x y w h` row per frame, numbers separated
-/// by commas, tabs and/or spaces. A row of four zeros means "unlabelled" and
-/// becomes `None`. Blank lines are skipped (they number no frame).
+/// by commas, tabs and/or spaces, mixed even within one row as OTB ships
+/// them (BlurCar1's row 496: `1 2,3\t4`). A comma with spaces or tabs
+/// around it is one separator, and so is a run of spaces and tabs; two
+/// commas with nothing between them (`1,,2,3,4`) are an empty field, an
+/// error rather than a silently shifted row. A UTF-8 byte-order mark at the
+/// start and CRLF line ends are accepted. A row of four zeros means
+/// "unlabelled" and becomes `None`. Blank lines are skipped (they number no
+/// frame).
 ///
 /// `path` only names the source in errors.
 ///
 /// # Errors
 /// [`ImageError::GroundTruthParse`] naming the 1-based line for a row that
-/// is not four finite numbers with non-negative width and height.
+/// is not four finite numbers with non-negative width and height, or that
+/// has an empty field.
 pub fn parse_ground_truth(text: &str, path: impl AsRef<Path>) -> Result<Vec<Option<BBox>>> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut out = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let trimmed = line.trim();
@@ -200,10 +282,17 @@ pub fn parse_ground_truth(text: &str, path: impl AsRef<Path>) -> Result<Vec<Opti
             text: line.to_string(),
             reason,
         };
-        let fields: Vec<&str> = trimmed
-            .split(|c: char| c == ',' || c.is_whitespace())
-            .filter(|f| !f.is_empty())
-            .collect();
+        let mut fields: Vec<&str> = Vec::with_capacity(4);
+        for (k, part) in trimmed.split(',').enumerate() {
+            if part.trim().is_empty() {
+                return Err(bad(format!(
+                    "field {} is empty (two commas with nothing between them, or a comma \
+                     at an end of the row)",
+                    k + 1
+                )));
+            }
+            fields.extend(part.split_whitespace());
+        }
         if fields.len() != 4 {
             return Err(bad(format!("expected 4 numbers, found {}", fields.len())));
         }
@@ -429,6 +518,86 @@ mod tests {
         assert_eq!(gt[2], Some(BBox::new(9.0, 10.0, 11.0, 12.0)));
         assert_eq!(gt[3], None);
         assert_eq!(gt[4], Some(BBox::new(87.586, 40.153, 75.0, 97.0)));
+    }
+
+    #[test]
+    fn ground_truth_as_otb_ships_it() {
+        // A byte-order mark, CRLF, separators mixed within a row (BlurCar1's
+        // row 496), a comma with spaces around it, tabs.
+        let t = "\u{feff}1,2,3,4\r\n5 6,7\t8\r\n9 , 10,\t11  12\r\n";
+        let gt = parse_ground_truth(t, "gt.txt").unwrap();
+        assert_eq!(
+            gt,
+            [
+                Some(BBox::new(1.0, 2.0, 3.0, 4.0)),
+                Some(BBox::new(5.0, 6.0, 7.0, 8.0)),
+                Some(BBox::new(9.0, 10.0, 11.0, 12.0)),
+            ]
+        );
+        // An empty field is an error naming the line, not a shifted row.
+        for (text, line) in [
+            ("1,2,3,4\n1,,2,3,4\n", 2),
+            ("1,2,3,4\n1, ,2,3\n", 2),
+            (",1,2,3,4\n", 1),
+            ("1,2,3,4,\n", 1),
+        ] {
+            match parse_ground_truth(text, "gt.txt") {
+                Err(e @ ImageError::GroundTruthParse { line: l, .. }) => {
+                    assert_eq!(l, line, "{text:?}");
+                    assert!(e.to_string().contains("empty"), "{e}");
+                }
+                other => panic!("{text:?}: expected an empty-field error, got {other:?}"),
+            }
+        }
+    }
+
+    /// A `w x h` gray JPEG in memory.
+    fn jpeg_bytes(w: u32, h: u32) -> Vec<u8> {
+        let pixels: Vec<u8> = (0..w * h).map(|i| (i * 7 % 251) as u8).collect();
+        let mut out = Vec::new();
+        image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, 90)
+            .encode(&pixels, w, h, image::ExtendedColorType::L8)
+            .unwrap();
+        out
+    }
+
+    #[test]
+    fn bytes_after_the_end_of_an_image_are_ignored_and_a_cut_file_is_not() {
+        let d = tmpdir("trailing");
+        let jpeg = jpeg_bytes(40, 24);
+        let clean = decode_frame(&jpeg, "a.jpg").unwrap();
+        // Cameras and editors append data after the end-of-image marker; a
+        // long tail (more than the last 64 bytes) with an FF D8 in it too.
+        let mut tail = jpeg.clone();
+        tail.extend((0..5000u32).map(|i| (i * 31 % 256) as u8));
+        tail.extend([0xFF, 0xD8, 0xFF, 0xE0, 0x00]);
+        let p = d.join("trailing.jpg");
+        fs::write(&p, &tail).unwrap();
+        assert_eq!(read_frame(&p).unwrap(), clean);
+        // Cut anywhere after the header: an error naming the file.
+        for cut in [jpeg.len() - 1, jpeg.len() - 2, jpeg.len() * 2 / 3, 300] {
+            let p = d.join(format!("cut{cut}.jpg"));
+            fs::write(&p, &jpeg[..cut]).unwrap();
+            match read_frame(&p) {
+                Err(e @ ImageError::Truncated { .. }) => {
+                    assert!(e.to_string().contains(p.to_str().unwrap()), "{e}");
+                }
+                other => panic!("cut at {cut}: expected Truncated, got {other:?}"),
+            }
+        }
+        // The same for PNG: data after IEND decodes, a cut file does not.
+        let img = Image::from_fn(9, 7, |x, y| (x * 20 + y) as u8).unwrap();
+        let png = d.join("a.png");
+        write_png(&png, img.view()).unwrap();
+        let mut bytes = fs::read(&png).unwrap();
+        let whole = bytes.len();
+        bytes.extend(b"appended by an editor, longer than sixty-four bytes of text....");
+        assert_eq!(decode_frame(&bytes, "a.png").unwrap(), img);
+        assert!(matches!(
+            decode_frame(&bytes[..whole - 1], "a.png"),
+            Err(ImageError::Truncated { .. })
+        ));
+        let _ = fs::remove_dir_all(&d);
     }
 
     #[test]

@@ -1,10 +1,13 @@
-//! Loading OTB-layout tracking sequences (frames + ground truth).
+//! Loading tracking sequences (frames + ground truth): OTB-100 sequences
+//! by the benchmark's table ([`crate::otb_table`]) and any folder of
+//! numbered frames.
 //!
-//! A thin, stricter layer over `bayestrack-image`'s `io` feature
-//! ([`bayestrack_image::OtbSequence`], [`bayestrack_image::read_frame`]): it
-//! refuses a missing folder with its own error, checks that there is one
-//! ground-truth row per frame, and names the frame index and file of a frame
-//! that does not decode. Ground-truth rows `0,0,0,0` are unlabelled (`None`)
+//! A layer over `bayestrack-image`'s `io` feature
+//! ([`bayestrack_image::read_frame`], [`bayestrack_image::read_ground_truth`]):
+//! it refuses a missing folder with its own error, lines the ground-truth
+//! rows up with the frames (frames past the last row are tracked, not
+//! scored, and [`Sequence::notes`] says so), and names the frame index and
+//! file of a frame that does not decode. Ground-truth rows `0,0,0,0` are unlabelled (`None`)
 //! and are not scored by [`crate::metrics::score_otb`].
 //!
 //! Layouts accepted: `<seq>/img/0001.jpg ...` or `<seq>/img/img00001.png ...`
@@ -14,8 +17,11 @@
 use std::path::{Path, PathBuf};
 
 use bayestrack_image::{
-    BBox, Image, ImageError, OtbSequence, find_ground_truth, list_frames, read_ground_truth,
+    BBox, Image, ImageError, find_ground_truth, list_frames, read_ground_truth,
 };
+
+use crate::otb_table::{self, OtbEntry};
+use crate::source::FolderSource;
 
 /// What can go wrong while loading an OTB sequence.
 #[derive(Debug, thiserror::Error)]
@@ -27,7 +33,8 @@ pub enum OtbError {
         /// The folder asked for.
         path: PathBuf,
     },
-    /// The ground-truth file has fewer (or more) rows than there are frames.
+    /// The ground-truth file of a plain frame folder has more rows than
+    /// there are frames (which rows belong to which frames is unknown).
     #[error("{path}: {rows} ground-truth rows for {frames} frames")]
     RowCount {
         /// The ground-truth file.
@@ -57,6 +64,53 @@ pub enum OtbError {
         /// Frames in the sequence.
         len: usize,
     },
+    /// A frame file the OTB-100 table says the sequence has is missing.
+    #[error("{path} is missing (OTB-100 {sequence} runs on frames {first}-{last} of its folder)")]
+    MissingFrame {
+        /// The frame file expected.
+        path: PathBuf,
+        /// The OTB-100 sequence.
+        sequence: String,
+        /// First frame number of the sequence.
+        first: usize,
+        /// Last frame number.
+        last: usize,
+    },
+    /// A YUV4MPEG2 stream that cannot be read: a bad header, a frame cut
+    /// short, a failed read.
+    #[error("{source_name}: {}{reason}", .frame.map(|f| format!("Y4M frame {f}: ")).unwrap_or_else(|| "Y4M header: ".to_string()))]
+    Y4m {
+        /// The stream (`stdin`, a file).
+        source_name: String,
+        /// 1-based frame, `None` for the stream header.
+        frame: Option<usize>,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A video file needs an `ffmpeg` executable to decode it, and there is
+    /// none.
+    #[error(
+        "cannot decode the video {video}: no `{program}` executable was found. bayestrack reads \
+         video files by piping them through ffmpeg: install it (https://ffmpeg.org/download.html; \
+         `apt install ffmpeg`, `dnf install ffmpeg`, `brew install ffmpeg`, `winget install \
+         ffmpeg`) or name its path in BAYESTRACK_FFMPEG. Without it, a folder of PNG/JPEG frames \
+         works, and so does Y4M on standard input from any decoder: `ffmpeg -i clip.mp4 -f \
+         yuv4mpegpipe - | bayestrack track --seq - --init x,y,w,h`"
+    )]
+    NoFfmpeg {
+        /// The video file.
+        video: PathBuf,
+        /// The executable looked for.
+        program: String,
+    },
+    /// ffmpeg could not decode a video file (ffmpeg's message).
+    #[error("cannot decode the video {video}: {reason}")]
+    Video {
+        /// The video file.
+        video: PathBuf,
+        /// What went wrong, with ffmpeg's own message.
+        reason: String,
+    },
     /// Listing frames or reading/parsing the ground truth failed
     /// ([`ImageError::GroundTruthParse`] names the file and 1-based line,
     /// [`ImageError::NoFrames`] and [`ImageError::NoGroundTruth`] the folder).
@@ -64,96 +118,260 @@ pub enum OtbError {
     Image(#[from] ImageError),
 }
 
-/// One OTB sequence on disk: frame files, ground truth, and its name.
-/// Frames are decoded on demand.
+/// One sequence on disk: frame files, ground truth, and its name. Frames
+/// are decoded on demand.
+///
+/// A folder named like an OTB-100 sequence with the benchmark's layout (its
+/// first frame file and ground-truth file where the table says) runs on the
+/// table's frames: David on `img/0300.jpg`-`img/0770.jpg`, Football1 on
+/// frames 1-74 of its 81 images, Tiger1 from frame 6
+/// ([`crate::otb_table`]). Any other folder runs on all its numbered
+/// frames. Frames past the last ground-truth row are tracked but not
+/// scored ([`Sequence::notes`] says so).
 #[derive(Debug, Clone)]
+#[non_exhaustive]
 pub struct Sequence {
-    /// Folder name (`Crossing`, `David`, ...).
+    /// Folder name (`Crossing`, `David`, ...), or the OTB-100 target's name
+    /// (`Jogging_2`).
     pub name: String,
     /// The sequence folder.
     pub dir: PathBuf,
-    /// Frame files in numeric order.
+    /// Frame files in order.
     pub frames: Vec<PathBuf>,
-    /// The ground-truth file read (`None` for a bare frame folder opened
-    /// with [`Sequence::open_frames`]).
+    /// The ground-truth file read (`None` for a frame folder without one).
     pub ground_truth_path: Option<PathBuf>,
-    /// One entry per frame; `None` where the row is `0,0,0,0` (unlabelled)
-    /// or where there is no ground-truth file.
+    /// One entry per frame; `None` where the row is `0,0,0,0`
+    /// (unlabelled), where the file has no row for the frame, or where
+    /// there is no ground-truth file.
     pub ground_truth: Vec<Option<BBox>>,
+    /// Frames that have a ground-truth row (the first `ground_truth_rows`
+    /// frames; 0 without a file).
+    pub ground_truth_rows: usize,
+    /// The OTB-100 table entry the frames and ground truth follow, if any.
+    pub otb: Option<&'static OtbEntry>,
+    /// What the loader decided that a user should hear: frames without a
+    /// ground-truth row, other targets' ground-truth files, a folder named
+    /// like an OTB sequence without its layout.
+    pub notes: Vec<String>,
 }
 
 impl Sequence {
-    /// Opens a sequence folder: lists its frames (without decoding them) and
-    /// reads its ground truth.
+    /// Opens a sequence folder with ground truth: lists its frames (without
+    /// decoding them) and reads its ground truth, by the OTB-100 table when
+    /// the folder is one of its sequences.
     ///
     /// # Errors
-    /// [`OtbError::MissingFolder`]; [`OtbError::Image`] for a folder without
-    /// frames or ground-truth file and for a ground-truth row that does not
-    /// parse (naming the line); [`OtbError::RowCount`] unless there is exactly
-    /// one ground-truth row per frame.
+    /// [`OtbError::MissingFolder`]; [`OtbError::MissingFrame`] for a frame
+    /// the OTB table lists that is not there; [`OtbError::Image`] for a
+    /// folder without frames or ground-truth file and for a ground-truth row
+    /// that does not parse (naming the line); [`OtbError::RowCount`] when a
+    /// plain folder's file has more rows than frames.
     pub fn open(dir: impl AsRef<Path>) -> Result<Self, OtbError> {
-        let dir = dir.as_ref();
-        if !dir.is_dir() {
-            return Err(OtbError::MissingFolder {
-                path: dir.to_path_buf(),
-            });
-        }
-        let seq = OtbSequence::open(dir)?;
-        if seq.ground_truth.len() != seq.frames.len() {
-            return Err(OtbError::RowCount {
-                path: seq.ground_truth_path,
-                frames: seq.frames.len(),
-                rows: seq.ground_truth.len(),
-            });
-        }
-        Ok(Self {
-            name: folder_name(dir),
-            dir: seq.dir,
-            frames: seq.frames,
-            ground_truth_path: Some(seq.ground_truth_path),
-            ground_truth: seq.ground_truth,
-        })
+        Self::load(dir.as_ref(), None, true)
     }
 
     /// Opens any folder of numbered PNG/JPEG frames (the folder itself or
-    /// its `img/` sub-folder); its ground truth is read when the folder has
-    /// one (`groundtruth_rect.txt` or `*_gt.txt`), and every frame is
-    /// unlabelled otherwise.
+    /// its `img/` sub-folder) or an OTB-100 sequence; its ground truth is
+    /// read when the folder has one (`groundtruth_rect.txt` or `*_gt.txt`),
+    /// and every frame is unlabelled otherwise.
     ///
     /// # Errors
-    /// [`OtbError::MissingFolder`]; [`OtbError::Image`] for a folder without
-    /// frames and for a ground-truth row that does not parse;
-    /// [`OtbError::RowCount`] when a ground-truth file is present without
-    /// exactly one row per frame.
+    /// As [`Sequence::open`], except that no ground-truth file is needed.
     pub fn open_frames(dir: impl AsRef<Path>) -> Result<Self, OtbError> {
-        let dir = dir.as_ref();
+        Self::load(dir.as_ref(), None, false)
+    }
+
+    /// Opens a folder as [`Sequence::open_frames`] does, scoring it with the
+    /// ground-truth file `ground_truth` instead of the folder's own (the
+    /// second target of Jogging: `Jogging/groundtruth_rect.2.txt`). The
+    /// file's first row is the sequence's first frame (for an OTB-100
+    /// sequence, its `start_frame`).
+    ///
+    /// # Errors
+    /// As [`Sequence::open`]; [`OtbError::Image`] naming `ground_truth`
+    /// when it cannot be read.
+    pub fn open_with_ground_truth(
+        dir: impl AsRef<Path>,
+        ground_truth: impl AsRef<Path>,
+    ) -> Result<Self, OtbError> {
+        Self::load(dir.as_ref(), Some(ground_truth.as_ref()), true)
+    }
+
+    fn load(dir: &Path, gt_file: Option<&Path>, require_gt: bool) -> Result<Self, OtbError> {
+        let mut notes = Vec::new();
+        let mut target = None;
+        let mut dir = dir.to_path_buf();
         if !dir.is_dir() {
-            return Err(OtbError::MissingFolder {
-                path: dir.to_path_buf(),
-            });
+            // `OTB100/Jogging_2`: a target within the folder `Jogging`.
+            let name = folder_name(&dir);
+            match otb_table::entry(&name) {
+                Some(e) if e.folder() != name && dir.with_file_name(e.folder()).is_dir() => {
+                    dir = dir.with_file_name(e.folder());
+                    target = Some(e);
+                }
+                _ => return Err(OtbError::MissingFolder { path: dir }),
+            }
         }
-        let frames = list_frames(dir)?;
-        let (ground_truth_path, ground_truth) = match find_ground_truth(dir) {
-            Ok(path) => {
-                let rows = read_ground_truth(&path)?;
-                if rows.len() != frames.len() {
+        let folder = folder_name(&dir);
+        let candidates = otb_table::entries_in_folder(&folder);
+        let chosen = target.or_else(|| {
+            gt_file
+                .and_then(|g| g.file_name())
+                .and_then(|g| {
+                    candidates
+                        .iter()
+                        .find(|e| g == std::ffi::OsStr::new(e.groundtruth_file()))
+                })
+                .or(candidates.first())
+                .copied()
+        });
+        if let Some(entry) = chosen {
+            let first = dir
+                .join(entry.frame_subdir())
+                .join(entry.frame_file(*entry.frames().start()));
+            if first.is_file()
+                && (gt_file.is_some() || dir.join(entry.groundtruth_file()).is_file())
+            {
+                if target.is_none() && gt_file.is_none() && candidates.len() > 1 {
+                    let others: Vec<String> = candidates
+                        .iter()
+                        .map(|e| format!("{} ({})", e.name, e.groundtruth_file()))
+                        .collect();
+                    notes.push(format!(
+                        "{folder} holds {} OTB-100 targets: {}; tracking {}; pick another with \
+                         --groundtruth {}",
+                        candidates.len(),
+                        others.join(", "),
+                        entry.name,
+                        dir.join(candidates[1].groundtruth_file()).display()
+                    ));
+                }
+                return Self::load_otb(&dir, entry, gt_file, notes);
+            }
+            notes.push(format!(
+                "{folder} is named like the OTB-100 sequence {} but has not its layout (no {} \
+                 with {}): read as a plain folder of frames",
+                entry.name,
+                first.display(),
+                entry.groundtruth_file()
+            ));
+        }
+        let frames = list_frames(&dir)?;
+        let gt_path = match gt_file {
+            Some(g) => Some(g.to_path_buf()),
+            None => match ground_truth_files(&dir) {
+                Ok(found) => {
+                    if found.len() > 1 {
+                        let names: Vec<String> = found
+                            .iter()
+                            .skip(1)
+                            .map(|p| p.display().to_string())
+                            .collect();
+                        notes.push(format!(
+                            "ground truth read from {}; the folder has other ground-truth files \
+                             ({}): pick one with --groundtruth",
+                            found[0].display(),
+                            names.join(", ")
+                        ));
+                    }
+                    found.into_iter().next()
+                }
+                Err(e @ ImageError::NoGroundTruth { .. }) => {
+                    if require_gt {
+                        return Err(e.into());
+                    }
+                    None
+                }
+                Err(e) => return Err(e.into()),
+            },
+        };
+        let (ground_truth, rows) = match &gt_path {
+            Some(path) => {
+                let rows = read_ground_truth(path)?;
+                if rows.len() > frames.len() {
                     return Err(OtbError::RowCount {
-                        path,
+                        path: path.clone(),
                         frames: frames.len(),
                         rows: rows.len(),
                     });
                 }
-                (Some(path), rows)
+                let n = rows.len();
+                (pad_rows(rows, frames.len(), path, &mut notes), n)
             }
-            Err(ImageError::NoGroundTruth { .. }) => (None, vec![None; frames.len()]),
-            Err(e) => return Err(e.into()),
+            None => (vec![None; frames.len()], 0),
         };
         Ok(Self {
-            name: folder_name(dir),
+            name: folder,
+            dir,
+            frames,
+            ground_truth_path: gt_path,
+            ground_truth,
+            ground_truth_rows: rows,
+            otb: None,
+            notes,
+        })
+    }
+
+    fn load_otb(
+        dir: &Path,
+        entry: &'static OtbEntry,
+        gt_file: Option<&Path>,
+        mut notes: Vec<String>,
+    ) -> Result<Self, OtbError> {
+        let img = dir.join(entry.frame_subdir());
+        let mut frames = Vec::with_capacity(entry.len());
+        for number in entry.frames() {
+            let path = img.join(entry.frame_file(number));
+            if !path.is_file() {
+                return Err(OtbError::MissingFrame {
+                    path,
+                    sequence: entry.name.clone(),
+                    first: *entry.frames().start(),
+                    last: entry.end_frame,
+                });
+            }
+            frames.push(path);
+        }
+        let gt_path = gt_file.map_or_else(|| dir.join(entry.groundtruth_file()), Path::to_path_buf);
+        let mut rows = read_ground_truth(&gt_path)?;
+        // The file's first row is start_frame; init_omit frames are left out.
+        rows.drain(..entry.init_omit.min(rows.len()));
+        if rows.len() > frames.len() {
+            notes.push(format!(
+                "{}: {} ground-truth rows past frame {} (the last of OTB-100 {}) are not used",
+                gt_path.display(),
+                rows.len() - frames.len(),
+                entry.end_frame,
+                entry.name
+            ));
+            rows.truncate(frames.len());
+        }
+        let n = rows.len();
+        let ground_truth = pad_rows(rows, frames.len(), &gt_path, &mut notes);
+        Ok(Self {
+            name: entry.name.clone(),
             dir: dir.to_path_buf(),
             frames,
-            ground_truth_path,
+            ground_truth_path: Some(gt_path),
             ground_truth,
+            ground_truth_rows: n,
+            otb: Some(entry),
+            notes,
+        })
+    }
+
+    /// The sequence's frames as a [`FrameSource`], decoded one at a time.
+    pub fn source(&self) -> FolderSource<'_> {
+        FolderSource::new(self)
+    }
+
+    /// The file name of frame `index` (0-based): `0300.jpg`.
+    pub fn frame_name(&self, index: usize) -> String {
+        self.frames.get(index).map_or_else(String::new, |p| {
+            p.file_name().map_or_else(
+                || p.display().to_string(),
+                |n| n.to_string_lossy().into_owned(),
+            )
         })
     }
 
@@ -254,6 +472,58 @@ impl Sequence {
         }
         Ok(shape)
     }
+}
+
+/// The ground-truth files of a folder, the one
+/// [`bayestrack_image::find_ground_truth`] picks first, then the other
+/// `*_gt*.txt` / `groundtruth*.txt` files by name.
+fn ground_truth_files(dir: &Path) -> Result<Vec<PathBuf>, ImageError> {
+    let first = find_ground_truth(dir)?;
+    let mut out = vec![first];
+    let io = |source| ImageError::Io {
+        path: dir.to_path_buf(),
+        source,
+    };
+    let mut others = Vec::new();
+    for entry in std::fs::read_dir(dir).map_err(io)? {
+        let p = entry.map_err(io)?.path();
+        let name = p
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or_default()
+            .to_ascii_lowercase();
+        if p.is_file()
+            && name.ends_with(".txt")
+            && (name.contains("_gt") || name.starts_with("groundtruth"))
+            && p != out[0]
+        {
+            others.push(p);
+        }
+    }
+    others.sort();
+    out.extend(others);
+    Ok(out)
+}
+
+/// Pads `rows` with `None` up to `frames` entries, noting the frames that
+/// have no row.
+fn pad_rows(
+    mut rows: Vec<Option<BBox>>,
+    frames: usize,
+    path: &Path,
+    notes: &mut Vec<String>,
+) -> Vec<Option<BBox>> {
+    if rows.len() < frames {
+        notes.push(format!(
+            "{} has {} rows for {frames} frames: frames {}-{frames} have no ground-truth row and \
+             are tracked but not scored",
+            path.display(),
+            rows.len(),
+            rows.len() + 1
+        ));
+        rows.resize(frames, None);
+    }
+    rows
 }
 
 fn folder_name(dir: &Path) -> String {

@@ -10,7 +10,7 @@
 
 use std::borrow::Cow;
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -18,6 +18,7 @@ use bayestrack_image::{BBox, Image, ImageView};
 use bayestrack_trackers::{Tracker, TrackerError};
 
 use crate::sequence::OtbError;
+use crate::source::{Frame, FrameSource};
 
 /// What to do with a frame that does not decode.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -67,8 +68,15 @@ pub enum TrackError {
 /// One frame's outcome, handed to the sink.
 #[derive(Debug, Clone, Copy)]
 pub struct FrameBox<'a> {
-    /// 0-based frame index.
+    /// 0-based index of the frame in the run.
     pub index: usize,
+    /// 1-based position of the frame in its source ([`Frame::number`]:
+    /// the ground-truth row it belongs to); `index + 1` for
+    /// [`track_frames`].
+    pub number: usize,
+    /// The frame's name ([`Frame::name`], or its file for
+    /// [`track_frames`]).
+    pub name: &'a str,
     /// The box reported for the frame (the initial box on frame 1, the
     /// previous box on a skipped frame).
     pub bbox: BBox,
@@ -92,6 +100,14 @@ pub struct TrackRun {
     pub lost_frames: usize,
     /// Particles summed over frames (0 for deterministic trackers).
     pub particles: usize,
+    /// The box the tracker was initialised with: the initial box, clipped
+    /// to the first frame where it reaches outside ([`clip_initial_box`]).
+    pub init: BBox,
+    /// 1-based source positions of the frames run, one per box.
+    pub numbers: Vec<usize>,
+    /// Source positions of frames whose channel count differed from the
+    /// first frame's and which were converted to it ([`track_source`]).
+    pub converted: Vec<usize>,
 }
 
 impl TrackRun {
@@ -148,15 +164,24 @@ where
         skipped: Vec::new(),
         lost_frames: 0,
         particles: 0,
+        init,
+        numbers: Vec::with_capacity(len),
+        converted: Vec::new(),
     };
 
     let first = frame(0)?;
+    let init = clip_initial_box(init, first.width(), first.height()).unwrap_or(init);
+    run.init = init;
     let start = Instant::now();
     tracker.init(first.view(), init).map_err(refused(0))?;
     run.tracker_seconds += start.elapsed().as_secs_f64();
     run.boxes.push(init);
+    run.numbers.push(1);
+    let name = path(0).display().to_string();
     sink(FrameBox {
         index: 0,
+        number: 1,
+        name: &name,
         bbox: init,
         frame: Some(first.view()),
         lost: false,
@@ -170,8 +195,11 @@ where
             Err(e) if on_bad_frame == OnBadFrame::Skip => {
                 run.skipped.push((index, e.to_string()));
                 run.boxes.push(last);
+                run.numbers.push(index + 1);
                 sink(FrameBox {
                     index,
+                    number: index + 1,
+                    name: &path(index).display().to_string(),
                     bbox: last,
                     frame: None,
                     lost: false,
@@ -187,8 +215,11 @@ where
         run.lost_frames += usize::from(estimate.lost);
         run.particles += estimate.particles;
         run.boxes.push(last);
+        run.numbers.push(index + 1);
         sink(FrameBox {
             index,
+            number: index + 1,
+            name: &path(index).display().to_string(),
             bbox: last,
             frame: Some(image.view()),
             lost: estimate.lost,
@@ -197,12 +228,205 @@ where
     Ok(run)
 }
 
-/// An OTB result file, one `x,y,w,h` row per frame, flushed row by row so
-/// that an interrupted run keeps every box it wrote. The path `-` is
-/// standard output.
+/// Clips an initial box (OTB convention: 1-based top-left corner) to a
+/// `width x height` frame: the part inside, or `None` when less than one
+/// pixel of it is inside (or it is not finite). A box wholly inside comes
+/// back unchanged.
+pub fn clip_initial_box(b: BBox, width: usize, height: usize) -> Option<BBox> {
+    let (w, h) = (width as f64, height as f64);
+    let (x0, y0) = (b.x - 1.0, b.y - 1.0);
+    let (x1, y1) = (x0 + b.width, y0 + b.height);
+    if ![x0, y0, x1, y1].iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    if x0 >= 0.0 && y0 >= 0.0 && x1 <= w && y1 <= h {
+        return Some(b);
+    }
+    let (cx0, cy0, cx1, cy1) = (x0.max(0.0), y0.max(0.0), x1.min(w), y1.min(h));
+    (cx1 - cx0 >= 1.0 && cy1 - cy0 >= 1.0)
+        .then(|| BBox::new(cx0 + 1.0, cy0 + 1.0, cx1 - cx0, cy1 - cy0))
+}
+
+/// Brings `image` to `channels` (1 gray, 3 RGB) as the first frame of a run
+/// had them: gray is replicated to RGB, RGB becomes gray by its luma (ITU-R
+/// BT.601 weights). `None` when it already has them.
+fn match_channels(image: &Image<u8>, channels: usize) -> Option<Image<u8>> {
+    match (image.channels(), channels) {
+        (a, b) if a == b => None,
+        (1, 3) => bayestrack_image::gray_to_rgb(image.view()).ok(),
+        (3, 1) => bayestrack_image::rgb_to_gray(image.view()).ok(),
+        _ => None,
+    }
+}
+
+/// Runs `tracker` over the frames `source` delivers, pulling one frame at
+/// a time: each is decoded when asked for and dropped before the next, so
+/// memory does not grow with the length of the sequence. `init` is the box
+/// on the first frame delivered (clipped to it where it reaches outside,
+/// [`clip_initial_box`]); `sink` receives every frame's box in order, as
+/// soon as it is known.
+///
+/// Every frame is given the first frame's channel count: a gray frame in a
+/// colour sequence is replicated to RGB, a colour frame in a gray sequence
+/// becomes gray, and [`TrackRun::converted`] lists them, so a tracker never
+/// sees its cues change kind part-way.
+///
+/// # Errors
+/// [`TrackError::NoFrames`] when the source delivers none;
+/// [`TrackError::Frame`] for a frame that does not decode (always for the
+/// first, otherwise only under [`OnBadFrame::Stop`]);
+/// [`TrackError::Tracker`] naming the frame the tracker refused; whatever
+/// the sink returns. Boxes handed to the sink before the error stay handed.
+pub fn track_source<S>(
+    tracker: &mut dyn Tracker,
+    source: &mut dyn FrameSource,
+    init: BBox,
+    on_bad_frame: OnBadFrame,
+    mut sink: S,
+) -> Result<TrackRun, TrackError>
+where
+    S: FnMut(FrameBox<'_>) -> Result<(), TrackError>,
+{
+    let name = tracker.name();
+    let describe = source.describe();
+    let refused = |frame: &Frame, index: usize| {
+        let path = PathBuf::from(format!("{describe}: {}", frame.name));
+        move |source| TrackError::Tracker {
+            tracker: name,
+            frame: index + 1,
+            path,
+            source: Box::new(source),
+        }
+    };
+    let first = source.next().ok_or(TrackError::NoFrames)??;
+    let channels = first.image.channels();
+    let init = clip_initial_box(init, first.image.width(), first.image.height()).unwrap_or(init);
+    let mut run = TrackRun {
+        boxes: Vec::new(),
+        tracker_seconds: 0.0,
+        skipped: Vec::new(),
+        lost_frames: 0,
+        particles: 0,
+        init,
+        numbers: Vec::new(),
+        converted: Vec::new(),
+    };
+    let start = Instant::now();
+    tracker
+        .init(first.image.view(), init)
+        .map_err(refused(&first, 0))?;
+    run.tracker_seconds += start.elapsed().as_secs_f64();
+    run.boxes.push(init);
+    run.numbers.push(first.number);
+    sink(FrameBox {
+        index: 0,
+        number: first.number,
+        name: &first.name,
+        bbox: init,
+        frame: Some(first.image.view()),
+        lost: false,
+    })?;
+    let mut previous = first.number;
+    drop(first);
+
+    let mut last = init;
+    let mut index = 0;
+    while let Some(next) = source.next() {
+        index += 1;
+        let mut frame = match next {
+            Ok(frame) => frame,
+            Err(e) if on_bad_frame == OnBadFrame::Skip => {
+                // The stream says which position failed only through the
+                // next good frame; the failed one is the one after the last.
+                let number = previous + 1;
+                previous = number;
+                run.skipped.push((index, e.to_string()));
+                run.boxes.push(last);
+                run.numbers.push(number);
+                let name = format!("frame {number}");
+                sink(FrameBox {
+                    index,
+                    number,
+                    name: &name,
+                    bbox: last,
+                    frame: None,
+                    lost: false,
+                })?;
+                continue;
+            }
+            Err(e) => return Err(e.into()),
+        };
+        previous = frame.number;
+        if let Some(converted) = match_channels(&frame.image, channels) {
+            frame.image = converted;
+            run.converted.push(frame.number);
+        }
+        let start = Instant::now();
+        let estimate = tracker
+            .step(frame.image.view())
+            .map_err(refused(&frame, index))?;
+        run.tracker_seconds += start.elapsed().as_secs_f64();
+        last = estimate.bbox;
+        run.lost_frames += usize::from(estimate.lost);
+        run.particles += estimate.particles;
+        run.boxes.push(last);
+        run.numbers.push(frame.number);
+        sink(FrameBox {
+            index,
+            number: frame.number,
+            name: &frame.name,
+            bbox: last,
+            frame: Some(frame.image.view()),
+            lost: estimate.lost,
+        })?;
+    }
+    Ok(run)
+}
+
+/// Where a [`BoxFile`] writes: standard output or a file whose length
+/// before each row is known, so a row that fails part-way is cut off.
+enum BoxOut {
+    Stdout(std::io::Stdout),
+    File { file: File, len: u64 },
+}
+
+/// Writes `row` whole or not at all: when the write fails part-way (a full
+/// disk), the target is cut back to `*len`, its length before the row.
+fn write_whole<W: Write + Rewind>(out: &mut W, len: &mut u64, row: &[u8]) -> std::io::Result<()> {
+    match out.write_all(row).and_then(|()| out.flush()) {
+        Ok(()) => {
+            *len += row.len() as u64;
+            Ok(())
+        }
+        Err(e) => {
+            // Best effort: the error that matters is the write's.
+            let _ = out.rewind_to(*len);
+            Err(e)
+        }
+    }
+}
+
+/// A writer that can be cut back to a length.
+trait Rewind {
+    fn rewind_to(&mut self, len: u64) -> std::io::Result<()>;
+}
+
+impl Rewind for File {
+    fn rewind_to(&mut self, len: u64) -> std::io::Result<()> {
+        use std::io::{Seek, SeekFrom};
+        self.set_len(len)?;
+        self.seek(SeekFrom::Start(len)).map(|_| ())
+    }
+}
+
+/// An OTB result file, one `x,y,w,h` row per frame, written through row
+/// by row so that an interrupted run keeps every box it wrote. A row is
+/// written whole or not at all: when the disk fills part-way through one,
+/// the file is cut back to the rows before it. The path `-` is standard
+/// output.
 pub struct BoxFile {
     path: PathBuf,
-    out: Box<dyn Write>,
+    out: BoxOut,
 }
 
 impl BoxFile {
@@ -211,14 +435,14 @@ impl BoxFile {
     /// # Errors
     /// [`TrackError::Output`] naming the file.
     pub fn create(path: &Path) -> Result<Self, TrackError> {
-        let out: Box<dyn Write> = if path == Path::new("-") {
-            Box::new(std::io::stdout())
+        let out = if path == Path::new("-") {
+            BoxOut::Stdout(std::io::stdout())
         } else {
             let file = File::create(path).map_err(|source| TrackError::Output {
                 path: path.to_path_buf(),
                 source,
             })?;
-            Box::new(BufWriter::new(file))
+            BoxOut::File { file, len: 0 }
         };
         Ok(Self {
             path: path.to_path_buf(),
@@ -226,17 +450,20 @@ impl BoxFile {
         })
     }
 
-    /// Appends one row and flushes it.
+    /// Appends one row, whole or not at all, and flushes it.
     ///
     /// # Errors
     /// [`TrackError::Output`] naming the file.
     pub fn write(&mut self, b: &BBox) -> Result<(), TrackError> {
-        writeln!(self.out, "{}", box_row(b))
-            .and_then(|()| self.out.flush())
-            .map_err(|source| TrackError::Output {
-                path: self.path.clone(),
-                source,
-            })
+        let row = format!("{}\n", box_row(b));
+        let done = match &mut self.out {
+            BoxOut::Stdout(out) => out.write_all(row.as_bytes()).and_then(|()| out.flush()),
+            BoxOut::File { file, len } => write_whole(file, len, row.as_bytes()),
+        };
+        done.map_err(|source| TrackError::Output {
+            path: self.path.clone(),
+            source,
+        })
     }
 }
 
@@ -377,6 +604,61 @@ mod tests {
             |_| Ok(()),
         );
         assert!(matches!(first_bad, Err(TrackError::Frame(_))));
+    }
+
+    /// A disk that fills after `room` bytes: writes past it fail part-way.
+    struct FillingDisk {
+        data: Vec<u8>,
+        room: usize,
+    }
+
+    impl Write for FillingDisk {
+        fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+            let n = buf.len().min(self.room - self.data.len());
+            if n == 0 {
+                return Err(std::io::Error::from(std::io::ErrorKind::StorageFull));
+            }
+            self.data.extend(&buf[..n]);
+            Ok(n)
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    impl Rewind for FillingDisk {
+        fn rewind_to(&mut self, len: u64) -> std::io::Result<()> {
+            self.data.truncate(len as usize);
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn a_row_is_written_whole_or_not_at_all() {
+        let mut disk = FillingDisk {
+            data: Vec::new(),
+            room: 20,
+        };
+        let mut len = 0;
+        write_whole(&mut disk, &mut len, b"1,2,3,4\n").unwrap();
+        write_whole(&mut disk, &mut len, b"5,6,7,8\n").unwrap();
+        // 4 bytes of room left: the third row would be torn.
+        let e = write_whole(&mut disk, &mut len, b"9,10,11,12\n").unwrap_err();
+        assert_eq!(e.kind(), std::io::ErrorKind::StorageFull);
+        assert_eq!(disk.data, b"1,2,3,4\n5,6,7,8\n");
+        assert_eq!(len, 16);
+    }
+
+    #[test]
+    fn a_real_file_is_cut_back_to_its_whole_rows() {
+        let path = std::env::temp_dir().join(format!("bayestrack-rewind-{}", std::process::id()));
+        let mut file = File::create(&path).unwrap();
+        file.write_all(b"1,2,3,4\n9,9").unwrap();
+        file.rewind_to(8).unwrap();
+        file.write_all(b"5,6,7,8\n").unwrap();
+        drop(file);
+        assert_eq!(std::fs::read(&path).unwrap(), b"1,2,3,4\n5,6,7,8\n");
+        let _ = std::fs::remove_file(&path);
     }
 
     #[test]

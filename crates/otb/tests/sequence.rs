@@ -126,12 +126,24 @@ fn missing_folder_is_a_typed_error() {
 }
 
 #[test]
-fn fewer_rows_than_frames_is_a_typed_error() {
+fn frames_past_the_last_ground_truth_row_are_unlabelled_and_noted() {
     let d = make_sequence("rows", "1,1,4,4\n2,2,4,4\n");
+    let s = Sequence::open(&d).unwrap();
+    assert_eq!((s.len(), s.ground_truth_rows, s.labelled()), (3, 2, 2));
+    assert_eq!(s.ground_truth[2], None);
+    assert!(
+        s.notes
+            .iter()
+            .any(|n| n.contains("frames 3-3 have no ground-truth row")),
+        "{:?}",
+        s.notes
+    );
+    // More rows than frames: which row is which frame is unknown.
+    fs::write(d.join("groundtruth_rect.txt"), "1,1,4,4\n".repeat(4)).unwrap();
     match Sequence::open(&d) {
         Err(
             e @ OtbError::RowCount {
-                frames: 3, rows: 2, ..
+                frames: 3, rows: 4, ..
             },
         ) => {
             assert!(e.to_string().contains("groundtruth_rect.txt"), "{e}");

@@ -1,0 +1,536 @@
+//! Frame sources: where the tracking loop ([`crate::track::track_source`])
+//! pulls its frames from, one at a time.
+//!
+//! A [`FrameSource`] is an iterator of decoded frames with their names. It
+//! streams: a frame is decoded when the loop asks for it and dropped before
+//! the next is asked for, so memory does not grow with the length of the
+//! sequence, and a decoder or a camera plugs in by implementing the trait.
+//! Implementations: [`FolderSource`] (a folder of numbered PNG/JPEG frames
+//! or an OTB sequence, [`crate::sequence::Sequence::source`]),
+//! [`Y4mSource`] (YUV4MPEG2 from standard input or a file) and
+//! [`VideoSource`] (any video file, decoded by piping it through an
+//! `ffmpeg` executable). [`Select`] runs any of them on a range of frames
+//! and on every Nth frame.
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Child, ChildStdout, Command, Stdio};
+use std::thread::JoinHandle;
+
+use bayestrack_image::Image;
+
+use crate::sequence::{OtbError, Sequence};
+use crate::y4m::Y4mReader;
+
+/// One decoded frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Frame {
+    /// 1-based position of the frame in its source, before any selection
+    /// ([`Select`]); the ground-truth row that belongs to it.
+    pub number: usize,
+    /// The frame's name for messages and drawn files: its file name
+    /// (`0300.jpg`) or, in a stream, `frame 12`.
+    pub name: String,
+    /// The pixels: 1 channel (gray) or 3 (RGB).
+    pub image: Image<u8>,
+}
+
+/// A stream of decoded frames, pulled one at a time.
+pub trait FrameSource: Iterator<Item = Result<Frame, OtbError>> {
+    /// What the frames come from (`folder ../David`, `stdin`, `clip.mp4`),
+    /// for messages.
+    fn describe(&self) -> String;
+
+    /// Frames left to deliver, when the source knows (a folder does, a
+    /// stream does not): for progress and its time estimate.
+    fn remaining(&self) -> Option<usize>;
+
+    /// Passes over the next frame without decoding it where the source can
+    /// (a folder only moves on; a stream still reads the bytes). `None` at
+    /// the end.
+    ///
+    /// # Errors
+    /// Those of reading the frame, where it has to be read.
+    fn skip_frame(&mut self) -> Option<Result<(), OtbError>> {
+        self.next().map(|r| r.map(|_| ()))
+    }
+}
+
+/// The frames of a [`Sequence`] (a folder of numbered frames or an OTB
+/// sequence), decoded one by one in order.
+#[derive(Debug, Clone)]
+pub struct FolderSource<'a> {
+    seq: &'a Sequence,
+    next: usize,
+}
+
+impl<'a> FolderSource<'a> {
+    /// Frames of `seq` from its first.
+    pub fn new(seq: &'a Sequence) -> Self {
+        Self { seq, next: 0 }
+    }
+}
+
+impl Iterator for FolderSource<'_> {
+    type Item = Result<Frame, OtbError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        let index = self.next;
+        if index >= self.seq.len() {
+            return None;
+        }
+        self.next += 1;
+        Some(self.seq.frame(index).map(|image| Frame {
+            number: index + 1,
+            name: self.seq.frame_name(index),
+            image,
+        }))
+    }
+}
+
+impl FrameSource for FolderSource<'_> {
+    fn describe(&self) -> String {
+        format!("folder {}", self.seq.dir.display())
+    }
+
+    fn remaining(&self) -> Option<usize> {
+        Some(self.seq.len() - self.next)
+    }
+
+    fn skip_frame(&mut self) -> Option<Result<(), OtbError>> {
+        (self.next < self.seq.len()).then(|| {
+            self.next += 1;
+            Ok(())
+        })
+    }
+}
+
+/// YUV4MPEG2 frames from any byte stream: standard input (`--seq -`), a
+/// `.y4m` file, a pipe ([`crate::y4m`] describes the format).
+#[derive(Debug)]
+pub struct Y4mSource<R: Read> {
+    reader: Y4mReader<R>,
+}
+
+impl Y4mSource<std::io::Stdin> {
+    /// Y4M on standard input, as `ffmpeg -i clip.mp4 -f yuv4mpegpipe -`
+    /// writes it; its header is read now.
+    ///
+    /// # Errors
+    /// [`OtbError::Y4m`] for an empty stream or a bad header.
+    pub fn stdin() -> Result<Self, OtbError> {
+        Self::new(std::io::stdin(), "stdin")
+    }
+}
+
+impl Y4mSource<std::fs::File> {
+    /// A `.y4m` file; its header is read now.
+    ///
+    /// # Errors
+    /// [`OtbError::Image`] ([`bayestrack_image::ImageError::Io`]) naming a
+    /// file that cannot be opened; [`OtbError::Y4m`] for a bad header.
+    pub fn open(path: &Path) -> Result<Self, OtbError> {
+        let file = std::fs::File::open(path).map_err(|source| {
+            OtbError::Image(bayestrack_image::ImageError::Io {
+                path: path.to_path_buf(),
+                source,
+            })
+        })?;
+        Self::new(file, path.display().to_string())
+    }
+}
+
+impl<R: Read> Y4mSource<R> {
+    /// Y4M from `input`, named `name` in errors; its header is read now.
+    ///
+    /// # Errors
+    /// [`OtbError::Y4m`] for an empty stream or a bad header.
+    pub fn new(input: R, name: impl Into<String>) -> Result<Self, OtbError> {
+        Ok(Self {
+            reader: Y4mReader::new(input, name)?,
+        })
+    }
+
+    /// The stream header (size, frame rate, colour space).
+    pub fn header(&self) -> &crate::y4m::Y4mHeader {
+        self.reader.header()
+    }
+}
+
+impl<R: Read> Iterator for Y4mSource<R> {
+    type Item = Result<Frame, OtbError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        let image = self.reader.next_image()?;
+        let number = self.reader.frames_read();
+        Some(image.map(|image| Frame {
+            number,
+            name: format!("frame {number}"),
+            image,
+        }))
+    }
+}
+
+impl<R: Read> FrameSource for Y4mSource<R> {
+    fn describe(&self) -> String {
+        self.reader.name().to_string()
+    }
+
+    fn remaining(&self) -> Option<usize> {
+        None
+    }
+
+    fn skip_frame(&mut self) -> Option<Result<(), OtbError>> {
+        self.reader.skip_image()
+    }
+}
+
+/// The environment variable that names the `ffmpeg` executable
+/// [`VideoSource`] runs (default: `ffmpeg` on `PATH`).
+pub const FFMPEG_ENV: &str = "BAYESTRACK_FFMPEG";
+
+/// A video file decoded by an `ffmpeg` child process that pipes it as Y4M
+/// (`ffmpeg -i <file> -f yuv4mpegpipe -pix_fmt yuv444p -`): any format
+/// ffmpeg reads, with no video library linked. The child is stopped when
+/// the source is dropped (a run on the first frames of a long video does
+/// not decode the rest).
+pub struct VideoSource {
+    path: PathBuf,
+    child: Child,
+    frames: Y4mSource<ChildStdout>,
+    stderr: Option<JoinHandle<String>>,
+    finished: bool,
+}
+
+impl std::fmt::Debug for VideoSource {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("VideoSource")
+            .field("path", &self.path)
+            .field("frames", &self.frames)
+            .finish_non_exhaustive()
+    }
+}
+
+impl VideoSource {
+    /// Starts decoding `path` with the `ffmpeg` on `PATH` (or the one
+    /// [`FFMPEG_ENV`] names) and reads the stream header.
+    ///
+    /// # Errors
+    /// [`OtbError::NoFfmpeg`] (saying how to get one) when there is no such
+    /// executable; [`OtbError::Video`] with ffmpeg's own message when it
+    /// cannot read the file.
+    pub fn open(path: &Path) -> Result<Self, OtbError> {
+        let program = std::env::var_os(FFMPEG_ENV).unwrap_or_else(|| "ffmpeg".into());
+        if !path.is_file() {
+            return Err(OtbError::Video {
+                video: path.to_path_buf(),
+                reason: "no such file".to_string(),
+            });
+        }
+        let mut child = Command::new(&program)
+            .args(["-hide_banner", "-loglevel", "error", "-nostdin", "-i"])
+            .arg(path)
+            .args(["-f", "yuv4mpegpipe", "-pix_fmt", "yuv444p", "-"])
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .map_err(|e| {
+                if e.kind() == std::io::ErrorKind::NotFound {
+                    OtbError::NoFfmpeg {
+                        video: path.to_path_buf(),
+                        program: program.to_string_lossy().into_owned(),
+                    }
+                } else {
+                    OtbError::Video {
+                        video: path.to_path_buf(),
+                        reason: format!("cannot run {}: {e}", program.to_string_lossy()),
+                    }
+                }
+            })?;
+        let stderr = child.stderr.take().map(|mut err| {
+            std::thread::spawn(move || {
+                let mut text = String::new();
+                let _ = err.read_to_string(&mut text);
+                text
+            })
+        });
+        let stdout = child.stdout.take().ok_or_else(|| OtbError::Video {
+            video: path.to_path_buf(),
+            reason: "ffmpeg's output could not be read".to_string(),
+        })?;
+        let source = match Y4mSource::new(stdout, path.display().to_string()) {
+            Ok(frames) => frames,
+            Err(e) => {
+                let status = child.wait().ok();
+                let said = stderr.and_then(|h| h.join().ok()).unwrap_or_default();
+                return Err(OtbError::Video {
+                    video: path.to_path_buf(),
+                    reason: ffmpeg_reason(status, &said, &e),
+                });
+            }
+        };
+        Ok(Self {
+            path: path.to_path_buf(),
+            child,
+            frames: source,
+            stderr,
+            finished: false,
+        })
+    }
+
+    /// The stream header ffmpeg wrote (size, frame rate).
+    pub fn header(&self) -> &crate::y4m::Y4mHeader {
+        self.frames.header()
+    }
+
+    /// At the end of the stream: ffmpeg's exit status decides whether the
+    /// video ended or decoding failed.
+    fn finish(&mut self) -> Option<Result<Frame, OtbError>> {
+        if self.finished {
+            return None;
+        }
+        self.finished = true;
+        let status = self.child.wait().ok();
+        let said = self
+            .stderr
+            .take()
+            .and_then(|h| h.join().ok())
+            .unwrap_or_default();
+        match status {
+            Some(s) if s.success() => None,
+            _ => Some(Err(OtbError::Video {
+                video: self.path.clone(),
+                reason: format!(
+                    "ffmpeg stopped after frame {} ({}): {}",
+                    self.frames.reader.frames_read(),
+                    status.map_or("no exit status".to_string(), |s| s.to_string()),
+                    last_lines(&said)
+                ),
+            })),
+        }
+    }
+}
+
+fn last_lines(text: &str) -> String {
+    let lines: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty()).collect();
+    let tail = &lines[lines.len().saturating_sub(3)..];
+    if tail.is_empty() {
+        "it said nothing".to_string()
+    } else {
+        tail.join(" / ")
+    }
+}
+
+fn ffmpeg_reason(status: Option<std::process::ExitStatus>, said: &str, e: &OtbError) -> String {
+    match status {
+        Some(s) if !s.success() => format!("ffmpeg failed ({s}): {}", last_lines(said)),
+        _ => format!("ffmpeg's output is not a Y4M stream: {e}"),
+    }
+}
+
+impl Iterator for VideoSource {
+    type Item = Result<Frame, OtbError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.finished {
+            return None;
+        }
+        match self.frames.next() {
+            Some(frame) => Some(frame),
+            None => self.finish(),
+        }
+    }
+}
+
+impl FrameSource for VideoSource {
+    fn describe(&self) -> String {
+        self.path.display().to_string()
+    }
+
+    fn remaining(&self) -> Option<usize> {
+        None
+    }
+
+    fn skip_frame(&mut self) -> Option<Result<(), OtbError>> {
+        if self.finished {
+            return None;
+        }
+        match self.frames.skip_frame() {
+            Some(r) => Some(r),
+            None => self.finish().map(|r| r.map(|_| ())),
+        }
+    }
+}
+
+impl Drop for VideoSource {
+    fn drop(&mut self) {
+        if !self.finished {
+            // A run that stopped early: stop decoding the rest.
+            let _ = self.child.kill();
+            let _ = self.child.wait();
+        }
+    }
+}
+
+/// Which frames of a source to run on: `first..=last` (1-based positions,
+/// inclusive; `last` `None` for the end) and every `every`th of them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FrameSelection {
+    /// First frame, 1-based.
+    pub first: usize,
+    /// Last frame, inclusive (`None`: to the end).
+    pub last: Option<usize>,
+    /// Run on every `every`th frame from `first` (1: every frame).
+    pub every: usize,
+}
+
+impl Default for FrameSelection {
+    fn default() -> Self {
+        Self {
+            first: 1,
+            last: None,
+            every: 1,
+        }
+    }
+}
+
+impl FrameSelection {
+    /// Parses `a..b` (1-based, inclusive), `a..` (to the end) or `a` (one
+    /// frame), with `every` from `--every`.
+    ///
+    /// # Errors
+    /// A message for text that is not such a range, a frame 0, `b < a` or
+    /// `every` 0.
+    pub fn parse(range: Option<&str>, every: usize) -> Result<Self, String> {
+        if every == 0 {
+            return Err("--every must be at least 1".to_string());
+        }
+        let Some(range) = range else {
+            return Ok(Self {
+                every,
+                ..Self::default()
+            });
+        };
+        let num = |s: &str| {
+            s.trim()
+                .parse::<usize>()
+                .ok()
+                .filter(|&n| n >= 1)
+                .ok_or_else(|| {
+                    format!(
+                        "`{range}`: expected frames a..b (1-based, inclusive), a.. or a, with \
+                         whole numbers from 1"
+                    )
+                })
+        };
+        let (first, last) = match range.split_once("..") {
+            Some((a, b)) if b.trim().is_empty() => (num(a)?, None),
+            Some((a, b)) => (num(a)?, Some(num(b.trim_start_matches('='))?)),
+            None => {
+                let a = num(range)?;
+                (a, Some(a))
+            }
+        };
+        if last.is_some_and(|b| b < first) {
+            return Err(format!("`{range}`: the last frame is before the first"));
+        }
+        Ok(Self { first, last, every })
+    }
+
+    /// Whether frame `number` (1-based) is run.
+    pub fn contains(&self, number: usize) -> bool {
+        number >= self.first
+            && self.last.is_none_or(|b| number <= b)
+            && (number - self.first).is_multiple_of(self.every)
+    }
+
+    /// How many of `total` frames are run.
+    pub fn count(&self, total: usize) -> usize {
+        let last = self.last.map_or(total, |b| b.min(total));
+        if last < self.first {
+            0
+        } else {
+            (last - self.first) / self.every + 1
+        }
+    }
+}
+
+/// A source restricted to a [`FrameSelection`]: frames outside it are
+/// passed over without decoding where the source allows, and nothing after
+/// the last selected frame is read.
+#[derive(Debug)]
+pub struct Select<S> {
+    inner: S,
+    selection: FrameSelection,
+    position: usize,
+    total: Option<usize>,
+}
+
+impl<S: FrameSource> Select<S> {
+    /// Runs `inner` on the frames `selection` picks.
+    pub fn new(inner: S, selection: FrameSelection) -> Self {
+        let total = inner.remaining();
+        Self {
+            inner,
+            selection,
+            position: 0,
+            total,
+        }
+    }
+}
+
+impl<S: FrameSource> Iterator for Select<S> {
+    type Item = Result<Frame, OtbError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        loop {
+            let number = self.position + 1;
+            if self.selection.last.is_some_and(|b| number > b) {
+                return None;
+            }
+            if self.selection.contains(number) {
+                self.position += 1;
+                return self.inner.next();
+            }
+            match self.inner.skip_frame()? {
+                Ok(()) => self.position += 1,
+                Err(e) => {
+                    self.position += 1;
+                    return Some(Err(e));
+                }
+            }
+        }
+    }
+}
+
+impl<S: FrameSource> FrameSource for Select<S> {
+    fn describe(&self) -> String {
+        self.inner.describe()
+    }
+
+    fn remaining(&self) -> Option<usize> {
+        let total = self.total?;
+        let all = self.selection.count(total);
+        let done = FrameSelection {
+            last: Some(self.position),
+            ..self.selection
+        }
+        .count(total);
+        Some(all - done.min(all))
+    }
+}
+
+impl<S: FrameSource + ?Sized> FrameSource for Box<S> {
+    fn describe(&self) -> String {
+        (**self).describe()
+    }
+
+    fn remaining(&self) -> Option<usize> {
+        (**self).remaining()
+    }
+
+    fn skip_frame(&mut self) -> Option<Result<(), OtbError>> {
+        (**self).skip_frame()
+    }
+}
