@@ -325,33 +325,61 @@ mod x86 {
         }};
     }
 
-    /// Consecutive windows (`step` bytes apart), no limit.
+    /// Consecutive windows (`step` bytes apart), no limit: eight windows
+    /// at a time in registers when `step` is 1 or 3 (one bounds check per
+    /// row and chunk for all eight), the rest one by one.
     macro_rules! windows {
         ($v:expr, $b:expr, $t:ident, $f:ident, $stride:ident, $start:ident, $step:ident,
-         $out:ident, $ld:ident, $zero:expr, $and:ident, $sad:ident, $add:ident,
+         $out:ident, $w:literal, $ld:ident, $zero:expr, $and:ident, $sad:ident, $add:ident,
          $hsum:ident) => {{
-            let (w, nc) = ($t.width, $t.chunks);
-            for (k, o) in $out.iter_mut().enumerate() {
-                let base = $start + k * $step;
+            let nc = $t.chunks;
+            let mut k = 0;
+            macro_rules! batch {
+                ($s:literal) => {
+                    while k + 8 <= $out.len() {
+                        let base = $start + k * $s;
+                        if !$t.fits($f, $stride, base + 7 * $s) {
+                            break;
+                        }
+                        let mut acc = [$zero; 8];
+                        for r in 0..$t.rows {
+                            for c in 0..nc {
+                                let o = base + r * $stride + c * $w;
+                                let blk: &[u8; $w + 7 * $s] =
+                                    $f[o..o + $w + 7 * $s].try_into().unwrap();
+                                let m = $ld(&$t.masks, c * $w);
+                                let tv = $ld(&$t.padded, (r * nc + c) * $w);
+                                for (j, a) in acc.iter_mut().enumerate() {
+                                    let fv = $v.$and($ld(blk, j * $s), m);
+                                    *a = $v.$add(*a, $b.$sad(fv, tv));
+                                }
+                            }
+                        }
+                        for (o, a) in $out[k..k + 8].iter_mut().zip(acc) {
+                            *o = $hsum(a);
+                        }
+                        k += 8;
+                    }
+                };
+            }
+            if $step == 1 {
+                batch!(1);
+            } else if $step == 3 {
+                batch!(3);
+            }
+            for (kk, o) in $out.iter_mut().enumerate().skip(k) {
+                let base = $start + kk * $step;
                 if !$t.fits($f, $stride, base) {
                     *o = $t.sad_scalar($f, $stride, base, u32::MAX);
                     continue;
                 }
                 let mut acc = $zero;
-                if nc == 1 {
-                    let m = $ld(&$t.masks, 0);
-                    for r in 0..$t.rows {
-                        let f = $v.$and($ld($f, base + r * $stride), m);
-                        acc = $v.$add(acc, $b.$sad(f, $ld(&$t.padded, r * w)));
-                    }
-                } else {
-                    for r in 0..$t.rows {
-                        let fo = base + r * $stride;
-                        let to = r * nc * w;
-                        for c in 0..nc {
-                            let f = $v.$and($ld($f, fo + c * w), $ld(&$t.masks, c * w));
-                            acc = $v.$add(acc, $b.$sad(f, $ld(&$t.padded, to + c * w)));
-                        }
+                for r in 0..$t.rows {
+                    let fo = base + r * $stride;
+                    let to = r * nc * $w;
+                    for c in 0..nc {
+                        let fv = $v.$and($ld($f, fo + c * $w), $ld(&$t.masks, c * $w));
+                        acc = $v.$add(acc, $b.$sad(fv, $ld(&$t.padded, to + c * $w)));
                     }
                 }
                 *o = $hsum(acc);
@@ -466,6 +494,7 @@ mod x86 {
                             start,
                             step,
                             out,
+                            64,
                             ld64,
                             v._mm512_setzero_si512(),
                             _mm512_and_si512,
@@ -491,6 +520,7 @@ mod x86 {
                             start,
                             step,
                             out,
+                            32,
                             ld32,
                             simd.avx._mm256_setzero_si256(),
                             _mm256_and_si256,
@@ -516,6 +546,7 @@ mod x86 {
                             start,
                             step,
                             out,
+                            16,
                             ld16,
                             v._mm_setzero_si128(),
                             _mm_and_si128,
