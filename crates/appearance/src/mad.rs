@@ -6,7 +6,9 @@
 //! observation likelihood is `p(z | x) = exp(-MAD / (2 sigma^2))` (eq. 7),
 //! evaluated here in the log domain.
 
-use bayestrack_image::{ImageError, ImageView, ImageViewMut, Pixel, Rect};
+use std::cell::RefCell;
+
+use bayestrack_image::{ImageError, ImageView, ImageViewMut, Pixel, Rect, SadTemplate, SimdLevel};
 
 use crate::error::check_window;
 use crate::{AppearanceError, Result};
@@ -23,6 +25,14 @@ pub trait MadPixel: Pixel {
 
     /// `sum |a_k - b_k|` over two rows of equal length.
     fn sad_row(a: &[Self], b: &[Self]) -> f64;
+
+    /// The view as bytes when `Self` is `u8`: byte images take the SIMD
+    /// SAD kernels of [`SadTemplate`] (run-time dispatch to SSE2, AVX2 or
+    /// AVX-512BW, integer sums equal to the scalar ones).
+    fn as_bytes<'a>(view: &ImageView<'a, Self>) -> Option<ImageView<'a, u8>> {
+        let _ = view;
+        None
+    }
 
     /// Sums of absolute differences between `template` and the frame
     /// windows with top-left corners `(x0 + i, y)`, `i < out.len()`, into
@@ -55,7 +65,11 @@ impl MadPixel for u8 {
 
     #[inline]
     fn sad_row(a: &[u8], b: &[u8]) -> f64 {
-        f64::from(sad_u8(a, b))
+        f64::from(bayestrack_image::sad_u8(a, b))
+    }
+
+    fn as_bytes<'a>(view: &ImageView<'a, u8>) -> Option<ImageView<'a, u8>> {
+        Some(*view)
     }
 
     fn sad_positions(
@@ -66,43 +80,36 @@ impl MadPixel for u8 {
         out: &mut [f64],
     ) {
         let npos = out.len().min(SAD_CHUNK);
-        let ch = template.channels();
-        let mut acc = [0u32; SAD_CHUNK];
-        let mut lanes = [0u16; SAD_CHUNK];
-        for r in 0..template.height() {
-            let frow = frame.row(y + r);
-            let mut pending = 0u32;
-            for (m, &t) in template.row(r).iter().enumerate() {
-                let lanes = &mut lanes[..npos];
-                if ch == 1 {
-                    let src = &frow[x0 + m..x0 + m + npos];
-                    for (a, &f) in lanes.iter_mut().zip(src) {
-                        *a += absdiff(f, t);
-                    }
-                } else {
-                    for (i, a) in lanes.iter_mut().enumerate() {
-                        *a += absdiff(frow[(x0 + i) * ch + m], t);
-                    }
-                }
-                pending += 1;
-                // 257 * 255 < 2^16: flush before a lane can overflow.
-                if pending == 257 {
-                    for (s, l) in acc[..npos].iter_mut().zip(lanes.iter_mut()) {
-                        *s += u32::from(*l);
-                        *l = 0;
-                    }
-                    pending = 0;
-                }
-            }
-            for (s, l) in acc[..npos].iter_mut().zip(lanes[..npos].iter_mut()) {
-                *s += u32::from(*l);
-                *l = 0;
-            }
-        }
-        for (o, &s) in out.iter_mut().zip(&acc[..npos]) {
+        let mut sums = [0u32; SAD_CHUNK];
+        with_thread_template(*template, |t| {
+            t.sad_windows(*frame, x0, y, &mut sums[..npos]);
+        });
+        for (o, &s) in out.iter_mut().zip(&sums[..npos]) {
             *o = f64::from(s);
         }
     }
+}
+
+thread_local! {
+    /// A per-thread padded template for the free functions, so that they
+    /// allocate nothing once warm.
+    static THREAD_TEMPLATE: RefCell<SadTemplate> = RefCell::new(SadTemplate::new(SimdLevel::detect()));
+}
+
+/// Runs `f` on this thread's [`SadTemplate`] loaded with `template`.
+fn with_thread_template<R>(template: ImageView<'_, u8>, f: impl FnOnce(&SadTemplate) -> R) -> R {
+    THREAD_TEMPLATE.with(|cell| {
+        let mut t = cell.borrow_mut();
+        t.set(template);
+        f(&t)
+    })
+}
+
+/// Whether integer SADs of this template fit in `u32` (the SIMD kernels'
+/// sums): `255 * elements < 2^32`, templates of up to 16.8 million bytes.
+fn fits_u32(template: &ImageView<'_, u8>) -> bool {
+    (template.width() * template.channels()).saturating_mul(template.height())
+        < (u32::MAX / 255) as usize
 }
 
 impl MadPixel for f32 {
@@ -124,46 +131,6 @@ impl MadPixel for f32 {
             .sum();
         f64::from(acc.iter().sum::<f32>() + tail)
     }
-}
-
-/// `|a - b|` for bytes as two saturating subtractions: this form
-/// vectorises to `psubusb`/`por` on plain SSE2, where `u8::abs_diff`
-/// widens to 32-bit lanes (five times slower in the search).
-#[inline(always)]
-fn absdiff(a: u8, b: u8) -> u16 {
-    u16::from(a.saturating_sub(b) | b.saturating_sub(a))
-}
-
-/// Sum of absolute differences of two byte rows; written so that the
-/// compiler vectorises it (16-byte blocks into 16-bit lanes).
-#[inline]
-fn sad_u8(a: &[u8], b: &[u8]) -> u32 {
-    let n = a.len().min(b.len());
-    let (a, b) = (&a[..n], &b[..n]);
-    let mut total = 0u32;
-    let mut ca = a.chunks_exact(16);
-    let mut cb = b.chunks_exact(16);
-    let mut lanes = [0u16; 16];
-    let mut blocks = 0u32;
-    for (x, y) in (&mut ca).zip(&mut cb) {
-        for k in 0..16 {
-            lanes[k] += absdiff(x[k], y[k]);
-        }
-        blocks += 1;
-        // 255 * 257 < 2^16: flush before a lane can overflow.
-        if blocks == 257 {
-            total += lanes.iter().map(|&v| u32::from(v)).sum::<u32>();
-            lanes = [0; 16];
-            blocks = 0;
-        }
-    }
-    total += lanes.iter().map(|&v| u32::from(v)).sum::<u32>();
-    total
-        + ca.remainder()
-            .iter()
-            .zip(cb.remainder())
-            .map(|(x, y)| u32::from(x.abs_diff(*y)))
-            .sum::<u32>()
 }
 
 fn check_template<T: Pixel>(frame: &ImageView<'_, T>, template: &ImageView<'_, T>) -> Result<()> {
@@ -277,6 +244,7 @@ pub fn mad_search<T: MadPixel>(
 /// positions and vectorises.
 #[derive(Clone, Debug, Default)]
 pub struct MadSearch {
+    sad: SadTemplate,
     template_rows: Vec<f64>,
     window_rows: Vec<f64>,
     bounds: Vec<f64>,
@@ -354,7 +322,29 @@ impl MadSearch {
                 out[i] = acc;
             }
         }
+        // Byte images take the SIMD kernels (integer sums, exact in f64).
+        let bytes = T::as_bytes(&frame)
+            .zip(T::as_bytes(&template))
+            .filter(|(_, t)| fits_u32(t));
+        if let Some((_, t)) = bytes {
+            self.sad.set(t);
+        }
+        let sad = &self.sad;
         let full_sad = |x: usize, y: usize, limit: f64| -> f64 {
+            if let Some((f, _)) = bytes {
+                // `limit` is an integer sum or infinite.
+                let lim = if limit < f64::from(u32::MAX) {
+                    limit as u32
+                } else {
+                    u32::MAX
+                };
+                return f64::from(sad.sad_at(
+                    f.as_slice(),
+                    f.stride(),
+                    y * f.stride() + x * ch,
+                    lim,
+                ));
+            }
             let mut s = 0.0;
             for r in 0..th {
                 s += T::sad_row(template.row(r), &frame.row(y + r)[x * ch..x * ch + n]);
@@ -363,6 +353,17 @@ impl MadSearch {
                 }
             }
             s
+        };
+        let dense = |x0: usize, y: usize, out: &mut [f64]| {
+            if let Some((f, _)) = bytes {
+                let mut buf = [0u32; SAD_CHUNK];
+                sad.sad_windows(f, x0, y, &mut buf[..out.len()]);
+                for (o, &b) in out.iter_mut().zip(&buf) {
+                    *o = f64::from(b);
+                }
+            } else {
+                T::sad_positions(&frame, &template, x0, y, out);
+            }
         };
         // Lower bounds for every position.
         self.bounds.clear();
@@ -403,7 +404,7 @@ impl MadSearch {
                 let mut i0 = 0;
                 while i0 < npx {
                     let k = (npx - i0).min(SAD_CHUNK);
-                    T::sad_positions(&frame, &template, region.x + i0, y, &mut sums[..k]);
+                    dense(region.x + i0, y, &mut sums[..k]);
                     for (i, &s) in sums[..k].iter().enumerate() {
                         if better(s, y, region.x + i0 + i, &best) {
                             best = (s, y, region.x + i0 + i);
@@ -460,6 +461,25 @@ pub fn mad_map_into<T: MadPixel>(
         .into());
     }
     let norm = 1.0 / (tw * th * template.channels()) as f64;
+    if let (Some(f), Some(t)) = (T::as_bytes(&frame), T::as_bytes(&template))
+        && fits_u32(&t)
+    {
+        let mut sums = [0u32; SAD_CHUNK];
+        with_thread_template(t, |sad| {
+            for j in 0..oh {
+                let mut i0 = 0;
+                while i0 < ow {
+                    let n = (ow - i0).min(SAD_CHUNK);
+                    sad.sad_windows(f, region.x + i0, region.y + j, &mut sums[..n]);
+                    for (o, &s) in out.row_mut(j)[i0..i0 + n].iter_mut().zip(&sums[..n]) {
+                        *o = (f64::from(s) * norm) as f32;
+                    }
+                    i0 += n;
+                }
+            }
+        });
+        return Ok(());
+    }
     let mut sums = [0f64; SAD_CHUNK];
     for j in 0..oh {
         let mut i0 = 0;
@@ -560,8 +580,8 @@ mod tests {
             .zip(&b)
             .map(|(x, y)| u32::from(x.abs_diff(*y)))
             .sum();
-        assert_eq!(sad_u8(&a, &b), naive);
-        assert_eq!(sad_u8(&[255; 9000], &[0; 9000]), 255 * 9000);
+        assert_eq!(u8::sad_row(&a, &b), f64::from(naive));
+        assert_eq!(u8::sad_row(&[255; 9000], &[0; 9000]), 255.0 * 9000.0);
     }
 
     fn textured(w: usize, h: usize, seed: u32) -> Image<u8> {
