@@ -19,13 +19,29 @@ fn frame_rgb(w: usize, h: usize) -> Image<u8> {
 }
 
 fn bench_warp(c: &mut Criterion) {
-    let frame = Image::from_fn(320, 240, |x, y| ((x * 7 + y * 13) % 256) as f32).unwrap();
     let pose = Affine2::from_rows([[1.1, 0.2, 120.0], [-0.15, 0.95, 80.0]]).unwrap();
-    let mut buf = [0f32; 36 * 36];
+    let gray_f32 = Image::from_fn(320, 240, |x, y| ((x * 7 + y * 13) % 256) as f32).unwrap();
+    let rgb_u8 = frame_rgb(320, 240);
+    let gray_u8 = Image::from_fn(320, 240, |x, y| ((x * 7 + y * 13) % 256) as u8).unwrap();
+    let mut buf = vec![0f32; 36 * 36 * 3];
     c.bench_function("warp_into 36x36 affine patch (gray f32 320x240)", |b| {
         b.iter(|| {
             let mut patch = ImageViewMut::from_slice(&mut buf, 36, 36, 1, 36).unwrap();
-            warp_into(frame.view(), black_box(&pose), Border::Error, &mut patch).unwrap();
+            warp_into(gray_f32.view(), black_box(&pose), Border::Error, &mut patch).unwrap();
+            black_box(buf[0])
+        })
+    });
+    c.bench_function("warp_into 36x36 affine patch (gray u8 320x240)", |b| {
+        b.iter(|| {
+            let mut patch = ImageViewMut::from_slice(&mut buf, 36, 36, 1, 36).unwrap();
+            warp_into(gray_u8.view(), black_box(&pose), Border::Error, &mut patch).unwrap();
+            black_box(buf[0])
+        })
+    });
+    c.bench_function("warp_into 36x36 affine patch (RGB u8 320x240)", |b| {
+        b.iter(|| {
+            let mut patch = ImageViewMut::from_slice(&mut buf, 36, 36, 3, 108).unwrap();
+            warp_into(rgb_u8.view(), black_box(&pose), Border::Error, &mut patch).unwrap();
             black_box(buf[0])
         })
     });

@@ -306,6 +306,57 @@ fn first_outside_corner(m: &Affine2, pw: usize, ph: usize, w: usize, h: usize) -
     unreachable!("called only when a corner is outside")
 }
 
+/// The inside fast path of [`warp_into`]: every sample's cell is in the
+/// frame, so no border checks.
+struct InsideWarp<'a, T> {
+    data: &'a [T],
+    stride: usize,
+    xmax: f32,
+    ymax: f32,
+    m: [f64; 6],
+}
+
+impl<T: Pixel> InsideWarp<'_, T> {
+    /// `CH` is the channel count, or 0 for any (`ch` at run time).
+    #[inline(always)]
+    fn run<const CH: usize>(&self, out: &mut ImageViewMut<'_, f32>, ch: usize) {
+        let ch = if CH == 0 { ch } else { CH };
+        let [a, b, tx, c, d, ty] = self.m;
+        let (data, stride) = (self.data, self.stride);
+        let pw = out.width();
+        for v in 0..out.height() {
+            let row = &mut out.row_mut(v)[..pw * ch];
+            let vf = v as f64;
+            let (bx, by) = (b * vf + tx, d * vf + ty);
+            for (u, px) in row.chunks_exact_mut(ch).enumerate() {
+                let uf = u as f64;
+                let x = ((a * uf + bx) as f32).max(0.0);
+                let y = ((c * uf + by) as f32).max(0.0);
+                // Cells are [x0, x0 + 1] with x0 <= w - 2; on the right edge
+                // fx = 1. Truncation is floor here (x, y >= 0); through i32
+                // (the frame is far smaller than 2^31) it is one
+                // instruction, where usize needs an unsigned sequence.
+                let xi = x.min(self.xmax) as i32;
+                let yi = y.min(self.ymax) as i32;
+                let fx = (x - xi as f32).min(1.0);
+                let fy = (y - yi as f32).min(1.0);
+                let i00 = yi as usize * stride + xi as usize * ch;
+                let r0 = &data[i00..i00 + 2 * ch];
+                let r1 = &data[i00 + stride..i00 + stride + 2 * ch];
+                for k in 0..ch {
+                    let p00 = r0[k].to_f32();
+                    let p01 = r0[k + ch].to_f32();
+                    let p10 = r1[k].to_f32();
+                    let p11 = r1[k + ch].to_f32();
+                    let top = p00 + fx * (p01 - p00);
+                    let bot = p10 + fx * (p11 - p10);
+                    px[k] = top + fy * (bot - top);
+                }
+            }
+        }
+    }
+}
+
 /// Warps `src` through `m` (patch -> image coordinates) into the caller's
 /// patch `out`, which fixes the patch size and must have the same channel
 /// count as `src`. Allocation-free.
@@ -345,37 +396,19 @@ pub fn warp_into<T: Pixel>(
     let [a, b, tx, c, d, ty] = m.m;
     if inside && w >= 2 && h >= 2 {
         // Fast path: every sample is inside (to within rounding), so the
-        // four neighbours are read straight from the buffer.
-        let data = src.as_slice();
-        let stride = src.stride();
-        let (xmax, ymax) = ((w - 2) as f32, (h - 2) as f32);
-        for v in 0..ph {
-            let row = out.row_mut(v);
-            let vf = v as f64;
-            let (bx, by) = (b * vf + tx, d * vf + ty);
-            for u in 0..pw {
-                let uf = u as f64;
-                let x = ((a * uf + bx) as f32).max(0.0);
-                let y = ((c * uf + by) as f32).max(0.0);
-                // Cells are [x0, x0 + 1] with x0 <= w - 2; on the right edge fx = 1.
-                // Truncation is floor here (x, y >= 0) and avoids a libm
-                // call for `floor` on baseline x86-64.
-                let xi = x.min(xmax) as usize;
-                let yi = y.min(ymax) as usize;
-                let fx = (x - xi as f32).min(1.0);
-                let fy = (y - yi as f32).min(1.0);
-                let i00 = yi * stride + xi * ch;
-                for k in 0..ch {
-                    let i = i00 + k;
-                    let p00 = data[i].to_f32();
-                    let p01 = data[i + ch].to_f32();
-                    let p10 = data[i + stride].to_f32();
-                    let p11 = data[i + stride + ch].to_f32();
-                    let top = p00 + fx * (p01 - p00);
-                    let bot = p10 + fx * (p11 - p10);
-                    row[u * ch + k] = top + fy * (bot - top);
-                }
-            }
+        // four neighbours are read straight from the buffer. One and three
+        // channels get their own loops (the channel loop unrolled).
+        let p = InsideWarp {
+            data: src.as_slice(),
+            stride: src.stride(),
+            xmax: (w - 2) as f32,
+            ymax: (h - 2) as f32,
+            m: [a, b, tx, c, d, ty],
+        };
+        match ch {
+            1 => p.run::<1>(out, 1),
+            3 => p.run::<3>(out, 3),
+            _ => p.run::<0>(out, ch),
         }
         return Ok(());
     }
@@ -573,5 +606,87 @@ mod tests {
             warp_into(img.view(), &m, Border::Error, &mut wrong.view_mut()),
             Err(ImageError::Channels { .. })
         ));
+    }
+
+    /// The inside path as it was before the 1- and 3-channel loops (one
+    /// loop over a run-time channel count, unsigned conversions).
+    fn reference_inside<T: Pixel>(
+        src: ImageView<'_, T>,
+        m: &Affine2,
+        out: &mut [f32],
+        pw: usize,
+        ph: usize,
+    ) {
+        let [a, b, tx, c, d, ty] = m.as_array();
+        let (w, h, ch) = (src.width(), src.height(), src.channels());
+        let data = src.as_slice();
+        let stride = src.stride();
+        let (xmax, ymax) = ((w - 2) as f32, (h - 2) as f32);
+        for v in 0..ph {
+            let vf = v as f64;
+            let (bx, by) = (b * vf + tx, d * vf + ty);
+            for u in 0..pw {
+                let uf = u as f64;
+                let x = ((a * uf + bx) as f32).max(0.0);
+                let y = ((c * uf + by) as f32).max(0.0);
+                let xi = x.min(xmax) as usize;
+                let yi = y.min(ymax) as usize;
+                let fx = (x - xi as f32).min(1.0);
+                let fy = (y - yi as f32).min(1.0);
+                let i00 = yi * stride + xi * ch;
+                for k in 0..ch {
+                    let i = i00 + k;
+                    let p00 = data[i].to_f32();
+                    let p01 = data[i + ch].to_f32();
+                    let p10 = data[i + stride].to_f32();
+                    let p11 = data[i + stride + ch].to_f32();
+                    let top = p00 + fx * (p01 - p00);
+                    let bot = p10 + fx * (p11 - p10);
+                    out[(v * pw + u) * ch + k] = top + fy * (bot - top);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn channel_specialised_warps_equal_the_generic_loop_bit_for_bit() {
+        let mut s = 7u32;
+        let mut next = move || {
+            s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            s >> 8
+        };
+        for ch in 1..=4 {
+            let big = Image::from_vec(
+                70,
+                50,
+                ch,
+                (0..70 * 50 * ch).map(|_| (next() % 256) as u8).collect(),
+            )
+            .unwrap();
+            // A crop: stride wider than the view.
+            let src = big.crop(crate::Rect::new(3, 2, 61, 45)).unwrap();
+            let srcf = src.to_image().map(|v| f32::from(v) * 0.37 - 11.0);
+            for trial in 0..20 {
+                let mut r = |n: u32| (next() % n) as f64 / n as f64;
+                let m = Affine2::from_rows([
+                    [0.4 + r(1000), r(1000) * 0.6 - 0.3, 2.0 + 20.0 * r(1000)],
+                    [r(1000) * 0.6 - 0.3, 0.4 + r(1000), 2.0 + 15.0 * r(1000)],
+                ])
+                .unwrap();
+                let (pw, ph) = (17, 13);
+                let mut want = vec![0f32; pw * ph * ch];
+                let mut got = vec![0f32; pw * ph * ch];
+                let mut outv = ImageViewMut::from_slice(&mut got, pw, ph, ch, pw * ch).unwrap();
+                if warp_into(src, &m, Border::Error, &mut outv).is_err() {
+                    continue;
+                }
+                reference_inside(src, &m, &mut want, pw, ph);
+                assert_eq!(got, want, "u8, {ch} channels, trial {trial}");
+                let mut outv = ImageViewMut::from_slice(&mut got, pw, ph, ch, pw * ch).unwrap();
+                warp_into(srcf.view(), &m, Border::Error, &mut outv).unwrap();
+                reference_inside(srcf.view(), &m, &mut want, pw, ph);
+                assert_eq!(got, want, "f32, {ch} channels, trial {trial}");
+            }
+        }
     }
 }
