@@ -171,17 +171,14 @@ enum Input {
     /// A folder of frames (or an OTB-100 sequence).
     Folder(Sequence),
     /// A Y4M stream or a video decoded by ffmpeg.
-    Stream(Box<dyn FrameSource>, PathBuf),
+    Stream(Box<dyn FrameSource>),
 }
 
 fn open_input(args: &TrackArgs) -> Result<Input, String> {
     let seq = &args.seq;
     let e = |e: OtbError| e.to_string();
     if seq == Path::new("-") {
-        return Ok(Input::Stream(
-            Box::new(Y4mSource::stdin().map_err(e)?),
-            seq.clone(),
-        ));
+        return Ok(Input::Stream(Box::new(Y4mSource::stdin().map_err(e)?)));
     }
     if seq.is_file() {
         let y4m = seq
@@ -192,7 +189,7 @@ fn open_input(args: &TrackArgs) -> Result<Input, String> {
         } else {
             Box::new(VideoSource::open(seq).map_err(e)?)
         };
-        return Ok(Input::Stream(source, seq.clone()));
+        return Ok(Input::Stream(source));
     }
     let folder = match &args.groundtruth {
         Some(gt) => Sequence::open_with_ground_truth(seq, gt),
@@ -305,7 +302,7 @@ fn track(args: &TrackArgs) -> Result<(), String> {
             seq.ground_truth_rows,
             seq.notes.clone(),
         ),
-        Input::Stream(..) => match &args.groundtruth {
+        Input::Stream(_) => match &args.groundtruth {
             Some(gt) => {
                 let rows = read_ground_truth(gt).map_err(|e| e.to_string())?;
                 let n = rows.len();
@@ -340,7 +337,7 @@ fn track(args: &TrackArgs) -> Result<(), String> {
     }
     let (folder, stream) = match input {
         Input::Folder(seq) => (Some(seq), None),
-        Input::Stream(stream, _) => (None, Some(stream)),
+        Input::Stream(stream) => (None, Some(stream)),
     };
     let name = folder
         .as_ref()
