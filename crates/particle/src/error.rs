@@ -50,6 +50,16 @@ pub enum ParticleError {
         /// What the filter said.
         source: KalmanError,
     },
+    /// A filter step given the random-stream key of the step before it,
+    /// which would draw the same noise again.
+    #[error(
+        "step {k} reuses the random-stream key of step {}: every step needs its own key (Smc numbers them)",
+        k - 1
+    )]
+    KeyReused {
+        /// The time index of the refused step.
+        k: usize,
+    },
     /// A proposed particle is not finite.
     #[error("proposed state of particle {index} is not finite")]
     NonFiniteState {

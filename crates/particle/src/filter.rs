@@ -239,7 +239,13 @@ impl ParticleFilter {
 
     /// One step: propose every particle, weight, normalise, resample per
     /// the policy, and move (MCMC) if enabled. `key` identifies the step's
-    /// random streams (for example `[experiment, run, k]`).
+    /// random streams (for example `[experiment, run, k]`): every step needs
+    /// its own, and the previous step's key is refused
+    /// ([`ParticleError::KeyReused`]) rather than silently drawing the same
+    /// noise again. [`crate::Smc`] numbers the keys itself.
+    ///
+    /// The proposal sees the time index `k = set.k() + 1` of the particles
+    /// it draws; the set's index advances when the step succeeds.
     ///
     /// Every pass over the particles (proposal, weights, resampling and
     /// gathering) runs chunk by chunk in parallel; the chunk results are
@@ -253,7 +259,8 @@ impl ParticleFilter {
     /// [`ParticleError::Proposal`] naming the particle whose local filter
     /// failed, [`ParticleError::NonFiniteState`], [`ParticleError::NonFiniteWeight`],
     /// [`ParticleError::AllWeightsZero`] (unless [`Degenerate::IgnoreMeasurement`]),
-    /// and configuration errors of [`ParticleFilter::validate`].
+    /// [`ParticleError::KeyReused`], and configuration errors of
+    /// [`ParticleFilter::validate`].
     pub fn step<T, Z, P, const N: usize>(
         &self,
         set: &mut ParticleSet<T>,
@@ -267,22 +274,32 @@ impl ParticleFilter {
         P: Proposal<T, Z>,
     {
         self.validate()?;
+        let seed = stream_seed(key);
+        let k = set.k + 1;
+        if set.last_seed == Some(seed) {
+            return Err(ParticleError::KeyReused { k });
+        }
         let mut parents = std::mem::take(&mut set.scratch.parents);
         if self.mcmc {
             parents.clone_from(&set.particles);
         }
-        let outcome = self.step_from(set, proposal, z, key, &parents);
+        let outcome = self.step_from(set, proposal, z, k, key, &parents);
         set.scratch.parents = parents;
+        if outcome.is_ok() {
+            set.k = k;
+            set.last_seed = Some(seed);
+        }
         outcome
     }
 
-    /// [`ParticleFilter::step`] with the particles before the proposal in
-    /// `parents` (for the MCMC move; empty without it).
+    /// [`ParticleFilter::step`] at time `k` with the particles before the
+    /// proposal in `parents` (for the MCMC move; empty without it).
     fn step_from<T, Z, P, const N: usize>(
         &self,
         set: &mut ParticleSet<T>,
         proposal: &P,
         z: &Z,
+        k: usize,
         key: &[u64],
         parents: &[T],
     ) -> Result<StepReport>
@@ -297,6 +314,7 @@ impl ParticleFilter {
             particles,
             log_weights: log_w,
             scratch,
+            ..
         } = set;
         let Scratch {
             increments,
@@ -325,7 +343,7 @@ impl ParticleFilter {
                 let offset = c * cs;
                 let mut acc = Proposed::EMPTY;
                 for (i, ((p, w), &l)) in ps.iter_mut().zip(inc.iter_mut()).zip(lw).enumerate() {
-                    let (child, x) = proposal.propose(p, z, &mut rng).map_err(|source| {
+                    let (child, x) = proposal.propose(k, p, z, &mut rng).map_err(|source| {
                         ParticleError::Proposal {
                             index: offset + i,
                             source,
@@ -461,7 +479,7 @@ impl ParticleFilter {
             });
         std::mem::swap(particles, spare);
         let accepted = if self.mcmc {
-            self.mcmc_move(set, proposal, z, key, parents)?
+            self.mcmc_move(set, proposal, z, k, key, parents)?
         } else {
             0
         };
@@ -483,6 +501,7 @@ impl ParticleFilter {
         set: &mut ParticleSet<T>,
         proposal: &P,
         z: &Z,
+        k: usize,
         key: &[u64],
         parents: &[T],
     ) -> Result<usize>
@@ -506,7 +525,7 @@ impl ParticleFilter {
                     let j = offset + i;
                     let anc = ancestors[j];
                     let (cand, lw) = proposal
-                        .propose(&parents[anc], z, rng)
+                        .propose(k, &parents[anc], z, rng)
                         .map_err(|source| ParticleError::Proposal { index: j, source })?;
                     let u: f64 = rng.random();
                     if cand.state().iter().all(|v| v.is_finite())

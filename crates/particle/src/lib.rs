@@ -6,10 +6,26 @@ mod proposal;
 mod resample;
 mod seed;
 mod set;
+mod smc;
 
 pub use error::{ParticleError, Result};
 pub use filter::{Degenerate, ParticleFilter, ResamplePolicy, StepReport};
-pub use proposal::{Bootstrap, KalmanProposal, LocalFilter, Proposal, StateSpaceModel};
+pub use proposal::{
+    Bootstrap, KalmanProposal, LocalFilter, Model, Proposal, StateSpaceModel, TransitionDensity,
+};
 pub use resample::{Resampler, Resampling};
 pub use seed::{stream_rng, stream_seed};
 pub use set::{Finite, KalmanParticle, Particle, ParticleSet, log_sum_exp};
+pub use smc::Smc;
+
+/// Re-exported so one dependency is enough: the filters, Gaussians and
+/// errors of the Kalman proposals (`KalmanError` is in [`Proposal`]).
+pub use bayestrack_kalman as kalman;
+/// Re-exported: states are `nalgebra::SVector`s.
+pub use nalgebra;
+/// Re-exported: models and proposals draw from a `rand::Rng`.
+pub use rand;
+/// Re-exported: the distributions a model samples its noise from.
+pub use rand_distr;
+/// Re-exported: [`stream_rng`]'s generator.
+pub use rand_xoshiro;

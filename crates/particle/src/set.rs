@@ -118,6 +118,10 @@ pub(crate) fn shifted_log_sum_exp(log_w: &[f64]) -> Result<(f64, f64)> {
 pub struct ParticleSet<T> {
     pub(crate) particles: Vec<T>,
     pub(crate) log_weights: Vec<f64>,
+    /// The time index: filter steps taken since the set was made.
+    pub(crate) k: usize,
+    /// The stream seed of the latest filter step (none before the first).
+    pub(crate) last_seed: Option<u64>,
     pub(crate) scratch: Scratch<T>,
 }
 
@@ -154,6 +158,8 @@ impl<T: Clone> Clone for ParticleSet<T> {
         Self {
             particles: self.particles.clone(),
             log_weights: self.log_weights.clone(),
+            k: self.k,
+            last_seed: self.last_seed,
             scratch: Scratch::default(),
         }
     }
@@ -170,7 +176,17 @@ impl<T: std::fmt::Debug> std::fmt::Debug for ParticleSet<T> {
         f.debug_struct("ParticleSet")
             .field("particles", &self.particles)
             .field("log_weights", &self.log_weights)
+            .field("k", &self.k)
             .finish()
+    }
+}
+
+impl<T> ParticleSet<T> {
+    /// The time index `k` of the particles: the number of
+    /// [`crate::ParticleFilter::step`]s the set has taken (0 for a new set;
+    /// the next step draws `x_{k+1}` and shows its models `k + 1`).
+    pub fn k(&self) -> usize {
+        self.k
     }
 }
 
@@ -196,6 +212,8 @@ impl<T: Clone> ParticleSet<T> {
         Ok(Self {
             particles,
             log_weights,
+            k: 0,
+            last_seed: None,
             scratch: Scratch::default(),
         })
     }
@@ -214,6 +232,8 @@ impl<T: Clone> ParticleSet<T> {
         let mut set = Self {
             particles,
             log_weights,
+            k: 0,
+            last_seed: None,
             scratch: Scratch::default(),
         };
         set.normalize()?;

@@ -432,6 +432,7 @@ struct ArpProposal;
 impl<'a> Proposal<Vector2<f64>, Observation<'a>> for ArpProposal {
     fn propose<R: Rng + ?Sized>(
         &self,
+        _k: usize,
         parent: &Vector2<f64>,
         z: &Observation<'a>,
         rng: &mut R,

@@ -1,0 +1,62 @@
+//! A particle filter that runs: configuration, particle set and seed, with
+//! the step keys numbered by the filter.
+
+use crate::error::Result;
+use crate::filter::{ParticleFilter, StepReport};
+use crate::proposal::Proposal;
+use crate::set::{Particle, ParticleSet};
+
+/// A running particle filter (sequential Monte Carlo): a
+/// [`ParticleFilter`] configuration, the [`ParticleSet`] it moves and a
+/// seed.
+///
+/// Step `k` (the set's time index after it, [`ParticleSet::k`]) draws its
+/// random streams from the key `[seed, k]`: no two steps share noise, the
+/// same seed gives the same numbers on any number of threads, and
+/// different seeds give independent runs (mix a run number into the seed
+/// with [`crate::stream_seed`]). [`ParticleFilter::step`] is the same step
+/// with a key of the caller's.
+#[derive(Debug, Clone)]
+pub struct Smc<T> {
+    /// The configuration.
+    pub filter: ParticleFilter,
+    /// The particles and their weights.
+    pub set: ParticleSet<T>,
+    seed: u64,
+}
+
+impl<T> Smc<T> {
+    /// A filter that starts from `set`.
+    ///
+    /// # Errors
+    /// As [`ParticleFilter::validate`].
+    pub fn new(filter: ParticleFilter, set: ParticleSet<T>, seed: u64) -> Result<Self> {
+        filter.validate()?;
+        Ok(Self { filter, set, seed })
+    }
+
+    /// The seed of the run.
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+
+    /// The time index of the particles: steps taken ([`ParticleSet::k`]).
+    pub fn k(&self) -> usize {
+        self.set.k()
+    }
+
+    /// One step with measurement `z`: [`ParticleFilter::step`] with the key
+    /// `[seed, k]`, `k` the time index the proposal draws.
+    ///
+    /// # Errors
+    /// As [`ParticleFilter::step`].
+    pub fn step<Z, P, const N: usize>(&mut self, proposal: &P, z: &Z) -> Result<StepReport>
+    where
+        T: Particle<N>,
+        Z: ?Sized + Sync,
+        P: Proposal<T, Z>,
+    {
+        let key = [self.seed, self.set.k() as u64 + 1];
+        self.filter.step(&mut self.set, proposal, z, &key)
+    }
+}
