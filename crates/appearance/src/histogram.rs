@@ -30,6 +30,8 @@ pub struct RgbHistogram {
     /// sub-histograms per channel (`sub[l * 3 + c]`), indexed by a `u8` bin
     /// so the increments need no bounds check; empty until first needed.
     sub: Vec<[u32; 256]>,
+    /// Scratch: the bins of one window row (bin counts below 256).
+    row_bins: Vec<u8>,
 }
 
 /// Sub-histograms per channel in [`RgbHistogram::compute`]: pixel `i` of a
@@ -83,6 +85,7 @@ impl RgbHistogram {
             counts: vec![0; 3 * bins],
             pixels: 0,
             sub: Vec::new(),
+            row_bins: Vec::new(),
         })
     }
 
@@ -166,9 +169,20 @@ impl RgbHistogram {
             if b == 256 {
                 count_interleaved(&mut self.sub, rows, |v| v);
             } else {
-                // `v * bins / 256` < bins <= 256: a `u8`.
-                let bins = b as u32;
-                count_interleaved(&mut self.sub, rows, |v| ((u32::from(v) * bins) >> 8) as u8);
+                // The bins of a whole row first, in a pass the compiler
+                // vectorises (`v * bins / 256` < bins <= 256 fits a `u8`,
+                // the product a `u16`), then the counting.
+                let bins = b as u16;
+                let row_bins = &mut self.row_bins;
+                row_bins.resize(3 * window.width, 0);
+                for row in rows {
+                    crate::skin::vectorised(BinRow {
+                        row,
+                        out: &mut row_bins[..],
+                        bins,
+                    });
+                    count_interleaved(&mut self.sub, std::iter::once(&row_bins[..]), |v| v);
+                }
             }
             for (c, out) in self.counts.chunks_exact_mut(b).enumerate() {
                 for (k, o) in out.iter_mut().enumerate() {
@@ -226,9 +240,10 @@ impl RgbHistogram {
         // then the sum is exact in any order and the result is
         // `sqrt(S) / (na nb)` rounded twice.
         let (na, nb) = (f64::from(self.pixels), f64::from(other.pixels));
-        let s = sum_lanes(&self.counts, &other.counts, |a, b| {
-            let d = a * nb - b * na;
-            d * d
+        let s = crate::skin::vectorised(CountSum {
+            a: (&self.counts, self.pixels),
+            b: (&other.counts, other.pixels),
+            kind: HistogramDistance::L2,
         });
         Ok(s.sqrt() / (na * nb))
     }
@@ -242,7 +257,11 @@ impl RgbHistogram {
         self.check_pair(other, "bhattacharyya_distance")?;
         // `a b` is exact in f64 for counts below 2^26.5; one square root per
         // bin, one division at the end.
-        let s = sum_lanes(&self.counts, &other.counts, |a, b| (a * b).sqrt());
+        let s = crate::skin::vectorised(CountSum {
+            a: (&self.counts, self.pixels),
+            b: (&other.counts, other.pixels),
+            kind: HistogramDistance::Bhattacharyya,
+        });
         let bc = s / (3.0 * (f64::from(self.pixels) * f64::from(other.pixels)).sqrt());
         Ok((1.0 - bc).max(0.0).sqrt())
     }
@@ -309,20 +328,85 @@ fn count_interleaved<'a>(
     }
 }
 
+/// `v * bins / 256` for a row of bytes (`bins < 256`: the product fits a
+/// `u16`, the bin a `u8`).
+struct BinRow<'a> {
+    row: &'a [u8],
+    out: &'a mut [u8],
+    bins: u16,
+}
+
+impl crate::skin::Kernel for BinRow<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run(self) {
+        for (o, &v) in self.out.iter_mut().zip(self.row) {
+            *o = ((u16::from(v) * self.bins) >> 8) as u8;
+        }
+    }
+}
+
+/// The per-bin sum of a distance between two histograms' counts (with
+/// their pixel counts): `sum (a nb - b na)^2` for L2, `sum sqrt(a b)` for
+/// Bhattacharyya.
+struct CountSum<'a> {
+    a: (&'a [u32], u32),
+    b: (&'a [u32], u32),
+    kind: HistogramDistance,
+}
+
+impl crate::skin::Kernel for CountSum<'_> {
+    type Output = f64;
+    #[inline(always)]
+    fn run(self) -> f64 {
+        match self.kind {
+            HistogramDistance::L2 => {
+                let (na, nb) = (f64::from(self.a.1), f64::from(self.b.1));
+                sum_lanes(self.a, self.b, |x, y| {
+                    let d = x * nb - y * na;
+                    d * d
+                })
+            }
+            HistogramDistance::Bhattacharyya => sum_lanes(self.a, self.b, |x, y| (x * y).sqrt()),
+        }
+    }
+}
+
 /// `sum_k f(a_k, b_k)` over two count vectors, in four interleaved partial
 /// sums (so the compiler vectorises it), added pairwise at the end.
 #[inline(always)]
-fn sum_lanes(a: &[u32], b: &[u32], f: impl Fn(f64, f64) -> f64) -> f64 {
+fn sum_lanes(
+    (a, pixels_a): (&[u32], u32),
+    (b, pixels_b): (&[u32], u32),
+    f: impl Fn(f64, f64) -> f64,
+) -> f64 {
+    // Every count is at most its histogram's pixel count, so below 2^31
+    // (every window of fewer pixels) the counts convert as `i32`, which
+    // every x86-64 vector unit converts to f64 in one instruction.
+    if pixels_a <= i32::MAX as u32 && pixels_b <= i32::MAX as u32 {
+        sum_lanes_with(a, b, |v| f64::from(v as i32), f)
+    } else {
+        sum_lanes_with(a, b, f64::from, f)
+    }
+}
+
+#[inline(always)]
+fn sum_lanes_with(
+    a: &[u32],
+    b: &[u32],
+    to_f64: impl Fn(u32) -> f64,
+    f: impl Fn(f64, f64) -> f64,
+) -> f64 {
     let mut acc = [0f64; 4];
     let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
     let (ra, rb) = (ca.remainder(), cb.remainder());
     for (x, y) in ca.zip(cb) {
         for l in 0..4 {
-            acc[l] += f(f64::from(x[l]), f64::from(y[l]));
+            acc[l] += f(to_f64(x[l]), to_f64(y[l]));
         }
     }
     for (l, (&x, &y)) in ra.iter().zip(rb).enumerate() {
-        acc[l] += f(f64::from(x), f64::from(y));
+        acc[l] += f(to_f64(x), to_f64(y));
     }
     (acc[0] + acc[1]) + (acc[2] + acc[3])
 }

@@ -45,37 +45,25 @@ pub fn interframe_difference_into<T: Pixel>(
         1 => {
             for y in 0..current.height() {
                 let (a, b) = (current.row(y), previous.row(y));
-                for ((d, &p), &q) in out.row_mut(y).iter_mut().zip(a).zip(b) {
-                    *d = p.abs_diff(q).to_f32() * scale;
-                }
+                let d = out.row_mut(y);
+                crate::skin::vectorised(AbsDiffRow {
+                    a,
+                    b,
+                    out: d,
+                    scale,
+                });
             }
         }
         3 => {
             let w = LUMA_WEIGHTS.map(|w| w * scale);
             for y in 0..current.height() {
                 let (a, b) = (current.row(y), previous.row(y));
-                let out = out.row_mut(y);
-                // Blocks of LUMA_BLOCK pixels, de-interleaved into
-                // channel arrays so that the compiler vectorises across
-                // pixels; the same operations in the same order per pixel
-                // as the one-pixel tail, so every path gives the same bits.
-                let mut pa = a.chunks_exact(3 * LUMA_BLOCK);
-                let mut pb = b.chunks_exact(3 * LUMA_BLOCK);
-                let mut po = out.chunks_exact_mut(LUMA_BLOCK);
-                for ((p, q), d) in (&mut pa).zip(&mut pb).zip(&mut po) {
-                    let la = luma_block(w, p);
-                    let lb = luma_block(w, q);
-                    for ((d, x), y) in d.iter_mut().zip(la).zip(lb) {
-                        *d = (x - y).abs();
-                    }
-                }
-                let tail = pa
-                    .remainder()
-                    .chunks_exact(3)
-                    .zip(pb.remainder().chunks_exact(3));
-                for (d, (p, q)) in po.into_remainder().iter_mut().zip(tail) {
-                    *d = (luma(w, p) - luma(w, q)).abs();
-                }
+                crate::skin::vectorised(LumaDifferenceRow {
+                    w,
+                    a,
+                    b,
+                    out: out.row_mut(y),
+                });
             }
         }
         got => {
@@ -88,6 +76,62 @@ pub fn interframe_difference_into<T: Pixel>(
         }
     }
     Ok(())
+}
+
+/// `|a - b| scale` of two gray rows into `out`.
+struct AbsDiffRow<'a, T> {
+    a: &'a [T],
+    b: &'a [T],
+    out: &'a mut [f32],
+    scale: f32,
+}
+
+impl<T: Pixel> crate::skin::Kernel for AbsDiffRow<'_, T> {
+    type Output = ();
+    #[inline(always)]
+    fn run(self) {
+        for ((d, &p), &q) in self.out.iter_mut().zip(self.a).zip(self.b) {
+            *d = p.abs_diff(q).to_f32() * self.scale;
+        }
+    }
+}
+
+/// `|luma(a) - luma(b)|` of two interleaved RGB rows into `out`, with the
+/// luma weights `w` (scaled to `[0, 1]`).
+struct LumaDifferenceRow<'a, T> {
+    w: [f32; 3],
+    a: &'a [T],
+    b: &'a [T],
+    out: &'a mut [f32],
+}
+
+impl<T: Pixel> crate::skin::Kernel for LumaDifferenceRow<'_, T> {
+    type Output = ();
+    #[inline(always)]
+    fn run(self) {
+        let Self { w, a, b, out } = self;
+        // Blocks of LUMA_BLOCK pixels, de-interleaved into
+        // channel arrays so that the compiler vectorises across
+        // pixels; the same operations in the same order per pixel
+        // as the one-pixel tail, so every path gives the same bits.
+        let mut pa = a.chunks_exact(3 * LUMA_BLOCK);
+        let mut pb = b.chunks_exact(3 * LUMA_BLOCK);
+        let mut po = out.chunks_exact_mut(LUMA_BLOCK);
+        for ((p, q), d) in (&mut pa).zip(&mut pb).zip(&mut po) {
+            let la = luma_block(w, p);
+            let lb = luma_block(w, q);
+            for ((d, x), y) in d.iter_mut().zip(la).zip(lb) {
+                *d = (x - y).abs();
+            }
+        }
+        let tail = pa
+            .remainder()
+            .chunks_exact(3)
+            .zip(pb.remainder().chunks_exact(3));
+        for (d, (p, q)) in po.into_remainder().iter_mut().zip(tail) {
+            *d = (luma(w, p) - luma(w, q)).abs();
+        }
+    }
 }
 
 /// Pixels per block of the colour path of [`interframe_difference_into`].

@@ -226,6 +226,15 @@ impl SkinModel {
     /// Eq. 8 for the RGB pixels of `rgb` (`3 x out.len()` bytes) into `out`,
     /// [`LANES`] at a time; a short tail goes through a zero-padded block.
     fn score_row(&self, rgb: &[u8], out: &mut [f32]) {
+        vectorised(ScoreRow {
+            model: self,
+            rgb,
+            out,
+        });
+    }
+
+    #[inline(always)]
+    fn score_row_inline(&self, rgb: &[u8], out: &mut [f32]) {
         let mut px = rgb.chunks_exact(3 * LANES);
         let mut o = out.chunks_exact_mut(LANES);
         for (p, d) in (&mut px).zip(&mut o) {
@@ -245,13 +254,67 @@ impl SkinModel {
     }
 }
 
+/// Runs `kernel` compiled for the best instruction set this CPU has
+/// (AVX-512, AVX2 + FMA, or the x86-64 baseline) through `pulp`'s run-time
+/// dispatch. The kernel's `Kernel::run` and everything its hot loop
+/// calls must be `#[inline(always)]` (a closure or a function item called
+/// through `FnOnce` is not inlined into the dispatched copy, and then runs
+/// the baseline code); the compiler then auto-vectorises it for each
+/// instruction set. The kernels use no fused multiply-add and sum in a
+/// fixed order, so every instruction set gives the same bits.
+#[inline(always)]
+pub(crate) fn vectorised<K: Kernel>(kernel: K) -> K::Output {
+    pulp::Arch::new().dispatch(Dispatch(kernel))
+}
+
+/// A loop for [`vectorised`]: its data and, in `run`, its body.
+pub(crate) trait Kernel {
+    /// What the loop returns.
+    type Output;
+    /// The loop (mark it `#[inline(always)]`).
+    fn run(self) -> Self::Output;
+}
+
+/// A [`Kernel`] as a `pulp` operation.
+struct Dispatch<K>(K);
+
+impl<K: Kernel> pulp::WithSimd for Dispatch<K> {
+    type Output = K::Output;
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) -> K::Output {
+        self.0.run()
+    }
+}
+
+/// [`SkinModel::score_row`] as a [`Kernel`].
+struct ScoreRow<'a> {
+    model: &'a SkinModel,
+    rgb: &'a [u8],
+    out: &'a mut [f32],
+}
+
+impl Kernel for ScoreRow<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run(self) {
+        self.model.score_row_inline(self.rgb, self.out);
+    }
+}
+
 impl SkinLanes {
     /// Eq. 8 for [`LANES`] interleaved RGB pixels.
     #[inline(always)]
     fn score(&self, s_ref: f32, k: f32, rgb: &[u8; 3 * LANES], out: &mut [f32; LANES]) {
+        // De-interleave first: the vectoriser gives up on stride-3 bytes.
+        let (mut rr, mut gg, mut bb) = ([0u8; LANES], [0u8; LANES], [0u8; LANES]);
+        for (i, p) in rgb.chunks_exact(3).enumerate() {
+            rr[i] = p[0];
+            gg[i] = p[1];
+            bb[i] = p[2];
+        }
         let mut arg = [0f32; LANES];
         for i in 0..LANES {
-            let (r, g, b) = (rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]);
+            let (r, g, b) = (rr[i], gg[i], bb[i]);
             let max = r.max(g).max(b);
             let min = r.min(g).min(b);
             let d = i32::from(max - min);
