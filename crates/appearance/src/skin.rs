@@ -312,6 +312,8 @@ impl SkinLanes {
             gg[i] = p[1];
             bb[i] = p[2];
         }
+        // Values, not indexed loads: selecting between them stays a blend.
+        let ([h0, h1, h2], [l0, l1, l2]) = (self.c_hi, self.c_lo);
         let mut arg = [0f32; LANES];
         for i in 0..LANES {
             let (r, g, b) = (rr[i], gg[i], bb[i]);
@@ -321,11 +323,11 @@ impl SkinLanes {
             // The sector as in `bayestrack_image::Hsv::from_rgb`: red
             // first, then green (ties, gray pixels included, go to red).
             let (n, c_hi, c_lo) = if max == r {
-                (i32::from(g) - i32::from(b), self.c_hi[0], self.c_lo[0])
+                (i32::from(g) - i32::from(b), h0, l0)
             } else if max == g {
-                (i32::from(b) - i32::from(r), self.c_hi[1], self.c_lo[1])
+                (i32::from(b) - i32::from(r), h1, l1)
             } else {
-                (i32::from(r) - i32::from(g), self.c_hi[2], self.c_lo[2])
+                (i32::from(r) - i32::from(g), h2, l2)
             };
             // A gray pixel has n = d = 0: hue 0, saturation 0.
             let q = n as f32 / d.max(1) as f32;
