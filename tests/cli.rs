@@ -605,3 +605,58 @@ fn an_mp4_file_tracks_when_ffmpeg_is_installed() {
     assert!(err.contains("precision@20px 1.000"), "{err}");
     assert!(err.contains("over 12 labelled frames"), "{err}");
 }
+
+/// Every tracker on a gray and on a colour sequence: it tracks, or it
+/// refuses the gray one with a message naming itself and the channels it
+/// needs (colour cues: the ball's colour, the skin model), never a panic
+/// or a silent run on the wrong kind of frame.
+#[test]
+fn every_tracker_runs_on_gray_and_colour_or_says_why_not() {
+    let gray = tmpdir("all-gray");
+    write_sequence(&gray, 4, 4);
+    let colour = tmpdir("all-colour");
+    fs::create_dir_all(colour.join("img")).unwrap();
+    for k in 1..=4 {
+        // A skin-coloured target on a bluish background.
+        let g = frame(80, 60, 10 + 2 * (k - 1), 20);
+        let data = (0..80 * 60)
+            .flat_map(|i| {
+                let (u, v) = (i % 80, i / 80);
+                let value = f64::from(g.as_slice()[i]);
+                let inside =
+                    (10 + 2 * (k - 1)..22 + 2 * (k - 1)).contains(&u) && (20..32).contains(&v);
+                let tint = if inside {
+                    [1.0, 0.7, 0.55]
+                } else {
+                    [0.6, 0.8, 1.0]
+                };
+                tint.map(|t| (value * t) as u8)
+            })
+            .collect();
+        let rgb = Image::from_vec(80, 60, 3, data).unwrap();
+        write_png(colour.join(format!("img/{k:04}.png")), rgb.view()).unwrap();
+    }
+    fs::copy(
+        gray.join("groundtruth_rect.txt"),
+        colour.join("groundtruth_rect.txt"),
+    )
+    .unwrap();
+    for t in REGISTRY {
+        let run = |dir: &Path| {
+            bayestrack(&["track", "--seq", dir.to_str().unwrap(), "--tracker", t.name])
+        };
+        let o = run(&colour);
+        assert!(o.status.success(), "{} on colour: {}", t.name, stderr(&o));
+        assert_eq!(String::from_utf8_lossy(&o.stdout).lines().count(), 4);
+        let o = run(&gray);
+        if !o.status.success() {
+            let err = stderr(&o);
+            assert_eq!(o.status.code(), Some(1), "{}: {err}", t.name);
+            assert!(
+                err.contains(t.name) && err.contains("needs 3") && err.contains("0001.png"),
+                "{}: {err}",
+                t.name
+            );
+        }
+    }
+}

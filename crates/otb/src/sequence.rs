@@ -360,7 +360,8 @@ impl Sequence {
         })
     }
 
-    /// The sequence's frames as a [`FrameSource`], decoded one at a time.
+    /// The sequence's frames as a [`crate::source::FrameSource`], decoded one at a
+    /// time.
     pub fn source(&self) -> FolderSource<'_> {
         FolderSource::new(self)
     }

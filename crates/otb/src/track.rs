@@ -331,7 +331,7 @@ where
 
     let mut last = init;
     let mut index = 0;
-    while let Some(next) = source.next() {
+    for next in &mut *source {
         index += 1;
         let mut frame = match next {
             Ok(frame) => frame,
