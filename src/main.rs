@@ -500,6 +500,27 @@ mod tests {
     }
 
     #[test]
+    fn a_drawn_frame_that_fails_part_way_leaves_no_file() {
+        let dir = std::env::temp_dir().join(format!("bayestrack-drawn-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let target = dir.join("0001.png");
+        // The disk fills after part of the PNG is written.
+        let e = super::write_drawn(&target, |part| {
+            std::fs::write(part, b"\x89PNG half").unwrap();
+            Err("No space left on device".to_string())
+        })
+        .unwrap_err();
+        assert!(e.contains("No space left"), "{e}");
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
+        super::write_drawn(&target, |part| {
+            std::fs::write(part, b"whole").map_err(|e| e.to_string())
+        })
+        .unwrap();
+        assert_eq!(std::fs::read(&target).unwrap(), b"whole");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
     fn a_box_whose_far_edge_overflows_is_refused() {
         assert!(parse_box("1e308,0,1e308,5").is_err());
         assert!(parse_box("1,2,3,4").is_ok());
