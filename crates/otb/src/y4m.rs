@@ -320,21 +320,25 @@ impl<R: Read> Y4mReader<R> {
                 format!("expected a FRAME line, found {start:?}"),
             ));
         }
+        // Read as the bytes arrive (the buffer keeps its capacity from frame
+        // to frame): a header that promises a huge frame allocates only
+        // what the stream holds.
         let need = self.header.frame_bytes();
-        self.buf.resize(need, 0);
-        let mut got = 0;
-        while got < need {
-            match self.input.read(&mut self.buf[got..]) {
-                Ok(0) => {
-                    return Err(fail(
-                        &mut self.done,
-                        format!("cut short: {got} of its {need} bytes"),
-                    ));
-                }
-                Ok(n) => got += n,
-                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-                Err(e) => return Err(fail(&mut self.done, format!("reading failed: {e}"))),
+        self.buf.clear();
+        let got = self
+            .input
+            .by_ref()
+            .take(need as u64)
+            .read_to_end(&mut self.buf);
+        match got {
+            Ok(n) if n == need => {}
+            Ok(n) => {
+                return Err(fail(
+                    &mut self.done,
+                    format!("cut short: {n} of its {need} bytes"),
+                ));
             }
+            Err(e) => return Err(fail(&mut self.done, format!("reading failed: {e}"))),
         }
         self.frames_read = number;
         Ok(true)

@@ -567,3 +567,35 @@ fn an_initial_box_partly_outside_is_clipped_and_one_wholly_outside_is_not() {
         None
     );
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig { cases: 256, ..Default::default() })]
+
+    /// Arbitrary bytes after a Y4M header (and arbitrary headers): frames or
+    /// errors naming the stream, never a panic, and frames of the header's size.
+    #[test]
+    fn any_y4m_bytes_give_frames_or_errors(
+        header in proptest::sample::select(vec![
+            "YUV4MPEG2 W3 H2 C420jpeg\n", "YUV4MPEG2 W4 H3 Cmono\n", "YUV4MPEG2 W2 H2 C444alpha\n",
+            "YUV4MPEG2 W5 H1 C422 XCOLORRANGE=FULL\n", "YUV4MPEG2 W32768 H32768\n",
+        ]),
+        body in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..200),
+        frames in 0usize..3,
+    ) {
+        let mut bytes = header.as_bytes().to_vec();
+        for _ in 0..frames {
+            bytes.extend(b"FRAME\n");
+            bytes.extend(&body);
+        }
+        bytes.extend(&body);
+        if let Ok(src) = Y4mSource::new(&bytes[..], "fuzz") {
+            let (w, h) = (src.header().width, src.header().height);
+            for f in src.take(10) {
+                match f {
+                    Ok(f) => proptest::prop_assert_eq!((f.image.width(), f.image.height()), (w, h)),
+                    Err(e) => proptest::prop_assert!(e.to_string().contains("fuzz"), "{}", e),
+                }
+            }
+        }
+    }
+}
