@@ -330,23 +330,23 @@ mod x86 {
     /// row and chunk for all eight), the rest one by one.
     macro_rules! windows {
         ($v:expr, $b:expr, $t:ident, $f:ident, $stride:ident, $start:ident, $step:ident,
-         $out:ident, $w:literal, $ld:ident, $zero:expr, $and:ident, $sad:ident, $add:ident,
+         $out:ident, $w:literal, $nb:literal, $ld:ident, $zero:expr, $and:ident, $sad:ident, $add:ident,
          $hsum:ident) => {{
             let nc = $t.chunks;
             let mut k = 0;
             macro_rules! batch {
                 ($s:literal) => {
-                    while k + 8 <= $out.len() {
+                    while k + $nb <= $out.len() {
                         let base = $start + k * $s;
-                        if !$t.fits($f, $stride, base + 7 * $s) {
+                        if !$t.fits($f, $stride, base + ($nb - 1) * $s) {
                             break;
                         }
-                        let mut acc = [$zero; 8];
+                        let mut acc = [$zero; $nb];
                         for r in 0..$t.rows {
                             for c in 0..nc {
                                 let o = base + r * $stride + c * $w;
-                                let blk: &[u8; $w + 7 * $s] =
-                                    $f[o..o + $w + 7 * $s].try_into().unwrap();
+                                let blk: &[u8; $w + ($nb - 1) * $s] =
+                                    $f[o..o + $w + ($nb - 1) * $s].try_into().unwrap();
                                 let m = $ld(&$t.masks, c * $w);
                                 let tv = $ld(&$t.padded, (r * nc + c) * $w);
                                 for (j, a) in acc.iter_mut().enumerate() {
@@ -355,10 +355,10 @@ mod x86 {
                                 }
                             }
                         }
-                        for (o, a) in $out[k..k + 8].iter_mut().zip(acc) {
+                        for (o, a) in $out[k..k + $nb].iter_mut().zip(acc) {
                             *o = $hsum(a);
                         }
-                        k += 8;
+                        k += $nb;
                     }
                 };
             }
@@ -495,6 +495,7 @@ mod x86 {
                             step,
                             out,
                             64,
+                            8,
                             ld64,
                             v._mm512_setzero_si512(),
                             _mm512_and_si512,
@@ -505,7 +506,36 @@ mod x86 {
                     },
                 )
             }
-            (SimdLevel::Avx512 | SimdLevel::Avx2, _) => {
+            (SimdLevel::Avx512, _) => {
+                // 32-byte rows under the AVX-512 token: 32 vector registers,
+                // so sixteen windows at a time.
+                let simd = V4::try_new().unwrap();
+                simd.vectorize(
+                    #[inline(always)]
+                    || {
+                        let v = simd.avx2;
+                        windows!(
+                            v,
+                            v,
+                            t,
+                            f,
+                            stride,
+                            start,
+                            step,
+                            out,
+                            32,
+                            16,
+                            ld32,
+                            simd.avx._mm256_setzero_si256(),
+                            _mm256_and_si256,
+                            _mm256_sad_epu8,
+                            _mm256_add_epi64,
+                            hsum4
+                        )
+                    },
+                )
+            }
+            (SimdLevel::Avx2, _) => {
                 let simd = V3::try_new().unwrap();
                 simd.vectorize(
                     #[inline(always)]
@@ -521,6 +551,7 @@ mod x86 {
                             step,
                             out,
                             32,
+                            8,
                             ld32,
                             simd.avx._mm256_setzero_si256(),
                             _mm256_and_si256,
@@ -547,6 +578,7 @@ mod x86 {
                             step,
                             out,
                             16,
+                            8,
                             ld16,
                             v._mm_setzero_si128(),
                             _mm_and_si128,
