@@ -341,9 +341,11 @@ fn track(args: &TrackArgs) -> Result<(), String> {
         Input::Folder(seq) => (Some(seq), None),
         Input::Stream(stream) => (None, Some(stream)),
     };
-    let name = folder
-        .as_ref()
-        .map_or_else(|| args.seq.display().to_string(), |s| s.name.clone());
+    let name = match &folder {
+        Some(seq) => seq.name.clone(),
+        None if args.seq == Path::new("-") => "stdin".to_string(),
+        None => args.seq.display().to_string(),
+    };
     let mut source: Box<dyn FrameSource + '_> = match (&folder, stream) {
         (Some(seq), _) => Box::new(Select::new(seq.source(), selection)),
         (None, Some(stream)) => Box::new(Select::new(stream, selection)),
