@@ -4,10 +4,10 @@
 //! `cargo run --example kalman_cv2d`
 
 use bayestrack::kalman::{Gaussian, Kf, LinearDynamics, LinearMeasurement, NoiseModel};
-use nalgebra::{Matrix4, Vector2, Vector4};
-use rand::SeedableRng;
-use rand_distr::{Distribution, Normal};
-use rand_xoshiro::Xoshiro256PlusPlus;
+use bayestrack::nalgebra::{Matrix4, Vector2, Vector4};
+use bayestrack::rand::SeedableRng;
+use bayestrack::rand_distr::{Distribution, Normal};
+use bayestrack::rand_xoshiro::Xoshiro256PlusPlus;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let dt = 0.1;

@@ -45,8 +45,11 @@ pub trait Tracker: Send {
     fn step(&mut self, frame: ImageView<'_, u8>) -> Result<Estimate>;
 }
 
-/// Checks an initial box against a frame: finite, non-empty, and at least
-/// partly inside (OTB boxes are 1-based).
+/// Checks an initial box against a frame: finite, non-empty, and inside
+/// it (OTB boxes are 1-based), since every tracker cuts its model from the
+/// box. A box only partly inside is for the caller to clip first, as the
+/// tracking loops of `bayestrack-otb` do (they refuse only a box wholly
+/// outside the frame).
 ///
 /// # Errors
 /// [`TrackerError::EmptyBox`] or [`TrackerError::BoxOutsideFrame`].
