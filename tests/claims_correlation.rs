@@ -77,6 +77,62 @@ fn with_a_capped_mad_the_pf_coasts_through_the_occlusion() {
 }
 
 #[test]
+fn accuracy_of_the_particle_filters_on_the_visible_car() {
+    // Mean centre error (px) over the 8 quick runs while the car is fully
+    // visible before the billboard; bounds are the measured values (in the
+    // comments) plus about 30 %, not the paper's (which gives positions,
+    // not errors). A loss of accuracy fails here even after `cargo xtask
+    // bless`.
+    for (v, bound) in [
+        (Variant::PfPrinted, 4.2),    // 3.22
+        (Variant::PfDrift, 3.2),      // 2.42
+        (Variant::PfDriftCap, 3.2),   // 2.43
+        (Variant::PfConstDrift, 1.0), // 0.48
+    ] {
+        let s = summary(v);
+        assert!(s.phases.before <= bound, "{s:?}");
+    }
+    // The capped MAD's coasting, measured 14.3 px during and 25.5 px after.
+    let s = summary(Variant::PfDriftCap);
+    assert!(s.phases.during <= 20.0 && s.phases.after <= 35.0, "{s:?}");
+}
+
+#[test]
+fn with_the_constant_drift_of_sec_3_2_the_pf_keeps_the_uniform_motion() {
+    // Sec. 3.2 read as a constant drift measured by the MAD match between
+    // frames 1 and 2, the PF from frame 3 on (`x_t = x_t-1 + c + B w`,
+    // B = 1 px), eq. 7 as printed: the particles coast behind the
+    // billboard and the car is re-found in most runs. Measured: 0.48 px
+    // before, 2.82 during, 3.71 after, 6 of 8 runs recovered (200 runs:
+    // 0.72, 3.18, 3.96, 70 %).
+    let s = summary(Variant::PfConstDrift);
+    assert!(s.phases.during <= 5.0, "{s:?}");
+    assert!(s.phases.after <= 6.0, "{s:?}");
+    assert!(s.recovered >= 0.5, "{s:?}");
+    // far better than the adaptive drift of the same eq. 7 after the
+    // billboard (129 px)
+    let adaptive = summary(Variant::PfDrift);
+    assert!(
+        s.phases.after * 10.0 < adaptive.phases.after,
+        "{adaptive:?}"
+    );
+    // Run 0 against the paper's Table 2 (every third frame): within 5 px
+    // of the car at each of the paper's frames.
+    let r0 = &result().runs[0];
+    let i = Variant::ALL
+        .iter()
+        .position(|&v| v == Variant::PfConstDrift)
+        .unwrap();
+    for (frame, _, _) in bayestrack_experiments::correlation::PAPER_TABLE2 {
+        let (p, t) = (r0.tracks[i].centres[frame - 1], r0.truth[frame - 1]);
+        assert!(
+            (p[0] - t[0]).hypot(p[1] - t[1]) < 5.0,
+            "frame {frame}: {p:?} {t:?}"
+        );
+    }
+}
+
+#[test]
 fn the_multi_target_tracker_keeps_two_cars_with_stable_ids() {
     // Table 3: two tracks (ids 0 and 1) in every frame; centroid within
     // half a pixel, window within 1.5 px of the car's size (the rendered

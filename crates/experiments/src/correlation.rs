@@ -88,16 +88,21 @@ pub enum Variant {
     PfDrift,
     /// PF with the displacement ARP and a capped MAD in eq. 7 (not in the paper).
     PfDriftCap,
+    /// PF with a constant drift measured by the MAD match between frames 1
+    /// and 2, the particle filter from frame 3 on (sec. 3.2;
+    /// [`ArpMotion::ConstantDrift`]), eq. 7 as printed.
+    PfConstDrift,
 }
 
 impl Variant {
     /// Every variant, in column order.
-    pub const ALL: [Variant; 5] = [
+    pub const ALL: [Variant; 6] = [
         Variant::MadWindow,
         Variant::MadFrame,
         Variant::PfPrinted,
         Variant::PfDrift,
         Variant::PfDriftCap,
+        Variant::PfConstDrift,
     ];
 
     /// Column label.
@@ -108,6 +113,7 @@ impl Variant {
             Variant::PfPrinted => "PF eq.6 printed",
             Variant::PfDrift => "PF drift",
             Variant::PfDriftCap => "PF drift+cap",
+            Variant::PfConstDrift => "PF const drift",
         }
     }
 
@@ -132,6 +138,10 @@ pub struct CorrelationConfig {
     pub printed_b: f64,
     /// MAD cap of the `PF drift+cap` row (gray levels).
     pub cap: f64,
+    /// `B` (px) of the `PF const drift` row: the constant drift carries the
+    /// motion, `B w` only absorbs the error of `c`, which the integer-pixel
+    /// MAD match measures to +-0.5 px per axis; 1 px covers it.
+    pub const_b: f64,
 }
 
 impl CorrelationConfig {
@@ -144,6 +154,7 @@ impl CorrelationConfig {
             pf: PfCorrelationConfig::default(),
             printed_b: 8.0,
             cap: 40.0,
+            const_b: 1.0,
         }
     }
 
@@ -159,7 +170,8 @@ impl CorrelationConfig {
     /// (listed by [`ExperimentError::BadOption`]).
     pub const KEYS: &'static str = "runs (1..=100000), scene_seed (u64), \
         mad_margin (0..=4096 px), particles (1..=1000000), sigma, spread, b, gain \
-        (finite; the tracker checks their range), printed_b (finite), cap (finite)";
+        (finite; the tracker checks their range), printed_b (finite), cap (finite), \
+        const_b (finite, >= 0)";
 
     /// Widest MAD search margin an option may ask for, px (wider than any
     /// frame).
@@ -189,7 +201,7 @@ impl CorrelationConfig {
             "b" => {
                 let gain = match self.pf.motion {
                     ArpMotion::Drift { gain, .. } => gain,
-                    ArpMotion::Position { .. } => 0.5,
+                    ArpMotion::Position { .. } | ArpMotion::ConstantDrift { .. } => 0.5,
                 };
                 self.pf.motion = ArpMotion::Drift {
                     b: [num()?; 2],
@@ -198,12 +210,15 @@ impl CorrelationConfig {
             }
             "gain" => {
                 let b = match self.pf.motion {
-                    ArpMotion::Drift { b, .. } | ArpMotion::Position { b, .. } => b,
+                    ArpMotion::Drift { b, .. }
+                    | ArpMotion::Position { b, .. }
+                    | ArpMotion::ConstantDrift { b, .. } => b,
                 };
                 self.pf.motion = ArpMotion::Drift { b, gain: num()? };
             }
             "printed_b" => self.printed_b = num()?,
             "cap" => self.cap = num()?,
+            "const_b" => self.const_b = num()?,
             _ => return Err(bad()),
         }
         if !(1..=MAX_RUNS).contains(&self.runs)
@@ -213,6 +228,9 @@ impl CorrelationConfig {
             return Err(bad());
         }
         PfCorrelationTracker::new(self.pf).map_err(|_| bad())?;
+        for v in Variant::ALL.into_iter().filter(|v| v.is_pf()) {
+            self.tracker(v, 0).map_err(|_| bad())?;
+        }
         Ok(())
     }
 
@@ -220,11 +238,11 @@ impl CorrelationConfig {
     pub fn describe(&self) -> String {
         let (b, gain) = match self.pf.motion {
             ArpMotion::Drift { b, gain } => (b[0], gain),
-            ArpMotion::Position { b, .. } => (b[0], f64::NAN),
+            ArpMotion::Position { b, .. } | ArpMotion::ConstantDrift { b, .. } => (b[0], f64::NAN),
         };
         format!(
             "runs={} scene_seed={} mad_margin={} particles={} spread={} sigma={} b={} gain={} \
-             printed_b={} cap={} resampling={}",
+             printed_b={} cap={} const_b={} resampling={}",
             self.runs,
             self.scene_seed,
             self.mad_margin,
@@ -235,6 +253,7 @@ impl CorrelationConfig {
             gain,
             self.printed_b,
             self.cap,
+            self.const_b,
             self.pf.resampling.name()
         )
     }
@@ -273,6 +292,13 @@ impl CorrelationConfig {
             Variant::PfDrift => pf(self.pf),
             Variant::PfDriftCap => pf(PfCorrelationConfig {
                 mad_cap: Some(self.cap),
+                ..self.pf
+            }),
+            Variant::PfConstDrift => pf(PfCorrelationConfig {
+                motion: ArpMotion::ConstantDrift {
+                    b: [self.const_b; 2],
+                    margin: self.mad_margin,
+                },
                 ..self.pf
             }),
         }
@@ -614,7 +640,12 @@ impl CorrelationResult {
         self.per_frame_table(
             "correlation: paper 004 Table 2, PF tracker (Ns = 15) centre (0-based px), run 0",
             &PAPER_TABLE2,
-            &[Variant::PfPrinted, Variant::PfDrift, Variant::PfDriftCap],
+            &[
+                Variant::PfPrinted,
+                Variant::PfDrift,
+                Variant::PfDriftCap,
+                Variant::PfConstDrift,
+            ],
         )
     }
 
@@ -876,6 +907,10 @@ mod tests {
         assert!(c.apply("runs", "0").is_err());
         assert!(c.apply("bogus", "1").is_err());
         assert!(c.apply("sigma", "nan").is_err());
+        c.apply("const_b", "2").unwrap();
+        assert_eq!(c.const_b, 2.0);
+        assert!(c.apply("const_b", "-1").is_err());
+        assert!(c.apply("cap", "-1").is_err());
     }
 
     #[test]

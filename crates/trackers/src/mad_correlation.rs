@@ -263,6 +263,20 @@ pub enum ArpMotion {
         /// smaller values average it over about `1 / g` frames.
         gain: f64,
     },
+    /// Sec. 3.2 read with a constant drift: `T_t = T_{t-1} + c + B w`. In
+    /// frame 2 the tracker is the MAD tracker of sec. 2 (an exhaustive
+    /// search of the template within `margin` pixels of the initial
+    /// window); its match is frame 2's output and `c` is the displacement
+    /// from the initial centre to it, kept for the rest of the sequence.
+    /// The particles (spread by eq. 4 in frame 1) move by `c` in frame 2;
+    /// "at the third frame" the particle filter takes over.
+    ConstantDrift {
+        /// `(B1, B2)` in pixels.
+        b: [f64; 2],
+        /// Pixels added on every side of the initial window for the frame-2
+        /// MAD search.
+        margin: usize,
+    },
 }
 
 impl ArpMotion {
@@ -279,6 +293,7 @@ impl ArpMotion {
                 }
                 ([1.0, 1.0], b)
             }
+            ArpMotion::ConstantDrift { b, .. } => ([1.0, 1.0], b),
         };
         for (name, v) in [("A1", a[0]), ("A2", a[1])] {
             if !v.is_finite() {
@@ -442,7 +457,9 @@ impl<'a> Proposal<Vector2<f64>, Observation<'a>> for ArpProposal {
             ArpMotion::Position { a, b } => {
                 Vector2::new(a[0] * parent.x + b[0] * w.x, a[1] * parent.y + b[1] * w.y)
             }
-            ArpMotion::Drift { b, .. } => parent + z.drift + Vector2::new(b[0] * w.x, b[1] * w.y),
+            ArpMotion::Drift { b, .. } | ArpMotion::ConstantDrift { b, .. } => {
+                parent + z.drift + Vector2::new(b[0] * w.x, b[1] * w.y)
+            }
         };
         let (tw, th) = (z.template.width(), z.template.height());
         let x = clamp_centre(moved, tw, th, z.frame.width(), z.frame.height());
@@ -475,6 +492,8 @@ pub struct PfCorrelationTracker {
     drift: Vector2<f64>,
     frame_index: u64,
     ancestors: Vec<usize>,
+    window: Rect,
+    search: MadSearch,
 }
 
 /// Stream ids of the tracker's random streams.
@@ -507,6 +526,8 @@ impl PfCorrelationTracker {
             drift: Vector2::zeros(),
             frame_index: 0,
             ancestors: Vec::new(),
+            window: Rect::new(0, 0, 1, 1),
+            search: MadSearch::new(),
         })
     }
 
@@ -523,6 +544,38 @@ impl PfCorrelationTracker {
     /// The latest output centre (eq. 8), 0-based pixel coordinates.
     pub fn centre(&self) -> (f64, f64) {
         (self.output.x, self.output.y)
+    }
+
+    /// Frame 2 of [`ArpMotion::ConstantDrift`]: the MAD match within
+    /// `margin` of the initial window gives the output and the drift `c`;
+    /// every particle moves by `c`.
+    fn measure_drift(&mut self, margin: usize) -> Result<Estimate> {
+        let (w, h) = (self.gray.width(), self.gray.height());
+        let r = self.window;
+        let x0 = r.x.saturating_sub(margin);
+        let y0 = r.y.saturating_sub(margin);
+        let x1 = r.right().saturating_add(margin).min(w);
+        let y1 = r.bottom().saturating_add(margin).min(h);
+        let region = Rect::new(x0, y0, x1 - x0, y1 - y0);
+        let m = self
+            .search
+            .search(self.gray.view(), self.template.view(), region)?;
+        let (tw, th) = (self.template.width(), self.template.height());
+        let (cx, cy) = m.window(tw, th).center();
+        let out = Vector2::new(cx, cy);
+        self.drift = out - self.output;
+        let set = self.set.as_mut().ok_or(TrackerError::NotInitialised)?;
+        for p in set.parts_mut().0 {
+            *p = clamp_centre(*p + self.drift, tw, th, w, h);
+        }
+        self.output = out;
+        Ok(Estimate {
+            bbox: self.bbox_at(out),
+            pose: None,
+            particles: self.config.particles,
+            evaluations: (region.width - tw + 1) * (region.height - th + 1),
+            lost: m.mad > self.config.lost_mad,
+        })
     }
 
     fn bbox_at(&self, c: Vector2<f64>) -> BBox {
@@ -566,6 +619,7 @@ impl Tracker for PfCorrelationTracker {
         self.output = centre;
         self.drift = Vector2::zeros();
         self.frame_index = 0;
+        self.window = rect;
         Ok(())
     }
 
@@ -574,6 +628,10 @@ impl Tracker for PfCorrelationTracker {
         let set = self.set.as_mut().ok_or(TrackerError::NotInitialised)?;
         to_gray("pf-correlation", frame, &mut self.gray)?;
         self.frame_index += 1;
+        if let (ArpMotion::ConstantDrift { margin, .. }, 1) = (self.config.motion, self.frame_index)
+        {
+            return self.measure_drift(margin);
+        }
         let z = Observation {
             frame: self.gray.view(),
             template: self.template.view(),
@@ -791,6 +849,72 @@ mod tests {
         assert!(mean < 2.0 && worst < 5.0, "mean {mean}, worst {worst}");
         // Same seed, same bits.
         assert_eq!(run(0).2, end);
+    }
+
+    #[test]
+    fn constant_drift_is_measured_in_frame_2_and_coasts_through_a_hidden_stretch() {
+        // 3 px right, 2 px down per frame; hidden (background only) in
+        // frames 10-14.
+        let bg = road(260, 200);
+        let t = car();
+        let motion = ArpMotion::ConstantDrift {
+            b: [2.0, 2.0],
+            margin: 8,
+        };
+        let run = |seed, motion| {
+            let mut tr = PfCorrelationTracker::new(PfCorrelationConfig {
+                seed,
+                motion,
+                ..PfCorrelationConfig::default()
+            })
+            .unwrap();
+            tr.init(
+                paste(&bg, &t, 10, 10).view(),
+                BBox::from_rect(Rect::new(10, 10, 24, 32)),
+            )
+            .unwrap();
+            let mut errs = vec![];
+            for k in 1..30 {
+                let (x, y) = (10 + 3 * k, 10 + 2 * k);
+                let frame = if (10..15).contains(&k) {
+                    bg.clone()
+                } else {
+                    paste(&bg, &t, x, y)
+                };
+                let e = tr.step(frame.view()).unwrap();
+                if k == 1 {
+                    // frame 2: the exact MAD match, the drift measured by it
+                    assert_eq!(e.bbox, BBox::from_rect(Rect::new(13, 12, 24, 32)));
+                    assert_eq!(tr.drift, Vector2::new(3.0, 2.0));
+                    assert!(e.evaluations > 15, "the frame-2 MAD search");
+                }
+                let (cx, cy) = e.bbox.center();
+                let (tx, ty) = Rect::new(x, y, 24, 32).center();
+                errs.push((cx - 1.0 - tx).hypot(cy - 1.0 - ty));
+            }
+            errs
+        };
+        for seed in 0..5 {
+            let errs = run(seed, motion);
+            let after = errs[15..].iter().sum::<f64>() / 14.0;
+            assert!(after < 3.0, "seed {seed}: {errs:?}");
+        }
+        // The drift stays what frame 2 measured.
+        let mut tr = PfCorrelationTracker::new(PfCorrelationConfig {
+            motion,
+            ..PfCorrelationConfig::default()
+        })
+        .unwrap();
+        tr.init(
+            paste(&bg, &t, 10, 10).view(),
+            BBox::from_rect(Rect::new(10, 10, 24, 32)),
+        )
+        .unwrap();
+        for k in 1..6 {
+            tr.step(paste(&bg, &t, 10 + 3 * k, 10 + 2 * k).view())
+                .unwrap();
+            assert_eq!(tr.drift, Vector2::new(3.0, 2.0));
+        }
     }
 
     #[test]

@@ -50,12 +50,11 @@ pub const REGISTRY: &[TrackerInfo] = &[
     },
     TrackerInfo {
         name: "pf-correlation",
-        summary: "paper 004 sec. 3: 15-particle correlation PF, ARP drift dynamics, MAD likelihood (capped at 40), translation only",
+        summary: "paper 004 sec. 3: 15-particle correlation PF, ARP on the displacement (adaptive drift), MAD likelihood of eq. 7 as printed, translation only",
         handles_scale: false,
         build: |seed| {
             boxed(PfCorrelationTracker::new(PfCorrelationConfig {
                 seed,
-                mad_cap: Some(40.0),
                 ..PfCorrelationConfig::default()
             }))
         },
