@@ -22,8 +22,8 @@ pub struct SkinModel {
     lanes: SkinLanes,
 }
 
-/// Constants of the batch kernel behind [`SkinModel::map_rgb_into`] and
-/// [`SkinModel::window_mean`], which evaluates eq. 8 for [`LANES`] pixels
+/// Constants of the batch kernel behind [`SkinModel::map_rgb_into`], which
+/// evaluates eq. 8 for [`LANES`] pixels
 /// at a time in straight-line `f32` code the compiler vectorises.
 ///
 /// With `M = max(r, g, b)`, `m = min(r, g, b)`, `d = M - m`, the hexcone hue
@@ -163,7 +163,10 @@ impl SkinModel {
     }
 
     /// The skin map of a whole RGB frame into a 1-channel `f32` buffer of the
-    /// same size. Allocation-free.
+    /// same size. Allocation-free. A batch kernel, vectorised for the CPU
+    /// at run time: every value is within 1e-6 of eq. 8 evaluated in `f64`
+    /// (checked over all 2^24 colours for sigma 0.05; it may differ from
+    /// [`SkinModel::score_rgb`] by as much).
     ///
     /// # Errors
     /// [`ImageError::Channels`] unless `rgb` has 3 channels;
@@ -211,13 +214,13 @@ impl SkinModel {
     pub fn window_mean(&self, rgb: ImageView<'_, u8>, window: Rect) -> Result<f64> {
         rgb.expect_channels("skin window", 3)?;
         check_window("skin window", window, rgb.width(), rgb.height())?;
+        // The scalar path, one pixel at a time: the paper 003 trackers'
+        // pinned numbers (tests/golden/condensation.csv) were made with it,
+        // and the batch kernel moves the cue by up to 6e-7.
         let mut s = 0f64;
-        let mut buf = [0f32; 4 * LANES];
         for y in window.y..window.bottom() {
-            for px in rgb.row(y)[window.x * 3..window.right() * 3].chunks(3 * buf.len()) {
-                let out = &mut buf[..px.len() / 3];
-                self.score_row(px, out);
-                s += out.iter().map(|&v| f64::from(v)).sum::<f64>();
+            for p in rgb.row(y)[window.x * 3..window.right() * 3].chunks_exact(3) {
+                s += f64::from(self.score_rgb(Rgb::new(p[0], p[1], p[2])));
             }
         }
         Ok(s / window.area() as f64)
@@ -606,8 +609,9 @@ mod tests {
                     sum += got;
                 }
             }
+            // window_mean is the scalar path: within 1e-6 of eq. 8 as well.
             let mean = m.window_mean(img.view(), Rect::new(0, 0, w, 3)).unwrap();
-            assert!((mean - sum / (3 * w) as f64).abs() < 1e-12);
+            assert!((mean - sum / (3 * w) as f64).abs() < 2e-6);
             let inner = m
                 .window_mean(img.view(), Rect::new(w / 2, 1, w - w / 2, 2))
                 .unwrap();
@@ -617,7 +621,7 @@ mod tests {
                     s2 += f64::from(out.get(x, y, 0).unwrap());
                 }
             }
-            assert!((inner - s2 / (2 * (w - w / 2)) as f64).abs() < 1e-12);
+            assert!((inner - s2 / (2 * (w - w / 2)) as f64).abs() < 2e-6);
         }
     }
 
