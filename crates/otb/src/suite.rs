@@ -46,7 +46,9 @@ use crate::published::Published;
 use crate::sequence::{OtbError, Sequence, list_sequences};
 use crate::table::Table;
 use crate::track::{BoxFile, OnBadFrame, TrackError, track_frames};
-use crate::write::{PartialCsv, WriteError, clear_partial, create_dir, mark_partial, write_text};
+use crate::write::{
+    PartialRows, WriteError, clear_partial, create_dir, mark_partial, write_csv, write_text,
+};
 
 /// Centre-error thresholds of the precision plot, px.
 pub const PRECISION_PLOT_MAX: usize = 50;
@@ -298,7 +300,7 @@ pub fn run_suite_with(
     };
     let out = &options.out;
     mark_partial(out, "the OTB one-pass suite (`cargo xtask otb`)")?;
-    let cells = PartialCsv::create(&out.join("results.csv"), CSV_HEADER.join(",").as_str())?;
+    let cells = PartialRows::create(&out.join("results.csv"))?;
     // listing the frames is cheap: it gives the total work for the progress
     // display before any frame is decoded
     let opened: Vec<Result<Sequence, OtbError>> = dirs.iter().map(Sequence::open).collect();
@@ -346,65 +348,81 @@ pub fn run_suite_with(
                 outcome,
             };
             observe(SuiteEvent::CellFinished { cell: &cell, done });
-            let row = csv_table(std::slice::from_ref(&cell)).to_csv();
-            cells.append(row.split_once('\n').map_or("", |(_, rows)| rows))?;
+            cells.append(&[ResultRow::of(&cell)])?;
             report.cells.push(cell);
         }
         report.sequences.push(name);
         report.frames.push(len);
     }
-    cells.finish(&report.csv())?;
+    cells.finish(&report.rows())?;
     report.write_summary(out)?;
     clear_partial(out)?;
     Ok(report)
 }
 
-/// The columns of `results.csv`.
-const CSV_HEADER: [&str; 12] = [
-    "sequence",
-    "tracker",
-    "success_rate_50",
-    "auc",
-    "precision_20",
-    "mean_iou",
-    "mean_overlap_of_frames_with_overlap",
-    "mean_center_error",
-    "fps",
-    "frames_scored",
-    "lost_frames",
-    "error",
-];
+/// One row of `results.csv`: one tracker on one sequence, every number at
+/// full precision; a cell that failed has empty scores and its error.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct ResultRow {
+    /// Sequence (folder) name.
+    pub sequence: String,
+    /// Tracker name.
+    pub tracker: &'static str,
+    /// Share of scored frames with IoU > 0.5.
+    pub success_rate_50: Option<f64>,
+    /// Area under the success curve.
+    pub auc: Option<f64>,
+    /// Share of scored frames with a centre error of at most 20 px.
+    pub precision_20: Option<f64>,
+    /// Mean IoU over scored frames.
+    pub mean_iou: Option<f64>,
+    /// The benchmark's overlap score: mean IoU over frames with IoU > 0.
+    pub mean_overlap_of_frames_with_overlap: Option<f64>,
+    /// Mean centre error (pixels).
+    pub mean_center_error: Option<f64>,
+    /// Frames per second of the tracker's own calls.
+    pub fps: Option<f64>,
+    /// Frames with ground truth.
+    pub frames_scored: Option<usize>,
+    /// Frames the tracker reported lost.
+    pub lost_frames: Option<usize>,
+    /// Why the cell failed (empty when it ran).
+    pub error: String,
+}
 
-/// The rows of `results.csv` for `cells`.
-fn csv_table(cells: &[Cell]) -> Table {
-    let mut t = Table::new("", &CSV_HEADER);
-    for c in cells {
-        let mut row = vec![c.sequence.clone(), c.tracker.to_string()];
+impl ResultRow {
+    fn of(c: &Cell) -> Self {
+        let mut row = Self {
+            sequence: c.sequence.clone(),
+            tracker: c.tracker,
+            success_rate_50: None,
+            auc: None,
+            precision_20: None,
+            mean_iou: None,
+            mean_overlap_of_frames_with_overlap: None,
+            mean_center_error: None,
+            fps: None,
+            frames_scored: None,
+            lost_frames: None,
+            error: String::new(),
+        };
         match &c.outcome {
             Ok(s) => {
-                row.extend([
-                    format!("{:.4}", s.score.success_rate_50),
-                    format!("{:.4}", s.score.auc),
-                    format!("{:.4}", s.score.precision_20),
-                    format!("{:.4}", s.score.mean_overlap),
-                    s.score
-                        .mean_overlap_of_frames_with_overlap
-                        .map_or_else(String::new, |o| format!("{o:.4}")),
-                    format!("{:.2}", s.score.mean_center_error),
-                    format!("{:.1}", s.fps),
-                    s.score.frames_scored.to_string(),
-                    s.lost_frames.to_string(),
-                    String::new(),
-                ]);
+                row.success_rate_50 = Some(s.score.success_rate_50);
+                row.auc = Some(s.score.auc);
+                row.precision_20 = Some(s.score.precision_20);
+                row.mean_iou = Some(s.score.mean_overlap);
+                row.mean_overlap_of_frames_with_overlap =
+                    s.score.mean_overlap_of_frames_with_overlap;
+                row.mean_center_error = Some(s.score.mean_center_error);
+                row.fps = Some(s.fps);
+                row.frames_scored = Some(s.score.frames_scored);
+                row.lost_frames = Some(s.lost_frames);
             }
-            Err(e) => {
-                row.extend(std::iter::repeat_n(String::new(), 9));
-                row.push(e.to_string());
-            }
+            Err(e) => row.error = e.to_string(),
         }
-        t.push(row);
+        row
     }
-    t
 }
 
 /// Runs one tracker on one decoded sequence; `on_frame(k)` after the
@@ -540,8 +558,9 @@ impl SuiteReport {
         t
     }
 
-    fn csv(&self) -> String {
-        csv_table(&self.cells).to_csv()
+    /// The rows of `results.csv`, one per tracker x sequence cell.
+    pub fn rows(&self) -> Vec<ResultRow> {
+        self.cells.iter().map(ResultRow::of).collect()
     }
 
     /// The sequences we ran that have published results, with whether the
@@ -827,7 +846,7 @@ impl SuiteReport {
     /// [`WriteError`] naming the file.
     pub fn write(&self, out: &Path) -> Result<(), WriteError> {
         create_dir(out)?;
-        write_text(&out.join("results.csv"), &self.csv())?;
+        write_csv(&out.join("results.csv"), &self.rows())?;
         self.write_summary(out)
     }
 
