@@ -181,7 +181,17 @@ impl CorrelationConfig {
     ///
     /// # Errors
     /// [`ExperimentError::BadOption`] for an unknown key or value.
+    /// A refused option leaves the configuration as it was.
     pub fn apply(&mut self, key: &str, value: &str) -> Result<(), ExperimentError> {
+        let before = *self;
+        let result = self.apply_unchecked(key, value);
+        if result.is_err() {
+            *self = before;
+        }
+        result
+    }
+
+    fn apply_unchecked(&mut self, key: &str, value: &str) -> Result<(), ExperimentError> {
         let bad = || ExperimentError::bad_option("correlation", Self::KEYS, key, value);
         let num = || {
             value
@@ -904,6 +914,13 @@ mod tests {
             }
         );
         assert!(c.apply("gain", "2").is_err());
+        assert_eq!(
+            c.pf.motion,
+            ArpMotion::Drift {
+                b: [5.0, 5.0],
+                gain: 1.0
+            }
+        );
         assert!(c.apply("runs", "0").is_err());
         assert!(c.apply("bogus", "1").is_err());
         assert!(c.apply("sigma", "nan").is_err());
