@@ -78,7 +78,7 @@ use crate::scenes::{BallMotion, BallScene, SceneStream};
 use bayestrack_otb::Table;
 use bayestrack_otb::metrics::center_error;
 use bayestrack_otb::plot::{Series, line_chart};
-use bayestrack_otb::write::PartialCsv;
+use bayestrack_otb::write::PartialRows;
 
 /// Key of this experiment's random streams ("ball" in ASCII).
 const KEY: u64 = 0x6261_6c6c;
@@ -1464,55 +1464,89 @@ fn cell(v: Option<f64>, digits: usize) -> String {
     }
 }
 
-/// The header of `runs.csv`.
-const RUNS_HEADER: &str = "condition,run,alg,mode,frames,evaluations,mean_error_px,losses,found_times_s,unresolved,\
-    late_mean_error_px,late_losses,late_found_times_s,late_unresolved,self_lost_frames,wall_s";
-
-/// `error,losses,found times,unresolved` of a score (`,,,` when absent).
-fn score_cells(score: Option<&Score>, frames: usize, precise: bool) -> String {
+/// `error,losses,found times,unresolved` of a score for the golden file,
+/// numbers as `{:.17e}` (`,,,` when absent).
+fn score_cells(score: Option<&Score>, frames: usize) -> String {
     let Some(s) = score else {
         return ",,,".to_string();
     };
-    let times: Vec<String> = s
-        .found_times
-        .iter()
-        .map(|t| {
-            if precise {
-                format!("{t:.17e}")
-            } else {
-                format!("{t:.4}")
-            }
-        })
-        .collect();
+    let times: Vec<String> = s.found_times.iter().map(|t| format!("{t:.17e}")).collect();
     let error = s.error_sum / frames.max(1) as f64;
-    let error = if precise {
-        format!("{error:.17e}")
-    } else {
-        format!("{error:.6}")
-    };
-    format!("{error},{},{},{}", s.losses, times.join(";"), s.unresolved)
+    format!(
+        "{error:.17e},{},{},{}",
+        s.losses,
+        times.join(";"),
+        s.unresolved
+    )
+}
+
+/// One row of `runs.csv`: one tracker in one mode of one (condition, run)
+/// pair, at full precision; the `late_*` cells are empty offline.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct RunRow {
+    /// [`Condition::name`].
+    pub condition: &'static str,
+    /// Run index (0-based).
+    pub run: usize,
+    /// [`TrackOutcome::label`] (`PF10`, `KF`, `KF@37`).
+    pub alg: String,
+    /// [`FrameMode::name`].
+    pub mode: &'static str,
+    /// Frames processed.
+    pub frames: usize,
+    /// Histogram evaluations over the processed frames.
+    pub evaluations: usize,
+    /// Mean centre error (px).
+    pub mean_error_px: f64,
+    /// Losses.
+    pub losses: usize,
+    /// Time from each re-found loss to its re-finding (s), `;`-separated.
+    pub found_times_s: String,
+    /// Losses not re-found before the end.
+    pub unresolved: usize,
+    /// As `mean_error_px`, scored where the ball is when the estimate
+    /// becomes available (real time only).
+    pub late_mean_error_px: Option<f64>,
+    /// As `losses`, late scoring.
+    pub late_losses: Option<usize>,
+    /// As `found_times_s`, late scoring.
+    pub late_found_times_s: Option<String>,
+    /// As `unresolved`, late scoring.
+    pub late_unresolved: Option<usize>,
+    /// Frames in which the tracker reported itself lost.
+    pub self_lost_frames: usize,
+    /// Wall-clock seconds in `step` (not deterministic).
+    pub wall_s: f64,
 }
 
 /// The `runs.csv` rows of one finished (condition, run) pair.
-fn run_rows(r: &RunResult) -> String {
-    let mut text = String::new();
-    for o in &r.outcomes {
-        let _ = writeln!(
-            text,
-            "{},{},{},{},{},{},{},{},{},{:.4}",
-            r.condition.name(),
-            r.run,
-            o.label(),
-            o.mode.name(),
-            o.frames,
-            o.evaluations,
-            score_cells(Some(&o.score), o.frames, false),
-            score_cells(o.delayed.as_ref(), o.frames, false),
-            o.self_lost,
-            o.wall
-        );
-    }
-    text
+fn run_rows(r: &RunResult) -> Vec<RunRow> {
+    let times = |s: &Score| {
+        let t: Vec<String> = s.found_times.iter().map(f64::to_string).collect();
+        t.join(";")
+    };
+    let error = |s: &Score, frames: usize| s.error_sum / frames.max(1) as f64;
+    r.outcomes
+        .iter()
+        .map(|o| RunRow {
+            condition: r.condition.name(),
+            run: r.run,
+            alg: o.label(),
+            mode: o.mode.name(),
+            frames: o.frames,
+            evaluations: o.evaluations,
+            mean_error_px: error(&o.score, o.frames),
+            losses: o.score.losses,
+            found_times_s: times(&o.score),
+            unresolved: o.score.unresolved,
+            late_mean_error_px: o.delayed.as_ref().map(|d| error(d, o.frames)),
+            late_losses: o.delayed.as_ref().map(|d| d.losses),
+            late_found_times_s: o.delayed.as_ref().map(times),
+            late_unresolved: o.delayed.as_ref().map(|d| d.unresolved),
+            self_lost_frames: o.self_lost,
+            wall_s: o.wall,
+        })
+        .collect()
 }
 
 /// Runs the experiment: every (condition, run) pair in parallel (each has
@@ -1520,7 +1554,7 @@ fn run_rows(r: &RunResult) -> String {
 /// count), then the sweep when asked for. With `runs_csv`, each pair's rows
 /// are appended to `runs.partial.csv` beside it the moment the pair
 /// finishes, and the complete file, in (condition, run) order, replaces
-/// `runs_csv` at the end (see [`PartialCsv`]): a run killed part-way keeps
+/// `runs_csv` at the end (see [`PartialRows`]): a run killed part-way keeps
 /// every finished pair and the previous `runs.csv`. The sweep's runs are
 /// not logged (its tables are).
 ///
@@ -1540,9 +1574,7 @@ pub fn run(
             "0",
         ));
     }
-    let log = runs_csv
-        .map(|path| PartialCsv::create(path, RUNS_HEADER))
-        .transpose()?;
+    let log = runs_csv.map(PartialRows::create).transpose()?;
     let jobs: Vec<(Condition, usize)> = (0..opts.runs)
         .flat_map(|r| Condition::ALL.into_iter().map(move |c| (c, r)))
         .collect();
@@ -1558,11 +1590,7 @@ pub fn run(
         .iter()
         .flat_map(|&(i, j)| (0..opts.sweep_runs).map(move |r| (i, j, r)))
         .collect();
-    let bar = if progress {
-        indicatif::ProgressBar::new((jobs.len() + sweep_jobs.len()) as u64)
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
+    let bar = crate::experiment::progress_bar(jobs.len() + sweep_jobs.len(), progress, "ball runs");
     let mut runs: Vec<RunResult> = jobs
         .par_iter()
         .map(|&(c, r)| {
@@ -1577,9 +1605,8 @@ pub fn run(
     // conditions in Condition::ALL order, runs in order within each
     runs.sort_by_key(|r| (Condition::ALL.iter().position(|c| *c == r.condition), r.run));
     if let Some(log) = log {
-        let mut text = format!("{RUNS_HEADER}\n");
-        runs.iter().for_each(|r| text.push_str(&run_rows(r)));
-        log.finish(&text)?;
+        let rows: Vec<RunRow> = runs.iter().flat_map(run_rows).collect();
+        log.finish(&rows)?;
     }
     let swept: Vec<((usize, usize, usize), RunResult)> = sweep_jobs
         .par_iter()
@@ -1730,8 +1757,8 @@ impl Experiment for BallExperiment {
                     o.mode.name(),
                     o.frames,
                     o.evaluations,
-                    score_cells(Some(&o.score), o.frames, true),
-                    score_cells(o.delayed.as_ref(), o.frames, true),
+                    score_cells(Some(&o.score), o.frames),
+                    score_cells(o.delayed.as_ref(), o.frames),
                     o.self_lost
                 );
             }
