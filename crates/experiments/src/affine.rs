@@ -36,7 +36,7 @@ use bayestrack_image::Image;
 use bayestrack_otb::Table;
 use bayestrack_otb::metrics::{FeaturePoints, rms_error_eq6};
 use bayestrack_otb::plot::{Series, line_chart};
-use bayestrack_otb::write::PartialRows;
+use bayestrack_otb::write::PartialCsv;
 use bayestrack_trackers::{
     FrameStats, HkpfConfig, HkpfTracker, IspfConfig, IspfTracker, StpfConfig, StpfTracker, Tracker,
 };
@@ -580,7 +580,7 @@ fn frame_rows(setting: Setting, run: usize, tracks: &[TrackRun]) -> Vec<FrameRow
 pub fn run_logged(
     config: &AffineConfig,
     progress: bool,
-    log: Option<&PartialRows<FrameRow>>,
+    log: Option<&PartialCsv<FrameRow>>,
 ) -> Result<AffineResult, ExperimentError> {
     if config.frames < 2 || config.runs == 0 {
         return Err(ExperimentError::bad_option(
@@ -837,7 +837,7 @@ impl Experiment for AffineExperiment {
         }
         let dir = opts.output_dir(self.id())?;
         // every frame of every run, appended as each run finishes
-        let frames = PartialRows::create(&dir.join("frames.csv"))?;
+        let frames = PartialCsv::create(&dir.join("frames.csv"))?;
         let result = run_logged(
             &config,
             opts.progress && opts.mode == Mode::Full,

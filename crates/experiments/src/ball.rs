@@ -78,7 +78,7 @@ use crate::scenes::{BallMotion, BallScene, SceneStream};
 use bayestrack_otb::Table;
 use bayestrack_otb::metrics::center_error;
 use bayestrack_otb::plot::{Series, line_chart};
-use bayestrack_otb::write::PartialRows;
+use bayestrack_otb::write::PartialCsv;
 
 /// Key of this experiment's random streams ("ball" in ASCII).
 const KEY: u64 = 0x6261_6c6c;
@@ -1554,7 +1554,7 @@ fn run_rows(r: &RunResult) -> Vec<RunRow> {
 /// count), then the sweep when asked for. With `runs_csv`, each pair's rows
 /// are appended to `runs.partial.csv` beside it the moment the pair
 /// finishes, and the complete file, in (condition, run) order, replaces
-/// `runs_csv` at the end (see [`PartialRows`]): a run killed part-way keeps
+/// `runs_csv` at the end (see [`PartialCsv`]): a run killed part-way keeps
 /// every finished pair and the previous `runs.csv`. The sweep's runs are
 /// not logged (its tables are).
 ///
@@ -1574,7 +1574,7 @@ pub fn run(
             "0",
         ));
     }
-    let log = runs_csv.map(PartialRows::create).transpose()?;
+    let log = runs_csv.map(PartialCsv::create).transpose()?;
     let jobs: Vec<(Condition, usize)> = (0..opts.runs)
         .flat_map(|r| Condition::ALL.into_iter().map(move |c| (c, r)))
         .collect();

@@ -44,7 +44,7 @@ use crate::experiment::{
 use crate::scenes::{FrameTruth, Outline, SceneStream, WebcamScene};
 use bayestrack_otb::Table;
 use bayestrack_otb::plot::{Series, line_chart};
-use bayestrack_otb::write::PartialRows;
+use bayestrack_otb::write::PartialCsv;
 
 const ID: &str = "condensation";
 
@@ -797,7 +797,7 @@ fn frame_rows(key: GridKey, run: usize, tr: &TrackRun) -> Vec<FrameRow> {
 pub fn run_logged(
     config: &CondensationConfig,
     progress: bool,
-    log: Option<&PartialRows<FrameRow>>,
+    log: Option<&PartialCsv<FrameRow>>,
 ) -> Result<CondensationResult, ExperimentError> {
     if config.runs == 0 || config.frames < 2 {
         return Err(ExperimentError::bad_option(
@@ -1386,7 +1386,7 @@ impl Experiment for CondensationExperiment {
         }
         let dir = opts.output_dir(self.id())?;
         // every frame of every grid run, appended as each run finishes
-        let frames = PartialRows::create(&dir.join("frames.csv"))?;
+        let frames = PartialCsv::create(&dir.join("frames.csv"))?;
         let result = run_logged(
             &config,
             opts.progress && opts.mode == Mode::Full,

@@ -553,7 +553,7 @@ pub fn run(config: &CorrelationConfig) -> Result<CorrelationResult, ExperimentEr
 /// moment the run finishes (the caller finishes the file).
 fn run_logged(
     config: &CorrelationConfig,
-    frames: Option<&PartialCsv>,
+    frames: Option<&PartialCsv<FrameRow>>,
 ) -> Result<CorrelationResult, ExperimentError> {
     let runs = (0..config.runs)
         .into_par_iter()
@@ -722,37 +722,48 @@ impl CorrelationResult {
     }
 }
 
-/// The header of `frames.csv` (without its newline).
-fn frames_header() -> String {
-    let mut text = String::from("run,frame,truth_x,truth_y,visible");
-    for v in Variant::ALL {
-        let _ = write!(text, ",{0} x,{0} y,{0} lost", v.name());
-    }
-    text
+/// One row of `frames.csv`: one tracker on one frame of one run.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct FrameRow {
+    /// Run index (0-based).
+    pub run: usize,
+    /// Frame number (1-based).
+    pub frame: usize,
+    /// True centre, x (px).
+    pub truth_x: f64,
+    /// True centre, y (px).
+    pub truth_y: f64,
+    /// Visible share of the car.
+    pub visible: f64,
+    /// [`Variant::name`].
+    pub tracker: &'static str,
+    /// Estimated centre, x (px).
+    pub x: f64,
+    /// Estimated centre, y (px).
+    pub y: f64,
+    /// Whether the tracker reported itself lost.
+    pub lost: bool,
 }
 
 /// The `frames.csv` rows of run `r`: every frame of every tracker.
-fn frame_rows(r: usize, run: &RunResult) -> String {
-    let mut text = String::new();
+fn frame_rows(r: usize, run: &RunResult) -> Vec<FrameRow> {
+    let mut rows = Vec::new();
     for k in 0..run.truth.len() {
-        let _ = write!(
-            text,
-            "{r},{},{:.3},{:.3},{:.4}",
-            k + 1,
-            run.truth[k][0],
-            run.truth[k][1],
-            run.visible[k]
-        );
-        for tr in &run.tracks {
-            let _ = write!(
-                text,
-                ",{:.3},{:.3},{}",
-                tr.centres[k][0], tr.centres[k][1], tr.lost[k]
-            );
+        for (v, tr) in Variant::ALL.iter().zip(&run.tracks) {
+            rows.push(FrameRow {
+                run: r,
+                frame: k + 1,
+                truth_x: run.truth[k][0],
+                truth_y: run.truth[k][1],
+                visible: run.visible[k],
+                tracker: v.name(),
+                x: tr.centres[k][0],
+                y: tr.centres[k][1],
+                lost: tr.lost[k],
+            });
         }
-        text.push('\n');
     }
-    text
+    rows
 }
 
 /// Writes the CSV files (all but `frames.csv`, which the run writes as it
@@ -841,14 +852,15 @@ impl Experiment for CorrelationExperiment {
         }
         let dir = opts.output_dir(self.id())?;
         // every frame of every run, written as each run finishes
-        let header = frames_header();
-        let frames = PartialCsv::create(&dir.join("frames.csv"), &header)?;
+        let frames = PartialCsv::create(&dir.join("frames.csv"))?;
         let result = run_logged(&config, Some(&frames))?;
-        let mut text = format!("{header}\n");
-        for (r, run) in result.runs.iter().enumerate() {
-            text.push_str(&frame_rows(r, run));
-        }
-        frames.finish(&text)?;
+        let rows: Vec<FrameRow> = result
+            .runs
+            .iter()
+            .enumerate()
+            .flat_map(|(r, run)| frame_rows(r, run))
+            .collect();
+        frames.finish(&rows)?;
         write_outputs(&result, &dir)?;
         let mut tables = result.tables();
         if let Some(first) = tables.first_mut() {

@@ -957,13 +957,28 @@ pub fn sweep_table(cells: &[SweepCell], runs: usize) -> Table {
     t
 }
 
-/// The `runs.csv` row of run `r`.
-fn run_row(r: usize, outcomes: &[RunOutcome]) -> String {
-    let cells: Vec<String> = outcomes
+/// One row of `runs.csv`: one filter's error in one run (full precision).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct RunRow {
+    /// Run index (0-based).
+    pub run: usize,
+    /// [`FilterKind::name`].
+    pub filter: &'static str,
+    /// The run's error (the configured formula).
+    pub error: f64,
+}
+
+/// The `runs.csv` rows of run `r`, one per filter.
+fn run_rows(r: usize, outcomes: &[RunOutcome]) -> Vec<RunRow> {
+    FilterKind::ALL
         .iter()
-        .map(|x| format!("{:.17e}", x.error))
-        .collect();
-    format!("{r},{}\n", cells.join(","))
+        .zip(outcomes)
+        .map(|(k, x)| RunRow {
+            run: r,
+            filter: k.name(),
+            error: x.error,
+        })
+        .collect()
 }
 
 /// Runs the experiment: runs in parallel (each run has its own random
@@ -981,23 +996,14 @@ pub fn run(
     runs_csv: Option<&Path>,
     progress: bool,
 ) -> Result<HikpfResult, ExperimentError> {
-    let names: Vec<&str> = FilterKind::ALL.iter().map(|k| k.name()).collect();
-    let header = format!("run,{}", names.join(","));
-    let log = runs_csv
-        .map(|path| PartialCsv::create(path, &header))
-        .transpose()?;
-    let bar = if progress {
-        indicatif::ProgressBar::new(config.runs as u64)
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
-    bar.set_message("hikpf runs");
+    let log = runs_csv.map(PartialCsv::create).transpose()?;
+    let bar = crate::experiment::progress_bar(config.runs, progress, "hikpf runs");
     let runs: Vec<Vec<RunOutcome>> = (0..config.runs)
         .into_par_iter()
         .map(|r| {
             let outcomes = one_run(config, r)?;
             if let Some(log) = &log {
-                log.append(&run_row(r, &outcomes))?;
+                log.append(&run_rows(r, &outcomes))?;
             }
             bar.inc(1);
             Ok(outcomes)
@@ -1005,11 +1011,12 @@ pub fn run(
         .collect::<Result<_, ExperimentError>>()?;
     bar.finish_and_clear();
     if let Some(log) = log {
-        let mut text = format!("{header}\n");
-        for (r, o) in runs.iter().enumerate() {
-            text.push_str(&run_row(r, o));
-        }
-        log.finish(&text)?;
+        let rows: Vec<RunRow> = runs
+            .iter()
+            .enumerate()
+            .flat_map(|(r, o)| run_rows(r, o))
+            .collect();
+        log.finish(&rows)?;
     }
     Ok(HikpfResult {
         config: *config,
@@ -1135,12 +1142,21 @@ mod tests {
         };
         let result = run(&config, Some(&path), false).unwrap();
         let text = std::fs::read_to_string(&path).unwrap();
-        let lines: Vec<&str> = text.lines().collect();
-        assert_eq!(lines.len(), 4, "{text}");
-        assert!(lines[0].starts_with("run,"));
-        for (r, line) in lines[1..].iter().enumerate() {
-            assert_eq!(*line, run_row(r, &result.runs[r]).trim_end());
-        }
+        let rows: Vec<RunRow> = (0..3).flat_map(|r| run_rows(r, &result.runs[r])).collect();
+        assert_eq!(rows.len(), 3 * FilterKind::ALL.len());
+        assert_eq!(text, bayestrack_otb::write::csv_text(&rows));
+        assert!(text.starts_with("run,filter,error\n0,"), "{text}");
+        // full precision: every error reads back to the same f64
+        let first: f64 = text
+            .lines()
+            .nth(1)
+            .unwrap()
+            .split(',')
+            .nth(2)
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert_eq!(first, result.runs[0][0].error);
         assert!(!dir.join("runs.partial.csv").exists());
         std::fs::remove_dir_all(&dir).unwrap();
     }

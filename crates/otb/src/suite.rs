@@ -47,7 +47,7 @@ use crate::sequence::{OtbError, Sequence, list_sequences};
 use crate::table::Table;
 use crate::track::{BoxFile, OnBadFrame, TrackError, track_frames};
 use crate::write::{
-    PartialRows, WriteError, clear_partial, create_dir, mark_partial, write_csv, write_text,
+    PartialCsv, WriteError, clear_partial, create_dir, mark_partial, write_csv, write_text,
 };
 
 /// Centre-error thresholds of the precision plot, px.
@@ -300,7 +300,7 @@ pub fn run_suite_with(
     };
     let out = &options.out;
     mark_partial(out, "the OTB one-pass suite (`cargo xtask otb`)")?;
-    let cells = PartialRows::create(&out.join("results.csv"))?;
+    let cells = PartialCsv::create(&out.join("results.csv"))?;
     // listing the frames is cheap: it gives the total work for the progress
     // display before any frame is decoded
     let opened: Vec<Result<Sequence, OtbError>> = dirs.iter().map(Sequence::open).collect();

@@ -61,73 +61,6 @@ pub fn partial_path(path: &Path) -> PathBuf {
     }
 }
 
-/// A CSV written row by row as results finish, beside the file it will
-/// replace: rows go to [`partial_path`] (`runs.partial.csv` for
-/// `runs.csv`), created fresh with its header and written through after
-/// every [`PartialCsv::append`]; [`PartialCsv::finish`] writes the complete
-/// file over `path` (atomically, [`write_text`]) and removes the partial
-/// one. A run killed part-way keeps every row it appended, under a name
-/// that says it is partial, and the previous `path` untouched.
-///
-/// Appends may come from several threads (each call writes whole rows).
-#[derive(Debug)]
-pub struct PartialCsv {
-    path: PathBuf,
-    partial: PathBuf,
-    file: std::sync::Mutex<std::fs::File>,
-}
-
-impl PartialCsv {
-    /// Creates the partial file of `path` with `header` (one line, without
-    /// its newline).
-    ///
-    /// # Errors
-    /// [`WriteError`] naming the partial file.
-    pub fn create(path: &Path, header: &str) -> Result<Self, WriteError> {
-        use std::io::Write;
-        let partial = partial_path(path);
-        let mut file = std::fs::File::create(&partial).map_err(|e| WriteError::new(&partial, e))?;
-        writeln!(file, "{header}").map_err(|e| WriteError::new(&partial, e))?;
-        Ok(Self {
-            path: path.to_path_buf(),
-            partial,
-            file: std::sync::Mutex::new(file),
-        })
-    }
-
-    /// The file the rows go to until [`PartialCsv::finish`].
-    pub fn partial(&self) -> &Path {
-        &self.partial
-    }
-
-    /// Appends `rows` (whole lines, each ending in a newline) and hands them
-    /// to the operating system before returning.
-    ///
-    /// # Errors
-    /// [`WriteError`] naming the partial file.
-    pub fn append(&self, rows: &str) -> Result<(), WriteError> {
-        use std::io::Write;
-        let mut file = self
-            .file
-            .lock()
-            .unwrap_or_else(std::sync::PoisonError::into_inner);
-        file.write_all(rows.as_bytes())
-            .and_then(|()| file.flush())
-            .map_err(|e| WriteError::new(&self.partial, e))
-    }
-
-    /// Writes the complete `contents` (header included) over the final
-    /// path and removes the partial file.
-    ///
-    /// # Errors
-    /// [`WriteError`] naming the file.
-    pub fn finish(self, contents: &str) -> Result<(), WriteError> {
-        write_text(&self.path, contents)?;
-        drop(self.file);
-        std::fs::remove_file(&self.partial).map_err(|e| WriteError::new(&self.partial, e))
-    }
-}
-
 /// `rows` as CSV text, written by the `csv` crate from typed rows: the
 /// header is the field names of `R` (serde), every float is written with
 /// full precision (the shortest text that reads back to the same `f64`),
@@ -165,22 +98,22 @@ pub fn write_csv<R: serde::Serialize>(path: &Path, rows: &[R]) -> Result<(), Wri
 /// A CSV of typed rows written as results finish, beside the file it will
 /// replace: rows go to [`partial_path`] (`runs.partial.csv` for
 /// `runs.csv`), created fresh, and are handed to the operating system after
-/// every [`PartialRows::append`] (the header with the first rows);
-/// [`PartialRows::finish`] writes the complete file over `path`
+/// every [`PartialCsv::append`] (the header with the first rows);
+/// [`PartialCsv::finish`] writes the complete file over `path`
 /// (atomically, [`write_text`]) and removes the partial one. A run killed
 /// part-way keeps every row it appended, under a name that says it is
 /// partial, and the previous `path` untouched.
 ///
 /// Appends may come from several threads (each call writes whole rows).
 #[derive(Debug)]
-pub struct PartialRows<R> {
+pub struct PartialCsv<R> {
     path: PathBuf,
     partial: PathBuf,
     file: std::sync::Mutex<(std::fs::File, bool)>,
     rows: std::marker::PhantomData<fn(&R)>,
 }
 
-impl<R: serde::Serialize> PartialRows<R> {
+impl<R: serde::Serialize> PartialCsv<R> {
     /// Creates the (empty) partial file of `path`.
     ///
     /// # Errors
@@ -196,7 +129,7 @@ impl<R: serde::Serialize> PartialRows<R> {
         })
     }
 
-    /// The file the rows go to until [`PartialRows::finish`].
+    /// The file the rows go to until [`PartialCsv::finish`].
     pub fn partial(&self) -> &Path {
         &self.partial
     }
@@ -314,39 +247,6 @@ mod tests {
         dir
     }
 
-    #[test]
-    fn a_killed_run_keeps_its_rows_and_the_previous_file() {
-        let dir = scratch("killed");
-        let path = dir.join("runs.csv");
-        write_text(&path, "a,b\nold,1\n").unwrap();
-        let log = PartialCsv::create(&path, "a,b").unwrap();
-        assert_eq!(log.partial(), dir.join("runs.partial.csv"));
-        log.append("new,1\n").unwrap();
-        log.append("new,2\n").unwrap();
-        // killed here: nothing more runs
-        drop(log);
-        assert_eq!(std::fs::read_to_string(&path).unwrap(), "a,b\nold,1\n");
-        assert_eq!(
-            std::fs::read_to_string(dir.join("runs.partial.csv")).unwrap(),
-            "a,b\nnew,1\nnew,2\n"
-        );
-        // a finished run replaces the file and removes the partial one
-        let log = PartialCsv::create(&path, "a,b").unwrap();
-        log.append("new,2\n").unwrap();
-        log.finish("a,b\nnew,1\nnew,2\n").unwrap();
-        assert_eq!(
-            std::fs::read_to_string(&path).unwrap(),
-            "a,b\nnew,1\nnew,2\n"
-        );
-        assert!(!dir.join("runs.partial.csv").exists());
-        let names: Vec<_> = std::fs::read_dir(&dir)
-            .unwrap()
-            .map(|e| e.unwrap().file_name())
-            .collect();
-        assert_eq!(names.len(), 1, "{names:?}");
-        std::fs::remove_dir_all(&dir).unwrap();
-    }
-
     #[derive(serde::Serialize)]
     struct Row {
         name: &'static str,
@@ -383,10 +283,12 @@ mod tests {
     }
 
     #[test]
-    fn partial_rows_write_the_header_once_and_finish_whole() {
+    fn a_killed_run_keeps_its_rows_and_the_previous_file() {
         let dir = scratch("rows");
         let path = dir.join("frames.csv");
-        let log = PartialRows::<Row>::create(&path).unwrap();
+        write_text(&path, "old\n").unwrap();
+        let log = PartialCsv::<Row>::create(&path).unwrap();
+        assert_eq!(log.partial(), dir.join("frames.partial.csv"));
         log.append(&[]).unwrap();
         log.append(&[Row {
             name: "a",
@@ -404,6 +306,8 @@ mod tests {
             std::fs::read_to_string(log.partial()).unwrap(),
             "name,x,missing\na,1.0,\nb,2.0,3.0\n"
         );
+        // killed here, the finished rows and the previous file both stay
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "old\n");
         log.finish(&[Row {
             name: "a",
             x: 1.0,
