@@ -110,6 +110,12 @@ use rand_distr::{Distribution, StandardNormal};
 use crate::error::{Result, TrackerError};
 use crate::tracker::{Estimate, FrameGuard, Tracker, check_initial_box};
 
+/// What the ball trackers need: their cue is paper 001's RGB histogram, and
+/// gray replicated into three equal channels would make it a gray
+/// histogram under another name, so gray frames are refused.
+const COLOUR_ONLY: &str =
+    "3 (RGB: the RGB-histogram cue of paper 001 needs colour; for gray video use hist-pf-scale)";
+
 /// Key of the particle filter's random streams ("ball" in ASCII).
 const KEY: u64 = 0x6261_6c6c;
 
@@ -271,7 +277,7 @@ impl Target {
         if frame.channels() != 3 {
             return Err(TrackerError::Channels {
                 tracker: name,
-                expected: "3",
+                expected: COLOUR_ONLY,
                 got: frame.channels(),
             });
         }
@@ -633,7 +639,7 @@ impl BallTracker {
         if frame.channels() != 3 {
             return Err(TrackerError::Channels {
                 tracker: self.filter.name(),
-                expected: "3",
+                expected: COLOUR_ONLY,
                 got: frame.channels(),
             });
         }
