@@ -326,19 +326,27 @@ pub fn read_ground_truth(path: impl AsRef<Path>) -> Result<Vec<Option<BBox>>> {
 }
 
 /// Finds the ground-truth file of an OTB sequence folder:
-/// `groundtruth_rect.txt`, else the first (by name) `*gt*.txt` or
-/// `groundtruth*.txt`.
+/// `groundtruth_rect.txt`, else the first (by name) `*_gt*.txt` or
+/// `groundtruth*.txt` (the first of [`find_ground_truth_files`]).
 ///
 /// # Errors
 /// [`ImageError::Io`] if the folder cannot be read;
 /// [`ImageError::NoGroundTruth`] if there is none.
 pub fn find_ground_truth(dir: impl AsRef<Path>) -> Result<PathBuf> {
+    let mut files = find_ground_truth_files(dir)?;
+    Ok(files.swap_remove(0))
+}
+
+/// Every ground-truth file of an OTB sequence folder (`*_gt*.txt` and
+/// `groundtruth*.txt`; a folder with two targets has two):
+/// `groundtruth_rect.txt` first when there is one, the others by name.
+///
+/// # Errors
+/// [`ImageError::Io`] if the folder cannot be read;
+/// [`ImageError::NoGroundTruth`] if there is none.
+pub fn find_ground_truth_files(dir: impl AsRef<Path>) -> Result<Vec<PathBuf>> {
     let dir = dir.as_ref();
-    let standard = dir.join("groundtruth_rect.txt");
-    if standard.is_file() {
-        return Ok(standard);
-    }
-    let mut candidates = Vec::new();
+    let mut files = Vec::new();
     for entry in fs::read_dir(dir).map_err(io_err(dir))? {
         let p = entry.map_err(io_err(dir))?.path();
         let name = p
@@ -350,16 +358,21 @@ pub fn find_ground_truth(dir: impl AsRef<Path>) -> Result<PathBuf> {
             && name.ends_with(".txt")
             && (name.contains("_gt") || name.starts_with("groundtruth"))
         {
-            candidates.push(p);
+            files.push(p);
         }
     }
-    candidates.sort();
-    candidates
-        .into_iter()
-        .next()
-        .ok_or_else(|| ImageError::NoGroundTruth {
+    files.sort();
+    let standard = dir.join("groundtruth_rect.txt");
+    if let Some(i) = files.iter().position(|p| *p == standard) {
+        let p = files.remove(i);
+        files.insert(0, p);
+    }
+    if files.is_empty() {
+        return Err(ImageError::NoGroundTruth {
             path: dir.to_path_buf(),
-        })
+        });
+    }
+    Ok(files)
 }
 
 /// An OTB-layout sequence on disk: its frame paths and ground truth.

@@ -17,7 +17,7 @@
 use std::path::{Path, PathBuf};
 
 use bayestrack_image::{
-    BBox, Image, ImageError, find_ground_truth, list_frames, read_ground_truth,
+    BBox, Image, ImageError, find_ground_truth_files, list_frames, read_ground_truth,
 };
 
 use crate::otb_table::{self, OtbEntry};
@@ -259,7 +259,7 @@ impl Sequence {
         let frames = list_frames(&dir)?;
         let gt_path = match gt_file {
             Some(g) => Some(g.to_path_buf()),
-            None => match ground_truth_files(&dir) {
+            None => match find_ground_truth_files(&dir) {
                 Ok(found) => {
                     if found.len() > 1 {
                         let names: Vec<String> = found
@@ -473,37 +473,6 @@ impl Sequence {
         }
         Ok(shape)
     }
-}
-
-/// The ground-truth files of a folder, the one
-/// [`bayestrack_image::find_ground_truth`] picks first, then the other
-/// `*_gt*.txt` / `groundtruth*.txt` files by name.
-fn ground_truth_files(dir: &Path) -> Result<Vec<PathBuf>, ImageError> {
-    let first = find_ground_truth(dir)?;
-    let mut out = vec![first];
-    let io = |source| ImageError::Io {
-        path: dir.to_path_buf(),
-        source,
-    };
-    let mut others = Vec::new();
-    for entry in std::fs::read_dir(dir).map_err(io)? {
-        let p = entry.map_err(io)?.path();
-        let name = p
-            .file_name()
-            .and_then(|n| n.to_str())
-            .unwrap_or_default()
-            .to_ascii_lowercase();
-        if p.is_file()
-            && name.ends_with(".txt")
-            && (name.contains("_gt") || name.starts_with("groundtruth"))
-            && p != out[0]
-        {
-            others.push(p);
-        }
-    }
-    others.sort();
-    out.extend(others);
-    Ok(out)
 }
 
 /// Pads `rows` with `None` up to `frames` entries, noting the frames that
