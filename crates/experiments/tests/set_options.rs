@@ -31,6 +31,7 @@ const KEYS: &[&str] = &[
     "proposal_noise",
     "hybrid_prior",
     "likelihood_floor",
+    "sweep",
     "resampling",
     // ball
     "seconds",
@@ -50,6 +51,18 @@ const KEYS: &[&str] = &[
     "ukf_alpha",
     "ukf_beta",
     "ukf_kappa",
+    "budget",
+    "speed",
+    "exposure",
+    "flicker",
+    "auto_exposure",
+    "frame_jitter",
+    "jpeg_quality",
+    "webcam",
+    "sweep_speeds",
+    "sweep_noises",
+    "sweep_runs",
+    "sweep_seconds",
     // correlation
     "scene_seed",
     "mad_margin",
@@ -59,6 +72,7 @@ const KEYS: &[&str] = &[
     "gain",
     "printed_b",
     "cap",
+    "const_b",
 ];
 
 fn value() -> impl Strategy<Value = String> {
