@@ -36,25 +36,15 @@ impl Table {
     /// header as keys without spaces ([`crate::write::csv_key`]: `paper
     /// mean` is `paper_mean`); the cells are the printed ones.
     pub fn to_csv(&self) -> String {
-        fn cell(s: &str) -> String {
-            if s.contains([',', '"', '\n']) {
-                format!("\"{}\"", s.replace('"', "\"\""))
-            } else {
-                s.to_string()
-            }
-        }
-        let mut out = String::new();
-        let keys: Vec<String> = self
-            .header
-            .iter()
-            .map(|h| crate::write::csv_key(h))
-            .collect();
-        for row in std::iter::once(&keys).chain(&self.rows) {
-            let line: Vec<String> = row.iter().map(|c| cell(c)).collect();
-            out.push_str(&line.join(","));
-            out.push('\n');
-        }
-        out
+        // flexible: the fields are public, so a row may have another width
+        let mut out = csv::WriterBuilder::new()
+            .flexible(true)
+            .from_writer(Vec::new());
+        let keys = self.header.iter().map(|h| crate::write::csv_key(h));
+        out.write_record(keys)
+            .and_then(|()| self.rows.iter().try_for_each(|r| out.write_record(r)))
+            .unwrap_or_else(|e| panic!("writing CSV to memory: {e}"));
+        crate::write::into_text(out)
     }
 
     /// The table as a Markdown (GitHub) table, the title as a bold line

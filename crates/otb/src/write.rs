@@ -81,6 +81,11 @@ pub fn csv_text<R: serde::Serialize>(rows: &[R]) -> String {
             )
         });
     }
+    into_text(out)
+}
+
+/// The text a CSV writer to memory wrote.
+pub(crate) fn into_text(out: csv::Writer<Vec<u8>>) -> String {
     let bytes = out
         .into_inner()
         .unwrap_or_else(|e| panic!("writing CSV to memory: {e}"));
