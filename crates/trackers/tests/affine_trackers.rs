@@ -68,8 +68,6 @@ struct Motion {
     pose: [f64; 3],
     /// Drift amplitudes (px) of the centre, x and y.
     drift: [f64; 2],
-    /// Abrupt jumps of this many px every 15 frames (0: none).
-    jump: f64,
 }
 
 /// The true pose of frame `k`.
@@ -79,20 +77,8 @@ fn truth(m: &Motion, k: usize) -> Affine2 {
     let theta = m.pose[0] * (tau * t / 80.0).sin();
     let s = 1.0 + m.pose[1] * (tau * t / 60.0).sin();
     let a = 1.0 + m.pose[2] * (tau * t / 50.0).sin();
-    let mut cx = 160.0 + m.drift[0] * (tau * t / 90.0).sin();
-    let mut cy = 120.0 + m.drift[1] * (1.0 - (tau * t / 70.0).cos());
-    if m.jump > 0.0 {
-        // Alternating jumps right / down / left / up, every 15 frames.
-        let n = k / 15;
-        for j in 1..=n {
-            match j % 4 {
-                1 => cx += m.jump,
-                2 => cy += 0.6 * m.jump,
-                3 => cx -= m.jump,
-                _ => cy -= 0.6 * m.jump,
-            }
-        }
-    }
+    let cx = 160.0 + m.drift[0] * (tau * t / 90.0).sin();
+    let cy = 120.0 + m.drift[1] * (1.0 - (tau * t / 70.0).cos());
     let (sn, cs) = theta.sin_cos();
     let lin = Matrix2::new(cs, -sn, sn, cs) * Matrix2::new(s, 0.0, 0.0, s * a);
     Affine2::from_parts(lin, Vector2::new(cx, cy)).unwrap()
@@ -207,7 +193,6 @@ const POSE_CHANGE: Motion = Motion {
     frames: 61,
     pose: [0.6, 0.25, 0.1],
     drift: [30.0, 18.0],
-    jump: 0.0,
 };
 
 /// Fast motion: the centre swings 90 px (up to 6.3 px per frame, beyond
@@ -216,16 +201,6 @@ const FAST: Motion = Motion {
     frames: 61,
     pose: [0.2, 0.1, 0.05],
     drift: [90.0, 25.0],
-    jump: 0.0,
-};
-
-/// Abrupt motion: jumps of 12 px (right, down 7.2 px, left, up) every 15
-/// frames on a slow drift with mild pose change.
-const JUMPS: Motion = Motion {
-    frames: 61,
-    pose: [0.2, 0.1, 0.05],
-    drift: [20.0, 10.0],
-    jump: 12.0,
 };
 
 fn stpf(seed: u64) -> StpfTracker {
@@ -494,33 +469,6 @@ fn bad_input_is_a_typed_error() {
     assert!(StpfTracker::new(alt, 0).is_ok());
 }
 
-/// Not a test: the three trackers over seeds, for choosing bounds
-/// (`cargo test --test affine_trackers survey -- --ignored --nocapture`).
-#[test]
-#[ignore]
-fn survey() {
-    let motion = match std::env::var("AFFINE_MOTION").as_deref() {
-        Ok("fast") => FAST,
-        Ok("jumps") => JUMPS,
-        _ => POSE_CHANGE,
-    };
-    for seed in 1..=4 {
-        let (frames, poses) = scene(&motion, 1, seed);
-        println!("seed {seed}");
-        report("  stpf", &run(&mut stpf(seed), &frames, &poses));
-        report("  ispf", &run(&mut ispf(seed), &frames, &poses));
-        let each = IspfConfig {
-            stop_inside_batch: true,
-            ..IspfConfig::default()
-        };
-        report(
-            "  ispf, stop inside batches",
-            &run(&mut IspfTracker::new(each, seed).unwrap(), &frames, &poses),
-        );
-        report("  hkpf", &run(&mut hkpf(seed), &frames, &poses));
-    }
-}
-
 #[test]
 fn a_target_leaving_the_frame_does_not_carry_the_pose_away() {
     // The target drifts out through the right edge (centre up to x = 360
@@ -533,7 +481,6 @@ fn a_target_leaving_the_frame_does_not_carry_the_pose_away() {
         frames: 40,
         pose: [0.0, 0.0, 0.0],
         drift: [200.0, 0.0],
-        jump: 0.0,
     };
     let (frames, poses) = scene(&out, 1, 1);
     let trackers: [Box<dyn Tracker>; 2] = [Box::new(stpf(1)), Box::new(hkpf(1))];
