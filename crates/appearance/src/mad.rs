@@ -248,8 +248,8 @@ pub struct MadSearch {
     template_rows: Vec<f64>,
     window_rows: Vec<f64>,
     bounds: Vec<f64>,
-    row_sums: Vec<u32>,
-    window_sums: Vec<u32>,
+    col_sums: Vec<u32>,
+    prefix: Vec<u32>,
     byte_bounds: Vec<u32>,
 }
 
@@ -470,49 +470,48 @@ impl MadSearch {
         let tsum: u32 = (0..th)
             .map(|r| template.row(r).iter().map(|&v| u32::from(v)).sum::<u32>())
             .sum();
-        // Row sums of every window row, then window sums down the columns.
-        self.row_sums.clear();
-        self.row_sums.resize(region.height * npx, 0);
-        for yy in 0..region.height {
-            let row = &frame.row(region.y + yy)[region.x * ch..region.right() * ch];
-            let out = &mut self.row_sums[yy * npx..(yy + 1) * npx];
-            let mut acc: u32 = row[..n].iter().map(|&v| u32::from(v)).sum();
-            out[0] = acc;
-            for i in 1..npx {
-                let (add, sub) = (
-                    &row[(i - 1) * ch + n..i * ch + n],
-                    &row[(i - 1) * ch..i * ch],
-                );
-                for (&a, &b) in add.iter().zip(sub) {
-                    acc = acc + u32::from(a) - u32::from(b);
-                }
-                out[i] = acc;
-            }
-        }
-        self.window_sums.clear();
-        self.window_sums.resize(npx, 0);
+        // Window sums: column sums over the window's rows (slid down one
+        // row of positions at a time), then prefix sums along the row; a
+        // window's sum is a difference of two prefix sums. The prefix sums
+        // wrap in u32, but every window sum is below 2^32 (`fits_u32`), so
+        // the wrapped difference is exact.
+        let cols = region.width * ch;
+        let x0 = region.x * ch;
+        self.col_sums.clear();
+        self.col_sums.resize(cols, 0);
         for r in 0..th {
-            for (w, &v) in self.window_sums.iter_mut().zip(&self.row_sums[r * npx..]) {
-                *w += v;
+            let row = &frame.row(region.y + r)[x0..x0 + cols];
+            for (c, &v) in self.col_sums.iter_mut().zip(row) {
+                *c += u32::from(v);
             }
         }
+        self.prefix.clear();
+        self.prefix.resize(cols + 1, 0);
         self.byte_bounds.clear();
         self.byte_bounds.resize(npx * npy, 0);
         for j in 0..npy {
             if j > 0 {
-                let (old, new) = (
-                    &self.row_sums[(j - 1) * npx..],
-                    &self.row_sums[(j + th - 1) * npx..],
-                );
-                for ((w, &o), &nw) in self.window_sums.iter_mut().zip(old).zip(new) {
-                    *w = *w + nw - o;
+                let old = &frame.row(region.y + j - 1)[x0..x0 + cols];
+                let new = &frame.row(region.y + j + th - 1)[x0..x0 + cols];
+                for ((c, &o), &nw) in self.col_sums.iter_mut().zip(old).zip(new) {
+                    *c = *c + u32::from(nw) - u32::from(o);
                 }
             }
-            for (b, &w) in self.byte_bounds[j * npx..(j + 1) * npx]
-                .iter_mut()
-                .zip(&self.window_sums)
-            {
-                *b = w.abs_diff(tsum);
+            let mut acc = 0u32;
+            for (p, &c) in self.prefix[1..].iter_mut().zip(&self.col_sums) {
+                acc = acc.wrapping_add(c);
+                *p = acc;
+            }
+            let bounds = &mut self.byte_bounds[j * npx..(j + 1) * npx];
+            if ch == 1 {
+                for ((b, &lo), &hi) in bounds.iter_mut().zip(&self.prefix).zip(&self.prefix[n..]) {
+                    *b = hi.wrapping_sub(lo).abs_diff(tsum);
+                }
+            } else {
+                for (i, b) in bounds.iter_mut().enumerate() {
+                    let w = self.prefix[i * ch + n].wrapping_sub(self.prefix[i * ch]);
+                    *b = w.abs_diff(tsum);
+                }
             }
         }
         let data = frame.as_slice();
