@@ -448,8 +448,8 @@ impl MadSearch {
     /// The byte-image search: `(y, x, SAD)` of the best window.
     ///
     /// Successive elimination with the whole-window bound
-    /// `|sum T - sum W| <= SAD` (one subtraction per position, from sliding
-    /// row and column sums), seeded with the position of smallest bound and
+    /// `|sum T - sum W| <= SAD` (one subtraction per position, from column
+    /// sums slid down the region and prefix sums along each row), seeded with the position of smallest bound and
     /// the region's centre; then, row of positions by row, the SIMD kernel
     /// over all eight-wide blocks where many positions survive, else each
     /// survivor's SAD with an exit after the first four-row group that
