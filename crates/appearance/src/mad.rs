@@ -18,11 +18,6 @@ pub const SAD_CHUNK: usize = 512;
 
 /// Scalars MAD can be computed on, with fast kernels.
 pub trait MadPixel: Pixel {
-    /// Whether sums of this scalar are exact in `f64` (integers), so that
-    /// [`MadSearch`] may prune positions with the lower bound
-    /// `sum_rows |sum(T row) - sum(W row)| <= SAD` without changing the result.
-    const EXACT_SUMS: bool = false;
-
     /// `sum |a_k - b_k|` over two rows of equal length.
     fn sad_row(a: &[Self], b: &[Self]) -> f64;
 
@@ -61,8 +56,6 @@ pub trait MadPixel: Pixel {
 }
 
 impl MadPixel for u8 {
-    const EXACT_SUMS: bool = true;
-
     #[inline]
     fn sad_row(a: &[u8], b: &[u8]) -> f64 {
         f64::from(bayestrack_image::sad_u8(a, b))
@@ -233,21 +226,18 @@ pub fn mad_search<T: MadPixel>(
 /// Exhaustive MAD search with reusable buffers (no allocation once warm).
 ///
 /// The result is exactly the minimum of eq. 1 over all positions (first in
-/// raster order on ties). For integer pixels the search is pruned with the
-/// successive-elimination bound: for each template row, the absolute
-/// difference of the row sums of template and window is at most that row's
-/// SAD, so a position whose summed bound exceeds the best SAD so far cannot
-/// win and is skipped. The search is seeded with the position of smallest
-/// bound and with the region's centre (where a tracker's prediction usually
-/// is), so that the bound bites from the first row. Rows where
-/// pruning would leave many positions use a kernel that runs across
-/// positions and vectorises.
+/// raster order on ties). Byte images are searched with successive
+/// elimination: the absolute difference of the template's and a window's
+/// sums is at most their SAD, so a position whose bound exceeds the best
+/// SAD so far cannot win and is skipped; the search is seeded with the
+/// position of smallest bound and with the region's centre (where a
+/// tracker's prediction usually is), so that the bound bites from the first
+/// row, and the SADs run on the SIMD kernels of [`SadTemplate`]. Other
+/// scalars (floats, whose sums are not exact) are searched exhaustively,
+/// with [`MadPixel::sad_positions`] across positions.
 #[derive(Clone, Debug, Default)]
 pub struct MadSearch {
     sad: SadTemplate,
-    template_rows: Vec<f64>,
-    window_rows: Vec<f64>,
-    bounds: Vec<f64>,
     col_sums: Vec<u32>,
     prefix: Vec<u32>,
     byte_bounds: Vec<u32>,
@@ -290,152 +280,18 @@ impl MadSearch {
             });
         }
         let mut sums = [0f64; SAD_CHUNK];
-        if !T::EXACT_SUMS {
-            for j in 0..npy {
-                let y = region.y + j;
-                let mut i0 = 0;
-                while i0 < npx {
-                    let k = (npx - i0).min(SAD_CHUNK);
-                    T::sad_positions(&frame, &template, region.x + i0, y, &mut sums[..k]);
-                    for (i, &s) in sums[..k].iter().enumerate() {
-                        if better(s, y, region.x + i0 + i, &best) {
-                            best = (s, y, region.x + i0 + i);
-                        }
-                    }
-                    i0 += k;
-                }
-            }
-            return Ok(MadMatch {
-                x: best.2,
-                y: best.1,
-                mad: best.0 / norm,
-            });
-        }
-        // Row sums of the template and of every window row in the region.
-        self.template_rows.clear();
-        self.template_rows.extend((0..th).map(|r| {
-            template
-                .row(r)
-                .iter()
-                .map(|v| f64::from(v.to_f32()))
-                .sum::<f64>()
-        }));
-        self.window_rows.clear();
-        self.window_rows.resize(region.height * npx, 0.0);
-        for yy in 0..region.height {
-            let row = &frame.row(region.y + yy)[region.x * ch..region.right() * ch];
-            let out = &mut self.window_rows[yy * npx..(yy + 1) * npx];
-            let mut acc: f64 = row[..n].iter().map(|v| f64::from(v.to_f32())).sum();
-            out[0] = acc;
-            for i in 1..npx {
-                for c in 0..ch {
-                    acc += f64::from(row[(i - 1) * ch + n + c].to_f32())
-                        - f64::from(row[(i - 1) * ch + c].to_f32());
-                }
-                out[i] = acc;
-            }
-        }
-        // Byte images take the SIMD kernels (integer sums, exact in f64).
-        let bytes = T::as_bytes(&frame)
-            .zip(T::as_bytes(&template))
-            .filter(|(_, t)| fits_u32(t));
-        if let Some((_, t)) = bytes {
-            self.sad.set(t);
-        }
-        let sad = &self.sad;
-        let full_sad = |x: usize, y: usize, limit: f64| -> f64 {
-            if let Some((f, _)) = bytes {
-                // `limit` is an integer sum or infinite.
-                let lim = if limit < f64::from(u32::MAX) {
-                    limit as u32
-                } else {
-                    u32::MAX
-                };
-                return f64::from(sad.sad_at(
-                    f.as_slice(),
-                    f.stride(),
-                    y * f.stride() + x * ch,
-                    lim,
-                ));
-            }
-            let mut s = 0.0;
-            for r in 0..th {
-                s += T::sad_row(template.row(r), &frame.row(y + r)[x * ch..x * ch + n]);
-                if s > limit {
-                    break;
-                }
-            }
-            s
-        };
-        let dense = |x0: usize, y: usize, out: &mut [f64]| {
-            if let Some((f, _)) = bytes {
-                let mut buf = [0u32; SAD_CHUNK];
-                sad.sad_windows(f, x0, y, &mut buf[..out.len()]);
-                for (o, &b) in out.iter_mut().zip(&buf) {
-                    *o = f64::from(b);
-                }
-            } else {
-                T::sad_positions(&frame, &template, x0, y, out);
-            }
-        };
-        // Lower bounds for every position.
-        self.bounds.clear();
-        self.bounds.resize(npx * npy, 0.0);
-        for j in 0..npy {
-            let bounds = &mut self.bounds[j * npx..(j + 1) * npx];
-            for (r, &tr) in self.template_rows.iter().enumerate() {
-                let wr = &self.window_rows[(j + r) * npx..(j + r + 1) * npx];
-                for (b, &w) in bounds.iter_mut().zip(wr) {
-                    *b += (tr - w).abs();
-                }
-            }
-        }
-        // Seed with the position of smallest bound and with the centre.
-        let (mut k_min, mut b_min) = (0, f64::INFINITY);
-        for (k, &b) in self.bounds.iter().enumerate() {
-            if b < b_min {
-                (k_min, b_min) = (k, b);
-            }
-        }
-        for (x, y) in [
-            (region.x + k_min % npx, region.y + k_min / npx),
-            (region.x + npx / 2, region.y + npy / 2),
-        ] {
-            let s = full_sad(x, y, best.0);
-            if better(s, y, x, &best) {
-                best = (s, y, x);
-            }
-        }
         for j in 0..npy {
             let y = region.y + j;
-            let bounds = &self.bounds[j * npx..(j + 1) * npx];
-            let survivors = bounds.iter().filter(|&&b| b <= best.0).count();
-            if survivors == 0 {
-                continue;
-            }
-            if survivors * 8 > npx {
-                let mut i0 = 0;
-                while i0 < npx {
-                    let k = (npx - i0).min(SAD_CHUNK);
-                    dense(region.x + i0, y, &mut sums[..k]);
-                    for (i, &s) in sums[..k].iter().enumerate() {
-                        if better(s, y, region.x + i0 + i, &best) {
-                            best = (s, y, region.x + i0 + i);
-                        }
-                    }
-                    i0 += k;
-                }
-            } else {
-                for (i, &b) in bounds.iter().enumerate() {
-                    if b > best.0 {
-                        continue;
-                    }
-                    let x = region.x + i;
-                    let s = full_sad(x, y, best.0);
-                    if better(s, y, x, &best) {
-                        best = (s, y, x);
+            let mut i0 = 0;
+            while i0 < npx {
+                let k = (npx - i0).min(SAD_CHUNK);
+                T::sad_positions(&frame, &template, region.x + i0, y, &mut sums[..k]);
+                for (i, &s) in sums[..k].iter().enumerate() {
+                    if better(s, y, region.x + i0 + i, &best) {
+                        best = (s, y, region.x + i0 + i);
                     }
                 }
+                i0 += k;
             }
         }
         Ok(MadMatch {
@@ -839,6 +695,35 @@ mod tests {
             .search(flat.view(), tpl.view(), Rect::new(3, 4, 20, 10))
             .unwrap();
         assert_eq!((m.x, m.y, m.mad), (3, 4, 0.0));
+    }
+
+    #[test]
+    fn a_tie_with_the_bound_keeps_the_earlier_window() {
+        // Template 4x3 of 100 over a 40x30 frame of 50 (SAD 600 = bound).
+        // Two windows of 90, at (5, 5) and at the region's centre (18, 14),
+        // tie at SAD 120, each equal to its bound. A checkerboard of 0 and
+        // 200 at (30, 2) has bound 0 (so it is the smallest-bound seed) but
+        // SAD 1200. The centre is the other seed, so the best so far is 120
+        // at the centre when the scan reaches (5, 5), whose bound is exactly
+        // 120: it must still be scored, and win as the earlier window.
+        let mut frame = Image::new(40, 30, 1, 50u8).unwrap();
+        for (x0, y0) in [(5, 5), (18, 14)] {
+            for y in y0..y0 + 3 {
+                for x in x0..x0 + 4 {
+                    frame.set(x, y, 0, 90);
+                }
+            }
+        }
+        for y in 2..5 {
+            for x in 30..34 {
+                frame.set(x, y, 0, if (x + y) % 2 == 0 { 0 } else { 200 });
+            }
+        }
+        let tpl = Image::new(4, 3, 1, 100u8).unwrap();
+        let m = MadSearch::new()
+            .search(frame.view(), tpl.view(), Rect::new(0, 0, 40, 30))
+            .unwrap();
+        assert_eq!((m.x, m.y, m.mad), (5, 5, 10.0));
     }
 
     #[test]
