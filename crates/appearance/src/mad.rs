@@ -44,14 +44,25 @@ pub trait MadPixel: Pixel {
         y: usize,
         out: &mut [f64],
     ) {
-        let ch = template.channels();
-        let n = template.width() * ch;
-        for (i, o) in out.iter_mut().enumerate() {
-            let x = x0 + i;
-            *o = (0..template.height())
-                .map(|r| Self::sad_row(template.row(r), &frame.row(y + r)[x * ch..x * ch + n]))
-                .sum();
-        }
+        sad_positions_by_rows(frame, template, x0, y, out);
+    }
+}
+
+/// [`MadPixel::sad_positions`] window by window, row by row (f64 sums).
+fn sad_positions_by_rows<T: MadPixel>(
+    frame: &ImageView<'_, T>,
+    template: &ImageView<'_, T>,
+    x0: usize,
+    y: usize,
+    out: &mut [f64],
+) {
+    let ch = template.channels();
+    let n = template.width() * ch;
+    for (i, o) in out.iter_mut().enumerate() {
+        let x = x0 + i;
+        *o = (0..template.height())
+            .map(|r| T::sad_row(template.row(r), &frame.row(y + r)[x * ch..x * ch + n]))
+            .sum();
     }
 }
 
@@ -72,6 +83,11 @@ impl MadPixel for u8 {
         y: usize,
         out: &mut [f64],
     ) {
+        if !fits_u32(template) {
+            // The kernels' u32 sums could wrap.
+            sad_positions_by_rows(frame, template, x0, y, out);
+            return;
+        }
         let npos = out.len().min(SAD_CHUNK);
         let mut sums = [0u32; SAD_CHUNK];
         with_thread_template(*template, |t| {
