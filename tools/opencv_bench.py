@@ -12,8 +12,10 @@ the best position, which is what mad_search returns).
 
 The script alternates: each round runs our criterion bench binary (only the
 MAD cases, short warm-up and measurement), then times OpenCV on the same
-frames, so both see the same machine load. It prints the median over rounds
-of each and the ratio ours / OpenCV TM_SQDIFF. One thread for both.
+frames, so both see the same machine load. Both sides report the median
+per-call time of a round (criterion's median for ours, read from its
+estimates.json); the script prints the median over rounds of each and the
+ratio ours / OpenCV TM_SQDIFF. One thread for both.
 
 Usage:
   pip install opencv-python-headless numpy
@@ -26,7 +28,6 @@ and runs the executable cargo reports.
 import argparse
 import json
 import os
-import re
 import statistics
 import subprocess
 import sys
@@ -35,7 +36,6 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 SEQ = ROOT.parent / "shared" / "data" / "sequences"
-UNIT = {"ns": 1e-9, "µs": 1e-6, "us": 1e-6, "ms": 1e-3, "s": 1.0}
 
 
 def median_time(fn, min_total=1.0, min_reps=20):
@@ -123,17 +123,26 @@ def bench_exe():
 
 
 def ours(exe, seconds):
-    """One run of our MAD benches: {case name: criterion's middle estimate (s)}."""
-    out = subprocess.run(
-        [exe, "--bench", "--warm-up-time", "0.5", "--measurement-time", str(seconds),
-         "mad_search|MadSearch|mad_map_into"],
-        cwd=ROOT / "crates" / "appearance", check=True, capture_output=True, text=True).stdout
-    times = {}
-    pat = re.compile(r"^(\S[^\n]*?)\s+time:\s+\[\S+ \S+ (\S+) (\S+) \S+ \S+\]", re.M)
-    for m in pat.finditer(out):
-        times[m.group(1).strip()] = float(m.group(2)) * UNIT[m.group(3)]
+    """One run of our MAD benches: {case name: criterion's median (s)}.
+
+    Criterion's median of its samples' per-iteration times, read from the
+    estimates.json it writes (into a fresh CRITERION_HOME), so that both
+    sides report the same statistic as median_time() does for OpenCV."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as home:
+        subprocess.run(
+            [exe, "--bench", "--warm-up-time", "0.5", "--measurement-time", str(seconds),
+             "mad_search|MadSearch|mad_map_into"],
+            cwd=ROOT / "crates" / "appearance", check=True, capture_output=True, text=True,
+            env={**os.environ, "CRITERION_HOME": home})
+        times = {}
+        for bench in Path(home).glob("*/new/benchmark.json"):
+            name = json.loads(bench.read_text())["full_id"]
+            est = json.loads((bench.parent / "estimates.json").read_text())
+            times[name] = est["median"]["point_estimate"] * 1e-9
     if not times:
-        sys.exit(f"no criterion timings in the bench output:\n{out}")
+        sys.exit("no criterion estimates were written by the bench")
     return times
 
 
@@ -194,7 +203,7 @@ def main():
             print(f"  {fmt(median_time(fn)):>12}  {k}")
         other_references()
         return
-    exe = args.bench_exe or bench_exe()
+    exe = os.path.abspath(args.bench_exe) if args.bench_exe else bench_exe()
     print(f"OpenCV {cv2.__version__}, threads = {cv2.getNumThreads()}; ours: {os.path.basename(exe)}")
     cv = opencv_cases()
     ours_t, cv_t = {}, {}
