@@ -253,7 +253,11 @@ fn profile(case: &str, calls: usize) {
             }
         }
         "pose_tune_step_144feat" | "pose_tune_step_1296feat" => {
-            let pool = if case == "pose_tune_step_144feat" { 3 } else { 1 };
+            let pool = if case == "pose_tune_step_144feat" {
+                3
+            } else {
+                1
+            };
             let (frame, mut pe, m) = pose_setup(pool);
             for _ in 0..calls {
                 black_box(profiled_tune_step(&mut pe, &frame, black_box(&m)));

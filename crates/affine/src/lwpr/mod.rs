@@ -24,10 +24,12 @@
 
 #![allow(clippy::needless_range_loop)] // index loops mirror the algorithm's equations
 
+mod pack;
 mod rf;
 
 use crate::error::{AffineError, Result, check_finite};
-use rf::{ReceptiveField, Workspace};
+use pack::ActivationPack;
+use rf::{ReceptiveField, Workspace, derivs, distances4, weight};
 
 /// Activation kernel of the receptive fields.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -258,6 +260,15 @@ pub struct Lwpr {
     var_x: Vec<f64>,
     ws: Workspace,
     xn: Vec<f64>,
+    /// Every input scale is 1 (normalising is then a copy).
+    unit_norm_in: bool,
+    /// Packed trustworthy fields for predictions (diagonal metrics).
+    pack: ActivationPack,
+    /// Per-output sums of a prediction (weights, weighted outputs).
+    sums: Vec<(f64, f64)>,
+    /// Squared distances of an update's input to every RF (diagonal
+    /// metrics), by output, then field.
+    q: Vec<f64>,
 }
 
 impl Lwpr {
@@ -280,6 +291,10 @@ impl Lwpr {
             var_x: vec![0.0; n],
             ws: Workspace::new(n, !cfg.diag_only),
             xn: vec![0.0; n],
+            unit_norm_in: cfg.norm_in.iter().all(|&v| v == 1.0),
+            pack: ActivationPack::default(),
+            sums: vec![(0.0, 0.0); cfg.n_out],
+            q: Vec::new(),
             cfg,
         })
     }
@@ -331,8 +346,26 @@ impl Lwpr {
                 got: x.len(),
             });
         }
+        // With unit scales, one pass shows every input finite and within
+        // the magnitude bound (NaN fails the comparison); otherwise (and to
+        // name the offending input) the two checks below.
+        if self.unit_norm_in && x.iter().fold(true, |ok, v| ok & (v.abs() <= MAX_MAGNITUDE)) {
+            return Ok(());
+        }
         check_finite("LWPR input", x)?;
         check_magnitude("LWPR input", x, &self.cfg.norm_in)
+    }
+
+    /// `xn = x / norm_in` (a copy when every scale is 1: `x / 1 = x`
+    /// exactly).
+    fn normalise_input(&mut self, x: &[f64]) {
+        if self.unit_norm_in {
+            self.xn.copy_from_slice(x);
+        } else {
+            for (xn, (xi, ni)) in self.xn.iter_mut().zip(x.iter().zip(&self.cfg.norm_in)) {
+                *xn = xi / ni;
+            }
+        }
     }
 
     /// Trains on one sample; returns the model's prediction for `x` made
@@ -366,16 +399,38 @@ impl Lwpr {
         let nd = self.n_data as f64;
         self.n_data += 1;
         let inv = 1.0 / self.n_data as f64;
-        for i in 0..self.cfg.n_in {
-            self.mean_x[i] = (self.mean_x[i] * nd + x[i]) * inv;
-            let d = x[i] - self.mean_x[i];
-            self.var_x[i] = (self.var_x[i] * nd + d * d) * inv;
+        for ((mean, var), xi) in self.mean_x.iter_mut().zip(self.var_x.iter_mut()).zip(x) {
+            *mean = (*mean * nd + xi) * inv;
+            let d = xi - *mean;
+            *var = (*var * nd + d * d) * inv;
         }
-        for (xn, (xi, ni)) in self.xn.iter_mut().zip(x.iter().zip(&self.cfg.norm_in)) {
-            *xn = xi / ni;
+        self.normalise_input(x);
+        self.pack.invalidate();
+        // The distances to every RF (of every output) before any moves,
+        // four fields at a time; an update of one RF changes no other RF.
+        self.q.clear();
+        if self.cfg.diag_only {
+            let mut rfs = self.subs.iter().flat_map(|s| s.rfs.iter());
+            loop {
+                match (rfs.next(), rfs.next(), rfs.next(), rfs.next()) {
+                    (Some(a), Some(b), Some(c), Some(d)) => {
+                        self.q.extend(distances4(&self.xn, [a, b, c, d]));
+                    }
+                    (a, b, c, _) => {
+                        for rf in [a, b, c].into_iter().flatten() {
+                            self.q.push(rf.distance(&self.xn, &mut self.ws));
+                        }
+                        break;
+                    }
+                }
+            }
         }
+        let mut first = 0;
         for dim in 0..self.cfg.n_out {
             let yn = y[dim] / self.cfg.norm_out[dim];
+            let n_rfs = self.subs[dim].rfs.len();
+            let q = self.q.get(first..first + n_rfs);
+            first += n_rfs;
             let p = update_one(
                 &self.cfg,
                 &self.init_m,
@@ -383,6 +438,7 @@ impl Lwpr {
                 &mut self.ws,
                 &self.xn,
                 yn,
+                q,
             );
             yp[dim] = p * self.cfg.norm_out[dim];
         }
@@ -409,23 +465,39 @@ impl Lwpr {
                 got: y.len(),
             });
         }
-        for (xn, (xi, ni)) in self.xn.iter_mut().zip(x.iter().zip(&self.cfg.norm_in)) {
-            *xn = xi / ni;
-        }
-        for dim in 0..self.cfg.n_out {
-            let mut sum_w = 0.0;
-            let mut yp = 0.0;
-            for rf in &self.subs[dim].rfs {
-                let w = rf.activation(&self.cfg, &self.xn, &mut self.ws);
-                if w > cutoff && rf.trustworthy() {
-                    yp += w * rf.predict_local(&self.cfg, &self.xn, &mut self.ws, None);
-                    sum_w += w;
+        self.normalise_input(x);
+        // Per output, the trustworthy RFs activated above the cutoff, in
+        // field order (an untrustworthy RF is skipped before its activation
+        // is computed).
+        self.sums.fill((0.0, 0.0));
+        let kernel = self.cfg.kernel;
+        if self.cfg.diag_only {
+            for (&(dim, k), &q) in self.pack.distances(&self.subs, kernel, &self.xn, cutoff) {
+                let w = weight(kernel, q);
+                if w > cutoff {
+                    let rf = &self.subs[dim].rfs[k];
+                    let yk = rf.predict_local(&self.cfg, &self.xn, &mut self.ws, None);
+                    let (sum_w, yp) = &mut self.sums[dim];
+                    *yp += w * yk;
+                    *sum_w += w;
                 }
             }
+        } else {
+            for (sub, (sum_w, yp)) in self.subs.iter().zip(self.sums.iter_mut()) {
+                for rf in sub.rfs.iter().filter(|rf| rf.trustworthy()) {
+                    let w = rf.activation(&self.cfg, &self.xn, &mut self.ws);
+                    if w > cutoff {
+                        *yp += w * rf.predict_local(&self.cfg, &self.xn, &mut self.ws, None);
+                        *sum_w += w;
+                    }
+                }
+            }
+        }
+        for ((yd, &(sum_w, mut yp)), norm) in y.iter_mut().zip(&self.sums).zip(&self.cfg.norm_out) {
             if sum_w > 0.0 {
                 yp /= sum_w;
             }
-            y[dim] = yp * self.cfg.norm_out[dim];
+            *yd = yp * norm;
         }
         Ok(())
     }
@@ -434,9 +506,7 @@ impl Lwpr {
     pub fn predict_conf(&mut self, x: &[f64], cutoff: f64) -> Result<Prediction> {
         self.check_input(x)?;
         check_cutoff(cutoff)?;
-        for (xn, (xi, ni)) in self.xn.iter_mut().zip(x.iter().zip(&self.cfg.norm_in)) {
-            *xn = xi / ni;
-        }
+        self.normalise_input(x);
         let n_out = self.cfg.n_out;
         let mut out = Prediction {
             y: vec![0.0; n_out],
@@ -520,6 +590,7 @@ fn update_one(
     ws: &mut Workspace,
     xn: &[f64],
     yn: f64,
+    q: Option<&[f64]>,
 ) -> f64 {
     let mut w_max = 0.0;
     let mut w_sec = 0.0;
@@ -528,7 +599,10 @@ fn update_one(
     let mut yp = 0.0;
     let mut sum_w = 0.0;
     for (n, rf) in sub.rfs.iter_mut().enumerate() {
-        let (w, dwdq, ddwdqdq) = rf.activation_derivs(cfg, xn, ws);
+        let (w, dwdq, ddwdqdq) = match q {
+            Some(q) => derivs(cfg.kernel, q[n]),
+            None => rf.activation_derivs(cfg, xn, ws),
+        };
         if w > w_sec {
             if w > w_max {
                 ind_sec = ind_max;

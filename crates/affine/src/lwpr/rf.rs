@@ -14,23 +14,250 @@ use super::{Kernel, LwprConfig};
 #[cfg(feature = "faer")]
 const FAER_MIN_DIM: usize = 24;
 
+// The kernels below keep one summation order, that of `dot`: four
+// accumulators over whole chunks of four (lane k takes the elements
+// i = k mod 4), combined as (a0 + a1) + (a2 + a3), then the tail added one
+// element at a time. Iterating over exact chunks of equal-length slices (no
+// index bounds checks) lets the compiler vectorise them; the fused variants
+// compute the vector they multiply on the fly (and store it), with the same
+// operations as the separate loops they replace, so results are identical
+// bit for bit.
+
+/// `sum_i a_i b_i` over `a.len()` elements (`b` may be longer).
 #[inline]
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    // Four accumulators: lets the compiler vectorise without -ffast-math.
+pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len();
+    let split = n / 4 * 4;
+    let (a4, at) = a.split_at(split);
+    let (b4, bt) = b[..n].split_at(split);
     let mut acc = [0.0f64; 4];
-    let chunks = a.len() / 4;
-    for k in 0..chunks {
-        let i = 4 * k;
-        acc[0] += a[i] * b[i];
-        acc[1] += a[i + 1] * b[i + 1];
-        acc[2] += a[i + 2] * b[i + 2];
-        acc[3] += a[i + 3] * b[i + 3];
+    for (x, y) in a4.chunks_exact(4).zip(b4.chunks_exact(4)) {
+        acc[0] += x[0] * y[0];
+        acc[1] += x[1] * y[1];
+        acc[2] += x[2] * y[2];
+        acc[3] += x[3] * y[3];
     }
     let mut s = (acc[0] + acc[1]) + (acc[2] + acc[3]);
-    for i in 4 * chunks..a.len() {
-        s += a[i] * b[i];
+    for (x, y) in at.iter().zip(bt) {
+        s += x * y;
     }
     s
+}
+
+/// `dot(u, v)` with `v = a - b`, which is written into `out`.
+#[inline]
+fn dot_diff(u: &[f64], a: &[f64], b: &[f64], out: &mut [f64]) -> f64 {
+    let n = u.len();
+    let split = n / 4 * 4;
+    let (a, b, out) = (&a[..n], &b[..n], &mut out[..n]);
+    let mut acc = [0.0f64; 4];
+    for (((uc, ac), bc), oc) in u[..split]
+        .chunks_exact(4)
+        .zip(a[..split].chunks_exact(4))
+        .zip(b[..split].chunks_exact(4))
+        .zip(out[..split].chunks_exact_mut(4))
+    {
+        for l in 0..4 {
+            let v = ac[l] - bc[l];
+            oc[l] = v;
+            acc[l] += uc[l] * v;
+        }
+    }
+    let mut s = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+    for i in split..n {
+        let v = a[i] - b[i];
+        out[i] = v;
+        s += u[i] * v;
+    }
+    s
+}
+
+/// `dot(u, v)` with the deflated residual `v = a - p t`, which is written
+/// into `out`.
+#[inline]
+fn dot_axpy(u: &[f64], a: &[f64], p: &[f64], t: f64, out: &mut [f64]) -> f64 {
+    let n = u.len();
+    let split = n / 4 * 4;
+    let (a, p, out) = (&a[..n], &p[..n], &mut out[..n]);
+    let mut acc = [0.0f64; 4];
+    for (((uc, ac), pc), oc) in u[..split]
+        .chunks_exact(4)
+        .zip(a[..split].chunks_exact(4))
+        .zip(p[..split].chunks_exact(4))
+        .zip(out[..split].chunks_exact_mut(4))
+    {
+        for l in 0..4 {
+            let v = ac[l] - pc[l] * t;
+            oc[l] = v;
+            acc[l] += uc[l] * v;
+        }
+    }
+    let mut s = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+    for i in split..n {
+        let v = a[i] - p[i] * t;
+        out[i] = v;
+        s += u[i] * v;
+    }
+    s
+}
+
+/// `dot(u, x)` after deflating `x` in place: `x <- x - p t`.
+#[inline]
+fn dot_deflate(u: &[f64], x: &mut [f64], p: &[f64], t: f64) -> f64 {
+    let n = u.len();
+    let split = n / 4 * 4;
+    let (x, p) = (&mut x[..n], &p[..n]);
+    let mut acc = [0.0f64; 4];
+    for ((uc, xc), pc) in u[..split]
+        .chunks_exact(4)
+        .zip(x[..split].chunks_exact_mut(4))
+        .zip(p[..split].chunks_exact(4))
+    {
+        for l in 0..4 {
+            let v = xc[l] - pc[l] * t;
+            xc[l] = v;
+            acc[l] += uc[l] * v;
+        }
+    }
+    let mut s = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+    for i in split..n {
+        let v = x[i] - p[i] * t;
+        x[i] = v;
+        s += u[i] * v;
+    }
+    s
+}
+
+/// `max_i |m_i|` (0 for none; NaNs ignored, as `f64::max` does). The
+/// maximum of a set does not depend on the order of comparison, so four
+/// interleaved running maxima give the sequential fold's value exactly.
+#[inline]
+fn max_abs(m: &[f64]) -> f64 {
+    let mut acc = [0.0f64; 4];
+    let split = m.len() / 4 * 4;
+    for c in m[..split].chunks_exact(4) {
+        for l in 0..4 {
+            acc[l] = acc[l].max(c[l].abs());
+        }
+    }
+    let mut r = acc[0].max(acc[1]).max(acc[2].max(acc[3]));
+    for v in &m[split..] {
+        r = r.max(v.abs());
+    }
+    r
+}
+
+/// The activation at squared distance `q` (the kernel alone, no
+/// derivatives).
+#[inline]
+pub(super) fn weight(kernel: Kernel, q: f64) -> f64 {
+    match kernel {
+        Kernel::Gaussian => (-0.5 * q).exp(),
+        Kernel::BiSquare => {
+            let t = 1.0 - 0.25 * q;
+            if t < 0.0 { 0.0 } else { t * t }
+        }
+    }
+}
+
+/// The activation at squared distance `q` and its derivatives dw/dq,
+/// d2w/dq2.
+#[inline]
+pub(super) fn derivs(kernel: Kernel, q: f64) -> (f64, f64, f64) {
+    let w = weight(kernel, q);
+    match kernel {
+        Kernel::Gaussian => (w, -0.5 * w, 0.25 * w),
+        Kernel::BiSquare => {
+            let t = 1.0 - 0.25 * q;
+            if t < 0.0 {
+                (0.0, 0.0, 0.0)
+            } else {
+                (w, -0.5 * t, 0.125)
+            }
+        }
+    }
+}
+
+/// The squared distances of `x` to four diagonal-metric fields, each summed
+/// in index order as [`ReceptiveField::distance`] does (identical results);
+/// the four independent sums run side by side.
+pub(super) fn distances4(x: &[f64], rfs: [&ReceptiveField; 4]) -> [f64; 4] {
+    let n = x.len();
+    let [a, b, c, d] = rfs;
+    let (ca, cb, cc, cd) = (&a.c[..n], &b.c[..n], &c.c[..n], &d.c[..n]);
+    let (da, db, dc, dd) = (&a.d[..n], &b.d[..n], &c.d[..n], &d.d[..n]);
+    let mut q = [0.0f64; 4];
+    for i in 0..n {
+        let xi = x[i];
+        let (ea, eb, ec, ed) = (xi - ca[i], xi - cb[i], xi - cc[i], xi - cd[i]);
+        q[0] += da[i] * ea * ea;
+        q[1] += db[i] * eb * eb;
+        q[2] += dc[i] * ec * ec;
+        q[3] += dd[i] * ed * ed;
+    }
+    q
+}
+
+/// Scalars of one PLS direction's update: (lambda_slow, w ytarget, lambda,
+/// w s, 1 / SSs2).
+type DirScalars = (f64, f64, f64, f64, f64);
+
+/// One pass of a PLS direction's update over the inputs `x` (its residual):
+/// `SXresYres <- lambda_slow SXresYres + w ytarget x`, whose squared norm is
+/// returned (summed in index order), `SSXres <- lambda SSXres + w s x` and
+/// `p = SSXres / SSs2`.
+#[inline]
+fn fused_sums(sxy: &mut [f64], ssx: &mut [f64], p: &mut [f64], x: &[f64], sc: DirScalars) -> f64 {
+    let (lambda_slow, wyt, lj, wsj, inv_ss_s2) = sc;
+    let mut unorm = 0.0;
+    for (((a, x), sx), p) in sxy.iter_mut().zip(x).zip(ssx.iter_mut()).zip(p.iter_mut()) {
+        *a = *a * lambda_slow + wyt * x;
+        unorm += *a * *a;
+        *sx = lj * *sx + wsj * x;
+        *p = *sx * inv_ss_s2;
+    }
+    unorm
+}
+
+/// [`fused_sums`] for two directions in one loop (the same operations, so
+/// the same results; the two norms' sums are independent chains).
+#[inline]
+fn fused_sums_pair(
+    sxy: [&mut [f64]; 2],
+    ssx: [&mut [f64]; 2],
+    p: [&mut [f64]; 2],
+    x: [&[f64]; 2],
+    sc: [DirScalars; 2],
+) -> (f64, f64) {
+    let n = x[0].len();
+    let [sxy0, sxy1] = sxy;
+    let [ssx0, ssx1] = ssx;
+    let [p0, p1] = p;
+    let (sxy0, sxy1, ssx0, ssx1) = (
+        &mut sxy0[..n],
+        &mut sxy1[..n],
+        &mut ssx0[..n],
+        &mut ssx1[..n],
+    );
+    let (p0, p1, x0, x1) = (&mut p0[..n], &mut p1[..n], x[0], &x[1][..n]);
+    let (ls0, wyt0, l0, ws0, inv0) = sc[0];
+    let (ls1, wyt1, l1, ws1, inv1) = sc[1];
+    let (mut un0, mut un1) = (0.0, 0.0);
+    for i in 0..n {
+        let a0 = sxy0[i] * ls0 + wyt0 * x0[i];
+        sxy0[i] = a0;
+        un0 += a0 * a0;
+        let a1 = sxy1[i] * ls1 + wyt1 * x1[i];
+        sxy1[i] = a1;
+        un1 += a1 * a1;
+        let s0 = l0 * ssx0[i] + ws0 * x0[i];
+        ssx0[i] = s0;
+        p0[i] = s0 * inv0;
+        let s1 = l1 * ssx1[i] + ws1 * x1[i];
+        ssx1[i] = s1;
+        p1[i] = s1 * inv1;
+    }
+    (un0, un1)
 }
 
 /// Scratch buffers shared by all RFs of a model.
@@ -223,14 +450,38 @@ impl ReceptiveField {
         }
     }
 
-    /// Squared Mahalanobis distance `(x - c)^T D (x - c)`, leaving `x - c` in
-    /// `ws.dx`.
-    fn distance(&self, xn: &[f64], ws: &mut Workspace) -> f64 {
+    /// The centre `c`.
+    pub(super) fn centre(&self) -> &[f64] {
+        &self.c
+    }
+
+    /// The diagonal of the distance metric D (a diagonal metric only).
+    pub(super) fn metric_diag(&self) -> &[f64] {
+        debug_assert!(!self.full);
+        &self.d
+    }
+
+    /// Squared Mahalanobis distance `(x - c)^T D (x - c)` (a full metric
+    /// leaves `x - c` in `ws.dx` and `M (x - c)` in `ws.mdx`).
+    pub(super) fn distance(&self, xn: &[f64], ws: &mut Workspace) -> f64 {
         let n = self.n;
+        if !self.full {
+            // Summed in index order (the packed kernel in `pack` keeps it).
+            return self
+                .d
+                .iter()
+                .zip(xn)
+                .zip(&self.c)
+                .map(|((d, x), c)| {
+                    let dx = x - c;
+                    d * dx * dx
+                })
+                .sum();
+        }
         for ((dx, x), c) in ws.dx.iter_mut().zip(xn).zip(&self.c) {
             *dx = x - c;
         }
-        if self.full {
+        {
             // |M dx|^2 with M upper triangular.
             let mut q = 0.0;
             for i in 0..n {
@@ -242,8 +493,6 @@ impl ReceptiveField {
                 q += v * v;
             }
             q
-        } else {
-            self.d.iter().zip(&ws.dx).map(|(d, x)| d * x * x).sum()
         }
     }
 
@@ -255,21 +504,7 @@ impl ReceptiveField {
         xn: &[f64],
         ws: &mut Workspace,
     ) -> (f64, f64, f64) {
-        let q = self.distance(xn, ws);
-        match cfg.kernel {
-            Kernel::Gaussian => {
-                let w = (-0.5 * q).exp();
-                (w, -0.5 * w, 0.25 * w)
-            }
-            Kernel::BiSquare => {
-                let t = 1.0 - 0.25 * q;
-                if t < 0.0 {
-                    (0.0, 0.0, 0.0)
-                } else {
-                    (t * t, -0.5 * t, 0.125)
-                }
-            }
-        }
+        derivs(cfg.kernel, self.distance(xn, ws))
     }
 
     pub(super) fn activation(&self, cfg: &LwprConfig, xn: &[f64], ws: &mut Workspace) -> f64 {
@@ -287,18 +522,19 @@ impl ReceptiveField {
         }
     }
 
-    /// PLS projections of `x` onto the first `nr` directions, into `s`.
+    /// PLS projections of `x` onto the first `nr` directions, into `s`
+    /// (`xu` holds the deflated residuals): `s_0 = u_0^T x`,
+    /// `x_j = x_(j-1) - p_(j-1) s_(j-1)`, `s_j = u_j^T x_j`.
     fn project(&self, x: &[f64], nr: usize, s: &mut [f64], xu: &mut [f64]) {
         let n = self.n;
-        xu.copy_from_slice(x);
-        for j in 0..nr {
-            let sj = dot(&self.u[j * n..(j + 1) * n], xu);
-            s[j] = sj;
-            if j + 1 < nr {
-                for (xi, pi) in xu.iter_mut().zip(&self.p[j * n..(j + 1) * n]) {
-                    *xi -= pi * sj;
-                }
-            }
+        s[0] = dot(&self.u[..n], x);
+        for j in 1..nr {
+            let (u, p) = (&self.u[j * n..(j + 1) * n], &self.p[(j - 1) * n..j * n]);
+            s[j] = if j == 1 {
+                dot_axpy(u, x, p, s[0], xu)
+            } else {
+                dot_deflate(u, xu, p, s[j - 1])
+            };
         }
     }
 
@@ -312,15 +548,15 @@ impl ReceptiveField {
         s2: Option<&mut f64>,
     ) -> f64 {
         let nr = self.n_pred();
-        ws.ensure_reg(self.n, self.n_reg);
-        for ((xc, x), mx) in ws.xc.iter_mut().zip(xn).zip(&self.mean_x) {
-            *xc = x - mx;
+        let n = self.n;
+        ws.ensure_reg(n, self.n_reg);
+        // The projections of x - mean_x (computed on the fly and deflated in
+        // place in ws.xc).
+        ws.s[0] = dot_diff(&self.u[..n], xn, &self.mean_x, &mut ws.xc);
+        for j in 1..nr {
+            let (u, p) = (&self.u[j * n..(j + 1) * n], &self.p[(j - 1) * n..j * n]);
+            ws.s[j] = dot_deflate(u, &mut ws.xc, p, ws.s[j - 1]);
         }
-        let xc = std::mem::take(&mut ws.xc);
-        let mut xu = std::mem::take(&mut ws.dx);
-        self.project(&xc, nr, &mut ws.s, &mut xu);
-        ws.xc = xc;
-        ws.dx = xu;
         let mut y = self.beta0;
         let mut q = 0.0;
         for j in 0..nr {
@@ -373,12 +609,18 @@ impl ReceptiveField {
     fn update_means(&mut self, x: &[f64], y: f64, w: f64, ws: &mut Workspace) -> f64 {
         let swl = self.sum_w[0] * self.lambda[0];
         let inv = 1.0 / (swl + w);
-        for i in 0..self.n {
-            let mx = (swl * self.mean_x[i] + w * x[i]) * inv;
-            self.mean_x[i] = mx;
-            let z = x[i] - mx;
-            ws.xmz[i] = z;
-            self.var_x[i] = (swl * self.var_x[i] + w * z * z) * inv;
+        for (((mx, vx), xmz), xi) in self
+            .mean_x
+            .iter_mut()
+            .zip(self.var_x.iter_mut())
+            .zip(ws.xmz.iter_mut())
+            .zip(x)
+        {
+            let m = (swl * *mx + w * xi) * inv;
+            *mx = m;
+            let z = xi - m;
+            *xmz = z;
+            *vx = (swl * *vx + w * z * z) * inv;
         }
         self.beta0 = (swl * self.beta0 + w * y) * inv;
         y - self.beta0
@@ -390,19 +632,19 @@ impl ReceptiveField {
     fn update_regression(&mut self, y: f64, w: f64, ws: &mut Workspace) -> (f64, f64, f64) {
         let n = self.n;
         let nr = self.n_reg;
-        // Projections with residuals, before the update.
-        ws.xres[..n].copy_from_slice(&ws.xmz);
-        for j in 0..nr {
-            let (done, rest) = ws.xres.split_at_mut((j + 1) * n);
-            let xj = &done[j * n..];
-            let sj = dot(&self.u[j * n..(j + 1) * n], xj);
-            self.s[j] = sj;
-            if j + 1 < nr {
-                let pj = &self.p[j * n..(j + 1) * n];
-                for ((xn, xo), pi) in rest[..n].iter_mut().zip(xj).zip(pj) {
-                    *xn = xo - pi * sj;
-                }
-            }
+        // Projections with residuals, before the update: xres_0 = xmz (not
+        // copied), xres_j = xres_(j-1) - p_(j-1) s_(j-1) at
+        // ws.xres[(j - 1) N, j N).
+        self.s[0] = dot(&self.u[..n], &ws.xmz);
+        for j in 1..nr {
+            let (u, p) = (&self.u[j * n..(j + 1) * n], &self.p[(j - 1) * n..j * n]);
+            let (done, rest) = ws.xres.split_at_mut((j - 1) * n);
+            let prev: &[f64] = if j == 1 {
+                &ws.xmz
+            } else {
+                &done[(j - 2) * n..]
+            };
+            self.s[j] = dot_axpy(u, prev, p, self.s[j - 1], &mut rest[..n]);
         }
         let mut acc = 0.0;
         for i in 0..nr {
@@ -415,46 +657,77 @@ impl ReceptiveField {
         for i in 0..nr - 1 {
             ws.ytarget[i + 1] = ws.e_cv[i];
         }
+        // Per direction: the sums of squared projections and of projected
+        // targets give beta; one pass over the inputs updates SXresYres (and
+        // sums its squared norm), SSXres and the loading p; then u is the
+        // normalised SXresYres. Directions go in pairs, whose norms' running
+        // sums (each in index order) advance side by side.
         let mut ws2_ss_s2 = 0.0;
-        for j in 0..nr {
-            let lambda_slow = 0.9 + 0.1 * self.lambda[j];
-            let wyt = w * ws.ytarget[j];
-            let xj = &ws.xres[j * n..(j + 1) * n];
-            let sxy = &mut self.sxres_yres[j * n..(j + 1) * n];
-            let mut unorm = 0.0;
-            for (a, x) in sxy.iter_mut().zip(xj) {
-                *a = *a * lambda_slow + wyt * x;
-                unorm += *a * *a;
+        let mut scal = [(0.0, 0.0, 0.0, 0.0, 0.0); 2];
+        let mut j = 0;
+        while j < nr {
+            let pair = j + 1 < nr;
+            for (k, sc) in scal.iter_mut().enumerate().take(if pair { 2 } else { 1 }) {
+                let jj = j + k;
+                let lambda_slow = 0.9 + 0.1 * self.lambda[jj];
+                let wyt = w * ws.ytarget[jj];
+                let lj = self.lambda[jj];
+                let wsj = w * self.s[jj];
+                self.ss_s2[jj] = lj * self.ss_s2[jj] + self.s[jj] * wsj;
+                self.ss_yres[jj] = lj * self.ss_yres[jj] + ws.ytarget[jj] * wsj;
+                let inv_ss_s2 = 1.0 / self.ss_s2[jj];
+                self.beta[jj] = self.ss_yres[jj] * inv_ss_s2;
+                *sc = (lambda_slow, wyt, lj, wsj, inv_ss_s2);
             }
-            if unorm > 1e-24 {
-                let inv = 1.0 / unorm.sqrt();
-                for (u, a) in self.u[j * n..(j + 1) * n].iter_mut().zip(sxy.iter()) {
-                    *u = a * inv;
+            let xres = |jj: usize| -> &[f64] {
+                if jj == 0 {
+                    &ws.xmz
+                } else {
+                    &ws.xres[(jj - 1) * n..jj * n]
                 }
+            };
+            let range = j * n..(j + 1) * n;
+            let unorms = if pair {
+                let (sxy0, sxy1) = self.sxres_yres[j * n..(j + 2) * n].split_at_mut(n);
+                let (ssx0, ssx1) = self.ssxres[j * n..(j + 2) * n].split_at_mut(n);
+                let (p0, p1) = self.p[j * n..(j + 2) * n].split_at_mut(n);
+                let (u0, u1) = fused_sums_pair(
+                    [sxy0, sxy1],
+                    [ssx0, ssx1],
+                    [p0, p1],
+                    [xres(j), xres(j + 1)],
+                    scal,
+                );
+                [u0, u1]
+            } else {
+                let u0 = fused_sums(
+                    &mut self.sxres_yres[range.clone()],
+                    &mut self.ssxres[range.clone()],
+                    &mut self.p[range],
+                    xres(j),
+                    scal[0],
+                );
+                [u0, 0.0]
+            };
+            for (k, &unorm) in unorms.iter().enumerate().take(if pair { 2 } else { 1 }) {
+                let jj = j + k;
+                if unorm > 1e-24 {
+                    let inv = 1.0 / unorm.sqrt();
+                    let sxy = &self.sxres_yres[jj * n..(jj + 1) * n];
+                    for (u, a) in self.u[jj * n..(jj + 1) * n].iter_mut().zip(sxy) {
+                        *u = a * inv;
+                    }
+                }
+                let (_, _, _, wsj, inv_ss_s2) = scal[k];
+                ws2_ss_s2 += wsj * wsj * inv_ss_s2;
             }
-            let lj = self.lambda[j];
-            let wsj = w * self.s[j];
-            self.ss_s2[j] = lj * self.ss_s2[j] + self.s[j] * wsj;
-            self.ss_yres[j] = lj * self.ss_yres[j] + ws.ytarget[j] * wsj;
-            let inv_ss_s2 = 1.0 / self.ss_s2[j];
-            self.beta[j] = self.ss_yres[j] * inv_ss_s2;
-            let ssx = &mut self.ssxres[j * n..(j + 1) * n];
-            let pj = &mut self.p[j * n..(j + 1) * n];
-            for ((a, x), p) in ssx.iter_mut().zip(xj).zip(pj.iter_mut()) {
-                *a = lj * *a + wsj * x;
-                *p = *a * inv_ss_s2;
-            }
-            ws2_ss_s2 += wsj * wsj * inv_ss_s2;
+            j += if pair { 2 } else { 1 };
         }
         self.ssp = self.lambda[nr - 1] * self.ssp + ws2_ss_s2;
         // Projections after the update.
         let mut s = std::mem::take(&mut self.s);
-        let xmz = std::mem::take(&mut ws.xmz);
-        let mut xu = std::mem::take(&mut ws.xc);
-        self.project(&xmz, nr, &mut s, &mut xu);
+        self.project(&ws.xmz, nr, &mut s, &mut ws.xc);
         self.s = s;
-        ws.xmz = xmz;
-        ws.xc = xu;
         let (ypred, e_cv_r) = if self.n_data[nr - 1] > 2.0 * n as f64 || nr == 1 {
             let yp = if self.n_data[nr - 1] > 2.0 * n as f64 {
                 dot(&self.beta[..nr], &self.s[..nr])
@@ -542,8 +815,10 @@ impl ReceptiveField {
         }
         dj1dw /= big_w;
         let w_w = w / big_w;
-        for ((dx, x), c) in ws.dx.iter_mut().zip(xn).zip(&self.c) {
-            *dx = x - c;
+        if self.full || cfg.meta {
+            for ((dx, x), c) in ws.dx.iter_mut().zip(xn).zip(&self.c) {
+                *dx = x - c;
+            }
         }
         let ddj1dwdw = if cfg.meta {
             let s_pse: f64 = (0..nr).map(|i| self.s[i] * ws.pse[i]).sum();
@@ -556,11 +831,35 @@ impl ReceptiveField {
             0.0
         };
         let penalty2 = 2.0 * penalty;
-        if !self.full {
-            let mut max_m: f64 = 0.0;
-            for mj in &self.m {
-                max_m = max_m.max(mj.abs());
+        if !self.full && !cfg.meta {
+            // One pass over the diagonal: the gradient of each M_jj, the step
+            // (or the halved learning rate) and D_jj = M_jj^2 (each element
+            // depends on its own index and max |M| alone).
+            let lim = 0.1 * max_abs(&self.m);
+            for ((((m, d), alpha), x), c) in self
+                .m
+                .iter_mut()
+                .zip(self.d.iter_mut())
+                .zip(self.alpha.iter_mut())
+                .zip(xn)
+                .zip(&self.c)
+            {
+                let dx = x - c;
+                let aux = 2.0 * *m;
+                let dx2 = dx * dx;
+                let dqdm = dx2 * aux;
+                let dwdm = dqdm * dwdq;
+                let djdm = w_w * (penalty2 * *d * aux) + dwdm * dj1dw;
+                let delta = *alpha * trans_mul * djdm;
+                // A step larger than a tenth of max |M| halves the rate
+                // instead (written as selects, so the loop vectorises).
+                let too_big = delta > lim;
+                *alpha = if too_big { *alpha * 0.5 } else { *alpha };
+                *m = if too_big { *m } else { *m - delta };
+                *d = *m * *m;
             }
+        } else if !self.full {
+            let max_m = max_abs(&self.m);
             for j in 0..n {
                 let aux = 2.0 * self.m[j];
                 let dx2 = ws.dx[j] * ws.dx[j];

@@ -389,3 +389,111 @@ fn samples_whose_squares_overflow_are_refused_and_leave_the_model_usable() {
     }
     assert!(model.predict(&[0.5, 0.1], 0.001).unwrap()[0].is_finite());
 }
+
+/// FNV-1a over the bit patterns of `values`.
+fn fnv(values: &[f64]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for v in values {
+        for b in v.to_bits().to_le_bytes() {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    h
+}
+
+/// Every number a model gives on clustered unit-norm inputs of `n` features
+/// and 6 outputs (the pose estimator's kind of data): the predictions made
+/// during `n_train` updates, then predictions at 60 test inputs with three
+/// cutoffs and with confidence bounds. Several RFs per output, all
+/// trustworthy by the end.
+fn clustered_run(n: usize, n_train: usize, kernel: Kernel, scaled: bool) -> (Vec<f64>, usize) {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(77);
+    let mut cfg = LwprConfig::new(n, 6).init_d_spherical(2.0);
+    cfg.w_gen = 0.2;
+    cfg.kernel = kernel;
+    if scaled {
+        cfg.norm_in = (0..n).map(|i| 0.5 + (i % 7) as f64 * 0.25).collect();
+        cfg.norm_out = vec![0.5, 1.0, 2.0, 3.0, 0.25, 1.5];
+    }
+    let unit = |rng: &mut Xoshiro256PlusPlus, v: &mut Vec<f64>| {
+        for x in v.iter_mut() {
+            *x = <StandardNormal as Distribution<f64>>::sample(&StandardNormal, rng);
+        }
+        let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        v.iter_mut().for_each(|x| *x /= norm);
+    };
+    let mut centres = vec![vec![0.0; n]; 3];
+    for c in centres.iter_mut() {
+        unit(&mut rng, c);
+    }
+    let mut dirs = vec![vec![0.0; n]; 6];
+    for d in dirs.iter_mut() {
+        unit(&mut rng, d);
+    }
+    let mut noise = vec![0.0; n];
+    let mut draw = |rng: &mut Xoshiro256PlusPlus| {
+        let k = rng.random_range(0..centres.len());
+        unit(rng, &mut noise);
+        let x: Vec<f64> = centres[k]
+            .iter()
+            .zip(&noise)
+            .map(|(c, e)| c + 0.3 * e)
+            .collect();
+        let y: Vec<f64> = dirs
+            .iter()
+            .map(|d| (3.0 * d.iter().zip(&x).map(|(a, b)| a * b).sum::<f64>()).sin())
+            .collect();
+        (x, y)
+    };
+    let mut model = Lwpr::new(cfg).unwrap();
+    let mut out = Vec::new();
+    for _ in 0..n_train {
+        let (x, y) = draw(&mut rng);
+        out.extend(model.update(&x, &y).unwrap());
+    }
+    for _ in 0..60 {
+        let (x, _) = draw(&mut rng);
+        for cutoff in [0.001, 0.3, 0.6] {
+            out.extend(model.predict(&x, cutoff).unwrap());
+        }
+        let p = model.predict_conf(&x, 0.001).unwrap();
+        out.extend(p.y.iter().chain(&p.conf).chain(&p.max_w));
+    }
+    let rfs = (0..6).map(|d| model.num_rfs(d)).sum();
+    (out, rfs)
+}
+
+/// The optimised kernels (fused passes, packed activations, early stops)
+/// change no number: the fingerprints of every update's and prediction's
+/// bits equal those of the straightforward implementation of commit 9ed19d8
+/// (the code before them), on Gaussian and bi-square kernels and with
+/// input/output scales.
+#[test]
+fn results_equal_the_reference_implementation_bit_for_bit() {
+    for (n, n_train, kernel, scaled, expected) in [
+        (
+            144,
+            1200,
+            Kernel::Gaussian,
+            false,
+            0x40eb_6ca8_8712_af00_u64,
+        ),
+        (100, 900, Kernel::BiSquare, false, 0xec43_443a_9e14_1da0),
+        (37, 400, Kernel::Gaussian, true, 0x3e37_0cdd_3120_5930),
+    ] {
+        let (out, rfs) = clustered_run(n, n_train, kernel, scaled);
+        // 3 RFs per output, every test prediction from trustworthy RFs.
+        assert_eq!(rfs, 18, "{n} inputs");
+        let tested = &out[6 * n_train..];
+        assert!(
+            tested.iter().filter(|v| **v == 0.0).count() <= 10,
+            "{n} inputs: untrained"
+        );
+        assert_eq!(
+            fnv(&out),
+            expected,
+            "{n} inputs, {kernel:?}, scaled {scaled}"
+        );
+    }
+}
