@@ -407,7 +407,12 @@ fn fnv(values: &[f64]) -> u64 {
 /// during `n_train` updates, then predictions at 60 test inputs with three
 /// cutoffs and with confidence bounds. Several RFs per output, all
 /// trustworthy by the end.
-fn clustered_run(n: usize, n_train: usize, kernel: Kernel, scaled: bool) -> (Vec<f64>, usize) {
+fn clustered_run(
+    n: usize,
+    n_train: usize,
+    kernel: Kernel,
+    scaled: bool,
+) -> (Vec<f64>, usize, Lwpr) {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(77);
     let mut cfg = LwprConfig::new(n, 6).init_d_spherical(2.0);
     cfg.w_gen = 0.2;
@@ -461,7 +466,7 @@ fn clustered_run(n: usize, n_train: usize, kernel: Kernel, scaled: bool) -> (Vec
         out.extend(p.y.iter().chain(&p.conf).chain(&p.max_w));
     }
     let rfs = (0..6).map(|d| model.num_rfs(d)).sum();
-    (out, rfs)
+    (out, rfs, model)
 }
 
 /// The optimised kernels (fused passes, packed activations, early stops)
@@ -482,7 +487,7 @@ fn results_equal_the_reference_implementation_bit_for_bit() {
         (100, 900, Kernel::BiSquare, false, 0xec43_443a_9e14_1da0),
         (37, 400, Kernel::Gaussian, true, 0x3e37_0cdd_3120_5930),
     ] {
-        let (out, rfs) = clustered_run(n, n_train, kernel, scaled);
+        let (out, rfs, _) = clustered_run(n, n_train, kernel, scaled);
         // 3 RFs per output, every test prediction from trustworthy RFs.
         assert_eq!(rfs, 18, "{n} inputs");
         let tested = &out[6 * n_train..];
@@ -496,4 +501,108 @@ fn results_equal_the_reference_implementation_bit_for_bit() {
             "{n} inputs, {kernel:?}, scaled {scaled}"
         );
     }
+}
+
+/// A random unit vector of `n` components.
+fn unit_vector(rng: &mut Xoshiro256PlusPlus, n: usize) -> Vec<f64> {
+    let mut v: Vec<f64> = (0..n)
+        .map(|_| <StandardNormal as Distribution<f64>>::sample(&StandardNormal, rng))
+        .collect();
+    let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    v.iter_mut().for_each(|x| *x /= norm);
+    v
+}
+
+/// The packed distances of the trustworthy RFs equal each RF's own
+/// distance bit for bit, lane by lane in order of output and field; a group
+/// stops early (infinite distance) only when each of its RFs' activation is
+/// at most the cutoff (which `predict` skips), and it does stop for inputs
+/// far from every RF.
+#[test]
+fn packed_distances_equal_the_fields_own_and_stop_only_below_the_cutoff() {
+    for kernel in [Kernel::Gaussian, Kernel::BiSquare] {
+        let (_, _, mut model) = clustered_run(144, 1200, kernel, false);
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(5);
+        let mut stopped = 0;
+        let mut exact = 0;
+        for t in 0..40 {
+            // Half the inputs near a cluster's RFs (training data), half far
+            // from every RF (random unit vectors).
+            let x = if t % 2 == 0 {
+                let base = model.subs[0].rfs[t % 3].centre().to_vec();
+                let e = unit_vector(&mut rng, 144);
+                base.iter().zip(&e).map(|(c, e)| c + 0.3 * e).collect()
+            } else {
+                unit_vector(&mut rng, 144)
+            };
+            for cutoff in [0.0, 0.001, 0.3, 0.6, 0.9] {
+                let trusted: Vec<(usize, usize)> = (0..6)
+                    .flat_map(|d| {
+                        let rfs = &model.subs[d].rfs;
+                        (0..rfs.len())
+                            .filter(move |&k| rfs[k].trustworthy())
+                            .map(move |k| (d, k))
+                    })
+                    .collect();
+                assert_eq!(trusted.len(), 18);
+                let got: Vec<((usize, usize), f64)> = model
+                    .pack
+                    .distances(&model.subs, kernel, &x, cutoff)
+                    .map(|(l, q)| (*l, *q))
+                    .collect();
+                assert_eq!(got.iter().map(|g| g.0).collect::<Vec<_>>(), trusted);
+                for ((dim, k), q) in got {
+                    let rf = &model.subs[dim].rfs[k];
+                    let own = rf.distance(&x, &mut model.ws);
+                    if q.is_infinite() {
+                        let w = weight(kernel, own);
+                        assert!(w <= cutoff, "stopped at w = {w}, cutoff {cutoff}");
+                        stopped += 1;
+                    } else {
+                        assert_eq!(q.to_bits(), own.to_bits(), "lane ({dim}, {k})");
+                        exact += 1;
+                    }
+                }
+            }
+        }
+        println!("{kernel:?}: {stopped} lanes stopped early, {exact} exact");
+        assert!(
+            stopped >= 100 && exact >= 1000,
+            "{stopped} stopped, {exact} exact"
+        );
+    }
+}
+
+/// Predictions between updates see the updated model (the packed copy is
+/// rebuilt): `predict` (packed, skipping untrustworthy RFs) gives the bits
+/// of `predict_conf` (every RF, one at a time) at every step of a training
+/// run, from the first trustworthy RF on.
+#[test]
+fn packed_predictions_follow_every_update() {
+    let n = 40;
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(8);
+    let mut cfg = LwprConfig::new(n, 3).init_d_spherical(2.0);
+    cfg.w_gen = 0.3;
+    let mut model = Lwpr::new(cfg).unwrap();
+    let centres: Vec<Vec<f64>> = (0..3).map(|_| unit_vector(&mut rng, n)).collect();
+    let mut nonzero = 0;
+    for t in 0..600 {
+        let e = unit_vector(&mut rng, n);
+        let x: Vec<f64> = centres[t % 3]
+            .iter()
+            .zip(&e)
+            .map(|(c, e)| c + 0.3 * e)
+            .collect();
+        let y = [x[0] + x[1], (2.0 * x[2]).sin(), x[3] * x[4]];
+        model.update(&x, &y).unwrap();
+        for cutoff in [0.001, 0.5] {
+            let packed = model.predict(&x, cutoff).unwrap();
+            let one_by_one = model.predict_conf(&x, cutoff).unwrap().y;
+            for (a, b) in packed.iter().zip(&one_by_one) {
+                assert_eq!(a.to_bits(), b.to_bits(), "step {t}, cutoff {cutoff}");
+            }
+            nonzero += packed.iter().filter(|v| **v != 0.0).count();
+        }
+    }
+    assert!(nonzero > 2000, "{nonzero} nonzero predictions");
 }
