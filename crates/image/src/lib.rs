@@ -12,6 +12,7 @@ mod morph;
 mod ops;
 mod simd;
 mod warp;
+mod warp_simd;
 
 pub use crate::color::{
     Hsv, LUMA_WEIGHTS, Rgb, gray_to_rgb, hsv_to_rgb, hue_distance, rgb_to_gray, rgb_to_gray_into,

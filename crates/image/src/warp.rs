@@ -7,7 +7,8 @@
 //! observation `O(M)` of Xu, Gao and Yang 2015 (paper 002): a fixed-size (36x36) patch seen through
 //! an affine pose.
 
-use crate::{Image, ImageError, ImageView, ImageViewMut, Pixel, Result};
+use crate::warp_simd::InsideWarp;
+use crate::{Image, ImageError, ImageView, ImageViewMut, Pixel, Result, SimdLevel};
 
 /// A 2-D affine map `(u, v) -> (a u + b v + tx, c u + d v + ty)`.
 ///
@@ -306,57 +307,6 @@ fn first_outside_corner(m: &Affine2, pw: usize, ph: usize, w: usize, h: usize) -
     unreachable!("called only when a corner is outside")
 }
 
-/// The inside fast path of [`warp_into`]: every sample's cell is in the
-/// frame, so no border checks.
-struct InsideWarp<'a, T> {
-    data: &'a [T],
-    stride: usize,
-    xmax: f32,
-    ymax: f32,
-    m: [f64; 6],
-}
-
-impl<T: Pixel> InsideWarp<'_, T> {
-    /// `CH` is the channel count, or 0 for any (`ch` at run time).
-    #[inline(always)]
-    fn run<const CH: usize>(&self, out: &mut ImageViewMut<'_, f32>, ch: usize) {
-        let ch = if CH == 0 { ch } else { CH };
-        let [a, b, tx, c, d, ty] = self.m;
-        let (data, stride) = (self.data, self.stride);
-        let pw = out.width();
-        for v in 0..out.height() {
-            let row = &mut out.row_mut(v)[..pw * ch];
-            let vf = v as f64;
-            let (bx, by) = (b * vf + tx, d * vf + ty);
-            for (u, px) in row.chunks_exact_mut(ch).enumerate() {
-                let uf = u as f64;
-                let x = ((a * uf + bx) as f32).max(0.0);
-                let y = ((c * uf + by) as f32).max(0.0);
-                // Cells are [x0, x0 + 1] with x0 <= w - 2; on the right edge
-                // fx = 1. Truncation is floor here (x, y >= 0); through i32
-                // (the frame is far smaller than 2^31) it is one
-                // instruction, where usize needs an unsigned sequence.
-                let xi = x.min(self.xmax) as i32;
-                let yi = y.min(self.ymax) as i32;
-                let fx = (x - xi as f32).min(1.0);
-                let fy = (y - yi as f32).min(1.0);
-                let i00 = yi as usize * stride + xi as usize * ch;
-                let r0 = &data[i00..i00 + 2 * ch];
-                let r1 = &data[i00 + stride..i00 + stride + 2 * ch];
-                for k in 0..ch {
-                    let p00 = r0[k].to_f32();
-                    let p01 = r0[k + ch].to_f32();
-                    let p10 = r1[k].to_f32();
-                    let p11 = r1[k + ch].to_f32();
-                    let top = p00 + fx * (p01 - p00);
-                    let bot = p10 + fx * (p11 - p10);
-                    px[k] = top + fy * (bot - top);
-                }
-            }
-        }
-    }
-}
-
 /// Warps `src` through `m` (patch -> image coordinates) into the caller's
 /// patch `out`, which fixes the patch size and must have the same channel
 /// count as `src`. Allocation-free.
@@ -396,8 +346,8 @@ pub fn warp_into<T: Pixel>(
     let [a, b, tx, c, d, ty] = m.m;
     if inside && w >= 2 && h >= 2 {
         // Fast path: every sample is inside (to within rounding), so the
-        // four neighbours are read straight from the buffer. One and three
-        // channels get their own loops (the channel loop unrolled).
+        // four neighbours are read straight from the buffer, a patch row
+        // eight pixels at a time in vector lanes (see `warp_simd.rs`).
         let p = InsideWarp {
             data: src.as_slice(),
             stride: src.stride(),
@@ -405,11 +355,7 @@ pub fn warp_into<T: Pixel>(
             ymax: (h - 2) as f32,
             m: [a, b, tx, c, d, ty],
         };
-        match ch {
-            1 => p.run::<1>(out, 1),
-            3 => p.run::<3>(out, 3),
-            _ => p.run::<0>(out, ch),
-        }
+        p.run(SimdLevel::detect(), out, ch);
         return Ok(());
     }
     if inside {
