@@ -356,12 +356,10 @@ impl Lwpr {
         check_magnitude("LWPR input", x, &self.cfg.norm_in)
     }
 
-    /// `xn = x / norm_in` (a copy when every scale is 1: `x / 1 = x`
-    /// exactly).
+    /// Writes `xn = x / norm_in` unless every scale is 1 (then `x / 1 = x`
+    /// exactly, and the callers read `x` itself: the normalised input).
     fn normalise_input(&mut self, x: &[f64]) {
-        if self.unit_norm_in {
-            self.xn.copy_from_slice(x);
-        } else {
+        if !self.unit_norm_in {
             for (xn, (xi, ni)) in self.xn.iter_mut().zip(x.iter().zip(&self.cfg.norm_in)) {
                 *xn = xi / ni;
             }
@@ -405,6 +403,7 @@ impl Lwpr {
             *var = (*var * nd + d * d) * inv;
         }
         self.normalise_input(x);
+        let xn: &[f64] = if self.unit_norm_in { x } else { &self.xn };
         self.pack.invalidate();
         // The distances to every RF (of every output) before any moves,
         // four fields at a time; an update of one RF changes no other RF.
@@ -414,11 +413,11 @@ impl Lwpr {
             loop {
                 match (rfs.next(), rfs.next(), rfs.next(), rfs.next()) {
                     (Some(a), Some(b), Some(c), Some(d)) => {
-                        self.q.extend(distances4(&self.xn, [a, b, c, d]));
+                        self.q.extend(distances4(xn, [a, b, c, d]));
                     }
                     (a, b, c, _) => {
                         for rf in [a, b, c].into_iter().flatten() {
-                            self.q.push(rf.distance(&self.xn, &mut self.ws));
+                            self.q.push(rf.distance(xn, &mut self.ws));
                         }
                         break;
                     }
@@ -436,7 +435,7 @@ impl Lwpr {
                 &self.init_m,
                 &mut self.subs[dim],
                 &mut self.ws,
-                &self.xn,
+                xn,
                 yn,
                 q,
             );
@@ -466,17 +465,18 @@ impl Lwpr {
             });
         }
         self.normalise_input(x);
+        let xn: &[f64] = if self.unit_norm_in { x } else { &self.xn };
         // Per output, the trustworthy RFs activated above the cutoff, in
         // field order (an untrustworthy RF is skipped before its activation
         // is computed).
         self.sums.fill((0.0, 0.0));
         let kernel = self.cfg.kernel;
         if self.cfg.diag_only {
-            for (&(dim, k), &q) in self.pack.distances(&self.subs, kernel, &self.xn, cutoff) {
+            for (&(dim, k), &q) in self.pack.distances(&self.subs, kernel, xn, cutoff) {
                 let w = weight(kernel, q);
                 if w > cutoff {
                     let rf = &self.subs[dim].rfs[k];
-                    let yk = rf.predict_local(&self.cfg, &self.xn, &mut self.ws, None);
+                    let yk = rf.predict_local(&self.cfg, xn, &mut self.ws, None);
                     let (sum_w, yp) = &mut self.sums[dim];
                     *yp += w * yk;
                     *sum_w += w;
@@ -485,9 +485,9 @@ impl Lwpr {
         } else {
             for (sub, (sum_w, yp)) in self.subs.iter().zip(self.sums.iter_mut()) {
                 for rf in sub.rfs.iter().filter(|rf| rf.trustworthy()) {
-                    let w = rf.activation(&self.cfg, &self.xn, &mut self.ws);
+                    let w = rf.activation(&self.cfg, xn, &mut self.ws);
                     if w > cutoff {
-                        *yp += w * rf.predict_local(&self.cfg, &self.xn, &mut self.ws, None);
+                        *yp += w * rf.predict_local(&self.cfg, xn, &mut self.ws, None);
                         *sum_w += w;
                     }
                 }
@@ -507,6 +507,7 @@ impl Lwpr {
         self.check_input(x)?;
         check_cutoff(cutoff)?;
         self.normalise_input(x);
+        let xn: &[f64] = if self.unit_norm_in { x } else { &self.xn };
         let n_out = self.cfg.n_out;
         let mut out = Prediction {
             y: vec![0.0; n_out],
@@ -520,11 +521,11 @@ impl Lwpr {
             let mut sum_conf = 0.0;
             let mut w_max: f64 = 0.0;
             for rf in &self.subs[dim].rfs {
-                let w = rf.activation(&self.cfg, &self.xn, &mut self.ws);
+                let w = rf.activation(&self.cfg, xn, &mut self.ws);
                 w_max = w_max.max(w);
                 if w > cutoff && rf.trustworthy() {
                     let mut s2 = 0.0;
-                    let yk = rf.predict_local(&self.cfg, &self.xn, &mut self.ws, Some(&mut s2));
+                    let yk = rf.predict_local(&self.cfg, xn, &mut self.ws, Some(&mut s2));
                     let sigma2 = rf.local_variance(w, s2);
                     sum_wyy += w * yk * yk;
                     sum_conf += w * sigma2;
