@@ -21,10 +21,11 @@
 //!   [`crate::OtbScore::mean_overlap_of_frames_with_overlap`], never with
 //!   AUC.
 //!
-//! [`OtbFrameRanges::read`] reads the benchmark's sequence table
-//! (`sequences.csv`, the same folder) for the frames each published number
-//! covers (OTB's David is frames 300-770): a published number is
-//! comparable with ours only when our copy of the sequence has those frames
+//! The frames each published number covers are the benchmark's sequence
+//! table compiled into the crate ([`crate::otb_table`], the one the
+//! sequence loader reads; OTB's David is frames 300-770):
+//! [`OtbFrameRanges::otb100`]. A published number is comparable with ours
+//! only when our copy of the sequence has those frames
 //! ([`OtbFrameRanges::same_frames`]).
 //!
 //! ```
@@ -42,11 +43,10 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
+use crate::otb_table::{OtbEntry, otb100};
+
 /// File name of the published results in the OTB data folder.
 pub const PUBLISHED_OPE_FILE: &str = "published_ope.csv";
-
-/// File name of the benchmark's sequence table in the OTB data folder.
-pub const OTB_SEQUENCES_FILE: &str = "sequences.csv";
 
 /// The header of `published_ope.csv`.
 pub const PUBLISHED_OPE_HEADER: [&str; 4] = [
@@ -56,7 +56,7 @@ pub const PUBLISHED_OPE_HEADER: [&str; 4] = [
     "mean_overlap_of_frames_with_overlap",
 ];
 
-/// What is wrong with a table of published results or OTB sequence facts.
+/// What is wrong with a table of published results.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum PublishedError {
@@ -73,7 +73,7 @@ pub enum PublishedError {
     Header {
         /// The file.
         path: PathBuf,
-        /// What the header should be (or contain).
+        /// What the header should be.
         expected: String,
         /// The first line as found.
         found: String,
@@ -88,7 +88,7 @@ pub enum PublishedError {
         /// What is wrong.
         message: String,
     },
-    /// The same tracker and sequence (or sequence name) twice.
+    /// The same tracker and sequence twice.
     #[error("{}:{line}: {what} repeats line {first}", path.display())]
     Duplicate {
         /// The file.
@@ -108,20 +108,22 @@ pub enum PublishedError {
     },
 }
 
-/// The OTB data folder's two tables, read together: the published results
-/// and the frame ranges they cover.
+/// The published results of the OTB data folder and the frame ranges they
+/// cover.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Published {
     /// The folder read.
     pub dir: PathBuf,
     /// `published_ope.csv`.
     pub results: PublishedOpe,
-    /// `sequences.csv`.
+    /// The benchmark's frame ranges ([`OtbFrameRanges::otb100`] when
+    /// read).
     pub ranges: OtbFrameRanges,
 }
 
 impl Published {
-    /// Reads [`PUBLISHED_OPE_FILE`] and [`OTB_SEQUENCES_FILE`] in `dir`.
+    /// Reads [`PUBLISHED_OPE_FILE`] in `dir`, with the frame ranges of the
+    /// compiled OTB-100 table ([`OtbFrameRanges::otb100`]).
     ///
     /// # Errors
     /// [`PublishedError`] naming the file (and the line) that cannot be
@@ -130,11 +132,11 @@ impl Published {
         Ok(Self {
             dir: dir.to_path_buf(),
             results: PublishedOpe::read(&dir.join(PUBLISHED_OPE_FILE))?,
-            ranges: OtbFrameRanges::read(&dir.join(OTB_SEQUENCES_FILE))?,
+            ranges: OtbFrameRanges::otb100(),
         })
     }
 
-    /// Whether `error` says that a file is not there (rather than
+    /// Whether `error` says that the file is not there (rather than
     /// unreadable or malformed).
     pub fn is_missing(error: &PublishedError) -> bool {
         matches!(error, PublishedError::Read { source, .. }
@@ -186,20 +188,17 @@ fn lines(text: &str) -> impl Iterator<Item = (usize, &str)> {
         .filter(|(_, l)| !l.trim().is_empty())
 }
 
-fn read_text(path: &Path) -> Result<String, PublishedError> {
-    std::fs::read_to_string(path).map_err(|source| PublishedError::Read {
-        path: path.to_path_buf(),
-        source,
-    })
-}
-
 impl PublishedOpe {
     /// Reads `path` (see the module docs for the format).
     ///
     /// # Errors
     /// [`PublishedError`] naming the file, and the line for a bad row.
     pub fn read(path: &Path) -> Result<Self, PublishedError> {
-        Self::parse(&read_text(path)?, path)
+        let text = std::fs::read_to_string(path).map_err(|source| PublishedError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::parse(&text, path)
     }
 
     /// Parses the text of a `published_ope.csv`; `path` names it in errors.
@@ -314,7 +313,9 @@ impl PublishedOpe {
     }
 }
 
-/// The frames the benchmark scores on one sequence.
+/// The frames the benchmark scores on one sequence: `start_frame ..=
+/// end_frame` as its configuration names them (Tiger1's `init_omit` frames
+/// are inside the range).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct OtbFrameRange {
     /// Sequence name as the table spells it.
@@ -326,114 +327,49 @@ pub struct OtbFrameRange {
 }
 
 impl OtbFrameRange {
-    /// Number of frames the benchmark scores.
+    /// Number of frames in `start_frame ..= end_frame` (0 when the end is
+    /// before the start).
     pub fn len(&self) -> usize {
-        self.end_frame + 1 - self.start_frame
+        (self.end_frame + 1).saturating_sub(self.start_frame)
     }
 
-    /// Whether the range is empty (never, for a range read by
-    /// [`OtbFrameRanges`]).
+    /// Whether the range has no frame (never for the OTB-100 table's
+    /// ranges).
     pub fn is_empty(&self) -> bool {
         self.end_frame < self.start_frame
     }
 }
 
-/// The frame ranges of the benchmark's sequence table (`sequences.csv`:
-/// the columns `name`, `start_frame` and `end_frame` are read, in any
-/// position; the other columns are the loader's).
+impl From<&OtbEntry> for OtbFrameRange {
+    fn from(entry: &OtbEntry) -> Self {
+        Self {
+            name: entry.name.clone(),
+            start_frame: entry.start_frame,
+            end_frame: entry.end_frame,
+        }
+    }
+}
+
+/// The benchmark's frame range of each sequence, looked up by name
+/// ([`sequence_key`]).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct OtbFrameRanges {
     ranges: Vec<OtbFrameRange>,
 }
 
 impl OtbFrameRanges {
-    /// Reads `path`.
-    ///
-    /// # Errors
-    /// [`PublishedError`] naming the file, and the line for a bad row.
-    pub fn read(path: &Path) -> Result<Self, PublishedError> {
-        Self::parse(&read_text(path)?, path)
+    /// The ranges of the 100 sequences of the compiled OTB-100 table
+    /// ([`crate::otb_table::otb100`]), in its order.
+    pub fn otb100() -> Self {
+        Self::from_ranges(otb100().iter().map(OtbFrameRange::from))
     }
 
-    /// Parses the text of a `sequences.csv`; `path` names it in errors.
-    ///
-    /// # Errors
-    /// [`PublishedError::Header`] when a needed column is missing;
-    /// [`PublishedError::Row`] for a short row or a frame number that is not
-    /// a positive integer, or an end before the start;
-    /// [`PublishedError::Duplicate`] for a name given twice;
-    /// [`PublishedError::Empty`] for a file with no rows.
-    pub fn parse(text: &str, path: &Path) -> Result<Self, PublishedError> {
-        const NEEDED: [&str; 3] = ["name", "start_frame", "end_frame"];
-        let mut lines = lines(text);
-        let header: Vec<&str> = lines
-            .next()
-            .map(|(_, l)| l.split(',').map(str::trim).collect())
-            .unwrap_or_default();
-        let column = |name: &str| header.iter().position(|h| *h == name);
-        let (Some(name_col), Some(start_col), Some(end_col)) =
-            (column(NEEDED[0]), column(NEEDED[1]), column(NEEDED[2]))
-        else {
-            return Err(PublishedError::Header {
-                path: path.to_path_buf(),
-                expected: format!("columns {}", NEEDED.join(", ")),
-                found: header.join(","),
-            });
-        };
-        let mut ranges: Vec<OtbFrameRange> = Vec::new();
-        let mut first_line: HashMap<String, usize> = HashMap::new();
-        for (line, row) in lines {
-            let bad = |message: String| PublishedError::Row {
-                path: path.to_path_buf(),
-                line,
-                message,
-            };
-            let fields: Vec<&str> = row.split(',').map(str::trim).collect();
-            if fields.len() != header.len() {
-                return Err(bad(format!(
-                    "{} fields, the header has {}",
-                    fields.len(),
-                    header.len()
-                )));
-            }
-            let frame = |col: usize| match fields[col].parse::<usize>() {
-                Ok(v) if v >= 1 => Ok(v),
-                _ => Err(bad(format!(
-                    "{} `{}` is not a frame number (1, 2, ...)",
-                    header[col], fields[col]
-                ))),
-            };
-            let name = fields[name_col];
-            let (start_frame, end_frame) = (frame(start_col)?, frame(end_col)?);
-            if name.is_empty() {
-                return Err(bad("empty sequence name".into()));
-            }
-            if end_frame < start_frame {
-                return Err(bad(format!(
-                    "end_frame {end_frame} before start_frame {start_frame}"
-                )));
-            }
-            if let Some(&first) = first_line.get(&sequence_key(name)) {
-                return Err(PublishedError::Duplicate {
-                    path: path.to_path_buf(),
-                    line,
-                    first,
-                    what: format!("sequence {name}"),
-                });
-            }
-            first_line.insert(sequence_key(name), line);
-            ranges.push(OtbFrameRange {
-                name: name.to_string(),
-                start_frame,
-                end_frame,
-            });
+    /// The ranges given, in their order (where a name comes twice,
+    /// [`OtbFrameRanges::get`] finds the first).
+    pub fn from_ranges(ranges: impl IntoIterator<Item = OtbFrameRange>) -> Self {
+        Self {
+            ranges: ranges.into_iter().collect(),
         }
-        if ranges.is_empty() {
-            return Err(PublishedError::Empty {
-                path: path.to_path_buf(),
-            });
-        }
-        Ok(Self { ranges })
     }
 
     /// The range of `sequence` ([`sequence_key`]).
@@ -442,7 +378,7 @@ impl OtbFrameRanges {
         self.ranges.iter().find(|r| sequence_key(&r.name) == key)
     }
 
-    /// Every range, in the order of the file.
+    /// Every range, in order.
     pub fn ranges(&self) -> &[OtbFrameRange] {
         &self.ranges
     }
@@ -556,49 +492,47 @@ mod tests {
     }
 
     #[test]
-    fn frame_ranges_and_same_frames() {
-        let text = "name,img_dir,start_frame,end_frame\n\
-                    Crossing,Crossing/img,1,120\n\
-                    David,David/img,300,770\n";
-        let r = OtbFrameRanges::parse(text, Path::new("s.csv")).unwrap();
+    fn the_otb100_ranges_and_same_frames() {
+        let r = OtbFrameRanges::otb100();
+        assert_eq!(r.ranges().len(), 100);
         let david = r.get("david").unwrap();
         assert_eq!(
             (david.start_frame, david.end_frame, david.len()),
             (300, 770, 471)
         );
         assert!(!david.is_empty());
+        // the published file's spelling finds the table's `Jogging_1`
+        assert_eq!(r.get("Jogging-1").unwrap().name, "Jogging_1");
+        // the configuration's range, init_omit inside it
+        assert_eq!(r.get("Tiger1").unwrap().len(), 354);
+        // our copies (../shared/data/sequences): Crossing and Couple are the
+        // benchmark's frames, David is the MIL tracker's 462-frame cut
         assert!(r.same_frames("Crossing", 120));
         assert!(!r.same_frames("Crossing", 119));
+        assert!(r.same_frames("Couple", 140));
         assert!(!r.same_frames("David", 462));
-        assert!(!r.same_frames("Couple", 140));
-        let err = |body: &str| {
-            message(OtbFrameRanges::parse(
-                &format!("name,img_dir,start_frame,end_frame\n{body}"),
-                Path::new("s.csv"),
-            ))
+        assert!(r.same_frames("David", 471));
+        assert!(!r.same_frames("Square", 3));
+    }
+
+    #[test]
+    fn ranges_given_by_hand() {
+        let range = |name: &str, start_frame, end_frame| OtbFrameRange {
+            name: name.into(),
+            start_frame,
+            end_frame,
         };
-        assert_eq!(
-            err("David,David/img,300,x\n"),
-            "s.csv:2: end_frame `x` is not a frame number (1, 2, ...)"
-        );
-        assert_eq!(
-            err("David,David/img,300,200\n"),
-            "s.csv:2: end_frame 200 before start_frame 300"
-        );
-        assert_eq!(
-            err("David,300,770\n"),
-            "s.csv:2: 3 fields, the header has 4"
-        );
-        assert_eq!(
-            err("David,a,1,2\ndavid,b,1,2\n"),
-            "s.csv:3: sequence david repeats line 2"
-        );
-        assert_eq!(
-            message(OtbFrameRanges::parse(
-                "name,first,last\nA,1,2\n",
-                Path::new("s.csv")
-            )),
-            "s.csv:1: expected the header `columns name, start_frame, end_frame`, found `name,first,last`"
-        );
+        let r = OtbFrameRanges::from_ranges([
+            range("Square", 1, 3),
+            range("square", 5, 9),
+            range("Odd", 4, 2),
+        ]);
+        assert_eq!(r.get("SQUARE"), Some(&range("Square", 1, 3)));
+        assert!(r.same_frames("square", 3));
+        assert!(!r.same_frames("square", 5));
+        let odd = r.get("Odd").unwrap();
+        assert!(odd.is_empty());
+        assert_eq!(odd.len(), 0);
+        assert!(!r.same_frames("Crossing", 120));
     }
 }

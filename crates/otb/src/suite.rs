@@ -931,7 +931,7 @@ mod tests {
     }
 
     fn published() -> Published {
-        use crate::published::{OtbFrameRanges, PublishedOpe};
+        use crate::published::{OtbFrameRange, OtbFrameRanges, PublishedOpe};
         let results = PublishedOpe::parse(
             "tracker,sequence,success_rate_iou_0.5,mean_overlap_of_frames_with_overlap\n\
              IVT,Crossing,0.25,0.3\nIVT,David,0.8,0.6\nIVT,Couple,0.1,0.1\n\
@@ -939,11 +939,16 @@ mod tests {
             Path::new("published_ope.csv"),
         )
         .unwrap();
-        let ranges = OtbFrameRanges::parse(
-            "name,start_frame,end_frame\nCrossing,1,4\nCouple,1,140\nDavid,300,770\n",
-            Path::new("sequences.csv"),
-        )
-        .unwrap();
+        let range = |name: &str, start_frame, end_frame| OtbFrameRange {
+            name: name.into(),
+            start_frame,
+            end_frame,
+        };
+        let ranges = OtbFrameRanges::from_ranges([
+            range("Crossing", 1, 4),
+            range("Couple", 1, 140),
+            range("David", 300, 770),
+        ]);
         Published {
             dir: PathBuf::from("otb"),
             results,

@@ -5,7 +5,9 @@
 
 use std::path::{Path, PathBuf};
 
-use bayestrack_otb::published::{OtbFrameRanges, Published, PublishedOpe};
+use bayestrack_otb::published::{
+    OtbFrameRange, OtbFrameRanges, PUBLISHED_OPE_FILE, Published, PublishedOpe,
+};
 use bayestrack_otb::suite::{SuiteEvent, SuiteOptions, run_suite, run_suite_with};
 use bayestrack_trackers::tracker_info;
 
@@ -95,11 +97,11 @@ fn published_results_sit_beside_ours_in_the_table_and_the_plot() {
             Path::new("published_ope.csv"),
         )
         .unwrap(),
-        ranges: OtbFrameRanges::parse(
-            "name,start_frame,end_frame\nSquare,1,3\n",
-            Path::new("sequences.csv"),
-        )
-        .unwrap(),
+        ranges: OtbFrameRanges::from_ranges([OtbFrameRange {
+            name: "Square".into(),
+            start_frame: 1,
+            end_frame: 3,
+        }]),
     };
     let options = SuiteOptions {
         trackers: vec![tracker_info("mad").unwrap()],
@@ -167,8 +169,8 @@ fn published_results_sit_beside_ours_in_the_table_and_the_plot() {
 }
 
 /// `../shared/data/otb` as shipped: the 34 trackers on the 100 sequences,
-/// each sequence with its frame range, and which of our three copies have
-/// the benchmark's frames.
+/// each sequence with its frame range in the compiled OTB-100 table, and
+/// which of our three copies have the benchmark's frames.
 #[test]
 fn the_shipped_published_results_read_whole() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/otb");
@@ -201,4 +203,12 @@ fn the_shipped_published_results_read_whole() {
     assert!(Published::is_missing(
         &Published::read(&dir.join("absent")).unwrap_err()
     ));
+    // the published results alone are enough: the ranges are compiled in
+    let alone = std::env::temp_dir().join(format!("bayestrack-published-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&alone);
+    std::fs::create_dir_all(&alone).unwrap();
+    std::fs::copy(dir.join(PUBLISHED_OPE_FILE), alone.join(PUBLISHED_OPE_FILE)).unwrap();
+    let q = Published::read(&alone).unwrap();
+    std::fs::remove_dir_all(&alone).unwrap();
+    assert_eq!((q.results, q.ranges), (p.results, p.ranges));
 }
