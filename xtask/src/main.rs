@@ -88,9 +88,9 @@ enum Command {
         /// Output folder (default: `<project root>/target/otb`).
         #[arg(long)]
         out: Option<PathBuf>,
-        /// Folder with the published OTB results, `published_ope.csv` and
-        /// `sequences.csv` (default: `<project root>/../shared/data/otb`;
-        /// without it ours are printed alone).
+        /// Folder with the published OTB results, `published_ope.csv`
+        /// (default: `<project root>/../shared/data/otb`; without it ours
+        /// are printed alone).
         #[arg(long)]
         otb_data: Option<PathBuf>,
     },
@@ -188,7 +188,7 @@ fn read_published(dir: &Path) -> Result<Option<Published>, String> {
         Err(e) if Published::is_missing(&e) => {
             eprintln!(
                 "note: no published OTB results ({e}); printing ours alone. They are \
-                 {PUBLISHED_OPE_FILE} and sequences.csv in ../shared/data/otb (or --otb-data DIR)."
+                 in ../shared/data/otb/{PUBLISHED_OPE_FILE} (or --otb-data DIR)."
             );
             Ok(None)
         }
