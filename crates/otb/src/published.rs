@@ -327,6 +327,15 @@ pub struct OtbFrameRange {
 }
 
 impl OtbFrameRange {
+    /// The range `start_frame ..= end_frame` of the sequence `name`.
+    pub fn new(name: impl Into<String>, start_frame: usize, end_frame: usize) -> Self {
+        Self {
+            name: name.into(),
+            start_frame,
+            end_frame,
+        }
+    }
+
     /// Number of frames in `start_frame ..= end_frame` (0 when the end is
     /// before the start).
     pub fn len(&self) -> usize {
@@ -342,11 +351,7 @@ impl OtbFrameRange {
 
 impl From<&OtbEntry> for OtbFrameRange {
     fn from(entry: &OtbEntry) -> Self {
-        Self {
-            name: entry.name.clone(),
-            start_frame: entry.start_frame,
-            end_frame: entry.end_frame,
-        }
+        Self::new(entry.name.as_str(), entry.start_frame, entry.end_frame)
     }
 }
 
@@ -517,11 +522,7 @@ mod tests {
 
     #[test]
     fn ranges_given_by_hand() {
-        let range = |name: &str, start_frame, end_frame| OtbFrameRange {
-            name: name.into(),
-            start_frame,
-            end_frame,
-        };
+        let range = OtbFrameRange::new;
         let r = OtbFrameRanges::from_ranges([
             range("Square", 1, 3),
             range("square", 5, 9),

@@ -939,15 +939,10 @@ mod tests {
             Path::new("published_ope.csv"),
         )
         .unwrap();
-        let range = |name: &str, start_frame, end_frame| OtbFrameRange {
-            name: name.into(),
-            start_frame,
-            end_frame,
-        };
         let ranges = OtbFrameRanges::from_ranges([
-            range("Crossing", 1, 4),
-            range("Couple", 1, 140),
-            range("David", 300, 770),
+            OtbFrameRange::new("Crossing", 1, 4),
+            OtbFrameRange::new("Couple", 1, 140),
+            OtbFrameRange::new("David", 300, 770),
         ]);
         Published {
             dir: PathBuf::from("otb"),

@@ -97,11 +97,7 @@ fn published_results_sit_beside_ours_in_the_table_and_the_plot() {
             Path::new("published_ope.csv"),
         )
         .unwrap(),
-        ranges: OtbFrameRanges::from_ranges([OtbFrameRange {
-            name: "Square".into(),
-            start_frame: 1,
-            end_frame: 3,
-        }]),
+        ranges: OtbFrameRanges::from_ranges([OtbFrameRange::new("Square", 1, 3)]),
     };
     let options = SuiteOptions {
         trackers: vec![tracker_info("mad").unwrap()],
