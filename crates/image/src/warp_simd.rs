@@ -18,8 +18,9 @@
 //!    (pixel-major, channels interleaved). One channel: each neighbour by
 //!    itself, converted to `f32` on the way for narrow pixels (`u8`,
 //!    `u16`), copied and converted as a vector for `f32`. Two to four
-//!    channels: each neighbour pixel copied whole, then converted as
-//!    vectors. The arrays pass through `core::hint::black_box`, which keeps
+//!    channels: each neighbour pixel copied whole (three channels as
+//!    overlapping four-element copies, one load and one store each), then
+//!    converted as vectors. The arrays pass through `core::hint::black_box`, which keeps
 //!    them in memory: the compiler then reads them back with vector loads
 //!    instead of assembling the vectors in registers with long chains of
 //!    byte and lane shuffles, which all queue on the one shuffle port
@@ -368,21 +369,44 @@ impl<T: Pixel> InsideWarp<'_, T> {
             // The four neighbours as they lie in the buffer (pixel-major,
             // channels interleaved, as the output): whole-pixel copies, then
             // converted to `f32` as vectors.
-            let mut q = [[T::default(); LANES * MAX_CH]; 4];
-            for j in 0..LANES {
-                let i = (cells.idx[j] as usize).min(last);
-                let (r0, r1) = (&d0[i..i + 2 * CH], &d1[i..i + 2 * CH]);
-                let o = j * CH..(j + 1) * CH;
-                q[0][o.clone()].copy_from_slice(&r0[..CH]);
-                q[1][o.clone()].copy_from_slice(&r0[CH..]);
-                q[2][o.clone()].copy_from_slice(&r1[..CH]);
-                q[3][o].copy_from_slice(&r1[CH..]);
+            let mut q = [[T::default(); LANES * MAX_CH + 1]; 4];
+            // Where pixel 0's channels start in each array.
+            let mut first = [0; 4];
+            if CH == 3 {
+                // Three-element copies take two loads and two stores (for
+                // `u8` and `f32` alike); four-element ones one. Left
+                // neighbours: copy the pixel and one element more, left to
+                // right, each extra element overwritten by the next pixel.
+                // Right neighbours: copy one element more on the left,
+                // right to left, into arrays shifted by one, each extra
+                // element overwritten by the previous pixel.
+                for (j, &idx) in cells.idx.iter().enumerate() {
+                    let i = (idx as usize).min(last);
+                    q[0][j * CH..j * CH + CH + 1].copy_from_slice(&d0[i..i + CH + 1]);
+                    q[2][j * CH..j * CH + CH + 1].copy_from_slice(&d1[i..i + CH + 1]);
+                }
+                for (j, &idx) in cells.idx.iter().enumerate().rev() {
+                    let i = (idx as usize).min(last);
+                    q[1][j * CH..j * CH + CH + 1].copy_from_slice(&d0[i + CH - 1..i + 2 * CH]);
+                    q[3][j * CH..j * CH + CH + 1].copy_from_slice(&d1[i + CH - 1..i + 2 * CH]);
+                }
+                first = [0, 1, 0, 1];
+            } else {
+                for (j, &idx) in cells.idx.iter().enumerate() {
+                    let i = (idx as usize).min(last);
+                    let (r0, r1) = (&d0[i..i + 2 * CH], &d1[i..i + 2 * CH]);
+                    let o = j * CH..(j + 1) * CH;
+                    q[0][o.clone()].copy_from_slice(&r0[..CH]);
+                    q[1][o.clone()].copy_from_slice(&r0[CH..]);
+                    q[2][o.clone()].copy_from_slice(&r1[..CH]);
+                    q[3][o].copy_from_slice(&r1[CH..]);
+                }
             }
             let q = core::hint::black_box(q);
             let mut p = [[0f32; LANES * MAX_CH]; 4];
-            for (pn, qn) in p.iter_mut().zip(&q) {
-                for l in 0..LANES * CH {
-                    pn[l] = qn[l].to_f32();
+            for ((pn, qn), f) in p.iter_mut().zip(&q).zip(first) {
+                for (pv, qv) in pn[..LANES * CH].iter_mut().zip(&qn[f..]) {
+                    *pv = qv.to_f32();
                 }
             }
             let mut fxe = [0f32; LANES * MAX_CH];
