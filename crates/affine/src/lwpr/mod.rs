@@ -266,6 +266,9 @@ pub struct Lwpr {
     pack: ActivationPack,
     /// Per-output sums of a prediction (weights, weighted outputs).
     sums: Vec<(f64, f64)>,
+    /// The activated trustworthy RFs of a prediction: (output, field,
+    /// activation).
+    active: Vec<(usize, usize, f64)>,
     /// Squared distances of an update's input to every RF (diagonal
     /// metrics), by output, then field.
     q: Vec<f64>,
@@ -295,6 +298,7 @@ impl Lwpr {
             pack: ActivationPack::default(),
             sums: vec![(0.0, 0.0); cfg.n_out],
             q: Vec::new(),
+            active: Vec::new(),
             cfg,
         })
     }
@@ -407,40 +411,49 @@ impl Lwpr {
         self.pack.invalidate();
         // The distances to every RF (of every output) before any moves,
         // four fields at a time; an update of one RF changes no other RF.
-        self.q.clear();
-        if self.cfg.diag_only {
-            let mut rfs = self.subs.iter().flat_map(|s| s.rfs.iter());
-            loop {
-                match (rfs.next(), rfs.next(), rfs.next(), rfs.next()) {
-                    (Some(a), Some(b), Some(c), Some(d)) => {
-                        self.q.extend(distances4(xn, [a, b, c, d]));
-                    }
-                    (a, b, c, _) => {
-                        for rf in [a, b, c].into_iter().flatten() {
-                            self.q.push(rf.distance(xn, &mut self.ws));
+        // Compiled for the best instruction set this CPU has (run-time
+        // dispatch); every path does the same operations in the same order.
+        let once = Once;
+        pulp::Arch::new().dispatch(
+            #[inline(always)]
+            || {
+                let _token: Once = once;
+                self.q.clear();
+                if self.cfg.diag_only {
+                    let mut rfs = self.subs.iter().flat_map(|s| s.rfs.iter());
+                    loop {
+                        match (rfs.next(), rfs.next(), rfs.next(), rfs.next()) {
+                            (Some(a), Some(b), Some(c), Some(d)) => {
+                                self.q.extend(distances4(xn, [a, b, c, d]));
+                            }
+                            (a, b, c, _) => {
+                                for rf in [a, b, c].into_iter().flatten() {
+                                    self.q.push(rf.distance(xn, &mut self.ws));
+                                }
+                                break;
+                            }
                         }
-                        break;
                     }
                 }
-            }
-        }
-        let mut first = 0;
-        for dim in 0..self.cfg.n_out {
-            let yn = y[dim] / self.cfg.norm_out[dim];
-            let n_rfs = self.subs[dim].rfs.len();
-            let q = self.q.get(first..first + n_rfs);
-            first += n_rfs;
-            let p = update_one(
-                &self.cfg,
-                &self.init_m,
-                &mut self.subs[dim],
-                &mut self.ws,
-                xn,
-                yn,
-                q,
-            );
-            yp[dim] = p * self.cfg.norm_out[dim];
-        }
+                let mut first = 0;
+                for dim in 0..self.cfg.n_out {
+                    let yn = y[dim] / self.cfg.norm_out[dim];
+                    let n_rfs = self.subs[dim].rfs.len();
+                    let q = self.q.get(first..first + n_rfs);
+                    first += n_rfs;
+                    let p = update_one(
+                        &self.cfg,
+                        &self.init_m,
+                        &mut self.subs[dim],
+                        &mut self.ws,
+                        xn,
+                        yn,
+                        q,
+                    );
+                    yp[dim] = p * self.cfg.norm_out[dim];
+                }
+            },
+        );
         Ok(())
     }
 
@@ -471,28 +484,52 @@ impl Lwpr {
         // is computed).
         self.sums.fill((0.0, 0.0));
         let kernel = self.cfg.kernel;
-        if self.cfg.diag_only {
-            for (&(dim, k), &q) in self.pack.distances(&self.subs, kernel, xn, cutoff) {
-                let w = weight(kernel, q);
-                if w > cutoff {
-                    let rf = &self.subs[dim].rfs[k];
-                    let yk = rf.predict_local(&self.cfg, xn, &mut self.ws, None);
-                    let (sum_w, yp) = &mut self.sums[dim];
-                    *yp += w * yk;
-                    *sum_w += w;
-                }
-            }
-        } else {
-            for (sub, (sum_w, yp)) in self.subs.iter().zip(self.sums.iter_mut()) {
-                for rf in sub.rfs.iter().filter(|rf| rf.trustworthy()) {
-                    let w = rf.activation(&self.cfg, xn, &mut self.ws);
-                    if w > cutoff {
-                        *yp += w * rf.predict_local(&self.cfg, xn, &mut self.ws, None);
-                        *sum_w += w;
+        let once = Once;
+        pulp::Arch::new().dispatch(
+            #[inline(always)]
+            || {
+                let _token: Once = once;
+                if self.cfg.diag_only {
+                    self.active.clear();
+                    for (&(dim, k), &q) in self.pack.distances(&self.subs, kernel, xn, cutoff) {
+                        let w = weight(kernel, q);
+                        if w > cutoff {
+                            self.active.push((dim, k, w));
+                        }
+                    }
+                    // The local predictions two fields at a time, added in
+                    // field order.
+                    for pair in self.active.chunks(2) {
+                        let (da, ka, wa) = pair[0];
+                        let a = &self.subs[da].rfs[ka];
+                        let (ya, b) = match pair.get(1) {
+                            Some(&(db, kb, wb)) => {
+                                let b = &self.subs[db].rfs[kb];
+                                let (ya, yb) =
+                                    ReceptiveField::predict_local_pair(a, b, xn, &mut self.ws);
+                                (ya, Some((db, wb, yb)))
+                            }
+                            None => (a.predict_local(&self.cfg, xn, &mut self.ws, None), None),
+                        };
+                        for (dim, w, yk) in std::iter::once((da, wa, ya)).chain(b) {
+                            let (sum_w, yp) = &mut self.sums[dim];
+                            *yp += w * yk;
+                            *sum_w += w;
+                        }
+                    }
+                } else {
+                    for (sub, (sum_w, yp)) in self.subs.iter().zip(self.sums.iter_mut()) {
+                        for rf in sub.rfs.iter().filter(|rf| rf.trustworthy()) {
+                            let w = rf.activation(&self.cfg, xn, &mut self.ws);
+                            if w > cutoff {
+                                *yp += w * rf.predict_local(&self.cfg, xn, &mut self.ws, None);
+                                *sum_w += w;
+                            }
+                        }
                     }
                 }
-            }
-        }
+            },
+        );
         for ((yd, &(sum_w, mut yp)), norm) in y.iter_mut().zip(&self.sums).zip(&self.cfg.norm_out) {
             if sum_w > 0.0 {
                 yp /= sum_w;
@@ -547,6 +584,13 @@ impl Lwpr {
     }
 }
 
+/// A token that a dispatched closure consumes, making it `FnOnce`: pulp
+/// calls the closure through `FnOnce::call_once`, which for an `FnMut`
+/// closure is a separate shim that the compiler does not inline into the
+/// target-feature function, and the body would then run without the wider
+/// instruction set.
+struct Once;
+
 /// The largest normalised input or target magnitude: the receptive
 /// fields keep sums of squares and cross-products, which overflow (and
 /// turn the model's predictions into NaN for good) for values near 1e154.
@@ -584,6 +628,8 @@ fn check_cutoff(cutoff: f64) -> Result<()> {
 
 /// One update of output `dim` (the reference's `lwpr_aux_update_one`):
 /// returns the prediction made from the trustworthy RFs during the update.
+/// `q`: the RFs' squared distances to `xn`, when computed beforehand.
+#[inline(always)]
 fn update_one(
     cfg: &LwprConfig,
     init_m: &[f64],

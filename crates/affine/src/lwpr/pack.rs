@@ -15,7 +15,7 @@
 use super::{Kernel, SubModel};
 
 /// Fields per group.
-pub(super) const LANES: usize = 4;
+pub(super) const LANES: usize = 8;
 
 /// Inputs between two early-stop checks.
 const BLOCK: usize = 64;
@@ -79,6 +79,7 @@ impl ActivationPack {
     /// `((output, field index), q)` in order of output, then field; `q` is
     /// infinite for fields whose activation is certainly at most `w_stop`
     /// (computed exactly otherwise).
+    #[inline(always)]
     pub(super) fn distances(
         &mut self,
         subs: &[SubModel],
@@ -116,6 +117,7 @@ pub(super) fn stop_distance(kernel: Kernel, w_stop: f64) -> f64 {
 /// The squared distances of one group: lane l sums
 /// `d[i L + l] (x_i - c[i L + l])^2` over i in order. When every used lane
 /// exceeds `q_stop` at a block boundary, all lanes are set to infinity.
+#[inline(always)]
 fn group_distances(x: &[f64], c: &[f64], d: &[f64], used: usize, q_stop: f64, q: &mut [f64]) {
     let mut acc = [0.0f64; LANES];
     for ((xb, cb), db) in x

@@ -24,7 +24,7 @@ const FAER_MIN_DIM: usize = 24;
 // bit for bit.
 
 /// `sum_i a_i b_i` over `a.len()` elements (`b` may be longer).
-#[inline]
+#[inline(always)]
 pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
     let n = a.len();
     let split = n / 4 * 4;
@@ -45,7 +45,7 @@ pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
 }
 
 /// `dot(u, v)` with `v = a - b`, which is written into `out`.
-#[inline]
+#[inline(always)]
 fn dot_diff(u: &[f64], a: &[f64], b: &[f64], out: &mut [f64]) -> f64 {
     let n = u.len();
     let split = n / 4 * 4;
@@ -74,7 +74,7 @@ fn dot_diff(u: &[f64], a: &[f64], b: &[f64], out: &mut [f64]) -> f64 {
 
 /// `dot(u, v)` with the deflated residual `v = a - p t`, which is written
 /// into `out`.
-#[inline]
+#[inline(always)]
 fn dot_axpy(u: &[f64], a: &[f64], p: &[f64], t: f64, out: &mut [f64]) -> f64 {
     let n = u.len();
     let split = n / 4 * 4;
@@ -102,7 +102,7 @@ fn dot_axpy(u: &[f64], a: &[f64], p: &[f64], t: f64, out: &mut [f64]) -> f64 {
 }
 
 /// `dot(u, x)` after deflating `x` in place: `x <- x - p t`.
-#[inline]
+#[inline(always)]
 fn dot_deflate(u: &[f64], x: &mut [f64], p: &[f64], t: f64) -> f64 {
     let n = u.len();
     let split = n / 4 * 4;
@@ -128,10 +128,93 @@ fn dot_deflate(u: &[f64], x: &mut [f64], p: &[f64], t: f64) -> f64 {
     s
 }
 
+/// [`dot_diff`] for two fields at once (`out_k = a - b_k`), the same
+/// operations in the same order per field; the two sums are independent
+/// chains.
+#[inline(always)]
+fn dot_diff2(u: [&[f64]; 2], a: &[f64], b: [&[f64]; 2], out: [&mut [f64]; 2]) -> [f64; 2] {
+    let n = a.len();
+    let split = n / 4 * 4;
+    let [o0, o1] = out;
+    let (mut acc0, mut acc1) = ([0.0f64; 4], [0.0f64; 4]);
+    for (((((ac, u0), u1), b0), b1), (o0, o1)) in a[..split]
+        .chunks_exact(4)
+        .zip(u[0][..split].chunks_exact(4))
+        .zip(u[1][..split].chunks_exact(4))
+        .zip(b[0][..split].chunks_exact(4))
+        .zip(b[1][..split].chunks_exact(4))
+        .zip(
+            o0[..split]
+                .chunks_exact_mut(4)
+                .zip(o1[..split].chunks_exact_mut(4)),
+        )
+    {
+        for l in 0..4 {
+            let v0 = ac[l] - b0[l];
+            o0[l] = v0;
+            acc0[l] += u0[l] * v0;
+            let v1 = ac[l] - b1[l];
+            o1[l] = v1;
+            acc1[l] += u1[l] * v1;
+        }
+    }
+    let mut s0 = (acc0[0] + acc0[1]) + (acc0[2] + acc0[3]);
+    let mut s1 = (acc1[0] + acc1[1]) + (acc1[2] + acc1[3]);
+    for i in split..n {
+        let v0 = a[i] - b[0][i];
+        o0[i] = v0;
+        s0 += u[0][i] * v0;
+        let v1 = a[i] - b[1][i];
+        o1[i] = v1;
+        s1 += u[1][i] * v1;
+    }
+    [s0, s1]
+}
+
+/// [`dot_deflate`] for two fields at once.
+#[inline(always)]
+fn dot_deflate2(u: [&[f64]; 2], x: [&mut [f64]; 2], p: [&[f64]; 2], t: [f64; 2]) -> [f64; 2] {
+    let n = u[0].len();
+    let split = n / 4 * 4;
+    let [x0, x1] = x;
+    let (mut acc0, mut acc1) = ([0.0f64; 4], [0.0f64; 4]);
+    for ((((u0, u1), p0), p1), (x0, x1)) in u[0][..split]
+        .chunks_exact(4)
+        .zip(u[1][..split].chunks_exact(4))
+        .zip(p[0][..split].chunks_exact(4))
+        .zip(p[1][..split].chunks_exact(4))
+        .zip(
+            x0[..split]
+                .chunks_exact_mut(4)
+                .zip(x1[..split].chunks_exact_mut(4)),
+        )
+    {
+        for l in 0..4 {
+            let v0 = x0[l] - p0[l] * t[0];
+            x0[l] = v0;
+            acc0[l] += u0[l] * v0;
+            let v1 = x1[l] - p1[l] * t[1];
+            x1[l] = v1;
+            acc1[l] += u1[l] * v1;
+        }
+    }
+    let mut s0 = (acc0[0] + acc0[1]) + (acc0[2] + acc0[3]);
+    let mut s1 = (acc1[0] + acc1[1]) + (acc1[2] + acc1[3]);
+    for i in split..n {
+        let v0 = x0[i] - p[0][i] * t[0];
+        x0[i] = v0;
+        s0 += u[0][i] * v0;
+        let v1 = x1[i] - p[1][i] * t[1];
+        x1[i] = v1;
+        s1 += u[1][i] * v1;
+    }
+    [s0, s1]
+}
+
 /// `max_i |m_i|` (0 for none; NaNs ignored, as `f64::max` does). The
 /// maximum of a set does not depend on the order of comparison, so four
 /// interleaved running maxima give the sequential fold's value exactly.
-#[inline]
+#[inline(always)]
 fn max_abs(m: &[f64]) -> f64 {
     let mut acc = [0.0f64; 4];
     let split = m.len() / 4 * 4;
@@ -149,7 +232,7 @@ fn max_abs(m: &[f64]) -> f64 {
 
 /// The activation at squared distance `q` (the kernel alone, no
 /// derivatives).
-#[inline]
+#[inline(always)]
 pub(super) fn weight(kernel: Kernel, q: f64) -> f64 {
     match kernel {
         Kernel::Gaussian => (-0.5 * q).exp(),
@@ -162,7 +245,7 @@ pub(super) fn weight(kernel: Kernel, q: f64) -> f64 {
 
 /// The activation at squared distance `q` and its derivatives dw/dq,
 /// d2w/dq2.
-#[inline]
+#[inline(always)]
 pub(super) fn derivs(kernel: Kernel, q: f64) -> (f64, f64, f64) {
     let w = weight(kernel, q);
     match kernel {
@@ -181,6 +264,7 @@ pub(super) fn derivs(kernel: Kernel, q: f64) -> (f64, f64, f64) {
 /// The squared distances of `x` to four diagonal-metric fields, each summed
 /// in index order as [`ReceptiveField::distance`] does (identical results);
 /// the four independent sums run side by side.
+#[inline(always)]
 pub(super) fn distances4(x: &[f64], rfs: [&ReceptiveField; 4]) -> [f64; 4] {
     let n = x.len();
     let [a, b, c, d] = rfs;
@@ -206,7 +290,7 @@ type DirScalars = (f64, f64, f64, f64, f64);
 /// `SXresYres <- lambda_slow SXresYres + w ytarget x`, whose squared norm is
 /// returned (summed in index order), `SSXres <- lambda SSXres + w s x` and
 /// `p = SSXres / SSs2`.
-#[inline]
+#[inline(always)]
 fn fused_sums(sxy: &mut [f64], ssx: &mut [f64], p: &mut [f64], x: &[f64], sc: DirScalars) -> f64 {
     let (lambda_slow, wyt, lj, wsj, inv_ss_s2) = sc;
     let mut unorm = 0.0;
@@ -221,7 +305,7 @@ fn fused_sums(sxy: &mut [f64], ssx: &mut [f64], p: &mut [f64], x: &[f64], sc: Di
 
 /// [`fused_sums`] for two directions in one loop (the same operations, so
 /// the same results; the two norms' sums are independent chains).
-#[inline]
+#[inline(always)]
 fn fused_sums_pair(
     sxy: [&mut [f64]; 2],
     ssx: [&mut [f64]; 2],
@@ -264,6 +348,10 @@ fn fused_sums_pair(
 #[derive(Debug, Clone)]
 pub(super) struct Workspace {
     xc: Vec<f64>,
+    /// The second field's residual and projections in
+    /// [`ReceptiveField::predict_local_pair`].
+    xc_b: Vec<f64>,
+    s_b: Vec<f64>,
     pub(super) xmz: Vec<f64>,
     xres: Vec<f64>,
     s: Vec<f64>,
@@ -284,6 +372,8 @@ impl Workspace {
         let nm = if full { n * n } else { n };
         Self {
             xc: vec![0.0; n],
+            xc_b: vec![0.0; n],
+            s_b: Vec::new(),
             xmz: vec![0.0; n],
             xres: Vec::new(),
             s: Vec::new(),
@@ -303,6 +393,7 @@ impl Workspace {
     fn ensure_reg(&mut self, n: usize, r: usize) {
         if self.s.len() < r {
             self.s.resize(r, 0.0);
+            self.s_b.resize(r, 0.0);
             self.yres.resize(r, 0.0);
             self.ytarget.resize(r, 0.0);
             self.e_cv.resize(r, 0.0);
@@ -463,6 +554,7 @@ impl ReceptiveField {
 
     /// Squared Mahalanobis distance `(x - c)^T D (x - c)` (a full metric
     /// leaves `x - c` in `ws.dx` and `M (x - c)` in `ws.mdx`).
+    #[inline(always)]
     pub(super) fn distance(&self, xn: &[f64], ws: &mut Workspace) -> f64 {
         let n = self.n;
         if !self.full {
@@ -498,6 +590,7 @@ impl ReceptiveField {
 
     /// Activation w and its derivatives dw/dq, d2w/dq2 with respect to the
     /// distance q.
+    #[inline(always)]
     pub(super) fn activation_derivs(
         &self,
         cfg: &LwprConfig,
@@ -525,6 +618,7 @@ impl ReceptiveField {
     /// PLS projections of `x` onto the first `nr` directions, into `s`
     /// (`xu` holds the deflated residuals): `s_0 = u_0^T x`,
     /// `x_j = x_(j-1) - p_(j-1) s_(j-1)`, `s_j = u_j^T x_j`.
+    #[inline(always)]
     fn project(&self, x: &[f64], nr: usize, s: &mut [f64], xu: &mut [f64]) {
         let n = self.n;
         s[0] = dot(&self.u[..n], x);
@@ -540,6 +634,7 @@ impl ReceptiveField {
 
     /// Local prediction at `xn` (relative to the RF's weighted input mean)
     /// and, when asked, `sum_j s_j^2 / SSs2_j` for the confidence.
+    #[inline(always)]
     pub(super) fn predict_local(
         &self,
         _cfg: &LwprConfig,
@@ -557,16 +652,65 @@ impl ReceptiveField {
             let (u, p) = (&self.u[j * n..(j + 1) * n], &self.p[(j - 1) * n..j * n]);
             ws.s[j] = dot_deflate(u, &mut ws.xc, p, ws.s[j - 1]);
         }
-        let mut y = self.beta0;
-        let mut q = 0.0;
-        for j in 0..nr {
-            y += ws.s[j] * self.beta[j];
-            q += ws.s[j] * ws.s[j] / self.ss_s2[j];
-        }
+        let (y, q) = self.local_output(&ws.s[..nr]);
         if let Some(out) = s2 {
             *out = q;
         }
         y
+    }
+
+    /// `beta0 + sum_j beta_j s_j` and `sum_j s_j^2 / SSs2_j` for the
+    /// projections `s`.
+    #[inline(always)]
+    fn local_output(&self, s: &[f64]) -> (f64, f64) {
+        let mut y = self.beta0;
+        let mut q = 0.0;
+        for (j, sj) in s.iter().enumerate() {
+            y += sj * self.beta[j];
+            q += sj * sj / self.ss_s2[j];
+        }
+        (y, q)
+    }
+
+    /// [`ReceptiveField::predict_local`] of two fields (of the same input
+    /// dimension) at once: the same operations per field, the two fields'
+    /// passes over the input fused so that their sums run side by side.
+    #[inline(always)]
+    pub(super) fn predict_local_pair(
+        a: &Self,
+        b: &Self,
+        xn: &[f64],
+        ws: &mut Workspace,
+    ) -> (f64, f64) {
+        let (na, nb) = (a.n_pred(), b.n_pred());
+        let n = a.n;
+        ws.ensure_reg(n, a.n_reg.max(b.n_reg));
+        [ws.s[0], ws.s_b[0]] = dot_diff2(
+            [&a.u[..n], &b.u[..n]],
+            xn,
+            [&a.mean_x, &b.mean_x],
+            [&mut ws.xc, &mut ws.xc_b],
+        );
+        for j in 1..na.max(nb) {
+            let rows = (j - 1) * n..j * n;
+            let next = j * n..(j + 1) * n;
+            if j < na && j < nb {
+                [ws.s[j], ws.s_b[j]] = dot_deflate2(
+                    [&a.u[next.clone()], &b.u[next]],
+                    [&mut ws.xc, &mut ws.xc_b],
+                    [&a.p[rows.clone()], &b.p[rows]],
+                    [ws.s[j - 1], ws.s_b[j - 1]],
+                );
+            } else if j < na {
+                ws.s[j] = dot_deflate(&a.u[next], &mut ws.xc, &a.p[rows], ws.s[j - 1]);
+            } else {
+                ws.s_b[j] = dot_deflate(&b.u[next], &mut ws.xc_b, &b.p[rows], ws.s_b[j - 1]);
+            }
+        }
+        (
+            a.local_output(&ws.s[..na]).0,
+            b.local_output(&ws.s_b[..nb]).0,
+        )
     }
 
     /// Predictive variance of this RF at activation `w` given
@@ -579,6 +723,7 @@ impl ReceptiveField {
     /// One training step for a sample at activation `w`. Returns the
     /// prediction for the sample when the RF is trustworthy.
     #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
     pub(super) fn update(
         &mut self,
         cfg: &LwprConfig,
@@ -606,6 +751,7 @@ impl ReceptiveField {
         out
     }
 
+    #[inline(always)]
     fn update_means(&mut self, x: &[f64], y: f64, w: f64, ws: &mut Workspace) -> f64 {
         let swl = self.sum_w[0] * self.lambda[0];
         let inv = 1.0 / (swl + w);
@@ -629,6 +775,7 @@ impl ReceptiveField {
     /// Incremental PLS on (xmz, y) (the reference's
     /// `lwpr_aux_update_regression`). Returns (prediction, e_cv of the
     /// directions used, residual after the update).
+    #[inline(always)]
     fn update_regression(&mut self, y: f64, w: f64, ws: &mut Workspace) -> (f64, f64, f64) {
         let n = self.n;
         let nr = self.n_reg;
@@ -759,6 +906,7 @@ impl ReceptiveField {
     /// `lwpr_aux_update_distance_metric`), with optional incremental
     /// delta-bar-delta adaptation of the learning rates.
     #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
     fn update_distance_metric(
         &mut self,
         cfg: &LwprConfig,
