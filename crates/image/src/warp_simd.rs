@@ -16,11 +16,10 @@
 //! 2. **Neighbours.** Scalar loads (the workspace forbids `unsafe`, so no
 //!    gather instructions) into small arrays laid out like the output
 //!    (pixel-major, channels interleaved). One channel: each neighbour by
-//!    itself, converted to `f32` on the way for narrow pixels (`u8`,
-//!    `u16`), copied and converted as a vector for `f32`. Two to four
-//!    channels: each neighbour pixel copied whole (three channels as
-//!    overlapping four-element copies, one load and one store each), then
-//!    converted as vectors. The arrays pass through `core::hint::black_box`, which keeps
+//!    itself, converted to `f32` on the way. Two to four channels: each
+//!    neighbour pixel copied whole (three channels as overlapping
+//!    four-element copies, one load and one store each), then converted as
+//!    vectors. The arrays pass through `core::hint::black_box`, which keeps
 //!    them in memory: the compiler then reads them back with vector loads
 //!    instead of assembling the vectors in registers with long chains of
 //!    byte and lane shuffles, which all queue on the one shuffle port
@@ -330,41 +329,21 @@ impl<T: Pixel> InsideWarp<'_, T> {
         let (d0, d1) = (&self.data[..n], &self.data[self.stride..]);
         let last = n - 2 * CH;
         if CH == 1 {
-            // Scalar loads into arrays that `black_box` keeps in memory, so
-            // that the compiler reads them back as vectors rather than
-            // assembling the vectors with long shuffle chains (one shuffle
-            // port). Narrow pixels are converted on the way (one load and
-            // one conversion each); wide ones are copied and converted as
-            // vectors.
-            if core::mem::size_of::<T>() < 4 {
-                let mut q = [[0f32; LANES]; 4];
-                for (j, &idx) in cells.idx.iter().enumerate() {
-                    let i = (idx as usize).min(last);
-                    q[0][j] = d0[i].to_f32();
-                    q[1][j] = d0[i + 1].to_f32();
-                    q[2][j] = d1[i].to_f32();
-                    q[3][j] = d1[i + 1].to_f32();
-                }
-                let q = core::hint::black_box(q);
-                lerp(&q[0], &q[1], &q[2], &q[3], &cells.fx, &cells.fy, dst);
-            } else {
-                let mut q = [[T::default(); LANES]; 4];
-                for (j, &idx) in cells.idx.iter().enumerate() {
-                    let i = (idx as usize).min(last);
-                    q[0][j] = d0[i];
-                    q[1][j] = d0[i + 1];
-                    q[2][j] = d1[i];
-                    q[3][j] = d1[i + 1];
-                }
-                let q = core::hint::black_box(q);
-                let mut p = [[0f32; LANES]; 4];
-                for (pn, qn) in p.iter_mut().zip(&q) {
-                    for j in 0..LANES {
-                        pn[j] = qn[j].to_f32();
-                    }
-                }
-                lerp(&p[0], &p[1], &p[2], &p[3], &cells.fx, &cells.fy, dst);
+            // Scalar loads, converted to `f32` on the way (one load and for
+            // narrow pixels one conversion each), into arrays that
+            // `black_box` keeps in memory, so that the compiler reads them
+            // back as vectors rather than assembling the vectors with long
+            // shuffle chains (all on one shuffle port).
+            let mut q = [[0f32; LANES]; 4];
+            for (j, &idx) in cells.idx.iter().enumerate() {
+                let i = (idx as usize).min(last);
+                q[0][j] = d0[i].to_f32();
+                q[1][j] = d0[i + 1].to_f32();
+                q[2][j] = d1[i].to_f32();
+                q[3][j] = d1[i + 1].to_f32();
             }
+            let q = core::hint::black_box(q);
+            lerp(&q[0], &q[1], &q[2], &q[3], &cells.fx, &cells.fy, dst);
         } else {
             // The four neighbours as they lie in the buffer (pixel-major,
             // channels interleaved, as the output): whole-pixel copies, then
