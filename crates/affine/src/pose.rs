@@ -185,17 +185,30 @@ impl PoseEstimator {
         let cells = ps / pool;
         let inv = 1.0 / (pool * pool) as f64;
         let at = |patch: &[f32], x: usize, y: usize| f64::from(patch[y * ps + x]);
+        // The sum of the features, in index order as it is written (from
+        // -0.0, as `Iterator::sum` starts).
+        let mut total = -0.0;
         match self.cfg.features {
+            FeatureKind::Gray if pool == 1 => {
+                // A cell's sum is one value (added to 0.0, as below).
+                for (f, v) in self.feat.iter_mut().zip(&self.patch) {
+                    *f = (0.0 + f64::from(*v)) * inv;
+                    total += *f;
+                }
+            }
             FeatureKind::Gray => {
-                for cy in 0..cells {
-                    for cx in 0..cells {
+                // Cell sums over the cell's rows, each row left to right.
+                for (cy, band) in self.patch.chunks_exact(pool * ps).enumerate() {
+                    let feat = &mut self.feat[cy * cells..(cy + 1) * cells];
+                    for (cx, f) in feat.iter_mut().enumerate() {
                         let mut s = 0.0;
-                        for y in cy * pool..(cy + 1) * pool {
-                            for x in cx * pool..(cx + 1) * pool {
-                                s += at(&self.patch, x, y);
+                        for row in band.chunks_exact(ps) {
+                            for v in &row[cx * pool..(cx + 1) * pool] {
+                                s += f64::from(*v);
                             }
                         }
-                        self.feat[cy * cells + cx] = s * inv;
+                        *f = s * inv;
+                        total += *f;
                     }
                 }
             }
@@ -218,10 +231,11 @@ impl PoseEstimator {
                         self.feat[n + cy * cells + cx] = gy * inv;
                     }
                 }
+                total = self.feat.iter().sum::<f64>();
             }
         }
         let n = self.feat.len() as f64;
-        let mean = self.feat.iter().sum::<f64>() / n;
+        let mean = total / n;
         let mut norm = 0.0;
         for f in self.feat.iter_mut() {
             *f -= mean;
@@ -233,7 +247,12 @@ impl PoseEstimator {
                 *f /= norm;
             }
         }
-        crate::error::check_finite("patch features", &self.feat)?;
+        // The features are pooled f32 values: all finite exactly when their
+        // mean and norm are (no f64 overflow from f32 magnitudes), and the
+        // scan that names the first bad one runs only then.
+        if !(mean.is_finite() && norm.is_finite()) {
+            crate::error::check_finite("patch features", &self.feat)?;
+        }
         Ok(&self.feat)
     }
 
@@ -409,6 +428,104 @@ mod tests {
             pe.model().num_rfs(4)
         );
         assert!(after < 0.5 * before, "before {before} after {after}");
+    }
+
+    /// The features as first written (straightforward loops, the mean by
+    /// `Iterator::sum`, a final finiteness scan), from a warped patch.
+    fn reference_features(patch: &[f32], ps: usize, pool: usize, kind: FeatureKind) -> Vec<f64> {
+        let cells = ps / pool;
+        let inv = 1.0 / (pool * pool) as f64;
+        let at = |x: usize, y: usize| f64::from(patch[y * ps + x]);
+        let n_in = if kind == FeatureKind::Gray {
+            cells * cells
+        } else {
+            2 * cells * cells
+        };
+        let mut feat = vec![0.0; n_in];
+        for cy in 0..cells {
+            for cx in 0..cells {
+                let (mut s, mut gx, mut gy) = (0.0, 0.0, 0.0);
+                for y in cy * pool..(cy + 1) * pool {
+                    for x in cx * pool..(cx + 1) * pool {
+                        s += at(x, y);
+                        let (x0, x1) = (x.saturating_sub(1), (x + 1).min(ps - 1));
+                        let (y0, y1) = (y.saturating_sub(1), (y + 1).min(ps - 1));
+                        gx += (at(x1, y) - at(x0, y)) / (x1 - x0) as f64;
+                        gy += (at(x, y1) - at(x, y0)) / (y1 - y0) as f64;
+                    }
+                }
+                if kind == FeatureKind::Gray {
+                    feat[cy * cells + cx] = s * inv;
+                } else {
+                    feat[cy * cells + cx] = gx * inv;
+                    feat[cells * cells + cy * cells + cx] = gy * inv;
+                }
+            }
+        }
+        let mean = feat.iter().sum::<f64>() / feat.len() as f64;
+        let mut norm = 0.0;
+        for f in feat.iter_mut() {
+            *f -= mean;
+            norm += *f * *f;
+        }
+        let norm = norm.sqrt();
+        if norm > 1e-12 {
+            feat.iter_mut().for_each(|f| *f /= norm);
+        }
+        assert!(feat.iter().all(|f| f.is_finite()));
+        feat
+    }
+
+    /// The features equal the straightforward computation bit for bit, for
+    /// every pooling factor and both kinds, on random textures and poses
+    /// (and a constant patch, whose norm is 0).
+    #[test]
+    fn features_equal_the_reference_bit_for_bit() {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(11);
+        for (seed, (pool, kind)) in [
+            (1, FeatureKind::Gray),
+            (2, FeatureKind::Gray),
+            (3, FeatureKind::Gray),
+            (4, FeatureKind::Gray),
+            (1, FeatureKind::Gradient),
+            (3, FeatureKind::Gradient),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let frame = texture(120, 120, 20 + seed as u64);
+            let cfg = PoseConfig {
+                pool,
+                features: kind,
+                ..PoseConfig::default()
+            };
+            let mut pe = PoseEstimator::new(cfg, 30.0, 30.0).unwrap();
+            for _ in 0..5 {
+                let mut delta = AlgebraVector::zeros();
+                for (d, s) in delta.iter_mut().zip(pe.config().train_sigma.iter()) {
+                    let z: f64 = StandardNormal.sample(&mut rng);
+                    *d = 3.0 * s * z;
+                }
+                let m = Affine2::translation(60.0, 60.0)
+                    .unwrap()
+                    .compose(&Affine2::exp(&delta).unwrap());
+                let got = pe.features(frame.view(), &m).unwrap().to_vec();
+                let want = reference_features(pe.patch(), 36, pool, kind);
+                assert_eq!(got.len(), want.len());
+                for (i, (a, b)) in got.iter().zip(&want).enumerate() {
+                    assert_eq!(a.to_bits(), b.to_bits(), "pool {pool} {kind:?} feature {i}");
+                }
+            }
+            let flat = Image::from_fn(120, 120, |_, _| 0.25f32).unwrap();
+            let m = Affine2::translation(60.0, 60.0).unwrap();
+            let got = pe.features(flat.view(), &m).unwrap().to_vec();
+            let want = reference_features(pe.patch(), 36, pool, kind);
+            assert!(
+                got.iter()
+                    .zip(&want)
+                    .all(|(a, b)| a.to_bits() == b.to_bits())
+            );
+        }
     }
 
     #[test]
