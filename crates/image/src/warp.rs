@@ -311,6 +311,14 @@ fn first_outside_corner(m: &Affine2, pw: usize, ph: usize, w: usize, h: usize) -
 /// patch `out`, which fixes the patch size and must have the same channel
 /// count as `src`. Allocation-free.
 ///
+/// When the whole patch lies inside the frame (the tracker's case), one to
+/// four channels are computed eight patch pixels at a time in SIMD lanes,
+/// with run-time CPU dispatch (SSE2, AVX2, AVX-512); the values are bit for
+/// bit those of bilinear interpolation pixel by pixel in the order
+/// `top = p00 + fx (p01 - p00)`, `bot = p10 + fx (p11 - p10)`,
+/// `top + fy (bot - top)`, with the map applied in `f64` and the sample
+/// point rounded to `f32`.
+///
 /// ```
 /// use bayestrack_image::{Affine2, Border, Image, ImageViewMut, warp_into};
 /// let frame = Image::from_fn(100, 80, |x, y| (x + y) as f32).unwrap();
