@@ -535,7 +535,13 @@ fn packed_distances_equal_the_fields_own_and_stop_only_below_the_cutoff() {
             } else {
                 unit_vector(&mut rng, 144)
             };
-            for cutoff in [0.0, 0.001, 0.3, 0.6, 0.9] {
+            // A cutoff just below the largest activation: no group may stop.
+            let w_max = (0..6)
+                .flat_map(|d| model.subs[d].rfs.iter())
+                .map(|rf| weight(kernel, rf.distance(&x, &mut Workspace::new(144, false))))
+                .fold(0.0, f64::max);
+            let edge = (w_max * (1.0 - 1e-9)).min(0.999);
+            for cutoff in [0.0, 0.001, 0.3, 0.6, 0.9, edge] {
                 let trusted: Vec<(usize, usize)> = (0..6)
                     .flat_map(|d| {
                         let rfs = &model.subs[d].rfs;
@@ -605,4 +611,57 @@ fn packed_predictions_follow_every_update() {
         }
     }
     assert!(nonzero > 2000, "{nonzero} nonzero predictions");
+}
+
+/// A model of 12 inputs whose outputs each mix four directions (so RFs add
+/// PLS directions beyond two) with a large initial metric learning rate
+/// (so metric steps get clipped and their rates halved): every number it
+/// gives during training and at 40 test inputs, and the directions per RF.
+fn mixed_run(alpha: f64, n_train: usize) -> (Vec<f64>, Vec<usize>) {
+    let n = 12;
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(31);
+    let mut cfg = LwprConfig::new(n, 6).init_d_spherical(3.0);
+    cfg.w_gen = 0.2;
+    cfg.init_alpha = alpha;
+    let centres: Vec<Vec<f64>> = (0..3).map(|_| unit_vector(&mut rng, n)).collect();
+    let dirs: Vec<Vec<f64>> = (0..9).map(|_| unit_vector(&mut rng, n)).collect();
+    let mut model = Lwpr::new(cfg).unwrap();
+    let mut out = Vec::new();
+    for t in 0..n_train + 40 {
+        let e = unit_vector(&mut rng, n);
+        let x: Vec<f64> = centres[t % 3]
+            .iter()
+            .zip(&e)
+            .map(|(c, e)| c + 0.4 * e)
+            .collect();
+        let y: Vec<f64> = (0..6)
+            .map(|d| {
+                (d..d + 4)
+                    .map(|k| (2.0 * dirs[k].iter().zip(&x).map(|(a, b)| a * b).sum::<f64>()).sin())
+                    .sum()
+            })
+            .collect();
+        if t < n_train {
+            out.extend(model.update(&x, &y).unwrap());
+        } else {
+            out.extend(model.predict(&x, 0.001).unwrap());
+            let p = model.predict_conf(&x, 0.3).unwrap();
+            out.extend(p.y.iter().chain(&p.conf).chain(&p.max_w));
+        }
+    }
+    let projections = (0..6).flat_map(|d| model.projections(d)).collect();
+    (out, projections)
+}
+
+/// As `results_equal_the_reference_implementation_bit_for_bit` (values of
+/// commit 9ed19d8), on models whose RFs grow a third PLS direction (odd
+/// direction counts, inner loadings in use; learning rate 1e3) and whose
+/// metric steps get clipped, halving their rates (learning rate 1e5).
+#[test]
+fn results_with_three_directions_equal_the_reference_bit_for_bit() {
+    let (out, proj) = mixed_run(1e3, 2000);
+    assert!(proj.contains(&3) && proj.contains(&2), "{proj:?}");
+    assert_eq!(fnv(&out), 0x5c1e_1ad2_8ee4_4195, "{} values", out.len());
+    let (out, _) = mixed_run(1e5, 600);
+    assert_eq!(fnv(&out), 0x3690_8cea_f493_45bf, "{} values", out.len());
 }
