@@ -226,7 +226,8 @@ fn check_region<T: Pixel>(
 /// Exhaustive MAD search: the window inside `region` (template fully
 /// inside) with the smallest MAD; ties go to the first in raster order.
 ///
-/// Convenience over [`MadSearch`], which keeps its buffers between calls.
+/// Convenience over [`MadSearch`]: a per-thread one keeps its buffers
+/// between calls.
 ///
 /// # Errors
 /// [`AppearanceError::WindowOutside`] if `region` leaves the frame;
@@ -236,7 +237,14 @@ pub fn mad_search<T: MadPixel>(
     template: ImageView<'_, T>,
     region: Rect,
 ) -> Result<MadMatch> {
-    MadSearch::new().search(frame, template, region)
+    THREAD_SEARCH.with(|cell| cell.borrow_mut().search(frame, template, region))
+}
+
+thread_local! {
+    /// A per-thread search for [`mad_search`], so that it allocates nothing
+    /// once warm (its bound buffers are a few hundred kilobytes for a
+    /// 320x240 region, and fresh ones cost page faults on every call).
+    static THREAD_SEARCH: RefCell<MadSearch> = RefCell::new(MadSearch::new());
 }
 
 /// Most row blocks of the template in [`MadSearch`]'s lower bound.
