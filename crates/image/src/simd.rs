@@ -62,6 +62,15 @@ impl SimdLevel {
         }
     }
 
+    /// This level if this CPU runs it, else the best one it runs.
+    pub fn or_best(self) -> Self {
+        if self.is_available() {
+            self
+        } else {
+            Self::detect()
+        }
+    }
+
     /// Bytes per vector chunk of a template row.
     fn width(self, row_len: usize) -> usize {
         match self {
@@ -104,11 +113,7 @@ impl SadTemplate {
     /// An empty template that will run at `level`, or at the best level
     /// this CPU has if `level` is not available here.
     pub fn new(level: SimdLevel) -> Self {
-        let level = if level.is_available() {
-            level
-        } else {
-            SimdLevel::detect()
-        };
+        let level = level.or_best();
         Self {
             level,
             row_len: 0,
@@ -252,11 +257,7 @@ pub fn sad_u8(a: &[u8], b: &[u8]) -> u32 {
 pub fn sad_u8_at(level: SimdLevel, a: &[u8], b: &[u8]) -> u32 {
     let n = a.len().min(b.len());
     let (a, b) = (&a[..n], &b[..n]);
-    let level = if level.is_available() {
-        level
-    } else {
-        SimdLevel::detect()
-    };
+    let level = level.or_best();
     match level {
         #[cfg(target_arch = "x86_64")]
         SimdLevel::Sse2 | SimdLevel::Avx2 | SimdLevel::Avx512 => x86::sad_slices(level, a, b),

@@ -161,11 +161,7 @@ impl<T: Pixel> InsideWarp<'_, T> {
     }
 
     fn dispatch<const CH: usize>(&self, level: SimdLevel, out: &mut ImageViewMut<'_, f32>) {
-        let level = if level.is_available() {
-            level
-        } else {
-            SimdLevel::detect()
-        };
+        let level = level.or_best();
         match level {
             #[cfg(target_arch = "x86_64")]
             SimdLevel::Avx512 => {
