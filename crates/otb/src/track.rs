@@ -18,7 +18,7 @@ use bayestrack_image::{BBox, Image, ImageView};
 use bayestrack_trackers::{Tracker, TrackerError};
 
 use crate::sequence::OtbError;
-use crate::source::{Frame, FrameSource};
+use crate::source::FrameSource;
 
 /// What to do with a frame that does not decode.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -70,11 +70,11 @@ pub enum TrackError {
 pub struct FrameBox<'a> {
     /// 0-based index of the frame in the run.
     pub index: usize,
-    /// 1-based position of the frame in its source ([`Frame::number`]:
+    /// 1-based position of the frame in its source ([`Frame::number`](crate::source::Frame::number):
     /// the ground-truth row it belongs to); `index + 1` for
     /// [`track_frames`].
     pub number: usize,
-    /// The frame's name ([`Frame::name`], or its file for
+    /// The frame's name ([`Frame::name`](crate::source::Frame::name), or its file for
     /// [`track_frames`]).
     pub name: &'a str,
     /// The box reported for the frame (the initial box on frame 1, the
@@ -145,87 +145,23 @@ where
     P: Fn(usize) -> PathBuf,
     S: FnMut(FrameBox<'_>) -> Result<(), TrackError>,
 {
-    if len == 0 {
-        return Err(TrackError::NoFrames);
-    }
-    let name = tracker.name();
-    let refused = |index: usize| {
-        let path = path(index);
-        move |source| TrackError::Tracker {
-            tracker: name,
-            frame: index + 1,
-            path,
-            source: Box::new(source),
-        }
-    };
-    let mut run = TrackRun {
-        boxes: Vec::with_capacity(len),
-        tracker_seconds: 0.0,
-        skipped: Vec::new(),
-        lost_frames: 0,
-        particles: 0,
+    let frames = (0..len).map(|i| {
+        frame(i).map(|image| Input {
+            number: i + 1,
+            name: path(i).display().to_string(),
+            image,
+        })
+    });
+    run_frames(
+        tracker,
+        frames,
+        |index, _| path(index),
+        |index, _| path(index).display().to_string(),
+        false,
         init,
-        numbers: Vec::with_capacity(len),
-        converted: Vec::new(),
-    };
-
-    let first = frame(0)?;
-    let init = clip_initial_box(init, first.width(), first.height()).unwrap_or(init);
-    run.init = init;
-    let start = Instant::now();
-    tracker.init(first.view(), init).map_err(refused(0))?;
-    run.tracker_seconds += start.elapsed().as_secs_f64();
-    run.boxes.push(init);
-    run.numbers.push(1);
-    let name = path(0).display().to_string();
-    sink(FrameBox {
-        index: 0,
-        number: 1,
-        name: &name,
-        bbox: init,
-        frame: Some(first.view()),
-        lost: false,
-    })?;
-    drop(first);
-
-    let mut last = init;
-    for index in 1..len {
-        let image = match frame(index) {
-            Ok(image) => image,
-            Err(e) if on_bad_frame == OnBadFrame::Skip => {
-                run.skipped.push((index, e.to_string()));
-                run.boxes.push(last);
-                run.numbers.push(index + 1);
-                sink(FrameBox {
-                    index,
-                    number: index + 1,
-                    name: &path(index).display().to_string(),
-                    bbox: last,
-                    frame: None,
-                    lost: false,
-                })?;
-                continue;
-            }
-            Err(e) => return Err(e.into()),
-        };
-        let start = Instant::now();
-        let estimate = tracker.step(image.view()).map_err(refused(index))?;
-        run.tracker_seconds += start.elapsed().as_secs_f64();
-        last = estimate.bbox;
-        run.lost_frames += usize::from(estimate.lost);
-        run.particles += estimate.particles;
-        run.boxes.push(last);
-        run.numbers.push(index + 1);
-        sink(FrameBox {
-            index,
-            number: index + 1,
-            name: &path(index).display().to_string(),
-            bbox: last,
-            frame: Some(image.view()),
-            lost: estimate.lost,
-        })?;
-    }
-    Ok(run)
+        on_bad_frame,
+        &mut sink,
+    )
 }
 
 /// Clips an initial box (OTB convention: 1-based top-left corner) to a
@@ -287,10 +223,57 @@ pub fn track_source<S>(
 where
     S: FnMut(FrameBox<'_>) -> Result<(), TrackError>,
 {
-    let name = tracker.name();
     let describe = source.describe();
-    let refused = |frame: &Frame, index: usize| {
-        let path = PathBuf::from(format!("{describe}: {}", frame.name));
+    let frames = source.map(|r| {
+        r.map(|f| Input {
+            number: f.number,
+            name: f.name,
+            image: Cow::Owned(f.image),
+        })
+    });
+    run_frames(
+        tracker,
+        frames,
+        |_, name| PathBuf::from(format!("{describe}: {name}")),
+        |_, number| format!("frame {number}"),
+        true,
+        init,
+        on_bad_frame,
+        &mut sink,
+    )
+}
+
+/// A frame for [`run_frames`]: its 1-based position in its source, its
+/// name and its pixels.
+struct Input<'f> {
+    number: usize,
+    name: String,
+    image: Cow<'f, Image<u8>>,
+}
+
+/// The loop behind [`track_frames`] and [`track_source`]: `error_path(index,
+/// name)` names a frame the tracker refused, `skipped_name(index, number)` a
+/// frame that did not decode (the stream says which position failed only
+/// through the next good frame: the failed one is the one after the last);
+/// with `convert_channels` every frame is brought to the first frame's
+/// channel count ([`TrackRun::converted`]).
+#[allow(clippy::too_many_arguments)]
+fn run_frames<'f, S>(
+    tracker: &mut dyn Tracker,
+    mut frames: impl Iterator<Item = Result<Input<'f>, OtbError>>,
+    error_path: impl Fn(usize, &str) -> PathBuf,
+    skipped_name: impl Fn(usize, usize) -> String,
+    convert_channels: bool,
+    init: BBox,
+    on_bad_frame: OnBadFrame,
+    sink: &mut S,
+) -> Result<TrackRun, TrackError>
+where
+    S: FnMut(FrameBox<'_>) -> Result<(), TrackError>,
+{
+    let name = tracker.name();
+    let refused = |frame: &Input<'_>, index: usize| {
+        let path = error_path(index, &frame.name);
         move |source| TrackError::Tracker {
             tracker: name,
             frame: index + 1,
@@ -298,17 +281,18 @@ where
             source: Box::new(source),
         }
     };
-    let first = source.next().ok_or(TrackError::NoFrames)??;
+    let capacity = frames.size_hint().0;
+    let first = frames.next().ok_or(TrackError::NoFrames)??;
     let channels = first.image.channels();
     let init = clip_initial_box(init, first.image.width(), first.image.height()).unwrap_or(init);
     let mut run = TrackRun {
-        boxes: Vec::new(),
+        boxes: Vec::with_capacity(capacity + 1),
         tracker_seconds: 0.0,
         skipped: Vec::new(),
         lost_frames: 0,
         particles: 0,
         init,
-        numbers: Vec::new(),
+        numbers: Vec::with_capacity(capacity + 1),
         converted: Vec::new(),
     };
     let start = Instant::now();
@@ -330,24 +314,19 @@ where
     drop(first);
 
     let mut last = init;
-    let mut index = 0;
-    for next in &mut *source {
-        index += 1;
+    for (index, next) in (1..).zip(frames) {
         let mut frame = match next {
             Ok(frame) => frame,
             Err(e) if on_bad_frame == OnBadFrame::Skip => {
-                // The stream says which position failed only through the
-                // next good frame; the failed one is the one after the last.
                 let number = previous + 1;
                 previous = number;
                 run.skipped.push((index, e.to_string()));
                 run.boxes.push(last);
                 run.numbers.push(number);
-                let name = format!("frame {number}");
                 sink(FrameBox {
                     index,
                     number,
-                    name: &name,
+                    name: &skipped_name(index, number),
                     bbox: last,
                     frame: None,
                     lost: false,
@@ -357,8 +336,8 @@ where
             Err(e) => return Err(e.into()),
         };
         previous = frame.number;
-        if let Some(converted) = match_channels(&frame.image, channels) {
-            frame.image = converted;
+        if convert_channels && let Some(converted) = match_channels(&frame.image, channels) {
+            frame.image = Cow::Owned(converted);
             run.converted.push(frame.number);
         }
         let start = Instant::now();
