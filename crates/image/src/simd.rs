@@ -726,7 +726,7 @@ mod x86 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::{Image, Rect};
 
@@ -760,7 +760,8 @@ mod tests {
             .sum()
     }
 
-    fn levels() -> Vec<SimdLevel> {
+    /// Every level this CPU runs (the SAD and warp tests force each).
+    pub(crate) fn levels() -> Vec<SimdLevel> {
         let l: Vec<_> = SimdLevel::ALL
             .into_iter()
             .filter(|l| l.is_available())

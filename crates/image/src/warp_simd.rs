@@ -514,16 +514,6 @@ mod tests {
         }
     }
 
-    fn levels() -> Vec<SimdLevel> {
-        let l: Vec<_> = SimdLevel::ALL
-            .into_iter()
-            .filter(|l| l.is_available())
-            .collect();
-        #[cfg(target_arch = "x86_64")]
-        assert!(l.contains(&SimdLevel::Sse2));
-        l
-    }
-
     /// A map sending the `pw x ph` patch inside `[0, w-1] x [0, h-1]`:
     /// rotation, anisotropic scale and shear, then a translation that puts
     /// the footprint anywhere in the frame, or flush against an edge (exact,
@@ -606,7 +596,7 @@ mod tests {
                 &mut ImageViewMut::from_slice(&mut want, pw, ph, ch, pw * ch).unwrap(),
                 ch,
             );
-            for level in levels() {
+            for level in crate::simd::tests::levels() {
                 // A strided output: padding between rows stays untouched.
                 let stride = pw * ch + 3;
                 let mut got = vec![-7f32; stride * ph];
@@ -689,7 +679,7 @@ mod tests {
             &mut ImageViewMut::from_slice(&mut want, 9, 2, 1, 9).unwrap(),
             1,
         );
-        for level in levels() {
+        for level in crate::simd::tests::levels() {
             let mut got = vec![0f32; 9 * 2];
             iw.run(
                 level,
