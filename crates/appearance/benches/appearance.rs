@@ -9,15 +9,8 @@ use bayestrack_appearance::{
 use bayestrack_image::{Image, Rect, rgb_to_gray};
 use criterion::{Criterion, criterion_group, criterion_main};
 
-fn noise(w: usize, h: usize, ch: usize, seed: u32) -> Image<u8> {
-    let mut img = Image::new(w, h, ch, 0u8).unwrap();
-    let mut s = seed;
-    for v in img.as_mut_slice() {
-        s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-        *v = (s >> 24) as u8;
-    }
-    img
-}
+mod common;
+use common::noise;
 
 /// Two consecutive frames of a real sequence (`../shared/data/sequences`)
 /// and the 30x20 template cut from the first, at the target (a tracker's

@@ -19,15 +19,8 @@ use bayestrack_appearance::{
 use bayestrack_image::{Image, Rect, rgb_to_gray};
 use criterion::{Criterion, Throughput};
 
-fn noise(w: usize, h: usize, ch: usize, seed: u32) -> Image<u8> {
-    let mut img = Image::new(w, h, ch, 0u8).unwrap();
-    let mut s = seed;
-    for v in img.as_mut_slice() {
-        s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-        *v = (s >> 24) as u8;
-    }
-    img
-}
+mod common;
+use common::noise;
 
 /// A smooth 320x240 RGB frame: slow colour ramps with a little noise, so
 /// neighbouring pixels often share a bin (as in real video).
