@@ -176,7 +176,7 @@ impl RgbHistogram {
                 let row_bins = &mut self.row_bins;
                 row_bins.resize(3 * window.width, 0);
                 for row in rows {
-                    crate::skin::vectorised(BinRow {
+                    crate::dispatch::vectorised(BinRow {
                         row,
                         out: &mut row_bins[..],
                         bins,
@@ -240,7 +240,7 @@ impl RgbHistogram {
         // then the sum is exact in any order and the result is
         // `sqrt(S) / (na nb)` rounded twice.
         let (na, nb) = (f64::from(self.pixels), f64::from(other.pixels));
-        let s = crate::skin::vectorised(CountSum {
+        let s = crate::dispatch::vectorised(CountSum {
             a: (&self.counts, self.pixels),
             b: (&other.counts, other.pixels),
             kind: HistogramDistance::L2,
@@ -257,7 +257,7 @@ impl RgbHistogram {
         self.check_pair(other, "bhattacharyya_distance")?;
         // `a b` is exact in f64 for counts below 2^26.5; one square root per
         // bin, one division at the end.
-        let s = crate::skin::vectorised(CountSum {
+        let s = crate::dispatch::vectorised(CountSum {
             a: (&self.counts, self.pixels),
             b: (&other.counts, other.pixels),
             kind: HistogramDistance::Bhattacharyya,
@@ -336,7 +336,7 @@ struct BinRow<'a> {
     bins: u16,
 }
 
-impl crate::skin::Kernel for BinRow<'_> {
+impl crate::dispatch::Kernel for BinRow<'_> {
     type Output = ();
     #[inline(always)]
     fn run(self) {
@@ -355,7 +355,7 @@ struct CountSum<'a> {
     kind: HistogramDistance,
 }
 
-impl crate::skin::Kernel for CountSum<'_> {
+impl crate::dispatch::Kernel for CountSum<'_> {
     type Output = f64;
     #[inline(always)]
     fn run(self) -> f64 {

@@ -46,7 +46,7 @@ pub fn interframe_difference_into<T: Pixel>(
             for y in 0..current.height() {
                 let (a, b) = (current.row(y), previous.row(y));
                 let d = out.row_mut(y);
-                crate::skin::vectorised(AbsDiffRow {
+                crate::dispatch::vectorised(AbsDiffRow {
                     a,
                     b,
                     out: d,
@@ -58,7 +58,7 @@ pub fn interframe_difference_into<T: Pixel>(
             let w = LUMA_WEIGHTS.map(|w| w * scale);
             for y in 0..current.height() {
                 let (a, b) = (current.row(y), previous.row(y));
-                crate::skin::vectorised(LumaDifferenceRow {
+                crate::dispatch::vectorised(LumaDifferenceRow {
                     w,
                     a,
                     b,
@@ -86,7 +86,7 @@ struct AbsDiffRow<'a, T> {
     scale: f32,
 }
 
-impl<T: Pixel> crate::skin::Kernel for AbsDiffRow<'_, T> {
+impl<T: Pixel> crate::dispatch::Kernel for AbsDiffRow<'_, T> {
     type Output = ();
     #[inline(always)]
     fn run(self) {
@@ -105,7 +105,7 @@ struct LumaDifferenceRow<'a, T> {
     out: &'a mut [f32],
 }
 
-impl<T: Pixel> crate::skin::Kernel for LumaDifferenceRow<'_, T> {
+impl<T: Pixel> crate::dispatch::Kernel for LumaDifferenceRow<'_, T> {
     type Output = ();
     #[inline(always)]
     fn run(self) {

@@ -1,6 +1,7 @@
 #![doc = include_str!("../README.md")]
 
 mod cue;
+mod dispatch;
 mod error;
 mod histogram;
 mod ifd;

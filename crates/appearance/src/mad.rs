@@ -265,7 +265,7 @@ struct AddBlockBound<'a> {
     first: bool,
 }
 
-impl crate::skin::Kernel for AddBlockBound<'_> {
+impl crate::dispatch::Kernel for AddBlockBound<'_> {
     type Output = ();
     #[inline(always)]
     fn run(self) {
@@ -285,7 +285,7 @@ impl crate::skin::Kernel for AddBlockBound<'_> {
 /// The smallest element (`u32::MAX` for none).
 struct MinOf<'a>(&'a [u32]);
 
-impl crate::skin::Kernel for MinOf<'_> {
+impl crate::dispatch::Kernel for MinOf<'_> {
     type Output = u32;
     #[inline(always)]
     fn run(self) -> u32 {
@@ -474,7 +474,7 @@ impl MadSearch {
             for k in 0..nb {
                 let top = &self.cum[(j + edges[k]) * npx..][..npx];
                 let bottom = &self.cum[(j + edges[k + 1]) * npx..][..npx];
-                crate::skin::vectorised(AddBlockBound {
+                crate::dispatch::vectorised(AddBlockBound {
                     bounds,
                     top,
                     bottom,
@@ -482,7 +482,7 @@ impl MadSearch {
                     first: k == 0,
                 });
             }
-            self.row_mins[j] = crate::skin::vectorised(MinOf(bounds));
+            self.row_mins[j] = crate::dispatch::vectorised(MinOf(bounds));
         }
         let data = frame.as_slice();
         let stride = frame.stride();
