@@ -17,7 +17,8 @@ fn observe(x: &SVector<f64, 4>) -> Vector2<f64> {
     Vector2::new(x[0].hypot(x[1]), x[1].atan2(x[0]))
 }
 
-impl Model<4, 2> for RangeBearing {
+impl Model<4> for RangeBearing {
+    type Observation = SVector<f64, 2>;
     fn sample_transition<R: Rng + ?Sized>(
         &self,
         _k: usize,

@@ -17,8 +17,8 @@ use bayestrack_kalman::{
     Measurement, MeasurementJacobian, Ukf,
 };
 use bayestrack_particle::{
-    Bootstrap, Degenerate, KalmanParticle, KalmanProposal, LocalFilter, ParticleError,
-    ParticleFilter, ParticleSet, ResamplePolicy, Resampling, StateSpaceModel, stream_rng,
+    Bootstrap, Degenerate, KalmanParticle, KalmanProposal, LocalFilter, Model, ParticleError,
+    ParticleFilter, ParticleSet, ResamplePolicy, Resampling, TransitionDensity, stream_rng,
 };
 use nalgebra::{Matrix1, SMatrix, SVector, Vector1};
 use rand::Rng;
@@ -369,17 +369,34 @@ impl TrueModel {
 /// `ln Gamma(3) = ln 2`.
 const LN_GAMMA_SHAPE: f64 = std::f64::consts::LN_2;
 
-impl StateSpaceModel<1, 1> for TrueModel {
+impl Model<1> for TrueModel {
+    type Observation = SVector<f64, 1>;
     #[inline]
     fn sample_transition<R: Rng + ?Sized>(
         &self,
+        _k: usize,
         x: &SVector<f64, 1>,
         rng: &mut R,
     ) -> SVector<f64, 1> {
         Vector1::new(self.drift + 0.5 * x[0] + self.gamma.sample(rng))
     }
+    #[inline]
+    fn log_likelihood(&self, _k: usize, x: &SVector<f64, 1>, z: &SVector<f64, 1>) -> f64 {
+        let e = z[0] - observe(x[0], self.t).0;
+        // the demo's unnormalised sigma^(-1/2) exp(-e^2 / (2 sigma))
+        let ll = -0.5 * e * e / SIGMA - 0.5 * SIGMA.ln();
+        if self.floor {
+            let floor = 1e-99f64.ln();
+            let m = ll.max(floor);
+            m + ((ll - m).exp() + (floor - m).exp()).ln()
+        } else {
+            ll
+        }
+    }
+}
 
-    fn log_transition(&self, x_prev: &SVector<f64, 1>, x: &SVector<f64, 1>) -> f64 {
+impl TransitionDensity<1> for TrueModel {
+    fn log_transition(&self, _k: usize, x_prev: &SVector<f64, 1>, x: &SVector<f64, 1>) -> f64 {
         match self.prior {
             PriorDensity::Transition => {
                 let d = x[0] - (self.drift + 0.5 * x_prev[0]);
@@ -395,20 +412,6 @@ impl StateSpaceModel<1, 1> for TrueModel {
                 let d = x[0] - x_prev[0];
                 (GAMMA_SHAPE - 1.0) * d.abs().ln() - GAMMA_RATE * d
             }
-        }
-    }
-
-    #[inline]
-    fn log_likelihood(&self, x: &SVector<f64, 1>, z: &SVector<f64, 1>) -> f64 {
-        let e = z[0] - observe(x[0], self.t).0;
-        // the demo's unnormalised sigma^(-1/2) exp(-e^2 / (2 sigma))
-        let ll = -0.5 * e * e / SIGMA - 0.5 * SIGMA.ln();
-        if self.floor {
-            let floor = 1e-99f64.ln();
-            let m = ll.max(floor);
-            m + ((ll - m).exp() + (floor - m).exp()).ln()
-        } else {
-            ll
         }
     }
 }
@@ -539,6 +542,7 @@ fn particle_filter(c: &HikpfConfig, mcmc: bool) -> ParticleFilter {
         mcmc,
         chunk_size: 1024,
         degenerate: Degenerate::IgnoreMeasurement,
+        ..ParticleFilter::default()
     }
 }
 
@@ -1169,11 +1173,15 @@ mod tests {
         let f = m.drift + 0.15;
         let h = 1e-3;
         let total: f64 = (1..20_000)
-            .map(|i| m.log_transition(&x0, &Vector1::new(f + i as f64 * h)).exp() * h)
+            .map(|i| {
+                m.log_transition(0, &x0, &Vector1::new(f + i as f64 * h))
+                    .exp()
+                    * h
+            })
             .sum();
         assert!((total - 1.0).abs() < 1e-3, "{total}");
         assert_eq!(
-            m.log_transition(&x0, &Vector1::new(f - 0.1)),
+            m.log_transition(0, &x0, &Vector1::new(f - 0.1)),
             f64::NEG_INFINITY
         );
     }

@@ -23,7 +23,8 @@ use std::hint::black_box;
 use std::time::Instant;
 
 use bayestrack_particle::{
-    Bootstrap, ParticleFilter, ParticleSet, ResamplePolicy, Resampling, StateSpaceModel, stream_rng,
+    Bootstrap, Model, ParticleFilter, ParticleSet, ResamplePolicy, Resampling, TransitionDensity,
+    stream_rng,
 };
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use nalgebra::{Const, DMatrix, Dyn, OMatrix, SVector, Vector1};
@@ -33,11 +34,11 @@ use rand_distr::{Distribution, Exp1};
 const N: usize = 10_000;
 const SIGMA: f64 = 1e-5;
 
-struct Model {
+struct Demo {
     drift: f64,
 }
 
-impl Model {
+impl Demo {
     fn at(t: usize) -> Self {
         Self {
             drift: 1.0 + (0.04 * std::f64::consts::PI * t as f64).sin(),
@@ -54,22 +55,27 @@ fn gamma_noise<R: Rng + ?Sized>(rng: &mut R) -> f64 {
     0.5 * (e1 + e2 + e3)
 }
 
-impl StateSpaceModel<1, 1> for Model {
+impl Model<1> for Demo {
+    type Observation = SVector<f64, 1>;
     #[inline(always)]
     fn sample_transition<R: Rng + ?Sized>(
         &self,
+        _k: usize,
         x: &SVector<f64, 1>,
         rng: &mut R,
     ) -> SVector<f64, 1> {
         Vector1::new(self.drift + 0.5 * x[0] + gamma_noise(rng))
     }
-    fn log_transition(&self, _: &SVector<f64, 1>, _: &SVector<f64, 1>) -> f64 {
-        unreachable!("the bootstrap proposal never evaluates the prior")
-    }
     #[inline(always)]
-    fn log_likelihood(&self, x: &SVector<f64, 1>, z: &SVector<f64, 1>) -> f64 {
+    fn log_likelihood(&self, _k: usize, x: &SVector<f64, 1>, z: &SVector<f64, 1>) -> f64 {
         let e = z[0] - 0.2 * x[0] * x[0];
         -0.5 * e * e / SIGMA
+    }
+}
+
+impl TransitionDensity<1> for Demo {
+    fn log_transition(&self, _k: usize, _: &SVector<f64, 1>, _: &SVector<f64, 1>) -> f64 {
+        unreachable!("the bootstrap proposal never evaluates the prior")
     }
 }
 
@@ -79,7 +85,7 @@ fn measurements() -> Vec<f64> {
     let mut x = 1.0;
     (1..=60)
         .map(|t| {
-            let m = Model::at(t);
+            let m = Demo::at(t);
             x = m.drift + 0.5 * x + gamma_noise(&mut rng);
             0.2 * x * x
         })
@@ -106,7 +112,7 @@ fn bench_bootstrap(c: &mut Criterion) {
                 let mut k = 0u64;
                 b.iter(|| {
                     let t = (k % 59) as usize + 1;
-                    let m = Model::at(t + 1);
+                    let m = Demo::at(t + 1);
                     let r = pf
                         .step(&mut set, &Bootstrap(&m), &Vector1::new(zs[t]), &[k])
                         .unwrap();
@@ -142,7 +148,7 @@ fn bench_bootstrap(c: &mut Criterion) {
                         pool.install(|| {
                             for k in k0..k0 + steps {
                                 let t = (k % 59) as usize + 1;
-                                let m = Model::at(t + 1);
+                                let m = Demo::at(t + 1);
                                 let key = [i as u64, k];
                                 let z = Vector1::new(zs[t]);
                                 black_box(pf.step(set, &Bootstrap(&m), &z, &key).unwrap());
@@ -165,7 +171,7 @@ fn bench_bootstrap(c: &mut Criterion) {
         let mut k = 0usize;
         b.iter(|| {
             let t = k % 59 + 1;
-            let m = Model::at(t + 1);
+            let m = Demo::at(t + 1);
             let z = zs[t];
             f.predict(|x, out| out[0] = m.drift + 0.5 * x[0] + gamma_noise(&mut rng))
                 .unwrap();

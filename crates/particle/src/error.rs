@@ -1,6 +1,6 @@
 //! The error type of the crate.
 
-use bayestrack_kalman::KalmanError;
+use std::sync::Arc;
 
 /// Everything that can go wrong in `bayestrack-particle`.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -42,13 +42,15 @@ pub enum ParticleError {
         /// Why.
         reason: &'static str,
     },
-    /// A particle's Kalman proposal failed.
-    #[error("Kalman proposal of particle {index} failed: {source}")]
+    /// A particle's proposal failed (its local Kalman filter, its image
+    /// likelihood, ...).
+    #[error("the proposal of particle {index} failed: {source}")]
     Proposal {
         /// Which particle.
         index: usize,
-        /// What the filter said.
-        source: KalmanError,
+        /// What the proposal said ([`ProposalError::downcast_ref`] gives
+        /// back the proposal's own error type).
+        source: ProposalError,
     },
     /// A filter step given the random-stream key of the step before it,
     /// which would draw the same noise again.
@@ -70,3 +72,47 @@ pub enum ParticleError {
 
 /// Shorthand for results of this crate.
 pub type Result<T, E = ParticleError> = std::result::Result<T, E>;
+
+/// The error of a [`crate::Proposal`], whatever its type
+/// ([`crate::Proposal::Error`]): shared, so that [`ParticleError`] stays
+/// `Clone`, and recoverable with [`ProposalError::downcast_ref`].
+#[derive(Clone)]
+pub struct ProposalError(Arc<dyn std::error::Error + Send + Sync + 'static>);
+
+impl ProposalError {
+    /// Wraps a proposal's error.
+    pub fn new<E: std::error::Error + Send + Sync + 'static>(error: E) -> Self {
+        Self(Arc::new(error))
+    }
+
+    /// The proposal's error as its own type (`None` for another type).
+    pub fn downcast_ref<E: std::error::Error + 'static>(&self) -> Option<&E> {
+        self.0.downcast_ref::<E>()
+    }
+}
+
+impl std::fmt::Debug for ProposalError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        std::fmt::Debug::fmt(&*self.0, f)
+    }
+}
+
+impl std::fmt::Display for ProposalError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        std::fmt::Display::fmt(&*self.0, f)
+    }
+}
+
+impl std::error::Error for ProposalError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        self.0.source()
+    }
+}
+
+/// Two proposal errors are equal when they are the same error or say the
+/// same thing (the wrapped types need not be comparable).
+impl PartialEq for ProposalError {
+    fn eq(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.0, &other.0) || self.to_string() == other.to_string()
+    }
+}

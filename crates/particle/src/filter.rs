@@ -12,7 +12,7 @@ use rand::{RngExt, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rayon::prelude::*;
 
-use crate::error::{ParticleError, Result};
+use crate::error::{ParticleError, ProposalError, Result};
 use crate::proposal::Proposal;
 use crate::resample::{ChunkedCumulative, Resampling};
 use crate::seed::{extend_seed, stream_rng, stream_seed};
@@ -27,6 +27,28 @@ pub enum ResamplePolicy {
     Ess(f64),
     /// Never (sequential importance sampling).
     Never,
+}
+
+/// Where in the step the set is resampled (when [`ResamplePolicy`] says
+/// so).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum ResampleTiming {
+    /// After the weights (sequential importance resampling as in Nagy,
+    /// Ahmed and Zayed (paper 000), the UPF demo): a step leaves the
+    /// resampled, equally weighted set.
+    #[default]
+    AfterWeighing,
+    /// At the start of the next step, from the weights the previous step
+    /// left, before the proposal: the "select, predict, measure" of
+    /// CONDENSATION (Isard and Blake 1998; Lee, Jo and Kang (paper 003)
+    /// sec. 2.1) and of the trackers' SIR filters (Bócsi and Csató (paper
+    /// 001) Algorithm 1, line 6). The same filter, but a step leaves the
+    /// weighted set, so [`crate::ParticleSet::mean`] is the weighted
+    /// estimate of the frame. [`ResamplePolicy::Ess`] looks at the ESS of
+    /// those weights. The first step of a set ([`crate::ParticleSet::k`] =
+    /// 0) has no previous weights to select by and does not resample. Not
+    /// combined with the MCMC move.
+    BeforeProposal,
 }
 
 /// What to do when every particle gets weight zero.
@@ -47,6 +69,8 @@ pub struct ParticleFilter {
     pub resampling: Resampling,
     /// When to resample.
     pub policy: ResamplePolicy,
+    /// Where in the step: after the weights, or before the next proposal.
+    pub timing: ResampleTiming,
     /// Metropolis-Hastings move after each resampling.
     pub mcmc: bool,
     /// Particles per chunk (per random stream and per parallel task).
@@ -60,6 +84,7 @@ impl Default for ParticleFilter {
         Self {
             resampling: Resampling::Systematic,
             policy: ResamplePolicy::Always,
+            timing: ResampleTiming::AfterWeighing,
             mcmc: false,
             chunk_size: 1024,
             degenerate: Degenerate::Error,
@@ -81,12 +106,20 @@ pub struct StepReport {
     pub accepted: usize,
     /// Whether every weight was zero (see [`Degenerate`]).
     pub degenerate: bool,
+    /// The largest log incremental weight of the step (for a bootstrap
+    /// proposal, the best particle's log-likelihood: how well the best
+    /// hypothesis explains the observation, which a tracker reads to say
+    /// whether the target is lost); minus infinity when every weight was
+    /// zero.
+    pub max_log_increment: f64,
 }
 
 /// One chunk's proposal pass, accumulated as the particles are proposed.
 struct Proposed {
     /// The largest updated log-weight.
     max: f64,
+    /// The largest increment.
+    max_increment: f64,
     /// Whether every increment so far was below `+inf` (and not NaN).
     ok: bool,
 }
@@ -94,6 +127,7 @@ struct Proposed {
 impl Proposed {
     const EMPTY: Self = Self {
         max: f64::NEG_INFINITY,
+        max_increment: f64::NEG_INFINITY,
         ok: true,
     };
 
@@ -103,6 +137,11 @@ impl Proposed {
         self.ok &= x < f64::INFINITY;
         let y = l + x;
         self.max = if y > self.max { y } else { self.max };
+        self.max_increment = if x > self.max_increment {
+            x
+        } else {
+            self.max_increment
+        };
     }
 
     /// The first NaN or `+inf` increment of the chunk `inc` with first
@@ -174,6 +213,8 @@ impl Weighed {
 struct ChunkPass {
     /// The largest updated log-weight, to which the weights are relative.
     max: f64,
+    /// The largest log increment.
+    max_increment: f64,
     /// The first NaN or `+inf` log increment, with its particle.
     bad: Option<(usize, f64)>,
     weighed: Weighed,
@@ -184,6 +225,15 @@ const RESAMPLE_STREAM: u64 = u64::MAX;
 const MCMC_STREAM: u64 = u64::MAX - 1;
 
 impl ParticleFilter {
+    /// Whether [`ResamplePolicy`] resamples a set of `n` with this ESS.
+    fn wants_resampling(&self, ess: f64, n: usize) -> bool {
+        match self.policy {
+            ResamplePolicy::Always => true,
+            ResamplePolicy::Ess(t) => ess < t * n as f64,
+            ResamplePolicy::Never => false,
+        }
+    }
+
     /// Checks the configuration.
     ///
     /// # Errors
@@ -200,36 +250,52 @@ impl ParticleFilter {
         if let ResamplePolicy::Ess(t) = self.policy {
             check_threshold(t)?;
         }
+        if self.mcmc && self.timing == ResampleTiming::BeforeProposal {
+            return Err(ParticleError::InvalidParameter {
+                name: "mcmc",
+                value: 1.0,
+                reason: "the MCMC move follows a resampling after the weights; \
+                         ResampleTiming::BeforeProposal resamples before the proposal",
+            });
+        }
         Ok(())
     }
 
-    /// Runs `f(chunk index, particle offset, particles, log-weight slots,
+    /// Runs `f(particle offset, particles, log-weight slots, scratch,
     /// generator)` over fixed chunks, in parallel when there is more than
     /// one; returns the first error in particle order.
-    fn chunked<T: Send, F>(
+    fn chunked<T: Send, S: Send, F>(
         &self,
         parts: &mut [T],
         extra: &mut [f64],
+        scratch: &mut [S],
         key: &[u64],
         f: F,
     ) -> Result<()>
     where
-        F: Fn(usize, &mut [T], &mut [f64], &mut rand_xoshiro::Xoshiro256PlusPlus) -> Result<()>
+        F: Fn(
+                usize,
+                &mut [T],
+                &mut [f64],
+                &mut S,
+                &mut rand_xoshiro::Xoshiro256PlusPlus,
+            ) -> Result<()>
             + Sync,
     {
         let cs = self.chunk_size;
-        let run = |(c, (p, e)): (usize, (&mut [T], &mut [f64]))| {
+        let run = |(c, ((p, e), s)): (usize, ((&mut [T], &mut [f64]), &mut S))| {
             let mut k = key.to_vec();
             k.push(c as u64);
             let mut rng = stream_rng(&k);
-            f(c * cs, p, e, &mut rng)
+            f(c * cs, p, e, s, &mut rng)
         };
         let results: Vec<Result<()>> = if parts.len() <= cs {
-            vec![run((0, (parts, extra)))]
+            vec![run((0, ((parts, extra), &mut scratch[0])))]
         } else {
             parts
                 .par_chunks_mut(cs)
                 .zip(extra.par_chunks_mut(cs))
+                .zip(scratch.par_iter_mut())
                 .enumerate()
                 .map(run)
                 .collect()
@@ -273,7 +339,35 @@ impl ParticleFilter {
         Z: ?Sized + Sync,
         P: Proposal<T, Z>,
     {
+        self.step_with(set, proposal, z, key, &mut Vec::new())
+    }
+
+    /// [`ParticleFilter::step`] with the proposal's per-chunk working
+    /// memory ([`Proposal::Scratch`]) kept by the caller between steps:
+    /// `scratch` grows to one entry per chunk on the first step and is
+    /// reused afterwards, so a proposal that fills buffers (an image patch,
+    /// a histogram) allocates nothing once warm.
+    ///
+    /// # Errors
+    /// As [`ParticleFilter::step`].
+    pub fn step_with<T, Z, P, const N: usize>(
+        &self,
+        set: &mut ParticleSet<T>,
+        proposal: &P,
+        z: &Z,
+        key: &[u64],
+        scratch: &mut Vec<P::Scratch>,
+    ) -> Result<StepReport>
+    where
+        T: crate::set::Particle<N>,
+        Z: ?Sized + Sync,
+        P: Proposal<T, Z>,
+    {
         self.validate()?;
+        let chunks = set.len().div_ceil(self.chunk_size).max(1);
+        if scratch.len() < chunks {
+            scratch.resize_with(chunks, Default::default);
+        }
         let seed = stream_seed(key);
         let k = set.k + 1;
         if set.last_seed == Some(seed) {
@@ -283,7 +377,7 @@ impl ParticleFilter {
         if self.mcmc {
             parents.clone_from(&set.particles);
         }
-        let outcome = self.step_from(set, proposal, z, k, key, &parents);
+        let outcome = self.step_from(set, proposal, z, k, key, &parents, scratch);
         set.scratch.parents = parents;
         if outcome.is_ok() {
             set.k = k;
@@ -294,6 +388,7 @@ impl ParticleFilter {
 
     /// [`ParticleFilter::step`] at time `k` with the particles before the
     /// proposal in `parents` (for the MCMC move; empty without it).
+    #[allow(clippy::too_many_arguments)]
     fn step_from<T, Z, P, const N: usize>(
         &self,
         set: &mut ParticleSet<T>,
@@ -302,6 +397,7 @@ impl ParticleFilter {
         k: usize,
         key: &[u64],
         parents: &[T],
+        scratch_chunks: &mut [P::Scratch],
     ) -> Result<StepReport>
     where
         T: crate::set::Particle<N>,
@@ -310,6 +406,15 @@ impl ParticleFilter {
     {
         let n = set.len();
         let cs = self.chunk_size;
+        let before = self.timing == ResampleTiming::BeforeProposal;
+        let selected = before && set.k > 0 && self.wants_resampling(set.ess(), n);
+        if selected {
+            let mut rng = stream_rng(&[key, &[RESAMPLE_STREAM]].concat());
+            let mut ancestors = std::mem::take(&mut set.scratch.ancestors);
+            let drawn = set.resample(&self.resampling, &mut rng, &mut ancestors);
+            set.scratch.ancestors = ancestors;
+            drawn?;
+        }
         let ParticleSet {
             particles,
             log_weights: log_w,
@@ -332,42 +437,68 @@ impl ParticleFilter {
         // common scale with one factor per chunk below
         let cumulative = self.resampling == Resampling::Systematic;
         let seed = stream_seed(key);
-        let passes: Vec<Result<ChunkPass>> = particles
-            .par_chunks_mut(cs)
-            .zip(increments.par_chunks_mut(cs))
-            .zip(log_w.par_chunks(cs))
-            .zip(weights.par_chunks_mut(cs))
-            .enumerate()
-            .map(|(c, (((ps, inc), lw), out))| {
-                let mut rng = Xoshiro256PlusPlus::seed_from_u64(extend_seed(seed, c as u64));
-                let offset = c * cs;
-                let mut acc = Proposed::EMPTY;
-                for (i, ((p, w), &l)) in ps.iter_mut().zip(inc.iter_mut()).zip(lw).enumerate() {
-                    let (child, x) = proposal.propose(k, p, z, &mut rng).map_err(|source| {
-                        ParticleError::Proposal {
+        let pass = |(c, ((((ps, inc), lw), out), scratch)): (
+            usize,
+            (
+                (((&mut [T], &mut [f64]), &[f64]), &mut [f64]),
+                &mut P::Scratch,
+            ),
+        )| {
+            let mut rng = Xoshiro256PlusPlus::seed_from_u64(extend_seed(seed, c as u64));
+            let offset = c * cs;
+            let mut acc = Proposed::EMPTY;
+            for (i, ((p, w), &l)) in ps.iter_mut().zip(inc.iter_mut()).zip(lw).enumerate() {
+                let (child, x) =
+                    proposal
+                        .propose(k, p, z, scratch, &mut rng)
+                        .map_err(|source| ParticleError::Proposal {
                             index: offset + i,
-                            source,
-                        }
-                    })?;
-                    if !child.state().iter().all(|v| v.is_finite()) {
-                        return Err(ParticleError::NonFiniteState { index: offset + i });
-                    }
-                    *p = child;
-                    *w = x;
-                    acc.add(l, x);
+                            source: ProposalError::new(source),
+                        })?;
+                if !child.state().iter().all(|v| v.is_finite()) {
+                    return Err(ParticleError::NonFiniteState { index: offset + i });
                 }
-                let bad = acc.bad(inc, offset);
-                let weighed = match bad {
-                    None => Weighed::of(lw, Some(inc), acc.max, out, cumulative),
-                    Some(_) => Weighed::ZERO,
-                };
-                Ok(ChunkPass {
-                    max: acc.max,
-                    bad,
-                    weighed,
-                })
+                *p = child;
+                *w = x;
+                acc.add(l, x);
+            }
+            let bad = acc.bad(inc, offset);
+            let weighed = match bad {
+                None => Weighed::of(lw, Some(inc), acc.max, out, cumulative),
+                Some(_) => Weighed::ZERO,
+            };
+            Ok(ChunkPass {
+                max: acc.max,
+                max_increment: acc.max_increment,
+                bad,
+                weighed,
             })
-            .collect();
+        };
+        // one chunk runs on the calling thread: handing it to the pool
+        // costs a cross-thread wake-up per step, which a tracker with a
+        // few hundred particles at 1,000 frames a second would feel
+        let passes: Vec<Result<ChunkPass>> = if n <= cs {
+            vec![pass((
+                0,
+                (
+                    (
+                        ((&mut particles[..], &mut increments[..]), &log_w[..]),
+                        &mut weights[..],
+                    ),
+                    &mut scratch_chunks[0],
+                ),
+            ))]
+        } else {
+            particles
+                .par_chunks_mut(cs)
+                .zip(increments.par_chunks_mut(cs))
+                .zip(log_w.par_chunks(cs))
+                .zip(weights.par_chunks_mut(cs))
+                .zip(scratch_chunks.par_iter_mut())
+                .enumerate()
+                .map(pass)
+                .collect()
+        };
         let mut chunks = passes.into_iter().collect::<Result<Vec<ChunkPass>>>()?;
         if let Some((index, value)) = chunks.iter().find_map(|c| c.bad) {
             return Err(ParticleError::NonFiniteWeight { index, value });
@@ -375,6 +506,10 @@ impl ParticleFilter {
         let mut max = chunks
             .iter()
             .map(|c| c.max)
+            .fold(f64::NEG_INFINITY, f64::max);
+        let max_log_increment = chunks
+            .iter()
+            .map(|c| c.max_increment)
             .fold(f64::NEG_INFINITY, f64::max);
         // weights: w_k = w_{k-1} * increment (log domain); all zero ignores
         // the measurement (the previous weights, weighed again) or fails
@@ -384,11 +519,15 @@ impl ParticleFilter {
                 return Err(ParticleError::AllWeightsZero { count: n });
             }
             max = log_w.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            let again: Vec<Weighed> = log_w
-                .par_chunks(cs)
-                .zip(weights.par_chunks_mut(cs))
-                .map(|(lw, out)| Weighed::of(lw, None, max, out, cumulative))
-                .collect();
+            let again: Vec<Weighed> = if n <= cs {
+                vec![Weighed::of(log_w, None, max, weights, cumulative)]
+            } else {
+                log_w
+                    .par_chunks(cs)
+                    .zip(weights.par_chunks_mut(cs))
+                    .map(|(lw, out)| Weighed::of(lw, None, max, out, cumulative))
+                    .collect()
+            };
             for (chunk, w) in chunks.iter_mut().zip(again) {
                 chunk.weighed = w;
             }
@@ -410,29 +549,31 @@ impl ParticleFilter {
         let lse = max + ln_sum;
         let log_evidence = if degenerate { f64::NEG_INFINITY } else { lse };
         let ess = sum * sum / sum2;
-        let resample = match self.policy {
-            ResamplePolicy::Always => true,
-            ResamplePolicy::Ess(t) => ess < t * n as f64,
-            ResamplePolicy::Never => false,
-        };
+        let resample = !before && self.wants_resampling(ess, n);
         if !resample {
-            log_w
-                .par_chunks_mut(cs)
-                .zip(increments.par_chunks(cs))
-                .for_each(|(lw, inc)| {
-                    // shift by the largest first: at large magnitudes
-                    // `max + ln(sum)` rounds to `max`, and subtracting it
-                    // whole would leave the weights unnormalised
-                    for (l, &x) in lw.iter_mut().zip(inc) {
-                        *l = (log_w_k(*l, x) - max) - ln_sum;
-                    }
-                });
+            let normalise = |(lw, inc): (&mut [f64], &[f64])| {
+                // shift by the largest first: at large magnitudes
+                // `max + ln(sum)` rounds to `max`, and subtracting it
+                // whole would leave the weights unnormalised
+                for (l, &x) in lw.iter_mut().zip(inc) {
+                    *l = (log_w_k(*l, x) - max) - ln_sum;
+                }
+            };
+            if n <= cs {
+                normalise((log_w, increments));
+            } else {
+                log_w
+                    .par_chunks_mut(cs)
+                    .zip(increments.par_chunks(cs))
+                    .for_each(normalise);
+            }
             return Ok(StepReport {
                 log_evidence,
                 ess,
-                resampled: false,
+                resampled: selected,
                 accepted: 0,
                 degenerate,
+                max_log_increment,
             });
         }
         let mut rng = stream_rng(&[key, &[RESAMPLE_STREAM]].concat());
@@ -463,23 +604,28 @@ impl ParticleFilter {
         };
         let from: &[T] = particles;
         let uniform = -(n as f64).ln();
-        spare
-            .par_chunks_mut(cs)
-            .zip(ancestors.par_chunks_mut(cs))
-            .zip(log_w.par_chunks_mut(cs))
-            .enumerate()
-            .for_each(|(o, ((out, anc), lw))| {
-                if let Some((cum, u, step)) = &systematic {
-                    cum.systematic(*u, *step, o * cs, anc);
-                }
-                for (p, &a) in out.iter_mut().zip(anc.iter()) {
-                    p.clone_from(&from[a]);
-                }
-                lw.fill(uniform);
-            });
+        let gather = |(o, ((out, anc), lw)): (usize, ((&mut [T], &mut [usize]), &mut [f64]))| {
+            if let Some((cum, u, step)) = &systematic {
+                cum.systematic(*u, *step, o * cs, anc);
+            }
+            for (p, &a) in out.iter_mut().zip(anc.iter()) {
+                p.clone_from(&from[a]);
+            }
+            lw.fill(uniform);
+        };
+        if n <= cs {
+            gather((0, ((spare, ancestors), log_w)));
+        } else {
+            spare
+                .par_chunks_mut(cs)
+                .zip(ancestors.par_chunks_mut(cs))
+                .zip(log_w.par_chunks_mut(cs))
+                .enumerate()
+                .for_each(gather);
+        }
         std::mem::swap(particles, spare);
         let accepted = if self.mcmc {
-            self.mcmc_move(set, proposal, z, k, key, parents)?
+            self.mcmc_move(set, proposal, z, k, key, parents, scratch_chunks)?
         } else {
             0
         };
@@ -489,6 +635,7 @@ impl ParticleFilter {
             resampled: true,
             accepted,
             degenerate,
+            max_log_increment,
         })
     }
 
@@ -496,6 +643,7 @@ impl ParticleFilter {
     /// fresh draw from the proposal of its parent is accepted with
     /// probability `min(1, exp(w' - w))`, `w` the log incremental weights
     /// (the target `p(z|x) p(x|x_prev)` over the proposal `q`).
+    #[allow(clippy::too_many_arguments)]
     fn mcmc_move<T, Z, P, const N: usize>(
         &self,
         set: &mut ParticleSet<T>,
@@ -504,6 +652,7 @@ impl ParticleFilter {
         k: usize,
         key: &[u64],
         parents: &[T],
+        chunk_scratch: &mut [P::Scratch],
     ) -> Result<usize>
     where
         T: crate::set::Particle<N>,
@@ -519,14 +668,18 @@ impl ParticleFilter {
         self.chunked(
             particles,
             &mut accepted,
+            chunk_scratch,
             &mcmc_key,
-            |offset, ps, acc, rng| {
+            |offset, ps, acc, scratch, rng| {
                 for (i, (p, a)) in ps.iter_mut().zip(acc.iter_mut()).enumerate() {
                     let j = offset + i;
                     let anc = ancestors[j];
                     let (cand, lw) = proposal
-                        .propose(k, &parents[anc], z, rng)
-                        .map_err(|source| ParticleError::Proposal { index: j, source })?;
+                        .propose(k, &parents[anc], z, scratch, rng)
+                        .map_err(|source| ParticleError::Proposal {
+                            index: j,
+                            source: ProposalError::new(source),
+                        })?;
                     let u: f64 = rng.random();
                     if cand.state().iter().all(|v| v.is_finite())
                         && !lw.is_nan()

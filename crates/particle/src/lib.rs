@@ -8,11 +8,9 @@ mod seed;
 mod set;
 mod smc;
 
-pub use error::{ParticleError, Result};
-pub use filter::{Degenerate, ParticleFilter, ResamplePolicy, StepReport};
-pub use proposal::{
-    Bootstrap, KalmanProposal, LocalFilter, Model, Proposal, StateSpaceModel, TransitionDensity,
-};
+pub use error::{ParticleError, ProposalError, Result};
+pub use filter::{Degenerate, ParticleFilter, ResamplePolicy, ResampleTiming, StepReport};
+pub use proposal::{Bootstrap, KalmanProposal, LocalFilter, Model, Proposal, TransitionDensity};
 pub use resample::{Resampler, Resampling};
 pub use seed::{stream_rng, stream_seed};
 pub use set::{Finite, KalmanParticle, Particle, ParticleSet, log_sum_exp};

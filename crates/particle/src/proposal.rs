@@ -17,6 +17,8 @@ use bayestrack_kalman::{
     Dynamics, DynamicsJacobian, Ekf, Gaussian, HybridUkfIekf, Iekf, KalmanError, Measurement,
     MeasurementJacobian, Ukf,
 };
+use std::convert::Infallible;
+
 use nalgebra::SVector;
 use rand::Rng;
 
@@ -24,9 +26,16 @@ use crate::set::KalmanParticle;
 
 /// What a bootstrap particle filter needs of a state-space model: a way
 /// to draw from the transition `p(x_k | x_{k-1})` and the likelihood
-/// `p(z_k | x_k)` (Nagy, Ahmed and Zayed (paper 000) eq. 7-9 with `q` the
-/// transition prior). Both see the time index `k` of the state being drawn
-/// or weighed: the set starts at `k = 0`, the first step draws `x_1`.
+/// `p(z_k | x_k)` of an observation (Nagy, Ahmed and Zayed (paper 000) eq.
+/// 7-9 with `q` the transition prior). Both see the time index `k` of the
+/// state being drawn or weighed: the set starts at `k = 0`, the first step
+/// draws `x_1`.
+///
+/// The observation is the model's own type: a measurement vector
+/// (`SVector<f64, M>`, what the Kalman proposals need), a scalar, or
+/// anything else the likelihood reads. A likelihood that can fail (an
+/// image window leaving the frame, say) implements [`Proposal`] itself,
+/// with an error type of its own.
 ///
 /// The density of the transition is not needed here: proposals other than
 /// the transition prior ([`KalmanProposal`]) ask for it through
@@ -38,7 +47,9 @@ use crate::set::KalmanParticle;
 /// in registers across the loop. On the `hikpf` model (three exponential
 /// draws per particle) an out-of-line `sample_transition` makes the whole
 /// step about a third slower.
-pub trait Model<const N: usize, const M: usize>: Sync {
+pub trait Model<const N: usize>: Sync {
+    /// What the likelihood weighs a state against (`z_k`).
+    type Observation: ?Sized + Sync;
     /// Draws `x_k ~ p(. | x_{k-1})`.
     fn sample_transition<R: Rng + ?Sized>(
         &self,
@@ -48,72 +59,46 @@ pub trait Model<const N: usize, const M: usize>: Sync {
     ) -> SVector<f64, N>;
     /// `log p(z_k | x_k)` (an unnormalised log density is enough: the
     /// weights are normalised, only the log evidence of a step moves).
-    fn log_likelihood(&self, k: usize, x: &SVector<f64, N>, z: &SVector<f64, M>) -> f64;
+    fn log_likelihood(&self, k: usize, x: &SVector<f64, N>, z: &Self::Observation) -> f64;
 }
 
 /// The transition density `log p(x_k | x_{k-1})` of a [`Model`]: the
 /// `p(x_k | x_{k-1})` of the incremental weight (paper 000 eq. 9) of every
 /// proposal that is not the transition prior.
-pub trait TransitionDensity<const N: usize, const M: usize>: Model<N, M> {
+pub trait TransitionDensity<const N: usize>: Model<N> {
     /// `log p(x_k | x_{k-1})` (minus infinity outside the support).
     fn log_transition(&self, k: usize, x_prev: &SVector<f64, N>, x: &SVector<f64, N>) -> f64;
 }
 
-/// A time-invariant model with its transition density, in one trait: the
-/// first form of the particle API, kept for the code written against it.
-/// Every `StateSpaceModel` is a [`Model`] and a [`TransitionDensity`] that
-/// ignore the time index; new models implement [`Model`] (and
-/// [`TransitionDensity`] only when a proposal needs it).
-pub trait StateSpaceModel<const N: usize, const M: usize>: Sync {
-    /// Draws `x_k ~ p(. | x_{k-1})`.
-    fn sample_transition<R: Rng + ?Sized>(
-        &self,
-        x_prev: &SVector<f64, N>,
-        rng: &mut R,
-    ) -> SVector<f64, N>;
-    /// `log p(x_k | x_{k-1})` (minus infinity outside the support).
-    fn log_transition(&self, x_prev: &SVector<f64, N>, x: &SVector<f64, N>) -> f64;
-    /// `log p(z_k | x_k)`.
-    fn log_likelihood(&self, x: &SVector<f64, N>, z: &SVector<f64, M>) -> f64;
-}
-
-impl<const N: usize, const M: usize, S: StateSpaceModel<N, M>> Model<N, M> for S {
-    #[inline(always)]
-    fn sample_transition<R: Rng + ?Sized>(
-        &self,
-        _k: usize,
-        x_prev: &SVector<f64, N>,
-        rng: &mut R,
-    ) -> SVector<f64, N> {
-        StateSpaceModel::sample_transition(self, x_prev, rng)
-    }
-    #[inline(always)]
-    fn log_likelihood(&self, _k: usize, x: &SVector<f64, N>, z: &SVector<f64, M>) -> f64 {
-        StateSpaceModel::log_likelihood(self, x, z)
-    }
-}
-
-impl<const N: usize, const M: usize, S: StateSpaceModel<N, M>> TransitionDensity<N, M> for S {
-    #[inline(always)]
-    fn log_transition(&self, _k: usize, x_prev: &SVector<f64, N>, x: &SVector<f64, N>) -> f64 {
-        StateSpaceModel::log_transition(self, x_prev, x)
-    }
-}
-
-/// An importance proposal for particles of type `T` and measurements `Z`.
+/// An importance proposal for particles of type `T` and observations `Z`.
+///
+/// The filter calls [`Proposal::propose`] once per particle, chunk by
+/// chunk ([`crate::ParticleFilter::chunk_size`]); each chunk has its own
+/// random stream and its own [`Proposal::Scratch`], so a proposal that
+/// needs buffers (a patch to warp into, a histogram to fill) allocates
+/// them once per chunk, or never when the caller keeps them between steps
+/// ([`crate::ParticleFilter::step_with`]).
 pub trait Proposal<T, Z: ?Sized>: Sync {
+    /// Why a proposal can fail: the local filter's [`KalmanError`] for
+    /// [`KalmanProposal`], an image likelihood's error, or
+    /// [`Infallible`] for [`Bootstrap`]. The step reports it as
+    /// [`crate::ParticleError::Proposal`] with the particle's index.
+    type Error: std::error::Error + Send + Sync + 'static;
+    /// Per-chunk working memory (`()` when none is needed).
+    type Scratch: Default + Send;
     /// Draws a child of `parent` at time `k` given `z`; returns it with the
     /// log incremental weight.
     ///
     /// # Errors
-    /// The local filter's error, for Kalman proposals.
+    /// [`Proposal::Error`].
     fn propose<R: Rng + ?Sized>(
         &self,
         k: usize,
         parent: &T,
         z: &Z,
+        scratch: &mut Self::Scratch,
         rng: &mut R,
-    ) -> Result<(T, f64), KalmanError>;
+    ) -> Result<(T, f64), Self::Error>;
 }
 
 /// The transition prior as proposal (bootstrap / SIR filter): needs only a
@@ -121,17 +106,18 @@ pub trait Proposal<T, Z: ?Sized>: Sync {
 #[derive(Debug, Clone, Copy)]
 pub struct Bootstrap<'a, S>(pub &'a S);
 
-impl<const N: usize, const M: usize, S: Model<N, M>> Proposal<SVector<f64, N>, SVector<f64, M>>
-    for Bootstrap<'_, S>
-{
+impl<const N: usize, S: Model<N>> Proposal<SVector<f64, N>, S::Observation> for Bootstrap<'_, S> {
+    type Error = Infallible;
+    type Scratch = ();
     #[inline(always)]
     fn propose<R: Rng + ?Sized>(
         &self,
         k: usize,
         parent: &SVector<f64, N>,
-        z: &SVector<f64, M>,
+        z: &S::Observation,
+        _scratch: &mut (),
         rng: &mut R,
-    ) -> Result<(SVector<f64, N>, f64), KalmanError> {
+    ) -> Result<(SVector<f64, N>, f64), Infallible> {
         let x = self.0.sample_transition(k, parent, rng);
         let lw = self.0.log_likelihood(k, &x, z);
         Ok((x, lw))
@@ -241,15 +227,18 @@ pub struct KalmanProposal<'a, S, D, F> {
 impl<const N: usize, const M: usize, S, D, F> Proposal<KalmanParticle<N>, SVector<f64, M>>
     for KalmanProposal<'_, S, D, F>
 where
-    S: TransitionDensity<N, M>,
+    S: TransitionDensity<N, Observation = SVector<f64, M>>,
     D: Sync,
     F: LocalFilter<N, M, D>,
 {
+    type Error = KalmanError;
+    type Scratch = ();
     fn propose<R: Rng + ?Sized>(
         &self,
         k: usize,
         parent: &KalmanParticle<N>,
         z: &SVector<f64, M>,
+        _scratch: &mut (),
         rng: &mut R,
     ) -> Result<(KalmanParticle<N>, f64), KalmanError> {
         let prior = Gaussian::new(parent.x, parent.cov)?;

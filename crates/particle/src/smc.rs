@@ -56,7 +56,27 @@ impl<T> Smc<T> {
         Z: ?Sized + Sync,
         P: Proposal<T, Z>,
     {
+        self.step_with(proposal, z, &mut Vec::new())
+    }
+
+    /// [`Smc::step`] with the proposal's per-chunk working memory kept by
+    /// the caller ([`ParticleFilter::step_with`]).
+    ///
+    /// # Errors
+    /// As [`ParticleFilter::step`].
+    pub fn step_with<Z, P, const N: usize>(
+        &mut self,
+        proposal: &P,
+        z: &Z,
+        scratch: &mut Vec<P::Scratch>,
+    ) -> Result<StepReport>
+    where
+        T: Particle<N>,
+        Z: ?Sized + Sync,
+        P: Proposal<T, Z>,
+    {
         let key = [self.seed, self.set.k() as u64 + 1];
-        self.filter.step(&mut self.set, proposal, z, &key)
+        self.filter
+            .step_with(&mut self.set, proposal, z, &key, scratch)
     }
 }

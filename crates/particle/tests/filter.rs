@@ -6,8 +6,9 @@ use bayestrack_kalman::{
     LinearMeasurement, Measurement, MeasurementJacobian, Ukf,
 };
 use bayestrack_particle::{
-    Bootstrap, Degenerate, KalmanParticle, KalmanProposal, ParticleError, ParticleFilter,
-    ParticleSet, ResamplePolicy, Resampling, StateSpaceModel, stream_rng,
+    Bootstrap, Degenerate, KalmanParticle, KalmanProposal, Model, ParticleError, ParticleFilter,
+    ParticleSet, Proposal, ResamplePolicy, ResampleTiming, Resampling, TransitionDensity,
+    stream_rng,
 };
 use nalgebra::{Matrix1, Matrix1x2, Matrix2, SMatrix, SVector, Vector1, Vector2};
 use rand::Rng;
@@ -33,9 +34,11 @@ impl Lin {
     }
 }
 
-impl StateSpaceModel<2, 1> for Lin {
+impl Model<2> for Lin {
+    type Observation = SVector<f64, 1>;
     fn sample_transition<R: Rng + ?Sized>(
         &self,
+        _k: usize,
         x: &SVector<f64, 2>,
         rng: &mut R,
     ) -> SVector<f64, 2> {
@@ -43,15 +46,18 @@ impl StateSpaceModel<2, 1> for Lin {
         let e = Vector2::new(StandardNormal.sample(rng), StandardNormal.sample(rng));
         self.f * x + l * e
     }
-    fn log_transition(&self, x_prev: &SVector<f64, 2>, x: &SVector<f64, 2>) -> f64 {
+    fn log_likelihood(&self, _k: usize, x: &SVector<f64, 2>, z: &SVector<f64, 1>) -> f64 {
+        let d = z[0] - (self.h * x)[0];
+        -0.5 * (d * d / self.r + (2.0 * std::f64::consts::PI * self.r).ln())
+    }
+}
+
+impl TransitionDensity<2> for Lin {
+    fn log_transition(&self, _k: usize, x_prev: &SVector<f64, 2>, x: &SVector<f64, 2>) -> f64 {
         Gaussian::new(self.f * x_prev, self.q)
             .unwrap()
             .log_pdf(x)
             .unwrap()
-    }
-    fn log_likelihood(&self, x: &SVector<f64, 2>, z: &SVector<f64, 1>) -> f64 {
-        let d = z[0] - (self.h * x)[0];
-        -0.5 * (d * d / self.r + (2.0 * std::f64::consts::PI * self.r).ln())
     }
 }
 
@@ -87,7 +93,7 @@ fn data(model: &Lin, steps: usize) -> Vec<Vector1<f64>> {
     let mut x = Vector2::new(0.0, 1.0);
     (0..steps)
         .map(|_| {
-            x = model.sample_transition(&x, &mut rng);
+            x = model.sample_transition(0, &x, &mut rng);
             let e: f64 = StandardNormal.sample(&mut rng);
             Vector1::new(x[0] + model.r.sqrt() * e)
         })
@@ -314,19 +320,24 @@ const PINNED_19: f64 = 1.5164426129558723;
 /// checked against a direct computation.
 struct Table(Vec<f64>);
 
-impl StateSpaceModel<1, 1> for Table {
+impl Model<1> for Table {
+    type Observation = SVector<f64, 1>;
     fn sample_transition<R: Rng + ?Sized>(
         &self,
+        _k: usize,
         x: &SVector<f64, 1>,
         _: &mut R,
     ) -> SVector<f64, 1> {
         *x
     }
-    fn log_transition(&self, _: &SVector<f64, 1>, _: &SVector<f64, 1>) -> f64 {
-        0.0
-    }
-    fn log_likelihood(&self, x: &SVector<f64, 1>, _: &SVector<f64, 1>) -> f64 {
+    fn log_likelihood(&self, _k: usize, x: &SVector<f64, 1>, _: &SVector<f64, 1>) -> f64 {
         self.0[x[0] as usize]
+    }
+}
+
+impl TransitionDensity<1> for Table {
+    fn log_transition(&self, _k: usize, _: &SVector<f64, 1>, _: &SVector<f64, 1>) -> f64 {
+        0.0
     }
 }
 
@@ -387,6 +398,123 @@ fn a_failing_local_filter_names_the_particle() {
         matches!(r, Err(ParticleError::Proposal { index: 2, .. })),
         "{r:?}"
     );
+    // the proposal's own error comes back with its type
+    let Err(ParticleError::Proposal { source, .. }) = r else {
+        unreachable!()
+    };
+    assert!(
+        source
+            .downcast_ref::<bayestrack_kalman::KalmanError>()
+            .is_some(),
+        "{source:?}"
+    );
+}
+
+/// A proposal with an error type and a scratch of its own: it fails on
+/// a negative parent, and counts in its per-chunk scratch the particles it
+/// has proposed (so a test sees that the scratch is kept between steps).
+struct Counting;
+
+#[derive(Debug, PartialEq)]
+struct Negative(f64);
+
+impl std::fmt::Display for Negative {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "negative parent {}", self.0)
+    }
+}
+
+impl std::error::Error for Negative {}
+
+impl Proposal<SVector<f64, 1>, ()> for Counting {
+    type Error = Negative;
+    type Scratch = usize;
+    fn propose<R: Rng + ?Sized>(
+        &self,
+        _k: usize,
+        parent: &SVector<f64, 1>,
+        _z: &(),
+        scratch: &mut usize,
+        _rng: &mut R,
+    ) -> Result<(SVector<f64, 1>, f64), Negative> {
+        *scratch += 1;
+        if parent[0] < 0.0 {
+            return Err(Negative(parent[0]));
+        }
+        Ok((*parent, 0.0))
+    }
+}
+
+#[test]
+fn proposals_bring_their_own_errors_and_keep_their_scratch() {
+    let pf = ParticleFilter {
+        chunk_size: 4,
+        ..ParticleFilter::default()
+    };
+    let mut set = index_set(10);
+    let mut scratch = Vec::new();
+    for k in 1..=3 {
+        pf.step_with(&mut set, &Counting, &(), &[k], &mut scratch)
+            .unwrap();
+    }
+    // chunks of 4, 4 and 2 particles, three steps each
+    assert_eq!(scratch, vec![12, 12, 6]);
+    let mut bad = ParticleSet::new(vec![Vector1::new(1.0), Vector1::new(-2.0)]).unwrap();
+    let r = pf.step(&mut bad, &Counting, &(), &[0]);
+    let Err(ParticleError::Proposal { index, source }) = r else {
+        panic!("{r:?}")
+    };
+    assert_eq!(index, 1);
+    assert_eq!(source.downcast_ref::<Negative>(), Some(&Negative(-2.0)));
+    assert!(
+        source.to_string().contains("negative parent -2"),
+        "{source}"
+    );
+}
+
+#[test]
+fn resampling_before_the_proposal_keeps_the_weighted_set() {
+    let model = Lin::new();
+    let zs = data(&model, 25);
+    let p0 = Gaussian::new(Vector2::new(0.0, 1.0), Matrix2::identity()).unwrap();
+    let truth = kalman(&model, &zs, &p0);
+    let n = 10_000;
+    let mut set = ParticleSet::new(initial_particles(&p0, n)).unwrap();
+    let pf = ParticleFilter {
+        timing: ResampleTiming::BeforeProposal,
+        ..ParticleFilter::default()
+    };
+    for (k, (z, kf)) in zs.iter().zip(&truth).enumerate() {
+        let report = pf
+            .step(&mut set, &Bootstrap(&model), z, &[2, k as u64])
+            .unwrap();
+        // the first step has no weights to select by
+        assert_eq!(report.resampled, k > 0, "step {k}");
+        // the set keeps this step's weights: not uniform, and (resampled
+        // before each step) not degenerate either
+        assert!(set.ess() < 0.99 * n as f64, "step {k}: ess {}", set.ess());
+        assert!(set.ess() > 0.02 * n as f64, "step {k}: ess {}", set.ess());
+        assert!((set.ess() - report.ess).abs() < 1e-6 * n as f64);
+        let m = set.mean();
+        for i in 0..2 {
+            let sd = kf.cov()[(i, i)].sqrt();
+            let tol = 5.0 * sd / (set.ess() * 0.5).sqrt();
+            assert!(
+                (m[i] - kf.mean()[i]).abs() < tol,
+                "step {k} mean {i}: {} vs {}",
+                m[i],
+                kf.mean()[i]
+            );
+            let rel = (set.covariance()[(i, i)] / kf.cov()[(i, i)] - 1.0).abs();
+            assert!(rel < 0.15, "step {k} var {i}");
+        }
+    }
+    // MCMC moves follow a resampling after the weights
+    let refused = ParticleFilter { mcmc: true, ..pf };
+    assert!(matches!(
+        refused.validate(),
+        Err(ParticleError::InvalidParameter { name: "mcmc", .. })
+    ));
 }
 
 /// Log-likelihoods whose chunks of 4 lie on very different scales: chunk

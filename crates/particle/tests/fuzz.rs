@@ -3,8 +3,8 @@
 //! comes back `Ok` is finite and normalised.
 
 use bayestrack_particle::{
-    Bootstrap, Degenerate, ParticleFilter, ParticleSet, ResamplePolicy, Resampler, Resampling,
-    StateSpaceModel, log_sum_exp, stream_rng,
+    Bootstrap, Degenerate, Model, ParticleFilter, ParticleSet, ResamplePolicy, Resampler,
+    Resampling, TransitionDensity, log_sum_exp, stream_rng,
 };
 use nalgebra::{SVector, Vector1};
 use proptest::prelude::*;
@@ -34,19 +34,24 @@ fn log_weight() -> impl Strategy<Value = f64> {
 /// log-likelihoods read from a table.
 struct Table(Vec<f64>);
 
-impl StateSpaceModel<1, 1> for Table {
+impl Model<1> for Table {
+    type Observation = SVector<f64, 1>;
     fn sample_transition<R: Rng + ?Sized>(
         &self,
+        _k: usize,
         x: &SVector<f64, 1>,
         _: &mut R,
     ) -> SVector<f64, 1> {
         *x
     }
-    fn log_transition(&self, _: &SVector<f64, 1>, _: &SVector<f64, 1>) -> f64 {
-        0.0
-    }
-    fn log_likelihood(&self, x: &SVector<f64, 1>, _: &SVector<f64, 1>) -> f64 {
+    fn log_likelihood(&self, _k: usize, x: &SVector<f64, 1>, _: &SVector<f64, 1>) -> f64 {
         self.0[x[0] as usize]
+    }
+}
+
+impl TransitionDensity<1> for Table {
+    fn log_transition(&self, _k: usize, _: &SVector<f64, 1>, _: &SVector<f64, 1>) -> f64 {
+        0.0
     }
 }
 

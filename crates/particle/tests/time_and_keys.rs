@@ -17,7 +17,8 @@ use bayestrack_particle::{
 /// transition density: a bootstrap filter must not need one.
 struct Ramp;
 
-impl Model<1, 1> for Ramp {
+impl Model<1> for Ramp {
+    type Observation = SVector<f64, 1>;
     fn sample_transition<R: Rng + ?Sized>(
         &self,
         k: usize,
@@ -83,7 +84,8 @@ struct Walk {
     r: f64,
 }
 
-impl Model<1, 2> for Walk {
+impl Model<1> for Walk {
+    type Observation = SVector<f64, 2>;
     fn sample_transition<R: Rng + ?Sized>(
         &self,
         _: usize,
@@ -100,7 +102,8 @@ impl Model<1, 2> for Walk {
 /// Holds `k` where the filter stores the step's time index for the model.
 struct AtStep(Walk, f64);
 
-impl Model<1, 2> for AtStep {
+impl Model<1> for AtStep {
+    type Observation = SVector<f64, 2>;
     fn sample_transition<R: Rng + ?Sized>(
         &self,
         k: usize,
@@ -114,7 +117,7 @@ impl Model<1, 2> for AtStep {
     }
 }
 
-impl TransitionDensity<1, 2> for AtStep {
+impl TransitionDensity<1> for AtStep {
     fn log_transition(&self, k: usize, x_prev: &SVector<f64, 1>, x: &SVector<f64, 1>) -> f64 {
         if k as f64 != self.1 {
             return f64::NEG_INFINITY;

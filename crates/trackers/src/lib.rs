@@ -5,6 +5,7 @@
 
 mod affine_pf;
 mod condensation;
+mod engine;
 mod error;
 mod hist_pf_scale;
 mod histogram_filters;
@@ -23,6 +24,7 @@ pub use condensation::{
     CurveCue, CurveCueKind, LOST_LOG_LIKELIHOOD, MultiCondensation, MultiConfig, ObjectConfig,
     ObjectEstimate, PointCloudConfig, PointCloudTracker, StepBuffers,
 };
+pub use engine::{CueFilter, CueProposal, StateModel, select_predict_measure};
 pub use error::{Result, TrackerError};
 pub use hist_pf_scale::{HistPfConfig, HistPfTracker};
 pub use histogram_filters::{BallConfig, BallFilter, BallTracker, MotionModel};

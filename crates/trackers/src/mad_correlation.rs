@@ -15,9 +15,8 @@
 
 use bayestrack_appearance::{AppearanceError, MadLikelihood, MadSearch, mad};
 use bayestrack_image::{BBox, Image, ImageView, Rect, rgb_to_gray_into};
-use bayestrack_kalman::KalmanError;
 use bayestrack_particle::{
-    Degenerate, ParticleFilter, ParticleSet, Proposal, ResamplePolicy, Resampling, stream_rng,
+    Degenerate, ParticleFilter, ParticleSet, Proposal, ResampleTiming, Resampling, stream_rng,
 };
 use nalgebra::Vector2;
 use rand::{Rng, RngExt};
@@ -435,9 +434,9 @@ impl Observation<'_> {
         (x as usize, y as usize)
     }
 
-    fn mad_at(&self, c: &Vector2<f64>) -> f64 {
+    fn mad_at(&self, c: &Vector2<f64>) -> std::result::Result<f64, AppearanceError> {
         let (x, y) = self.corner(c);
-        mad(self.frame, self.template, x, y).unwrap_or(f64::INFINITY)
+        mad(self.frame, self.template, x, y)
     }
 }
 
@@ -445,13 +444,18 @@ impl Observation<'_> {
 struct ArpProposal;
 
 impl<'a> Proposal<Vector2<f64>, Observation<'a>> for ArpProposal {
+    /// The window is clamped inside the frame, so the MAD fails only if the
+    /// template and frame disagree (channels): an error, not a zero weight.
+    type Error = AppearanceError;
+    type Scratch = ();
     fn propose<R: Rng + ?Sized>(
         &self,
         _k: usize,
         parent: &Vector2<f64>,
         z: &Observation<'a>,
+        _scratch: &mut (),
         rng: &mut R,
-    ) -> std::result::Result<(Vector2<f64>, f64), KalmanError> {
+    ) -> std::result::Result<(Vector2<f64>, f64), AppearanceError> {
         let w = Vector2::new(rng.random_range(-1.0..=1.0), rng.random_range(-1.0..=1.0));
         let moved = match z.motion {
             ArpMotion::Position { a, b } => {
@@ -463,10 +467,7 @@ impl<'a> Proposal<Vector2<f64>, Observation<'a>> for ArpProposal {
         };
         let (tw, th) = (z.template.width(), z.template.height());
         let x = clamp_centre(moved, tw, th, z.frame.width(), z.frame.height());
-        let lw = z
-            .likelihood
-            .log_likelihood(z.mad_at(&x).min(z.cap))
-            .unwrap_or(f64::NEG_INFINITY);
+        let lw = z.likelihood.log_likelihood(z.mad_at(&x)?.min(z.cap))?;
         Ok((x, lw))
     }
 }
@@ -475,10 +476,12 @@ impl<'a> Proposal<Vector2<f64>, Observation<'a>> for ArpProposal {
 /// window centre `(TX, TY)` (0-based pixel coordinates), built on
 /// [`bayestrack_particle::ParticleFilter`].
 ///
-/// Per frame: every particle moves by the ARP (eq. 6) and is weighted by
+/// Per frame, one step of the particle engine with
+/// [`ResampleTiming::BeforeProposal`]: the previous frame's weighted set is
+/// resampled, every particle moves by the ARP (eq. 6) and is weighted by
 /// the MAD likelihood of its window (eq. 7, log domain); the output is the
-/// weighted mean of the particles (eq. 8); then the set is resampled.
-/// The random streams are keyed by `(seed, frame)`.
+/// weighted mean of the particles (eq. 8). The random streams are keyed by
+/// `(seed, frame)`.
 #[derive(Debug, Clone)]
 pub struct PfCorrelationTracker {
     config: PfCorrelationConfig,
@@ -491,7 +494,6 @@ pub struct PfCorrelationTracker {
     output: Vector2<f64>,
     drift: Vector2<f64>,
     frame_index: u64,
-    ancestors: Vec<usize>,
     window: Rect,
     search: MadSearch,
 }
@@ -499,7 +501,6 @@ pub struct PfCorrelationTracker {
 /// Stream ids of the tracker's random streams.
 const INIT_STREAM: u64 = 0x0000_696e_6974;
 const STEP_STREAM: u64 = 0x0000_7374_6570;
-const RESAMPLE_STREAM: u64 = 0x0000_0072_6573;
 
 impl PfCorrelationTracker {
     /// A tracker with `config`.
@@ -512,7 +513,8 @@ impl PfCorrelationTracker {
         config.check()?;
         Ok(Self {
             filter: ParticleFilter {
-                policy: ResamplePolicy::Never,
+                resampling: config.resampling,
+                timing: ResampleTiming::BeforeProposal,
                 degenerate: Degenerate::IgnoreMeasurement,
                 ..ParticleFilter::default()
             },
@@ -525,7 +527,6 @@ impl PfCorrelationTracker {
             output: Vector2::zeros(),
             drift: Vector2::zeros(),
             frame_index: 0,
-            ancestors: Vec::new(),
             window: Rect::new(0, 0, 1, 1),
             search: MadSearch::new(),
         })
@@ -641,12 +642,11 @@ impl Tracker for PfCorrelationTracker {
             cap: self.config.mad_cap.unwrap_or(f64::INFINITY),
         };
         let key = [self.config.seed, STEP_STREAM, self.frame_index];
+        // resample last frame's weighted set, move, weigh (eq. 5-7)
         self.filter.step(set, &ArpProposal, &z, &key)?;
-        // Eq. 8: the weighted mean, before resampling.
+        // Eq. 8: the weighted mean
         let out = set.mean();
-        let mad_out = z.mad_at(&out);
-        let mut rng = stream_rng(&[self.config.seed, RESAMPLE_STREAM, self.frame_index]);
-        set.resample(&self.config.resampling, &mut rng, &mut self.ancestors)?;
+        let mad_out = z.mad_at(&out)?;
         if let ArpMotion::Drift { gain, .. } = self.config.motion {
             self.drift += gain * (out - self.output - self.drift);
         }
