@@ -41,8 +41,13 @@ struct Cli {
 #[allow(clippy::large_enum_variant)]
 #[derive(Subcommand)]
 enum Command {
-    /// List the trackers, one line each.
-    Trackers,
+    /// List the trackers, one line each, or one tracker's options.
+    Trackers {
+        /// List this tracker's options (key, type, domain, default and
+        /// documentation) instead.
+        #[arg(long, value_name = "NAME")]
+        options: Option<String>,
+    },
     /// Track one target through a sequence and, when the folder has ground
     /// truth, score the result (OTB one-pass evaluation).
     #[command(after_help = TRACK_AFTER_HELP)]
@@ -107,6 +112,10 @@ struct TrackArgs {
     /// Seed of the tracker's random streams (same seed, same boxes).
     #[arg(long, default_value_t = 0)]
     seed: u64,
+    /// A tracker option `key=value` (repeatable; `bayestrack trackers
+    /// --options NAME` lists them), e.g. `--set particles=70`.
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_key_value)]
+    set: Vec<(String, String)>,
     /// What to do with a frame that does not decode: stop (keeping the
     /// boxes written so far) or skip it, repeating the previous box.
     #[arg(long, value_enum, default_value_t = BadFrame::Stop)]
@@ -117,6 +126,13 @@ struct TrackArgs {
 enum BadFrame {
     Stop,
     Skip,
+}
+
+fn parse_key_value(s: &str) -> Result<(String, String), String> {
+    match s.split_once('=') {
+        Some((k, v)) if !k.is_empty() => Ok((k.to_string(), v.to_string())),
+        _ => Err(format!("`{s}`: expected key=value")),
+    }
 }
 
 fn parse_box(s: &str) -> Result<BBox, String> {
@@ -145,10 +161,13 @@ fn parse_box(s: &str) -> Result<BBox, String> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Trackers => {
+        Command::Trackers { options: None } => {
             list_trackers();
             Ok(())
         }
+        Command::Trackers {
+            options: Some(name),
+        } => list_options(&name),
         Command::Track(args) => track(&args),
     };
     match result {
@@ -166,6 +185,18 @@ fn list_trackers() {
         let scale = if t.handles_scale { "scale" } else { "     " };
         println!("{:<width$}  {scale}  {}", t.name, t.summary);
     }
+}
+
+fn list_options(name: &str) -> Result<(), String> {
+    let info = tracker_info(name).map_err(|e| e.to_string())?;
+    let specs = info.options();
+    if specs.is_empty() {
+        println!("{name} takes no options yet (only --seed)");
+    }
+    for spec in specs {
+        println!("{spec}");
+    }
+    Ok(())
 }
 
 /// What `--seq` names, opened.
@@ -295,6 +326,10 @@ impl Progress {
 
 fn track(args: &TrackArgs) -> Result<(), String> {
     let info = tracker_info(&args.tracker).map_err(|e| e.to_string())?;
+    // options are checked before anything is read or written
+    let mut tracker = info
+        .build_with(args.seed, &args.set)
+        .map_err(|e| e.to_string())?;
     let selection = FrameSelection::parse(args.frames.as_deref(), args.every)?;
     let input = open_input(args)?;
     // The ground truth, one entry per source position.
@@ -369,7 +404,6 @@ fn track(args: &TrackArgs) -> Result<(), String> {
         std::fs::create_dir_all(dir)
             .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     }
-    let mut tracker = info.build(args.seed).map_err(|e| e.to_string())?;
     let mut writer = BoxFile::create(&args.out).map_err(|e| e.to_string())?;
     let on_bad_frame = match args.on_bad_frame {
         BadFrame::Stop => OnBadFrame::Stop,

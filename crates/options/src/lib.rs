@@ -414,6 +414,60 @@ pub trait Options: Sized + Clone {
     }
 }
 
+/// Two groups of options as one: the keys of `A`, then those of `B` (no
+/// key may be in both); a value goes to the group that has its key, and
+/// an error lists every key of the two. For a tracker's own options beside
+/// a shared configuration (`particles` beside the ball trackers' settings).
+impl<A: Options, B: Options> Options for (A, B) {
+    fn specs() -> Vec<Spec> {
+        let mut specs = A::specs();
+        specs.extend(B::specs());
+        specs
+    }
+
+    fn values(&self) -> Vec<(&'static str, String)> {
+        let mut values = self.0.values();
+        values.extend(self.1.values());
+        values
+    }
+
+    fn set(&mut self, key: &str, value: &str) -> Result<(), OptionError> {
+        let in_a = A::specs().iter().any(|s| s.key == key);
+        let result = if in_a {
+            self.0.set(key, value)
+        } else {
+            self.1.set(key, value)
+        };
+        result.map_err(|e| with_keys(e, Self::keys()))
+    }
+
+    fn validate(&self) -> Result<(), OptionError> {
+        self.0
+            .validate()
+            .and_then(|()| self.1.validate())
+            .map_err(|e| with_keys(e, Self::keys()))
+    }
+}
+
+/// `e` listing `valid` as the valid keys.
+fn with_keys(e: OptionError, valid: String) -> OptionError {
+    match e {
+        OptionError::UnknownKey { key, .. } => OptionError::UnknownKey { key, valid },
+        OptionError::BadValue {
+            key,
+            value,
+            expected,
+            ..
+        } => OptionError::BadValue {
+            key,
+            value,
+            expected,
+            valid,
+        },
+        other => other,
+    }
+}
+
 /// Declares a struct of options and implements [`Options`] and [`Default`]
 /// for it. Each field is
 ///
@@ -792,5 +846,36 @@ mod tests {
             All::default().set_all("runs"),
             Err(OptionError::NotKeyValue { .. })
         ));
+    }
+
+    options! {
+        /// A tracker's own option.
+        #[derive(Debug, Clone, PartialEq)]
+        struct Count {
+            /// Particles.
+            particles: usize = 30, in 1..=100;
+        }
+    }
+
+    #[test]
+    fn a_pair_of_groups_is_one_set_of_options() {
+        let mut p = (Count::default(), All::default());
+        let keys: Vec<&str> = <(Count, All)>::specs().iter().map(|s| s.key).collect();
+        assert_eq!(keys[..2], ["particles", "runs"]);
+        p.set("particles", "70").unwrap();
+        p.set("runs", "5").unwrap();
+        assert_eq!((p.0.particles, p.1.runs), (70, 5));
+        // an error in either group lists the keys of both
+        for (k, v) in [("particles", "0"), ("runs", "0"), ("typo", "1")] {
+            let e = p.set(k, v).unwrap_err().to_string();
+            assert!(
+                e.contains("particles (1..=100)") && e.contains("runs (1..=1000)"),
+                "{e}"
+            );
+        }
+        assert_eq!(p.0.particles, 70, "a refused value changes nothing");
+        let mut q = (Count::default(), All::default());
+        q.set_all(&p.describe()).unwrap();
+        assert_eq!(p, q);
     }
 }

@@ -77,6 +77,15 @@ pub enum TrackerError {
     /// From a particle filter.
     #[error(transparent)]
     Particle(#[from] bayestrack_particle::ParticleError),
+    /// A `key=value` option the tracker does not take, or a value outside
+    /// its domain; the message lists the tracker's keys.
+    #[error("tracker {tracker}: {source}")]
+    BadOption {
+        /// The tracker's name.
+        tracker: &'static str,
+        /// Which key, which value, and the valid keys.
+        source: bayestrack_options::OptionError,
+    },
     /// From the affine group, its dynamics or the pose estimator.
     #[error(transparent)]
     Affine(#[from] bayestrack_affine::AffineError),

@@ -50,13 +50,16 @@
 //!   becomes `(r^2 + s^2 / 12) I` (the variance of a uniform quantisation
 //!   error). This models a tracker that, like paper 001's, must finish a
 //!   frame within a time its fps allows.
-//! - PF: Algorithm 1 of the paper on a [`ParticleSet`]: draw ancestors by
-//!   importance resampling ([`Resampling::Multinomial`]: sorted uniforms
-//!   walked once over the cumulative weights, footnote 2), propagate each
+//! - PF: Algorithm 1 of the paper on the particle engine ([`CueFilter`],
+//!   resampling before the proposal): draw ancestors by importance
+//!   resampling from the previous frame's weights ([`Resampling::Multinomial`]:
+//!   sorted uniforms walked once over the cumulative weights, footnote 2;
+//!   not in the first frame, whose weights are all equal), propagate each
 //!   through the motion model, weight by the histogram distance `d` of its
-//!   window, `w = exp(-d^2 / (2 sigma^2))` ([`BallConfig::likelihood_sigma`];
-//!   the paper gives no formula, only "proportional to their plausibility"),
-//!   normalise (log domain). The estimate is the weighted mean.
+//!   window through [`HistogramCue`], `w = exp(-d^2 / (2 sigma^2))`
+//!   ([`BallConfig::likelihood_sigma`]; the paper gives no formula, only
+//!   "proportional to their plausibility"), normalise (log domain). The
+//!   estimate is the weighted mean.
 //!
 //! The reference histogram is the initial box's in the first frame; it is
 //! never updated.
@@ -72,9 +75,10 @@
 //! when it comes within the ball's radius; see docs/reproduction.md.
 //!
 //! # Randomness
-//! The PF draws from `stream_rng([key, seed, k])` for its `k`-th frame
-//! (`k = 0` at `init`), so a seed gives the same run on any machine; the KF
-//! and UKF are deterministic.
+//! The PF's initial velocities come from `stream_rng([key, seed, u64::MAX])`
+//! and frame `k` from the engine's streams keyed `[stream_seed([key,
+//! seed]), k]`, so a seed gives the same run on any machine and thread
+//! count; the KF and UKF are deterministic.
 //!
 //! ```
 //! use bayestrack_image::{BBox, Image};
@@ -100,13 +104,20 @@
 //! assert!((cx - 1.0 - 33.5).abs() < 3.0);
 //! ```
 
-use bayestrack_appearance::{HistogramDistance, HistogramMatch, RgbHistogram, histogram_search};
+use bayestrack_appearance::{
+    Candidate, Frame, HistogramCue, HistogramDistance, HistogramMatch, RgbHistogram,
+    histogram_search,
+};
 use bayestrack_image::{BBox, ImageView, Rect};
 use bayestrack_kalman::{Dynamics, Gaussian, Kf, LinearDynamics, LinearMeasurement, Ukf, nalgebra};
-use bayestrack_particle::{ParticleSet, Resampling, stream_rng};
+use bayestrack_particle::{Resampling, stream_rng, stream_seed};
 use nalgebra::{Matrix2, Matrix2x4, Matrix4, SMatrix, SVector, Vector2, Vector4};
+use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 
+use bayestrack_options::{Codec, above, choice, options};
+
+use crate::engine::{CueFilter, StateModel, select_predict_measure};
 use crate::error::{Result, TrackerError};
 use crate::tracker::{Estimate, FrameGuard, Tracker, check_initial_box};
 
@@ -141,68 +152,103 @@ impl MotionModel {
     }
 }
 
-/// Every parameter of the ball trackers. `Default` is what the `ball`
-/// experiment uses; the paper gives only the histogram and the UKF's
-/// `alpha`, `beta`, `kappa`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct BallConfig {
-    /// Motion model (default [`MotionModel::Linear`]).
-    pub motion: MotionModel,
-    /// Histogram bins per channel (256, the paper's).
-    pub bins: usize,
-    /// Histogram distance (L2, the paper's).
-    pub distance: HistogramDistance,
-    /// White-noise acceleration density `q`, px/frame^2 (0.5).
-    pub acceleration_noise: f64,
-    /// Standard deviation of the initial velocity, px/frame per axis (3):
-    /// the KF/UKF prior and the PF's initial spread of velocities.
-    pub initial_speed: f64,
-    /// KF/UKF measurement noise `r`, px (1.5).
-    pub measurement_noise: f64,
-    /// KF/UKF search margin around the predicted window, px (20: one ball
-    /// diameter in the default scene).
-    pub search_margin: usize,
-    /// PF likelihood spread `sigma` of `exp(-d^2 / (2 sigma^2))` (0.1).
-    pub likelihood_sigma: f64,
-    /// Histogram distance above which the tracker reports itself lost (0.6).
-    pub lost_distance: f64,
-    /// UKF `alpha` (1; Bócsi and Csató (paper 001) sec. 2.2 suggests 1e-3, which puts the
-    /// sigma points within 0.002 standard deviations of the mean with
-    /// weights of 1.25e5: one point across a wall, reflected, then throws
-    /// the mean hundreds of pixels off, see the module docs).
-    pub ukf_alpha: f64,
-    /// UKF `beta` (2).
-    pub ukf_beta: f64,
-    /// UKF `kappa` (0).
-    pub ukf_kappa: f64,
-    /// Evaluation budget of the KF/UKF measurement: at most this many
-    /// histogram windows per frame (`None`, the default: every window of the
-    /// search region, the exhaustive search). With a budget `B` smaller than
-    /// the region's windows the search visits a `k x k` grid, `k =
-    /// floor(sqrt(B))`, spread evenly over the same region, and the
-    /// measurement noise grows by the grid's quantisation variance
-    /// `s^2 / 12` per axis (`s` the larger grid step), see the module docs.
-    /// The PF evaluates exactly its `N` particles' windows whatever this is.
-    pub max_evaluations: Option<usize>,
+/// Reads a [`MotionModel`] as an option value: `linear`, or `bouncing:G`
+/// for gravity `G` px/frame^2 (finite).
+#[derive(Debug, Clone, Copy)]
+pub struct MotionCodec;
+
+impl Codec<MotionModel> for MotionCodec {
+    fn type_name() -> &'static str {
+        "motion"
+    }
+    fn parse(s: &str) -> Option<MotionModel> {
+        match s.trim() {
+            "linear" => Some(MotionModel::Linear),
+            other => {
+                let g: f64 = other.strip_prefix("bouncing:")?.parse().ok()?;
+                g.is_finite()
+                    .then_some(MotionModel::Bouncing { gravity: g })
+            }
+        }
+    }
+    fn format(v: &MotionModel) -> String {
+        match v {
+            MotionModel::Linear => "linear".to_string(),
+            MotionModel::Bouncing { gravity } => format!("bouncing:{gravity}"),
+        }
+    }
+    fn domain() -> String {
+        "linear|bouncing:G (gravity G px/frame^2)".to_string()
+    }
 }
 
-impl Default for BallConfig {
-    fn default() -> Self {
-        Self {
-            motion: MotionModel::Linear,
-            bins: RgbHistogram::FULL_BINS,
-            distance: HistogramDistance::L2,
-            acceleration_noise: 0.5,
-            initial_speed: 3.0,
-            measurement_noise: 1.5,
-            search_margin: 20,
-            likelihood_sigma: 0.1,
-            lost_distance: 0.6,
-            ukf_alpha: 1.0,
-            ukf_beta: 2.0,
-            ukf_kappa: 0.0,
-            max_evaluations: None,
-        }
+choice! {
+    /// Reads a [`HistogramDistance`] as an option value.
+    pub codec DistanceCodec for HistogramDistance { L2 = "l2", Bhattacharyya = "bhattacharyya" }
+}
+
+/// [`BallConfig::validate`] as the options' cross-field check.
+fn check_ball(c: &BallConfig) -> std::result::Result<(), String> {
+    c.validate().map_err(|e| e.to_string())
+}
+
+options! {
+    /// Every parameter of the ball trackers, each an option of `bayestrack
+    /// track --tracker ball-... --set key=value`. `Default` is what the
+    /// `ball` experiment uses; the paper gives only the histogram and the
+    /// UKF's `alpha`, `beta`, `kappa`.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub struct BallConfig {
+        /// Motion model: constant velocity reflected at the frame edges
+        /// (`linear`), or with gravity (`bouncing:G`).
+        pub motion: MotionModel = MotionModel::Linear, via MotionCodec;
+        /// Histogram bins per channel (256, the paper's).
+        pub bins: usize = RgbHistogram::FULL_BINS, in 1..=256;
+        /// Histogram distance (L2, the paper's).
+        pub distance: HistogramDistance = HistogramDistance::L2, via DistanceCodec;
+        /// White-noise acceleration density `q`, px/frame^2 (0.5).
+        pub acceleration_noise: f64 = 0.5, in above(0.0);
+        /// Standard deviation of the initial velocity, px/frame per axis (3):
+        /// the KF/UKF prior and the PF's initial spread of velocities.
+        pub initial_speed: f64 = 3.0, in above(0.0);
+        /// KF/UKF measurement noise `r`, px (1.5).
+        pub measurement_noise: f64 = 1.5, in above(0.0);
+        /// KF/UKF search margin around the predicted window, px (20: one ball
+        /// diameter in the default scene).
+        pub search_margin: usize = 20;
+        /// PF likelihood spread `sigma` of `exp(-d^2 / (2 sigma^2))` (0.1).
+        pub likelihood_sigma: f64 = 0.1, in above(0.0);
+        /// Histogram distance above which the tracker reports itself lost (0.6).
+        pub lost_distance: f64 = 0.6, in above(0.0);
+        /// UKF `alpha` (1; Bócsi and Csató (paper 001) sec. 2.2 suggests 1e-3, which puts the
+        /// sigma points within 0.002 standard deviations of the mean with
+        /// weights of 1.25e5: one point across a wall, reflected, then throws
+        /// the mean hundreds of pixels off, see the module docs).
+        pub ukf_alpha: f64 = 1.0, in above(0.0);
+        /// UKF `beta` (2).
+        pub ukf_beta: f64 = 2.0;
+        /// UKF `kappa` (0).
+        pub ukf_kappa: f64 = 0.0;
+        /// Evaluation budget of the KF/UKF measurement: at most this many
+        /// histogram windows per frame (`none`, the default: every window of the
+        /// search region, the exhaustive search). With a budget `B` smaller than
+        /// the region's windows the search visits a `k x k` grid, `k =
+        /// floor(sqrt(B))`, spread evenly over the same region, and the
+        /// measurement noise grows by the grid's quantisation variance
+        /// `s^2 / 12` per axis (`s` the larger grid step), see the module docs.
+        /// The PF evaluates exactly its `N` particles' windows whatever this is.
+        pub max_evaluations: Option<usize> = None;
+    }
+    check check_ball;
+}
+
+options! {
+    /// The ball particle filter's own option, beside [`BallConfig`].
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub struct BallParticles {
+        /// Particles (paper 001 sec. 4 runs 10, 30 and 70: the `ball-pf10`,
+        /// `ball-pf30` and `ball-pf70` presets).
+        pub particles: usize = 30, in 1..=1_000_000;
     }
 }
 
@@ -531,24 +577,65 @@ impl BallFilter {
 #[derive(Debug, Clone)]
 enum Belief {
     Gaussian(Gaussian<4>),
-    Particles(ParticleSet<SVector<f64, 4>>),
+    /// The particles and their cue (paper 001's RGB histogram, the
+    /// reference cut from the first frame).
+    Particles(Box<CueFilter<4>>, HistogramCue),
+}
+
+/// Paper 001 Algorithm 1, line 7: `x_k ~ p(x_k | x_{k-1})`, the
+/// constant-velocity (plus gravity) model over `dt` frames with white
+/// acceleration noise, reflected at the frame edges; each state is
+/// weighed as the box-size window at its centre.
+struct BallMotion<'a> {
+    target: &'a Target,
+    f: Matrix4<f64>,
+    b: SMatrix<f64, 4, 1>,
+    gravity: f64,
+    /// Lower-triangular factor of one axis' `[[dt^3/3, dt^2/2], [dt^2/2, dt]]`
+    /// times the acceleration noise.
+    l: (f64, f64, f64),
+}
+
+impl StateModel<4> for BallMotion<'_> {
+    #[inline]
+    fn predict<R: Rng + ?Sized>(
+        &self,
+        _k: usize,
+        x: &SVector<f64, 4>,
+        rng: &mut R,
+    ) -> SVector<f64, 4> {
+        let (l11, l21, l22) = self.l;
+        let mut y = self.f * x + self.b * self.gravity;
+        for axis in 0..2 {
+            let z1: f64 = StandardNormal.sample(rng);
+            let z2: f64 = StandardNormal.sample(rng);
+            y[axis] += l11 * z1;
+            y[axis + 2] += l21 * z1 + l22 * z2;
+        }
+        self.target.reflect(&mut y);
+        y
+    }
+
+    #[inline]
+    fn candidate(&self, x: &SVector<f64, 4>) -> Option<Candidate> {
+        Some(Candidate::Window(self.target.window(x[0], x[1])))
+    }
 }
 
 /// One of Bócsi and Csató's (paper 001) ball trackers (KF, UKF or PF_N), see the module docs.
 #[derive(Debug, Clone)]
 pub struct BallTracker {
+    /// The name it reports (the registry's entry, or the filter's name).
+    name: &'static str,
     filter: BallFilter,
     config: BallConfig,
     seed: u64,
     guard: FrameGuard,
     target: Option<Target>,
     belief: Option<Belief>,
-    /// Frames processed since `init` (the PF's stream index).
-    k: u64,
     ukf: Ukf,
     /// Scratch buffers.
     hist: RgbHistogram,
-    ancestors: Vec<usize>,
 }
 
 impl BallTracker {
@@ -569,16 +656,15 @@ impl BallTracker {
         }
         let ukf = Ukf::new(config.ukf_alpha, config.ukf_beta, config.ukf_kappa)?;
         Ok(Self {
+            name: filter.name(),
             filter,
             config,
             seed,
             guard: FrameGuard::default(),
             target: None,
             belief: None,
-            k: 0,
             ukf,
             hist: RgbHistogram::new(config.bins)?,
-            ancestors: Vec::new(),
         })
     }
 
@@ -606,6 +692,23 @@ impl BallTracker {
         Self::new(BallFilter::Pf(particles), config, seed)
     }
 
+    /// The particle-filter tracker as registry entry `name` (`ball-pf`,
+    /// or a preset such as `ball-pf10`), whatever its particle count.
+    ///
+    /// # Errors
+    /// As [`BallTracker::new`].
+    pub fn named_pf(
+        name: &'static str,
+        config: BallConfig,
+        particles: usize,
+        seed: u64,
+    ) -> Result<Self> {
+        Ok(Self {
+            name,
+            ..Self::new(BallFilter::Pf(particles), config, seed)?
+        })
+    }
+
     /// Which filter.
     pub fn filter(&self) -> BallFilter {
         self.filter
@@ -621,7 +724,7 @@ impl BallTracker {
     pub fn state(&self) -> Option<SVector<f64, 4>> {
         match self.belief.as_ref()? {
             Belief::Gaussian(g) => Some(*g.mean()),
-            Belief::Particles(set) => Some(set.mean()),
+            Belief::Particles(pf, _) => Some(pf.mean()),
         }
     }
 
@@ -638,7 +741,7 @@ impl BallTracker {
         check_dt(dt)?;
         if frame.channels() != 3 {
             return Err(TrackerError::Channels {
-                tracker: self.filter.name(),
+                tracker: self.name,
                 expected: COLOUR_ONLY,
                 got: frame.channels(),
             });
@@ -649,8 +752,6 @@ impl BallTracker {
         let c = &self.config;
         let (f, b, q) = matrices(dt, c.acceleration_noise);
         let gravity = c.motion.gravity();
-        let k = self.k;
-        self.k += 1;
         match (self.filter, belief) {
             (BallFilter::Kf | BallFilter::Ukf, Belief::Gaussian(g)) => {
                 let predicted = if self.filter == BallFilter::Kf {
@@ -693,45 +794,34 @@ impl BallTracker {
                     lost: m.distance > c.lost_distance,
                 })
             }
-            (BallFilter::Pf(_), Belief::Particles(set)) => {
-                let mut rng = stream_rng(&[KEY, self.seed, k]);
-                // Algorithm 1, line 6: j ~ p(j | w_{k-1}) (uniform after init).
-                set.resample(&Resampling::Multinomial, &mut rng, &mut self.ancestors)?;
-                // Lower-triangular factor of one axis' [[dt^3/3, dt^2/2], [dt^2/2, dt]].
+            (BallFilter::Pf(_), Belief::Particles(pf, cue)) => {
+                // Algorithm 1: j ~ p(j | w_{k-1}) (line 6, the engine's
+                // multinomial selection before the proposal), x_k ~
+                // p(x_k | x_{k-1}) (line 7), w_k from the histogram
+                // distance (line 8), normalised (lines 14-16)
                 let qn = c.acceleration_noise;
-                let (l11, l21, l22) = (
-                    qn * (dt.powi(3) / 3.0).sqrt(),
-                    qn * (3.0 * dt).sqrt() / 2.0,
-                    qn * (dt / 4.0).sqrt(),
-                );
+                let motion = BallMotion {
+                    target,
+                    f,
+                    b,
+                    gravity,
+                    l: (
+                        qn * (dt.powi(3) / 3.0).sqrt(),
+                        qn * (3.0 * dt).sqrt() / 2.0,
+                        qn * (dt / 4.0).sqrt(),
+                    ),
+                };
+                let report = pf.step(&motion, cue, &Frame::new().with_rgb(frame))?;
+                // the best particle's distance, from its log-likelihood
+                // -d^2 / (2 sigma^2)
                 let two_s2 = 2.0 * c.likelihood_sigma * c.likelihood_sigma;
-                let mut best = f64::INFINITY;
-                let (particles, log_w) = set.parts_mut();
-                for (x, lw) in particles.iter_mut().zip(log_w.iter_mut()) {
-                    // line 7: x_k ~ p(x_k | x_{k-1})
-                    let mut y = f * *x + b * gravity;
-                    for axis in 0..2 {
-                        let z1: f64 = StandardNormal.sample(&mut rng);
-                        let z2: f64 = StandardNormal.sample(&mut rng);
-                        y[axis] += l11 * z1;
-                        y[axis + 2] += l21 * z1 + l22 * z2;
-                    }
-                    target.reflect(&mut y);
-                    *x = y;
-                    // line 8: w_k ~ p(z_k | x_k), from the histogram distance
-                    self.hist.compute(frame, target.window(y[0], y[1]))?;
-                    let d = self.hist.distance(&target.reference, c.distance)?;
-                    best = best.min(d);
-                    *lw = -d * d / two_s2;
-                }
-                // lines 14-16: normalise
-                set.normalize()?;
-                let mean: SVector<f64, 4> = set.mean();
+                let best = (-report.max_log_increment * two_s2).max(0.0).sqrt();
+                let mean = pf.mean();
                 Ok(Estimate {
                     bbox: target.bbox(mean[0], mean[1]),
                     pose: None,
-                    particles: set.len(),
-                    evaluations: set.len(),
+                    particles: pf.len(),
+                    evaluations: pf.len(),
                     lost: best > c.lost_distance,
                 })
             }
@@ -742,11 +832,11 @@ impl BallTracker {
 
 impl Tracker for BallTracker {
     fn name(&self) -> &'static str {
-        self.filter.name()
+        self.name
     }
 
     fn init(&mut self, frame: ImageView<'_, u8>, bbox: BBox) -> Result<()> {
-        let (target, centre) = Target::new(self.filter.name(), &frame, bbox, &self.config)?;
+        let (target, centre) = Target::new(self.name, &frame, bbox, &self.config)?;
         let v0 = self.config.initial_speed;
         let belief = match self.filter {
             BallFilter::Kf | BallFilter::Ukf => {
@@ -766,13 +856,21 @@ impl Tracker for BallTracker {
                 let particles = (0..n)
                     .map(|_| Vector4::new(centre[0], centre[1], draw(), draw()))
                     .collect();
-                Belief::Particles(ParticleSet::new(particles)?)
+                let c = &self.config;
+                let cue = HistogramCue::new(
+                    target.reference.clone(),
+                    c.distance,
+                    c.likelihood_sigma,
+                    target.w.max(target.h),
+                )?;
+                let filter = select_predict_measure(Resampling::Multinomial);
+                let seed = stream_seed(&[KEY, self.seed]);
+                Belief::Particles(Box::new(CueFilter::new(filter, particles, seed)?), cue)
             }
         };
         self.guard.start(&frame);
         self.target = Some(target);
         self.belief = Some(belief);
-        self.k = 0;
         Ok(())
     }
 
@@ -834,19 +932,37 @@ mod tests {
 
     #[test]
     fn every_tracker_follows_a_clean_ball() {
-        for filter in BallFilter::PAPER {
+        for filter in [
+            BallFilter::Pf(30),
+            BallFilter::Pf(70),
+            BallFilter::Kf,
+            BallFilter::Ukf,
+        ] {
             let mut t = BallTracker::new(filter, BallConfig::default(), 3).unwrap();
             let (mean, max, lost) = follow(&mut t, 120);
-            // Ten particles on a 20 px ball are coarse; the rest lock on.
-            let bound = if filter == BallFilter::Pf(10) {
-                6.0
-            } else {
-                3.0
-            };
-            assert!(mean < bound, "{}: mean error {mean}", filter.name());
+            assert!(mean < 3.0, "{}: mean error {mean}", filter.name());
             assert!(max < 15.0, "{}: max error {max}", filter.name());
             assert_eq!(lost, 0, "{} reported itself lost", filter.name());
         }
+    }
+
+    #[test]
+    fn ten_particles_follow_a_clean_ball_in_most_runs() {
+        // Ten particles on a 20 px ball are coarse, and some runs lose the
+        // ball for good (seeds 0-29: 2 of 30 on the engine, 6 of 30 with
+        // the hand-written loop before it): a claim over ten seeds.
+        let runs: Vec<(f64, f64, usize)> = (0..10)
+            .map(|seed| {
+                let mut t =
+                    BallTracker::new(BallFilter::Pf(10), BallConfig::default(), seed).unwrap();
+                follow(&mut t, 120)
+            })
+            .collect();
+        let mut means: Vec<f64> = runs.iter().map(|r| r.0).collect();
+        means.sort_by(f64::total_cmp);
+        assert!(means[4] < 6.0, "median mean error {}: {means:?}", means[4]);
+        let held = runs.iter().filter(|r| r.0 < 6.0).count();
+        assert!(held >= 7, "{held} of 10 runs held the ball: {runs:?}");
     }
 
     #[test]
