@@ -660,3 +660,34 @@ fn every_tracker_runs_on_gray_and_colour_or_says_why_not() {
         }
     }
 }
+
+#[test]
+fn tracker_options_reach_the_tracker_and_bad_ones_write_nothing() {
+    let dir = tmpdir("options");
+    write_sequence(&dir, 4, 4);
+    let seq = dir.to_str().unwrap();
+    let out = dir.join("boxes.txt");
+    fs::write(&out, "previous run\n").unwrap();
+    let o = bayestrack(&[
+        "track",
+        "--seq",
+        seq,
+        "--tracker",
+        "ball-pf",
+        "--set",
+        "particles=0",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("particles (1..=1000000)"), "{err}");
+    assert_eq!(fs::read_to_string(&out).unwrap(), "previous run\n");
+    let o = bayestrack(&["trackers", "--options", "ball-pf70"]);
+    let listing = String::from_utf8_lossy(&o.stdout).to_string();
+    assert!(o.status.success());
+    assert!(
+        listing.starts_with("particles: usize (1..=1000000) = 70"),
+        "{listing}"
+    );
+}
