@@ -38,37 +38,21 @@ use std::path::{Path, PathBuf};
 use bayestrack_image::Image;
 use bayestrack_trackers::{TrackerError, TrackerInfo};
 
+use crate::error::{OtbError, WriteError};
 use crate::metrics::{
     OtbScore, SUCCESS_RATE_THRESHOLD, SUCCESS_THRESHOLDS, precision_at, score_otb,
 };
 use crate::plot::{Marks, Series, line_chart, line_chart_with_marks};
 use crate::published::Published;
-use crate::sequence::{OtbError, Sequence, list_sequences};
+use crate::sequence::{Sequence, list_sequences};
 use crate::table::Table;
-use crate::track::{BoxFile, OnBadFrame, TrackError, track_frames};
+use crate::track::{OnBadFrame, track_frames};
 use crate::write::{
-    PartialCsv, WriteError, clear_partial, create_dir, mark_partial, write_csv, write_text,
+    BoxFile, PartialCsv, clear_partial, create_dir, mark_partial, write_csv, write_text,
 };
 
 /// Centre-error thresholds of the precision plot, px.
 pub const PRECISION_PLOT_MAX: usize = 50;
-
-/// Why a suite run could not produce its report.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum SuiteError {
-    /// The root folder holds no sequence, or cannot be listed.
-    #[error("no sequence to run in {root}: {reason}")]
-    NoSequences {
-        /// The folder asked for.
-        root: PathBuf,
-        /// Why nothing was found.
-        reason: String,
-    },
-    /// An output file could not be written.
-    #[error(transparent)]
-    Write(#[from] WriteError),
-}
 
 /// What to run and where to write.
 #[derive(Debug, Clone)]
@@ -190,8 +174,8 @@ impl CellError {
     }
 
     /// Classifies a tracking error (see the type's documentation).
-    fn from_track(e: TrackError) -> Self {
-        if let TrackError::Tracker {
+    fn from_track(e: OtbError) -> Self {
+        if let OtbError::Tracker {
             frame: 1, source, ..
         } = &e
             && let TrackerError::Channels { expected, .. } = source.as_ref()
@@ -259,11 +243,11 @@ pub struct SuiteReport {
 /// `options.progress` is set.
 ///
 /// # Errors
-/// [`SuiteError::Write`] when an output file cannot be written;
-/// [`SuiteError::NoSequences`] when `root` holds no sequence or cannot
+/// [`OtbError::Write`] when an output file cannot be written;
+/// [`OtbError::NoSequences`] when `root` holds no sequence or cannot
 /// be listed. Failures of a tracker or of a sequence's frames are not
 /// errors of the run: they fill the affected cells.
-pub fn run_suite(root: &Path, options: &SuiteOptions) -> Result<SuiteReport, SuiteError> {
+pub fn run_suite(root: &Path, options: &SuiteOptions) -> Result<SuiteReport, OtbError> {
     run_suite_with(root, options, |event| {
         if let (true, SuiteEvent::CellFinished { cell, .. }) = (options.progress, event) {
             eprintln!("{}", cell.summary());
@@ -280,8 +264,8 @@ pub fn run_suite_with(
     root: &Path,
     options: &SuiteOptions,
     mut observe: impl FnMut(SuiteEvent<'_>),
-) -> Result<SuiteReport, SuiteError> {
-    let bad_root = |reason: String| SuiteError::NoSequences {
+) -> Result<SuiteReport, OtbError> {
+    let bad_root = |reason: String| OtbError::NoSequences {
         root: root.to_path_buf(),
         reason,
     };
@@ -888,8 +872,8 @@ impl SuiteReport {
 mod tests {
     use super::*;
 
-    fn tracker_error(frame: usize, source: TrackerError) -> TrackError {
-        TrackError::Tracker {
+    fn tracker_error(frame: usize, source: TrackerError) -> OtbError {
+        OtbError::Tracker {
             tracker: "t",
             frame,
             path: PathBuf::from("0001.jpg"),
@@ -911,7 +895,7 @@ mod tests {
         // the channel count changing mid-sequence is a real failure
         assert!(CellError::from_track(tracker_error(7, channels())).is_failure());
         assert!(CellError::from_track(tracker_error(1, TrackerError::NotInitialised)).is_failure());
-        assert!(CellError::from_track(TrackError::NoFrames).is_failure());
+        assert!(CellError::from_track(OtbError::NoFramesToTrack).is_failure());
     }
 
     /// A score whose success rate at 0.5 is `hits / frames` (IoU 1 on the
