@@ -8,6 +8,8 @@ pub mod otb_table;
 pub mod plot;
 pub mod published;
 pub mod sequence;
+#[cfg(feature = "suite")]
+pub mod shard;
 pub mod source;
 #[cfg(feature = "suite")]
 pub mod suite;

@@ -25,6 +25,20 @@ pub fn write_text(path: &Path, contents: &str) -> Result<(), WriteError> {
     })
 }
 
+/// Copies the file `from` to `to` as [`write_text`] writes: to a
+/// temporary file beside `to`, renamed over it.
+///
+/// # Errors
+/// [`WriteError`] naming the file that cannot be copied or written.
+pub fn copy_file(from: &Path, to: &Path) -> Result<(), WriteError> {
+    let tmp = temporary_path(to);
+    std::fs::copy(from, &tmp).map_err(|e| WriteError::new(from, e))?;
+    std::fs::rename(&tmp, to).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        WriteError::new(to, e)
+    })
+}
+
 /// `dir/.name.tmp` for `dir/name`.
 fn temporary_path(path: &Path) -> PathBuf {
     let name = path
