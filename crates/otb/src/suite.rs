@@ -554,7 +554,8 @@ fn merged_report(
                     return Err(merge_error(
                         dir,
                         format!(
-                            "it is from another suite run than {}: {} shards, {} cells of {}                              trackers, seed {} against {} shards, {} cells of {} trackers, seed {}",
+                            "it is from another suite run than {}: {} shards, {} cells of {} trackers, \
+                             seed {} against {} shards, {} cells of {} trackers, seed {}",
                             said.display(),
                             key.0,
                             key.1,

@@ -147,14 +147,21 @@ fn shards_merged_write_the_files_of_one_run_byte_for_byte() {
             "{n} shards: the files"
         );
         for (path, bytes) in &expected {
-            assert!(got[path] == *bytes, "{n} shards: {} differs", path.display());
+            assert!(
+                got[path] == *bytes,
+                "{n} shards: {} differs",
+                path.display()
+            );
         }
     }
 
     // a shard missing: nothing written, the earlier results kept
     let merged = root.join("merged3");
     let before = tree(&merged);
-    let two: Vec<PathBuf> = [1, 3].iter().map(|k| root.join(format!("shard{k}of3"))).collect();
+    let two: Vec<PathBuf> = [1, 3]
+        .iter()
+        .map(|k| root.join(format!("shard{k}of3")))
+        .collect();
     let e = merge(&two, &merged, None).unwrap_err().to_string();
     assert!(e.contains("give the folders of shard(s) 2/3"), "{e}");
     // the same shard twice, or shards of two splits
@@ -169,6 +176,9 @@ fn shards_merged_write_the_files_of_one_run_byte_for_byte() {
     let all: Vec<PathBuf> = (1..=3).map(|k| root.join(format!("shard{k}of3"))).collect();
     let e = merge(&all, &merged, None).unwrap_err().to_string();
     assert!(e.contains("shard2of3") && e.contains("PARTIAL.txt"), "{e}");
-    assert!(tree(&merged) == before, "a failed merge changed its output folder");
+    assert!(
+        tree(&merged) == before,
+        "a failed merge changed its output folder"
+    );
     std::fs::remove_dir_all(&root).unwrap();
 }
