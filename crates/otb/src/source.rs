@@ -1,5 +1,5 @@
-//! Frame sources: where the tracking loop ([`crate::track::track_source`])
-//! pulls its frames from, one at a time.
+//! Frame sources: where the tracking loop (`track::track_source`, feature
+//! `track`) pulls its frames from, one at a time.
 //!
 //! A [`FrameSource`] is an iterator of decoded frames with their names. It
 //! streams: a frame is decoded when the loop asks for it and dropped before
