@@ -31,6 +31,12 @@
 //!
 //! [`run_suite_with`] reports what it is doing ([`SuiteEvent`]: the cell
 //! running, each frame tracked) so that a caller can draw a progress bar.
+//!
+//! On several machines, each runs one shard of the cells
+//! ([`SuiteOptions::shard`], [`crate::shard`] says which cells and what a
+//! shard writes) and [`merge`] combines the shard folders into the files a
+//! single run writes, byte for byte ([`Timing::PerCall`] makes two runs'
+//! fps, and so every byte, comparable in tests).
 
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
