@@ -12,11 +12,14 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
-use bayestrack::image::{BBox, Rgb, read_ground_truth, write_frame_with_boxes};
+use bayestrack::image::{BBox, Rgb, write_frame_with_boxes};
+use bayestrack::otb::ground_truth::read_ground_truth;
 use bayestrack::otb::metrics::score_otb;
-use bayestrack::otb::sequence::{OtbError, Sequence};
+use bayestrack::otb::sequence::Sequence;
 use bayestrack::otb::source::{FrameSelection, FrameSource, Select, VideoSource, Y4mSource};
-use bayestrack::otb::track::{BoxFile, OnBadFrame, TrackError, box_row, track_source};
+use bayestrack::otb::track::{OnBadFrame, track_source};
+use bayestrack::otb::write::{BoxFile, box_row};
+use bayestrack::otb::{OtbError, WriteError};
 use bayestrack::trackers::{REGISTRY, tracker_info};
 use clap::{Parser, Subcommand, ValueEnum};
 
@@ -434,10 +437,7 @@ fn track(args: &TrackArgs) -> Result<(), String> {
             write_drawn(&path, |part| {
                 write_frame_with_boxes(part, frame, &boxes, 1).map_err(|e| e.to_string())
             })
-            .map_err(|e| TrackError::Output {
-                path,
-                source: std::io::Error::other(e),
-            })?;
+            .map_err(|e| WriteError::new(&path, std::io::Error::other(e)))?;
         }
         Ok(())
     });

@@ -25,8 +25,9 @@ use bayestrack_experiments::{
     Experiment, ExperimentError, Mode, REGISTRY as EXPERIMENTS, RunOptions,
 };
 use bayestrack_otb::published::{PUBLISHED_OPE_FILE, Published};
-use bayestrack_otb::suite::{SuiteEvent, SuiteOptions, run_suite_with};
-use bayestrack_trackers::{REGISTRY, tracker_info};
+use bayestrack_otb::shard::Shard;
+use bayestrack_otb::suite::{SuiteEvent, SuiteOptions, SuiteReport, Timing, merge, run_suite_with};
+use bayestrack_trackers::{REGISTRY, TrackerInfo, tracker_info};
 use clap::{Parser, Subcommand};
 
 #[derive(Parser)]
@@ -72,7 +73,9 @@ enum Command {
     /// evaluation); print AUC / P@20 / fps per sequence and their means,
     /// then ours beside the published OTB trackers (success rate at IoU
     /// 0.5); write boxes, results.csv, results.md and success/precision
-    /// plots.
+    /// plots. `--shard K/N` runs one slice of the cells (on one of N
+    /// machines), `--merge DIR...` combines the slices' folders into the
+    /// files of one run.
     Otb {
         /// Folder of OTB sequences (each with img/ and ground truth)
         /// (default: `<project root>/../shared/data/sequences`).
@@ -93,6 +96,22 @@ enum Command {
         /// are printed alone).
         #[arg(long)]
         otb_data: Option<PathBuf>,
+        /// Run shard K of N: the tracker x sequence cells i (numbered
+        /// sequence-major: sequence i / trackers, tracker i % trackers) with
+        /// i % N == K - 1, written to --out with what `--merge` needs
+        /// (shard.csv, scores/) instead of the results, table and plots.
+        #[arg(long, value_name = "K/N", value_parser = parse_shard)]
+        shard: Option<Shard>,
+        /// Merge the folders of every shard of one run (written by
+        /// `--shard`) into --out: the files one run on one machine writes,
+        /// byte for byte, beside the published results of --otb-data.
+        #[arg(
+            long,
+            value_name = "DIR",
+            num_args = 1..,
+            conflicts_with_all = ["shard", "root", "trackers", "seed"]
+        )]
+        merge: Vec<PathBuf>,
     },
     /// Rewrite `tests/golden/<id>.csv` from fresh quick runs and print what
     /// changed.
@@ -210,12 +229,21 @@ fn suite_bar() -> indicatif::ProgressBar {
     indicatif::ProgressBar::new(0).with_style(style)
 }
 
+/// `--shard K/N`: shard K of N.
+fn parse_shard(spec: &str) -> Result<Shard, String> {
+    Shard::parse(spec).map_err(|e| e.to_string())
+}
+
+/// `cargo xtask otb`: the suite on every cell, or on a shard's
+/// (`shard`), or the merge of shard folders (`merge_dirs`).
 fn otb(
     root: &Path,
     names: &[String],
     seed: u64,
     out: PathBuf,
     otb_data: &Path,
+    shard: Option<Shard>,
+    merge_dirs: &[PathBuf],
 ) -> Result<(), String> {
     let trackers = if names.is_empty() {
         REGISTRY.iter().collect()
@@ -230,12 +258,67 @@ fn otb(
         Ok(p) => (p, None),
         Err(e) => (None, Some(e)),
     };
+    let report = if merge_dirs.is_empty() {
+        run_otb(root, trackers, seed, out.clone(), published, shard)?
+    } else {
+        merge(merge_dirs, &out, published).map_err(|e| e.to_string())?
+    };
+    if let Some(shard) = shard {
+        println!(
+            "shard {shard}: {} of the tracker x sequence cells; merge the folders of all {} \
+             shards with `cargo xtask otb --merge DIR... --out OUT`",
+            report.cells.len(),
+            shard.count()
+        );
+    } else {
+        print_otb(&report);
+    }
+    println!("\nfiles: {}", out.display());
+    let mut errors: Vec<String> = published_error.into_iter().collect();
+    // cells marked n/a (a tracker that cannot run on the input by design,
+    // see `CellError`) are not failures; every other error fails the run
+    let failed = report.failures();
+    if !failed.is_empty() {
+        let cells: Vec<String> = failed
+            .iter()
+            .map(|c| format!("{} x {}", c.tracker, c.sequence))
+            .collect();
+        let table = if shard.is_some() {
+            bayestrack_otb::shard::SHARD_FILE
+        } else {
+            "results.csv"
+        };
+        errors.push(format!(
+            "{} tracker x sequence cell(s) failed: {} (reasons in the `error` column of {})",
+            failed.len(),
+            cells.join(", "),
+            out.join(table).display()
+        ));
+    }
+    if errors.is_empty() {
+        Ok(())
+    } else {
+        Err(errors.join("\nerror: "))
+    }
+}
+
+/// Runs the suite (every cell, or `shard`'s) with a progress bar.
+fn run_otb(
+    root: &Path,
+    trackers: Vec<&'static TrackerInfo>,
+    seed: u64,
+    out: PathBuf,
+    published: Option<Published>,
+    shard: Option<Shard>,
+) -> Result<SuiteReport, String> {
     let options = SuiteOptions {
         trackers,
         seed,
         out,
         progress: true,
         published,
+        shard,
+        timing: Timing::Measured,
     };
     let bar = suite_bar();
     let report = run_suite_with(root, &options, |event| match event {
@@ -253,35 +336,18 @@ fn otb(
         _ => {}
     });
     bar.finish_and_clear();
-    let report = report.map_err(|e| e.to_string())?;
+    report.map_err(|e| e.to_string())
+}
+
+/// Prints the suite's table, ours beside the published trackers, and the
+/// notes on the frames compared.
+fn print_otb(report: &SuiteReport) {
     println!("{}", report.table());
     if let Some(beside) = report.beside_published() {
         println!("{beside}");
     }
     for note in report.published_notes() {
         println!("- {note}");
-    }
-    println!("\nfiles: {}", options.out.display());
-    let mut errors: Vec<String> = published_error.into_iter().collect();
-    // cells marked n/a (a tracker that cannot run on the input by design,
-    // see `CellError`) are not failures; every other error fails the run
-    let failed = report.failures();
-    if !failed.is_empty() {
-        let cells: Vec<String> = failed
-            .iter()
-            .map(|c| format!("{} x {}", c.tracker, c.sequence))
-            .collect();
-        errors.push(format!(
-            "{} tracker x sequence cell(s) failed: {} (reasons in the `error` column of {})",
-            failed.len(),
-            cells.join(", "),
-            options.out.join("results.csv").display()
-        ));
-    }
-    if errors.is_empty() {
-        Ok(())
-    } else {
-        Err(errors.join("\nerror: "))
     }
 }
 
@@ -294,12 +360,16 @@ fn main() -> ExitCode {
             seed,
             out,
             otb_data,
+            shard,
+            merge,
         } => match otb(
             &resolve(root, "../shared/data/sequences"),
             &trackers,
             seed,
             resolve(out, "target/otb"),
             &resolve(otb_data, "../shared/data/otb"),
+            shard,
+            &merge,
         ) {
             Ok(()) => ExitCode::SUCCESS,
             Err(err) => {

@@ -159,24 +159,6 @@ pub enum ImageError {
         /// The folder searched.
         path: PathBuf,
     },
-    /// No ground-truth file found in a sequence folder.
-    #[error("no ground-truth file (groundtruth_rect.txt or *_gt.txt) in {path}")]
-    NoGroundTruth {
-        /// The sequence folder.
-        path: PathBuf,
-    },
-    /// A ground-truth row that does not parse as four numbers.
-    #[error("{path}:{line}: cannot parse ground-truth row {text:?}: {reason}")]
-    GroundTruthParse {
-        /// The ground-truth file.
-        path: PathBuf,
-        /// 1-based line number.
-        line: usize,
-        /// The text of the line.
-        text: String,
-        /// What is wrong with it.
-        reason: String,
-    },
 }
 
 /// Shorthand for results of this crate.

@@ -1,4 +1,5 @@
-//! PNG/JPEG frame folders, OTB ground truth and PNG output (feature `io`).
+//! PNG/JPEG frame folders and PNG output (feature `io`). The OTB layout
+//! (ground truth, sequence tables) is `bayestrack-otb`'s.
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -252,188 +253,6 @@ fn check_nonempty(img: &image::DynamicImage) -> Result<()> {
     Ok(())
 }
 
-/// Parses OTB ground truth: one `x y w h` row per frame, numbers separated
-/// by commas, tabs and/or spaces, mixed even within one row as OTB ships
-/// them (BlurCar1's row 496: `1 2,3\t4`). A comma with spaces or tabs
-/// around it is one separator, and so is a run of spaces and tabs; two
-/// commas with nothing between them (`1,,2,3,4`) are an empty field, an
-/// error rather than a silently shifted row. A UTF-8 byte-order mark at the
-/// start and CRLF line ends are accepted. A row of four zeros means
-/// "unlabelled" and becomes `None`. Blank lines are skipped (they number no
-/// frame).
-///
-/// `path` only names the source in errors.
-///
-/// # Errors
-/// [`ImageError::GroundTruthParse`] naming the 1-based line for a row that
-/// is not four finite numbers with non-negative width and height, or that
-/// has an empty field.
-pub fn parse_ground_truth(text: &str, path: impl AsRef<Path>) -> Result<Vec<Option<BBox>>> {
-    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let mut out = Vec::new();
-    for (i, line) in text.lines().enumerate() {
-        let trimmed = line.trim();
-        if trimmed.is_empty() {
-            continue;
-        }
-        let bad = |reason: String| ImageError::GroundTruthParse {
-            path: path.as_ref().to_path_buf(),
-            line: i + 1,
-            text: line.to_string(),
-            reason,
-        };
-        let mut fields: Vec<&str> = Vec::with_capacity(4);
-        for (k, part) in trimmed.split(',').enumerate() {
-            if part.trim().is_empty() {
-                return Err(bad(format!(
-                    "field {} is empty (two commas with nothing between them, or a comma \
-                     at an end of the row)",
-                    k + 1
-                )));
-            }
-            fields.extend(part.split_whitespace());
-        }
-        if fields.len() != 4 {
-            return Err(bad(format!("expected 4 numbers, found {}", fields.len())));
-        }
-        let mut v = [0f64; 4];
-        for (slot, f) in v.iter_mut().zip(&fields) {
-            *slot = f
-                .parse::<f64>()
-                .map_err(|e| bad(format!("{f:?} is not a number ({e})")))?;
-            if !slot.is_finite() {
-                return Err(bad(format!("{f:?} is not finite")));
-            }
-        }
-        if v[2] < 0.0 || v[3] < 0.0 {
-            return Err(bad("negative width or height".to_string()));
-        }
-        out.push((v != [0.0; 4]).then(|| BBox::new(v[0], v[1], v[2], v[3])));
-    }
-    Ok(out)
-}
-
-/// Reads an OTB ground-truth file; see [`parse_ground_truth`].
-///
-/// # Errors
-/// [`ImageError::Io`] if the file cannot be read;
-/// [`ImageError::GroundTruthParse`] naming the file and line of a bad row.
-pub fn read_ground_truth(path: impl AsRef<Path>) -> Result<Vec<Option<BBox>>> {
-    let path = path.as_ref();
-    let bytes = fs::read(path).map_err(io_err(path))?;
-    let text = String::from_utf8_lossy(&bytes);
-    parse_ground_truth(&text, path)
-}
-
-/// Finds the ground-truth file of an OTB sequence folder:
-/// `groundtruth_rect.txt`, else the first (by name) `*_gt*.txt` or
-/// `groundtruth*.txt` (the first of [`find_ground_truth_files`]).
-///
-/// # Errors
-/// [`ImageError::Io`] if the folder cannot be read;
-/// [`ImageError::NoGroundTruth`] if there is none.
-pub fn find_ground_truth(dir: impl AsRef<Path>) -> Result<PathBuf> {
-    let mut files = find_ground_truth_files(dir)?;
-    Ok(files.swap_remove(0))
-}
-
-/// Every ground-truth file of an OTB sequence folder (`*_gt*.txt` and
-/// `groundtruth*.txt`; a folder with two targets has two):
-/// `groundtruth_rect.txt` first when there is one, the others by name.
-///
-/// # Errors
-/// [`ImageError::Io`] if the folder cannot be read;
-/// [`ImageError::NoGroundTruth`] if there is none.
-pub fn find_ground_truth_files(dir: impl AsRef<Path>) -> Result<Vec<PathBuf>> {
-    let dir = dir.as_ref();
-    let mut files = Vec::new();
-    for entry in fs::read_dir(dir).map_err(io_err(dir))? {
-        let p = entry.map_err(io_err(dir))?.path();
-        let name = p
-            .file_name()
-            .and_then(|n| n.to_str())
-            .unwrap_or_default()
-            .to_ascii_lowercase();
-        if p.is_file()
-            && name.ends_with(".txt")
-            && (name.contains("_gt") || name.starts_with("groundtruth"))
-        {
-            files.push(p);
-        }
-    }
-    files.sort();
-    let standard = dir.join("groundtruth_rect.txt");
-    if let Some(i) = files.iter().position(|p| *p == standard) {
-        let p = files.remove(i);
-        files.insert(0, p);
-    }
-    if files.is_empty() {
-        return Err(ImageError::NoGroundTruth {
-            path: dir.to_path_buf(),
-        });
-    }
-    Ok(files)
-}
-
-/// An OTB-layout sequence on disk: its frame paths and ground truth.
-/// Frames are decoded on demand with [`OtbSequence::frame`].
-#[derive(Clone, Debug)]
-pub struct OtbSequence {
-    /// The sequence folder.
-    pub dir: PathBuf,
-    /// Frame files in order.
-    pub frames: Vec<PathBuf>,
-    /// The ground-truth file.
-    pub ground_truth_path: PathBuf,
-    /// One entry per ground-truth row; `None` where unlabelled.
-    pub ground_truth: Vec<Option<BBox>>,
-}
-
-impl OtbSequence {
-    /// Opens a sequence folder (`img/` + ground-truth file).
-    ///
-    /// # Errors
-    /// Those of [`list_frames`], [`find_ground_truth`], [`read_ground_truth`].
-    pub fn open(dir: impl AsRef<Path>) -> Result<Self> {
-        let dir = dir.as_ref();
-        let frames = list_frames(dir)?;
-        let ground_truth_path = find_ground_truth(dir)?;
-        let ground_truth = read_ground_truth(&ground_truth_path)?;
-        Ok(Self {
-            dir: dir.to_path_buf(),
-            frames,
-            ground_truth_path,
-            ground_truth,
-        })
-    }
-
-    /// Number of frames.
-    pub fn len(&self) -> usize {
-        self.frames.len()
-    }
-
-    /// Whether the sequence has no frames (never true for an opened one).
-    pub fn is_empty(&self) -> bool {
-        self.frames.is_empty()
-    }
-
-    /// Decodes frame `index` (0-based) with [`read_frame`].
-    ///
-    /// # Errors
-    /// [`ImageError::InvalidParameter`] for an index past the end; those of
-    /// [`read_frame`].
-    pub fn frame(&self, index: usize) -> Result<Image<u8>> {
-        let path = self
-            .frames
-            .get(index)
-            .ok_or_else(|| ImageError::InvalidParameter {
-                name: "index",
-                reason: format!("frame {index} of a {}-frame sequence", self.frames.len()),
-            })?;
-        read_frame(path)
-    }
-}
-
 /// Writes a 1- or 3-channel 8-bit image (any stride) as PNG.
 ///
 /// # Errors
@@ -521,49 +340,6 @@ mod tests {
         assert_eq!(frame_number(Path::new("x.png")), None);
     }
 
-    #[test]
-    fn ground_truth_formats() {
-        let t = "1,2,3,4\n5\t6\t7\t8\n\n9 10  11 12\n0,0,0,0\n87.586,40.153,75,97\r\n";
-        let gt = parse_ground_truth(t, "gt.txt").unwrap();
-        assert_eq!(gt.len(), 5);
-        assert_eq!(gt[0], Some(BBox::new(1.0, 2.0, 3.0, 4.0)));
-        assert_eq!(gt[1], Some(BBox::new(5.0, 6.0, 7.0, 8.0)));
-        assert_eq!(gt[2], Some(BBox::new(9.0, 10.0, 11.0, 12.0)));
-        assert_eq!(gt[3], None);
-        assert_eq!(gt[4], Some(BBox::new(87.586, 40.153, 75.0, 97.0)));
-    }
-
-    #[test]
-    fn ground_truth_as_otb_ships_it() {
-        // A byte-order mark, CRLF, separators mixed within a row (BlurCar1's
-        // row 496), a comma with spaces around it, tabs.
-        let t = "\u{feff}1,2,3,4\r\n5 6,7\t8\r\n9 , 10,\t11  12\r\n";
-        let gt = parse_ground_truth(t, "gt.txt").unwrap();
-        assert_eq!(
-            gt,
-            [
-                Some(BBox::new(1.0, 2.0, 3.0, 4.0)),
-                Some(BBox::new(5.0, 6.0, 7.0, 8.0)),
-                Some(BBox::new(9.0, 10.0, 11.0, 12.0)),
-            ]
-        );
-        // An empty field is an error naming the line, not a shifted row.
-        for (text, line) in [
-            ("1,2,3,4\n1,,2,3,4\n", 2),
-            ("1,2,3,4\n1, ,2,3\n", 2),
-            (",1,2,3,4\n", 1),
-            ("1,2,3,4,\n", 1),
-        ] {
-            match parse_ground_truth(text, "gt.txt") {
-                Err(e @ ImageError::GroundTruthParse { line: l, .. }) => {
-                    assert_eq!(l, line, "{text:?}");
-                    assert!(e.to_string().contains("empty"), "{e}");
-                }
-                other => panic!("{text:?}: expected an empty-field error, got {other:?}"),
-            }
-        }
-    }
-
     /// A `w x h` gray JPEG in memory.
     fn jpeg_bytes(w: u32, h: u32) -> Vec<u8> {
         let pixels: Vec<u8> = (0..w * h).map(|i| (i * 7 % 251) as u8).collect();
@@ -614,27 +390,6 @@ mod tests {
     }
 
     #[test]
-    fn bad_ground_truth_names_the_line() {
-        for (text, line) in [
-            ("1,2,3,4\n1,2,x,4\n", 2),
-            ("1,2,3\n", 1),
-            ("1,2,3,4\n\n1,2,3,4,5\n", 3),
-            ("1,2,-3,4\n", 1),
-            ("1,2,NaN,4\n", 1),
-        ] {
-            match parse_ground_truth(text, "seq/gt.txt") {
-                Err(ImageError::GroundTruthParse { line: l, path, .. }) => {
-                    assert_eq!(l, line, "{text:?}");
-                    assert_eq!(path, Path::new("seq/gt.txt"));
-                }
-                other => panic!("{text:?}: expected a parse error, got {other:?}"),
-            }
-        }
-        let e = parse_ground_truth("1;2;3;4", "a.txt").unwrap_err();
-        assert!(e.to_string().contains("a.txt:1"), "{e}");
-    }
-
-    #[test]
     fn png_round_trip_and_numeric_order() {
         let d = tmpdir("roundtrip");
         let img = Image::from_fn(7, 5, |x, y| (x * 30 + y) as u8).unwrap();
@@ -659,11 +414,9 @@ mod tests {
         let seq = tmpdir("seq");
         fs::create_dir_all(seq.join("img")).unwrap();
         write_png(seq.join("img/0001.png"), img.view()).unwrap();
-        fs::write(seq.join("groundtruth_rect.txt"), "1\t1\t3\t3\n").unwrap();
-        let s = OtbSequence::open(&seq).unwrap();
-        assert_eq!((s.len(), s.ground_truth.len()), (1, 1));
-        assert_eq!(s.frame(0).unwrap(), img);
-        assert!(s.frame(1).is_err());
+        let frames = list_frames(&seq).unwrap();
+        assert_eq!(frames, [seq.join("img/0001.png")]);
+        assert_eq!(read_frame(&frames[0]).unwrap(), img);
         // Boxes drawn on a gray frame come back red.
         let out = seq.join("boxed.png");
         write_frame_with_boxes(
@@ -707,10 +460,6 @@ mod tests {
         assert!(matches!(
             list_frames(&empty),
             Err(ImageError::NoFrames { .. })
-        ));
-        assert!(matches!(
-            find_ground_truth(&empty),
-            Err(ImageError::NoGroundTruth { .. })
         ));
         let _ = fs::remove_dir_all(&d);
         let _ = fs::remove_dir_all(&empty);

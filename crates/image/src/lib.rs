@@ -25,9 +25,8 @@ pub use crate::error::{ImageError, Result};
 pub use crate::integral::{AreaSampler, IntegralImage, gray_region_into};
 #[cfg(feature = "io")]
 pub use crate::io::{
-    OtbSequence, decode_frame, find_ground_truth, find_ground_truth_files, list_frames,
-    parse_ground_truth, read_frame, read_frame_gray, read_frame_rgb, read_ground_truth,
-    write_frame_with_boxes, write_png,
+    decode_frame, list_frames, read_frame, read_frame_gray, read_frame_rgb, write_frame_with_boxes,
+    write_png,
 };
 pub use crate::morph::{close, dilate, erode, open};
 pub use crate::ops::{Mask, abs_diff, abs_diff_into, motion_mask, threshold, threshold_into};

@@ -1,22 +1,28 @@
 #![doc = include_str!("../README.md")]
 
+pub mod error;
+pub mod ground_truth;
 pub mod metrics;
 pub mod otb_table;
-#[cfg(feature = "suite")]
+#[cfg(feature = "plot")]
 pub mod plot;
 pub mod published;
 pub mod sequence;
+#[cfg(feature = "suite")]
+pub mod shard;
 pub mod source;
 #[cfg(feature = "suite")]
 pub mod suite;
 pub mod table;
+#[cfg(feature = "track")]
 pub mod track;
 pub mod write;
 pub mod y4m;
 
-pub use metrics::{MetricsError, OtbScore, score_otb};
-pub use sequence::{OtbError, Sequence};
+pub use error::{OtbError, WriteError};
+pub use metrics::{OtbScore, score_otb};
+pub use sequence::Sequence;
 pub use source::{Frame, FrameSelection, FrameSource, Select};
 pub use table::Table;
-pub use track::{OnBadFrame, TrackError, TrackRun, track_frames, track_source};
-pub use write::WriteError;
+#[cfg(feature = "track")]
+pub use track::{OnBadFrame, TrackRun, track_frames, track_source};

@@ -4,7 +4,7 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use crate::write::WriteError;
+use crate::error::WriteError;
 
 /// One named polyline.
 #[derive(Debug, Clone)]

@@ -43,6 +43,7 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
+use crate::error::OtbError;
 use crate::otb_table::{OtbEntry, otb100};
 
 /// File name of the published results in the OTB data folder.
@@ -55,58 +56,6 @@ pub const PUBLISHED_OPE_HEADER: [&str; 4] = [
     "success_rate_iou_0.5",
     "mean_overlap_of_frames_with_overlap",
 ];
-
-/// What is wrong with a table of published results.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum PublishedError {
-    /// The file cannot be read.
-    #[error("cannot read {}: {source}", path.display())]
-    Read {
-        /// The file.
-        path: PathBuf,
-        /// The I/O error.
-        source: std::io::Error,
-    },
-    /// The first line is not the expected header.
-    #[error("{}:1: expected the header `{expected}`, found `{found}`", path.display())]
-    Header {
-        /// The file.
-        path: PathBuf,
-        /// What the header should be.
-        expected: String,
-        /// The first line as found.
-        found: String,
-    },
-    /// A row that cannot be read.
-    #[error("{}:{line}: {message}", path.display())]
-    Row {
-        /// The file.
-        path: PathBuf,
-        /// 1-based line number.
-        line: usize,
-        /// What is wrong.
-        message: String,
-    },
-    /// The same tracker and sequence twice.
-    #[error("{}:{line}: {what} repeats line {first}", path.display())]
-    Duplicate {
-        /// The file.
-        path: PathBuf,
-        /// 1-based line of the repetition.
-        line: usize,
-        /// 1-based line of the first occurrence.
-        first: usize,
-        /// The repeated key.
-        what: String,
-    },
-    /// A header and no rows.
-    #[error("{}: no rows after the header", path.display())]
-    Empty {
-        /// The file.
-        path: PathBuf,
-    },
-}
 
 /// The published results of the OTB data folder and the frame ranges they
 /// cover.
@@ -126,9 +75,9 @@ impl Published {
     /// compiled OTB-100 table ([`OtbFrameRanges::otb100`]).
     ///
     /// # Errors
-    /// [`PublishedError`] naming the file (and the line) that cannot be
+    /// [`OtbError`] naming the file (and the line) that cannot be
     /// read; [`Published::is_missing`] says whether it is simply absent.
-    pub fn read(dir: &Path) -> Result<Self, PublishedError> {
+    pub fn read(dir: &Path) -> Result<Self, OtbError> {
         Ok(Self {
             dir: dir.to_path_buf(),
             results: PublishedOpe::read(&dir.join(PUBLISHED_OPE_FILE))?,
@@ -138,8 +87,8 @@ impl Published {
 
     /// Whether `error` says that the file is not there (rather than
     /// unreadable or malformed).
-    pub fn is_missing(error: &PublishedError) -> bool {
-        matches!(error, PublishedError::Read { source, .. }
+    pub fn is_missing(error: &OtbError) -> bool {
+        matches!(error, OtbError::Read { source, .. }
             if source.kind() == std::io::ErrorKind::NotFound)
     }
 
@@ -192,9 +141,9 @@ impl PublishedOpe {
     /// Reads `path` (see the module docs for the format).
     ///
     /// # Errors
-    /// [`PublishedError`] naming the file, and the line for a bad row.
-    pub fn read(path: &Path) -> Result<Self, PublishedError> {
-        let text = std::fs::read_to_string(path).map_err(|source| PublishedError::Read {
+    /// [`OtbError`] naming the file, and the line for a bad row.
+    pub fn read(path: &Path) -> Result<Self, OtbError> {
+        let text = std::fs::read_to_string(path).map_err(|source| OtbError::Read {
             path: path.to_path_buf(),
             source,
         })?;
@@ -204,18 +153,18 @@ impl PublishedOpe {
     /// Parses the text of a `published_ope.csv`; `path` names it in errors.
     ///
     /// # Errors
-    /// [`PublishedError::Header`] for another header;
-    /// [`PublishedError::Row`] for a row without four fields, an empty name
+    /// [`OtbError::Header`] for another header;
+    /// [`OtbError::Row`] for a row without four fields, an empty name
     /// or a value that is not a number in `[0, 1]`;
-    /// [`PublishedError::Duplicate`] for a tracker and sequence given twice;
-    /// [`PublishedError::Empty`] for a file with no rows.
-    pub fn parse(text: &str, path: &Path) -> Result<Self, PublishedError> {
+    /// [`OtbError::Duplicate`] for a tracker and sequence given twice;
+    /// [`OtbError::Empty`] for a file with no rows.
+    pub fn parse(text: &str, path: &Path) -> Result<Self, OtbError> {
         let mut lines = lines(text);
         let header = PUBLISHED_OPE_HEADER.join(",");
         match lines.next() {
             Some((_, found)) if found.split(',').map(str::trim).eq(PUBLISHED_OPE_HEADER) => {}
             found => {
-                return Err(PublishedError::Header {
+                return Err(OtbError::Header {
                     path: path.to_path_buf(),
                     expected: header,
                     found: found.map_or_else(String::new, |(_, l)| l.to_string()),
@@ -229,7 +178,7 @@ impl PublishedOpe {
         };
         let mut first_line: HashMap<(String, String), usize> = HashMap::new();
         for (line, row) in lines {
-            let bad = |message: String| PublishedError::Row {
+            let bad = |message: String| OtbError::Row {
                 path: path.to_path_buf(),
                 line,
                 message,
@@ -254,7 +203,7 @@ impl PublishedOpe {
             };
             let key = (tracker.to_string(), sequence_key(sequence));
             if let Some(&first) = first_line.get(&key) {
-                return Err(PublishedError::Duplicate {
+                return Err(OtbError::Duplicate {
                     path: path.to_path_buf(),
                     line,
                     first,
@@ -271,7 +220,7 @@ impl PublishedOpe {
             out.scores.insert(key, score);
         }
         if out.scores.is_empty() {
-            return Err(PublishedError::Empty {
+            return Err(OtbError::Empty {
                 path: path.to_path_buf(),
             });
         }
@@ -405,11 +354,11 @@ mod tests {
     const HEADER: &str =
         "tracker,sequence,success_rate_iou_0.5,mean_overlap_of_frames_with_overlap\n";
 
-    fn parse(body: &str) -> Result<PublishedOpe, PublishedError> {
+    fn parse(body: &str) -> Result<PublishedOpe, OtbError> {
         PublishedOpe::parse(&format!("{HEADER}{body}"), Path::new("p.csv"))
     }
 
-    fn message(r: Result<impl std::fmt::Debug, PublishedError>) -> String {
+    fn message(r: Result<impl std::fmt::Debug, OtbError>) -> String {
         r.unwrap_err().to_string()
     }
 

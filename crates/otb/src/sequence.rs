@@ -2,9 +2,9 @@
 //! by the benchmark's table ([`crate::otb_table`]) and any folder of
 //! numbered frames.
 //!
-//! A layer over `bayestrack-image`'s `io` feature
-//! ([`bayestrack_image::read_frame`], [`bayestrack_image::read_ground_truth`]):
-//! it refuses a missing folder with its own error, lines the ground-truth
+//! A layer over `bayestrack-image`'s frame decoding
+//! ([`bayestrack_image::read_frame`]) and this crate's ground-truth reader
+//! ([`crate::ground_truth`]): it refuses a missing folder with its own error, lines the ground-truth
 //! rows up with the frames (frames past the last row are tracked, not
 //! scored, and [`Sequence::notes`] says so), and names the frame index and
 //! file of a frame that does not decode. Ground-truth rows `0,0,0,0` are unlabelled (`None`)
@@ -16,107 +16,12 @@
 
 use std::path::{Path, PathBuf};
 
-use bayestrack_image::{
-    BBox, Image, ImageError, find_ground_truth_files, list_frames, read_ground_truth,
-};
+use bayestrack_image::{BBox, Image, ImageError, list_frames};
 
+use crate::error::OtbError;
+use crate::ground_truth::{find_ground_truth_files, read_ground_truth};
 use crate::otb_table::{self, OtbEntry};
-use crate::source::FolderSource;
-
-/// What can go wrong while loading an OTB sequence.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum OtbError {
-    /// The sequence folder does not exist or is not a folder.
-    #[error("sequence folder {path} does not exist")]
-    MissingFolder {
-        /// The folder asked for.
-        path: PathBuf,
-    },
-    /// The ground-truth file of a plain frame folder has more rows than
-    /// there are frames (which rows belong to which frames is unknown).
-    #[error("{path}: {rows} ground-truth rows for {frames} frames")]
-    RowCount {
-        /// The ground-truth file.
-        path: PathBuf,
-        /// Frames found.
-        frames: usize,
-        /// Ground-truth rows found (blank lines excluded).
-        rows: usize,
-    },
-    /// A frame that cannot be read or decoded (truncated, corrupt, not an
-    /// image); the source names the file too.
-    #[error("frame {} ({path}): {source}", .index + 1)]
-    Frame {
-        /// 0-based frame index.
-        index: usize,
-        /// The frame file.
-        path: PathBuf,
-        /// What `bayestrack-image` reported.
-        #[source]
-        source: Box<ImageError>,
-    },
-    /// A frame index past the end of the sequence.
-    #[error("frame {index} requested from a {len}-frame sequence")]
-    IndexOutOfRange {
-        /// Index asked for.
-        index: usize,
-        /// Frames in the sequence.
-        len: usize,
-    },
-    /// A frame file the OTB-100 table says the sequence has is missing.
-    #[error("{path} is missing (OTB-100 {sequence} runs on frames {first}-{last} of its folder)")]
-    MissingFrame {
-        /// The frame file expected.
-        path: PathBuf,
-        /// The OTB-100 sequence.
-        sequence: String,
-        /// First frame number of the sequence.
-        first: usize,
-        /// Last frame number.
-        last: usize,
-    },
-    /// A YUV4MPEG2 stream that cannot be read: a bad header, a frame cut
-    /// short, a failed read.
-    #[error("{source_name}: {}{reason}", .frame.map(|f| format!("Y4M frame {f}: ")).unwrap_or_else(|| "Y4M header: ".to_string()))]
-    Y4m {
-        /// The stream (`stdin`, a file).
-        source_name: String,
-        /// 1-based frame, `None` for the stream header.
-        frame: Option<usize>,
-        /// What is wrong.
-        reason: String,
-    },
-    /// A video file needs an `ffmpeg` executable to decode it, and there is
-    /// none.
-    #[error(
-        "cannot decode the video {video}: no `{program}` executable was found. bayestrack reads \
-         video files by piping them through ffmpeg: install it (https://ffmpeg.org/download.html; \
-         `apt install ffmpeg`, `dnf install ffmpeg`, `brew install ffmpeg`, `winget install \
-         ffmpeg`) or name its path in BAYESTRACK_FFMPEG. Without it, a folder of PNG/JPEG frames \
-         works, and so does Y4M on standard input from any decoder: `ffmpeg -i clip.mp4 -f \
-         yuv4mpegpipe - | bayestrack track --seq - --init x,y,w,h`"
-    )]
-    NoFfmpeg {
-        /// The video file.
-        video: PathBuf,
-        /// The executable looked for.
-        program: String,
-    },
-    /// ffmpeg could not decode a video file (ffmpeg's message).
-    #[error("cannot decode the video {video}: {reason}")]
-    Video {
-        /// The video file.
-        video: PathBuf,
-        /// What went wrong, with ffmpeg's own message.
-        reason: String,
-    },
-    /// Listing frames or reading/parsing the ground truth failed
-    /// ([`ImageError::GroundTruthParse`] names the file and 1-based line,
-    /// [`ImageError::NoFrames`] and [`ImageError::NoGroundTruth`] the folder).
-    #[error(transparent)]
-    Image(#[from] ImageError),
-}
+use crate::source::{FolderSource, decode_numbered, file_name};
 
 /// One sequence on disk: frame files, ground truth, and its name. Frames
 /// are decoded on demand.
@@ -162,10 +67,12 @@ impl Sequence {
     ///
     /// # Errors
     /// [`OtbError::MissingFolder`]; [`OtbError::MissingFrame`] for a frame
-    /// the OTB table lists that is not there; [`OtbError::Image`] for a
-    /// folder without frames or ground-truth file and for a ground-truth row
-    /// that does not parse (naming the line); [`OtbError::RowCount`] when a
-    /// plain folder's file has more rows than frames.
+    /// the OTB table lists that is not there; [`OtbError::Image`]
+    /// ([`ImageError::NoFrames`]) for a folder without frames;
+    /// [`OtbError::NoGroundTruth`] for one without a ground-truth file;
+    /// [`OtbError::GroundTruth`] for a row that does not parse (naming the
+    /// file and line); [`OtbError::RowCount`] when a plain folder's file
+    /// has more rows than frames.
     pub fn open(dir: impl AsRef<Path>) -> Result<Self, OtbError> {
         Self::load(dir.as_ref(), None, true)
     }
@@ -188,7 +95,7 @@ impl Sequence {
     /// sequence, its `start_frame`).
     ///
     /// # Errors
-    /// As [`Sequence::open`]; [`OtbError::Image`] naming `ground_truth`
+    /// As [`Sequence::open`]; [`OtbError::Read`] naming `ground_truth`
     /// when it cannot be read.
     pub fn open_with_ground_truth(
         dir: impl AsRef<Path>,
@@ -276,13 +183,13 @@ impl Sequence {
                     }
                     found.into_iter().next()
                 }
-                Err(e @ ImageError::NoGroundTruth { .. }) => {
+                Err(e @ OtbError::NoGroundTruth { .. }) => {
                     if require_gt {
-                        return Err(e.into());
+                        return Err(e);
                     }
                     None
                 }
-                Err(e) => return Err(e.into()),
+                Err(e) => return Err(e),
             },
         };
         let (ground_truth, rows) = match &gt_path {
@@ -363,17 +270,14 @@ impl Sequence {
     /// The sequence's frames as a [`crate::source::FrameSource`], decoded one at a
     /// time.
     pub fn source(&self) -> FolderSource<'_> {
-        FolderSource::new(self)
+        FolderSource::new(&self.dir, &self.frames)
     }
 
     /// The file name of frame `index` (0-based): `0300.jpg`.
     pub fn frame_name(&self, index: usize) -> String {
-        self.frames.get(index).map_or_else(String::new, |p| {
-            p.file_name().map_or_else(
-                || p.display().to_string(),
-                |n| n.to_string_lossy().into_owned(),
-            )
-        })
+        self.frames
+            .get(index)
+            .map_or_else(String::new, |p| file_name(p))
     }
 
     /// Number of frames.
@@ -407,14 +311,6 @@ impl Sequence {
             })
     }
 
-    fn wrap(index: usize, path: &Path) -> impl FnOnce(ImageError) -> OtbError + '_ {
-        move |source| OtbError::Frame {
-            index,
-            path: path.to_path_buf(),
-            source: Box::new(source),
-        }
-    }
-
     /// Decodes frame `index` (0-based) keeping its colour kind (1 channel
     /// for gray files, 3 for colour).
     ///
@@ -422,8 +318,9 @@ impl Sequence {
     /// [`OtbError::IndexOutOfRange`]; [`OtbError::Frame`] naming the index
     /// and file for an unreadable, truncated or corrupt file.
     pub fn frame(&self, index: usize) -> Result<Image<u8>, OtbError> {
-        let path = self.path(index)?;
-        bayestrack_image::read_frame(path).map_err(Self::wrap(index, path))
+        decode_numbered(index, self.path(index)?, |p| {
+            bayestrack_image::read_frame(p)
+        })
     }
 
     /// Decodes frame `index` as 1-channel gray.
@@ -431,8 +328,9 @@ impl Sequence {
     /// # Errors
     /// As [`Sequence::frame`].
     pub fn frame_gray(&self, index: usize) -> Result<Image<u8>, OtbError> {
-        let path = self.path(index)?;
-        bayestrack_image::read_frame_gray(path).map_err(Self::wrap(index, path))
+        decode_numbered(index, self.path(index)?, |p| {
+            bayestrack_image::read_frame_gray(p)
+        })
     }
 
     /// Decodes frame `index` as 3-channel RGB (gray files replicated).
@@ -440,8 +338,9 @@ impl Sequence {
     /// # Errors
     /// As [`Sequence::frame`].
     pub fn frame_rgb(&self, index: usize) -> Result<Image<u8>, OtbError> {
-        let path = self.path(index)?;
-        bayestrack_image::read_frame_rgb(path).map_err(Self::wrap(index, path))
+        decode_numbered(index, self.path(index)?, |p| {
+            bayestrack_image::read_frame_rgb(p)
+        })
     }
 
     /// Decodes every frame once and checks that they all have the size of
@@ -507,7 +406,7 @@ fn folder_name(dir: &Path) -> String {
 ///
 /// # Errors
 /// [`OtbError::MissingFolder`] if `root` is not a folder;
-/// [`OtbError::Image`] ([`ImageError::Io`]) if it cannot be listed.
+/// [`OtbError::Read`] if it cannot be listed.
 pub fn list_sequences(root: impl AsRef<Path>) -> Result<Vec<PathBuf>, OtbError> {
     let root = root.as_ref();
     if !root.is_dir() {
@@ -515,7 +414,7 @@ pub fn list_sequences(root: impl AsRef<Path>) -> Result<Vec<PathBuf>, OtbError> 
             path: root.to_path_buf(),
         });
     }
-    let io = |source| ImageError::Io {
+    let io = |source| OtbError::Read {
         path: root.to_path_buf(),
         source,
     };

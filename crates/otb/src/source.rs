@@ -1,12 +1,13 @@
-//! Frame sources: where the tracking loop ([`crate::track::track_source`])
-//! pulls its frames from, one at a time.
+//! Frame sources: where the tracking loop (`track::track_source`, feature
+//! `track`) pulls its frames from, one at a time.
 //!
 //! A [`FrameSource`] is an iterator of decoded frames with their names. It
 //! streams: a frame is decoded when the loop asks for it and dropped before
 //! the next is asked for, so memory does not grow with the length of the
 //! sequence, and a decoder or a camera plugs in by implementing the trait.
-//! Implementations: [`FolderSource`] (a folder of numbered PNG/JPEG frames
-//! or an OTB sequence, [`crate::sequence::Sequence::source`]),
+//! Implementations: [`FolderSource`] (a list of PNG/JPEG frame files: a
+//! folder of numbered frames or an OTB sequence,
+//! [`crate::sequence::Sequence::source`]),
 //! [`Y4mSource`] (YUV4MPEG2 from standard input or a file) and
 //! [`VideoSource`] (any video file, decoded by piping it through an
 //! `ffmpeg` executable). [`Select`] runs any of them on a range of frames
@@ -17,9 +18,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStdout, Command, Stdio};
 use std::thread::JoinHandle;
 
-use bayestrack_image::Image;
+use bayestrack_image::{Image, ImageError};
 
-use crate::sequence::{OtbError, Sequence};
+use crate::error::OtbError;
 use crate::y4m::Y4mReader;
 
 /// One decoded frame.
@@ -56,19 +57,48 @@ pub trait FrameSource: Iterator<Item = Result<Frame, OtbError>> {
     }
 }
 
-/// The frames of a [`Sequence`] (a folder of numbered frames or an OTB
-/// sequence), decoded one by one in order.
+/// A list of frame files (a folder of numbered frames or an OTB sequence,
+/// [`crate::sequence::Sequence::source`]), decoded one by one in order.
 #[derive(Debug, Clone)]
 pub struct FolderSource<'a> {
-    seq: &'a Sequence,
+    dir: &'a Path,
+    frames: &'a [PathBuf],
     next: usize,
 }
 
 impl<'a> FolderSource<'a> {
-    /// Frames of `seq` from its first.
-    pub fn new(seq: &'a Sequence) -> Self {
-        Self { seq, next: 0 }
+    /// The files `frames` of the folder `dir` (which names the source in
+    /// [`FrameSource::describe`]), from the first.
+    pub fn new(dir: &'a Path, frames: &'a [PathBuf]) -> Self {
+        Self {
+            dir,
+            frames,
+            next: 0,
+        }
     }
+}
+
+/// The file name of `path` (`0300.jpg`), or the whole path when it has
+/// none.
+pub(crate) fn file_name(path: &Path) -> String {
+    path.file_name().map_or_else(
+        || path.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    )
+}
+
+/// Decodes frame `index` (0-based) from `path` with `read`, naming the
+/// index and the file in the error ([`OtbError::Frame`]).
+pub(crate) fn decode_numbered(
+    index: usize,
+    path: &Path,
+    read: impl FnOnce(&Path) -> Result<Image<u8>, ImageError>,
+) -> Result<Image<u8>, OtbError> {
+    read(path).map_err(|source| OtbError::Frame {
+        index,
+        path: path.to_path_buf(),
+        source: Box::new(source),
+    })
 }
 
 impl Iterator for FolderSource<'_> {
@@ -76,29 +106,29 @@ impl Iterator for FolderSource<'_> {
 
     fn next(&mut self) -> Option<Self::Item> {
         let index = self.next;
-        if index >= self.seq.len() {
-            return None;
-        }
+        let path = self.frames.get(index)?;
         self.next += 1;
-        Some(self.seq.frame(index).map(|image| Frame {
-            number: index + 1,
-            name: self.seq.frame_name(index),
-            image,
-        }))
+        Some(
+            decode_numbered(index, path, |p| bayestrack_image::read_frame(p)).map(|image| Frame {
+                number: index + 1,
+                name: file_name(path),
+                image,
+            }),
+        )
     }
 }
 
 impl FrameSource for FolderSource<'_> {
     fn describe(&self) -> String {
-        format!("folder {}", self.seq.dir.display())
+        format!("folder {}", self.dir.display())
     }
 
     fn remaining(&self) -> Option<usize> {
-        Some(self.seq.len() - self.next)
+        Some(self.frames.len() - self.next)
     }
 
     fn skip_frame(&mut self) -> Option<Result<(), OtbError>> {
-        (self.next < self.seq.len()).then(|| {
+        (self.next < self.frames.len()).then(|| {
             self.next += 1;
             Ok(())
         })
@@ -127,14 +157,12 @@ impl Y4mSource<std::fs::File> {
     /// A `.y4m` file; its header is read now.
     ///
     /// # Errors
-    /// [`OtbError::Image`] ([`bayestrack_image::ImageError::Io`]) naming a
-    /// file that cannot be opened; [`OtbError::Y4m`] for a bad header.
+    /// [`OtbError::Read`] naming a file that cannot be opened;
+    /// [`OtbError::Y4m`] for a bad header.
     pub fn open(path: &Path) -> Result<Self, OtbError> {
-        let file = std::fs::File::open(path).map_err(|source| {
-            OtbError::Image(bayestrack_image::ImageError::Io {
-                path: path.to_path_buf(),
-                source,
-            })
+        let file = std::fs::File::open(path).map_err(|source| OtbError::Read {
+            path: path.to_path_buf(),
+            source,
         })?;
         Self::new(file, path.display().to_string())
     }

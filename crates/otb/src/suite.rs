@@ -31,44 +31,38 @@
 //!
 //! [`run_suite_with`] reports what it is doing ([`SuiteEvent`]: the cell
 //! running, each frame tracked) so that a caller can draw a progress bar.
+//!
+//! On several machines, each runs one shard of the cells
+//! ([`SuiteOptions::shard`], [`crate::shard`] says which cells and what a
+//! shard writes) and [`merge`] combines the shard folders into the files a
+//! single run writes, byte for byte ([`Timing::PerCall`] makes two runs'
+//! fps, and so every byte, comparable in tests).
 
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
-use bayestrack_image::Image;
+use bayestrack_image::{BBox, Image};
 use bayestrack_trackers::{TrackerError, TrackerInfo};
 
+use crate::error::{OtbError, WriteError};
 use crate::metrics::{
     OtbScore, SUCCESS_RATE_THRESHOLD, SUCCESS_THRESHOLDS, precision_at, score_otb,
 };
 use crate::plot::{Marks, Series, line_chart, line_chart_with_marks};
 use crate::published::Published;
-use crate::sequence::{OtbError, Sequence, list_sequences};
+use crate::sequence::{Sequence, list_sequences};
+use crate::shard::{
+    SHARD_FILE, Shard, ShardRow, read_scores, read_shard, scores_path, write_scores,
+};
 use crate::table::Table;
-use crate::track::{BoxFile, OnBadFrame, TrackError, track_frames};
+use crate::track::{OnBadFrame, track_frames};
 use crate::write::{
-    PartialCsv, WriteError, clear_partial, create_dir, mark_partial, write_csv, write_text,
+    BoxFile, PartialCsv, clear_partial, copy_file, create_dir, mark_partial, partial_path,
+    write_csv, write_text,
 };
 
 /// Centre-error thresholds of the precision plot, px.
 pub const PRECISION_PLOT_MAX: usize = 50;
-
-/// Why a suite run could not produce its report.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum SuiteError {
-    /// The root folder holds no sequence, or cannot be listed.
-    #[error("no sequence to run in {root}: {reason}")]
-    NoSequences {
-        /// The folder asked for.
-        root: PathBuf,
-        /// Why nothing was found.
-        reason: String,
-    },
-    /// An output file could not be written.
-    #[error(transparent)]
-    Write(#[from] WriteError),
-}
 
 /// What to run and where to write.
 #[derive(Debug, Clone)]
@@ -84,6 +78,23 @@ pub struct SuiteOptions {
     pub progress: bool,
     /// The published OTB results to set ours beside (`None`: ours alone).
     pub published: Option<Published>,
+    /// Run only this shard's cells and write them for [`merge`] (`None`:
+    /// every cell, and the results, table and plots).
+    pub shard: Option<Shard>,
+    /// How the trackers' time (fps) is counted.
+    pub timing: Timing,
+}
+
+/// How a suite run counts the trackers' time, from which it reports fps.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Timing {
+    /// The wall clock around each tracker call (the default).
+    #[default]
+    Measured,
+    /// This many seconds per tracker call, whatever the calls took: the fps
+    /// of two runs is then the same, and so is every byte they write (to
+    /// compare a sharded run with a single one).
+    PerCall(f64),
 }
 
 /// What a suite run is doing, for a progress display ([`run_suite_with`]).
@@ -190,8 +201,8 @@ impl CellError {
     }
 
     /// Classifies a tracking error (see the type's documentation).
-    fn from_track(e: TrackError) -> Self {
-        if let TrackError::Tracker {
+    fn from_track(e: OtbError) -> Self {
+        if let OtbError::Tracker {
             frame: 1, source, ..
         } = &e
             && let TrackerError::Channels { expected, .. } = source.as_ref()
@@ -259,11 +270,11 @@ pub struct SuiteReport {
 /// `options.progress` is set.
 ///
 /// # Errors
-/// [`SuiteError::Write`] when an output file cannot be written;
-/// [`SuiteError::NoSequences`] when `root` holds no sequence or cannot
+/// [`OtbError::Write`] when an output file cannot be written;
+/// [`OtbError::NoSequences`] when `root` holds no sequence or cannot
 /// be listed. Failures of a tracker or of a sequence's frames are not
 /// errors of the run: they fill the affected cells.
-pub fn run_suite(root: &Path, options: &SuiteOptions) -> Result<SuiteReport, SuiteError> {
+pub fn run_suite(root: &Path, options: &SuiteOptions) -> Result<SuiteReport, OtbError> {
     run_suite_with(root, options, |event| {
         if let (true, SuiteEvent::CellFinished { cell, .. }) = (options.progress, event) {
             eprintln!("{}", cell.summary());
@@ -280,8 +291,8 @@ pub fn run_suite_with(
     root: &Path,
     options: &SuiteOptions,
     mut observe: impl FnMut(SuiteEvent<'_>),
-) -> Result<SuiteReport, SuiteError> {
-    let bad_root = |reason: String| SuiteError::NoSequences {
+) -> Result<SuiteReport, OtbError> {
+    let bad_root = |reason: String| OtbError::NoSequences {
         root: root.to_path_buf(),
         reason,
     };
@@ -299,8 +310,22 @@ pub fn run_suite_with(
         cells: Vec::new(),
     };
     let out = &options.out;
-    mark_partial(out, "the OTB one-pass suite (`cargo xtask otb`)")?;
-    let cells = PartialCsv::create(&out.join("results.csv"))?;
+    let shard = options.shard;
+    match shard {
+        None => mark_partial(out, "the OTB one-pass suite (`cargo xtask otb`)")?,
+        Some(s) => mark_partial(
+            out,
+            &format!("shard {s} of the OTB one-pass suite (`cargo xtask otb --shard {s}`)"),
+        )?,
+    }
+    let (cells, shard_cells) = match shard {
+        None => (Some(PartialCsv::create(&out.join("results.csv"))?), None),
+        Some(_) => (None, Some(PartialCsv::create(&out.join(SHARD_FILE))?)),
+    };
+    let mut shard_rows = Vec::new();
+    let n_trackers = options.trackers.len();
+    let total_cells = dirs.len() * n_trackers;
+    let mine = |cell: usize| shard.is_none_or(|s| s.contains(cell));
     // listing the frames is cheap: it gives the total work for the progress
     // display before any frame is decoded
     let opened: Vec<Result<Sequence, OtbError>> = dirs.iter().map(Sequence::open).collect();
@@ -308,18 +333,25 @@ pub fn run_suite_with(
         .iter()
         .map(|s| s.as_ref().map_or(0, Sequence::len))
         .collect();
-    let trackers = options.trackers.len() as u64;
+    let cells_of = |s: usize| (0..n_trackers).filter(|t| mine(s * n_trackers + t)).count();
     observe(SuiteEvent::Start {
         sequences: dirs.len(),
-        trackers: options.trackers.len(),
-        total: lengths.iter().map(|&n| n as u64).sum::<u64>() * trackers,
+        trackers: n_trackers,
+        total: (0..dirs.len())
+            .map(|s| (lengths[s] * cells_of(s)) as u64)
+            .sum(),
     });
     let mut done = 0u64;
-    for ((dir, opened), len) in dirs.iter().zip(opened).zip(lengths) {
+    for (s, ((dir, opened), len)) in dirs.iter().zip(opened).zip(lengths).enumerate() {
         let name = dir
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default();
+        report.sequences.push(name.clone());
+        report.frames.push(len);
+        if shard.is_some() && cells_of(s) == 0 {
+            continue;
+        }
         observe(SuiteEvent::Decoding { sequence: &name });
         let loaded = opened.and_then(|seq| {
             let frames = (0..seq.len())
@@ -327,7 +359,11 @@ pub fn run_suite_with(
                 .collect::<Result<Vec<_>, OtbError>>()?;
             Ok((seq, frames))
         });
-        for info in &options.trackers {
+        for (t, info) in options.trackers.iter().enumerate() {
+            let index = s * n_trackers + t;
+            if !mine(index) {
+                continue;
+            }
             observe(SuiteEvent::CellStarted {
                 sequence: &name,
                 tracker: info.name,
@@ -342,22 +378,332 @@ pub fn run_suite_with(
                 Err(e) => Err(CellError::Failed(e.to_string())),
             };
             done += len as u64;
+            let (outcome, boxes) = match outcome {
+                Ok((score, boxes)) => (Ok(score), Some(boxes)),
+                Err(e) => (Err(e), None),
+            };
             let cell = Cell {
                 sequence: name.clone(),
                 tracker: info.name,
                 outcome,
             };
             observe(SuiteEvent::CellFinished { cell: &cell, done });
-            cells.append(&[ResultRow::of(&cell)])?;
+            if let Some(cells) = &cells {
+                cells.append(&[ResultRow::of(&cell)])?;
+            }
+            if let (Some(shard_cells), Some(shard)) = (&shard_cells, shard) {
+                if let (Some(boxes), Ok((seq, _))) = (&boxes, &loaded) {
+                    write_scores(
+                        &scores_path(out, info.name, &name),
+                        boxes,
+                        &seq.ground_truth,
+                    )?;
+                }
+                let row = shard_row(
+                    &cell,
+                    index,
+                    shard,
+                    total_cells,
+                    n_trackers,
+                    options.seed,
+                    len,
+                );
+                shard_cells.append(std::slice::from_ref(&row))?;
+                shard_rows.push(row);
+            }
             report.cells.push(cell);
         }
-        report.sequences.push(name);
-        report.frames.push(len);
     }
-    cells.finish(&report.rows())?;
-    report.write_summary(out)?;
+    if let Some(cells) = cells {
+        cells.finish(&report.rows())?;
+        report.write_summary(out)?;
+    }
+    if let Some(shard_cells) = shard_cells {
+        shard_cells.finish(&shard_rows)?;
+    }
     clear_partial(out)?;
     Ok(report)
+}
+
+/// The row of [`SHARD_FILE`] for `cell`, the suite's cell `index`.
+fn shard_row(
+    cell: &Cell,
+    index: usize,
+    shard: Shard,
+    cells: usize,
+    trackers: usize,
+    seed: u64,
+    frames: usize,
+) -> ShardRow {
+    let mut row = ShardRow {
+        cell: index,
+        shard: shard.to_string(),
+        cells,
+        trackers,
+        seed,
+        sequence: cell.sequence.clone(),
+        frames,
+        tracker: cell.tracker.to_string(),
+        outcome: "ok".into(),
+        needs: String::new(),
+        error: String::new(),
+        fps: None,
+        lost_frames: None,
+    };
+    match &cell.outcome {
+        Ok(c) => {
+            row.fps = Some(c.fps);
+            row.lost_frames = Some(c.lost_frames);
+        }
+        Err(CellError::NotApplicable { needs, message }) => {
+            row.outcome = "n/a".into();
+            row.needs.clone_from(needs);
+            row.error.clone_from(message);
+        }
+        Err(CellError::Failed(message)) => {
+            row.outcome = "failed".into();
+            row.error.clone_from(message);
+        }
+    }
+    row
+}
+
+/// Combines the folders of the shards of one suite run
+/// ([`SuiteOptions::shard`], `cargo xtask otb --shard K/N`) into `out`:
+/// exactly the files a single run of every cell writes there, byte for
+/// byte (`results.csv`, `results.md`, the plots, `boxes/`), given the same
+/// `published` results. Every shard folder is read and checked before
+/// anything is written; `out` is marked `PARTIAL.txt` while the files are
+/// written, and each is replaced whole, so a merge that fails keeps the
+/// earlier results.
+///
+/// # Errors
+/// [`OtbError::Merge`] for a shard folder still marked `PARTIAL.txt`, a
+/// shard missing or given twice, folders of different runs (another
+/// number of shards, other trackers or sequences, another seed), a tracker
+/// not in the registry; [`OtbError::Read`] / [`OtbError::Row`] for a shard
+/// file that cannot be read (naming the file and line);
+/// [`OtbError::Write`] for an output that cannot be written.
+pub fn merge(
+    shards: &[PathBuf],
+    out: &Path,
+    published: Option<Published>,
+) -> Result<SuiteReport, OtbError> {
+    let (report, owners) = merged_report(shards, out, published)?;
+    mark_partial(
+        out,
+        "merging the shards of the OTB one-pass suite (`cargo xtask otb --merge`)",
+    )?;
+    for (cell, dir) in report.cells.iter().zip(&owners) {
+        let from = dir.join("boxes").join(cell.tracker);
+        let to = out.join("boxes").join(cell.tracker);
+        if from.is_dir() {
+            create_dir(&to)?;
+        }
+        let boxes = format!("{}.txt", cell.sequence);
+        for file in [PathBuf::from(&boxes), partial_path(Path::new(&boxes))] {
+            if from.join(&file).is_file() {
+                copy_file(&from.join(&file), &to.join(&file))?;
+            }
+        }
+    }
+    // a single run leaves no partial results behind it
+    let stale = partial_path(&out.join("results.csv"));
+    match std::fs::remove_file(&stale) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            return Err(WriteError::new(&stale, e).into());
+        }
+        _ => {}
+    }
+    report.write(out)?;
+    clear_partial(out)?;
+    Ok(report)
+}
+
+/// The report the shards in `shards` make together, with the folder each
+/// cell comes from.
+fn merged_report(
+    shards: &[PathBuf],
+    out: &Path,
+    published: Option<Published>,
+) -> Result<(SuiteReport, Vec<PathBuf>), OtbError> {
+    let merge_error = |path: &Path, reason: String| OtbError::Merge {
+        path: path.to_path_buf(),
+        reason,
+    };
+    // (N, cells, trackers, seed) of the run, and the file that said so first
+    let mut run: Option<((usize, usize, usize, u64), PathBuf)> = None;
+    let mut folders: Vec<(Shard, &PathBuf)> = Vec::new();
+    let mut rows: Vec<(usize, PathBuf, ShardRow)> = Vec::new();
+    for dir in shards {
+        let file = dir.join(SHARD_FILE);
+        let mut this: Option<Shard> = None;
+        for (line, row) in read_shard(dir)? {
+            let bad = |message: String| OtbError::Row {
+                path: file.clone(),
+                line,
+                message,
+            };
+            let shard = Shard::parse(&row.shard).map_err(|e| bad(e.to_string()))?;
+            match this {
+                Some(s) if s != shard => {
+                    return Err(bad(format!(
+                        "a cell of shard {shard} among those of shard {s}"
+                    )));
+                }
+                _ => this = Some(shard),
+            }
+            let key = (shard.count(), row.cells, row.trackers, row.seed);
+            match &run {
+                None => run = Some((key, file.clone())),
+                Some((first, said)) if *first != key => {
+                    return Err(merge_error(
+                        dir,
+                        format!(
+                            "it is from another suite run than {}: {} shards, {} cells of {} trackers, \
+                             seed {} against {} shards, {} cells of {} trackers, seed {}",
+                            said.display(),
+                            key.0,
+                            key.1,
+                            key.2,
+                            key.3,
+                            first.0,
+                            first.1,
+                            first.2,
+                            first.3
+                        ),
+                    ));
+                }
+                Some(_) => {}
+            }
+            if row.trackers == 0 || row.cells % row.trackers != 0 {
+                return Err(bad(format!(
+                    "{} cells is not a whole number of sequences of {} trackers",
+                    row.cells, row.trackers
+                )));
+            }
+            if row.cell >= row.cells || !shard.contains(row.cell) {
+                return Err(bad(format!(
+                    "cell {} is not one of shard {shard}'s (of {} cells)",
+                    row.cell, row.cells
+                )));
+            }
+            rows.push((line, file.clone(), row));
+        }
+        if let Some(shard) = this {
+            if let Some((_, other)) = folders.iter().find(|(s, _)| *s == shard) {
+                return Err(merge_error(
+                    dir,
+                    format!("it holds shard {shard}, and so does {}", other.display()),
+                ));
+            }
+            folders.push((shard, dir));
+        }
+    }
+    let Some(((count, total, n_trackers, _), _)) = run else {
+        return Err(merge_error(
+            out,
+            "the shard folders given hold no finished cell".into(),
+        ));
+    };
+    let mut by_cell: Vec<Option<(usize, PathBuf, ShardRow)>> = vec![None; total];
+    for (line, file, row) in rows {
+        let cell = row.cell;
+        if let Some((first, _, _)) = &by_cell[cell] {
+            return Err(OtbError::Row {
+                path: file,
+                line,
+                message: format!("cell {cell} again (first on line {first})"),
+            });
+        }
+        by_cell[cell] = Some((line, file, row));
+    }
+    let missing: Vec<usize> = (0..total).filter(|&i| by_cell[i].is_none()).collect();
+    if !missing.is_empty() {
+        let mut absent: Vec<usize> = missing.iter().map(|&i| Shard::of_cell(i, count)).collect();
+        absent.sort_unstable();
+        absent.dedup();
+        let absent: Vec<String> = absent.iter().map(|k| format!("{k}/{count}")).collect();
+        return Err(merge_error(
+            out,
+            format!(
+                "{} of {total} cells have no shard folder: give the folders of shard(s) {}",
+                missing.len(),
+                absent.join(", ")
+            ),
+        ));
+    }
+    let rows: Vec<(usize, PathBuf, ShardRow)> = by_cell.into_iter().flatten().collect();
+    let mut report = SuiteReport {
+        sequences: Vec::new(),
+        frames: Vec::new(),
+        published,
+        trackers: Vec::new(),
+        cells: Vec::with_capacity(total),
+    };
+    let mut owners = Vec::with_capacity(total);
+    for (index, (line, file, row)) in rows.into_iter().enumerate() {
+        let bad = |message: String| OtbError::Row {
+            path: file.clone(),
+            line,
+            message,
+        };
+        let (s, t) = (index / n_trackers, index % n_trackers);
+        if t == 0 {
+            report.sequences.push(row.sequence.clone());
+            report.frames.push(row.frames);
+        } else if (report.sequences[s].as_str(), report.frames[s]) != (&row.sequence, row.frames) {
+            return Err(bad(format!(
+                "sequence {} ({} frames) where the other shards have {} ({} frames)",
+                row.sequence, row.frames, report.sequences[s], report.frames[s]
+            )));
+        }
+        if s == 0 {
+            let info = bayestrack_trackers::tracker_info(&row.tracker)
+                .map_err(|e| bad(format!("tracker {}: {e}", row.tracker)))?;
+            report.trackers.push(info.name);
+        } else if report.trackers[t] != row.tracker {
+            return Err(bad(format!(
+                "tracker {} where the other shards have {}",
+                row.tracker, report.trackers[t]
+            )));
+        }
+        let dir = file.parent().map_or_else(PathBuf::new, Path::to_path_buf);
+        let outcome = match row.outcome.as_str() {
+            "ok" => {
+                let scores = scores_path(&dir, &row.tracker, &row.sequence);
+                let (boxes, truth) = read_scores(&scores)?;
+                let score = score_otb(&boxes, &truth)
+                    .map_err(|e| merge_error(&scores, format!("its boxes do not score: {e}")))?;
+                Ok(CellScore {
+                    score,
+                    fps: row
+                        .fps
+                        .ok_or_else(|| bad("a cell that ran without fps".into()))?,
+                    lost_frames: row
+                        .lost_frames
+                        .ok_or_else(|| bad("a cell that ran without lost_frames".into()))?,
+                })
+            }
+            "n/a" => Err(CellError::NotApplicable {
+                needs: row.needs,
+                message: row.error,
+            }),
+            "failed" => Err(CellError::Failed(row.error)),
+            other => {
+                return Err(bad(format!(
+                    "outcome {other:?}: expected ok, n/a or failed"
+                )));
+            }
+        };
+        report.cells.push(Cell {
+            sequence: report.sequences[s].clone(),
+            tracker: report.trackers[t],
+            outcome,
+        });
+        owners.push(dir);
+    }
+    Ok((report, owners))
 }
 
 /// One row of `results.csv`: one tracker on one sequence, every number at
@@ -426,14 +772,15 @@ impl ResultRow {
 }
 
 /// Runs one tracker on one decoded sequence; `on_frame(k)` after the
-/// `k`-th frame's box (1-based) is written.
+/// `k`-th frame's box (1-based) is written. The scores come with the boxes
+/// they were computed from.
 fn run_cell(
     info: &TrackerInfo,
     seq: &Sequence,
     frames: &[Image<u8>],
     options: &SuiteOptions,
     on_frame: &mut dyn FnMut(usize),
-) -> Result<CellScore, CellError> {
+) -> Result<(CellScore, Vec<BBox>), CellError> {
     let init = seq
         .initial_box()
         .ok_or_else(|| CellError::Failed(format!("{}: frame 1 is unlabelled", seq.name)))?;
@@ -448,7 +795,7 @@ fn run_cell(
     let mut tracker = info
         .build(options.seed)
         .map_err(|e| CellError::Failed(e.to_string()))?;
-    let run = track_frames(
+    let mut run = track_frames(
         tracker.as_mut(),
         frames.len(),
         |i| Ok(Cow::Borrowed(&frames[i])),
@@ -479,11 +826,15 @@ fn run_cell(
     })?;
     let score =
         score_otb(&run.boxes, &seq.ground_truth).map_err(|e| CellError::Failed(e.to_string()))?;
-    Ok(CellScore {
+    if let Timing::PerCall(seconds) = options.timing {
+        run.tracker_seconds = (run.boxes.len() - run.skipped.len()) as f64 * seconds;
+    }
+    let score = CellScore {
         score,
         fps: run.fps(),
         lost_frames: run.lost_frames,
-    })
+    };
+    Ok((score, run.boxes))
 }
 
 impl SuiteReport {
@@ -888,8 +1239,8 @@ impl SuiteReport {
 mod tests {
     use super::*;
 
-    fn tracker_error(frame: usize, source: TrackerError) -> TrackError {
-        TrackError::Tracker {
+    fn tracker_error(frame: usize, source: TrackerError) -> OtbError {
+        OtbError::Tracker {
             tracker: "t",
             frame,
             path: PathBuf::from("0001.jpg"),
@@ -911,13 +1262,12 @@ mod tests {
         // the channel count changing mid-sequence is a real failure
         assert!(CellError::from_track(tracker_error(7, channels())).is_failure());
         assert!(CellError::from_track(tracker_error(1, TrackerError::NotInitialised)).is_failure());
-        assert!(CellError::from_track(TrackError::NoFrames).is_failure());
+        assert!(CellError::from_track(OtbError::NoFramesToTrack).is_failure());
     }
 
     /// A score whose success rate at 0.5 is `hits / frames` (IoU 1 on the
     /// hits, 0 elsewhere).
     fn score(hits: usize, frames: usize) -> CellScore {
-        use bayestrack_image::BBox;
         let t = BBox::new(1.0, 1.0, 10.0, 10.0);
         let far = BBox::new(100.0, 100.0, 10.0, 10.0);
         let pred: Vec<BBox> = (0..frames)

@@ -9,15 +9,13 @@
 //! frames and writing boxes are not part of the reported fps.
 
 use std::borrow::Cow;
-use std::fs::File;
-use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 use bayestrack_image::{BBox, Image, ImageView};
-use bayestrack_trackers::{Tracker, TrackerError};
+use bayestrack_trackers::Tracker;
 
-use crate::sequence::OtbError;
+use crate::error::OtbError;
 use crate::source::FrameSource;
 
 /// What to do with a frame that does not decode.
@@ -29,40 +27,6 @@ pub enum OnBadFrame {
     /// Skip it: the tracker does not see it and the previous box is
     /// repeated for it. The first frame cannot be skipped.
     Skip,
-}
-
-/// What went wrong while tracking a sequence.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum TrackError {
-    /// A frame could not be read or decoded (the source names the file).
-    #[error(transparent)]
-    Frame(#[from] OtbError),
-    /// The tracker refused a frame (changed size, wrong channels, a box
-    /// outside the first frame, ...).
-    #[error("{tracker} failed on frame {frame} ({path}): {source}")]
-    Tracker {
-        /// Tracker name.
-        tracker: &'static str,
-        /// 1-based frame number.
-        frame: usize,
-        /// The frame file.
-        path: PathBuf,
-        /// What the tracker reported.
-        #[source]
-        source: Box<TrackerError>,
-    },
-    /// The sink (an output file, a drawing) failed.
-    #[error("cannot write {path}: {source}")]
-    Output {
-        /// The file.
-        path: PathBuf,
-        /// The underlying error.
-        source: std::io::Error,
-    },
-    /// The sequence has no frames.
-    #[error("the sequence has no frames")]
-    NoFrames,
 }
 
 /// One frame's outcome, handed to the sink.
@@ -127,9 +91,10 @@ impl TrackRun {
 /// `sink` receives every frame's box in order, as soon as it is known.
 ///
 /// # Errors
-/// [`TrackError::NoFrames`]; [`TrackError::Frame`] for a frame that does not
-/// decode (always for frame 1, otherwise only under [`OnBadFrame::Stop`]);
-/// [`TrackError::Tracker`] naming the frame the tracker refused; whatever
+/// [`OtbError::NoFramesToTrack`]; the frame's error ([`OtbError::Frame`])
+/// for a frame that does not decode (always for frame 1, otherwise only
+/// under [`OnBadFrame::Stop`]); [`OtbError::Tracker`] naming the frame the
+/// tracker refused; whatever
 /// the sink returns. Boxes handed to the sink before the error stay handed.
 pub fn track_frames<'f, F, P, S>(
     tracker: &mut dyn Tracker,
@@ -139,11 +104,11 @@ pub fn track_frames<'f, F, P, S>(
     init: BBox,
     on_bad_frame: OnBadFrame,
     mut sink: S,
-) -> Result<TrackRun, TrackError>
+) -> Result<TrackRun, OtbError>
 where
     F: FnMut(usize) -> Result<Cow<'f, Image<u8>>, OtbError>,
     P: Fn(usize) -> PathBuf,
-    S: FnMut(FrameBox<'_>) -> Result<(), TrackError>,
+    S: FnMut(FrameBox<'_>) -> Result<(), OtbError>,
 {
     let frames = (0..len).map(|i| {
         frame(i).map(|image| Input {
@@ -208,10 +173,11 @@ fn match_channels(image: &Image<u8>, channels: usize) -> Option<Image<u8>> {
 /// sees its cues change kind part-way.
 ///
 /// # Errors
-/// [`TrackError::NoFrames`] when the source delivers none;
-/// [`TrackError::Frame`] for a frame that does not decode (always for the
-/// first, otherwise only under [`OnBadFrame::Stop`]);
-/// [`TrackError::Tracker`] naming the frame the tracker refused; whatever
+/// [`OtbError::NoFramesToTrack`] when the source delivers none; the
+/// frame's error ([`OtbError::Frame`], [`OtbError::Y4m`], ...) for a frame
+/// that does not decode (always for the first, otherwise only under
+/// [`OnBadFrame::Stop`]); [`OtbError::Tracker`] naming the frame the
+/// tracker refused; whatever
 /// the sink returns. Boxes handed to the sink before the error stay handed.
 pub fn track_source<S>(
     tracker: &mut dyn Tracker,
@@ -219,9 +185,9 @@ pub fn track_source<S>(
     init: BBox,
     on_bad_frame: OnBadFrame,
     mut sink: S,
-) -> Result<TrackRun, TrackError>
+) -> Result<TrackRun, OtbError>
 where
-    S: FnMut(FrameBox<'_>) -> Result<(), TrackError>,
+    S: FnMut(FrameBox<'_>) -> Result<(), OtbError>,
 {
     let describe = source.describe();
     let frames = source.map(|r| {
@@ -267,14 +233,14 @@ fn run_frames<'f, S>(
     init: BBox,
     on_bad_frame: OnBadFrame,
     sink: &mut S,
-) -> Result<TrackRun, TrackError>
+) -> Result<TrackRun, OtbError>
 where
-    S: FnMut(FrameBox<'_>) -> Result<(), TrackError>,
+    S: FnMut(FrameBox<'_>) -> Result<(), OtbError>,
 {
     let name = tracker.name();
     let refused = |frame: &Input<'_>, index: usize| {
         let path = error_path(index, &frame.name);
-        move |source| TrackError::Tracker {
+        move |source| OtbError::Tracker {
             tracker: name,
             frame: index + 1,
             path,
@@ -282,7 +248,7 @@ where
         }
     };
     let capacity = frames.size_hint().0;
-    let first = frames.next().ok_or(TrackError::NoFrames)??;
+    let first = frames.next().ok_or(OtbError::NoFramesToTrack)??;
     let channels = first.image.channels();
     let init = clip_initial_box(init, first.image.width(), first.image.height()).unwrap_or(init);
     let mut run = TrackRun {
@@ -333,7 +299,7 @@ where
                 })?;
                 continue;
             }
-            Err(e) => return Err(e.into()),
+            Err(e) => return Err(e),
         };
         previous = frame.number;
         if convert_channels && let Some(converted) = match_channels(&frame.image, channels) {
@@ -362,109 +328,10 @@ where
     Ok(run)
 }
 
-/// Where a [`BoxFile`] writes: standard output or a file whose length
-/// before each row is known, so a row that fails part-way is cut off.
-enum BoxOut {
-    Stdout(std::io::Stdout),
-    File { file: File, len: u64 },
-}
-
-/// Writes `row` whole or not at all: when the write fails part-way (a full
-/// disk), the target is cut back to `*len`, its length before the row.
-fn write_whole<W: Write + Rewind>(out: &mut W, len: &mut u64, row: &[u8]) -> std::io::Result<()> {
-    match out.write_all(row).and_then(|()| out.flush()) {
-        Ok(()) => {
-            *len += row.len() as u64;
-            Ok(())
-        }
-        Err(e) => {
-            // Best effort: the error that matters is the write's.
-            let _ = out.rewind_to(*len);
-            Err(e)
-        }
-    }
-}
-
-/// A writer that can be cut back to a length.
-trait Rewind {
-    fn rewind_to(&mut self, len: u64) -> std::io::Result<()>;
-}
-
-impl Rewind for File {
-    fn rewind_to(&mut self, len: u64) -> std::io::Result<()> {
-        use std::io::{Seek, SeekFrom};
-        self.set_len(len)?;
-        self.seek(SeekFrom::Start(len)).map(|_| ())
-    }
-}
-
-/// An OTB result file, one `x,y,w,h` row per frame, written through row
-/// by row so that an interrupted run keeps every box it wrote. A row is
-/// written whole or not at all: when the disk fills part-way through one,
-/// the file is cut back to the rows before it. The path `-` is standard
-/// output.
-pub struct BoxFile {
-    path: PathBuf,
-    out: BoxOut,
-}
-
-impl BoxFile {
-    /// Creates (truncates) the file.
-    ///
-    /// # Errors
-    /// [`TrackError::Output`] naming the file.
-    pub fn create(path: &Path) -> Result<Self, TrackError> {
-        let out = if path == Path::new("-") {
-            BoxOut::Stdout(std::io::stdout())
-        } else {
-            let file = File::create(path).map_err(|source| TrackError::Output {
-                path: path.to_path_buf(),
-                source,
-            })?;
-            BoxOut::File { file, len: 0 }
-        };
-        Ok(Self {
-            path: path.to_path_buf(),
-            out,
-        })
-    }
-
-    /// Appends one row, whole or not at all, and flushes it.
-    ///
-    /// # Errors
-    /// [`TrackError::Output`] naming the file.
-    pub fn write(&mut self, b: &BBox) -> Result<(), TrackError> {
-        let row = format!("{}\n", box_row(b));
-        let done = match &mut self.out {
-            BoxOut::Stdout(out) => out.write_all(row.as_bytes()).and_then(|()| out.flush()),
-            BoxOut::File { file, len } => write_whole(file, len, row.as_bytes()),
-        };
-        done.map_err(|source| TrackError::Output {
-            path: self.path.clone(),
-            source,
-        })
-    }
-}
-
-/// Formats a box as an OTB result row `x,y,w,h` (at most 2 decimals,
-/// trailing zeros dropped).
-pub fn box_row(b: &BBox) -> String {
-    let f = |v: f64| {
-        let s = format!("{v:.2}");
-        let s = s.trim_end_matches('0').trim_end_matches('.');
-        if s == "-0" {
-            "0".to_string()
-        } else {
-            s.to_string()
-        }
-    };
-    format!("{},{},{},{}", f(b.x), f(b.y), f(b.width), f(b.height))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use bayestrack_trackers::{Estimate, Result as TrackerResult};
+    use bayestrack_trackers::{Estimate, Result as TrackerResult, TrackerError};
 
     /// Moves its box one pixel right per frame; refuses frames of another
     /// size than the first.
@@ -557,7 +424,7 @@ mod tests {
             OnBadFrame::Stop,
             |_| Ok(()),
         );
-        assert!(matches!(stop, Err(TrackError::Frame(_))));
+        assert!(matches!(stop, Err(OtbError::IndexOutOfRange { .. })));
         let run = track_frames(
             &mut tracker,
             4,
@@ -582,66 +449,6 @@ mod tests {
             OnBadFrame::Skip,
             |_| Ok(()),
         );
-        assert!(matches!(first_bad, Err(TrackError::Frame(_))));
-    }
-
-    /// A disk that fills after `room` bytes: writes past it fail part-way.
-    struct FillingDisk {
-        data: Vec<u8>,
-        room: usize,
-    }
-
-    impl Write for FillingDisk {
-        fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-            let n = buf.len().min(self.room - self.data.len());
-            if n == 0 {
-                return Err(std::io::Error::from(std::io::ErrorKind::StorageFull));
-            }
-            self.data.extend(&buf[..n]);
-            Ok(n)
-        }
-        fn flush(&mut self) -> std::io::Result<()> {
-            Ok(())
-        }
-    }
-
-    impl Rewind for FillingDisk {
-        fn rewind_to(&mut self, len: u64) -> std::io::Result<()> {
-            self.data.truncate(len as usize);
-            Ok(())
-        }
-    }
-
-    #[test]
-    fn a_row_is_written_whole_or_not_at_all() {
-        let mut disk = FillingDisk {
-            data: Vec::new(),
-            room: 20,
-        };
-        let mut len = 0;
-        write_whole(&mut disk, &mut len, b"1,2,3,4\n").unwrap();
-        write_whole(&mut disk, &mut len, b"5,6,7,8\n").unwrap();
-        // 4 bytes of room left: the third row would be torn.
-        let e = write_whole(&mut disk, &mut len, b"9,10,11,12\n").unwrap_err();
-        assert_eq!(e.kind(), std::io::ErrorKind::StorageFull);
-        assert_eq!(disk.data, b"1,2,3,4\n5,6,7,8\n");
-        assert_eq!(len, 16);
-    }
-
-    #[test]
-    fn a_real_file_is_cut_back_to_its_whole_rows() {
-        let path = std::env::temp_dir().join(format!("bayestrack-rewind-{}", std::process::id()));
-        let mut file = File::create(&path).unwrap();
-        file.write_all(b"1,2,3,4\n9,9").unwrap();
-        file.rewind_to(8).unwrap();
-        file.write_all(b"5,6,7,8\n").unwrap();
-        drop(file);
-        assert_eq!(std::fs::read(&path).unwrap(), b"1,2,3,4\n5,6,7,8\n");
-        let _ = std::fs::remove_file(&path);
-    }
-
-    #[test]
-    fn box_rows_are_short() {
-        assert_eq!(box_row(&BBox::new(1.0, 2.5, 10.126, 3.0)), "1,2.5,10.13,3");
+        assert!(matches!(first_bad, Err(OtbError::IndexOutOfRange { .. })));
     }
 }

@@ -1,27 +1,13 @@
-//! Writing result files: one error type that names the file.
+//! Writing result files without leaving them half written: text and CSV
+//! replaced whole, CSV rows appended as results finish, OTB box files
+//! written through row by row, and the `PARTIAL.txt` marker. Every
+//! failure is a [`WriteError`] naming the file.
 
 use std::path::{Path, PathBuf};
 
-/// A file or folder that could not be written.
-#[derive(Debug, thiserror::Error)]
-#[error("cannot write {path}: {source}")]
-pub struct WriteError {
-    /// The file or folder.
-    pub path: PathBuf,
-    /// The underlying error.
-    #[source]
-    pub source: std::io::Error,
-}
+use bayestrack_image::BBox;
 
-impl WriteError {
-    /// Wraps `source`, naming `path`.
-    pub fn new(path: &Path, source: std::io::Error) -> Self {
-        Self {
-            path: path.to_path_buf(),
-            source,
-        }
-    }
-}
+use crate::error::WriteError;
 
 /// Writes `contents` to `path` without ever leaving it half written: the
 /// text goes to a temporary file beside it (`.<name>.tmp`), which is then
@@ -36,6 +22,20 @@ pub fn write_text(path: &Path, contents: &str) -> Result<(), WriteError> {
     std::fs::rename(&tmp, path).map_err(|e| {
         let _ = std::fs::remove_file(&tmp);
         WriteError::new(path, e)
+    })
+}
+
+/// Copies the file `from` to `to` as [`write_text`] writes: to a
+/// temporary file beside `to`, renamed over it.
+///
+/// # Errors
+/// [`WriteError`] naming the file that cannot be copied or written.
+pub fn copy_file(from: &Path, to: &Path) -> Result<(), WriteError> {
+    let tmp = temporary_path(to);
+    std::fs::copy(from, &tmp).map_err(|e| WriteError::new(from, e))?;
+    std::fs::rename(&tmp, to).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        WriteError::new(to, e)
     })
 }
 
@@ -240,9 +240,109 @@ pub fn create_dir(dir: &Path) -> Result<(), WriteError> {
     std::fs::create_dir_all(dir).map_err(|e| WriteError::new(dir, e))
 }
 
+/// Where a [`BoxFile`] writes: standard output or a file whose length
+/// before each row is known, so a row that fails part-way is cut off.
+enum BoxOut {
+    Stdout(std::io::Stdout),
+    File { file: std::fs::File, len: u64 },
+}
+
+/// Writes `row` whole or not at all: when the write fails part-way (a full
+/// disk), the target is cut back to `*len`, its length before the row.
+fn write_whole<W: std::io::Write + Rewind>(
+    out: &mut W,
+    len: &mut u64,
+    row: &[u8],
+) -> std::io::Result<()> {
+    match out.write_all(row).and_then(|()| out.flush()) {
+        Ok(()) => {
+            *len += row.len() as u64;
+            Ok(())
+        }
+        Err(e) => {
+            // Best effort: the error that matters is the write's.
+            let _ = out.rewind_to(*len);
+            Err(e)
+        }
+    }
+}
+
+/// A writer that can be cut back to a length.
+trait Rewind {
+    fn rewind_to(&mut self, len: u64) -> std::io::Result<()>;
+}
+
+impl Rewind for std::fs::File {
+    fn rewind_to(&mut self, len: u64) -> std::io::Result<()> {
+        use std::io::{Seek, SeekFrom};
+        self.set_len(len)?;
+        self.seek(SeekFrom::Start(len)).map(|_| ())
+    }
+}
+
+/// An OTB result file, one `x,y,w,h` row per frame, written through row
+/// by row so that an interrupted run keeps every box it wrote. A row is
+/// written whole or not at all: when the disk fills part-way through one,
+/// the file is cut back to the rows before it. The path `-` is standard
+/// output.
+pub struct BoxFile {
+    path: PathBuf,
+    out: BoxOut,
+}
+
+impl BoxFile {
+    /// Creates (truncates) the file.
+    ///
+    /// # Errors
+    /// [`WriteError`] naming the file.
+    pub fn create(path: &Path) -> Result<Self, WriteError> {
+        let out = if path == Path::new("-") {
+            BoxOut::Stdout(std::io::stdout())
+        } else {
+            let file = std::fs::File::create(path).map_err(|e| WriteError::new(path, e))?;
+            BoxOut::File { file, len: 0 }
+        };
+        Ok(Self {
+            path: path.to_path_buf(),
+            out,
+        })
+    }
+
+    /// Appends one row, whole or not at all, and flushes it.
+    ///
+    /// # Errors
+    /// [`WriteError`] naming the file.
+    pub fn write(&mut self, b: &BBox) -> Result<(), WriteError> {
+        use std::io::Write;
+        let row = format!("{}\n", box_row(b));
+        let done = match &mut self.out {
+            BoxOut::Stdout(out) => out.write_all(row.as_bytes()).and_then(|()| out.flush()),
+            BoxOut::File { file, len } => write_whole(file, len, row.as_bytes()),
+        };
+        done.map_err(|e| WriteError::new(&self.path, e))
+    }
+}
+
+/// Formats a box as an OTB result row `x,y,w,h` (at most 2 decimals,
+/// trailing zeros dropped).
+pub fn box_row(b: &BBox) -> String {
+    let f = |v: f64| {
+        let s = format!("{v:.2}");
+        let s = s.trim_end_matches('0').trim_end_matches('.');
+        if s == "-0" {
+            "0".to_string()
+        } else {
+            s.to_string()
+        }
+    };
+    format!("{},{},{},{}", f(b.x), f(b.y), f(b.width), f(b.height))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::fs::File;
+    use std::io::Write;
 
     fn scratch(name: &str) -> PathBuf {
         let dir =
@@ -354,5 +454,65 @@ mod tests {
             Path::new("x/boxes.partial")
         );
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A disk that fills after `room` bytes: writes past it fail part-way.
+    struct FillingDisk {
+        data: Vec<u8>,
+        room: usize,
+    }
+
+    impl Write for FillingDisk {
+        fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+            let n = buf.len().min(self.room - self.data.len());
+            if n == 0 {
+                return Err(std::io::Error::from(std::io::ErrorKind::StorageFull));
+            }
+            self.data.extend(&buf[..n]);
+            Ok(n)
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    impl Rewind for FillingDisk {
+        fn rewind_to(&mut self, len: u64) -> std::io::Result<()> {
+            self.data.truncate(len as usize);
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn a_row_is_written_whole_or_not_at_all() {
+        let mut disk = FillingDisk {
+            data: Vec::new(),
+            room: 20,
+        };
+        let mut len = 0;
+        write_whole(&mut disk, &mut len, b"1,2,3,4\n").unwrap();
+        write_whole(&mut disk, &mut len, b"5,6,7,8\n").unwrap();
+        // 4 bytes of room left: the third row would be torn.
+        let e = write_whole(&mut disk, &mut len, b"9,10,11,12\n").unwrap_err();
+        assert_eq!(e.kind(), std::io::ErrorKind::StorageFull);
+        assert_eq!(disk.data, b"1,2,3,4\n5,6,7,8\n");
+        assert_eq!(len, 16);
+    }
+
+    #[test]
+    fn a_real_file_is_cut_back_to_its_whole_rows() {
+        let path = std::env::temp_dir().join(format!("bayestrack-rewind-{}", std::process::id()));
+        let mut file = File::create(&path).unwrap();
+        file.write_all(b"1,2,3,4\n9,9").unwrap();
+        file.rewind_to(8).unwrap();
+        file.write_all(b"5,6,7,8\n").unwrap();
+        drop(file);
+        assert_eq!(std::fs::read(&path).unwrap(), b"1,2,3,4\n5,6,7,8\n");
+        let _ = std::fs::remove_file(&path);
+    }
+
+    #[test]
+    fn box_rows_are_short() {
+        assert_eq!(box_row(&BBox::new(1.0, 2.5, 10.126, 3.0)), "1,2.5,10.13,3");
     }
 }

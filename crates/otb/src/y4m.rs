@@ -27,7 +27,7 @@ use std::io::{BufRead, BufReader, Read};
 
 use bayestrack_image::Image;
 
-use crate::sequence::OtbError;
+use crate::error::OtbError;
 
 /// Longest header or frame-header line read (ffmpeg writes under 100 bytes).
 const MAX_LINE: usize = 4096;

@@ -5,8 +5,9 @@ use std::fs;
 use std::path::{Path, PathBuf};
 
 use bayestrack_image::{BBox, Image, ImageError, write_png};
+use bayestrack_otb::OtbError;
 use bayestrack_otb::metrics::score_otb;
-use bayestrack_otb::sequence::{OtbError, Sequence, list_sequences};
+use bayestrack_otb::sequence::{Sequence, list_sequences};
 
 fn sequences_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/sequences")
@@ -58,7 +59,11 @@ fn real_sequences_load_with_one_row_per_frame() {
                 "{name}"
             );
             assert_eq!(seq.ground_truth[1], None);
+            assert_eq!(seq.labelled(), 93, "{name}: labelled rows");
         }
+        // Numeric order: the first file is frame 1.
+        assert!(seq.frame_name(0).contains("0001"), "{name}: first frame");
+        // Every frame decodes (and passes the truncation check) at one size.
         assert_eq!(seq.check_frames().unwrap(), size, "{name}: frame size");
         // Ground truth scored against itself is perfect; unlabelled frames are skipped.
         let pred: Vec<BBox> = seq
@@ -157,7 +162,7 @@ fn frames_past_the_last_ground_truth_row_are_unlabelled_and_noted() {
 fn bad_ground_truth_line_names_the_line() {
     let d = make_sequence("badline", "1,1,4,4\n1,1,four,4\n1,1,4,4\n");
     match Sequence::open(&d) {
-        Err(OtbError::Image(e @ ImageError::GroundTruthParse { line: 2, .. })) => {
+        Err(e @ OtbError::GroundTruth { line: 2, .. }) => {
             assert!(e.to_string().contains("groundtruth_rect.txt:2"), "{e}");
         }
         other => panic!("expected a parse error on line 2, got {other:?}"),

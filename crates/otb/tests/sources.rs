@@ -3,6 +3,8 @@
 //! Y4M streams decode, selections pick frames without decoding the others,
 //! and the tracking loop pulls one frame at a time.
 
+#![cfg(feature = "track")]
+
 use std::cell::Cell;
 use std::fs;
 use std::io::Read;
@@ -10,8 +12,9 @@ use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
 use bayestrack_image::{BBox, Image, write_png};
+use bayestrack_otb::OtbError;
 use bayestrack_otb::metrics::score_otb;
-use bayestrack_otb::sequence::{OtbError, Sequence};
+use bayestrack_otb::sequence::Sequence;
 use bayestrack_otb::source::{Frame, FrameSelection, FrameSource, Select, Y4mSource};
 use bayestrack_otb::track::{OnBadFrame, clip_initial_box, track_source};
 use bayestrack_otb::y4m::rgb_to_yuv;

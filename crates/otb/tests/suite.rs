@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use bayestrack_otb::published::{
     OtbFrameRange, OtbFrameRanges, PUBLISHED_OPE_FILE, Published, PublishedOpe,
 };
-use bayestrack_otb::suite::{SuiteEvent, SuiteOptions, run_suite, run_suite_with};
+use bayestrack_otb::suite::{SuiteEvent, SuiteOptions, Timing, run_suite, run_suite_with};
 use bayestrack_trackers::tracker_info;
 
 /// A 3-frame sequence of a bright square moving right by 1 px a frame.
@@ -61,6 +61,8 @@ fn a_finished_suite_replaces_the_previous_results_and_leaves_nothing_partial() {
         out: out.clone(),
         progress: false,
         published: None,
+        shard: None,
+        timing: Timing::Measured,
     };
     let report = run_suite(&seqs, &options).unwrap();
     assert_eq!(report.cells.len(), 1);
@@ -105,6 +107,8 @@ fn published_results_sit_beside_ours_in_the_table_and_the_plot() {
         out: root.join("out"),
         progress: false,
         published: Some(published),
+        shard: None,
+        timing: Timing::Measured,
     };
     let mut events = Vec::new();
     let report = run_suite_with(&seqs, &options, |e| {
