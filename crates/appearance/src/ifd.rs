@@ -12,6 +12,7 @@
 //! clustering). Object `k` is weighted against `V^k`, so two objects that
 //! cross do not both lock onto the same motion blob.
 
+use bayestrack_image::simd::{Kernel, Token, dispatch};
 use bayestrack_image::{Image, ImageError, ImageView, ImageViewMut, LUMA_WEIGHTS, Pixel, Rect};
 
 use crate::{AppearanceError, Result};
@@ -46,7 +47,7 @@ pub fn interframe_difference_into<T: Pixel>(
             for y in 0..current.height() {
                 let (a, b) = (current.row(y), previous.row(y));
                 let d = out.row_mut(y);
-                crate::dispatch::vectorised(AbsDiffRow {
+                dispatch(AbsDiffRow {
                     a,
                     b,
                     out: d,
@@ -58,7 +59,7 @@ pub fn interframe_difference_into<T: Pixel>(
             let w = LUMA_WEIGHTS.map(|w| w * scale);
             for y in 0..current.height() {
                 let (a, b) = (current.row(y), previous.row(y));
-                crate::dispatch::vectorised(LumaDifferenceRow {
+                dispatch(LumaDifferenceRow {
                     w,
                     a,
                     b,
@@ -86,10 +87,10 @@ struct AbsDiffRow<'a, T> {
     scale: f32,
 }
 
-impl<T: Pixel> crate::dispatch::Kernel for AbsDiffRow<'_, T> {
+impl<T: Pixel> Kernel for AbsDiffRow<'_, T> {
     type Output = ();
     #[inline(always)]
-    fn run(self) {
+    fn run<K: Token>(self, _: K) {
         for ((d, &p), &q) in self.out.iter_mut().zip(self.a).zip(self.b) {
             *d = p.abs_diff(q).to_f32() * self.scale;
         }
@@ -105,10 +106,10 @@ struct LumaDifferenceRow<'a, T> {
     out: &'a mut [f32],
 }
 
-impl<T: Pixel> crate::dispatch::Kernel for LumaDifferenceRow<'_, T> {
+impl<T: Pixel> Kernel for LumaDifferenceRow<'_, T> {
     type Output = ();
     #[inline(always)]
-    fn run(self) {
+    fn run<K: Token>(self, _: K) {
         let Self { w, a, b, out } = self;
         // Blocks of LUMA_BLOCK pixels, de-interleaved into
         // channel arrays so that the compiler vectorises across

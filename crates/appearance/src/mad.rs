@@ -8,6 +8,7 @@
 
 use std::cell::RefCell;
 
+use bayestrack_image::simd::{Kernel, Token, dispatch};
 use bayestrack_image::{ImageError, ImageView, ImageViewMut, Pixel, Rect, SadTemplate, SimdLevel};
 
 use crate::error::check_window;
@@ -265,10 +266,10 @@ struct AddBlockBound<'a> {
     first: bool,
 }
 
-impl crate::dispatch::Kernel for AddBlockBound<'_> {
+impl Kernel for AddBlockBound<'_> {
     type Output = ();
     #[inline(always)]
-    fn run(self) {
+    fn run<K: Token>(self, _: K) {
         let terms = self.bounds.iter_mut().zip(self.top).zip(self.bottom);
         if self.first {
             for ((b, &t), &d) in terms {
@@ -285,10 +286,10 @@ impl crate::dispatch::Kernel for AddBlockBound<'_> {
 /// The smallest element (`u32::MAX` for none).
 struct MinOf<'a>(&'a [u32]);
 
-impl crate::dispatch::Kernel for MinOf<'_> {
+impl Kernel for MinOf<'_> {
     type Output = u32;
     #[inline(always)]
-    fn run(self) -> u32 {
+    fn run<K: Token>(self, _: K) -> u32 {
         self.0.iter().fold(u32::MAX, |m, &b| m.min(b))
     }
 }
@@ -474,7 +475,7 @@ impl MadSearch {
             for k in 0..nb {
                 let top = &self.cum[(j + edges[k]) * npx..][..npx];
                 let bottom = &self.cum[(j + edges[k + 1]) * npx..][..npx];
-                crate::dispatch::vectorised(AddBlockBound {
+                dispatch(AddBlockBound {
                     bounds,
                     top,
                     bottom,
@@ -482,7 +483,7 @@ impl MadSearch {
                     first: k == 0,
                 });
             }
-            self.row_mins[j] = crate::dispatch::vectorised(MinOf(bounds));
+            self.row_mins[j] = dispatch(MinOf(bounds));
         }
         let data = frame.as_slice();
         let stride = frame.stride();

@@ -7,9 +7,9 @@
 
 use bayestrack_image::{Hsv, ImageError, ImageView, ImageViewMut, Rect, Rgb, hue_distance};
 
-use crate::dispatch::{Kernel, vectorised};
 use crate::error::check_window;
 use crate::{AppearanceError, Result};
+use bayestrack_image::simd::{Kernel, Token, dispatch};
 
 /// A skin-colour reference (hue, saturation) with its spread.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -230,7 +230,7 @@ impl SkinModel {
     /// Eq. 8 for the RGB pixels of `rgb` (`3 x out.len()` bytes) into `out`,
     /// [`LANES`] at a time; a short tail goes through a zero-padded block.
     fn score_row(&self, rgb: &[u8], out: &mut [f32]) {
-        vectorised(ScoreRow {
+        dispatch(ScoreRow {
             model: self,
             rgb,
             out,
@@ -268,7 +268,7 @@ struct ScoreRow<'a> {
 impl Kernel for ScoreRow<'_> {
     type Output = ();
     #[inline(always)]
-    fn run(self) {
+    fn run<K: Token>(self, _: K) {
         self.model.score_row_inline(self.rgb, self.out);
     }
 }
