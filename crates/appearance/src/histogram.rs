@@ -636,11 +636,8 @@ mod tests {
 
     #[test]
     fn sliding_search_matches_direct_computation() {
-        let mut s = 99u32;
-        let mut next = move || {
-            s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            (s >> 24) as u8
-        };
+        let mut lcg = bayestrack_testkit::Lcg32(99);
+        let mut next = move || lcg.byte();
         let mut img = rgb(60, 40, |_, _| [0, 0, 0]);
         for v in img.as_mut_slice() {
             *v = next() / 2; // dark noise
@@ -684,13 +681,8 @@ mod tests {
     /// A random RGB image from a linear congruential stream; `levels`
     /// distinct values per channel (few levels make long runs of equal bins).
     fn random_rgb(w: usize, h: usize, seed: u32, levels: u32) -> Image<u8> {
-        let mut s = seed;
-        let mut img = Image::new(w, h, 3, 0u8).unwrap();
-        for v in img.as_mut_slice() {
-            s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            *v = ((s >> 24) % levels * (256 / levels)) as u8;
-        }
-        img
+        bayestrack_testkit::noise(w, h, 3, seed)
+            .map(|v| (u32::from(v) % levels * (256 / levels)) as u8)
     }
 
     /// The histogram pixel by pixel through `add` (the scalar reference).

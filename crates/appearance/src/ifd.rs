@@ -366,11 +366,8 @@ mod tests {
 
     #[test]
     fn colour_blocks_match_the_per_pixel_formula_bit_for_bit() {
-        let mut seed = 11u32;
-        let mut next = move || {
-            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            (seed >> 24) as u8
-        };
+        let mut lcg = bayestrack_testkit::Lcg32(11);
+        let mut next = move || lcg.byte();
         for w in [1, 15, 16, 17, 40, 53] {
             let mut a = Image::new(w, 3, 3, 0u8).unwrap();
             let mut b = Image::new(w, 3, 3, 0u8).unwrap();

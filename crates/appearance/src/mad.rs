@@ -702,13 +702,10 @@ mod tests {
         assert_eq!(u8::sad_row(&[255; 9000], &[0; 9000]), 255.0 * 9000.0);
     }
 
+    use bayestrack_testkit::noise;
+
     fn textured(w: usize, h: usize, seed: u32) -> Image<u8> {
-        let mut s = seed;
-        Image::from_fn(w, h, |_, _| {
-            s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            (s >> 24) as u8
-        })
-        .unwrap()
+        noise(w, h, 1, seed)
     }
 
     #[test]
@@ -716,11 +713,7 @@ mod tests {
         let mut frame = textured(120, 90, 1);
         let tpl = textured(30, 20, 2);
         let (px, py) = (71, 43);
-        for y in 0..20 {
-            for x in 0..30 {
-                frame.set(px + x, py + y, 0, tpl.get(x, y, 0).unwrap());
-            }
-        }
+        bayestrack_testkit::paste(&mut frame, tpl.view(), px, py);
         let m = mad_search(frame.view(), tpl.view(), Rect::new(0, 0, 120, 90)).unwrap();
         assert_eq!((m.x, m.y, m.mad), (px, py, 0.0));
         // Restricted region that still contains it, and one that does not.

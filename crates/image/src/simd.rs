@@ -134,6 +134,11 @@ pub fn dispatch<K: Kernel>(kernel: K) -> K::Output {
 
 /// A loop for [`dispatch`] and [`SimdLevel::run`]: its data (the value)
 /// and its body ([`Kernel::run`]).
+///
+/// A kernel of at most eight words is handed to the dispatched function
+/// in registers, a larger one through a pointer; where a hot loop keeps
+/// many of its fields live, implement `Kernel` for a reference to it and
+/// compare instruction counts (the SAD kernels are faster that way).
 pub trait Kernel {
     /// What the loop returns.
     type Output;

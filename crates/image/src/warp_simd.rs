@@ -479,20 +479,7 @@ mod tests {
         }
     }
 
-    /// A small linear congruential generator (seeded, no dependency).
-    struct Lcg(u64);
-    impl Lcg {
-        fn unit(&mut self) -> f64 {
-            self.0 = self
-                .0
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
-        }
-        fn range(&mut self, lo: f64, hi: f64) -> f64 {
-            lo + (hi - lo) * self.unit()
-        }
-    }
+    use bayestrack_testkit::Lcg64 as Lcg;
 
     /// A map sending the `pw x ph` patch inside `[0, w-1] x [0, h-1]`:
     /// rotation, anisotropic scale and shear, then a translation that puts

@@ -6,13 +6,7 @@
 use bayestrack_image::{Image, parse_ground_truth, read_frame, read_ground_truth, write_png};
 use proptest::prelude::*;
 
-/// The case count: `n`, or `PROPTEST_CASES` when set (a longer hunt).
-fn cases(n: u32) -> u32 {
-    std::env::var("PROPTEST_CASES")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(n)
-}
+use bayestrack_testkit::strategies::cases;
 
 /// A token of a ground-truth row: numbers of every kind and junk.
 fn token() -> impl Strategy<Value = String> {
