@@ -5,13 +5,7 @@ use bayestrack_affine::{Affine2, AlgebraVector, Lwpr, LwprConfig};
 use nalgebra::Matrix3;
 use proptest::prelude::*;
 
-/// The case count: `n`, or `PROPTEST_CASES` when set (a longer hunt).
-fn cases(n: u32) -> u32 {
-    std::env::var("PROPTEST_CASES")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(n)
-}
+use bayestrack_testkit::strategies::cases;
 
 /// A number at any scale, sometimes not finite.
 fn wide() -> impl Strategy<Value = f64> {

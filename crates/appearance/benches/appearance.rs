@@ -9,8 +9,7 @@ use bayestrack_appearance::{
 use bayestrack_image::{Image, Rect, rgb_to_gray};
 use criterion::{Criterion, criterion_group, criterion_main};
 
-mod common;
-use common::noise;
+use bayestrack_testkit::noise;
 
 /// Two consecutive frames of a real sequence (`../shared/data/sequences`)
 /// and the 30x20 template cut from the first, at the target (a tracker's

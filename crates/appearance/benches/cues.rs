@@ -19,8 +19,7 @@ use bayestrack_appearance::{
 use bayestrack_image::{Image, Rect, rgb_to_gray};
 use criterion::{Criterion, Throughput};
 
-mod common;
-use common::noise;
+use bayestrack_testkit::noise;
 
 /// A smooth 320x240 RGB frame: slow colour ramps with a little noise, so
 /// neighbouring pixels often share a bin (as in real video).

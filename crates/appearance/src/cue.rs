@@ -772,12 +772,7 @@ mod tests {
 
     #[test]
     fn mad_histogram_similarity_cues() {
-        let mut st = 5u32;
-        let frame = Image::from_fn(40, 30, |_, _| {
-            st = st.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            (st >> 24) as u8
-        })
-        .unwrap();
+        let frame = bayestrack_testkit::noise(40, 30, 1, 5);
         let tpl = frame.crop(Rect::new(10, 8, 6, 5)).unwrap().to_image();
         let cue = MadCue::new(tpl.clone(), 2.0).unwrap();
         let planes = Frame::new().with_gray(frame.view());

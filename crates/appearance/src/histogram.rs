@@ -4,6 +4,7 @@
 //! each (`3 x 256` in the paper), normalised so that each channel sums to
 //! one. Distances: L2 (the paper's choice, footnote 3) and Bhattacharyya.
 
+use bayestrack_image::simd::{Kernel, Token, dispatch};
 use bayestrack_image::{ImageError, ImageView, Rect};
 
 use crate::error::check_window;
@@ -176,7 +177,7 @@ impl RgbHistogram {
                 let row_bins = &mut self.row_bins;
                 row_bins.resize(3 * window.width, 0);
                 for row in rows {
-                    crate::dispatch::vectorised(BinRow {
+                    dispatch(BinRow {
                         row,
                         out: &mut row_bins[..],
                         bins,
@@ -240,7 +241,7 @@ impl RgbHistogram {
         // then the sum is exact in any order and the result is
         // `sqrt(S) / (na nb)` rounded twice.
         let (na, nb) = (f64::from(self.pixels), f64::from(other.pixels));
-        let s = crate::dispatch::vectorised(CountSum {
+        let s = dispatch(CountSum {
             a: (&self.counts, self.pixels),
             b: (&other.counts, other.pixels),
             kind: HistogramDistance::L2,
@@ -257,7 +258,7 @@ impl RgbHistogram {
         self.check_pair(other, "bhattacharyya_distance")?;
         // `a b` is exact in f64 for counts below 2^26.5; one square root per
         // bin, one division at the end.
-        let s = crate::dispatch::vectorised(CountSum {
+        let s = dispatch(CountSum {
             a: (&self.counts, self.pixels),
             b: (&other.counts, other.pixels),
             kind: HistogramDistance::Bhattacharyya,
@@ -336,10 +337,10 @@ struct BinRow<'a> {
     bins: u16,
 }
 
-impl crate::dispatch::Kernel for BinRow<'_> {
+impl Kernel for BinRow<'_> {
     type Output = ();
     #[inline(always)]
-    fn run(self) {
+    fn run<K: Token>(self, _: K) {
         for (o, &v) in self.out.iter_mut().zip(self.row) {
             *o = ((u16::from(v) * self.bins) >> 8) as u8;
         }
@@ -355,10 +356,10 @@ struct CountSum<'a> {
     kind: HistogramDistance,
 }
 
-impl crate::dispatch::Kernel for CountSum<'_> {
+impl Kernel for CountSum<'_> {
     type Output = f64;
     #[inline(always)]
-    fn run(self) -> f64 {
+    fn run<K: Token>(self, _: K) -> f64 {
         match self.kind {
             HistogramDistance::L2 => {
                 let (na, nb) = (f64::from(self.a.1), f64::from(self.b.1));
@@ -635,11 +636,8 @@ mod tests {
 
     #[test]
     fn sliding_search_matches_direct_computation() {
-        let mut s = 99u32;
-        let mut next = move || {
-            s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            (s >> 24) as u8
-        };
+        let mut lcg = bayestrack_testkit::Lcg32(99);
+        let mut next = move || lcg.byte();
         let mut img = rgb(60, 40, |_, _| [0, 0, 0]);
         for v in img.as_mut_slice() {
             *v = next() / 2; // dark noise
@@ -683,13 +681,8 @@ mod tests {
     /// A random RGB image from a linear congruential stream; `levels`
     /// distinct values per channel (few levels make long runs of equal bins).
     fn random_rgb(w: usize, h: usize, seed: u32, levels: u32) -> Image<u8> {
-        let mut s = seed;
-        let mut img = Image::new(w, h, 3, 0u8).unwrap();
-        for v in img.as_mut_slice() {
-            s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            *v = ((s >> 24) % levels * (256 / levels)) as u8;
-        }
-        img
+        bayestrack_testkit::noise(w, h, 3, seed)
+            .map(|v| (u32::from(v) % levels * (256 / levels)) as u8)
     }
 
     /// The histogram pixel by pixel through `add` (the scalar reference).

@@ -12,6 +12,7 @@
 //! clustering). Object `k` is weighted against `V^k`, so two objects that
 //! cross do not both lock onto the same motion blob.
 
+use bayestrack_image::simd::{Kernel, Token, dispatch};
 use bayestrack_image::{Image, ImageError, ImageView, ImageViewMut, LUMA_WEIGHTS, Pixel, Rect};
 
 use crate::{AppearanceError, Result};
@@ -46,7 +47,7 @@ pub fn interframe_difference_into<T: Pixel>(
             for y in 0..current.height() {
                 let (a, b) = (current.row(y), previous.row(y));
                 let d = out.row_mut(y);
-                crate::dispatch::vectorised(AbsDiffRow {
+                dispatch(AbsDiffRow {
                     a,
                     b,
                     out: d,
@@ -58,7 +59,7 @@ pub fn interframe_difference_into<T: Pixel>(
             let w = LUMA_WEIGHTS.map(|w| w * scale);
             for y in 0..current.height() {
                 let (a, b) = (current.row(y), previous.row(y));
-                crate::dispatch::vectorised(LumaDifferenceRow {
+                dispatch(LumaDifferenceRow {
                     w,
                     a,
                     b,
@@ -86,10 +87,10 @@ struct AbsDiffRow<'a, T> {
     scale: f32,
 }
 
-impl<T: Pixel> crate::dispatch::Kernel for AbsDiffRow<'_, T> {
+impl<T: Pixel> Kernel for AbsDiffRow<'_, T> {
     type Output = ();
     #[inline(always)]
-    fn run(self) {
+    fn run<K: Token>(self, _: K) {
         for ((d, &p), &q) in self.out.iter_mut().zip(self.a).zip(self.b) {
             *d = p.abs_diff(q).to_f32() * self.scale;
         }
@@ -105,10 +106,10 @@ struct LumaDifferenceRow<'a, T> {
     out: &'a mut [f32],
 }
 
-impl<T: Pixel> crate::dispatch::Kernel for LumaDifferenceRow<'_, T> {
+impl<T: Pixel> Kernel for LumaDifferenceRow<'_, T> {
     type Output = ();
     #[inline(always)]
-    fn run(self) {
+    fn run<K: Token>(self, _: K) {
         let Self { w, a, b, out } = self;
         // Blocks of LUMA_BLOCK pixels, de-interleaved into
         // channel arrays so that the compiler vectorises across
@@ -365,11 +366,8 @@ mod tests {
 
     #[test]
     fn colour_blocks_match_the_per_pixel_formula_bit_for_bit() {
-        let mut seed = 11u32;
-        let mut next = move || {
-            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            (seed >> 24) as u8
-        };
+        let mut lcg = bayestrack_testkit::Lcg32(11);
+        let mut next = move || lcg.byte();
         for w in [1, 15, 16, 17, 40, 53] {
             let mut a = Image::new(w, 3, 3, 0u8).unwrap();
             let mut b = Image::new(w, 3, 3, 0u8).unwrap();

@@ -1,7 +1,6 @@
 #![doc = include_str!("../README.md")]
 
 mod cue;
-mod dispatch;
 mod error;
 mod histogram;
 mod ifd;

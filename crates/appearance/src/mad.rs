@@ -8,6 +8,7 @@
 
 use std::cell::RefCell;
 
+use bayestrack_image::simd::{Kernel, Token, dispatch};
 use bayestrack_image::{ImageError, ImageView, ImageViewMut, Pixel, Rect, SadTemplate, SimdLevel};
 
 use crate::error::check_window;
@@ -265,10 +266,10 @@ struct AddBlockBound<'a> {
     first: bool,
 }
 
-impl crate::dispatch::Kernel for AddBlockBound<'_> {
+impl Kernel for AddBlockBound<'_> {
     type Output = ();
     #[inline(always)]
-    fn run(self) {
+    fn run<K: Token>(self, _: K) {
         let terms = self.bounds.iter_mut().zip(self.top).zip(self.bottom);
         if self.first {
             for ((b, &t), &d) in terms {
@@ -285,10 +286,10 @@ impl crate::dispatch::Kernel for AddBlockBound<'_> {
 /// The smallest element (`u32::MAX` for none).
 struct MinOf<'a>(&'a [u32]);
 
-impl crate::dispatch::Kernel for MinOf<'_> {
+impl Kernel for MinOf<'_> {
     type Output = u32;
     #[inline(always)]
-    fn run(self) -> u32 {
+    fn run<K: Token>(self, _: K) -> u32 {
         self.0.iter().fold(u32::MAX, |m, &b| m.min(b))
     }
 }
@@ -474,7 +475,7 @@ impl MadSearch {
             for k in 0..nb {
                 let top = &self.cum[(j + edges[k]) * npx..][..npx];
                 let bottom = &self.cum[(j + edges[k + 1]) * npx..][..npx];
-                crate::dispatch::vectorised(AddBlockBound {
+                dispatch(AddBlockBound {
                     bounds,
                     top,
                     bottom,
@@ -482,7 +483,7 @@ impl MadSearch {
                     first: k == 0,
                 });
             }
-            self.row_mins[j] = crate::dispatch::vectorised(MinOf(bounds));
+            self.row_mins[j] = dispatch(MinOf(bounds));
         }
         let data = frame.as_slice();
         let stride = frame.stride();
@@ -701,13 +702,10 @@ mod tests {
         assert_eq!(u8::sad_row(&[255; 9000], &[0; 9000]), 255.0 * 9000.0);
     }
 
+    use bayestrack_testkit::noise;
+
     fn textured(w: usize, h: usize, seed: u32) -> Image<u8> {
-        let mut s = seed;
-        Image::from_fn(w, h, |_, _| {
-            s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            (s >> 24) as u8
-        })
-        .unwrap()
+        noise(w, h, 1, seed)
     }
 
     #[test]
@@ -715,11 +713,7 @@ mod tests {
         let mut frame = textured(120, 90, 1);
         let tpl = textured(30, 20, 2);
         let (px, py) = (71, 43);
-        for y in 0..20 {
-            for x in 0..30 {
-                frame.set(px + x, py + y, 0, tpl.get(x, y, 0).unwrap());
-            }
-        }
+        bayestrack_testkit::paste(&mut frame, tpl.view(), px, py);
         let m = mad_search(frame.view(), tpl.view(), Rect::new(0, 0, 120, 90)).unwrap();
         assert_eq!((m.x, m.y, m.mad), (px, py, 0.0));
         // Restricted region that still contains it, and one that does not.

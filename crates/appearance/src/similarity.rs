@@ -320,12 +320,7 @@ mod tests {
     use super::*;
 
     fn texture(w: usize, h: usize, seed: u32) -> Image<f32> {
-        let mut s = seed;
-        Image::from_fn(w, h, |_, _| {
-            s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            (s >> 24) as f32 / 255.0
-        })
-        .unwrap()
+        bayestrack_testkit::noise(w, h, 1, seed).map(|v| f32::from(v) / 255.0)
     }
 
     #[test]

@@ -7,9 +7,9 @@
 
 use bayestrack_image::{Hsv, ImageError, ImageView, ImageViewMut, Rect, Rgb, hue_distance};
 
-use crate::dispatch::{Kernel, vectorised};
 use crate::error::check_window;
 use crate::{AppearanceError, Result};
+use bayestrack_image::simd::{Kernel, Token, dispatch};
 
 /// A skin-colour reference (hue, saturation) with its spread.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -230,7 +230,7 @@ impl SkinModel {
     /// Eq. 8 for the RGB pixels of `rgb` (`3 x out.len()` bytes) into `out`,
     /// [`LANES`] at a time; a short tail goes through a zero-padded block.
     fn score_row(&self, rgb: &[u8], out: &mut [f32]) {
-        vectorised(ScoreRow {
+        dispatch(ScoreRow {
             model: self,
             rgb,
             out,
@@ -268,7 +268,7 @@ struct ScoreRow<'a> {
 impl Kernel for ScoreRow<'_> {
     type Output = ();
     #[inline(always)]
-    fn run(self) {
+    fn run<K: Token>(self, _: K) {
         self.model.score_row_inline(self.rgb, self.out);
     }
 }
@@ -556,12 +556,11 @@ mod tests {
     fn window_mean_and_map_agree_on_odd_widths() {
         // Widths around the block size exercise the padded tail.
         let m = SkinModel::new(0.05, 0.4, 0.05).unwrap();
-        let mut seed = 7u32;
+        let mut lcg = bayestrack_testkit::Lcg32(7);
         for w in [1, 5, 15, 16, 17, 33, 70] {
             let mut img = Image::new(w, 3, 3, 0u8).unwrap();
             for v in img.as_mut_slice() {
-                seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-                *v = (seed >> 24) as u8;
+                *v = lcg.byte();
             }
             let mut out = Image::new(w, 3, 1, 0f32).unwrap();
             m.map_rgb_into(img.view(), &mut out.view_mut()).unwrap();

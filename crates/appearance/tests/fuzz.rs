@@ -9,31 +9,7 @@ use bayestrack_appearance::{
 use bayestrack_image::{Image, Rect};
 use proptest::prelude::*;
 
-/// The case count: `n`, or `PROPTEST_CASES` when set (a longer hunt).
-fn cases(n: u32) -> u32 {
-    std::env::var("PROPTEST_CASES")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(n)
-}
-
-fn image_u8(channels: usize) -> impl Strategy<Value = Image<u8>> {
-    (1usize..20, 1usize..20).prop_flat_map(move |(w, h)| {
-        prop::collection::vec(any::<u8>(), w * h * channels)
-            .prop_map(move |data| Image::from_vec(w, h, channels, data).unwrap())
-    })
-}
-
-fn image_f32(lo: f32, hi: f32) -> impl Strategy<Value = Image<f32>> {
-    (1usize..16, 1usize..16).prop_flat_map(move |(w, h)| {
-        prop::collection::vec(lo..hi, w * h)
-            .prop_map(move |data| Image::from_vec(w, h, 1, data).unwrap())
-    })
-}
-
-fn rect() -> impl Strategy<Value = Rect> {
-    (0usize..24, 0usize..24, 0usize..24, 0usize..24).prop_map(|(x, y, w, h)| Rect::new(x, y, w, h))
-}
+use bayestrack_testkit::strategies::{cases, image_f32, image_u8, rect};
 
 /// A parameter of any sign and scale, sometimes not finite.
 fn param() -> impl Strategy<Value = f64> {

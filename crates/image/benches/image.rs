@@ -9,13 +9,7 @@ use bayestrack_image::{
 use criterion::{Criterion, criterion_group, criterion_main};
 
 fn frame_rgb(w: usize, h: usize) -> Image<u8> {
-    let mut img = Image::new(w, h, 3, 0u8).unwrap();
-    let mut s = 12345u32;
-    for v in img.as_mut_slice() {
-        s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-        *v = (s >> 24) as u8;
-    }
-    img
+    bayestrack_testkit::noise(w, h, 3, 12345)
 }
 
 fn bench_warp(c: &mut Criterion) {

@@ -10,7 +10,8 @@ mod integral;
 mod io;
 mod morph;
 mod ops;
-mod simd;
+mod sad;
+pub mod simd;
 mod warp;
 mod warp_simd;
 
@@ -30,7 +31,8 @@ pub use crate::io::{
 };
 pub use crate::morph::{close, dilate, erode, open};
 pub use crate::ops::{Mask, abs_diff, abs_diff_into, motion_mask, threshold, threshold_into};
-pub use crate::simd::{SadTemplate, SimdLevel, sad_u8, sad_u8_at};
+pub use crate::sad::{SadTemplate, sad_u8, sad_u8_at};
+pub use crate::simd::SimdLevel;
 pub use crate::warp::{Affine2, Border, sample_bilinear, sample_bilinear_border, warp, warp_into};
 
 /// Patch side used by paper 002 (36x36 patches).

@@ -159,12 +159,8 @@ mod tests {
 
     #[test]
     fn separable_passes_match_brute_force() {
-        let mut s = 7u32;
-        let m = Image::from_fn(23, 17, |_, _| {
-            s = s.wrapping_mul(1_103_515_245).wrapping_add(12345);
-            !(s >> 16).is_multiple_of(3)
-        })
-        .unwrap();
+        let mut next = bayestrack_testkit::ansi_c_lcg(7);
+        let m = Image::from_fn(23, 17, |_, _| !(next() >> 16).is_multiple_of(3)).unwrap();
         for r in 0..4 {
             assert_eq!(
                 erode(m.view(), r).unwrap(),

@@ -1,32 +1,57 @@
-//! Sums of absolute differences (SAD) of byte images with run-time CPU
-//! dispatch, in safe code.
+//! Run-time CPU dispatch, in safe code: the one way the workspace's
+//! vector kernels pick an instruction set.
 //!
-//! The kernels compare a template with frame windows one template row at a
-//! time: each row is split into vector-wide chunks (16 bytes with SSE2, 32
-//! with AVX2, 64 with AVX-512BW) and one `psadbw` per chunk sums the
-//! absolute differences of the chunk's bytes into 64-bit lanes. The
-//! template rows are copied once, zero-padded to whole chunks, and the frame
-//! bytes past the row's end are masked off, so every path gives exactly the
-//! integer SAD of the scalar reference ([`SimdLevel::Scalar`]).
+//! A kernel is a value holding its data whose [`Kernel::run`] is the loop,
+//! generic over a [`Token`] (the proof that an instruction set is
+//! available). [`dispatch`] runs it compiled for the best level this CPU
+//! has; [`SimdLevel::run`] for a given level (tests force each level this
+//! way and compare the bits with the scalar reference). The body is
+//! compiled once per level inside a function that enables that level's
+//! target features (through the `pulp` crate's tokens), so a loop the
+//! compiler vectorises by itself gets AVX2 or AVX-512 code with no
+//! intrinsics written; the image crate's hand-written kernels (the SAD and
+//! warp kernels) also take the token's intrinsics.
 //!
-//! The instruction sets are used through the tokens of the `pulp` crate,
-//! which check the CPU once and make the intrinsics safe to call; this crate
-//! keeps `unsafe_code = "forbid"`.
+//! `Kernel::run` and everything its hot loop calls must be
+//! `#[inline(always)]`: a function that is not inlined into the dispatched
+//! copy runs the baseline code. Kernels use no fused multiply-add and sum
+//! in a fixed order, so every level gives the same bits.
+//!
+//! ```
+//! use bayestrack_image::simd::{Kernel, SimdLevel, Token, dispatch};
+//!
+//! /// `sum |a_k - b_k|` over two byte rows.
+//! struct AbsDiffSum<'a>(&'a [u8], &'a [u8]);
+//!
+//! impl Kernel for AbsDiffSum<'_> {
+//!     type Output = u32;
+//!     #[inline(always)]
+//!     fn run<T: Token>(self, _: T) -> u32 {
+//!         self.0.iter().zip(self.1).map(|(&a, &b)| u32::from(a.abs_diff(b))).sum()
+//!     }
+//! }
+//!
+//! let (a, b) = ([3u8; 100], [5u8; 100]);
+//! assert_eq!(dispatch(AbsDiffSum(&a, &b)), 200);
+//! for level in SimdLevel::ALL {
+//!     // An unavailable level runs at the best one this CPU has.
+//!     assert_eq!(level.run(AbsDiffSum(&a, &b)), 200);
+//! }
+//! ```
 
-use crate::ImageView;
-
-/// An instruction set the SAD kernels can run with.
+/// An instruction set the kernels can run with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[non_exhaustive]
 pub enum SimdLevel {
-    /// Plain Rust, one byte at a time (the reference).
+    /// Plain Rust, no target features (the reference; the hand-written
+    /// kernels go one element at a time).
     Scalar,
-    /// 16-byte `psadbw` (x86-64 baseline).
+    /// The x86-64 baseline: SSE2 (the SAD kernels' 16-byte `psadbw`).
     Sse2,
-    /// 32-byte `vpsadbw` (x86-64-v3).
+    /// x86-64-v3: AVX2 and FMA (32-byte vectors).
     Avx2,
-    /// 64-byte `vpsadbw` (x86-64-v4: AVX-512F and BW); rows of at most 32
-    /// bytes take the AVX2 kernel.
+    /// x86-64-v4: AVX-512F, BW, CD, DQ and VL (64-byte vectors; the SAD
+    /// kernels take their AVX2 form for rows of at most 32 bytes).
     Avx512,
 }
 
@@ -39,7 +64,8 @@ impl SimdLevel {
         SimdLevel::Avx512,
     ];
 
-    /// The best level this CPU runs (checked once, then cached).
+    /// The best level this CPU runs (the CPU is queried once per level,
+    /// then the answer is cached).
     pub fn detect() -> Self {
         [SimdLevel::Avx512, SimdLevel::Avx2, SimdLevel::Sse2]
             .into_iter()
@@ -71,786 +97,196 @@ impl SimdLevel {
         }
     }
 
-    /// Bytes per vector chunk of a template row.
-    fn width(self, row_len: usize) -> usize {
-        match self {
-            SimdLevel::Scalar => 1,
-            SimdLevel::Sse2 => 16,
-            SimdLevel::Avx2 => 32,
-            SimdLevel::Avx512 if row_len <= 32 => 32,
-            SimdLevel::Avx512 => 64,
-        }
-    }
-}
-
-/// A `u8` template prepared for the SAD kernels: rows zero-padded to whole
-/// vector chunks, and the mask of each chunk's valid bytes. Reusable:
-/// [`SadTemplate::set`] keeps the buffers, so a warm template does not
-/// allocate.
-#[derive(Clone, Debug)]
-pub struct SadTemplate {
-    level: SimdLevel,
-    /// Bytes per template row (width times channels).
-    row_len: usize,
-    rows: usize,
-    /// Vector chunks per row and their width in bytes.
-    chunks: usize,
-    width: usize,
-    padded: Vec<u8>,
-    masks: Vec<u8>,
-    /// Under AVX-512 with one 32-byte chunk per row: each padded row twice
-    /// (64 bytes), for the kernel that runs two windows per `vpsadbw`.
-    doubled: Vec<u8>,
-}
-
-impl Default for SadTemplate {
-    fn default() -> Self {
-        Self::new(SimdLevel::detect())
-    }
-}
-
-impl SadTemplate {
-    /// An empty template that will run at `level`, or at the best level
-    /// this CPU has if `level` is not available here.
-    pub fn new(level: SimdLevel) -> Self {
-        let level = level.or_best();
-        Self {
-            level,
-            row_len: 0,
-            rows: 0,
-            chunks: 0,
-            width: 1,
-            padded: Vec::new(),
-            masks: Vec::new(),
-            doubled: Vec::new(),
-        }
-    }
-
-    /// The level the kernels run at.
-    pub fn level(&self) -> SimdLevel {
-        self.level
-    }
-
-    /// Bytes per template row (width times channels).
-    pub fn row_len(&self) -> usize {
-        self.row_len
-    }
-
-    /// Template rows.
-    pub fn rows(&self) -> usize {
-        self.rows
-    }
-
-    /// Copies `template` in (its rows padded to whole vector chunks).
-    pub fn set(&mut self, template: ImageView<'_, u8>) {
-        let n = template.width() * template.channels();
-        let w = self.level.width(n);
-        let chunks = n.div_ceil(w);
-        self.row_len = n;
-        self.rows = template.height();
-        self.chunks = chunks;
-        self.width = w;
-        self.padded.clear();
-        self.padded.resize(self.rows * chunks * w, 0);
-        for r in 0..self.rows {
-            let start = r * chunks * w;
-            self.padded[start..start + n].copy_from_slice(template.row(r));
-        }
-        self.masks.clear();
-        self.masks.resize(chunks * w, 0);
-        self.masks[..n].fill(0xff);
-        self.doubled.clear();
-        if self.level == SimdLevel::Avx512 && chunks == 1 && w == 32 {
-            for r in 0..self.rows {
-                let row = &self.padded[r * 32..(r + 1) * 32];
-                self.doubled.extend_from_slice(row);
-                self.doubled.extend_from_slice(row);
-            }
-            self.masks.extend_from_within(..32);
-        }
-    }
-
-    /// The integer SAD between the template and the frame window whose
-    /// first byte is `frame[start]` (rows `stride` apart), stopping after
-    /// the first group of rows whose partial sum exceeds `limit` (the
-    /// partial sum is returned then, still above `limit`).
-    ///
-    /// # Panics
-    /// If the window's rows leave `frame`.
-    pub fn sad_at(&self, frame: &[u8], stride: usize, start: usize, limit: u32) -> u32 {
-        match self.level {
-            #[cfg(target_arch = "x86_64")]
-            SimdLevel::Sse2 | SimdLevel::Avx2 | SimdLevel::Avx512 => {
-                if self.fits(frame, stride, start) {
-                    return x86::sad_at(self, frame, stride, start, limit);
-                }
-                self.sad_scalar(frame, stride, start, limit)
-            }
-            _ => self.sad_scalar(frame, stride, start, limit),
-        }
-    }
-
-    /// SADs between the template and the windows of `frame` with top-left
-    /// corners `(x0 + k, y)` for `k < out.len()`, into `out`.
-    ///
-    /// # Panics
-    /// If a window leaves the frame or the channel counts make the template
-    /// rows longer than the frame's.
-    pub fn sad_windows(&self, frame: ImageView<'_, u8>, x0: usize, y: usize, out: &mut [u32]) {
-        let ch = frame.channels();
-        assert!(
-            (x0 + out.len()) * ch + self.row_len <= frame.width() * ch + ch
-                && y + self.rows <= frame.height(),
-            "sad_windows: a window leaves the frame"
-        );
-        let data = frame.as_slice();
-        let stride = frame.stride();
-        let start = y * stride + x0 * ch;
-        match self.level {
-            #[cfg(target_arch = "x86_64")]
-            SimdLevel::Sse2 | SimdLevel::Avx2 | SimdLevel::Avx512 => {
-                x86::sad_windows(self, data, stride, start, ch, out);
-            }
-            _ => {
-                for (k, o) in out.iter_mut().enumerate() {
-                    *o = self.sad_scalar(data, stride, start + k * ch, u32::MAX);
-                }
-            }
-        }
-    }
-
-    /// Whether the padded rows of the window at `start` stay inside `frame`
-    /// (the bytes past each row's end are read, then masked off).
+    /// Runs `kernel` compiled for this level, or for the best level this
+    /// CPU runs if it does not run this one (the levels nest: a CPU with
+    /// AVX-512 has AVX2, and every x86-64 CPU has SSE2).
     #[inline(always)]
-    fn fits(&self, frame: &[u8], stride: usize, start: usize) -> bool {
-        self.rows == 0 || start + (self.rows - 1) * stride + self.chunks * self.width <= frame.len()
-    }
-
-    /// The scalar reference (also used where padded reads would leave the
-    /// buffer). Stops after the first row whose partial sum exceeds `limit`.
-    fn sad_scalar(&self, frame: &[u8], stride: usize, start: usize, limit: u32) -> u32 {
-        let n = self.row_len;
-        let mut s = 0u32;
-        for r in 0..self.rows {
-            let t = &self.padded[r * self.chunks * self.width..][..n];
-            let f = &frame[start + r * stride..][..n];
-            s += t
-                .iter()
-                .zip(f)
-                .map(|(&a, &b)| u32::from(a.abs_diff(b)))
-                .sum::<u32>();
-            if s > limit {
-                break;
+    pub fn run<K: Kernel>(self, kernel: K) -> K::Output {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use pulp::x86::{V1, V3, V4};
+            if matches!(self, SimdLevel::Avx512)
+                && let Some(token) = V4::try_new()
+            {
+                return token.vectorize(Body(kernel, token));
+            }
+            if matches!(self, SimdLevel::Avx512 | SimdLevel::Avx2)
+                && let Some(token) = V3::try_new()
+            {
+                return token.vectorize(Body(kernel, token));
+            }
+            if !matches!(self, SimdLevel::Scalar)
+                && let Some(token) = V1::try_new()
+            {
+                return token.vectorize(Body(kernel, token));
             }
         }
-        s
+        kernel.run(Scalar)
     }
 }
 
-/// `sum |a_k - b_k|` over two byte slices of equal length (the shorter
-/// length if they differ), at the best level this CPU has.
-pub fn sad_u8(a: &[u8], b: &[u8]) -> u32 {
-    sad_u8_at(SimdLevel::detect(), a, b)
+/// Runs `kernel` compiled for the best level this CPU has
+/// ([`SimdLevel::Avx512`], [`SimdLevel::Avx2`] or the baseline).
+#[inline(always)]
+pub fn dispatch<K: Kernel>(kernel: K) -> K::Output {
+    SimdLevel::Avx512.run(kernel)
 }
 
-/// [`sad_u8`] at a given level (the best available one if `level` is not).
-pub fn sad_u8_at(level: SimdLevel, a: &[u8], b: &[u8]) -> u32 {
-    let n = a.len().min(b.len());
-    let (a, b) = (&a[..n], &b[..n]);
-    let level = level.or_best();
-    match level {
-        #[cfg(target_arch = "x86_64")]
-        SimdLevel::Sse2 | SimdLevel::Avx2 | SimdLevel::Avx512 => x86::sad_slices(level, a, b),
-        _ => a
-            .iter()
-            .zip(b)
-            .map(|(&x, &y)| u32::from(x.abs_diff(y)))
-            .sum(),
+/// A loop for [`dispatch`] and [`SimdLevel::run`]: its data (the value)
+/// and its body ([`Kernel::run`]).
+///
+/// A kernel of at most eight words is handed to the dispatched function
+/// in registers, a larger one through a pointer; where a hot loop keeps
+/// many of its fields live, implement `Kernel` for a reference to it and
+/// compare instruction counts (the SAD kernels are faster that way).
+pub trait Kernel {
+    /// What the loop returns.
+    type Output;
+    /// The loop, compiled for the level `T` stands for (mark it
+    /// `#[inline(always)]`, and everything it calls in its hot loop).
+    fn run<T: Token>(self, token: T) -> Self::Output;
+}
+
+/// The proof that an instruction set is available, handed to
+/// [`Kernel::run`]: [`Scalar`] or one of the `pulp` crate's x86 tokens.
+/// A kernel that leaves vectorising to the compiler ignores it; this
+/// crate's hand-written kernels take their intrinsics from it.
+pub trait Token: Copy + sealed::Intrinsics {
+    /// The level the kernel runs at.
+    const LEVEL: SimdLevel;
+}
+
+/// The token of [`SimdLevel::Scalar`]: no target features.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Scalar;
+
+impl Token for Scalar {
+    const LEVEL: SimdLevel = SimdLevel::Scalar;
+}
+
+impl sealed::Intrinsics for Scalar {}
+
+#[cfg(target_arch = "x86_64")]
+impl Token for pulp::x86::V1 {
+    const LEVEL: SimdLevel = SimdLevel::Sse2;
+}
+
+#[cfg(target_arch = "x86_64")]
+impl sealed::Intrinsics for pulp::x86::V1 {
+    #[inline(always)]
+    fn sse2(self) -> Option<pulp::x86::V1> {
+        Some(self)
     }
 }
 
 #[cfg(target_arch = "x86_64")]
-mod x86 {
-    //! The x86-64 kernels: one `psadbw` per chunk, 64-bit lane sums.
-    use core::arch::x86_64::{__m128i, __m256i, __m512i};
+impl Token for pulp::x86::V3 {
+    const LEVEL: SimdLevel = SimdLevel::Avx2;
+}
 
-    use pulp::bytemuck::cast;
-    use pulp::x86::{V1, V3, V4};
-
-    use super::{SadTemplate, SimdLevel};
-
+#[cfg(target_arch = "x86_64")]
+impl sealed::Intrinsics for pulp::x86::V3 {
     #[inline(always)]
-    fn ld16(s: &[u8], o: usize) -> __m128i {
-        let a: [u8; 16] = s[o..o + 16].try_into().unwrap();
-        cast(a)
+    fn sse2(self) -> Option<pulp::x86::V1> {
+        Some(**self)
     }
     #[inline(always)]
-    fn ld32(s: &[u8], o: usize) -> __m256i {
-        let a: [u8; 32] = s[o..o + 32].try_into().unwrap();
-        cast(a)
+    fn avx2(self) -> Option<pulp::x86::V3> {
+        Some(self)
     }
-    #[inline(always)]
-    fn ld64(s: &[u8], o: usize) -> __m512i {
-        let a: [u8; 64] = s[o..o + 64].try_into().unwrap();
-        cast(a)
-    }
-    #[inline(always)]
-    fn hsum2(v: __m128i) -> u32 {
-        let l: [u64; 2] = cast(v);
-        (l[0] + l[1]) as u32
-    }
-    #[inline(always)]
-    fn hsum4(v: __m256i) -> u32 {
-        let l: [u64; 4] = cast(v);
-        (l[0] + l[1] + l[2] + l[3]) as u32
-    }
-    #[inline(always)]
-    fn hsum8(v: __m512i) -> u32 {
-        let l: [u64; 8] = cast(v);
-        l.iter().sum::<u64>() as u32
-    }
+}
 
-    /// One window: rows in groups of four between limit checks.
-    /// `$v` is the vector-op token (and, add), `$b` the one with `psadbw`.
-    macro_rules! window {
-        ($v:expr, $b:expr, $t:ident, $f:ident, $stride:ident, $start:ident, $limit:ident,
-         $ld:ident, $zero:expr, $and:ident, $sad:ident, $add:ident, $hsum:ident) => {{
-            let (w, nc) = ($t.width, $t.chunks);
-            let mut total = 0u32;
-            let mut r = 0;
-            while r < $t.rows {
-                let end = (r + 4).min($t.rows);
-                let mut acc = $zero;
-                for rr in r..end {
-                    let fo = $start + rr * $stride;
-                    let to = rr * nc * w;
-                    for c in 0..nc {
-                        let f = $v.$and($ld($f, fo + c * w), $ld(&$t.masks, c * w));
-                        acc = $v.$add(acc, $b.$sad(f, $ld(&$t.padded, to + c * w)));
-                    }
-                }
-                total += $hsum(acc);
-                if total > $limit {
-                    break;
-                }
-                r = end;
-            }
-            total
-        }};
-    }
+#[cfg(target_arch = "x86_64")]
+impl Token for pulp::x86::V4 {
+    const LEVEL: SimdLevel = SimdLevel::Avx512;
+}
 
-    /// Consecutive windows (`step` bytes apart), no limit: eight windows
-    /// at a time in registers when `step` is 1 or 3 (one bounds check per
-    /// row and chunk for all eight), the rest one by one.
-    macro_rules! windows {
-        ($v:expr, $b:expr, $t:ident, $f:ident, $stride:ident, $start:ident, $step:ident,
-         $out:ident, $w:literal, $nb:literal, $ld:ident, $zero:expr, $and:ident, $sad:ident, $add:ident,
-         $hsum:ident) => {{
-            let nc = $t.chunks;
-            let mut k = 0;
-            macro_rules! batch {
-                ($s:literal) => {
-                    while k + $nb <= $out.len() {
-                        let base = $start + k * $s;
-                        if !$t.fits($f, $stride, base + ($nb - 1) * $s) {
-                            break;
-                        }
-                        let mut acc = [$zero; $nb];
-                        for r in 0..$t.rows {
-                            for c in 0..nc {
-                                let o = base + r * $stride + c * $w;
-                                let blk: &[u8; $w + ($nb - 1) * $s] =
-                                    $f[o..o + $w + ($nb - 1) * $s].try_into().unwrap();
-                                let m = $ld(&$t.masks, c * $w);
-                                let tv = $ld(&$t.padded, (r * nc + c) * $w);
-                                for (j, a) in acc.iter_mut().enumerate() {
-                                    let fv = $v.$and($ld(blk, j * $s), m);
-                                    *a = $v.$add(*a, $b.$sad(fv, tv));
-                                }
-                            }
-                        }
-                        for (o, a) in $out[k..k + $nb].iter_mut().zip(acc) {
-                            *o = $hsum(a);
-                        }
-                        k += $nb;
-                    }
-                };
-            }
-            if $step == 1 {
-                batch!(1);
-            } else if $step == 3 {
-                batch!(3);
-            }
-            for (kk, o) in $out.iter_mut().enumerate().skip(k) {
-                let base = $start + kk * $step;
-                if !$t.fits($f, $stride, base) {
-                    *o = $t.sad_scalar($f, $stride, base, u32::MAX);
-                    continue;
-                }
-                let mut acc = $zero;
-                for r in 0..$t.rows {
-                    let fo = base + r * $stride;
-                    let to = r * nc * $w;
-                    for c in 0..nc {
-                        let fv = $v.$and($ld($f, fo + c * $w), $ld(&$t.masks, c * $w));
-                        acc = $v.$add(acc, $b.$sad(fv, $ld(&$t.padded, to + c * $w)));
-                    }
-                }
-                *o = $hsum(acc);
-            }
-        }};
+#[cfg(target_arch = "x86_64")]
+impl sealed::Intrinsics for pulp::x86::V4 {
+    #[inline(always)]
+    fn sse2(self) -> Option<pulp::x86::V1> {
+        Some(***self)
     }
+    #[inline(always)]
+    fn avx2(self) -> Option<pulp::x86::V3> {
+        Some(*self)
+    }
+    #[inline(always)]
+    fn avx512(self) -> Option<pulp::x86::V4> {
+        Some(self)
+    }
+}
 
-    pub(super) fn sad_at(
-        t: &SadTemplate,
-        f: &[u8],
-        stride: usize,
-        start: usize,
-        limit: u32,
-    ) -> u32 {
-        match (t.level, t.width) {
-            (SimdLevel::Avx512, 64) => {
-                let simd = V4::try_new().unwrap();
-                simd.vectorize(
-                    #[inline(always)]
-                    || {
-                        let (v, b) = (simd.avx512f, simd.avx512bw);
-                        window!(
-                            v,
-                            b,
-                            t,
-                            f,
-                            stride,
-                            start,
-                            limit,
-                            ld64,
-                            v._mm512_setzero_si512(),
-                            _mm512_and_si512,
-                            _mm512_sad_epu8,
-                            _mm512_add_epi64,
-                            hsum8
-                        )
-                    },
-                )
-            }
-            (SimdLevel::Avx512 | SimdLevel::Avx2, _) => {
-                let simd = V3::try_new().unwrap();
-                simd.vectorize(
-                    #[inline(always)]
-                    || {
-                        let v = simd.avx2;
-                        window!(
-                            v,
-                            v,
-                            t,
-                            f,
-                            stride,
-                            start,
-                            limit,
-                            ld32,
-                            simd.avx._mm256_setzero_si256(),
-                            _mm256_and_si256,
-                            _mm256_sad_epu8,
-                            _mm256_add_epi64,
-                            hsum4
-                        )
-                    },
-                )
-            }
-            _ => {
-                let simd = V1::try_new().unwrap();
-                simd.vectorize(
-                    #[inline(always)]
-                    || {
-                        let v = simd.sse2;
-                        window!(
-                            v,
-                            v,
-                            t,
-                            f,
-                            stride,
-                            start,
-                            limit,
-                            ld16,
-                            v._mm_setzero_si128(),
-                            _mm_and_si128,
-                            _mm_sad_epu8,
-                            _mm_add_epi64,
-                            hsum2
-                        )
-                    },
-                )
-            }
+pub(crate) mod sealed {
+    //! The intrinsics a [`Token`](super::Token) gives this crate's kernels
+    //! (not nameable outside the crate, so `pulp`'s types stay out of the
+    //! public API).
+
+    /// The x86 tokens a level includes, `None` where it does not.
+    pub trait Intrinsics {
+        /// SSE2 (every x86-64 level but scalar).
+        #[cfg(target_arch = "x86_64")]
+        #[inline(always)]
+        fn sse2(self) -> Option<pulp::x86::V1>
+        where
+            Self: Sized,
+        {
+            None
         }
-    }
-
-    pub(super) fn sad_windows(
-        t: &SadTemplate,
-        f: &[u8],
-        stride: usize,
-        start: usize,
-        step: usize,
-        out: &mut [u32],
-    ) {
-        match (t.level, t.width) {
-            (SimdLevel::Avx512, 64) => {
-                let simd = V4::try_new().unwrap();
-                simd.vectorize(
-                    #[inline(always)]
-                    || {
-                        let (v, b) = (simd.avx512f, simd.avx512bw);
-                        windows!(
-                            v,
-                            b,
-                            t,
-                            f,
-                            stride,
-                            start,
-                            step,
-                            out,
-                            64,
-                            8,
-                            ld64,
-                            v._mm512_setzero_si512(),
-                            _mm512_and_si512,
-                            _mm512_sad_epu8,
-                            _mm512_add_epi64,
-                            hsum8
-                        )
-                    },
-                )
-            }
-            (SimdLevel::Avx512, _) => {
-                // 32-byte rows under the AVX-512 token: gray windows two per
-                // 64-byte `vpsadbw`, sixty-four at a time; the rest with
-                // 32-byte vectors, sixteen windows at a time (32 vector
-                // registers).
-                let simd = V4::try_new().unwrap();
-                simd.vectorize(
-                    #[inline(always)]
-                    || {
-                        let done = if step == 1 && !t.doubled.is_empty() {
-                            paired(simd, t, f, stride, start, out)
-                        } else {
-                            0
-                        };
-                        let (start, out) = (start + done, &mut out[done..]);
-                        let v = simd.avx2;
-                        windows!(
-                            v,
-                            v,
-                            t,
-                            f,
-                            stride,
-                            start,
-                            step,
-                            out,
-                            32,
-                            16,
-                            ld32,
-                            simd.avx._mm256_setzero_si256(),
-                            _mm256_and_si256,
-                            _mm256_sad_epu8,
-                            _mm256_add_epi64,
-                            hsum4
-                        )
-                    },
-                )
-            }
-            (SimdLevel::Avx2, _) => {
-                let simd = V3::try_new().unwrap();
-                simd.vectorize(
-                    #[inline(always)]
-                    || {
-                        let v = simd.avx2;
-                        windows!(
-                            v,
-                            v,
-                            t,
-                            f,
-                            stride,
-                            start,
-                            step,
-                            out,
-                            32,
-                            8,
-                            ld32,
-                            simd.avx._mm256_setzero_si256(),
-                            _mm256_and_si256,
-                            _mm256_sad_epu8,
-                            _mm256_add_epi64,
-                            hsum4
-                        )
-                    },
-                )
-            }
-            _ => {
-                let simd = V1::try_new().unwrap();
-                simd.vectorize(
-                    #[inline(always)]
-                    || {
-                        let v = simd.sse2;
-                        windows!(
-                            v,
-                            v,
-                            t,
-                            f,
-                            stride,
-                            start,
-                            step,
-                            out,
-                            16,
-                            8,
-                            ld16,
-                            v._mm_setzero_si128(),
-                            _mm_and_si128,
-                            _mm_sad_epu8,
-                            _mm_add_epi64,
-                            hsum2
-                        )
-                    },
-                )
-            }
+        /// AVX2 (the AVX2 and AVX-512 levels).
+        #[cfg(target_arch = "x86_64")]
+        #[inline(always)]
+        fn avx2(self) -> Option<pulp::x86::V3>
+        where
+            Self: Sized,
+        {
+            None
         }
-    }
-
-    /// Gray windows with rows of at most 32 bytes under AVX-512: a 64-byte
-    /// load at byte `o` holds the row of window `o` in its low half and
-    /// that of window `o + 32` in its high half, so one `vpsadbw` against
-    /// the row stored twice (`SadTemplate::doubled`) advances two windows.
-    /// Sixty-four consecutive windows at a time, as two batches of sixteen
-    /// accumulators; returns how many windows it did (a multiple of 64,
-    /// stopping where the reads would leave `f`).
-    #[inline(always)]
-    fn paired(
-        simd: V4,
-        t: &SadTemplate,
-        f: &[u8],
-        stride: usize,
-        start: usize,
-        out: &mut [u32],
-    ) -> usize {
-        // Bytes one batch reads from each row: 15 offsets plus 64.
-        const SPAN: usize = 15 + 64;
-        let (v, bw) = (simd.avx512f, simd.avx512bw);
-        let m = ld64(&t.masks, 0);
-        let mut k = 0;
-        while k + 64 <= out.len() {
-            let base = start + k;
-            // The second batch starts at base + 16 and reads SPAN bytes a row.
-            if t.rows == 0 || base + 16 + (t.rows - 1) * stride + SPAN > f.len() {
-                break;
-            }
-            for half in [0, 16] {
-                let mut acc = [v._mm512_setzero_si512(); 16];
-                for r in 0..t.rows {
-                    let o = base + half + r * stride;
-                    let blk: &[u8; SPAN] = f[o..o + SPAN].try_into().unwrap();
-                    let tv = ld64(&t.doubled, r * 64);
-                    for (j, a) in acc.iter_mut().enumerate() {
-                        let fv = v._mm512_and_si512(ld64(blk, j), m);
-                        *a = v._mm512_add_epi64(*a, bw._mm512_sad_epu8(fv, tv));
-                    }
-                }
-                for (j, a) in acc.into_iter().enumerate() {
-                    let l: [u64; 8] = cast(a);
-                    out[k + half + j] = (l[0] + l[1] + l[2] + l[3]) as u32;
-                    out[k + 32 + half + j] = (l[4] + l[5] + l[6] + l[7]) as u32;
-                }
-            }
-            k += 64;
-        }
-        k
-    }
-
-    /// SAD of two equal-length slices: whole chunks by `psadbw`, the tail
-    /// in scalar code.
-    pub(super) fn sad_slices(level: SimdLevel, a: &[u8], b: &[u8]) -> u32 {
-        let tail = |from: usize| -> u32 {
-            a[from..]
-                .iter()
-                .zip(&b[from..])
-                .map(|(&x, &y)| u32::from(x.abs_diff(y)))
-                .sum()
-        };
-        match level {
-            SimdLevel::Avx512 => {
-                let simd = V4::try_new().unwrap();
-                simd.vectorize(
-                    #[inline(always)]
-                    || {
-                        let (v, bw) = (simd.avx512f, simd.avx512bw);
-                        let mut acc = v._mm512_setzero_si512();
-                        let n = a.len() / 64 * 64;
-                        for o in (0..n).step_by(64) {
-                            acc =
-                                v._mm512_add_epi64(acc, bw._mm512_sad_epu8(ld64(a, o), ld64(b, o)));
-                        }
-                        hsum8(acc) + tail(n)
-                    },
-                )
-            }
-            SimdLevel::Avx2 => {
-                let simd = V3::try_new().unwrap();
-                simd.vectorize(
-                    #[inline(always)]
-                    || {
-                        let v = simd.avx2;
-                        let mut acc = simd.avx._mm256_setzero_si256();
-                        let n = a.len() / 32 * 32;
-                        for o in (0..n).step_by(32) {
-                            acc =
-                                v._mm256_add_epi64(acc, v._mm256_sad_epu8(ld32(a, o), ld32(b, o)));
-                        }
-                        hsum4(acc) + tail(n)
-                    },
-                )
-            }
-            _ => {
-                let simd = V1::try_new().unwrap();
-                simd.vectorize(
-                    #[inline(always)]
-                    || {
-                        let v = simd.sse2;
-                        let mut acc = v._mm_setzero_si128();
-                        let n = a.len() / 16 * 16;
-                        for o in (0..n).step_by(16) {
-                            acc = v._mm_add_epi64(acc, v._mm_sad_epu8(ld16(a, o), ld16(b, o)));
-                        }
-                        hsum2(acc) + tail(n)
-                    },
-                )
-            }
+        /// AVX-512.
+        #[cfg(target_arch = "x86_64")]
+        #[inline(always)]
+        fn avx512(self) -> Option<pulp::x86::V4>
+        where
+            Self: Sized,
+        {
+            None
         }
     }
 }
 
+/// A [`Kernel`] with its token as `pulp`'s argument-less operation.
+#[cfg(target_arch = "x86_64")]
+struct Body<K, T>(K, T);
+
+#[cfg(target_arch = "x86_64")]
+impl<K: Kernel, T: Token> pulp::NullaryFnOnce for Body<K, T> {
+    type Output = K::Output;
+    #[inline(always)]
+    fn call(self) -> K::Output {
+        self.0.run(self.1)
+    }
+}
+
 #[cfg(test)]
-pub(crate) mod tests {
+mod tests {
     use super::*;
-    use crate::{Image, Rect};
 
-    fn random(w: usize, h: usize, ch: usize, seed: u32) -> Image<u8> {
-        let mut s = seed;
-        Image::from_vec(
-            w,
-            h,
-            ch,
-            (0..w * h * ch)
-                .map(|_| {
-                    s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-                    (s >> 24) as u8
-                })
-                .collect(),
-        )
-        .unwrap()
-    }
-
-    fn reference(f: ImageView<'_, u8>, t: ImageView<'_, u8>, x: usize, y: usize) -> u32 {
-        let ch = f.channels();
-        let n = t.width() * ch;
-        (0..t.height())
-            .map(|r| {
-                t.row(r)
-                    .iter()
-                    .zip(&f.row(y + r)[x * ch..x * ch + n])
-                    .map(|(&a, &b)| u32::from(a.abs_diff(b)))
-                    .sum::<u32>()
-            })
-            .sum()
-    }
-
-    /// Every level this CPU runs (the SAD and warp tests force each).
-    pub(crate) fn levels() -> Vec<SimdLevel> {
-        let l: Vec<_> = SimdLevel::ALL
-            .into_iter()
-            .filter(|l| l.is_available())
-            .collect();
-        // This crate's CI machines are x86-64: every vector path must run.
-        #[cfg(target_arch = "x86_64")]
-        assert!(l.contains(&SimdLevel::Sse2));
-        l
-    }
-
-    #[test]
-    fn every_level_equals_the_scalar_reference_on_random_images() {
-        let mut seed = 1;
-        for level in levels() {
-            let mut tpl = SadTemplate::new(level);
-            assert_eq!(tpl.level(), level, "a forced level runs as asked");
-            for ch in [1, 3] {
-                for (tw, th) in [
-                    (1, 1),
-                    (5, 3),
-                    (8, 2),
-                    (11, 4),
-                    (16, 5),
-                    (21, 3),
-                    (30, 20),
-                    (33, 2),
-                    (64, 3),
-                    (70, 2),
-                ] {
-                    seed += 1;
-                    // A crop of a larger frame: stride > width, and windows
-                    // at the right and bottom edges of the buffer take the
-                    // scalar fallback for their padded reads.
-                    // 150 wide: gray rows of up to 32 bytes leave more than
-                    // 64 windows, so the paired AVX-512 kernel runs too.
-                    let big = random(157, 30, ch, seed);
-                    let frame = big.crop(Rect::new(7, 3, 150, 27)).unwrap();
-                    let t_img = random(tw, th, ch, seed + 100);
-                    tpl.set(t_img.view());
-                    let npx = 150 - tw + 1;
-                    let mut out = vec![0u32; npx];
-                    for y in [0, 27 - th] {
-                        tpl.sad_windows(frame, 0, y, &mut out);
-                        for (x, &o) in out.iter().enumerate() {
-                            let want = reference(frame, t_img.view(), x, y);
-                            assert_eq!(o, want, "{level:?} ch {ch} {tw}x{th} at ({x}, {y})");
-                            let start = y * frame.stride() + x * ch;
-                            let s = frame.as_slice();
-                            assert_eq!(tpl.sad_at(s, frame.stride(), start, u32::MAX), want);
-                            // A limit: exact at or below it, above it when cut.
-                            let limit = want / 2;
-                            let cut = tpl.sad_at(s, frame.stride(), start, limit);
-                            assert!(
-                                cut <= want && (want <= limit || cut > limit),
-                                "{level:?} cut {cut} want {want}"
-                            );
-                            assert_eq!(tpl.sad_at(s, frame.stride(), start, want), want);
-                        }
-                    }
-                    // Saturated bytes: 255 against 0 everywhere.
-                    let white = Image::new(tw + 40, th, ch, 255u8).unwrap();
-                    let black = Image::new(tw, th, ch, 0u8).unwrap();
-                    tpl.set(black.view());
-                    let mut out = vec![0u32; 41];
-                    tpl.sad_windows(white.view(), 0, 0, &mut out);
-                    assert!(out.iter().all(|&o| o as usize == 255 * tw * th * ch));
-                }
-            }
+    /// Reports the level it ran at.
+    struct Which;
+    impl Kernel for Which {
+        type Output = SimdLevel;
+        #[inline(always)]
+        fn run<T: Token>(self, _: T) -> SimdLevel {
+            T::LEVEL
         }
     }
 
     #[test]
-    fn slices_at_every_level() {
-        let a = random(300, 1, 1, 5).into_vec();
-        let b = random(300, 1, 1, 6).into_vec();
-        for level in levels() {
-            for n in [0, 1, 15, 16, 17, 31, 32, 33, 63, 64, 65, 127, 200, 300] {
-                let want: u32 = a[..n]
-                    .iter()
-                    .zip(&b[..n])
-                    .map(|(&x, &y)| u32::from(x.abs_diff(y)))
-                    .sum();
-                assert_eq!(sad_u8_at(level, &a[..n], &b[..n]), want, "{level:?} n {n}");
-            }
-            assert_eq!(sad_u8_at(level, &[255; 9000], &[0; 9000]), 255 * 9000);
+    fn a_forced_level_runs_as_asked_where_available() {
+        for level in SimdLevel::ALL {
+            let ran = level.run(Which);
+            assert_eq!(ran, level.or_best(), "{level:?}");
         }
-        assert_eq!(
-            sad_u8(&a, &b[..10]),
-            sad_u8_at(SimdLevel::Scalar, &a[..10], &b[..10])
-        );
+        assert_eq!(dispatch(Which), SimdLevel::detect());
     }
 }

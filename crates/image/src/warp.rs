@@ -604,11 +604,8 @@ mod tests {
 
     #[test]
     fn channel_specialised_warps_equal_the_generic_loop_bit_for_bit() {
-        let mut s = 7u32;
-        let mut next = move || {
-            s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            s >> 8
-        };
+        let mut lcg = bayestrack_testkit::Lcg32(7);
+        let mut next = move || lcg.next_u32() >> 8;
         for ch in 1..=4 {
             let big = Image::from_vec(
                 70,

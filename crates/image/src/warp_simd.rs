@@ -38,12 +38,13 @@
 //! loop, and so do more than four channels and frames of 2^23 pixels a side
 //! or 2^31 elements.
 //!
-//! The instruction sets are chosen at run time through the tokens of the
-//! `pulp` crate ([`SimdLevel`], as the SAD kernels in `simd.rs`): the same
-//! generic body is compiled for SSE2, AVX2 (x86-64-v3) and AVX-512
+//! The instruction sets are chosen at run time through [`crate::simd`]
+//! (the `pulp` crate's tokens, as for the SAD kernels in `sad.rs`): the
+//! same generic body is compiled for SSE2, AVX2 (x86-64-v3) and AVX-512
 //! (x86-64-v4), and the best one the CPU runs is called.
 
-use crate::{ImageViewMut, Pixel, SimdLevel};
+use crate::simd::{Kernel, SimdLevel, Token};
+use crate::{ImageViewMut, Pixel};
 
 /// Patch pixels per batch.
 pub(crate) const LANES: usize = 8;
@@ -127,6 +128,36 @@ pub(crate) struct InsideWarp<'a, T> {
     pub(crate) m: [f64; 6],
 }
 
+/// Every row of an [`InsideWarp`] of `CH` channels as a [`Kernel`]: the
+/// cells in AVX2 intrinsics where the level has them (AVX2 and AVX-512,
+/// the rest of the body compiled for the level), else in plain array code.
+struct Rows<'a, 'b, 'c, T, const CH: usize> {
+    warp: &'a InsideWarp<'b, T>,
+    out: &'a mut ImageViewMut<'c, f32>,
+}
+
+impl<T: Pixel, const CH: usize> Kernel for Rows<'_, '_, '_, T, CH> {
+    type Output = ();
+    #[inline(always)]
+    fn run<K: Token>(self, token: K) {
+        let Rows { warp, out } = self;
+        #[cfg(target_arch = "x86_64")]
+        if let Some(v3) = token.avx2() {
+            return warp.rows::<CH>(
+                out,
+                #[inline(always)]
+                |bx, by, u0| warp.cells_avx2::<CH>(v3, bx, by, u0),
+            );
+        }
+        let _ = token;
+        warp.rows::<CH>(
+            out,
+            #[inline(always)]
+            |bx, by, u0| warp.cells::<CH>(bx, by, u0),
+        )
+    }
+}
+
 /// The cells and fractions of one batch of [`LANES`] patch pixels.
 struct Cells {
     /// Horizontal fractions `min(x - xi, 1)`.
@@ -161,58 +192,7 @@ impl<T: Pixel> InsideWarp<'_, T> {
     }
 
     fn dispatch<const CH: usize>(&self, level: SimdLevel, out: &mut ImageViewMut<'_, f32>) {
-        let level = level.or_best();
-        match level {
-            #[cfg(target_arch = "x86_64")]
-            SimdLevel::Avx512 => {
-                // The AVX2 coordinates; the rest compiled for AVX-512.
-                let simd = pulp::x86::V4::try_new().unwrap();
-                let v3 = *simd;
-                simd.vectorize(
-                    #[inline(always)]
-                    || {
-                        self.rows::<CH>(
-                            out,
-                            #[inline(always)]
-                            |bx, by, u0| self.cells_avx2::<CH>(v3, bx, by, u0),
-                        )
-                    },
-                )
-            }
-            #[cfg(target_arch = "x86_64")]
-            SimdLevel::Avx2 => {
-                let simd = pulp::x86::V3::try_new().unwrap();
-                simd.vectorize(
-                    #[inline(always)]
-                    || {
-                        self.rows::<CH>(
-                            out,
-                            #[inline(always)]
-                            |bx, by, u0| self.cells_avx2::<CH>(simd, bx, by, u0),
-                        )
-                    },
-                )
-            }
-            #[cfg(target_arch = "x86_64")]
-            SimdLevel::Sse2 => {
-                let simd = pulp::x86::V1::try_new().unwrap();
-                simd.vectorize(
-                    #[inline(always)]
-                    || {
-                        self.rows::<CH>(
-                            out,
-                            #[inline(always)]
-                            |bx, by, u0| self.cells::<CH>(bx, by, u0),
-                        )
-                    },
-                )
-            }
-            _ => self.rows::<CH>(
-                out,
-                #[inline(always)]
-                |bx, by, u0| self.cells::<CH>(bx, by, u0),
-            ),
-        }
+        level.run(Rows::<T, CH> { warp: self, out });
     }
 
     /// Every patch row, [`LANES`] pixels at a time, the cells of a batch
@@ -499,20 +479,7 @@ mod tests {
         }
     }
 
-    /// A small linear congruential generator (seeded, no dependency).
-    struct Lcg(u64);
-    impl Lcg {
-        fn unit(&mut self) -> f64 {
-            self.0 = self
-                .0
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
-        }
-        fn range(&mut self, lo: f64, hi: f64) -> f64 {
-            lo + (hi - lo) * self.unit()
-        }
-    }
+    use bayestrack_testkit::Lcg64 as Lcg;
 
     /// A map sending the `pw x ph` patch inside `[0, w-1] x [0, h-1]`:
     /// rotation, anisotropic scale and shear, then a translation that puts
@@ -596,7 +563,7 @@ mod tests {
                 &mut ImageViewMut::from_slice(&mut want, pw, ph, ch, pw * ch).unwrap(),
                 ch,
             );
-            for level in crate::simd::tests::levels() {
+            for level in crate::sad::tests::levels() {
                 // A strided output: padding between rows stays untouched.
                 let stride = pw * ch + 3;
                 let mut got = vec![-7f32; stride * ph];
@@ -679,7 +646,7 @@ mod tests {
             &mut ImageViewMut::from_slice(&mut want, 9, 2, 1, 9).unwrap(),
             1,
         );
-        for level in crate::simd::tests::levels() {
+        for level in crate::sad::tests::levels() {
             let mut got = vec![0f32; 9 * 2];
             iw.run(
                 level,

@@ -7,13 +7,7 @@
 use bayestrack_image::{Image, read_frame, write_png};
 use proptest::prelude::*;
 
-/// The case count: `n`, or `PROPTEST_CASES` when set (a longer hunt).
-fn cases(n: u32) -> u32 {
-    std::env::var("PROPTEST_CASES")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(n)
-}
+use bayestrack_testkit::strategies::cases;
 
 fn scratch(name: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("bayestrack-fuzz-{name}-{}", std::process::id()));

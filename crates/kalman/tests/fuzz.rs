@@ -10,13 +10,7 @@ use bayestrack_kalman::{
 use nalgebra::{Matrix2, Matrix2x3, Matrix3, Vector2, Vector3};
 use proptest::prelude::*;
 
-/// The case count: `n`, or `PROPTEST_CASES` when set (a longer hunt).
-fn cases(n: u32) -> u32 {
-    std::env::var("PROPTEST_CASES")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(n)
-}
+use bayestrack_testkit::strategies::{cases, psd3, psd3_of};
 
 /// A number at any scale from 1e-300 to 1e300, either sign, sometimes 0.
 fn scaled() -> impl Strategy<Value = f64> {
@@ -37,20 +31,13 @@ fn matrix3() -> impl Strategy<Value = Matrix3<f64>> {
         0u8..3,
     )
         .prop_map(|(a, rank, e, kind)| {
-            let a = Matrix3::from_row_slice(&a);
             let s = 10f64.powi(e);
+            let m = Matrix3::from_row_slice(&a);
             match kind {
-                0 => {
-                    // rank `rank` PSD: sum of `rank` outer products
-                    let mut m = Matrix3::zeros();
-                    for j in 0..rank {
-                        let c = a.column(j);
-                        m += c * c.transpose();
-                    }
-                    m * s
-                }
-                1 => (a + a.transpose()) * s,
-                _ => a * s,
+                // rank `rank` PSD: sum of `rank` outer products
+                0 => psd3_of(a, rank) * s,
+                1 => (m + m.transpose()) * s,
+                _ => m * s,
             }
         })
 }
@@ -58,19 +45,6 @@ fn matrix3() -> impl Strategy<Value = Matrix3<f64>> {
 /// Finite, symmetric, and no variance below round-off of `scale` (the
 /// largest covariance entry the filter started from: the UKF's `P - K S
 /// K^T` is positive semi-definite only to round-off).
-/// A symmetric positive semi-definite 3x3 matrix of random rank and scale.
-fn psd3() -> impl Strategy<Value = Matrix3<f64>> {
-    (prop::array::uniform9(-2.0f64..2.0), 0usize..4, -300i32..300).prop_map(|(a, rank, e)| {
-        let a = Matrix3::from_row_slice(&a);
-        let mut m = Matrix3::zeros();
-        for j in 0..rank {
-            let c = a.column(j);
-            m += c * c.transpose();
-        }
-        m * 10f64.powi(e)
-    })
-}
-
 fn finite_gaussian<const N: usize>(g: &Gaussian<N>, scale: f64) -> bool {
     g.mean().iter().all(|v| v.is_finite())
         && g.cov().iter().all(|v| v.is_finite())

@@ -1,7 +1,8 @@
 //! Property tests on random symmetric positive-definite matrices.
 
 use bayestrack_kalman::{CovarianceUpdate, Gaussian, Kf, LinearMeasurement, Ukf};
-use nalgebra::{Matrix2, Matrix2x3, Matrix2x4, Matrix3, Matrix4, Vector2, Vector3, Vector4};
+use bayestrack_testkit::strategies::spd3;
+use nalgebra::{Matrix2, Matrix2x3, Matrix2x4, Matrix4, Vector2, Vector3, Vector4};
 use proptest::prelude::*;
 use rand::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
@@ -29,13 +30,6 @@ fn joseph_form_stays_positive_semi_definite_under_precise_measurements() {
         worst = worst.min(post.symmetric_eigenvalues().min() / post.amax());
     }
     assert!(worst > -1e-13, "{worst:e}");
-}
-
-fn spd3() -> impl Strategy<Value = Matrix3<f64>> {
-    (prop::array::uniform9(-2.0f64..2.0), 0.05f64..2.0).prop_map(|(a, d)| {
-        let a = Matrix3::from_row_slice(&a);
-        a * a.transpose() + Matrix3::identity() * d
-    })
 }
 
 proptest! {

@@ -10,13 +10,7 @@ use nalgebra::{SVector, Vector1};
 use proptest::prelude::*;
 use rand::Rng;
 
-/// The case count: `n`, or `PROPTEST_CASES` when set (a longer hunt).
-fn cases(n: u32) -> u32 {
-    std::env::var("PROPTEST_CASES")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(n)
-}
+use bayestrack_testkit::strategies::cases;
 
 /// Any log-weight: ordinary, huge of either sign, minus infinity, NaN,
 /// plus infinity, subnormal.

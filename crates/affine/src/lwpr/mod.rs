@@ -27,6 +27,8 @@
 mod pack;
 mod rf;
 
+use bayestrack_image::simd::{self, Token, dispatch};
+
 use crate::error::{AffineError, Result, check_finite};
 use pack::ActivationPack;
 use rf::{ReceptiveField, Workspace, derivs, distances4, weight};
@@ -407,53 +409,17 @@ impl Lwpr {
             *var = (*var * nd + d * d) * inv;
         }
         self.normalise_input(x);
-        let xn: &[f64] = if self.unit_norm_in { x } else { &self.xn };
         self.pack.invalidate();
         // The distances to every RF (of every output) before any moves,
         // four fields at a time; an update of one RF changes no other RF.
         // Compiled for the best instruction set this CPU has (run-time
         // dispatch); every path does the same operations in the same order.
-        let once = Once;
-        pulp::Arch::new().dispatch(
-            #[inline(always)]
-            || {
-                let _token: Once = once;
-                self.q.clear();
-                if self.cfg.diag_only {
-                    let mut rfs = self.subs.iter().flat_map(|s| s.rfs.iter());
-                    loop {
-                        match (rfs.next(), rfs.next(), rfs.next(), rfs.next()) {
-                            (Some(a), Some(b), Some(c), Some(d)) => {
-                                self.q.extend(distances4(xn, [a, b, c, d]));
-                            }
-                            (a, b, c, _) => {
-                                for rf in [a, b, c].into_iter().flatten() {
-                                    self.q.push(rf.distance(xn, &mut self.ws));
-                                }
-                                break;
-                            }
-                        }
-                    }
-                }
-                let mut first = 0;
-                for dim in 0..self.cfg.n_out {
-                    let yn = y[dim] / self.cfg.norm_out[dim];
-                    let n_rfs = self.subs[dim].rfs.len();
-                    let q = self.q.get(first..first + n_rfs);
-                    first += n_rfs;
-                    let p = update_one(
-                        &self.cfg,
-                        &self.init_m,
-                        &mut self.subs[dim],
-                        &mut self.ws,
-                        xn,
-                        yn,
-                        q,
-                    );
-                    yp[dim] = p * self.cfg.norm_out[dim];
-                }
-            },
-        );
+        dispatch(Update {
+            lwpr: self,
+            x,
+            y,
+            yp,
+        });
         Ok(())
     }
 
@@ -478,58 +444,15 @@ impl Lwpr {
             });
         }
         self.normalise_input(x);
-        let xn: &[f64] = if self.unit_norm_in { x } else { &self.xn };
         // Per output, the trustworthy RFs activated above the cutoff, in
         // field order (an untrustworthy RF is skipped before its activation
-        // is computed).
+        // is computed), compiled for the best instruction set this CPU has.
         self.sums.fill((0.0, 0.0));
-        let kernel = self.cfg.kernel;
-        let once = Once;
-        pulp::Arch::new().dispatch(
-            #[inline(always)]
-            || {
-                let _token: Once = once;
-                if self.cfg.diag_only {
-                    self.active.clear();
-                    for (&(dim, k), &q) in self.pack.distances(&self.subs, kernel, xn, cutoff) {
-                        let w = weight(kernel, q);
-                        if w > cutoff {
-                            self.active.push((dim, k, w));
-                        }
-                    }
-                    // The local predictions two fields at a time, added in
-                    // field order.
-                    for pair in self.active.chunks(2) {
-                        let (da, ka, wa) = pair[0];
-                        let a = &self.subs[da].rfs[ka];
-                        let (ya, b) = match pair.get(1) {
-                            Some(&(db, kb, wb)) => {
-                                let b = &self.subs[db].rfs[kb];
-                                let (ya, yb) =
-                                    ReceptiveField::predict_local_pair(a, b, xn, &mut self.ws);
-                                (ya, Some((db, wb, yb)))
-                            }
-                            None => (a.predict_local(&self.cfg, xn, &mut self.ws, None), None),
-                        };
-                        for (dim, w, yk) in std::iter::once((da, wa, ya)).chain(b) {
-                            let (sum_w, yp) = &mut self.sums[dim];
-                            *yp += w * yk;
-                            *sum_w += w;
-                        }
-                    }
-                } else {
-                    for (sub, (sum_w, yp)) in self.subs.iter().zip(self.sums.iter_mut()) {
-                        for rf in sub.rfs.iter().filter(|rf| rf.trustworthy()) {
-                            let w = rf.activation(&self.cfg, xn, &mut self.ws);
-                            if w > cutoff {
-                                *yp += w * rf.predict_local(&self.cfg, xn, &mut self.ws, None);
-                                *sum_w += w;
-                            }
-                        }
-                    }
-                }
-            },
-        );
+        dispatch(Predict {
+            lwpr: self,
+            x,
+            cutoff,
+        });
         for ((yd, &(sum_w, mut yp)), norm) in y.iter_mut().zip(&self.sums).zip(&self.cfg.norm_out) {
             if sum_w > 0.0 {
                 yp /= sum_w;
@@ -584,12 +507,126 @@ impl Lwpr {
     }
 }
 
-/// A token that a dispatched closure consumes, making it `FnOnce`: pulp
-/// calls the closure through `FnOnce::call_once`, which for an `FnMut`
-/// closure is a separate shim that the compiler does not inline into the
-/// target-feature function, and the body would then run without the wider
-/// instruction set.
-struct Once;
+/// The body of [`Lwpr::update_into`] after the checks and the input
+/// statistics, as a dispatched kernel.
+struct Update<'a> {
+    lwpr: &'a mut Lwpr,
+    x: &'a [f64],
+    y: &'a [f64],
+    yp: &'a mut [f64],
+}
+
+impl simd::Kernel for Update<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        self.lwpr.update_inline(self.x, self.y, self.yp);
+    }
+}
+
+/// The weighted sums of [`Lwpr::predict_into`], as a dispatched kernel.
+struct Predict<'a> {
+    lwpr: &'a mut Lwpr,
+    x: &'a [f64],
+    cutoff: f64,
+}
+
+impl simd::Kernel for Predict<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        self.lwpr.predict_inline(self.x, self.cutoff);
+    }
+}
+
+impl Lwpr {
+    /// [`Update`]'s body: the distances to every RF (diagonal metrics),
+    /// then each output's update, its prediction into `yp`.
+    #[inline(always)]
+    fn update_inline(&mut self, x: &[f64], y: &[f64], yp: &mut [f64]) {
+        let xn: &[f64] = if self.unit_norm_in { x } else { &self.xn };
+        self.q.clear();
+        if self.cfg.diag_only {
+            let mut rfs = self.subs.iter().flat_map(|s| s.rfs.iter());
+            loop {
+                match (rfs.next(), rfs.next(), rfs.next(), rfs.next()) {
+                    (Some(a), Some(b), Some(c), Some(d)) => {
+                        self.q.extend(distances4(xn, [a, b, c, d]));
+                    }
+                    (a, b, c, _) => {
+                        for rf in [a, b, c].into_iter().flatten() {
+                            self.q.push(rf.distance(xn, &mut self.ws));
+                        }
+                        break;
+                    }
+                }
+            }
+        }
+        let mut first = 0;
+        for dim in 0..self.cfg.n_out {
+            let yn = y[dim] / self.cfg.norm_out[dim];
+            let n_rfs = self.subs[dim].rfs.len();
+            let q = self.q.get(first..first + n_rfs);
+            first += n_rfs;
+            let p = update_one(
+                &self.cfg,
+                &self.init_m,
+                &mut self.subs[dim],
+                &mut self.ws,
+                xn,
+                yn,
+                q,
+            );
+            yp[dim] = p * self.cfg.norm_out[dim];
+        }
+    }
+
+    /// [`Predict`]'s body: the activated trustworthy RFs' weights and
+    /// weighted local predictions, summed per output into `self.sums`.
+    #[inline(always)]
+    fn predict_inline(&mut self, x: &[f64], cutoff: f64) {
+        let xn: &[f64] = if self.unit_norm_in { x } else { &self.xn };
+        let kernel = self.cfg.kernel;
+        if self.cfg.diag_only {
+            self.active.clear();
+            for (&(dim, k), &q) in self.pack.distances(&self.subs, kernel, xn, cutoff) {
+                let w = weight(kernel, q);
+                if w > cutoff {
+                    self.active.push((dim, k, w));
+                }
+            }
+            // The local predictions two fields at a time, added in
+            // field order.
+            for pair in self.active.chunks(2) {
+                let (da, ka, wa) = pair[0];
+                let a = &self.subs[da].rfs[ka];
+                let (ya, b) = match pair.get(1) {
+                    Some(&(db, kb, wb)) => {
+                        let b = &self.subs[db].rfs[kb];
+                        let (ya, yb) = ReceptiveField::predict_local_pair(a, b, xn, &mut self.ws);
+                        (ya, Some((db, wb, yb)))
+                    }
+                    None => (a.predict_local(&self.cfg, xn, &mut self.ws, None), None),
+                };
+                for (dim, w, yk) in std::iter::once((da, wa, ya)).chain(b) {
+                    let (sum_w, yp) = &mut self.sums[dim];
+                    *yp += w * yk;
+                    *sum_w += w;
+                }
+            }
+        } else {
+            for (sub, (sum_w, yp)) in self.subs.iter().zip(self.sums.iter_mut()) {
+                for rf in sub.rfs.iter().filter(|rf| rf.trustworthy()) {
+                    let w = rf.activation(&self.cfg, xn, &mut self.ws);
+                    if w > cutoff {
+                        *yp += w * rf.predict_local(&self.cfg, xn, &mut self.ws, None);
+                        *sum_w += w;
+                    }
+                }
+            }
+        }
+    }
+}
 
 /// The largest normalised input or target magnitude: the receptive
 /// fields keep sums of squares and cross-products, which overflow (and
