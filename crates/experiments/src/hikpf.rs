@@ -23,14 +23,15 @@ use bayestrack_particle::{
 use nalgebra::{Matrix1, SMatrix, SVector, Vector1};
 use rand::Rng;
 use rand_distr::{Distribution, Gamma, StandardNormal};
-use rayon::prelude::*;
 
-use crate::experiment::{
-    Experiment, ExperimentError, MAX_FRAMES, MAX_PARTICLES, MAX_RUNS, Mode, RunOptions, write_text,
-};
+use crate::driver::Paper;
+use crate::experiment::{ExperimentError, MAX_FRAMES, MAX_PARTICLES, MAX_RUNS, write_text};
+use bayestrack_options::{Options, choice, options};
 use bayestrack_otb::Table;
 use bayestrack_otb::plot::{Series, line_chart};
-use bayestrack_otb::write::PartialCsv;
+
+/// The experiment's id.
+const ID: &str = "hikpf";
 
 /// Key of this experiment's random streams.
 const KEY: u64 = 0x0068_696b_7066; // "hikpf" in ASCII
@@ -137,6 +138,7 @@ pub enum ErrorMetric {
     /// absolute value taken so that a negative mean error stays real.
     Eq11Literal,
 }
+choice! { ErrorMetric { Rmse = "rmse", Eq11Literal = "eq11" } }
 
 /// The transition density `p(x_t | x_{t-1})` in the importance weights.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -148,6 +150,7 @@ pub enum PriorDensity {
     /// (unnormalised, no support check): likely a bug, kept to compare.
     DemoIncrement,
 }
+choice! { PriorDensity { Transition = "transition", DemoIncrement = "demo" } }
 
 /// The Gaussian model of the local Kalman filters inside the proposals.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -159,63 +162,76 @@ pub enum ProposalNoise {
     /// The true moments: process-noise mean 1.5, `Q = 0.75`, `R = 1e-5`.
     TrueMoments,
 }
+choice! { ProposalNoise { Demo = "demo", TrueMoments = "moments" } }
 
-/// Every choice of the experiment.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct HikpfConfig {
-    /// Monte Carlo runs.
-    pub runs: usize,
-    /// Particles per filter.
-    pub particles: usize,
-    /// Time steps `T` (the state starts at `t = 1`).
-    pub steps: usize,
-    /// Frequency `w` of `sin(w pi t)`: 0.04 in the original demo, 0.4 as
-    /// paper 000 prints it.
-    pub sin_freq: f64,
-    /// Per-run error.
-    pub error: ErrorMetric,
-    /// Transition density in the weights.
-    pub prior: PriorDensity,
-    /// Local-filter model of the Kalman proposals.
-    pub proposal_noise: ProposalNoise,
-    /// Paper 000's `c`: IEKF iterations of PF-IEKF and HIKPF.
-    pub iekf_iterations: usize,
-    /// IEKF early-stopping tolerance.
-    pub iekf_tolerance: f64,
-    /// Prior of the IEKF refinement inside HIKPF.
-    pub hybrid_prior: HybridPrior,
-    /// Add the demo's `1e-99` to every likelihood (a linear-domain floor).
-    pub likelihood_floor: bool,
-    /// Resampling scheme (every step).
-    pub resampling: Resampling,
-    /// Seed of the whole experiment.
-    pub seed: u64,
-    /// Also run the sweep of [`sweep`] (error formula x likelihood floor x
-    /// IEKF iterations) and print it after the main table: on in full mode,
-    /// off in quick mode (`--set sweep=true` turns it on there: 10 more
-    /// runs of the table).
-    pub sweep: bool,
+choice! {
+    /// Reads [`HybridPrior`] by name.
+    pub codec HybridPriorName for HybridPrior {
+        UkfPredicted = "predicted",
+        UkfPosterior = "posterior",
+    }
+}
+
+choice! {
+    /// Reads [`Resampling`] by its [`Resampling::name`].
+    pub codec ResamplingName for Resampling {
+        Multinomial = "multinomial",
+        Residual = "residual",
+        Systematic = "systematic",
+        Stratified = "stratified",
+    }
+}
+
+options! {
+    /// Every choice of the experiment, at paper scale by default (100 runs
+    /// of 60 steps with 200 particles); the reasons for the defaults are in
+    /// docs/reproduction.md.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub struct HikpfConfig {
+        /// Monte Carlo runs (paper 000 sec. 4: 100).
+        pub runs: usize = 100, in 1..=MAX_RUNS;
+        /// Particles per filter (paper 000 sec. 4: 200).
+        pub particles: usize = 200, in 1..=MAX_PARTICLES;
+        /// Time steps `T`, the state starting at `t = 1` (the demo's 60).
+        pub steps: usize = 60, in 2..=MAX_FRAMES;
+        /// Seed of the whole experiment.
+        pub seed: u64 = 1;
+        /// Frequency `w` of `sin(w pi t)`: 0.04 in the original demo, 0.4 as
+        /// paper 000 prints it.
+        pub sin_freq: f64 = 0.04;
+        /// Paper 000's `c`: IEKF iterations of PF-IEKF and HIKPF (unstated;
+        /// 10, swept by `sweep`).
+        pub iekf_iterations: usize = 10, in 1..=10_000;
+        /// IEKF early-stopping tolerance.
+        pub iekf_tolerance: f64 = 1e-10;
+        /// Per-run error: `rmse` as the demo computes it, or `eq11` as
+        /// paper 000 prints it.
+        pub error: ErrorMetric = ErrorMetric::Rmse;
+        /// Transition density in the weights (`transition`: the model's own;
+        /// `demo`: the demo's expression).
+        pub prior: PriorDensity = PriorDensity::Transition;
+        /// Local-filter model of the Kalman proposals (`demo` tuning or the
+        /// true `moments`).
+        pub proposal_noise: ProposalNoise = ProposalNoise::Demo;
+        /// Prior of the IEKF refinement inside HIKPF (`predicted`: the
+        /// measurement used once).
+        pub hybrid_prior: HybridPrior = HybridPrior::UkfPredicted, via HybridPriorName;
+        /// Add the demo's `1e-99` to every likelihood (a linear-domain floor).
+        pub likelihood_floor: bool = false;
+        /// Also run the sweep of [`sweep`] (error formula x likelihood floor
+        /// x IEKF iterations) and print it after the main table: on in full
+        /// mode, off in quick mode (`--set sweep=true` turns it on there: 10
+        /// more runs of the table).
+        pub sweep: bool = true;
+        /// Resampling scheme, every step (the demo's residual resampling).
+        pub resampling: Resampling = Resampling::Residual, via ResamplingName;
+    }
 }
 
 impl HikpfConfig {
-    /// Paper scale: 100 runs of 60 steps with 200 particles.
+    /// Paper scale: 100 runs of 60 steps with 200 particles, with the sweep.
     pub fn paper() -> Self {
-        Self {
-            runs: 100,
-            particles: 200,
-            steps: 60,
-            sin_freq: 0.04,
-            error: ErrorMetric::Rmse,
-            prior: PriorDensity::Transition,
-            proposal_noise: ProposalNoise::Demo,
-            iekf_iterations: 10,
-            iekf_tolerance: 1e-10,
-            hybrid_prior: HybridPrior::UkfPredicted,
-            likelihood_floor: false,
-            resampling: Resampling::Residual,
-            seed: 1,
-            sweep: true,
-        }
+        Self::default()
     }
 
     /// The CI scale: 20 runs, no sweep.
@@ -227,105 +243,18 @@ impl HikpfConfig {
         }
     }
 
-    /// The keys [`HikpfConfig::apply`] accepts, with their domains (listed
-    /// by [`ExperimentError::BadOption`]).
-    pub const KEYS: &'static str = "runs (1..=100000), particles (1..=1000000), \
-        steps (2..=1000000), seed (u64), sin_freq (finite), iekf_iterations (1..=10000), \
-        iekf_tolerance (finite), error (rmse|eq11), prior (transition|demo), \
-        proposal_noise (demo|moments), hybrid_prior (predicted|posterior), \
-        likelihood_floor (true|false), sweep (true|false), \
-        resampling (multinomial|residual|systematic|stratified)";
-
-    /// Applies `key=value` overrides (the named options).
+    /// Applies a `key=value` override (see [`Options::set`]).
     ///
     /// # Errors
-    /// [`ExperimentError::BadOption`] for an unknown key or value.
+    /// [`ExperimentError::BadOption`] for an unknown key or value, listing
+    /// every key with its domain; the options are then unchanged.
     pub fn apply(&mut self, key: &str, value: &str) -> Result<(), ExperimentError> {
-        let bad = || ExperimentError::bad_option("hikpf", Self::KEYS, key, value);
-        // `inf` and `NaN` parse as f64: refused here, not later as NaN errors
-        let num = || {
-            value
-                .parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(bad)
-        };
-        let int = || value.parse::<usize>().map_err(|_| bad());
-        match key {
-            "runs" => self.runs = int()?,
-            "particles" => self.particles = int()?,
-            "steps" => self.steps = int()?,
-            "seed" => self.seed = value.parse().map_err(|_| bad())?,
-            "sin_freq" => self.sin_freq = num()?,
-            "iekf_iterations" => self.iekf_iterations = int()?,
-            "iekf_tolerance" => self.iekf_tolerance = num()?,
-            "error" => {
-                self.error = match value {
-                    "rmse" => ErrorMetric::Rmse,
-                    "eq11" => ErrorMetric::Eq11Literal,
-                    _ => return Err(bad()),
-                }
-            }
-            "prior" => {
-                self.prior = match value {
-                    "transition" => PriorDensity::Transition,
-                    "demo" => PriorDensity::DemoIncrement,
-                    _ => return Err(bad()),
-                }
-            }
-            "proposal_noise" => {
-                self.proposal_noise = match value {
-                    "demo" => ProposalNoise::Demo,
-                    "moments" => ProposalNoise::TrueMoments,
-                    _ => return Err(bad()),
-                }
-            }
-            "hybrid_prior" => {
-                self.hybrid_prior = match value {
-                    "predicted" => HybridPrior::UkfPredicted,
-                    "posterior" => HybridPrior::UkfPosterior,
-                    _ => return Err(bad()),
-                }
-            }
-            "likelihood_floor" => self.likelihood_floor = value.parse().map_err(|_| bad())?,
-            "sweep" => self.sweep = value.parse().map_err(|_| bad())?,
-            "resampling" => {
-                self.resampling = Resampling::ALL
-                    .into_iter()
-                    .find(|r| r.name() == value)
-                    .ok_or_else(bad)?
-            }
-            _ => return Err(bad()),
-        }
-        if !(1..=MAX_RUNS).contains(&self.runs)
-            || !(1..=MAX_PARTICLES).contains(&self.particles)
-            || !(2..=MAX_FRAMES).contains(&self.steps)
-            || !(1..=10_000).contains(&self.iekf_iterations)
-        {
-            return Err(bad());
-        }
-        Ok(())
+        crate::driver::apply(ID, self, key, value)
     }
 
-    /// One line per option, for the table footer.
+    /// Every option as `key=value`, for the table footer.
     pub fn describe(&self) -> String {
-        format!(
-            "runs={} particles={} steps={} sin_freq={} error={:?} prior={:?} proposal_noise={:?} \
-             iekf_iterations={} hybrid_prior={:?} likelihood_floor={} resampling={} seed={} sweep={}",
-            self.runs,
-            self.particles,
-            self.steps,
-            self.sin_freq,
-            self.error,
-            self.prior,
-            self.proposal_noise,
-            self.iekf_iterations,
-            self.hybrid_prior,
-            self.likelihood_floor,
-            self.resampling.name(),
-            self.seed,
-            self.sweep
-        )
+        Options::describe(self)
     }
 }
 
@@ -509,7 +438,7 @@ fn run_error(metric: ErrorMetric, est: &[f64], truth: &[f64]) -> f64 {
 }
 
 /// The result of one filter on one run.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RunOutcome {
     /// Per-run error (the configured [`ErrorMetric`]).
     pub error: f64,
@@ -837,54 +766,59 @@ impl SweepCell {
     }
 }
 
-/// Paper 000's unstated parameters swept: error formula {RMSE, eq. 11} x
-/// likelihood floor {off, on} x IEKF iterations [`SWEEP_ITERATIONS`], every
-/// other option as in `base`. Each (floor, iterations) pair is one run of
-/// the table, scored by both error formulas; every cell uses the same
-/// random streams, so cells differ only by the reading.
-///
-/// # Errors
-/// As [`run`].
-pub fn sweep(base: &HikpfConfig, progress: bool) -> Result<Vec<SweepCell>, ExperimentError> {
+/// The configuration of sweep cell `i` (`0..SWEEP_CELLS`): likelihood
+/// floor {off, on} x IEKF iterations [`SWEEP_ITERATIONS`], RMSE, every
+/// other option as in `base`.
+fn sweep_config(base: &HikpfConfig, i: usize) -> HikpfConfig {
+    HikpfConfig {
+        error: ErrorMetric::Rmse,
+        likelihood_floor: i >= SWEEP_ITERATIONS.len(),
+        iekf_iterations: SWEEP_ITERATIONS[i % SWEEP_ITERATIONS.len()],
+        sweep: false,
+        ..*base
+    }
+}
+
+/// Runs of the table in the sweep: floor {off, on} x [`SWEEP_ITERATIONS`].
+const SWEEP_CELLS: usize = 2 * SWEEP_ITERATIONS.len();
+
+/// The sweep's cells from each (floor, iterations) run of the table, in
+/// [`sweep_config`] order, each scored by both error formulas.
+fn sweep_cells(base: &HikpfConfig, mut runs: Vec<Vec<RunOutcome>>) -> Vec<SweepCell> {
+    let per_cell = base.runs;
     let mut cells = vec![];
-    for likelihood_floor in [false, true] {
-        for iekf_iterations in SWEEP_ITERATIONS {
-            let config = HikpfConfig {
-                error: ErrorMetric::Rmse,
-                likelihood_floor,
-                iekf_iterations,
-                sweep: false,
-                ..*base
-            };
-            let rmse = run(&config, None, progress)?;
-            // the same runs scored by eq. 11
-            let eq11 = HikpfResult {
-                config: HikpfConfig {
-                    error: ErrorMetric::Eq11Literal,
-                    ..config
-                },
-                runs: rmse
-                    .runs
-                    .iter()
-                    .map(|r| {
-                        r.iter()
-                            .map(|o| RunOutcome {
-                                error: o.other_error,
-                                other_error: o.error,
-                                ..*o
-                            })
-                            .collect()
-                    })
-                    .collect(),
-            };
-            for result in [rmse, eq11] {
-                cells.push(SweepCell {
-                    error: result.config.error,
-                    likelihood_floor,
-                    iekf_iterations,
-                    summary: result.summary(),
-                });
-            }
+    for i in 0..SWEEP_CELLS {
+        let config = sweep_config(base, i);
+        let rest = runs.split_off(per_cell.min(runs.len()));
+        let rmse = HikpfResult { config, runs };
+        runs = rest;
+        // the same runs scored by eq. 11
+        let eq11 = HikpfResult {
+            config: HikpfConfig {
+                error: ErrorMetric::Eq11Literal,
+                ..config
+            },
+            runs: rmse
+                .runs
+                .iter()
+                .map(|r| {
+                    r.iter()
+                        .map(|o| RunOutcome {
+                            error: o.other_error,
+                            other_error: o.error,
+                            ..*o
+                        })
+                        .collect()
+                })
+                .collect(),
+        };
+        for result in [rmse, eq11] {
+            cells.push(SweepCell {
+                error: result.config.error,
+                likelihood_floor: config.likelihood_floor,
+                iekf_iterations: config.iekf_iterations,
+                summary: result.summary(),
+            });
         }
     }
     // the table's order: error formula, then floor, then iterations
@@ -895,7 +829,25 @@ pub fn sweep(base: &HikpfConfig, progress: bool) -> Result<Vec<SweepCell>, Exper
             c.iekf_iterations,
         )
     });
-    Ok(cells)
+    cells
+}
+
+/// Paper 000's unstated parameters swept: error formula {RMSE, eq. 11} x
+/// likelihood floor {off, on} x IEKF iterations [`SWEEP_ITERATIONS`], every
+/// other option as in `base`. Each (floor, iterations) pair is one run of
+/// the table, scored by both error formulas; every cell uses the same
+/// random streams, so cells differ only by the reading.
+///
+/// # Errors
+/// As [`run`].
+pub fn sweep(base: &HikpfConfig, progress: bool) -> Result<Vec<SweepCell>, ExperimentError> {
+    let base = HikpfConfig {
+        sweep: true,
+        ..*base
+    };
+    let jobs: Vec<usize> = (base.runs..HikpfExperiment::jobs(&base)).collect();
+    let runs = crate::driver::run_jobs::<HikpfExperiment>(&base, &jobs, None, progress)?;
+    Ok(sweep_cells(&base, runs))
 }
 
 /// The sweep as a table: per cell, mean and variance of paper 000's five
@@ -985,8 +937,9 @@ fn run_rows(r: usize, outcomes: &[RunOutcome]) -> Vec<RunRow> {
 /// streams, so the result does not depend on the thread count). With
 /// `runs_csv`, each run's row is appended to `runs.partial.csv` beside it
 /// the moment the run finishes, and the complete file, in run order,
-/// replaces `runs_csv` at the end (see [`PartialCsv`]): an interrupted run
-/// keeps every finished run and the previous `runs.csv`.
+/// replaces `runs_csv` at the end (see [`bayestrack_otb::write::PartialCsv`]): an interrupted run
+/// keeps every finished run and the previous `runs.csv`. The sweep is not
+/// run (see [`sweep`]).
 ///
 /// # Errors
 /// [`ExperimentError::Failed`] naming the filter, run and step that failed;
@@ -996,28 +949,8 @@ pub fn run(
     runs_csv: Option<&Path>,
     progress: bool,
 ) -> Result<HikpfResult, ExperimentError> {
-    let log = runs_csv.map(PartialCsv::create).transpose()?;
-    let bar = crate::experiment::progress_bar(config.runs, progress, "hikpf runs");
-    let runs: Vec<Vec<RunOutcome>> = (0..config.runs)
-        .into_par_iter()
-        .map(|r| {
-            let outcomes = one_run(config, r)?;
-            if let Some(log) = &log {
-                log.append(&run_rows(r, &outcomes))?;
-            }
-            bar.inc(1);
-            Ok(outcomes)
-        })
-        .collect::<Result<_, ExperimentError>>()?;
-    bar.finish_and_clear();
-    if let Some(log) = log {
-        let rows: Vec<RunRow> = runs
-            .iter()
-            .enumerate()
-            .flat_map(|(r, o)| run_rows(r, o))
-            .collect();
-        log.finish(&rows)?;
-    }
+    let jobs: Vec<usize> = (0..config.runs).collect();
+    let runs = crate::driver::run_jobs::<HikpfExperiment>(config, &jobs, runs_csv, progress)?;
     Ok(HikpfResult {
         config: *config,
         runs,
@@ -1070,43 +1003,66 @@ pub fn golden_configs() -> [(&'static str, HikpfConfig); 2] {
     ]
 }
 
-/// The registry entry.
+/// The registry entry: job `j` is run `j % runs` of the main table
+/// (`j < runs`) or of sweep cell `j / runs - 1` ([`sweep`], when on).
 pub struct HikpfExperiment;
 
-impl Experiment for HikpfExperiment {
-    fn id(&self) -> &'static str {
-        "hikpf"
+impl Paper for HikpfExperiment {
+    type Config = HikpfConfig;
+    type Done = Vec<RunOutcome>;
+    type Row = RunRow;
+    const ID: &'static str = ID;
+    const SOURCE: &'static str = "paper 000 Table 1; van der Merwe et al. 2000 Table 1";
+    const SUMMARY: &'static str =
+        "EKF, UKF, PF, PF-EKF, PF-UKF, PF-IEKF, HIKPF (+MCMC) on the Gamma-noise model";
+    const LOG: &'static str = "runs.csv";
+    const JOBS: &'static str = "hikpf runs";
+
+    fn quick() -> HikpfConfig {
+        HikpfConfig::quick()
     }
-    fn source(&self) -> &'static str {
-        "paper 000 Table 1; van der Merwe et al. 2000 Table 1"
+    fn full() -> HikpfConfig {
+        HikpfConfig::paper()
     }
-    fn summary(&self) -> &'static str {
-        "EKF, UKF, PF, PF-EKF, PF-UKF, PF-IEKF, HIKPF (+MCMC) on the Gamma-noise model"
+    fn jobs(c: &HikpfConfig) -> usize {
+        c.runs * if c.sweep { 1 + SWEEP_CELLS } else { 1 }
     }
-    fn run(&self, opts: &RunOptions) -> Result<Vec<Table>, ExperimentError> {
-        let mut config = match opts.mode {
-            Mode::Quick => HikpfConfig::quick(),
-            Mode::Full => HikpfConfig::paper(),
-        };
-        for (k, v) in &opts.set {
-            config.apply(k, v)?;
+    fn run_job(c: &HikpfConfig, j: usize) -> Result<Vec<RunOutcome>, ExperimentError> {
+        let (cell, r) = (j / c.runs, j % c.runs);
+        if cell == 0 {
+            one_run(c, r)
+        } else {
+            one_run(&sweep_config(c, cell - 1), r)
         }
-        let dir = opts.output_dir(self.id())?;
-        let result = run(&config, Some(&dir.join("runs.csv")), opts.progress)?;
-        write_outputs(&result, &dir)?;
-        let mut table = result.table();
-        table.title = format!("{}\n  options: {}", table.title, config.describe());
-        let mut tables = vec![table];
+    }
+    fn rows(c: &HikpfConfig, j: usize, done: &Vec<RunOutcome>) -> Vec<RunRow> {
+        if j < c.runs {
+            run_rows(j, done)
+        } else {
+            Vec::new()
+        }
+    }
+    fn report(
+        config: &HikpfConfig,
+        mut runs: Vec<Vec<RunOutcome>>,
+        dir: &Path,
+    ) -> Result<Vec<Table>, ExperimentError> {
+        let swept = runs.split_off(config.runs.min(runs.len()));
+        let result = HikpfResult {
+            config: *config,
+            runs,
+        };
+        write_outputs(&result, dir)?;
+        let mut tables = vec![result.table()];
         if config.sweep {
-            let cells = sweep(&config, opts.progress)?;
-            let t = sweep_table(&cells, config.runs);
+            let t = sweep_table(&sweep_cells(config, swept), config.runs);
             write_text(&dir.join("sweep.csv"), &t.to_csv())?;
             tables.push(t);
         }
         Ok(tables)
     }
 
-    fn golden(&self) -> Result<Option<String>, ExperimentError> {
+    fn golden() -> Result<Option<String>, ExperimentError> {
         let mut out = String::from("config,filter,mean,var,median,all_zero_steps\n");
         for (name, config) in golden_configs() {
             for s in run(&config, None, false)?.summary() {
