@@ -36,16 +36,18 @@ use bayestrack_image::Image;
 use bayestrack_otb::Table;
 use bayestrack_otb::metrics::{FeaturePoints, rms_error_eq6};
 use bayestrack_otb::plot::{Series, line_chart};
-use bayestrack_otb::write::PartialCsv;
 use bayestrack_trackers::{
     FrameStats, HkpfConfig, HkpfTracker, IspfConfig, IspfTracker, StpfConfig, StpfTracker, Tracker,
 };
 use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
 
-use crate::experiment::{
-    Experiment, ExperimentError, MAX_FRAMES, MAX_PARTICLES, MAX_RUNS, Mode, RunOptions, write_text,
-};
+use crate::driver::Paper;
+use crate::experiment::{ExperimentError, MAX_FRAMES, MAX_PARTICLES, MAX_RUNS, write_text};
+use bayestrack_options::{IfSome, Options, above, options};
+
+/// The experiment's id.
+const ID: &str = "affine";
 use crate::scenes::{AffineScene, TEMPLATE_POINTS};
 
 /// The three synthetic settings, each mirroring one of the paper's videos.
@@ -193,40 +195,38 @@ impl Filter {
     }
 }
 
-/// Every choice of the experiment.
-#[derive(Debug, Clone, PartialEq)]
-pub struct AffineConfig {
-    /// Frames per sequence.
-    pub frames: usize,
-    /// Runs: run `r` renders each scene with seed `scene_seed + r` and seeds
-    /// the filters with `r`.
-    pub runs: usize,
-    /// Scene seed of run 0.
-    pub scene_seed: u64,
-    /// A frame is lost when its RMS exceeds this fraction of the true
-    /// target's side `sqrt(w_k h_k)` (0.25).
-    pub lost_fraction: f64,
-    /// HKPF's particles per setting; `None` uses the paper's
-    /// ([`Setting::hkpf_particles`]).
-    pub hkpf_particles: Option<usize>,
-    /// The self-tuning filter's settings (Algorithm 1's defaults).
-    pub stpf: StpfConfig,
-    /// ISPF's settings.
-    pub ispf: IspfConfig,
+options! {
+    /// Every choice of the experiment, at paper scale by default (300
+    /// frames, 5 runs).
+    #[derive(Debug, Clone, PartialEq)]
+    pub struct AffineConfig {
+        /// Frames per sequence (300: the length of the paper's videos'
+        /// tracked parts, about; 1 reads as 2).
+        pub frames: usize = 300, in 1..=MAX_FRAMES;
+        /// Runs: run `r` renders each scene with seed `scene_seed + r` and
+        /// seeds the filters with `r` (5).
+        pub runs: usize = 5, in 1..=MAX_RUNS;
+        /// Scene seed of run 0.
+        pub scene_seed: u64 = 1;
+        /// A frame is lost when its RMS exceeds this fraction of the true
+        /// target's side `sqrt(w_k h_k)` (0.25).
+        pub lost_fraction: f64 = 0.25, in above(0.0);
+        /// HKPF's particles in every setting; `none` uses the paper's per
+        /// setting ([`Setting::hkpf_particles`]: 150/100/50).
+        pub hkpf_particles: Option<usize> = None, in IfSome(1..=MAX_PARTICLES);
+        /// `N_max` of both self-tuning filters (ISPF and ours; Algorithm 1's
+        /// default, 50).
+        pub max_particles: usize = 50, in 1..=MAX_PARTICLES;
+        /// Measure the trackers' wall-clock time (the fps column); `false`
+        /// records 0 s, so that two runs write byte-identical files.
+        pub timing: bool = true;
+    }
 }
 
 impl AffineConfig {
     /// Paper scale: 300 frames, 5 runs.
     pub fn paper() -> Self {
-        Self {
-            frames: 300,
-            runs: 5,
-            scene_seed: 1,
-            lost_fraction: 0.25,
-            hkpf_particles: None,
-            stpf: StpfConfig::default(),
-            ispf: IspfConfig::default(),
-        }
+        Self::default()
     }
 
     /// The CI scale: 80 frames, 1 run.
@@ -238,68 +238,44 @@ impl AffineConfig {
         }
     }
 
-    /// The keys [`AffineConfig::apply`] accepts, with their domains (listed
-    /// by [`ExperimentError::BadOption`]).
-    pub const KEYS: &'static str = "frames (1..=1000000; 1 reads as 2), runs (1..=100000), \
-        scene_seed (u64), lost_fraction (> 0, finite), hkpf_particles (1..=1000000), \
-        max_particles (1..=1000000)";
-
-    /// Applies `key=value` overrides: `frames`, `runs`, `scene_seed`,
-    /// `lost_fraction`, `hkpf_particles`, `max_particles` (N_max of both
-    /// self-tuning filters).
+    /// Applies a `key=value` override (see [`Options::set`]).
     ///
     /// # Errors
-    /// [`ExperimentError::BadOption`] for an unknown key or value (listing
-    /// [`AffineConfig::KEYS`]).
+    /// [`ExperimentError::BadOption`] for an unknown key or value, listing
+    /// every key with its domain.
     pub fn apply(&mut self, key: &str, value: &str) -> Result<(), ExperimentError> {
-        let bad = || ExperimentError::bad_option("affine", Self::KEYS, key, value);
-        let int_to = |max: usize| {
-            value
-                .parse::<usize>()
-                .ok()
-                .filter(|&v| v > 0 && v <= max)
-                .ok_or_else(bad)
-        };
-        let int = || int_to(MAX_PARTICLES);
-        match key {
-            "frames" => self.frames = int_to(MAX_FRAMES)?.max(2),
-            "runs" => self.runs = int_to(MAX_RUNS)?,
-            "scene_seed" => self.scene_seed = value.parse().map_err(|_| bad())?,
-            "lost_fraction" => {
-                self.lost_fraction = value
-                    .parse::<f64>()
-                    .ok()
-                    .filter(|v| v.is_finite() && *v > 0.0)
-                    .ok_or_else(bad)?;
-            }
-            "hkpf_particles" => self.hkpf_particles = Some(int()?),
-            "max_particles" => {
-                let n = int()?;
-                self.stpf.max_particles = n;
-                self.ispf.max_particles = n;
-            }
-            _ => return Err(bad()),
-        }
-        Ok(())
+        crate::driver::apply(ID, self, key, value)
     }
 
-    /// One line with every option.
+    /// Every option as `key=value`, for the table footer.
     pub fn describe(&self) -> String {
-        format!(
-            "frames={} runs={} scene_seed={} lost_fraction={} hkpf_particles={} max_particles={}",
-            self.frames,
-            self.runs,
-            self.scene_seed,
-            self.lost_fraction,
-            self.hkpf_particles
-                .map_or("150/100/50".to_string(), |n| n.to_string()),
-            self.stpf.max_particles,
-        )
+        Options::describe(self)
+    }
+
+    /// Frames per sequence as run (at least 2: one to start, one to score).
+    pub fn frames(&self) -> usize {
+        self.frames.max(2)
+    }
+
+    /// The self-tuning filter's settings (Algorithm 1's defaults).
+    pub fn stpf(&self) -> StpfConfig {
+        StpfConfig {
+            max_particles: self.max_particles,
+            ..StpfConfig::default()
+        }
+    }
+
+    /// ISPF's settings.
+    pub fn ispf(&self) -> IspfConfig {
+        IspfConfig {
+            max_particles: self.max_particles,
+            ..IspfConfig::default()
+        }
     }
 }
 
 /// One filter on one sequence: per scored frame (frames 2..n).
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct TrackRun {
     /// RMS error of eq. 6.
     pub rms: Vec<f64>,
@@ -390,8 +366,8 @@ impl AnyTracker {
                 },
                 seed,
             )?),
-            Filter::Ispf => Self::Ispf(IspfTracker::new(config.ispf.clone(), seed)?),
-            Filter::Stpf => Self::Stpf(StpfTracker::new(config.stpf.clone(), seed)?),
+            Filter::Ispf => Self::Ispf(IspfTracker::new(config.ispf(), seed)?),
+            Filter::Stpf => Self::Stpf(StpfTracker::new(config.stpf(), seed)?),
         })
     }
 
@@ -511,7 +487,7 @@ fn track(
         out.evaluations.push(est.evaluations);
         out.pose_estimator_calls.push(stats.pose_estimator_calls);
     }
-    out.seconds = seconds;
+    out.seconds = if config.timing { seconds } else { 0.0 };
     Ok(out)
 }
 
@@ -519,10 +495,42 @@ fn track(
 /// depend on the thread count).
 ///
 /// # Errors
-/// [`ExperimentError::Failed`] naming the filter, setting, run and frame;
-/// [`ExperimentError::BadOption`] for zero frames or runs.
+/// [`ExperimentError::Failed`] naming the filter, setting, run and frame.
 pub fn run(config: &AffineConfig, progress: bool) -> Result<AffineResult, ExperimentError> {
-    run_logged(config, progress, None)
+    let done = crate::driver::run_all::<AffineExperiment>(config, None, progress)?;
+    Ok(assemble(config, done))
+}
+
+/// Job `j`: setting `j / runs`, run `j % runs`.
+fn job(config: &AffineConfig, j: usize) -> (Setting, usize) {
+    (Setting::ALL[j / config.runs], j % config.runs)
+}
+
+/// Every filter through setting `s`'s run `r`.
+fn run_job(config: &AffineConfig, s: Setting, r: usize) -> Result<Vec<TrackRun>, ExperimentError> {
+    let scene = s
+        .scene(config.frames())
+        .generate(config.scene_seed + r as u64)
+        .map_err(|e| ExperimentError::Failed {
+            id: "affine",
+            message: format!("{} scene: {e}", s.name()),
+        })?;
+    Filter::ALL
+        .par_iter()
+        .map(|&f| track(f, s, config, r, &scene.frames, &scene.truth))
+        .collect()
+}
+
+/// The result from every job's, in job order.
+fn assemble(config: &AffineConfig, done: Vec<Vec<TrackRun>>) -> AffineResult {
+    let mut runs = vec![Vec::new(); Setting::ALL.len()];
+    for (j, r) in done.into_iter().enumerate() {
+        runs[j / config.runs].push(r);
+    }
+    AffineResult {
+        config: config.clone(),
+        runs,
+    }
 }
 
 /// One row of `frames.csv`: one filter on one scored frame of one run.
@@ -568,63 +576,6 @@ fn frame_rows(setting: Setting, run: usize, tracks: &[TrackRun]) -> Vec<FrameRow
         }
     }
     rows
-}
-
-/// [`run`], appending each finished setting x run's frames to `log` as it
-/// finishes (in completion order), so that a run killed part-way keeps
-/// them.
-///
-/// # Errors
-/// Those of [`run`], and [`ExperimentError::Io`] when `log` cannot be
-/// written.
-pub fn run_logged(
-    config: &AffineConfig,
-    progress: bool,
-    log: Option<&PartialCsv<FrameRow>>,
-) -> Result<AffineResult, ExperimentError> {
-    if config.frames < 2 || config.runs == 0 {
-        return Err(ExperimentError::bad_option(
-            "affine",
-            AffineConfig::KEYS,
-            "frames/runs",
-            &format!("{}/{}", config.frames, config.runs),
-        ));
-    }
-    let jobs: Vec<(usize, usize)> = (0..Setting::ALL.len())
-        .flat_map(|s| (0..config.runs).map(move |r| (s, r)))
-        .collect();
-    let bar = crate::experiment::progress_bar(jobs.len(), progress, "affine sequences");
-    let done: Vec<Vec<TrackRun>> = jobs
-        .par_iter()
-        .map(|&(s, r)| {
-            let setting = Setting::ALL[s];
-            let scene = setting
-                .scene(config.frames)
-                .generate(config.scene_seed + r as u64)
-                .map_err(|e| ExperimentError::Failed {
-                    id: "affine",
-                    message: format!("{} scene: {e}", setting.name()),
-                })?;
-            let runs = Filter::ALL
-                .par_iter()
-                .map(|&f| track(f, setting, config, r, &scene.frames, &scene.truth))
-                .collect::<Result<Vec<_>, _>>()?;
-            if let Some(log) = log {
-                log.append(&frame_rows(setting, r, &runs))?;
-            }
-            bar.inc(1);
-            Ok(runs)
-        })
-        .collect::<Result<_, ExperimentError>>()?;
-    bar.finish_and_clear();
-    let mut runs = vec![Vec::new(); Setting::ALL.len()];
-    for ((s, _), r) in jobs.into_iter().zip(done) {
-        runs[s].push(r);
-    }
-    Ok(AffineResult {
-        config: config.clone(),
-        runs,
-    })
 }
 
 impl AffineResult {
@@ -677,7 +628,7 @@ impl AffineResult {
             format!(
                 "affine (paper 002 Fig. 7-8): {} frames x {} run(s) per setting; RMS of eq. 6 in px; \
                  lost = RMS > {} x target side",
-                self.config.frames, self.config.runs, self.config.lost_fraction
+                self.config.frames(), self.config.runs, self.config.lost_fraction
             ),
             &[
                 "setting",
@@ -814,49 +765,47 @@ fn write_outputs(result: &AffineResult, dir: &Path) -> Result<(), ExperimentErro
     Ok(())
 }
 
-/// The registry entry.
+/// The registry entry: job `j` is setting `j / runs`, run `j % runs`.
 pub struct AffineExperiment;
 
-impl Experiment for AffineExperiment {
-    fn id(&self) -> &'static str {
-        "affine"
+impl Paper for AffineExperiment {
+    type Config = AffineConfig;
+    type Done = Vec<TrackRun>;
+    type Row = FrameRow;
+    const ID: &'static str = ID;
+    const SOURCE: &'static str = "paper 002 (RMS eq. 6, particles per frame)";
+    const SUMMARY: &'static str = "HKPF, ISPF and self-tuning HKPF on synthetic affine sequences";
+    const LOG: &'static str = "frames.csv";
+    const JOBS: &'static str = "affine sequences";
+
+    fn quick() -> AffineConfig {
+        AffineConfig::quick()
     }
-    fn source(&self) -> &'static str {
-        "paper 002 (RMS eq. 6, particles per frame)"
+    fn full() -> AffineConfig {
+        AffineConfig::paper()
     }
-    fn summary(&self) -> &'static str {
-        "HKPF, ISPF and self-tuning HKPF on synthetic affine sequences"
+    fn jobs(c: &AffineConfig) -> usize {
+        Setting::ALL.len() * c.runs
     }
-    fn run(&self, opts: &RunOptions) -> Result<Vec<Table>, ExperimentError> {
-        let mut config = match opts.mode {
-            Mode::Quick => AffineConfig::quick(),
-            Mode::Full => AffineConfig::paper(),
-        };
-        for (k, v) in &opts.set {
-            config.apply(k, v)?;
-        }
-        let dir = opts.output_dir(self.id())?;
-        // every frame of every run, appended as each run finishes
-        let frames = PartialCsv::create(&dir.join("frames.csv"))?;
-        let result = run_logged(
-            &config,
-            opts.progress && opts.mode == Mode::Full,
-            Some(&frames),
-        )?;
-        let mut rows = Vec::new();
-        for (setting, runs) in Setting::ALL.iter().zip(&result.runs) {
-            for (r, tracks) in runs.iter().enumerate() {
-                rows.extend(frame_rows(*setting, r, tracks));
-            }
-        }
-        frames.finish(&rows)?;
-        write_outputs(&result, &dir)?;
-        let mut main = result.table();
-        main.title = format!("{}\n  options: {}", main.title, config.describe());
-        Ok(vec![main, result.claims_table()])
+    fn run_job(c: &AffineConfig, j: usize) -> Result<Vec<TrackRun>, ExperimentError> {
+        let (s, r) = job(c, j);
+        run_job(c, s, r)
+    }
+    fn rows(c: &AffineConfig, j: usize, done: &Vec<TrackRun>) -> Vec<FrameRow> {
+        let (s, r) = job(c, j);
+        frame_rows(s, r, done)
+    }
+    fn report(
+        config: &AffineConfig,
+        done: Vec<Vec<TrackRun>>,
+        dir: &Path,
+    ) -> Result<Vec<Table>, ExperimentError> {
+        let result = assemble(config, done);
+        write_outputs(&result, dir)?;
+        Ok(vec![result.table(), result.claims_table()])
     }
 
-    fn golden(&self) -> Result<Option<String>, ExperimentError> {
+    fn golden() -> Result<Option<String>, ExperimentError> {
         let r = run(&AffineConfig::quick(), false)?;
         let mut out = String::from("setting,filter,column,value\n");
         for s in r.summaries() {
@@ -891,7 +840,7 @@ mod tests {
         c.apply("frames", "30").unwrap();
         c.apply("max_particles", "20").unwrap();
         assert_eq!(
-            (c.frames, c.stpf.max_particles, c.ispf.max_particles),
+            (c.frames, c.stpf().max_particles, c.ispf().max_particles),
             (30, 20, 20)
         );
         assert!(c.apply("runs", "0").is_err());

@@ -25,15 +25,16 @@ use bayestrack_trackers::{
     ArpMotion, MadTracker, MadTrackerConfig, MultiTargetConfig, MultiTargetTracker,
     PfCorrelationConfig, PfCorrelationTracker, SearchArea, Tracker,
 };
-use rayon::prelude::*;
 
-use crate::experiment::{
-    Experiment, ExperimentError, MAX_PARTICLES, MAX_RUNS, Mode, RunOptions, write_text,
-};
+use crate::driver::Paper;
+use crate::experiment::{ExperimentError, MAX_PARTICLES, MAX_RUNS, write_text};
+use bayestrack_options::{Options, options};
+
+/// The experiment's id.
+const ID: &str = "correlation";
 use crate::scenes::{FrameTruth, RoadScene};
 use bayestrack_otb::Table;
 use bayestrack_otb::plot::{Series, line_chart};
-use bayestrack_otb::write::PartialCsv;
 
 /// Paper 004 Table 1 (MAD tracker): `(frame, x, y)`.
 pub const PAPER_TABLE1: [(usize, f64, f64); 10] = [
@@ -123,39 +124,58 @@ impl Variant {
     }
 }
 
-/// Every choice of the experiment.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct CorrelationConfig {
-    /// Runs (scene noise and particle seeds).
-    pub runs: usize,
-    /// Scene seed of run 0.
-    pub scene_seed: u64,
-    /// Margin of the MAD tracker's search window (px).
-    pub mad_margin: usize,
-    /// The PF tracker's settings (seed replaced per run) for the drift rows.
-    pub pf: PfCorrelationConfig,
-    /// `B` of the printed eq. 6 random walk (px).
-    pub printed_b: f64,
-    /// MAD cap of the `PF drift+cap` row (gray levels).
-    pub cap: f64,
-    /// `B` (px) of the `PF const drift` row: the constant drift carries the
-    /// motion, `B w` only absorbs the error of `c`, which the integer-pixel
-    /// MAD match measures to +-0.5 px per axis; 1 px covers it.
-    pub const_b: f64,
+/// Widest MAD search margin an option may ask for, px (wider than any
+/// frame).
+pub const MAX_MAD_MARGIN: usize = 4096;
+
+/// The cross-option rule: the PF trackers' settings must be ones they
+/// accept.
+fn check(c: &CorrelationConfig) -> Result<(), String> {
+    PfCorrelationTracker::new(c.pf()).map_err(|e| e.to_string())?;
+    for v in Variant::ALL.into_iter().filter(|v| v.is_pf()) {
+        c.tracker(v, 0).map_err(|e| e.to_string())?;
+    }
+    Ok(())
+}
+
+options! {
+    /// Every choice of the experiment, at paper scale by default (50 runs).
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub struct CorrelationConfig {
+        /// Runs (scene noise and particle seeds; 50 at paper scale).
+        pub runs: usize = 50, in 1..=MAX_RUNS;
+        /// Scene seed of run 0.
+        pub scene_seed: u64 = 1;
+        /// Margin of the MAD tracker's search window, px (16).
+        pub mad_margin: usize = 16, in 0..=MAX_MAD_MARGIN;
+        /// Particles of the PF trackers (paper 004 sec. 3: `Ns = 15`).
+        pub particles: usize = 15, in 1..=MAX_PARTICLES;
+        /// Likelihood width of the PF trackers, gray levels (1.5; the
+        /// tracker checks its range).
+        pub sigma: f64 = 1.5;
+        /// Initial spread of the particles, px per axis (5).
+        pub spread: f64 = 5.0;
+        /// `B` of the drift model's random walk, px (4).
+        pub b: f64 = 4.0;
+        /// Gain of the drift model (0.5).
+        pub gain: f64 = 0.5;
+        /// `B` of the printed eq. 6 random walk, px (8).
+        pub printed_b: f64 = 8.0;
+        /// MAD cap of the `PF drift+cap` row, gray levels (40).
+        pub cap: f64 = 40.0;
+        /// `B` (px) of the `PF const drift` row: the constant drift carries
+        /// the motion, `B w` only absorbs the error of `c`, which the
+        /// integer-pixel MAD match measures to +-0.5 px per axis; 1 px
+        /// covers it.
+        pub const_b: f64 = 1.0;
+    }
+    check check;
 }
 
 impl CorrelationConfig {
     /// Paper scale: 50 runs.
     pub fn paper() -> Self {
-        Self {
-            runs: 50,
-            scene_seed: 1,
-            mad_margin: 16,
-            pf: PfCorrelationConfig::default(),
-            printed_b: 8.0,
-            cap: 40.0,
-            const_b: 1.0,
-        }
+        Self::default()
     }
 
     /// The CI scale: 8 runs.
@@ -166,106 +186,33 @@ impl CorrelationConfig {
         }
     }
 
-    /// The keys [`CorrelationConfig::apply`] accepts, with their domains
-    /// (listed by [`ExperimentError::BadOption`]).
-    pub const KEYS: &'static str = "runs (1..=100000), scene_seed (u64), \
-        mad_margin (0..=4096 px), particles (1..=1000000), sigma, spread, b, gain \
-        (finite; the tracker checks their range), printed_b (finite), cap (finite), \
-        const_b (finite, >= 0)";
-
-    /// Widest MAD search margin an option may ask for, px (wider than any
-    /// frame).
-    pub const MAX_MAD_MARGIN: usize = 4096;
-
-    /// Applies `key=value` overrides.
+    /// Applies a `key=value` override (see [`Options::set`]).
     ///
     /// # Errors
-    /// [`ExperimentError::BadOption`] for an unknown key or value.
-    /// A refused option leaves the configuration as it was.
+    /// [`ExperimentError::BadOption`] for an unknown key or value, listing
+    /// every key with its domain; a refused option leaves the configuration
+    /// as it was.
     pub fn apply(&mut self, key: &str, value: &str) -> Result<(), ExperimentError> {
-        let before = *self;
-        let result = self.apply_unchecked(key, value);
-        if result.is_err() {
-            *self = before;
-        }
-        result
+        crate::driver::apply(ID, self, key, value)
     }
 
-    fn apply_unchecked(&mut self, key: &str, value: &str) -> Result<(), ExperimentError> {
-        let bad = || ExperimentError::bad_option("correlation", Self::KEYS, key, value);
-        let num = || {
-            value
-                .parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(bad)
-        };
-        let int = || value.parse::<usize>().map_err(|_| bad());
-        match key {
-            "runs" => self.runs = int()?,
-            "scene_seed" => self.scene_seed = value.parse().map_err(|_| bad())?,
-            "mad_margin" => self.mad_margin = int()?,
-            "particles" => self.pf.particles = int()?,
-            "sigma" => self.pf.sigma = num()?,
-            "spread" => self.pf.spread = [num()?; 2],
-            "b" => {
-                let gain = match self.pf.motion {
-                    ArpMotion::Drift { gain, .. } => gain,
-                    ArpMotion::Position { .. } | ArpMotion::ConstantDrift { .. } => 0.5,
-                };
-                self.pf.motion = ArpMotion::Drift {
-                    b: [num()?; 2],
-                    gain,
-                };
-            }
-            "gain" => {
-                let b = match self.pf.motion {
-                    ArpMotion::Drift { b, .. }
-                    | ArpMotion::Position { b, .. }
-                    | ArpMotion::ConstantDrift { b, .. } => b,
-                };
-                self.pf.motion = ArpMotion::Drift { b, gain: num()? };
-            }
-            "printed_b" => self.printed_b = num()?,
-            "cap" => self.cap = num()?,
-            "const_b" => self.const_b = num()?,
-            _ => return Err(bad()),
-        }
-        if !(1..=MAX_RUNS).contains(&self.runs)
-            || self.mad_margin > Self::MAX_MAD_MARGIN
-            || self.pf.particles > MAX_PARTICLES
-        {
-            return Err(bad());
-        }
-        PfCorrelationTracker::new(self.pf).map_err(|_| bad())?;
-        for v in Variant::ALL.into_iter().filter(|v| v.is_pf()) {
-            self.tracker(v, 0).map_err(|_| bad())?;
-        }
-        Ok(())
-    }
-
-    /// One line with every option.
+    /// Every option as `key=value`, for the table footer.
     pub fn describe(&self) -> String {
-        let (b, gain) = match self.pf.motion {
-            ArpMotion::Drift { b, gain } => (b[0], gain),
-            ArpMotion::Position { b, .. } | ArpMotion::ConstantDrift { b, .. } => (b[0], f64::NAN),
-        };
-        format!(
-            "runs={} scene_seed={} mad_margin={} particles={} spread={} sigma={} b={} gain={} \
-             printed_b={} cap={} const_b={} resampling={}",
-            self.runs,
-            self.scene_seed,
-            self.mad_margin,
-            self.pf.particles,
-            self.pf.spread[0],
-            self.pf.sigma,
-            b,
-            gain,
-            self.printed_b,
-            self.cap,
-            self.const_b,
-            self.pf.resampling.name()
-        )
+        Options::describe(self)
+    }
+
+    /// The PF tracker's settings (seed replaced per run) for the drift rows.
+    pub fn pf(&self) -> PfCorrelationConfig {
+        PfCorrelationConfig {
+            particles: self.particles,
+            spread: [self.spread; 2],
+            motion: ArpMotion::Drift {
+                b: [self.b; 2],
+                gain: self.gain,
+            },
+            sigma: self.sigma,
+            ..PfCorrelationConfig::default()
+        }
     }
 
     fn tracker(&self, v: Variant, run: usize) -> Result<Box<dyn Tracker>, ExperimentError> {
@@ -297,19 +244,19 @@ impl CorrelationConfig {
                     a: [1.0, 1.0],
                     b: [self.printed_b; 2],
                 },
-                ..self.pf
+                ..self.pf()
             }),
-            Variant::PfDrift => pf(self.pf),
+            Variant::PfDrift => pf(self.pf()),
             Variant::PfDriftCap => pf(PfCorrelationConfig {
                 mad_cap: Some(self.cap),
-                ..self.pf
+                ..self.pf()
             }),
             Variant::PfConstDrift => pf(PfCorrelationConfig {
                 motion: ArpMotion::ConstantDrift {
                     b: [self.const_b; 2],
                     margin: self.mad_margin,
                 },
-                ..self.pf
+                ..self.pf()
             }),
         }
     }
@@ -323,7 +270,7 @@ fn failed(what: &str, e: impl std::fmt::Display) -> ExperimentError {
 }
 
 /// One tracker's run on the single-car scene.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TrackRun {
     /// Window centre per frame (0-based); frame 0 is the initial box.
     pub centres: Vec<[f64; 2]>,
@@ -343,7 +290,7 @@ pub struct PhaseErrors {
 }
 
 /// Everything one run produced.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RunResult {
     /// Ground truth centres per frame.
     pub truth: Vec<[f64; 2]>,
@@ -396,7 +343,7 @@ impl RunResult {
 }
 
 /// The multi-target run (Table 3).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MultiResult {
     /// Per frame, per car (truth order): `[x, y, Lx, Ly]` of the track that
     /// follows it, `None` when no track does.
@@ -546,29 +493,36 @@ fn multi_run(c: &CorrelationConfig) -> Result<MultiResult, ExperimentError> {
 /// # Errors
 /// [`ExperimentError::Failed`] naming the tracker, run and frame.
 pub fn run(config: &CorrelationConfig) -> Result<CorrelationResult, ExperimentError> {
-    run_logged(config, None)
+    let done = crate::driver::run_all::<CorrelationExperiment>(config, None, false)?;
+    assemble(config, done)
 }
 
-/// [`run`], with each run's rows of `frames.csv` appended to `frames` the
-/// moment the run finishes (the caller finishes the file).
-fn run_logged(
+/// What one job gives: a run on the single-car scene, or the two-car run.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub enum Done {
+    /// Run `r` of the single-car scene (job `r`).
+    Run(RunResult),
+    /// The two-car run (the last job).
+    Multi(MultiResult),
+}
+
+/// The result from every job's, in job order.
+fn assemble(
     config: &CorrelationConfig,
-    frames: Option<&PartialCsv<FrameRow>>,
+    done: Vec<Done>,
 ) -> Result<CorrelationResult, ExperimentError> {
-    let runs = (0..config.runs)
-        .into_par_iter()
-        .map(|r| {
-            let done = one_run(config, r)?;
-            if let Some(log) = frames {
-                log.append(&frame_rows(r, &done))?;
-            }
-            Ok(done)
-        })
-        .collect::<Result<Vec<_>, ExperimentError>>()?;
+    let mut runs = Vec::new();
+    let mut multi = None;
+    for d in done {
+        match d {
+            Done::Run(r) => runs.push(r),
+            Done::Multi(m) => multi = Some(m),
+        }
+    }
     Ok(CorrelationResult {
         config: *config,
         runs,
-        multi: multi_run(config)?,
+        multi: multi.ok_or_else(|| failed("multi-target", "no two-car run"))?,
     })
 }
 
@@ -829,47 +783,54 @@ fn write_outputs(result: &CorrelationResult, dir: &Path) -> Result<(), Experimen
     Ok(())
 }
 
-/// The registry entry.
+/// The registry entry: job `r < runs` is run `r` of the single-car scene,
+/// job `runs` the two-car run.
 pub struct CorrelationExperiment;
 
-impl Experiment for CorrelationExperiment {
-    fn id(&self) -> &'static str {
-        "correlation"
+impl Paper for CorrelationExperiment {
+    type Config = CorrelationConfig;
+    type Done = Done;
+    type Row = FrameRow;
+    const ID: &'static str = ID;
+    const SOURCE: &'static str = "paper 004 Tables 1-3";
+    const SUMMARY: &'static str =
+        "MAD vs PF correlation tracker through an occlusion; Kalman multi-target";
+    const LOG: &'static str = "frames.csv";
+    const JOBS: &'static str = "correlation runs";
+
+    fn quick() -> CorrelationConfig {
+        CorrelationConfig::quick()
     }
-    fn source(&self) -> &'static str {
-        "paper 004 Tables 1-3"
+    fn full() -> CorrelationConfig {
+        CorrelationConfig::paper()
     }
-    fn summary(&self) -> &'static str {
-        "MAD vs PF correlation tracker through an occlusion; Kalman multi-target"
+    fn jobs(c: &CorrelationConfig) -> usize {
+        c.runs + 1
     }
-    fn run(&self, opts: &RunOptions) -> Result<Vec<Table>, ExperimentError> {
-        let mut config = match opts.mode {
-            Mode::Quick => CorrelationConfig::quick(),
-            Mode::Full => CorrelationConfig::paper(),
-        };
-        for (k, v) in &opts.set {
-            config.apply(k, v)?;
+    fn run_job(c: &CorrelationConfig, j: usize) -> Result<Done, ExperimentError> {
+        if j < c.runs {
+            one_run(c, j).map(Done::Run)
+        } else {
+            multi_run(c).map(Done::Multi)
         }
-        let dir = opts.output_dir(self.id())?;
-        // every frame of every run, written as each run finishes
-        let frames = PartialCsv::create(&dir.join("frames.csv"))?;
-        let result = run_logged(&config, Some(&frames))?;
-        let rows: Vec<FrameRow> = result
-            .runs
-            .iter()
-            .enumerate()
-            .flat_map(|(r, run)| frame_rows(r, run))
-            .collect();
-        frames.finish(&rows)?;
-        write_outputs(&result, &dir)?;
-        let mut tables = result.tables();
-        if let Some(first) = tables.first_mut() {
-            first.title = format!("{}\n  options: {}", first.title, config.describe());
+    }
+    fn rows(_: &CorrelationConfig, j: usize, done: &Done) -> Vec<FrameRow> {
+        match done {
+            Done::Run(r) => frame_rows(j, r),
+            Done::Multi(_) => Vec::new(),
         }
-        Ok(tables)
+    }
+    fn report(
+        config: &CorrelationConfig,
+        done: Vec<Done>,
+        dir: &Path,
+    ) -> Result<Vec<Table>, ExperimentError> {
+        let result = assemble(config, done)?;
+        write_outputs(&result, dir)?;
+        Ok(result.tables())
     }
 
-    fn golden(&self) -> Result<Option<String>, ExperimentError> {
+    fn golden() -> Result<Option<String>, ExperimentError> {
         let r = run(&CorrelationConfig::quick())?;
         let mut out = String::from("table,row,column,value\n");
         for s in r.summary() {
@@ -917,9 +878,9 @@ mod tests {
         c.apply("sigma", "2").unwrap();
         c.apply("b", "5").unwrap();
         c.apply("gain", "1").unwrap();
-        assert_eq!(c.pf.sigma, 2.0);
+        assert_eq!(c.sigma, 2.0);
         assert_eq!(
-            c.pf.motion,
+            c.pf().motion,
             ArpMotion::Drift {
                 b: [5.0, 5.0],
                 gain: 1.0
@@ -927,7 +888,7 @@ mod tests {
         );
         assert!(c.apply("gain", "2").is_err());
         assert_eq!(
-            c.pf.motion,
+            c.pf().motion,
             ArpMotion::Drift {
                 b: [5.0, 5.0],
                 gain: 1.0

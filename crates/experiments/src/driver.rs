@@ -213,15 +213,18 @@ pub fn run_jobs<P: Paper>(
     Ok(done)
 }
 
-/// Every job of `config`, in order (see [`run_jobs`]).
+/// Every job of `config`, in order (see [`run_jobs`]), after checking
+/// `config` against its declared domains.
 ///
 /// # Errors
-/// As [`run_jobs`].
+/// [`ExperimentError::BadOption`] for options outside their domains;
+/// those of [`run_jobs`].
 pub fn run_all<P: Paper>(
     config: &P::Config,
     log: Option<&Path>,
     progress: bool,
 ) -> Result<Vec<P::Done>, ExperimentError> {
+    config.validate().map_err(|e| bad_option(P::ID, e))?;
     let jobs: Vec<usize> = (0..P::jobs(config)).collect();
     run_jobs::<P>(config, &jobs, log, progress)
 }
