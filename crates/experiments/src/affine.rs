@@ -772,6 +772,7 @@ impl Paper for AffineExperiment {
     type Config = AffineConfig;
     type Done = Vec<TrackRun>;
     type Row = FrameRow;
+    type Shared = ();
     const ID: &'static str = ID;
     const SOURCE: &'static str = "paper 002 (RMS eq. 6, particles per frame)";
     const SUMMARY: &'static str = "HKPF, ISPF and self-tuning HKPF on synthetic affine sequences";
@@ -787,7 +788,10 @@ impl Paper for AffineExperiment {
     fn jobs(c: &AffineConfig) -> usize {
         Setting::ALL.len() * c.runs
     }
-    fn run_job(c: &AffineConfig, j: usize) -> Result<Vec<TrackRun>, ExperimentError> {
+    fn prepare(_: &AffineConfig, _: &[usize]) -> Result<(), ExperimentError> {
+        Ok(())
+    }
+    fn run_job(c: &AffineConfig, _: &(), j: usize) -> Result<Vec<TrackRun>, ExperimentError> {
         let (s, r) = job(c, j);
         run_job(c, s, r)
     }

@@ -38,13 +38,12 @@ use bayestrack_trackers::{
 };
 use rayon::prelude::*;
 
-use crate::experiment::{
-    Experiment, ExperimentError, MAX_FRAMES, MAX_RUNS, Mode, RunOptions, write_text,
-};
+use crate::driver::Paper;
+use crate::experiment::{ExperimentError, MAX_FRAMES, MAX_RUNS, write_text};
+use bayestrack_options::{Options, above, inside, options};
 use crate::scenes::{FrameTruth, Outline, SceneStream, WebcamScene};
 use bayestrack_otb::Table;
 use bayestrack_otb::plot::{Series, line_chart};
-use bayestrack_otb::write::PartialCsv;
 
 const ID: &str = "condensation";
 
@@ -53,7 +52,7 @@ const ID: &str = "condensation";
 pub const PARTICLES: [usize; 3] = [50, 100, 200];
 
 /// Which cues weight the particles (sec. 2.4).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum Cue {
     /// Interframe difference alone (eq. 7; eq. 9 with `lambda = 0`).
     Ifd,
@@ -93,7 +92,7 @@ impl Cue {
 }
 
 /// Point cloud or contour particles.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum Representation {
     /// Sec. 3.1: `[x, y, x_prev, y_prev]`, 30 px diffusion.
     Points,
@@ -115,7 +114,7 @@ impl Representation {
 }
 
 /// One cell of the tracking grid.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub struct GridKey {
     /// Point cloud or contour.
     pub representation: Representation,
@@ -175,48 +174,55 @@ pub const SIDE_TRACKERS: [GridKey; 3] = [
     },
 ];
 
-/// Every choice of the experiment.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct CondensationConfig {
-    /// Seeded runs of every job.
-    pub runs: usize,
-    /// Frames of the tracking scene (the default webcam scene).
-    pub frames: usize,
-    /// Scene seed of run 0.
-    pub scene_seed: u64,
-    /// A frame is lost when the centre error exceeds this fraction of the
-    /// smaller side of the object's box (1/2: the estimate is off the
-    /// object).
-    pub lost_fraction: f64,
-    /// Lock-on and identity radius (px): an estimate this close to an
-    /// object's centre is on it (20: half the face's width).
-    pub lock_distance: f64,
-    /// Consecutive frames on the newcomer that count as lock-on (3).
-    pub lock_frames: usize,
-    /// Frames of the entering scene after the entry (at frame 30) that are
-    /// tracked (45 quick, 90 = the whole scene full).
-    pub reinit_frames: usize,
-    /// After the crossing, frames whose true centres are more than this far
-    /// apart along x are scored (45 px: the objects no longer overlap).
-    pub separation: f64,
-    /// The c-AVQ constants of the re-initialisation runs.
-    pub avq: CAvqConfig,
+options! {
+    /// Every choice of the experiment, at paper scale by default (10 runs
+    /// of the whole 150-frame scene).
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub struct CondensationConfig {
+        /// Seeded runs of every job (10).
+        pub runs: usize = 10, in 1..=MAX_RUNS;
+        /// Frames of the tracking scene (the default webcam scene's 150).
+        pub frames: usize = 150, in 2..=MAX_FRAMES;
+        /// Scene seed of run 0.
+        pub scene_seed: u64 = 1;
+        /// A frame is lost when the centre error exceeds this fraction of
+        /// the smaller side of the object's box (1/2: the estimate is off
+        /// the object).
+        pub lost_fraction: f64 = 0.5, in above(0.0);
+        /// Lock-on and identity radius (px): an estimate this close to an
+        /// object's centre is on it (20: half the face's width).
+        pub lock_distance: f64 = 20.0, in above(0.0);
+        /// Consecutive frames on the newcomer that count as lock-on (3).
+        pub lock_frames: usize = 3, in 1..=MAX_FRAMES;
+        /// Frames of the entering scene after the entry (at frame 30) that
+        /// are tracked (45 quick, 90 = the whole scene full).
+        pub reinit_frames: usize = 90, in 1..=MAX_FRAMES;
+        /// After the crossing, frames whose true centres are more than this
+        /// far apart along x are scored (45 px: the objects no longer
+        /// overlap).
+        pub separation: f64 = 45.0, in above(0.0);
+        /// c-AVQ's IFD threshold of the re-initialisation runs (paper 003
+        /// sec. 4; the tracker's default, 0.05).
+        pub avq_threshold: f32 = 0.05, in above(0.0);
+        /// c-AVQ's trigger: the fraction of pixels over the threshold that
+        /// starts a re-initialisation (the tracker's default, 0.035).
+        pub avq_trigger: f64 = 0.035, in inside(0.0, 1.0);
+        /// Measure the trackers' wall-clock time (the fps column); `false`
+        /// records 0 s, so that two runs write byte-identical files.
+        pub timing: bool = true;
+    }
+    check check;
+}
+
+/// The cross-option rule: c-AVQ's constants must be ones it accepts.
+fn check(c: &CondensationConfig) -> Result<(), String> {
+    c.avq().validate().map_err(|e| e.to_string())
 }
 
 impl CondensationConfig {
     /// Paper scale: 10 runs of the whole 150-frame scene.
     pub fn paper() -> Self {
-        Self {
-            runs: 10,
-            frames: 150,
-            scene_seed: 1,
-            lost_fraction: 0.5,
-            lock_distance: 20.0,
-            lock_frames: 3,
-            reinit_frames: 90,
-            separation: 45.0,
-            avq: CAvqConfig::default(),
-        }
+        Self::default()
     }
 
     /// The CI scale: 2 runs of 60 frames, 45 frames after the entry.
@@ -229,75 +235,27 @@ impl CondensationConfig {
         }
     }
 
-    /// The keys [`CondensationConfig::apply`] accepts, with their domains
-    /// (listed by [`ExperimentError::BadOption`]).
-    pub const KEYS: &'static str = "runs (1..=100000), frames (2..=1000000), scene_seed (u64), \
-        lost_fraction (> 0), lock_distance (> 0), lock_frames (1..=1000000), \
-        reinit_frames (1..=1000000), separation (> 0), avq_threshold (> 0), \
-        avq_trigger (0 < v < 1)";
-
-    /// Applies `key=value` overrides (`runs`, `frames`, `scene_seed`,
-    /// `lost_fraction`, `lock_distance`, `lock_frames`, `reinit_frames`,
-    /// `separation`, `avq_threshold`, `avq_trigger`).
+    /// Applies a `key=value` override (see [`Options::set`]).
     ///
     /// # Errors
-    /// [`ExperimentError::BadOption`] for an unknown key or value.
+    /// [`ExperimentError::BadOption`] for an unknown key or value, listing
+    /// every key with its domain.
     pub fn apply(&mut self, key: &str, value: &str) -> Result<(), ExperimentError> {
-        let bad = || ExperimentError::bad_option(ID, Self::KEYS, key, value);
-        let num = || {
-            value
-                .parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite() && *v > 0.0)
-                .ok_or_else(bad)
-        };
-        let int = || value.parse::<usize>().map_err(|_| bad());
-        match key {
-            "runs" => self.runs = int()?,
-            "frames" => self.frames = int()?,
-            "scene_seed" => self.scene_seed = value.parse().map_err(|_| bad())?,
-            "lost_fraction" => self.lost_fraction = num()?,
-            "lock_distance" => self.lock_distance = num()?,
-            "lock_frames" => self.lock_frames = int()?,
-            "reinit_frames" => self.reinit_frames = int()?,
-            "separation" => self.separation = num()?,
-            "avq_threshold" => {
-                let v = num()? as f32;
-                if !v.is_finite() {
-                    return Err(bad());
-                }
-                self.avq.ifd_threshold = v;
-            }
-            "avq_trigger" => self.avq.trigger_fraction = num()?,
-            _ => return Err(bad()),
-        }
-        if !(1..=MAX_RUNS).contains(&self.runs)
-            || !(2..=MAX_FRAMES).contains(&self.frames)
-            || !(1..=MAX_FRAMES).contains(&self.lock_frames)
-            || !(1..=MAX_FRAMES).contains(&self.reinit_frames)
-        {
-            return Err(bad());
-        }
-        self.avq.validate().map_err(|_| bad())?;
-        Ok(())
+        crate::driver::apply(ID, self, key, value)
     }
 
-    /// One line with every option.
+    /// Every option as `key=value`, for the table footer.
     pub fn describe(&self) -> String {
-        format!(
-            "runs={} frames={} scene_seed={} lost_fraction={} lock_distance={} lock_frames={} \
-             reinit_frames={} separation={} avq_threshold={} avq_trigger={}",
-            self.runs,
-            self.frames,
-            self.scene_seed,
-            self.lost_fraction,
-            self.lock_distance,
-            self.lock_frames,
-            self.reinit_frames,
-            self.separation,
-            self.avq.ifd_threshold,
-            self.avq.trigger_fraction
-        )
+        Options::describe(self)
+    }
+
+    /// The c-AVQ constants of the re-initialisation runs.
+    pub fn avq(&self) -> CAvqConfig {
+        CAvqConfig {
+            ifd_threshold: self.avq_threshold,
+            trigger_fraction: self.avq_trigger,
+            ..CAvqConfig::default()
+        }
     }
 }
 
@@ -369,7 +327,7 @@ impl Single {
 }
 
 /// One tracker through one tracking scene.
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct TrackRun {
     /// Centre error per frame (px), frames 1..
     pub centre: Vec<f64>,
@@ -421,7 +379,9 @@ fn track(
             .tracker()
             .step(frame.view())
             .map_err(|e| failed(&what, format!("frame {k}: {e}")))?;
-        out.seconds += start.elapsed().as_secs_f64();
+        if config.timing {
+            out.seconds += start.elapsed().as_secs_f64();
+        }
         let o = target(k)?;
         let [x, y] = box_centre(&e.bbox);
         let [tx, ty] = o.center0();
@@ -481,7 +441,7 @@ fn entering_scene(config: &CondensationConfig) -> (WebcamScene, usize) {
 }
 
 /// One re-initialisation run.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ReinitRun {
     /// The tracker.
     pub key: GridKey,
@@ -514,7 +474,7 @@ fn reinit_run(
         key.representation,
         key.cue,
         key.particles,
-        avq.then_some(config.avq),
+        avq.then_some(config.avq()),
         run as u64,
     )?;
     let face = scene.truth[0]
@@ -559,7 +519,7 @@ fn reinit_run(
 }
 
 /// How the frames after a crossing were scored.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub struct CrossingCount {
     /// Each estimate on its own object.
     pub kept: usize,
@@ -579,7 +539,7 @@ impl CrossingCount {
 }
 
 /// One crossing run.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CrossingRun {
     /// The tracker of every object.
     pub key: GridKey,
@@ -666,11 +626,12 @@ fn crossing_run(
 }
 
 /// A snapshot of the contour particles for the figure.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct ParticleSnapshot {
     /// Frame index.
     pub frame: usize,
     /// The frame.
+    #[serde(with = "packed_image")]
     pub image: Image<u8>,
     /// Each particle's curve (0-based px) and its weight.
     pub curves: Vec<(Vec<[f64; 2]>, f64)>,
@@ -725,16 +686,181 @@ pub struct CondensationResult {
     pub snapshot: ParticleSnapshot,
 }
 
+/// What job `j` is: the grid runs key-major (`frames.csv`'s order), then
+/// per run the side trackers' re-initialisation and crossing runs, then the
+/// particle snapshot of run 0.
+#[derive(Debug, Clone, Copy)]
 enum Job {
     Grid(GridKey, usize),
     Reinit(GridKey, bool, usize),
     Crossing(GridKey, bool, usize),
+    Snapshot,
 }
 
-enum JobOut {
+/// Job `j` of `config`.
+fn job(config: &CondensationConfig, j: usize) -> Job {
+    let keys = GridKey::all();
+    let grid = keys.len() * config.runs;
+    if j < grid {
+        return Job::Grid(keys[j / config.runs], j % config.runs);
+    }
+    let side = j - grid;
+    let per_run = SIDE_TRACKERS.len() * 4;
+    if side >= per_run * config.runs {
+        return Job::Snapshot;
+    }
+    let (r, i) = (side / per_run, side % per_run);
+    let key = SIDE_TRACKERS[i / 4];
+    let flag = (i % 4) / 2 == 0;
+    if i % 2 == 0 {
+        Job::Reinit(key, flag, r)
+    } else {
+        Job::Crossing(key, flag, r)
+    }
+}
+
+/// What one job gives.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub enum Done {
+    /// A grid run.
     Grid(TrackRun),
+    /// A re-initialisation run.
     Reinit(ReinitRun),
+    /// A crossing run.
     Crossing(CrossingRun),
+    /// The particle snapshot.
+    Snapshot(Box<ParticleSnapshot>),
+}
+
+/// An [`Image`] as `(width, height, channels, packed samples)`.
+mod packed_image {
+    use bayestrack_image::Image;
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    pub fn serialize<S: Serializer>(img: &Image<u8>, s: S) -> Result<S::Ok, S::Error> {
+        let packed = img.view().to_image();
+        (
+            packed.width(),
+            packed.height(),
+            packed.channels(),
+            packed.as_slice(),
+        )
+            .serialize(s)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Image<u8>, D::Error> {
+        let (w, h, c, data) = <(usize, usize, usize, Vec<u8>)>::deserialize(d)?;
+        Image::from_vec(w, h, c, data).map_err(serde::de::Error::custom)
+    }
+}
+
+/// The scenes a run's jobs track: the tracking, entering and crossing
+/// scenes.
+type Scenes = [Rendered; 3];
+
+/// The scenes of the runs one process's jobs track, rendered once.
+pub struct RenderedRuns(Vec<Option<Scenes>>);
+
+/// Renders the scenes of the runs `jobs` need (in parallel).
+fn prepare(
+    config: &CondensationConfig,
+    jobs: &[usize],
+) -> Result<RenderedRuns, ExperimentError> {
+    let mut needed = vec![false; config.runs];
+    for &j in jobs {
+        match job(config, j) {
+            Job::Grid(_, r) | Job::Reinit(_, _, r) | Job::Crossing(_, _, r) => needed[r] = true,
+            Job::Snapshot => needed[0] = true,
+        }
+    }
+    let (enter, _) = entering_scene(config);
+    let cross = WebcamScene::crossing();
+    needed
+        .par_iter()
+        .enumerate()
+        .map(|(r, &need)| {
+            if !need {
+                return Ok(None);
+            }
+            let s = config.scene_seed + r as u64;
+            Ok(Some([
+                render(&tracking_scene(config), s)?,
+                render(&enter, s)?,
+                render(&cross, s)?,
+            ]))
+        })
+        .collect::<Result<_, _>>()
+        .map(RenderedRuns)
+}
+
+/// Runs job `j` on the rendered scenes.
+fn run_job(
+    config: &CondensationConfig,
+    scenes: &RenderedRuns,
+    j: usize,
+) -> Result<Done, ExperimentError> {
+    let job = job(config, j);
+    let r = match job {
+        Job::Grid(_, r) | Job::Reinit(_, _, r) | Job::Crossing(_, _, r) => r,
+        Job::Snapshot => 0,
+    };
+    let scenes = scenes
+        .0
+        .get(r)
+        .and_then(Option::as_ref)
+        .ok_or_else(|| failed("scene", format!("run {r} not rendered")))?;
+    let (_, entry) = entering_scene(config);
+    let aligned = match WebcamScene::crossing().second {
+        crate::scenes::SecondObject::Crossing { frame } => frame,
+        _ => 0,
+    };
+    Ok(match job {
+        Job::Grid(key, r) => {
+            let s = &scenes[0];
+            Done::Grid(track(key, config, r, &s.frames, &s.truth, &s.outlines)?)
+        }
+        Job::Reinit(key, avq, r) => {
+            Done::Reinit(reinit_run(key, avq, config, r, &scenes[1], entry)?)
+        }
+        Job::Crossing(key, pr, r) => {
+            Done::Crossing(crossing_run(key, pr, config, r, &scenes[2], aligned)?)
+        }
+        Job::Snapshot => Done::Snapshot(Box::new(snapshot(&scenes[0], config.frames / 2)?)),
+    })
+}
+
+/// The result from every job's, in job order.
+fn assemble(
+    config: &CondensationConfig,
+    done: Vec<Done>,
+) -> Result<CondensationResult, ExperimentError> {
+    let mut grid: Vec<(GridKey, Vec<TrackRun>)> = GridKey::all()
+        .into_iter()
+        .map(|k| (k, Vec::new()))
+        .collect();
+    let mut reinit = Vec::new();
+    let mut crossing = Vec::new();
+    let mut snapshot = None;
+    for (j, d) in done.into_iter().enumerate() {
+        match (job(config, j), d) {
+            (Job::Grid(key, _), Done::Grid(t)) => {
+                if let Some(cell) = grid.iter_mut().find(|(k, _)| *k == key) {
+                    cell.1.push(t);
+                }
+            }
+            (_, Done::Reinit(r)) => reinit.push(r),
+            (_, Done::Crossing(c)) => crossing.push(c),
+            (_, Done::Snapshot(s)) => snapshot = Some(*s),
+            _ => return Err(failed("jobs", format!("job {j} out of place"))),
+        }
+    }
+    Ok(CondensationResult {
+        config: *config,
+        grid,
+        reinit,
+        crossing,
+        snapshot: snapshot.ok_or_else(|| failed("particle figure", "no snapshot"))?,
+    })
 }
 
 /// Runs the experiment (jobs in parallel; each has its own seeds, so the
@@ -742,12 +868,13 @@ enum JobOut {
 ///
 /// # Errors
 /// [`ExperimentError::Failed`] naming the tracker, run and frame;
-/// [`ExperimentError::BadOption`] for zero runs or fewer than 2 frames.
+/// [`ExperimentError::BadOption`] for options outside their domains.
 pub fn run(
     config: &CondensationConfig,
     progress: bool,
 ) -> Result<CondensationResult, ExperimentError> {
-    run_logged(config, progress, None)
+    let done = crate::driver::run_all::<CondensationExperiment>(config, None, progress)?;
+    assemble(config, done)
 }
 
 /// One row of `frames.csv`: one frame of one grid run.
@@ -785,110 +912,6 @@ fn frame_rows(key: GridKey, run: usize, tr: &TrackRun) -> Vec<FrameRow> {
             lost: tr.lost[k],
         })
         .collect()
-}
-
-/// [`run`], appending each finished grid run's frames to `log` as it
-/// finishes (in completion order), so that a run killed part-way keeps
-/// them.
-///
-/// # Errors
-/// Those of [`run`], and [`ExperimentError::Io`] when `log` cannot be
-/// written.
-pub fn run_logged(
-    config: &CondensationConfig,
-    progress: bool,
-    log: Option<&PartialCsv<FrameRow>>,
-) -> Result<CondensationResult, ExperimentError> {
-    if config.runs == 0 || config.frames < 2 {
-        return Err(ExperimentError::bad_option(
-            ID,
-            CondensationConfig::KEYS,
-            "runs/frames",
-            &format!("{}/{}", config.runs, config.frames),
-        ));
-    }
-    let (enter, entry) = entering_scene(config);
-    let cross = WebcamScene::crossing();
-    let aligned = match cross.second {
-        crate::scenes::SecondObject::Crossing { frame } => frame,
-        _ => 0,
-    };
-    let seeds: Vec<u64> = (0..config.runs)
-        .map(|r| config.scene_seed + r as u64)
-        .collect();
-    let scenes = seeds
-        .par_iter()
-        .map(|&s| {
-            Ok([
-                render(&tracking_scene(config), s)?,
-                render(&enter, s)?,
-                render(&cross, s)?,
-            ])
-        })
-        .collect::<Result<Vec<_>, ExperimentError>>()?;
-    let mut jobs = Vec::new();
-    for r in 0..config.runs {
-        for key in GridKey::all() {
-            jobs.push(Job::Grid(key, r));
-        }
-        for key in SIDE_TRACKERS {
-            for flag in [true, false] {
-                jobs.push(Job::Reinit(key, flag, r));
-                jobs.push(Job::Crossing(key, flag, r));
-            }
-        }
-    }
-    let bar = crate::experiment::progress_bar(jobs.len(), progress, "condensation jobs");
-    let done = jobs
-        .par_iter()
-        .map(|job| {
-            let out = match *job {
-                Job::Grid(key, r) => {
-                    let s = &scenes[r][0];
-                    let tr = track(key, config, r, &s.frames, &s.truth, &s.outlines)?;
-                    if let Some(log) = log {
-                        log.append(&frame_rows(key, r, &tr))?;
-                    }
-                    JobOut::Grid(tr)
-                }
-                Job::Reinit(key, avq, r) => {
-                    JobOut::Reinit(reinit_run(key, avq, config, r, &scenes[r][1], entry)?)
-                }
-                Job::Crossing(rep, pr, r) => {
-                    JobOut::Crossing(crossing_run(rep, pr, config, r, &scenes[r][2], aligned)?)
-                }
-            };
-            bar.inc(1);
-            Ok(out)
-        })
-        .collect::<Result<Vec<_>, ExperimentError>>()?;
-    bar.finish_and_clear();
-    let mut grid: Vec<(GridKey, Vec<TrackRun>)> = GridKey::all()
-        .into_iter()
-        .map(|k| (k, Vec::new()))
-        .collect();
-    let mut reinit = Vec::new();
-    let mut crossing = Vec::new();
-    for (job, out) in jobs.iter().zip(done) {
-        match (job, out) {
-            (Job::Grid(key, _), JobOut::Grid(t)) => {
-                if let Some(cell) = grid.iter_mut().find(|(k, _)| k == key) {
-                    cell.1.push(t);
-                }
-            }
-            (_, JobOut::Reinit(r)) => reinit.push(r),
-            (_, JobOut::Crossing(c)) => crossing.push(c),
-            _ => {}
-        }
-    }
-    let snapshot = snapshot(&scenes[0][0], config.frames / 2)?;
-    Ok(CondensationResult {
-        config: *config,
-        grid,
-        reinit,
-        crossing,
-        snapshot,
-    })
 }
 
 /// One grid cell over runs.
@@ -1363,51 +1386,57 @@ fn write_outputs(result: &CondensationResult, dir: &Path) -> Result<(), Experime
     Ok(())
 }
 
-/// The registry entry.
+/// The registry entry (jobs: see [`Done`]).
 pub struct CondensationExperiment;
 
-impl Experiment for CondensationExperiment {
-    fn id(&self) -> &'static str {
-        ID
+impl Paper for CondensationExperiment {
+    type Config = CondensationConfig;
+    type Done = Done;
+    type Row = FrameRow;
+    type Shared = RenderedRuns;
+    const ID: &'static str = ID;
+    const SOURCE: &'static str = "paper 003 (sec. 3-5)";
+    const SUMMARY: &'static str =
+        "CONDENSATION with IFD, skin, OR and AND cues; c-AVQ; priority IFD";
+    const LOG: &'static str = "frames.csv";
+    const JOBS: &'static str = "condensation jobs";
+
+    fn quick() -> CondensationConfig {
+        CondensationConfig::quick()
     }
-    fn source(&self) -> &'static str {
-        "paper 003 (sec. 3-5)"
+    fn full() -> CondensationConfig {
+        CondensationConfig::paper()
     }
-    fn summary(&self) -> &'static str {
-        "CONDENSATION with IFD, skin, OR and AND cues; c-AVQ; priority IFD"
+    fn jobs(c: &CondensationConfig) -> usize {
+        GridKey::all().len() * c.runs + SIDE_TRACKERS.len() * 4 * c.runs + 1
     }
-    fn run(&self, opts: &RunOptions) -> Result<Vec<Table>, ExperimentError> {
-        let mut config = match opts.mode {
-            Mode::Quick => CondensationConfig::quick(),
-            Mode::Full => CondensationConfig::paper(),
-        };
-        for (k, v) in &opts.set {
-            config.apply(k, v)?;
+    fn prepare(c: &CondensationConfig, jobs: &[usize]) -> Result<Self::Shared, ExperimentError> {
+        prepare(c, jobs)
+    }
+    fn run_job(
+        c: &CondensationConfig,
+        scenes: &Self::Shared,
+        j: usize,
+    ) -> Result<Done, ExperimentError> {
+        run_job(c, scenes, j)
+    }
+    fn rows(c: &CondensationConfig, j: usize, done: &Done) -> Vec<FrameRow> {
+        match (job(c, j), done) {
+            (Job::Grid(key, r), Done::Grid(tr)) => frame_rows(key, r, tr),
+            _ => Vec::new(),
         }
-        let dir = opts.output_dir(self.id())?;
-        // every frame of every grid run, appended as each run finishes
-        let frames = PartialCsv::create(&dir.join("frames.csv"))?;
-        let result = run_logged(
-            &config,
-            opts.progress && opts.mode == Mode::Full,
-            Some(&frames),
-        )?;
-        let mut rows = Vec::new();
-        for (key, runs) in &result.grid {
-            for (r, tr) in runs.iter().enumerate() {
-                rows.extend(frame_rows(*key, r, tr));
-            }
-        }
-        frames.finish(&rows)?;
-        write_outputs(&result, &dir)?;
-        let mut tables = result.tables();
-        if let Some(first) = tables.first_mut() {
-            first.title = format!("{}\n  options: {}", first.title, config.describe());
-        }
-        Ok(tables)
+    }
+    fn report(
+        config: &CondensationConfig,
+        done: Vec<Done>,
+        dir: &Path,
+    ) -> Result<Vec<Table>, ExperimentError> {
+        let result = assemble(config, done)?;
+        write_outputs(&result, dir)?;
+        Ok(result.tables())
     }
 
-    fn golden(&self) -> Result<Option<String>, ExperimentError> {
+    fn golden() -> Result<Option<String>, ExperimentError> {
         let r = run(&CondensationConfig::quick(), false)?;
         let mut out = String::from("table,row,column,value\n");
         for s in r.grid_summary() {

@@ -791,6 +791,7 @@ impl Paper for CorrelationExperiment {
     type Config = CorrelationConfig;
     type Done = Done;
     type Row = FrameRow;
+    type Shared = ();
     const ID: &'static str = ID;
     const SOURCE: &'static str = "paper 004 Tables 1-3";
     const SUMMARY: &'static str =
@@ -807,7 +808,10 @@ impl Paper for CorrelationExperiment {
     fn jobs(c: &CorrelationConfig) -> usize {
         c.runs + 1
     }
-    fn run_job(c: &CorrelationConfig, j: usize) -> Result<Done, ExperimentError> {
+    fn prepare(_: &CorrelationConfig, _: &[usize]) -> Result<(), ExperimentError> {
+        Ok(())
+    }
+    fn run_job(c: &CorrelationConfig, _: &(), j: usize) -> Result<Done, ExperimentError> {
         if j < c.runs {
             one_run(c, j).map(Done::Run)
         } else {

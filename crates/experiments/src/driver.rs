@@ -77,6 +77,9 @@ pub trait Paper: Sync + Send + 'static {
     type Done: Serialize + DeserializeOwned + Send + Sync;
     /// One row of its per-job log ([`Paper::LOG`]).
     type Row: Serialize + Send + Sync;
+    /// What the jobs of one process share, built once before them by
+    /// [`Paper::prepare`] (rendered scenes; `()` for most).
+    type Shared: Sync;
     /// Stable id (`hikpf`, `ball`, ...).
     const ID: &'static str;
     /// Which paper and table it reproduces.
@@ -93,11 +96,20 @@ pub trait Paper: Sync + Send + 'static {
     fn full() -> Self::Config;
     /// Jobs in all, in output order.
     fn jobs(config: &Self::Config) -> usize;
+    /// Builds what the jobs `jobs` share (deterministic, from `config`).
+    ///
+    /// # Errors
+    /// [`ExperimentError::Failed`] naming what failed.
+    fn prepare(config: &Self::Config, jobs: &[usize]) -> Result<Self::Shared, ExperimentError>;
     /// Runs job `job` (keyed by its index alone).
     ///
     /// # Errors
     /// [`ExperimentError::Failed`] naming what failed.
-    fn run_job(config: &Self::Config, job: usize) -> Result<Self::Done, ExperimentError>;
+    fn run_job(
+        config: &Self::Config,
+        shared: &Self::Shared,
+        job: usize,
+    ) -> Result<Self::Done, ExperimentError>;
     /// Job `job`'s rows of [`Paper::LOG`].
     fn rows(config: &Self::Config, job: usize, done: &Self::Done) -> Vec<Self::Row>;
     /// Writes the tables' CSVs and figures under `dir` from every job's
@@ -188,12 +200,13 @@ pub fn run_jobs<P: Paper>(
     log: Option<&Path>,
     progress: bool,
 ) -> Result<Vec<P::Done>, ExperimentError> {
+    let shared = P::prepare(config, jobs)?;
     let partial = log.map(PartialCsv::<P::Row>::create).transpose()?;
     let bar = progress_bar(jobs.len(), progress, P::JOBS);
     let done: Vec<P::Done> = jobs
         .par_iter()
         .map(|&j| {
-            let done = P::run_job(config, j)?;
+            let done = P::run_job(config, &shared, j)?;
             if let Some(partial) = &partial {
                 partial.append(&P::rows(config, j, &done))?;
             }

@@ -1011,6 +1011,7 @@ impl Paper for HikpfExperiment {
     type Config = HikpfConfig;
     type Done = Vec<RunOutcome>;
     type Row = RunRow;
+    type Shared = ();
     const ID: &'static str = ID;
     const SOURCE: &'static str = "paper 000 Table 1; van der Merwe et al. 2000 Table 1";
     const SUMMARY: &'static str =
@@ -1027,7 +1028,10 @@ impl Paper for HikpfExperiment {
     fn jobs(c: &HikpfConfig) -> usize {
         c.runs * if c.sweep { 1 + SWEEP_CELLS } else { 1 }
     }
-    fn run_job(c: &HikpfConfig, j: usize) -> Result<Vec<RunOutcome>, ExperimentError> {
+    fn prepare(_: &HikpfConfig, _: &[usize]) -> Result<(), ExperimentError> {
+        Ok(())
+    }
+    fn run_job(c: &HikpfConfig, _: &(), j: usize) -> Result<Vec<RunOutcome>, ExperimentError> {
         let (cell, r) = (j / c.runs, j % c.runs);
         if cell == 0 {
             one_run(c, r)
