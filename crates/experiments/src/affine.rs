@@ -628,7 +628,9 @@ impl AffineResult {
             format!(
                 "affine (paper 002 Fig. 7-8): {} frames x {} run(s) per setting; RMS of eq. 6 in px; \
                  lost = RMS > {} x target side",
-                self.config.frames(), self.config.runs, self.config.lost_fraction
+                self.config.frames(),
+                self.config.runs,
+                self.config.lost_fraction
             ),
             &[
                 "setting",

@@ -71,14 +71,17 @@ use std::time::Instant;
 use bayestrack_image::Image;
 use bayestrack_particle::stream_seed;
 use bayestrack_trackers::{BallConfig, BallFilter, BallTracker, MotionModel, Tracker};
-use rayon::prelude::*;
 
-use crate::experiment::{Experiment, ExperimentError, MAX_RUNS, Mode, RunOptions, write_text};
+use crate::driver::Paper;
+use crate::experiment::{ExperimentError, MAX_RUNS, write_text};
 use crate::scenes::{BallMotion, BallScene, SceneStream};
+use bayestrack_options::{Each, OptionValue, Options, above, above_to, choice, options};
 use bayestrack_otb::Table;
 use bayestrack_otb::metrics::center_error;
 use bayestrack_otb::plot::{Series, line_chart};
-use bayestrack_otb::write::PartialCsv;
+
+/// The experiment's id.
+const ID: &str = "ball";
 
 /// Key of this experiment's random streams ("ball" in ASCII).
 const KEY: u64 = 0x6261_6c6c;
@@ -125,7 +128,7 @@ pub fn paper_row(filter: BallFilter) -> Option<PaperRow> {
 }
 
 /// Offline (every frame) or real time (frames dropped while computing).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum FrameMode {
     /// Every frame is processed.
     Offline,
@@ -147,7 +150,7 @@ impl FrameMode {
 }
 
 /// One of the four scene conditions.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Condition {
     /// Linear or bouncing motion.
     pub motion: BallMotion,
@@ -197,67 +200,142 @@ pub enum ModelChoice {
     Linear,
 }
 
-/// Every choice of the experiment.
-#[derive(Debug, Clone, PartialEq)]
-pub struct BallOptions {
-    /// Runs per condition (four conditions).
-    pub runs: usize,
-    /// Length of a run in seconds of video.
-    pub seconds: f64,
-    /// Motion noise of the noisy linear condition, px/frame per axis (1):
-    /// the scene restores the speed after each kick, so only the heading
-    /// wanders.
-    pub motion_noise: f64,
-    /// Motion noise of the noisy bouncing condition, px/frame per axis
-    /// (0.05): the scene keeps the kicks, so the velocity random-walks
-    /// (std `0.05 sqrt(n)` px/frame after `n` frames, 5.7 after 10 minutes).
-    pub bounce_noise: f64,
-    /// The trackers' parameters (their motion model is set per condition).
-    pub tracker: BallConfig,
-    /// Which motion model the trackers get.
-    pub model: ModelChoice,
-    /// Whether a real-time tracker is told how many camera frames passed
-    /// since the frame it saw last (else it assumes one).
-    pub rt_elapsed: bool,
-    /// Centre error (px) beyond which the ball counts as lost (20).
-    pub lost_radius: f64,
-    /// Centre error (px) at or below which a lost ball counts as found (10).
-    pub found_radius: f64,
-    /// The evaluation budget of the KF and UKF run beside the exhaustive
-    /// ones (see [`Budget`]; default [`Budget::Paper`]).
-    pub budget: Budget,
-    /// Ball speed, px/frame (3: the scene's default).
-    pub speed: f64,
-    /// Webcam motion blur: shutter open for this fraction of the frame
-    /// interval (0.5: an indoor webcam at 22 fps exposes 1/50 to 1/30 s of
-    /// its 1/22 s frame, 0.44 to 0.73).
-    pub exposure: f64,
-    /// Webcam flicker: relative std of the per-frame light (0.02: the
-    /// screen's refresh and the room's mains light beating against the
-    /// camera's 22 fps, a few percent).
-    pub flicker: f64,
-    /// Webcam auto-exposure time constant, s (0.5: consumer webcams settle
-    /// in about a second; 0 turns it off).
-    pub auto_exposure: f64,
-    /// Webcam frame-time jitter, std in ms (3: USB webcam frame timestamps
-    /// scatter by a few ms, 7% of the 45 ms interval).
-    pub frame_jitter: f64,
-    /// Webcam JPEG quality, 0 for none (75: the IJG/libjpeg default, and a
-    /// webcam streaming MJPEG at 200x160 compresses its frames).
-    pub jpeg_quality: u8,
-    /// Whether to run the speed x motion-noise sweep ([`BallOptions::sweep_speeds`]
-    /// x [`BallOptions::sweep_noises`], linear motion; default: in `--full` only).
-    pub sweep: bool,
-    /// Ball speeds of the sweep, px/frame (2, 3, 5, 8).
-    pub sweep_speeds: Vec<f64>,
-    /// Motion-noise levels of the sweep, px/frame per axis (0, 0.5, 1, 2).
-    pub sweep_noises: Vec<f64>,
-    /// Runs per sweep cell (2), each [`BallOptions::sweep_seconds`] long.
-    pub sweep_runs: usize,
-    /// Length of a sweep run, s (60).
-    pub sweep_seconds: f64,
-    /// Seed of the whole experiment.
-    pub seed: u64,
+/// Whether the scene adds the webcam's effects.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Webcam {
+    /// Motion blur, flicker, auto-exposure, jitter and JPEG as their
+    /// options say.
+    On,
+    /// Every webcam effect off: the clean scene.
+    Off,
+}
+choice! { Webcam { On = "on", Off = "off" } }
+
+choice! { ModelChoice { Matched = "matched", Linear = "linear" } }
+
+/// Longest run an option may ask for, seconds of video (a day).
+pub const MAX_SECONDS: f64 = 86_400.0;
+
+/// Widest search margin an option may ask for, px (wider than any frame).
+pub const MAX_SEARCH_MARGIN: usize = 4096;
+
+/// The cross-option rules: a ball is found only inside the radius where it
+/// is lost, and the trackers' settings must be ones they accept.
+fn check(o: &BallOptions) -> Result<(), String> {
+    if o.found_radius > o.lost_radius {
+        return Err("found_radius must be at most lost_radius".into());
+    }
+    if o.sweep_speeds.len() > 64 || o.sweep_noises.len() > 64 {
+        return Err("a sweep list has at most 64 values".into());
+    }
+    o.tracker_config(Condition::ALL[0])
+        .validate()
+        .map_err(|e| e.to_string())
+}
+
+options! {
+    /// Every choice of the experiment, at paper scale by default (40
+    /// experiments of 10 minutes: 10 runs per condition).
+    #[derive(Debug, Clone, PartialEq)]
+    pub struct BallOptions {
+        /// Runs per condition (four conditions; 10: paper 001's 40
+        /// experiments).
+        pub runs: usize = 10, in 1..=MAX_RUNS;
+        /// Length of a run in seconds of video (600: the paper's 10
+        /// minutes).
+        pub seconds: f64 = 600.0, in above_to(0.0, MAX_SECONDS);
+        /// Seed of the whole experiment.
+        pub seed: u64 = 1;
+        /// Motion noise of the noisy linear condition, px/frame per axis
+        /// (1): the scene restores the speed after each kick, so only the
+        /// heading wanders.
+        pub motion_noise: f64 = 1.0, in 0.0..=10.0;
+        /// Motion noise of the noisy bouncing condition, px/frame per axis
+        /// (0.05): the scene keeps the kicks, so the velocity random-walks
+        /// (std `0.05 sqrt(n)` px/frame after `n` frames, 5.7 after 10
+        /// minutes).
+        pub bounce_noise: f64 = 0.05, in 0.0..=10.0;
+        /// Centre error (px) beyond which the ball counts as lost (20: the
+        /// ball's diameter).
+        pub lost_radius: f64 = 20.0, in above(0.0);
+        /// Centre error (px) at or below which a lost ball counts as found
+        /// (10: the estimated centre lies on the ball; at most
+        /// `lost_radius`).
+        pub found_radius: f64 = 10.0, in above(0.0);
+        /// Whether a real-time tracker is told how many camera frames
+        /// passed since the frame it saw last (else it assumes one).
+        pub rt_elapsed: bool = true;
+        /// Which motion model the trackers get (`matched`: the scene's).
+        pub model: ModelChoice = ModelChoice::Matched;
+        /// The trackers' acceleration noise (the ball tracker's default).
+        pub acceleration_noise: f64 = BallConfig::default().acceleration_noise;
+        /// The trackers' initial speed, px/frame (the ball tracker's
+        /// default).
+        pub initial_speed: f64 = BallConfig::default().initial_speed;
+        /// The Kalman trackers' measurement noise (the ball tracker's
+        /// default).
+        pub measurement_noise: f64 = BallConfig::default().measurement_noise;
+        /// Search margin around the prediction, px (the ball tracker's
+        /// default).
+        pub search_margin: usize = BallConfig::default().search_margin, in 0..=MAX_SEARCH_MARGIN;
+        /// Width of the PFs' histogram likelihood (the ball tracker's
+        /// default).
+        pub likelihood_sigma: f64 = BallConfig::default().likelihood_sigma;
+        /// Histogram distance beyond which a tracker reports itself lost
+        /// (the ball tracker's default).
+        pub lost_distance: f64 = BallConfig::default().lost_distance;
+        /// Histogram bins per channel (the ball tracker's default).
+        pub bins: usize = BallConfig::default().bins, in 1..=256;
+        /// The UKF's `alpha` (the ball tracker's default).
+        pub ukf_alpha: f64 = BallConfig::default().ukf_alpha;
+        /// The UKF's `beta` (the ball tracker's default).
+        pub ukf_beta: f64 = BallConfig::default().ukf_beta;
+        /// The UKF's `kappa` (the ball tracker's default).
+        pub ukf_kappa: f64 = BallConfig::default().ukf_kappa;
+        /// The evaluation budget of the KF and UKF run beside the
+        /// exhaustive ones (see [`Budget`]; `paper`, `off` or a count).
+        pub budget: Budget = Budget::Paper;
+        /// Ball speed, px/frame (3: the scene's default).
+        pub speed: f64 = 3.0, in 0.0..=40.0;
+        /// Webcam motion blur: shutter open for this fraction of the frame
+        /// interval (0.5: an indoor webcam at 22 fps exposes 1/50 to 1/30 s
+        /// of its 1/22 s frame, 0.44 to 0.73).
+        pub exposure: f64 = 0.5, in 0.0..=1.0;
+        /// Webcam flicker: relative std of the per-frame light (0.02: the
+        /// screen's refresh and the room's mains light beating against the
+        /// camera's 22 fps, a few percent).
+        pub flicker: f64 = 0.02, in 0.0..=0.5;
+        /// Webcam auto-exposure time constant, s (0.5: consumer webcams
+        /// settle in about a second; 0 turns it off).
+        pub auto_exposure: f64 = 0.5, in 0.0..=1e6;
+        /// Webcam frame-time jitter, std in ms (3: USB webcam frame
+        /// timestamps scatter by a few ms, 7% of the 45 ms interval).
+        pub frame_jitter: f64 = 3.0, in 0.0..=1000.0;
+        /// Webcam JPEG quality, 0 for none (75: the IJG/libjpeg default, and
+        /// a webcam streaming MJPEG at 200x160 compresses its frames).
+        pub jpeg_quality: u8 = 75, in 0..=100;
+        /// `off` turns every webcam effect off (the five above read as 0).
+        pub webcam: Webcam = Webcam::On;
+        /// Whether to run the speed x motion-noise sweep
+        /// ([`BallOptions::sweep_speeds`] x [`BallOptions::sweep_noises`],
+        /// linear motion; default: in `--full` only).
+        pub sweep: bool = true;
+        /// Ball speeds of the sweep, px/frame (2, 3, 5, 8; paper 001 ran its
+        /// ball "with different speeds").
+        pub sweep_speeds: Vec<f64> = vec![2.0, 3.0, 5.0, 8.0], in Each(0.0..=40.0);
+        /// Motion-noise levels of the sweep, px/frame per axis (0, 0.5, 1,
+        /// 2; "different levels of additive noises").
+        pub sweep_noises: Vec<f64> = vec![0.0, 0.5, 1.0, 2.0], in Each(0.0..=10.0);
+        /// Runs per sweep cell (2), each [`BallOptions::sweep_seconds`] long.
+        pub sweep_runs: usize = 2, in 1..=MAX_RUNS;
+        /// Length of a sweep run, s (60).
+        pub sweep_seconds: f64 = 60.0, in above_to(0.0, MAX_SECONDS);
+        /// Measure the trackers' wall-clock time (the `ours wall fps`
+        /// column); `false` records 0 s, so that two runs write
+        /// byte-identical files.
+        pub timing: bool = true;
+    }
+    check check;
 }
 
 /// The evaluation budget of the KF and UKF: how many histogram windows they
@@ -299,6 +377,31 @@ pub fn paper_budget(filter: BallFilter) -> Option<usize> {
     }
 }
 
+impl OptionValue for Budget {
+    const TYPE: &'static str = "Budget";
+    fn parse_option(s: &str) -> Option<Self> {
+        match s.trim() {
+            "paper" => Some(Budget::Paper),
+            "off" => Some(Budget::Off),
+            n => n
+                .parse()
+                .ok()
+                .filter(|n| (1..=MAX_RUNS).contains(n))
+                .map(Budget::Fixed),
+        }
+    }
+    fn format_option(&self) -> String {
+        match self {
+            Budget::Paper => "paper".into(),
+            Budget::Off => "off".into(),
+            Budget::Fixed(n) => n.to_string(),
+        }
+    }
+    fn domain() -> String {
+        format!("paper|off|1..={MAX_RUNS} windows")
+    }
+}
+
 impl Budget {
     /// The cap of a KF or UKF, `None` for the PFs and when off.
     pub fn cap(self, filter: BallFilter) -> Option<usize> {
@@ -313,30 +416,7 @@ impl Budget {
 impl BallOptions {
     /// Paper scale: 40 experiments of 10 minutes (10 runs per condition).
     pub fn paper() -> Self {
-        Self {
-            runs: 10,
-            seconds: 600.0,
-            motion_noise: 1.0,
-            bounce_noise: 0.05,
-            tracker: BallConfig::default(),
-            model: ModelChoice::Matched,
-            rt_elapsed: true,
-            lost_radius: 20.0,
-            found_radius: 10.0,
-            budget: Budget::Paper,
-            speed: 3.0,
-            exposure: 0.5,
-            flicker: 0.02,
-            auto_exposure: 0.5,
-            frame_jitter: 3.0,
-            jpeg_quality: 75,
-            sweep: true,
-            sweep_speeds: vec![2.0, 3.0, 5.0, 8.0],
-            sweep_noises: vec![0.0, 0.5, 1.0, 2.0],
-            sweep_runs: 2,
-            sweep_seconds: 60.0,
-            seed: 1,
-        }
+        Self::default()
     }
 
     /// The CI scale: one run of 20 s per condition, no sweep.
@@ -351,11 +431,7 @@ impl BallOptions {
 
     /// Turns every webcam effect off: the clean scene (`webcam=off`).
     pub fn clean_camera(&mut self) {
-        self.exposure = 0.0;
-        self.flicker = 0.0;
-        self.auto_exposure = 0.0;
-        self.frame_jitter = 0.0;
-        self.jpeg_quality = 0;
+        self.webcam = Webcam::Off;
     }
 
     /// Frames per run.
@@ -363,201 +439,24 @@ impl BallOptions {
         ((self.seconds * CAMERA_FPS).round() as usize).max(2)
     }
 
-    /// The keys [`BallOptions::apply`] accepts, with their domains (listed
-    /// by [`ExperimentError::BadOption`]).
-    pub const KEYS: &'static str = "runs (1..=100000), seconds (> 0, at most 86400: a day), \
-        seed (u64), motion_noise (>= 0), bounce_noise (>= 0), lost_radius (> 0), \
-        found_radius (> 0, at most lost_radius), rt_elapsed (true|false), \
-        model (matched|linear), acceleration_noise (> 0), initial_speed (> 0), \
-        measurement_noise (> 0), search_margin (0..=4096 px), likelihood_sigma (> 0), \
-        lost_distance (> 0), bins (1..=256), ukf_alpha (> 0), ukf_beta (finite), \
-        ukf_kappa (finite), budget (paper|off|1..=100000 windows), speed (0..=40 px/frame), \
-        exposure (0..=1), flicker (0..=0.5), auto_exposure (0..=1e6 s), frame_jitter (0..=1000 ms), \
-        jpeg_quality (0..=100), webcam (off), sweep (true|false), \
-        sweep_speeds (comma list, 0..=40), sweep_noises (comma list, 0..=10), \
-        sweep_runs (1..=100000), sweep_seconds (> 0, at most 86400)";
-
-    /// Longest run an option may ask for, seconds of video (a day).
-    pub const MAX_SECONDS: f64 = 86_400.0;
-
-    /// Widest search margin an option may ask for, px (wider than any frame).
-    pub const MAX_SEARCH_MARGIN: usize = 4096;
-
-    /// Applies a `key=value` override.
+    /// Applies a `key=value` override (see [`Options::set`]).
     ///
     /// # Errors
-    /// [`ExperimentError::BadOption`] for an unknown key or a bad value.
+    /// [`ExperimentError::BadOption`] for an unknown key or a bad value,
+    /// listing every key with its domain.
     pub fn apply(&mut self, key: &str, value: &str) -> Result<(), ExperimentError> {
-        let bad = || ExperimentError::bad_option("ball", Self::KEYS, key, value);
-        let num = || value.parse::<f64>().map_err(|_| bad());
-        let int = || value.parse::<usize>().map_err(|_| bad());
-        let t = &mut self.tracker;
-        match key {
-            "runs" => self.runs = int()?,
-            "seconds" => self.seconds = num()?,
-            "seed" => self.seed = value.parse().map_err(|_| bad())?,
-            "motion_noise" => self.motion_noise = num()?,
-            "bounce_noise" => self.bounce_noise = num()?,
-            "lost_radius" => self.lost_radius = num()?,
-            "found_radius" => self.found_radius = num()?,
-            "rt_elapsed" => self.rt_elapsed = value.parse().map_err(|_| bad())?,
-            "model" => {
-                self.model = match value {
-                    "matched" => ModelChoice::Matched,
-                    "linear" => ModelChoice::Linear,
-                    _ => return Err(bad()),
-                }
-            }
-            "acceleration_noise" => t.acceleration_noise = num()?,
-            "initial_speed" => t.initial_speed = num()?,
-            "measurement_noise" => t.measurement_noise = num()?,
-            "search_margin" => t.search_margin = int()?,
-            "likelihood_sigma" => t.likelihood_sigma = num()?,
-            "lost_distance" => t.lost_distance = num()?,
-            "bins" => t.bins = int()?,
-            "ukf_alpha" => t.ukf_alpha = num()?,
-            "ukf_beta" => t.ukf_beta = num()?,
-            "ukf_kappa" => t.ukf_kappa = num()?,
-            "budget" => {
-                self.budget = match value {
-                    "paper" => Budget::Paper,
-                    "off" => Budget::Off,
-                    _ => Budget::Fixed(int()?),
-                }
-            }
-            "speed" => self.speed = num()?,
-            "exposure" => self.exposure = num()?,
-            "flicker" => self.flicker = num()?,
-            "auto_exposure" => self.auto_exposure = num()?,
-            "frame_jitter" => self.frame_jitter = num()?,
-            "jpeg_quality" => self.jpeg_quality = value.parse().map_err(|_| bad())?,
-            "webcam" if value == "off" => {
-                // As `clean_camera` (which would borrow all of `self`).
-                self.exposure = 0.0;
-                self.flicker = 0.0;
-                self.auto_exposure = 0.0;
-                self.frame_jitter = 0.0;
-                self.jpeg_quality = 0;
-            }
-            "sweep" => self.sweep = value.parse().map_err(|_| bad())?,
-            "sweep_speeds" | "sweep_noises" => {
-                let list = value
-                    .split(',')
-                    .map(|v| v.trim().parse::<f64>())
-                    .collect::<Result<Vec<_>, _>>()
-                    .map_err(|_| bad())?;
-                if key == "sweep_speeds" {
-                    self.sweep_speeds = list;
-                } else {
-                    self.sweep_noises = list;
-                }
-            }
-            "sweep_runs" => self.sweep_runs = int()?,
-            "sweep_seconds" => self.sweep_seconds = num()?,
-            _ => return Err(bad()),
-        }
-        let ok_num = |v: f64| v.is_finite() && v > 0.0;
-        let ok_noise = |v: f64| v.is_finite() && v >= 0.0;
-        if !(1..=MAX_RUNS).contains(&self.runs)
-            || !ok_num(self.seconds)
-            || self.seconds > Self::MAX_SECONDS
-            || t.search_margin > Self::MAX_SEARCH_MARGIN
-            || !ok_noise(self.motion_noise)
-            || !ok_noise(self.bounce_noise)
-            || !ok_num(self.lost_radius)
-            || !ok_num(self.found_radius)
-            || self.found_radius > self.lost_radius
-            || t.validate().is_err()
-            || !self.scene_ok()
-        {
-            return Err(bad());
-        }
-        Ok(())
+        crate::driver::apply(ID, self, key, value)
     }
 
-    /// Whether the scene options (and the sweep's) are in range.
-    fn scene_ok(&self) -> bool {
-        let within = |v: f64, hi: f64| v.is_finite() && (0.0..=hi).contains(&v);
-        let speed_ok = |v: f64| within(v, 40.0);
-        let budget_ok = match self.budget {
-            Budget::Fixed(n) => (1..=MAX_RUNS).contains(&n),
-            _ => true,
-        };
-        speed_ok(self.speed)
-            && within(self.exposure, 1.0)
-            && within(self.flicker, 0.5)
-            && within(self.auto_exposure, 1e6)
-            && within(self.frame_jitter, 1e3)
-            && self.jpeg_quality <= 100
-            && budget_ok
-            && !self.sweep_speeds.is_empty()
-            && !self.sweep_noises.is_empty()
-            && self.sweep_speeds.len() <= 64
-            && self.sweep_noises.len() <= 64
-            && self.sweep_speeds.iter().all(|&v| speed_ok(v))
-            && self.sweep_noises.iter().all(|&v| within(v, 10.0))
-            && (1..=MAX_RUNS).contains(&self.sweep_runs)
-            && self.sweep_seconds.is_finite()
-            && self.sweep_seconds > 0.0
-            && self.sweep_seconds <= Self::MAX_SECONDS
-            && within(self.motion_noise, 10.0)
-            && within(self.bounce_noise, 10.0)
-    }
-
-    /// One line with every option, for the table footer.
+    /// Every option as `key=value`, for the table footer.
     pub fn describe(&self) -> String {
-        let t = &self.tracker;
-        let budget = match self.budget {
-            Budget::Off => "off".to_string(),
-            Budget::Paper => format!(
-                "paper (KF {}, UKF {})",
-                self.budget.cap(BallFilter::Kf).unwrap_or(0),
-                self.budget.cap(BallFilter::Ukf).unwrap_or(0)
-            ),
-            Budget::Fixed(n) => n.to_string(),
-        };
-        let list = |v: &[f64]| v.iter().map(f64::to_string).collect::<Vec<_>>().join(",");
-        format!(
-            "runs={}x4 seconds={} speed={} exposure={} flicker={} auto_exposure={} frame_jitter={} \
-             jpeg_quality={} budget={budget} sweep={} (speeds {} x noises {}, {} runs of {} s) \
-             motion_noise={} bounce_noise={} model={:?} rt_elapsed={} lost_radius={} \
-             found_radius={} acceleration_noise={} initial_speed={} measurement_noise={} \
-             search_margin={} likelihood_sigma={} lost_distance={} bins={} ukf=({}, {}, {}) seed={}",
-            self.runs,
-            self.seconds,
-            self.speed,
-            self.exposure,
-            self.flicker,
-            self.auto_exposure,
-            self.frame_jitter,
-            self.jpeg_quality,
-            self.sweep,
-            list(&self.sweep_speeds),
-            list(&self.sweep_noises),
-            self.sweep_runs,
-            self.sweep_seconds,
-            self.motion_noise,
-            self.bounce_noise,
-            self.model,
-            self.rt_elapsed,
-            self.lost_radius,
-            self.found_radius,
-            t.acceleration_noise,
-            t.initial_speed,
-            t.measurement_noise,
-            t.search_margin,
-            t.likelihood_sigma,
-            t.lost_distance,
-            t.bins,
-            t.ukf_alpha,
-            t.ukf_beta,
-            t.ukf_kappa,
-            self.seed
-        )
+        Options::describe(self)
     }
 
     /// The scene of a condition.
     pub fn scene(&self, condition: Condition) -> BallScene {
+        let on = self.webcam == Webcam::On;
+        let cam = |v: f64| if on { v } else { 0.0 };
         BallScene {
             frames: self.frames(),
             motion: condition.motion,
@@ -567,11 +466,11 @@ impl BallOptions {
                 (true, BallMotion::Linear) => self.motion_noise,
                 (true, BallMotion::Bouncing) => self.bounce_noise,
             },
-            exposure: self.exposure,
-            flicker: self.flicker,
-            auto_exposure: self.auto_exposure,
-            frame_jitter: self.frame_jitter,
-            jpeg_quality: self.jpeg_quality,
+            exposure: cam(self.exposure),
+            flicker: cam(self.flicker),
+            auto_exposure: cam(self.auto_exposure),
+            frame_jitter: cam(self.frame_jitter),
+            jpeg_quality: if on { self.jpeg_quality } else { 0 },
             ..BallScene::default()
         }
     }
@@ -586,14 +485,24 @@ impl BallOptions {
         };
         BallConfig {
             motion,
-            ..self.tracker
+            acceleration_noise: self.acceleration_noise,
+            initial_speed: self.initial_speed,
+            measurement_noise: self.measurement_noise,
+            search_margin: self.search_margin,
+            likelihood_sigma: self.likelihood_sigma,
+            lost_distance: self.lost_distance,
+            bins: self.bins,
+            ukf_alpha: self.ukf_alpha,
+            ukf_beta: self.ukf_beta,
+            ukf_kappa: self.ukf_kappa,
+            ..BallConfig::default()
         }
     }
 }
 
 /// Lost / found / error bookkeeping of one tracker under one scoring (see
 /// the module docs).
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct Score {
     /// Sum of the centre errors over the processed frames (px).
     pub error_sum: f64,
@@ -631,9 +540,10 @@ impl Score {
 }
 
 /// What one tracker did in one run, in one mode.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TrackOutcome {
     /// Which tracker.
+    #[serde(with = "ball_filter")]
     pub filter: BallFilter,
     /// Its evaluation budget (windows per frame) for a budgeted KF/UKF,
     /// `None` for the exhaustive search and the PFs.
@@ -665,6 +575,35 @@ impl TrackOutcome {
     }
 }
 
+/// A [`BallFilter`] as `(kind, particles)`: `("pf", n)`, `("kf", 0)`,
+/// `("ukf", 0)`.
+mod ball_filter {
+    use bayestrack_trackers::BallFilter;
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    pub fn serialize<S: Serializer>(f: &BallFilter, s: S) -> Result<S::Ok, S::Error> {
+        #[allow(unreachable_patterns)]
+        let pair = match *f {
+            BallFilter::Pf(n) => ("pf", n),
+            BallFilter::Kf => ("kf", 0),
+            BallFilter::Ukf => ("ukf", 0),
+            _ => return Err(serde::ser::Error::custom("unknown ball filter")),
+        };
+        pair.serialize(s)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<BallFilter, D::Error> {
+        match <(String, usize)>::deserialize(d)? {
+            (k, n) if k == "pf" => Ok(BallFilter::Pf(n)),
+            (k, _) if k == "kf" => Ok(BallFilter::Kf),
+            (k, _) if k == "ukf" => Ok(BallFilter::Ukf),
+            (k, _) => Err(serde::de::Error::custom(format!(
+                "unknown ball filter `{k}`"
+            ))),
+        }
+    }
+}
+
 /// Row label of a tracker with an optional budget (`KF@37`).
 fn label(filter: BallFilter, budget: Option<usize>) -> String {
     match budget {
@@ -674,7 +613,7 @@ fn label(filter: BallFilter, budget: Option<usize>) -> String {
 }
 
 /// Every outcome of one run of one condition.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RunResult {
     /// The condition.
     pub condition: Condition,
@@ -932,7 +871,9 @@ pub fn run_one(
                 .tracker
                 .step_elapsed(frame.view(), dt)
                 .map_err(|e| failed(filter, condition, run, e))?;
-            lane.out.wall += t0.elapsed().as_secs_f64();
+            if opts.timing {
+                lane.out.wall += t0.elapsed().as_secs_f64();
+            }
             lane.last_seen = k;
             let err = center_error(&est.bbox, &ball);
             let out = &mut lane.out;
@@ -1549,71 +1490,61 @@ fn run_rows(r: &RunResult) -> Vec<RunRow> {
         .collect()
 }
 
-/// Runs the experiment: every (condition, run) pair in parallel (each has
-/// its own seeded streams, so the result does not depend on the thread
-/// count), then the sweep when asked for. With `runs_csv`, each pair's rows
-/// are appended to `runs.partial.csv` beside it the moment the pair
-/// finishes, and the complete file, in (condition, run) order, replaces
-/// `runs_csv` at the end (see [`PartialCsv`]): a run killed part-way keeps
-/// every finished pair and the previous `runs.csv`. The sweep's runs are
-/// not logged (its tables are).
+/// Runs every condition's runs (and the sweep when on) in parallel; each
+/// run has its own seeds, so the result does not depend on the thread
+/// count. With `runs_csv`, each run's rows are appended to
+/// `runs.partial.csv` as it finishes and the whole file, in order, replaces
+/// `runs_csv` at the end.
 ///
 /// # Errors
 /// [`ExperimentError::Failed`] naming the tracker, condition and run that
-/// failed; [`ExperimentError::Io`] when the CSV cannot be written.
+/// failed; [`ExperimentError::Io`] when the CSV cannot be written;
+/// [`ExperimentError::BadOption`] for options outside their domains.
 pub fn run(
     opts: &BallOptions,
     runs_csv: Option<&Path>,
     progress: bool,
 ) -> Result<BallResult, ExperimentError> {
-    if opts.runs == 0 {
-        return Err(ExperimentError::bad_option(
-            "ball",
-            BallOptions::KEYS,
-            "runs",
-            "0",
-        ));
+    let done = crate::driver::run_all::<BallExperiment>(opts, runs_csv, progress)?;
+    Ok(assemble(opts, done))
+}
+
+/// What job `j` is: run `j % runs` of condition `j / runs` (conditions in
+/// [`Condition::ALL`] order), then the sweep's runs, cells in order (speeds
+/// outer, noises inner), `sweep_runs` each.
+#[derive(Debug, Clone, Copy)]
+enum Job {
+    Run(Condition, usize),
+    Sweep(usize, usize, usize),
+}
+
+fn job(opts: &BallOptions, j: usize) -> Job {
+    let main = Condition::ALL.len() * opts.runs;
+    if j < main {
+        return Job::Run(Condition::ALL[j / opts.runs], j % opts.runs);
     }
-    let log = runs_csv.map(PartialCsv::create).transpose()?;
-    let jobs: Vec<(Condition, usize)> = (0..opts.runs)
-        .flat_map(|r| Condition::ALL.into_iter().map(move |c| (c, r)))
-        .collect();
-    // The sweep's jobs: (speed index, noise index, run).
-    let cells: Vec<(usize, usize)> = if opts.sweep {
-        (0..opts.sweep_speeds.len())
-            .flat_map(|i| (0..opts.sweep_noises.len()).map(move |j| (i, j)))
-            .collect()
+    let k = j - main;
+    let (cell, r) = (k / opts.sweep_runs, k % opts.sweep_runs);
+    let noises = opts.sweep_noises.len();
+    Job::Sweep(cell / noises, cell % noises, r)
+}
+
+fn jobs(opts: &BallOptions) -> usize {
+    let sweep = if opts.sweep {
+        opts.sweep_speeds.len() * opts.sweep_noises.len() * opts.sweep_runs
     } else {
-        Vec::new()
+        0
     };
-    let sweep_jobs: Vec<(usize, usize, usize)> = cells
-        .iter()
-        .flat_map(|&(i, j)| (0..opts.sweep_runs).map(move |r| (i, j, r)))
-        .collect();
-    let bar = crate::experiment::progress_bar(jobs.len() + sweep_jobs.len(), progress, "ball runs");
-    let mut runs: Vec<RunResult> = jobs
-        .par_iter()
-        .map(|&(c, r)| {
-            let done = run_one(opts, c, r, r == 0)?;
-            if let Some(log) = &log {
-                log.append(&run_rows(&done))?;
-            }
-            bar.inc(1);
-            Ok(done)
-        })
-        .collect::<Result<_, ExperimentError>>()?;
-    // conditions in Condition::ALL order, runs in order within each
-    runs.sort_by_key(|r| (Condition::ALL.iter().position(|c| *c == r.condition), r.run));
-    if let Some(log) = log {
-        let rows: Vec<RunRow> = runs.iter().flat_map(run_rows).collect();
-        log.finish(&rows)?;
-    }
-    let swept: Vec<((usize, usize, usize), RunResult)> = sweep_jobs
-        .par_iter()
-        .map(|&(i, j, r)| {
+    Condition::ALL.len() * opts.runs + sweep
+}
+
+fn run_job(opts: &BallOptions, j: usize) -> Result<RunResult, ExperimentError> {
+    match job(opts, j) {
+        Job::Run(c, r) => run_one(opts, c, r, r == 0),
+        Job::Sweep(i, k, r) => {
             let cell_opts = BallOptions {
                 speed: opts.sweep_speeds[i],
-                motion_noise: opts.sweep_noises[j],
+                motion_noise: opts.sweep_noises[k],
                 seconds: opts.sweep_seconds,
                 ..opts.clone()
             };
@@ -1621,29 +1552,59 @@ pub fn run(
                 motion: BallMotion::Linear,
                 noisy: true,
             };
-            let done = run_one(&cell_opts, linear_noisy, r, false)?;
-            bar.inc(1);
-            Ok(((i, j, r), done))
-        })
-        .collect::<Result<_, ExperimentError>>()?;
-    bar.finish_and_clear();
-    let sweep = cells
-        .iter()
-        .map(|&(i, j)| SweepCell {
-            speed: opts.sweep_speeds[i],
-            noise: opts.sweep_noises[j],
-            runs: swept
-                .iter()
-                .filter(|((a, b, _), _)| (*a, *b) == (i, j))
-                .map(|(_, r)| r.clone())
-                .collect(),
-        })
-        .collect();
-    Ok(BallResult {
+            run_one(&cell_opts, linear_noisy, r, false)
+        }
+    }
+}
+
+/// The result from every job's, in job order.
+fn assemble(opts: &BallOptions, done: Vec<RunResult>) -> BallResult {
+    let mut runs = Vec::new();
+    let mut sweep: Vec<SweepCell> = Vec::new();
+    for (j, d) in done.into_iter().enumerate() {
+        match job(opts, j) {
+            Job::Run(..) => runs.push(d),
+            Job::Sweep(i, k, r) => match sweep.last_mut() {
+                Some(cell) if r > 0 => cell.runs.push(d),
+                _ => sweep.push(SweepCell {
+                    speed: opts.sweep_speeds[i],
+                    noise: opts.sweep_noises[k],
+                    runs: vec![d],
+                }),
+            },
+        }
+    }
+    BallResult {
         options: opts.clone(),
         runs,
         sweep,
-    })
+    }
+}
+
+/// The named tables of a result, in print order.
+fn named_tables(result: &BallResult) -> Vec<(&'static str, Table)> {
+    let mut named = vec![
+        ("table1_offline", result.table1(FrameMode::Offline, false)),
+        ("table1_realtime", result.table1(FrameMode::RealTime, false)),
+    ];
+    if result.options.budget != Budget::Off {
+        named.push((
+            "table1_offline_budget",
+            result.table1(FrameMode::Offline, true),
+        ));
+        named.push((
+            "table1_realtime_budget",
+            result.table1(FrameMode::RealTime, true),
+        ));
+    }
+    named.extend([
+        ("table2", result.table_split(true)),
+        ("table3", result.table_split(false)),
+        ("findings", result.findings_table()),
+    ]);
+    named.extend(result.sweep_table(false).map(|t| ("sweep_lost", t)));
+    named.extend(result.sweep_table(true).map(|t| ("sweep_error", t)));
+    named
 }
 
 /// Writes the table CSVs and the error-over-time figures.
@@ -1691,57 +1652,53 @@ fn write_outputs(
     Ok(())
 }
 
-/// The registry entry.
+/// The registry entry (jobs: see `Job`).
 pub struct BallExperiment;
 
-impl Experiment for BallExperiment {
-    fn id(&self) -> &'static str {
-        "ball"
+impl Paper for BallExperiment {
+    type Config = BallOptions;
+    type Done = RunResult;
+    type Row = RunRow;
+    type Shared = ();
+    const ID: &'static str = ID;
+    const SOURCE: &'static str = "paper 001 Tables 1-3";
+    const SUMMARY: &'static str = "KF, UKF, PF_10/30/70 histogram ball trackers: fps, error, lost, found (offline and real time)";
+    const LOG: &'static str = "runs.csv";
+    const JOBS: &'static str = "ball runs";
+
+    fn quick() -> BallOptions {
+        BallOptions::quick()
     }
-    fn source(&self) -> &'static str {
-        "paper 001 Tables 1-3"
+    fn full() -> BallOptions {
+        BallOptions::paper()
     }
-    fn summary(&self) -> &'static str {
-        "KF, UKF, PF_10/30/70 histogram ball trackers: fps, error, lost, found (offline and real time)"
+    fn jobs(o: &BallOptions) -> usize {
+        jobs(o)
     }
-    fn run(&self, opts: &RunOptions) -> Result<Vec<Table>, ExperimentError> {
-        let mut options = match opts.mode {
-            Mode::Quick => BallOptions::quick(),
-            Mode::Full => BallOptions::paper(),
-        };
-        for (k, v) in &opts.set {
-            options.apply(k, v)?;
+    fn prepare(_: &BallOptions, _: &[usize]) -> Result<(), ExperimentError> {
+        Ok(())
+    }
+    fn run_job(o: &BallOptions, _: &(), j: usize) -> Result<RunResult, ExperimentError> {
+        run_job(o, j)
+    }
+    fn rows(o: &BallOptions, j: usize, done: &RunResult) -> Vec<RunRow> {
+        match job(o, j) {
+            Job::Run(..) => run_rows(done),
+            Job::Sweep(..) => Vec::new(),
         }
-        let dir = opts.output_dir(self.id())?;
-        let result = run(&options, Some(&dir.join("runs.csv")), opts.progress)?;
-        let mut named = vec![
-            ("table1_offline", result.table1(FrameMode::Offline, false)),
-            ("table1_realtime", result.table1(FrameMode::RealTime, false)),
-        ];
-        if options.budget != Budget::Off {
-            named.push((
-                "table1_offline_budget",
-                result.table1(FrameMode::Offline, true),
-            ));
-            named.push((
-                "table1_realtime_budget",
-                result.table1(FrameMode::RealTime, true),
-            ));
-        }
-        named.extend([
-            ("table2", result.table_split(true)),
-            ("table3", result.table_split(false)),
-            ("findings", result.findings_table()),
-        ]);
-        named.extend(result.sweep_table(false).map(|t| ("sweep_lost", t)));
-        named.extend(result.sweep_table(true).map(|t| ("sweep_error", t)));
-        write_outputs(&result, &dir, &named)?;
-        let mut tables: Vec<Table> = named.into_iter().map(|(_, t)| t).collect();
-        tables[0].title = format!("{}\n  options: {}", tables[0].title, options.describe());
-        Ok(tables)
+    }
+    fn report(
+        o: &BallOptions,
+        done: Vec<RunResult>,
+        dir: &Path,
+    ) -> Result<Vec<Table>, ExperimentError> {
+        let result = assemble(o, done);
+        let named = named_tables(&result);
+        write_outputs(&result, dir, &named)?;
+        Ok(named.into_iter().map(|(_, t)| t).collect())
     }
 
-    fn golden(&self) -> Result<Option<String>, ExperimentError> {
+    fn golden() -> Result<Option<String>, ExperimentError> {
         let result = run(&BallOptions::quick(), None, false)?;
         let mut out = String::from(
             "condition,alg,mode,frames,evaluations,mean_error_px,losses,found_times_s,unresolved,\
@@ -1799,7 +1756,7 @@ mod tests {
         o.apply("likelihood_sigma", "0.2").unwrap();
         o.apply("model", "linear").unwrap();
         o.apply("rt_elapsed", "false").unwrap();
-        assert_eq!(o.tracker.likelihood_sigma, 0.2);
+        assert_eq!(o.likelihood_sigma, 0.2);
         assert_eq!(o.model, ModelChoice::Linear);
         assert!(!o.rt_elapsed);
         assert!(o.apply("model", "nope").is_err());
@@ -1842,7 +1799,11 @@ mod tests {
         o.apply("sweep_speeds", "2, 4").unwrap();
         assert_eq!(o.sweep_speeds, vec![2.0, 4.0]);
         o.apply("webcam", "off").unwrap();
-        assert_eq!((o.jpeg_quality, o.exposure, o.frame_jitter), (0, 0.0, 0.0));
+        let scene = o.scene(Condition::ALL[0]);
+        assert_eq!(
+            (scene.jpeg_quality, scene.exposure, scene.frame_jitter),
+            (0, 0.0, 0.0)
+        );
         for (k, v) in [
             ("budget", "0"),
             ("budget", "some"),
@@ -1854,7 +1815,7 @@ mod tests {
             ("sweep_speeds", ""),
             ("sweep_noises", "1,x"),
             ("sweep_noises", "11"),
-            ("webcam", "on"),
+            ("webcam", "maybe"),
             ("sweep_runs", "0"),
         ] {
             assert!(BallOptions::quick().apply(k, v).is_err(), "{k}={v}");

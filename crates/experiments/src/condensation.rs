@@ -40,8 +40,8 @@ use rayon::prelude::*;
 
 use crate::driver::Paper;
 use crate::experiment::{ExperimentError, MAX_FRAMES, MAX_RUNS, write_text};
-use bayestrack_options::{Options, above, inside, options};
 use crate::scenes::{FrameTruth, Outline, SceneStream, WebcamScene};
+use bayestrack_options::{Options, above, inside, options};
 use bayestrack_otb::Table;
 use bayestrack_otb::plot::{Series, line_chart};
 
@@ -762,10 +762,7 @@ type Scenes = [Rendered; 3];
 pub struct RenderedRuns(Vec<Option<Scenes>>);
 
 /// Renders the scenes of the runs `jobs` need (in parallel).
-fn prepare(
-    config: &CondensationConfig,
-    jobs: &[usize],
-) -> Result<RenderedRuns, ExperimentError> {
+fn prepare(config: &CondensationConfig, jobs: &[usize]) -> Result<RenderedRuns, ExperimentError> {
     let mut needed = vec![false; config.runs];
     for &j in jobs {
         match job(config, j) {

@@ -331,7 +331,11 @@ fn run_shard<P: Paper>(
         ),
         &["shard", "jobs", "of"],
     );
-    t.push(vec![shard.to_string(), jobs.len().to_string(), total.to_string()]);
+    t.push(vec![
+        shard.to_string(),
+        jobs.len().to_string(),
+        total.to_string(),
+    ]);
     Ok(vec![t])
 }
 
@@ -416,7 +420,9 @@ pub fn merge<P: Paper>(
     let done: Vec<P::Done> = slots
         .into_iter()
         .enumerate()
-        .map(|(j, d)| d.ok_or_else(|| ExperimentError::Merge(format!("{}: job {j} missing", P::ID))))
+        .map(|(j, d)| {
+            d.ok_or_else(|| ExperimentError::Merge(format!("{}: job {j} missing", P::ID)))
+        })
         .collect::<Result<_, _>>()?;
     let dir = out.join(P::ID);
     std::fs::create_dir_all(&dir).map_err(io(&dir))?;
