@@ -168,7 +168,22 @@ pub fn apply<C: Options>(
     key: &str,
     value: &str,
 ) -> Result<(), ExperimentError> {
-    config.set(key, value).map_err(|e| bad_option(id, e))
+    config.set(key, value).map_err(|e| match bad_option(id, e) {
+        ExperimentError::BadOption {
+            key,
+            experiment,
+            valid,
+            expected,
+            ..
+        } => ExperimentError::BadOption {
+            key,
+            value: value.to_string(),
+            experiment,
+            valid,
+            expected,
+        },
+        other => other,
+    })
 }
 
 /// The preset of `mode` with the `--set` overrides applied.

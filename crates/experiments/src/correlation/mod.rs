@@ -28,13 +28,13 @@ use bayestrack_trackers::{
 
 use crate::driver::Paper;
 use crate::experiment::{ExperimentError, MAX_PARTICLES, MAX_RUNS, write_text};
+use crate::scenes::{FrameTruth, RoadScene};
 use bayestrack_options::{Options, options};
+use bayestrack_otb::Table;
+use bayestrack_otb::plot::{Series, line_chart};
 
 /// The experiment's id.
 const ID: &str = "correlation";
-use crate::scenes::{FrameTruth, RoadScene};
-use bayestrack_otb::Table;
-use bayestrack_otb::plot::{Series, line_chart};
 
 mod options;
 mod paper;
