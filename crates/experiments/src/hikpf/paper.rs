@@ -1,7 +1,5 @@
 //! The filters of the table and paper 000's and van der Merwe et al.'s numbers.
 
-use super::*;
-
 /// The filters of the table, in row order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum FilterKind {
