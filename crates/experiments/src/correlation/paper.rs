@@ -49,13 +49,13 @@ pub enum Variant {
     MadFrame,
     /// PF with eq. 6 as printed (`A = 1`: a random walk).
     PfPrinted,
-    /// PF with the ARP on the displacement ([`ArpMotion::Drift`]).
+    /// PF with the ARP on the displacement ([`ArpMotion::Drift`](bayestrack_trackers::ArpMotion::Drift)).
     PfDrift,
     /// PF with the displacement ARP and a capped MAD in eq. 7 (not in the paper).
     PfDriftCap,
     /// PF with a constant drift measured by the MAD match between frames 1
     /// and 2, the particle filter from frame 3 on (sec. 3.2;
-    /// [`ArpMotion::ConstantDrift`]), eq. 7 as printed.
+    /// [`ArpMotion::ConstantDrift`](bayestrack_trackers::ArpMotion::ConstantDrift)), eq. 7 as printed.
     PfConstDrift,
 }
 
