@@ -5,6 +5,9 @@
 //! cargo xtask reproduce-table list         # the registry
 //! cargo xtask reproduce-table all          # every experiment, quick mode
 //! cargo xtask reproduce-table hikpf --full # one experiment at paper scale
+//! cargo xtask reproduce-table ball --options # its options: keys, types, defaults
+//! cargo xtask reproduce-table ball --full --shard 2/8 --out shards/2  # one slice
+//! cargo xtask merge shards/* --out target/reproduce  # the slices as one run
 //! cargo xtask otb --root ../shared/data/sequences  # every tracker, every sequence
 //! ```
 //!
@@ -22,11 +25,10 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use bayestrack_experiments::{
-    Experiment, ExperimentError, Mode, REGISTRY as EXPERIMENTS, RunOptions,
+    Experiment, ExperimentError, Mode, REGISTRY as EXPERIMENTS, RunOptions, Shard,
 };
 use bayestrack_otb::published::{PUBLISHED_OPE_FILE, Published};
-use bayestrack_otb::shard::Shard;
-use bayestrack_otb::suite::{SuiteEvent, SuiteOptions, SuiteReport, Timing, merge, run_suite_with};
+use bayestrack_otb::suite::{SuiteEvent, SuiteOptions, SuiteReport, Timing, run_suite_with};
 use bayestrack_trackers::{REGISTRY, TrackerInfo, tracker_info};
 use clap::{Parser, Subcommand};
 
@@ -53,6 +55,26 @@ enum Command {
         /// (repeatable; see docs/reproduction.md for each experiment's keys).
         #[arg(long = "set", value_parser = parse_key_value)]
         set: Vec<(String, String)>,
+        /// Run only slice K of N of the jobs (1-based; seeds are keyed by
+        /// run, so a slice needs nothing from the others) and save it for
+        /// `cargo xtask merge`.
+        #[arg(long, value_parser = parse_shard)]
+        shard: Option<Shard>,
+        /// List the experiment's options (key, type, domain, default,
+        /// documentation) instead of running it.
+        #[arg(long)]
+        options: bool,
+    },
+    /// Combine the outputs of `reproduce-table ... --shard K/N` runs (each
+    /// folder a shard's `--out`) into exactly the files one run writes,
+    /// and print the tables.
+    Merge {
+        /// The shards' output folders.
+        #[arg(required = true)]
+        dirs: Vec<PathBuf>,
+        /// Output root (default: `<project root>/target/reproduce`).
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
     /// Write a synthetic scene as PNG frames + groundtruth_rect.txt so a
     /// person can look at it (`list` prints the names).
@@ -168,6 +190,42 @@ fn run_one(e: &dyn Experiment, opts: &RunOptions) -> Result<(), ExperimentError>
     Ok(())
 }
 
+/// Merges the shards under `dirs` of every experiment found there into
+/// `out` and prints their tables.
+fn merge(dirs: &[PathBuf], out: &Path) -> Result<(), String> {
+    let mut merged = 0;
+    for e in EXPERIMENTS {
+        let Some(tables) = e.merge(dirs, out).map_err(|err| err.to_string())? else {
+            continue;
+        };
+        eprintln!("== {} merged ==", e.id());
+        for table in tables {
+            println!("{table}");
+        }
+        println!("files: {}", out.join(e.id()).display());
+        merged += 1;
+    }
+    if merged == 0 {
+        return Err(format!(
+            "no shard found under {} (a shard's folder holds <id>/{})",
+            dirs.iter()
+                .map(|d| d.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", "),
+            bayestrack_experiments::driver::SHARD_FILE
+        ));
+    }
+    Ok(())
+}
+
+/// Prints an experiment's declared options.
+fn print_options(e: &dyn Experiment) {
+    println!("{} ({}): options (`--set key=value`)", e.id(), e.source());
+    for spec in e.options() {
+        println!("{spec}");
+    }
+}
+
 /// Rewrites the golden file of one experiment; returns whether it changed.
 fn bless(e: &dyn Experiment) -> Result<bool, String> {
     let Some(new) = e.golden().map_err(|err| err.to_string())? else {
@@ -261,7 +319,7 @@ fn otb(
     let report = if merge_dirs.is_empty() {
         run_otb(root, trackers, seed, out.clone(), published, shard)?
     } else {
-        merge(merge_dirs, &out, published).map_err(|e| e.to_string())?
+        bayestrack_otb::suite::merge(merge_dirs, &out, published).map_err(|e| e.to_string())?
     };
     if let Some(shard) = shard {
         println!(
@@ -423,18 +481,46 @@ fn main() -> ExitCode {
                 ExitCode::SUCCESS
             }
         }
+        Command::Merge { dirs, out } => match merge(&dirs, &resolve(out, "target/reproduce")) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(err) => {
+                eprintln!("error: {err}");
+                ExitCode::FAILURE
+            }
+        },
         Command::ReproduceTable {
             target,
             full,
             out,
             set,
+            shard,
+            options,
         } => {
             let opts = RunOptions {
                 mode: if full { Mode::Full } else { Mode::Quick },
                 out: resolve(out, "target/reproduce"),
                 progress: true,
                 set,
+                shard,
             };
+            if options {
+                let all: Vec<&dyn Experiment> = if target == "all" || target == "list" {
+                    EXPERIMENTS.to_vec()
+                } else {
+                    match bayestrack_experiments::find(&target) {
+                        Ok(e) => vec![e],
+                        Err(err) => {
+                            eprintln!("error: {err}");
+                            return ExitCode::FAILURE;
+                        }
+                    }
+                };
+                for e in all {
+                    print_options(e);
+                    println!();
+                }
+                return ExitCode::SUCCESS;
+            }
             match target.as_str() {
                 "list" => {
                     print_registry(EXPERIMENTS);

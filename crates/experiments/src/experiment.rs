@@ -30,6 +30,9 @@ pub struct RunOptions {
     pub progress: bool,
     /// `key=value` overrides of the experiment's named options.
     pub set: Vec<(String, String)>,
+    /// Run one slice of the jobs (`--shard K/N`) and save it for
+    /// `cargo xtask merge` instead of the whole experiment.
+    pub shard: Option<crate::driver::Shard>,
 }
 
 impl RunOptions {
@@ -131,7 +134,9 @@ pub enum ExperimentError {
     NotImplemented(&'static str),
     /// An option override that the experiment does not know, or a value
     /// outside the option's domain; the message lists the valid keys.
-    #[error("unknown option or value `{key}={value}` for {experiment}; valid keys: {valid}")]
+    #[error(
+        "unknown option or value `{key}={value}` for {experiment}; valid keys: {valid}{expected}"
+    )]
     BadOption {
         /// The option name.
         key: String,
@@ -139,9 +144,17 @@ pub enum ExperimentError {
         value: String,
         /// The experiment's id.
         experiment: &'static str,
-        /// The experiment's keys with their domains (the config's `KEYS`).
-        valid: &'static str,
+        /// The experiment's keys with their domains
+        /// ([`bayestrack_options::Options::keys`]).
+        valid: String,
+        /// What the key takes (`; `runs` takes 1..=100000`), or empty for
+        /// an unknown key.
+        expected: String,
     },
+    /// Shard outputs that cannot be merged: missing, duplicated, of
+    /// different runs, or unreadable.
+    #[error("cannot merge shards: {0}")]
+    Merge(String),
     /// A filter or tracker failed during the run.
     #[error("experiment `{id}` failed: {message}")]
     Failed {
@@ -155,17 +168,13 @@ pub enum ExperimentError {
 impl ExperimentError {
     /// [`ExperimentError::BadOption`] for `key=value` of `experiment`, whose
     /// valid keys (with their domains) are `valid`.
-    pub fn bad_option(
-        experiment: &'static str,
-        valid: &'static str,
-        key: &str,
-        value: &str,
-    ) -> Self {
+    pub fn bad_option(experiment: &'static str, valid: &str, key: &str, value: &str) -> Self {
         Self::BadOption {
             key: key.to_string(),
             value: value.to_string(),
             experiment,
-            valid,
+            valid: valid.to_string(),
+            expected: String::new(),
         }
     }
 }
@@ -189,8 +198,25 @@ pub trait Experiment: Sync {
     fn implemented(&self) -> bool {
         true
     }
-    /// Runs it, writes its files under `opts.out/<id>/` and returns its tables.
+    /// Its declared options (`reproduce-table ID --options`).
+    fn options(&self) -> Vec<bayestrack_options::Spec> {
+        Vec::new()
+    }
+    /// Runs it, writes its files under `opts.out/<id>/` and returns its
+    /// tables (with `opts.shard`, one slice of its jobs, saved for
+    /// [`Experiment::merge`]).
     fn run(&self, opts: &RunOptions) -> Result<Vec<Table>, ExperimentError>;
+    /// Merges the shards of it found under `dirs` (each a `--out` of a
+    /// `--shard` run) into `out/<id>/`: the files one run writes; `None`
+    /// when no folder holds a shard of it.
+    fn merge(
+        &self,
+        dirs: &[PathBuf],
+        out: &std::path::Path,
+    ) -> Result<Option<Vec<Table>>, ExperimentError> {
+        let _ = (dirs, out);
+        Ok(None)
+    }
     /// The quick-mode numbers that CI pins (`tests/golden/<id>.csv`), as
     /// CSV with full precision; `None` when nothing is pinned yet.
     /// `cargo xtask bless` rewrites the file from this.
@@ -239,6 +265,7 @@ mod tests {
             out: out.clone(),
             progress: false,
             set: vec![],
+            shard: None,
         };
         let marker = out.join("marker-test").join("PARTIAL.txt");
         assert!(run_marked(&Fails(true), &opts).is_err());

@@ -23,14 +23,15 @@ use bayestrack_particle::{
 use nalgebra::{Matrix1, SMatrix, SVector, Vector1};
 use rand::Rng;
 use rand_distr::{Distribution, Gamma, StandardNormal};
-use rayon::prelude::*;
 
-use crate::experiment::{
-    Experiment, ExperimentError, MAX_FRAMES, MAX_PARTICLES, MAX_RUNS, Mode, RunOptions, write_text,
-};
+use crate::driver::Paper;
+use crate::experiment::{ExperimentError, MAX_FRAMES, MAX_PARTICLES, MAX_RUNS, write_text};
+use bayestrack_options::{Options, choice, options};
 use bayestrack_otb::Table;
 use bayestrack_otb::plot::{Series, line_chart};
-use bayestrack_otb::write::PartialCsv;
+
+/// The experiment's id.
+const ID: &str = "hikpf";
 
 /// Key of this experiment's random streams.
 const KEY: u64 = 0x0068_696b_7066; // "hikpf" in ASCII
@@ -43,291 +44,14 @@ const SIGMA: f64 = 1e-5;
 /// Prior variance of the EKF/UKF and of each Kalman particle (the demo's P0).
 const P0: f64 = 0.75;
 
-/// The filters of the table, in row order.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum FilterKind {
-    /// Extended Kalman filter alone.
-    Ekf,
-    /// Unscented Kalman filter alone (augmented state).
-    Ukf,
-    /// Bootstrap particle filter (transition prior as proposal).
-    Pf,
-    /// Bootstrap PF with a Metropolis-Hastings move.
-    PfMcmc,
-    /// PF with EKF proposals.
-    PfEkf,
-    /// PF-EKF with a Metropolis-Hastings move.
-    PfEkfMcmc,
-    /// PF with UKF proposals (the unscented particle filter).
-    PfUkf,
-    /// PF-UKF with a Metropolis-Hastings move.
-    PfUkfMcmc,
-    /// PF with IEKF proposals.
-    PfIekf,
-    /// PF with the hybrid UKF -> IEKF proposal (paper 000).
-    Hikpf,
-}
-
-impl FilterKind {
-    /// Every filter, in row order.
-    pub const ALL: [FilterKind; 10] = [
-        FilterKind::Ekf,
-        FilterKind::Ukf,
-        FilterKind::Pf,
-        FilterKind::PfMcmc,
-        FilterKind::PfEkf,
-        FilterKind::PfEkfMcmc,
-        FilterKind::PfUkf,
-        FilterKind::PfUkfMcmc,
-        FilterKind::PfIekf,
-        FilterKind::Hikpf,
-    ];
-
-    /// Row label.
-    pub fn name(self) -> &'static str {
-        match self {
-            FilterKind::Ekf => "EKF",
-            FilterKind::Ukf => "UKF",
-            FilterKind::Pf => "PF",
-            FilterKind::PfMcmc => "PF-MCMC",
-            FilterKind::PfEkf => "PF-EKF",
-            FilterKind::PfEkfMcmc => "PF-EKF-MCMC",
-            FilterKind::PfUkf => "PF-UKF",
-            FilterKind::PfUkfMcmc => "PF-UKF-MCMC",
-            FilterKind::PfIekf => "PF-IEKF",
-            FilterKind::Hikpf => "HIKPF",
-        }
-    }
-
-    /// Paper 000 Table 1: (mean, variance) of the per-run error.
-    pub fn paper(self) -> Option<(f64, f64)> {
-        match self {
-            FilterKind::Pf => Some((0.25881, 0.057151)),
-            FilterKind::PfEkf => Some((0.32392, 0.021656)),
-            FilterKind::PfUkf => Some((0.077684, 0.006589)),
-            FilterKind::PfIekf => Some((0.049368, 0.0015238)),
-            FilterKind::Hikpf => Some((0.015607, 0.00000395)),
-            _ => None,
-        }
-    }
-
-    /// Van der Merwe et al. 2000, Table 1: mean of the per-run error
-    /// (approximate, as transcribed in SPEC section 3).
-    pub fn van_der_merwe(self) -> Option<f64> {
-        match self {
-            FilterKind::Ekf => Some(0.374),
-            FilterKind::Ukf => Some(0.280),
-            FilterKind::Pf => Some(0.424),
-            FilterKind::PfMcmc => Some(0.417),
-            FilterKind::PfEkf => Some(0.310),
-            FilterKind::PfEkfMcmc => Some(0.307),
-            FilterKind::PfUkf => Some(0.070),
-            FilterKind::PfUkfMcmc => Some(0.074),
-            _ => None,
-        }
-    }
-}
-
-/// How the per-run error is computed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ErrorMetric {
-    /// `sqrt(mean_t (x_hat - x)^2)`: what the demo code computes.
-    Rmse,
-    /// Paper 000 eq. 11 as printed, `(mean_t (x_hat - x))^(1/2)`, with the
-    /// absolute value taken so that a negative mean error stays real.
-    Eq11Literal,
-}
-
-/// The transition density `p(x_t | x_{t-1})` in the importance weights.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum PriorDensity {
-    /// Gamma density of `x_t - f(x_{t-1})`, zero outside its support (the
-    /// model's true density; ReBEL's version of the demo).
-    Transition,
-    /// The demo's expression `d^2 exp(-2 d)` with `d = x_t - x_{t-1}`
-    /// (unnormalised, no support check): likely a bug, kept to compare.
-    DemoIncrement,
-}
-
-/// The Gaussian model of the local Kalman filters inside the proposals.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ProposalNoise {
-    /// The demo's tuning: zero-mean process noise with `Q = 7.5` for the
-    /// EKF and IEKF proposals, `Q = 1.5` for the UKF and hybrid ones,
-    /// `R = 0.1`.
-    Demo,
-    /// The true moments: process-noise mean 1.5, `Q = 0.75`, `R = 1e-5`.
-    TrueMoments,
-}
-
-/// Every choice of the experiment.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct HikpfConfig {
-    /// Monte Carlo runs.
-    pub runs: usize,
-    /// Particles per filter.
-    pub particles: usize,
-    /// Time steps `T` (the state starts at `t = 1`).
-    pub steps: usize,
-    /// Frequency `w` of `sin(w pi t)`: 0.04 in the original demo, 0.4 as
-    /// paper 000 prints it.
-    pub sin_freq: f64,
-    /// Per-run error.
-    pub error: ErrorMetric,
-    /// Transition density in the weights.
-    pub prior: PriorDensity,
-    /// Local-filter model of the Kalman proposals.
-    pub proposal_noise: ProposalNoise,
-    /// Paper 000's `c`: IEKF iterations of PF-IEKF and HIKPF.
-    pub iekf_iterations: usize,
-    /// IEKF early-stopping tolerance.
-    pub iekf_tolerance: f64,
-    /// Prior of the IEKF refinement inside HIKPF.
-    pub hybrid_prior: HybridPrior,
-    /// Add the demo's `1e-99` to every likelihood (a linear-domain floor).
-    pub likelihood_floor: bool,
-    /// Resampling scheme (every step).
-    pub resampling: Resampling,
-    /// Seed of the whole experiment.
-    pub seed: u64,
-    /// Also run the sweep of [`sweep`] (error formula x likelihood floor x
-    /// IEKF iterations) and print it after the main table: on in full mode,
-    /// off in quick mode (`--set sweep=true` turns it on there: 10 more
-    /// runs of the table).
-    pub sweep: bool,
-}
-
-impl HikpfConfig {
-    /// Paper scale: 100 runs of 60 steps with 200 particles.
-    pub fn paper() -> Self {
-        Self {
-            runs: 100,
-            particles: 200,
-            steps: 60,
-            sin_freq: 0.04,
-            error: ErrorMetric::Rmse,
-            prior: PriorDensity::Transition,
-            proposal_noise: ProposalNoise::Demo,
-            iekf_iterations: 10,
-            iekf_tolerance: 1e-10,
-            hybrid_prior: HybridPrior::UkfPredicted,
-            likelihood_floor: false,
-            resampling: Resampling::Residual,
-            seed: 1,
-            sweep: true,
-        }
-    }
-
-    /// The CI scale: 20 runs, no sweep.
-    pub fn quick() -> Self {
-        Self {
-            runs: 20,
-            sweep: false,
-            ..Self::paper()
-        }
-    }
-
-    /// The keys [`HikpfConfig::apply`] accepts, with their domains (listed
-    /// by [`ExperimentError::BadOption`]).
-    pub const KEYS: &'static str = "runs (1..=100000), particles (1..=1000000), \
-        steps (2..=1000000), seed (u64), sin_freq (finite), iekf_iterations (1..=10000), \
-        iekf_tolerance (finite), error (rmse|eq11), prior (transition|demo), \
-        proposal_noise (demo|moments), hybrid_prior (predicted|posterior), \
-        likelihood_floor (true|false), sweep (true|false), \
-        resampling (multinomial|residual|systematic|stratified)";
-
-    /// Applies `key=value` overrides (the named options).
-    ///
-    /// # Errors
-    /// [`ExperimentError::BadOption`] for an unknown key or value.
-    pub fn apply(&mut self, key: &str, value: &str) -> Result<(), ExperimentError> {
-        let bad = || ExperimentError::bad_option("hikpf", Self::KEYS, key, value);
-        // `inf` and `NaN` parse as f64: refused here, not later as NaN errors
-        let num = || {
-            value
-                .parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(bad)
-        };
-        let int = || value.parse::<usize>().map_err(|_| bad());
-        match key {
-            "runs" => self.runs = int()?,
-            "particles" => self.particles = int()?,
-            "steps" => self.steps = int()?,
-            "seed" => self.seed = value.parse().map_err(|_| bad())?,
-            "sin_freq" => self.sin_freq = num()?,
-            "iekf_iterations" => self.iekf_iterations = int()?,
-            "iekf_tolerance" => self.iekf_tolerance = num()?,
-            "error" => {
-                self.error = match value {
-                    "rmse" => ErrorMetric::Rmse,
-                    "eq11" => ErrorMetric::Eq11Literal,
-                    _ => return Err(bad()),
-                }
-            }
-            "prior" => {
-                self.prior = match value {
-                    "transition" => PriorDensity::Transition,
-                    "demo" => PriorDensity::DemoIncrement,
-                    _ => return Err(bad()),
-                }
-            }
-            "proposal_noise" => {
-                self.proposal_noise = match value {
-                    "demo" => ProposalNoise::Demo,
-                    "moments" => ProposalNoise::TrueMoments,
-                    _ => return Err(bad()),
-                }
-            }
-            "hybrid_prior" => {
-                self.hybrid_prior = match value {
-                    "predicted" => HybridPrior::UkfPredicted,
-                    "posterior" => HybridPrior::UkfPosterior,
-                    _ => return Err(bad()),
-                }
-            }
-            "likelihood_floor" => self.likelihood_floor = value.parse().map_err(|_| bad())?,
-            "sweep" => self.sweep = value.parse().map_err(|_| bad())?,
-            "resampling" => {
-                self.resampling = Resampling::ALL
-                    .into_iter()
-                    .find(|r| r.name() == value)
-                    .ok_or_else(bad)?
-            }
-            _ => return Err(bad()),
-        }
-        if !(1..=MAX_RUNS).contains(&self.runs)
-            || !(1..=MAX_PARTICLES).contains(&self.particles)
-            || !(2..=MAX_FRAMES).contains(&self.steps)
-            || !(1..=10_000).contains(&self.iekf_iterations)
-        {
-            return Err(bad());
-        }
-        Ok(())
-    }
-
-    /// One line per option, for the table footer.
-    pub fn describe(&self) -> String {
-        format!(
-            "runs={} particles={} steps={} sin_freq={} error={:?} prior={:?} proposal_noise={:?} \
-             iekf_iterations={} hybrid_prior={:?} likelihood_floor={} resampling={} seed={} sweep={}",
-            self.runs,
-            self.particles,
-            self.steps,
-            self.sin_freq,
-            self.error,
-            self.prior,
-            self.proposal_noise,
-            self.iekf_iterations,
-            self.hybrid_prior,
-            self.likelihood_floor,
-            self.resampling.name(),
-            self.seed,
-            self.sweep
-        )
-    }
-}
+mod options;
+mod paper;
+mod report;
+mod score;
+pub use options::*;
+pub use paper::*;
+pub use report::*;
+pub use score::*;
 
 /// `f(x, t) = 1 + sin(w pi t) + 0.5 x` (without noise).
 #[inline]
@@ -512,7 +236,7 @@ fn run_error(metric: ErrorMetric, est: &[f64], truth: &[f64]) -> f64 {
 }
 
 /// The result of one filter on one run.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RunOutcome {
     /// Per-run error (the configured [`ErrorMetric`]).
     pub error: f64,
@@ -693,424 +417,70 @@ fn one_run(c: &HikpfConfig, run: usize) -> Result<Vec<RunOutcome>, ExperimentErr
         .collect()
 }
 
-/// Mean, variance (divisor `R - 1`, as MATLAB's `var`) and median of the
-/// per-run errors of one filter, and its degenerate steps.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FilterSummary {
-    /// Which filter.
-    pub kind: FilterKind,
-    /// Mean per-run error.
-    pub mean: f64,
-    /// Variance of the per-run errors.
-    pub var: f64,
-    /// Median per-run error.
-    pub median: f64,
-    /// Steps, over all runs, whose weights were all zero.
-    pub degenerate: usize,
-    /// Fraction of the Metropolis-Hastings moves accepted, over all
-    /// particles, steps and runs (0 for the rows without MCMC).
-    pub acceptance: f64,
-}
-
-/// The per-run outcomes of every filter: `runs[r][f]` follows
-/// [`FilterKind::ALL`].
-#[derive(Debug, Clone, PartialEq)]
-pub struct HikpfResult {
-    /// The configuration that produced it.
-    pub config: HikpfConfig,
-    /// Outcomes per run, per filter.
-    pub runs: Vec<Vec<RunOutcome>>,
-}
-
-impl HikpfResult {
-    /// The summary of every filter, in row order.
-    pub fn summary(&self) -> Vec<FilterSummary> {
-        FilterKind::ALL
-            .iter()
-            .enumerate()
-            .map(|(f, &kind)| {
-                let mut e: Vec<f64> = self.runs.iter().map(|r| r[f].error).collect();
-                let n = e.len() as f64;
-                let mean = e.iter().sum::<f64>() / n;
-                let var = if e.len() > 1 {
-                    e.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)
-                } else {
-                    0.0
-                };
-                e.sort_by(f64::total_cmp);
-                let mid = e.len() / 2;
-                let median = if e.len() % 2 == 1 {
-                    e[mid]
-                } else {
-                    0.5 * (e[mid - 1] + e[mid])
-                };
-                FilterSummary {
-                    kind,
-                    mean,
-                    var,
-                    median,
-                    degenerate: self.runs.iter().map(|r| r[f].degenerate).sum(),
-                    acceptance: self.runs.iter().map(|r| r[f].accepted).sum::<usize>() as f64
-                        / (self.runs.len()
-                            * self.config.particles
-                            * self.config.steps.saturating_sub(1)) as f64,
-                }
-            })
-            .collect()
-    }
-
-    /// The paper-vs-ours table.
-    pub fn table(&self) -> Table {
-        let mut t = Table::new(
-            format!(
-                "hikpf: paper 000 Table 1 and van der Merwe et al. 2000 Table 1 vs ours ({} runs)",
-                self.runs.len()
-            ),
-            &[
-                "filter",
-                "paper mean",
-                "paper var",
-                "vdM2000 mean",
-                "ours mean",
-                "ours var",
-                "ours median",
-                "ours/paper",
-                "ours/vdM",
-                "all-zero steps",
-                "MCMC accepted",
-            ],
-        );
-        let fmt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.5}"));
-        for s in self.summary() {
-            let paper = s.kind.paper();
-            let vdm = s.kind.van_der_merwe();
-            t.push(vec![
-                s.kind.name().to_string(),
-                fmt(paper.map(|p| p.0)),
-                paper.map_or("-".into(), |p| format!("{:.3e}", p.1)),
-                vdm.map_or("-".into(), |v| format!("{v:.3}")),
-                format!("{:.5}", s.mean),
-                format!("{:.3e}", s.var),
-                format!("{:.5}", s.median),
-                paper.map_or("-".into(), |p| format!("{:.2}", s.mean / p.0)),
-                vdm.map_or("-".into(), |v| format!("{:.2}", s.mean / v)),
-                s.degenerate.to_string(),
-                if s.acceptance > 0.0 {
-                    format!("{:.1}%", 100.0 * s.acceptance)
-                } else {
-                    "-".into()
-                },
-            ]);
-        }
-        t
-    }
-}
-
-/// The IEKF iteration counts `c` of the sweep.
-pub const SWEEP_ITERATIONS: [usize; 5] = [1, 2, 3, 5, 10];
-
-/// The filters of paper 000's Table 1, in its row order (the sweep's
-/// columns).
-pub const PAPER_ROWS: [FilterKind; 5] = [
-    FilterKind::Pf,
-    FilterKind::PfEkf,
-    FilterKind::PfUkf,
-    FilterKind::PfIekf,
-    FilterKind::Hikpf,
-];
-
-/// One cell of the sweep: a reading of paper 000's experiment and the
-/// summaries it gives.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SweepCell {
-    /// Error formula of the cell.
-    pub error: ErrorMetric,
-    /// Whether the demo's `1e-99` likelihood floor is on.
-    pub likelihood_floor: bool,
-    /// IEKF iterations `c` of PF-IEKF and HIKPF.
-    pub iekf_iterations: usize,
-    /// Every filter's summary, in [`FilterKind::ALL`] order.
-    pub summary: Vec<FilterSummary>,
-}
-
-impl SweepCell {
-    /// The summary of filter `kind`.
-    pub fn filter(&self, kind: FilterKind) -> &FilterSummary {
-        let i = FilterKind::ALL.iter().position(|&k| k == kind).unwrap_or(0);
-        &self.summary[i]
-    }
-}
-
-/// Paper 000's unstated parameters swept: error formula {RMSE, eq. 11} x
-/// likelihood floor {off, on} x IEKF iterations [`SWEEP_ITERATIONS`], every
-/// other option as in `base`. Each (floor, iterations) pair is one run of
-/// the table, scored by both error formulas; every cell uses the same
-/// random streams, so cells differ only by the reading.
-///
-/// # Errors
-/// As [`run`].
-pub fn sweep(base: &HikpfConfig, progress: bool) -> Result<Vec<SweepCell>, ExperimentError> {
-    let mut cells = vec![];
-    for likelihood_floor in [false, true] {
-        for iekf_iterations in SWEEP_ITERATIONS {
-            let config = HikpfConfig {
-                error: ErrorMetric::Rmse,
-                likelihood_floor,
-                iekf_iterations,
-                sweep: false,
-                ..*base
-            };
-            let rmse = run(&config, None, progress)?;
-            // the same runs scored by eq. 11
-            let eq11 = HikpfResult {
-                config: HikpfConfig {
-                    error: ErrorMetric::Eq11Literal,
-                    ..config
-                },
-                runs: rmse
-                    .runs
-                    .iter()
-                    .map(|r| {
-                        r.iter()
-                            .map(|o| RunOutcome {
-                                error: o.other_error,
-                                other_error: o.error,
-                                ..*o
-                            })
-                            .collect()
-                    })
-                    .collect(),
-            };
-            for result in [rmse, eq11] {
-                cells.push(SweepCell {
-                    error: result.config.error,
-                    likelihood_floor,
-                    iekf_iterations,
-                    summary: result.summary(),
-                });
-            }
-        }
-    }
-    // the table's order: error formula, then floor, then iterations
-    cells.sort_by_key(|c| {
-        (
-            c.error == ErrorMetric::Eq11Literal,
-            c.likelihood_floor,
-            c.iekf_iterations,
-        )
-    });
-    Ok(cells)
-}
-
-/// The sweep as a table: per cell, mean and variance of paper 000's five
-/// filters, each mean's ratio to the paper's, and PF-IEKF / HIKPF (the
-/// paper: 3.16); the paper's row first.
-pub fn sweep_table(cells: &[SweepCell], runs: usize) -> Table {
-    let mut header = vec!["error", "floor", "c"];
-    let names: Vec<String> = PAPER_ROWS
-        .iter()
-        .flat_map(|k| {
-            [
-                format!("{} mean (x paper)", k.name()),
-                format!("{} var", k.name()),
-            ]
-        })
-        .collect();
-    header.extend(names.iter().map(String::as_str));
-    header.push("PF-IEKF/HIKPF");
-    let mut t = Table::new(
-        format!(
-            "hikpf: sweep of paper 000's unstated parameters ({runs} runs each): \
-             mean (ours/paper) and variance of the per-run error"
-        ),
-        &header,
-    );
-    let mut paper = vec!["paper 000".to_string(), "-".into(), "-".into()];
-    for k in PAPER_ROWS {
-        let (m, v) = k.paper().unwrap_or((f64::NAN, f64::NAN));
-        paper.push(format!("{m:.5}"));
-        paper.push(format!("{v:.2e}"));
-    }
-    let (pi, ph) = (
-        FilterKind::PfIekf.paper().map_or(f64::NAN, |p| p.0),
-        FilterKind::Hikpf.paper().map_or(f64::NAN, |p| p.0),
-    );
-    paper.push(format!("{:.2}", pi / ph));
-    t.push(paper);
-    for c in cells {
-        let mut row = vec![
-            match c.error {
-                ErrorMetric::Rmse => "rmse".to_string(),
-                ErrorMetric::Eq11Literal => "eq11".to_string(),
-            },
-            if c.likelihood_floor { "on" } else { "off" }.to_string(),
-            c.iekf_iterations.to_string(),
-        ];
-        for k in PAPER_ROWS {
-            let s = c.filter(k);
-            let p = k.paper().map_or(f64::NAN, |p| p.0);
-            row.push(format!("{:.5} ({:.2})", s.mean, s.mean / p));
-            row.push(format!("{:.2e}", s.var));
-        }
-        row.push(format!(
-            "{:.2}",
-            c.filter(FilterKind::PfIekf).mean / c.filter(FilterKind::Hikpf).mean
-        ));
-        t.push(row);
-    }
-    t
-}
-
-/// One row of `runs.csv`: one filter's error in one run (full precision).
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct RunRow {
-    /// Run index (0-based).
-    pub run: usize,
-    /// [`FilterKind::name`].
-    pub filter: &'static str,
-    /// The run's error (the configured formula).
-    pub error: f64,
-}
-
-/// The `runs.csv` rows of run `r`, one per filter.
-fn run_rows(r: usize, outcomes: &[RunOutcome]) -> Vec<RunRow> {
-    FilterKind::ALL
-        .iter()
-        .zip(outcomes)
-        .map(|(k, x)| RunRow {
-            run: r,
-            filter: k.name(),
-            error: x.error,
-        })
-        .collect()
-}
-
-/// Runs the experiment: runs in parallel (each run has its own random
-/// streams, so the result does not depend on the thread count). With
-/// `runs_csv`, each run's row is appended to `runs.partial.csv` beside it
-/// the moment the run finishes, and the complete file, in run order,
-/// replaces `runs_csv` at the end (see [`PartialCsv`]): an interrupted run
-/// keeps every finished run and the previous `runs.csv`.
-///
-/// # Errors
-/// [`ExperimentError::Failed`] naming the filter, run and step that failed;
-/// [`ExperimentError::Io`] when the CSV cannot be written.
-pub fn run(
-    config: &HikpfConfig,
-    runs_csv: Option<&Path>,
-    progress: bool,
-) -> Result<HikpfResult, ExperimentError> {
-    let log = runs_csv.map(PartialCsv::create).transpose()?;
-    let bar = crate::experiment::progress_bar(config.runs, progress, "hikpf runs");
-    let runs: Vec<Vec<RunOutcome>> = (0..config.runs)
-        .into_par_iter()
-        .map(|r| {
-            let outcomes = one_run(config, r)?;
-            if let Some(log) = &log {
-                log.append(&run_rows(r, &outcomes))?;
-            }
-            bar.inc(1);
-            Ok(outcomes)
-        })
-        .collect::<Result<_, ExperimentError>>()?;
-    bar.finish_and_clear();
-    if let Some(log) = log {
-        let rows: Vec<RunRow> = runs
-            .iter()
-            .enumerate()
-            .flat_map(|(r, o)| run_rows(r, o))
-            .collect();
-        log.finish(&rows)?;
-    }
-    Ok(HikpfResult {
-        config: *config,
-        runs,
-    })
-}
-
-/// Writes the summary CSV and the per-run error figure (paper 000 Fig. 3).
-fn write_outputs(result: &HikpfResult, dir: &Path) -> Result<(), ExperimentError> {
-    let csv = dir.join("table.csv");
-    write_text(&csv, &result.table().to_csv())?;
-    let series: Vec<Series> = FilterKind::ALL
-        .iter()
-        .enumerate()
-        .filter(|(_, k)| {
-            !matches!(
-                k,
-                FilterKind::PfMcmc | FilterKind::PfEkfMcmc | FilterKind::PfUkfMcmc
-            )
-        })
-        .map(|(f, k)| Series {
-            name: k.name().to_string(),
-            points: result
-                .runs
-                .iter()
-                .enumerate()
-                .map(|(r, o)| ((r + 1) as f64, o[f].error))
-                .collect(),
-        })
-        .collect();
-    line_chart(
-        &dir.join("errors.svg"),
-        "hikpf: error of each filter per run (cf. paper 000 Fig. 3)",
-        "run",
-        "RMSE",
-        &series,
-    )?;
-    Ok(())
-}
-
-/// The quick configurations that CI pins: the defaults, and the demo's
-/// linear-domain likelihood floor.
-pub fn golden_configs() -> [(&'static str, HikpfConfig); 2] {
-    let floor = HikpfConfig {
-        likelihood_floor: true,
-        ..HikpfConfig::quick()
-    };
-    [
-        ("default", HikpfConfig::quick()),
-        ("likelihood_floor", floor),
-    ]
-}
-
-/// The registry entry.
+/// The registry entry: job `j` is run `j % runs` of the main table
+/// (`j < runs`) or of sweep cell `j / runs - 1` ([`sweep`], when on).
 pub struct HikpfExperiment;
 
-impl Experiment for HikpfExperiment {
-    fn id(&self) -> &'static str {
-        "hikpf"
+impl Paper for HikpfExperiment {
+    type Config = HikpfConfig;
+    type Done = Vec<RunOutcome>;
+    type Row = RunRow;
+    type Shared = ();
+    const ID: &'static str = ID;
+    const SOURCE: &'static str = "paper 000 Table 1; van der Merwe et al. 2000 Table 1";
+    const SUMMARY: &'static str =
+        "EKF, UKF, PF, PF-EKF, PF-UKF, PF-IEKF, HIKPF (+MCMC) on the Gamma-noise model";
+    const LOG: &'static str = "runs.csv";
+    const JOBS: &'static str = "hikpf runs";
+
+    fn quick() -> HikpfConfig {
+        HikpfConfig::quick()
     }
-    fn source(&self) -> &'static str {
-        "paper 000 Table 1; van der Merwe et al. 2000 Table 1"
+    fn full() -> HikpfConfig {
+        HikpfConfig::paper()
     }
-    fn summary(&self) -> &'static str {
-        "EKF, UKF, PF, PF-EKF, PF-UKF, PF-IEKF, HIKPF (+MCMC) on the Gamma-noise model"
+    fn jobs(c: &HikpfConfig) -> usize {
+        c.runs * if c.sweep { 1 + SWEEP_CELLS } else { 1 }
     }
-    fn run(&self, opts: &RunOptions) -> Result<Vec<Table>, ExperimentError> {
-        let mut config = match opts.mode {
-            Mode::Quick => HikpfConfig::quick(),
-            Mode::Full => HikpfConfig::paper(),
-        };
-        for (k, v) in &opts.set {
-            config.apply(k, v)?;
+    fn prepare(_: &HikpfConfig, _: &[usize]) -> Result<(), ExperimentError> {
+        Ok(())
+    }
+    fn run_job(c: &HikpfConfig, _: &(), j: usize) -> Result<Vec<RunOutcome>, ExperimentError> {
+        let (cell, r) = (j / c.runs, j % c.runs);
+        if cell == 0 {
+            one_run(c, r)
+        } else {
+            one_run(&sweep_config(c, cell - 1), r)
         }
-        let dir = opts.output_dir(self.id())?;
-        let result = run(&config, Some(&dir.join("runs.csv")), opts.progress)?;
-        write_outputs(&result, &dir)?;
-        let mut table = result.table();
-        table.title = format!("{}\n  options: {}", table.title, config.describe());
-        let mut tables = vec![table];
+    }
+    fn rows(c: &HikpfConfig, j: usize, done: &Vec<RunOutcome>) -> Vec<RunRow> {
+        if j < c.runs {
+            run_rows(j, done)
+        } else {
+            Vec::new()
+        }
+    }
+    fn report(
+        config: &HikpfConfig,
+        mut runs: Vec<Vec<RunOutcome>>,
+        dir: &Path,
+    ) -> Result<Vec<Table>, ExperimentError> {
+        let swept = runs.split_off(config.runs.min(runs.len()));
+        let result = HikpfResult {
+            config: *config,
+            runs,
+        };
+        write_outputs(&result, dir)?;
+        let mut tables = vec![result.table()];
         if config.sweep {
-            let cells = sweep(&config, opts.progress)?;
-            let t = sweep_table(&cells, config.runs);
+            let t = sweep_table(&sweep_cells(config, swept), config.runs);
             write_text(&dir.join("sweep.csv"), &t.to_csv())?;
             tables.push(t);
         }
         Ok(tables)
     }
 
-    fn golden(&self) -> Result<Option<String>, ExperimentError> {
+    fn golden() -> Result<Option<String>, ExperimentError> {
         let mut out = String::from("config,filter,mean,var,median,all_zero_steps\n");
         for (name, config) in golden_configs() {
             for s in run(&config, None, false)?.summary() {

@@ -6,6 +6,8 @@
 //! the experiments: `xtask` only parses arguments and prints.
 //!
 //! - [`experiment`]: the [`Experiment`] trait, run options and errors;
+//! - [`driver`]: the one driver of every experiment ([`driver::Paper`]):
+//!   presets, `--set`, outputs, partial logs, progress, shards and merge;
 //! - [`REGISTRY`]: every experiment by id, in the order `all` runs them;
 //! - one module per experiment: [`hikpf`] (paper 000), [`ball`] (paper
 //!   001), [`affine`] (paper 002), [`condensation`] (paper 003),
@@ -18,10 +20,12 @@ pub mod affine;
 pub mod ball;
 pub mod condensation;
 pub mod correlation;
+pub mod driver;
 pub mod experiment;
 pub mod hikpf;
 mod registry;
 pub mod scenes;
 
+pub use driver::{Paper, Shard};
 pub use experiment::{Experiment, ExperimentError, Mode, RunOptions};
 pub use registry::{REGISTRY, find};

@@ -64,7 +64,7 @@ const FLICKER: u64 = 101;
 const JITTER: u64 = 102;
 
 /// How the ball moves.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub enum BallMotion {
     /// Straight lines at constant speed, reflected at the screen edges.
     #[default]

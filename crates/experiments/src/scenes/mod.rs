@@ -182,7 +182,7 @@ impl ObjectTruth {
 /// silhouette made of several primitives (the hand: palm, fingers, thumb)
 /// keeps only the parts of their boundaries that no other primitive covers,
 /// so it may be several polylines.
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct Outline {
     /// The boundary pieces; a closed piece repeats its first point last.
     pub polylines: Vec<Vec<[f64; 2]>>,

@@ -1,0 +1,82 @@
+//! The experiment's declared options.
+
+use super::*;
+
+options! {
+    /// Every choice of the experiment, at paper scale by default (300
+    /// frames, 5 runs).
+    #[derive(Debug, Clone, PartialEq)]
+    pub struct AffineConfig {
+        /// Frames per sequence (300: the length of the paper's videos'
+        /// tracked parts, about; 1 reads as 2).
+        pub frames: usize = 300, in 1..=MAX_FRAMES;
+        /// Runs: run `r` renders each scene with seed `scene_seed + r` and
+        /// seeds the filters with `r` (5).
+        pub runs: usize = 5, in 1..=MAX_RUNS;
+        /// Scene seed of run 0.
+        pub scene_seed: u64 = 1;
+        /// A frame is lost when its RMS exceeds this fraction of the true
+        /// target's side `sqrt(w_k h_k)` (0.25).
+        pub lost_fraction: f64 = 0.25, in above(0.0);
+        /// HKPF's particles in every setting; `none` uses the paper's per
+        /// setting ([`Setting::hkpf_particles`]: 150/100/50).
+        pub hkpf_particles: Option<usize> = None, in IfSome(1..=MAX_PARTICLES);
+        /// `N_max` of both self-tuning filters (ISPF and ours; Algorithm 1's
+        /// default, 50).
+        pub max_particles: usize = 50, in 1..=MAX_PARTICLES;
+        /// Measure the trackers' wall-clock time (the fps column); `false`
+        /// records 0 s, so that two runs write byte-identical files.
+        pub timing: bool = true;
+    }
+}
+
+impl AffineConfig {
+    /// Paper scale: 300 frames, 5 runs.
+    pub fn paper() -> Self {
+        Self::default()
+    }
+
+    /// The CI scale: 80 frames, 1 run.
+    pub fn quick() -> Self {
+        Self {
+            frames: 80,
+            runs: 1,
+            ..Self::paper()
+        }
+    }
+
+    /// Applies a `key=value` override (see [`Options::set`]).
+    ///
+    /// # Errors
+    /// [`ExperimentError::BadOption`] for an unknown key or value, listing
+    /// every key with its domain.
+    pub fn apply(&mut self, key: &str, value: &str) -> Result<(), ExperimentError> {
+        crate::driver::apply(ID, self, key, value)
+    }
+
+    /// Every option as `key=value`, for the table footer.
+    pub fn describe(&self) -> String {
+        Options::describe(self)
+    }
+
+    /// Frames per sequence as run (at least 2: one to start, one to score).
+    pub fn frames(&self) -> usize {
+        self.frames.max(2)
+    }
+
+    /// The self-tuning filter's settings (Algorithm 1's defaults).
+    pub fn stpf(&self) -> StpfConfig {
+        StpfConfig {
+            max_particles: self.max_particles,
+            ..StpfConfig::default()
+        }
+    }
+
+    /// ISPF's settings.
+    pub fn ispf(&self) -> IspfConfig {
+        IspfConfig {
+            max_particles: self.max_particles,
+            ..IspfConfig::default()
+        }
+    }
+}

@@ -1,0 +1,148 @@
+//! Paper 002's settings (one per video) and filters.
+
+use super::*;
+
+/// The three synthetic settings, each mirroring one of the paper's videos.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Setting {
+    /// "Cock": abrupt, erratic motion with motion blur and little pose
+    /// change: a 15 px jump (random direction) every 8 frames, blurred over
+    /// 6 px (0.4 of the jump, as if the shutter were open for 0.4 of the
+    /// frame interval).
+    ///
+    /// Why 15 px: the paper says only "abrupt and erratic motion" and
+    /// "blur resulting from severe camera vibration", and reports that its
+    /// filter follows it. A jump must then land inside a region the
+    /// filters search in the jump frame itself. The widest first-frame
+    /// region of the three is ISPF's shift spread (5 px, so 3 sigma =
+    /// 15 px); the Kalman region of HKPF and the self-tuning filter is
+    /// narrower (`S = P_xy + r^2 I` is 5.1 px^2 in steady state, 2.25 px
+    /// per axis, so 3 sigma = 6.8 px; 3x wider after a detected
+    /// manoeuvre, but a manoeuvre is detected from the innovation of the
+    /// jump frame's own estimate, so only from the next frame on), and the
+    /// pose estimator corrects shifts of a few pixels (trained at 2 px).
+    /// The first version jumped 30 px (0.6 of the target's width in one
+    /// frame), twice any region: all three filters lost the target at the
+    /// first or second jump and never recovered (RMS 46-52 px, 64-68 of 79
+    /// frames lost), which says nothing about the filters. The size is
+    /// this reach; a sweep (80 frames, 2 seeds) agrees with it: at 6-10 px
+    /// no filter loses a frame, at 15 px HKPF loses some on one seed, at
+    /// 20 px HKPF loses frames on both seeds and all three lose the target
+    /// on one, at 30 px all three on both. Cock
+    /// stays the most abrupt setting by frequency: a jump every 8 frames
+    /// against Dudek's 20 px every 15 (beyond the 15 px reach, so Dudek's
+    /// jump frames test recovery rather than following).
+    Cock,
+    /// "Sylvester": strong illumination change and severe pose change
+    /// (rotation up to 0.9 rad, scale 0.7-1.3, aspect 0.85-1.15, gain
+    /// 0.55-1.45), smooth motion, no jumps.
+    Sylvester,
+    /// "Dudek": a face with fast motion and pose change: 20 px jumps every
+    /// 15 frames with 6 px blur, rotation up to 0.5 rad, scale 0.8-1.2.
+    Dudek,
+}
+
+impl Setting {
+    /// Every setting, in table order.
+    pub const ALL: [Setting; 3] = [Setting::Cock, Setting::Sylvester, Setting::Dudek];
+
+    /// Row label.
+    pub fn name(self) -> &'static str {
+        match self {
+            Setting::Cock => "Cock",
+            Setting::Sylvester => "Sylvester",
+            Setting::Dudek => "Dudek",
+        }
+    }
+
+    /// The scene of this setting with `frames` frames.
+    pub fn scene(self, frames: usize) -> AffineScene {
+        let base = AffineScene {
+            frames,
+            ..AffineScene::default()
+        };
+        match self {
+            Setting::Cock => AffineScene {
+                jump_every: 8,
+                jump_size: 15.0,
+                jump_blur: 6.0,
+                rotation_amplitude: 0.2,
+                scale_amplitude: 0.1,
+                aspect_amplitude: 0.05,
+                illumination_amplitude: 0.1,
+                ..base
+            },
+            Setting::Sylvester => AffineScene {
+                jump_every: 0,
+                rotation_amplitude: 0.9,
+                rotation_period: 80.0,
+                scale_amplitude: 0.3,
+                aspect_amplitude: 0.15,
+                illumination_amplitude: 0.45,
+                ..base
+            },
+            Setting::Dudek => AffineScene {
+                jump_every: 15,
+                jump_size: 20.0,
+                jump_blur: 6.0,
+                rotation_amplitude: 0.5,
+                scale_amplitude: 0.2,
+                aspect_amplitude: 0.1,
+                illumination_amplitude: 0.2,
+                ..base
+            },
+        }
+    }
+
+    /// HKPF's particles on the paper's video of this setting (150, 100, 50).
+    pub fn hkpf_particles(self) -> usize {
+        match self {
+            Setting::Cock => 150,
+            Setting::Sylvester => 100,
+            Setting::Dudek => 50,
+        }
+    }
+
+    /// The paper's mean particles per frame: (HKPF, ISPF, self-tuning HKPF).
+    /// The paper gives no ISPF figure on Cock (ISPF fails near frame 148).
+    pub fn paper_particles(self) -> [Option<f64>; 3] {
+        match self {
+            Setting::Cock => [Some(150.0), None, Some(28.2)],
+            Setting::Sylvester => [Some(100.0), Some(13.2), Some(9.7)],
+            Setting::Dudek => [Some(50.0), Some(15.5), Some(8.6)],
+        }
+    }
+}
+
+/// The three filters compared, in column order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Filter {
+    /// The hierarchical Kalman-particle filter (Yin et al. 2011).
+    Hkpf,
+    /// The incremental self-tuning particle filter (Li et al. 2012).
+    Ispf,
+    /// The self-tuning HKPF of paper 002 (Algorithm 1).
+    Stpf,
+}
+
+impl Filter {
+    /// Every filter, in column order.
+    pub const ALL: [Filter; 3] = [Filter::Hkpf, Filter::Ispf, Filter::Stpf];
+
+    /// Label.
+    pub fn name(self) -> &'static str {
+        match self {
+            Filter::Hkpf => "HKPF",
+            Filter::Ispf => "ISPF",
+            Filter::Stpf => "self-tuning HKPF",
+        }
+    }
+
+    pub(super) fn index(self) -> usize {
+        match self {
+            Filter::Hkpf => 0,
+            Filter::Ispf => 1,
+            Filter::Stpf => 2,
+        }
+    }
+}

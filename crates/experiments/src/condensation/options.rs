@@ -1,0 +1,88 @@
+//! The experiment's declared options.
+
+use super::*;
+
+options! {
+    /// Every choice of the experiment, at paper scale by default (10 runs
+    /// of the whole 150-frame scene).
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub struct CondensationConfig {
+        /// Seeded runs of every job (10).
+        pub runs: usize = 10, in 1..=MAX_RUNS;
+        /// Frames of the tracking scene (the default webcam scene's 150).
+        pub frames: usize = 150, in 2..=MAX_FRAMES;
+        /// Scene seed of run 0.
+        pub scene_seed: u64 = 1;
+        /// A frame is lost when the centre error exceeds this fraction of
+        /// the smaller side of the object's box (1/2: the estimate is off
+        /// the object).
+        pub lost_fraction: f64 = 0.5, in above(0.0);
+        /// Lock-on and identity radius (px): an estimate this close to an
+        /// object's centre is on it (20: half the face's width).
+        pub lock_distance: f64 = 20.0, in above(0.0);
+        /// Consecutive frames on the newcomer that count as lock-on (3).
+        pub lock_frames: usize = 3, in 1..=MAX_FRAMES;
+        /// Frames of the entering scene after the entry (at frame 30) that
+        /// are tracked (45 quick, 90 = the whole scene full).
+        pub reinit_frames: usize = 90, in 1..=MAX_FRAMES;
+        /// After the crossing, frames whose true centres are more than this
+        /// far apart along x are scored (45 px: the objects no longer
+        /// overlap).
+        pub separation: f64 = 45.0, in above(0.0);
+        /// c-AVQ's IFD threshold of the re-initialisation runs (paper 003
+        /// sec. 4; the tracker's default, 0.05).
+        pub avq_threshold: f32 = 0.05, in above(0.0);
+        /// c-AVQ's trigger: the fraction of pixels over the threshold that
+        /// starts a re-initialisation (the tracker's default, 0.035).
+        pub avq_trigger: f64 = 0.035, in inside(0.0, 1.0);
+        /// Measure the trackers' wall-clock time (the fps column); `false`
+        /// records 0 s, so that two runs write byte-identical files.
+        pub timing: bool = true;
+    }
+    check check;
+}
+
+/// The cross-option rule: c-AVQ's constants must be ones it accepts.
+pub(super) fn check(c: &CondensationConfig) -> Result<(), String> {
+    c.avq().validate().map_err(|e| e.to_string())
+}
+
+impl CondensationConfig {
+    /// Paper scale: 10 runs of the whole 150-frame scene.
+    pub fn paper() -> Self {
+        Self::default()
+    }
+
+    /// The CI scale: 2 runs of 60 frames, 45 frames after the entry.
+    pub fn quick() -> Self {
+        Self {
+            runs: 2,
+            frames: 60,
+            reinit_frames: 45,
+            ..Self::paper()
+        }
+    }
+
+    /// Applies a `key=value` override (see [`Options::set`]).
+    ///
+    /// # Errors
+    /// [`ExperimentError::BadOption`] for an unknown key or value, listing
+    /// every key with its domain.
+    pub fn apply(&mut self, key: &str, value: &str) -> Result<(), ExperimentError> {
+        crate::driver::apply(ID, self, key, value)
+    }
+
+    /// Every option as `key=value`, for the table footer.
+    pub fn describe(&self) -> String {
+        Options::describe(self)
+    }
+
+    /// The c-AVQ constants of the re-initialisation runs.
+    pub fn avq(&self) -> CAvqConfig {
+        CAvqConfig {
+            ifd_threshold: self.avq_threshold,
+            trigger_fraction: self.avq_trigger,
+            ..CAvqConfig::default()
+        }
+    }
+}
