@@ -40,14 +40,14 @@ pub enum ResampleTiming {
     AfterWeighing,
     /// At the start of the next step, from the weights the previous step
     /// left, before the proposal: the "select, predict, measure" of
-    /// CONDENSATION (Isard and Blake 1998; Lee, Jo and Kang (paper 003)
-    /// sec. 2.1) and of the trackers' SIR filters (Bócsi and Csató (paper
-    /// 001) Algorithm 1, line 6). The same filter, but a step leaves the
+    /// CONDENSATION (Isard and Blake 1998; paper 003, Lee, Jo and Kang,
+    /// sec. 2.1) and of the trackers' SIR filters (paper 001, Bócsi and
+    /// Csató, Algorithm 1, line 6). The same filter, but a step leaves the
     /// weighted set, so [`crate::ParticleSet::mean`] is the weighted
     /// estimate of the frame. [`ResamplePolicy::Ess`] looks at the ESS of
-    /// those weights. The first step of a set ([`crate::ParticleSet::k`] =
-    /// 0) has no previous weights to select by and does not resample. Not
-    /// combined with the MCMC move.
+    /// those weights. The first step of a set (time index `k` = 0) has no
+    /// previous weights to select by and does not resample. Not combined
+    /// with the MCMC move.
     BeforeProposal,
 }
 
@@ -264,6 +264,7 @@ impl ParticleFilter {
     /// Runs `f(particle offset, particles, log-weight slots, scratch,
     /// generator)` over fixed chunks, in parallel when there is more than
     /// one; returns the first error in particle order.
+    #[allow(clippy::type_complexity)]
     fn chunked<T: Send, S: Send, F>(
         &self,
         parts: &mut [T],
@@ -388,7 +389,7 @@ impl ParticleFilter {
 
     /// [`ParticleFilter::step`] at time `k` with the particles before the
     /// proposal in `parents` (for the MCMC move; empty without it).
-    #[allow(clippy::too_many_arguments)]
+    #[allow(clippy::too_many_arguments, clippy::type_complexity)]
     fn step_from<T, Z, P, const N: usize>(
         &self,
         set: &mut ParticleSet<T>,

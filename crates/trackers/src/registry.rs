@@ -25,8 +25,11 @@ pub struct TrackerInfo {
     /// position-only trackers keep the initial box size.
     pub handles_scale: bool,
     options: fn() -> Vec<Spec>,
-    build: fn(u64, &[(String, String)]) -> Result<Box<dyn Tracker>>,
+    build: Build,
 }
+
+/// A registry entry's constructor: seed and `key=value` options.
+type Build = fn(u64, &[(String, String)]) -> Result<Box<dyn Tracker>>;
 
 impl TrackerInfo {
     /// A fresh tracker with its default options, seeded with `seed`
