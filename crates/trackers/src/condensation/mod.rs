@@ -473,7 +473,7 @@ impl<M: StateModel<D>, const D: usize> Object<M, D> {
 /// One tracked object in either representation.
 #[derive(Debug)]
 enum ObjectFilter {
-    Points(Object<points::PointModel, 4>),
+    Points(Box<Object<points::PointModel, 4>>),
     Contour(Box<Object<contour::ContourModel, 8>>),
 }
 
@@ -548,7 +548,7 @@ mod tests {
     #[test]
     fn condensation_selects_on_the_pi_threshold_and_weights_by_the_likelihood() {
         // Four particles on a line, the likelihood peaks at 2.
-        let particles = [0.0, 1.0, 2.0, 3.0].map(|x| SVector::<f64, 1>::new(x));
+        let particles = [0.0, 1.0, 2.0, 3.0].map(SVector::<f64, 1>::new);
         let mut set = ParticleSet::new(particles.to_vec()).unwrap();
         let c = Condensation::POINT_CLOUD;
         let f = c.filter();

@@ -150,13 +150,13 @@ impl PointModel {
             frame: (frame.width(), frame.height()),
             size: (target.width, target.height),
         };
-        Ok(ObjectFilter::Points(Object::new(
+        Ok(ObjectFilter::Points(Box::new(Object::new(
             model,
             cue,
             &config.condensation,
             particles,
             seed,
-        )?))
+        )?)))
     }
 
     /// The support window of a particle, `None` when its centre is off the
