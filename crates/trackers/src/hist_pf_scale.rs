@@ -54,27 +54,61 @@
 //! background may hardly drop, and the scale can then run away.
 //!
 //! # Filter
-//! Systematic resampling every frame (sampling importance resampling),
-//! propagation, weighting in the log domain on a
-//! [`bayestrack_particle::ParticleSet`]; the estimate is the weighted mean
-//! of `(cx, cy, ln s)`. The reference is updated slowly, as in Nummiaro,
+//! The trackers' particle engine (`bayestrack-particle`'s `ParticleFilter`
+//! through an `Smc`): systematic resampling at the start of every frame
+//! (sampling importance resampling, [`crate::select_predict_measure`]),
+//! then propagation and weighting of each particle in one call of the
+//! proposal, in the log domain; the step leaves the weighted set, and the
+//! estimate is its weighted mean of `(cx, cy, ln s)`. The reference is
+//! updated slowly, as in Nummiaro,
 //! Koller-Meier and Van Gool (2003), `q <- (1 - a) q + a p(E[x])`
 //! ([`HistPfConfig::update_rate`]), only when the estimate's `rho_in`
 //! reaches [`HistPfConfig::update_threshold`], and with `p` taken from the
 //! core of the estimate ([`HistPfConfig::update_core`]) so that a box a
 //! little too large does not teach the model its background.
 //!
+//! # The bin map
+//! A box's histogram reads the HSV bin of each pixel from a bin map of the
+//! frame. Binning the whole frame costs more than the particles, so one
+//! region is binned per frame; it has to be chosen before the engine
+//! proposes and weighs each particle in one call. It is the region that
+//! the children of the previous particles (every one the selection may
+//! pick) reach within [`REACH_SIGMAS`] = 3 standard deviations of the
+//! noise, both for a constant-velocity move (`c + v +- 3 sigma_p z`,
+//! `ln s + 3 sigma_s`) and for a jump (`c +- 3 sigma_j z`), rings
+//! included, clamped to the frame. A child beyond it (rare: the
+//! union over the parents leaves out only extreme draws of the outermost
+//! ones) bins its own box and ring into its chunk's
+//! working memory instead. Both give the bins of the frame, so the
+//! likelihood is that of a whole-frame map: the bound decides the cost,
+//! never the numbers. The region is somewhat larger than the one the
+//! propagated particles touch (binning is a table lookup per pixel, a
+//! small share of a step), and no allocation is made once warm.
+//!
+//! The likelihood stays in this module rather than behind the
+//! appearance crate's `Cue`: it needs the frame's bin map (a plane
+//! `Frame` does not carry), two kernel histograms of working memory
+//! (`Scratch` has none) and a box of fractional centre and size
+//! (`Candidate::Window` is whole pixels). Once `Cue`'s frame planes and
+//! scratch are open to new cues (issue 24's tracker shell), it moves
+//! beside `KernelHistogram` as a cue.
+//!
 //! # Randomness
-//! Frame `k` draws from `stream_rng([key, seed, k])`: one seed gives one
-//! run on every machine.
+//! The initial particles draw from `stream_rng([key, seed, u64::MAX])`;
+//! the engine is seeded `stream_seed([key, seed])` and frame `k` draws
+//! from its streams keyed `[seed, k]`: one seed gives one run on every
+//! machine and thread count.
 
-use bayestrack_appearance::{BinMap, HsvBinning, KernelHistogram};
+use bayestrack_appearance::{
+    AppearanceError, BinMap, HsvBinning, KernelHistogram, Result as AppearanceResult,
+};
 use bayestrack_image::{BBox, ImageView, Rect};
-use bayestrack_particle::{ParticleSet, Resampling, stream_rng};
+use bayestrack_particle::{ParticleSet, Proposal, Resampling, Smc, stream_rng, stream_seed};
 use nalgebra::SVector;
-use rand::RngExt;
+use rand::{Rng, RngExt};
 use rand_distr::{Distribution, StandardNormal};
 
+use crate::engine::select_predict_measure;
 use crate::error::{Result, TrackerError};
 use crate::tracker::{Estimate, FrameGuard, Tracker, check_initial_box};
 
@@ -228,37 +262,115 @@ impl HistPfConfig {
     }
 }
 
-/// The colour measurement of one box: the binning, this frame's bin map,
-/// the reference and scratch histograms.
+/// How far a particle's centre reaches in one frame, in standard
+/// deviations of the noise: the region binned before a step covers every
+/// move within this many deviations (a particle beyond it bins its own
+/// ring, see [`Colour::map_for`]).
+const REACH_SIGMAS: f64 = 3.0;
+
+/// The frame region a box centred at `(cx, cy)` with size `(w, h)` and its
+/// ring (grown by `ring`) can read, with one pixel of margin, as
+/// `[x0, x1, y0, y1]` (unclamped).
+#[inline]
+fn reach(cx: f64, cy: f64, w: f64, h: f64, ring: f64) -> [f64; 4] {
+    let (hw, hh) = (w * ring / 2.0 + 1.0, h * ring / 2.0 + 1.0);
+    [cx - hw, cx + hw, cy - hh, cy + hh]
+}
+
+/// `[x0, x1, y0, y1]` (inclusive, fractional) clamped to a `fw x fh`
+/// frame as a pixel rectangle.
+fn clamped_rect(r: [f64; 4], fw: usize, fh: usize) -> Rect {
+    let clamp = |v: f64, n: usize| v.floor().clamp(0.0, n as f64 - 1.0) as usize;
+    let (ax, ay) = (clamp(r[0], fw), clamp(r[2], fh));
+    let (bx, by) = (clamp(r[1], fw).max(ax), clamp(r[3], fh).max(ay));
+    Rect::new(ax, ay, bx - ax + 1, by - ay + 1)
+}
+
+/// Whether `inner` lies inside `outer`.
+fn contains(outer: Rect, inner: Rect) -> bool {
+    inner.x >= outer.x
+        && inner.y >= outer.y
+        && inner.right() <= outer.right()
+        && inner.bottom() <= outer.bottom()
+}
+
+/// The colour model: the binning, the bin map of the region the step
+/// reads, the reference and `rho_0`.
 #[derive(Debug, Clone)]
 struct Colour {
     binning: HsvBinning,
     map: BinMap,
     reference: KernelHistogram,
+    /// `rho_out` of the initial box: how target-like its surroundings were.
+    ring0: f64,
+}
+
+/// Working memory of one box's measurement: the box and ring histograms
+/// and a map for a box outside the binned region. One per chunk of
+/// particles (the engine keeps them from frame to frame), one in the
+/// tracker for the estimate.
+#[derive(Debug, Clone, Default)]
+struct Measure {
     inner: KernelHistogram,
     ring: KernelHistogram,
+    fallback: BinMap,
+    /// The best `rho_in` of the boxes measured with this memory since the
+    /// tracker reset it (at the start of each step).
+    best_rho: f64,
 }
 
 impl Colour {
-    /// `(rho_in, rho_out)` of the box centred at `(cx, cy)` with size
-    /// `(w, h)`; leaves the box's histogram in `inner`.
-    fn rhos(
-        &mut self,
+    /// A map that covers the box centred at `(cx, cy)` with size `(w, h)`
+    /// and its ring: the binned region when it does, else the box's own
+    /// region binned into `fallback`. Either gives the bins of the frame,
+    /// so the measurement does not depend on which.
+    #[allow(clippy::too_many_arguments)]
+    fn map_for<'m>(
+        &'m self,
+        fallback: &'m mut BinMap,
+        frame: &ImageView<'_, u8>,
         cx: f64,
         cy: f64,
         w: f64,
         h: f64,
+        ring: f64,
+    ) -> AppearanceResult<&'m BinMap> {
+        let need = clamped_rect(reach(cx, cy, w, h, ring), frame.width(), frame.height());
+        if contains(self.map.rect(), need) {
+            return Ok(&self.map);
+        }
+        self.binning.bin_map_into(*frame, need, fallback)?;
+        Ok(fallback)
+    }
+
+    /// `(rho_in, rho_out)` of the box centred at `(cx, cy)` with size
+    /// `(w, h)`; leaves the box's histogram in `m.inner`.
+    fn rhos(
+        &self,
+        m: &mut Measure,
+        frame: &ImageView<'_, u8>,
+        (cx, cy, w, h): (f64, f64, f64, f64),
         config: &HistPfConfig,
-    ) -> Result<(f64, f64)> {
+    ) -> AppearanceResult<(f64, f64)> {
+        let bins = self.binning.len();
+        if m.inner.len() != bins {
+            m.inner = KernelHistogram::new(bins);
+            m.ring = KernelHistogram::new(bins);
+        }
+        let Measure {
+            inner,
+            ring,
+            fallback,
+            ..
+        } = m;
+        let map = self.map_for(fallback, frame, cx, cy, w, h, config.ring)?;
         let step = sample_step(w, h, config.max_samples);
-        self.inner
-            .ellipse(&self.map, cx, cy, w / 2.0, h / 2.0, step)?;
-        let rho_in = self.inner.bhattacharyya(&self.reference)?;
+        inner.ellipse(map, cx, cy, w / 2.0, h / 2.0, step)?;
+        let rho_in = inner.bhattacharyya(&self.reference)?;
         let rho_out = if config.ring_weight > 0.0 {
-            self.ring
-                .ring(&self.map, cx, cy, w / 2.0, h / 2.0, config.ring, step)?;
-            if self.ring.total() > 0.0 {
-                self.ring.bhattacharyya(&self.reference)?
+            ring.ring(map, cx, cy, w / 2.0, h / 2.0, config.ring, step)?;
+            if ring.total() > 0.0 {
+                ring.bhattacharyya(&self.reference)?
             } else {
                 0.0
             }
@@ -274,6 +386,113 @@ fn sample_step(w: f64, h: f64, max: usize) -> usize {
     ((w * h / max as f64).sqrt().floor() as usize).max(1)
 }
 
+/// The tracker's bootstrap proposal for the engine: draw from the
+/// dynamics of the module docs, weigh by the colour likelihood.
+struct HistProposal<'a> {
+    config: &'a HistPfConfig,
+    colour: &'a Colour,
+    /// Initial box size.
+    size0: (f64, f64),
+}
+
+impl HistProposal<'_> {
+    /// `x_k ~ p(x_k | x_{k-1})` in a `fw x fh` frame.
+    #[inline]
+    fn predict<R: Rng + ?Sized>(&self, x: &State, (fw, fh): (f64, f64), rng: &mut R) -> State {
+        let c = self.config;
+        let z = (self.size0.0 * self.size0.1).sqrt() * x[4].exp();
+        let jump = c.jump_fraction > 0.0 && rng.random::<f64>() < c.jump_fraction;
+        let mut n = || -> f64 { StandardNormal.sample(rng) };
+        let mut y = *x;
+        if jump {
+            y[0] += c.jump_spread * z * n();
+            y[1] += c.jump_spread * z * n();
+            y[2] = 0.0;
+            y[3] = 0.0;
+        } else {
+            y[0] += x[2] + c.position_noise * z * n();
+            y[1] += x[3] + c.position_noise * z * n();
+            y[2] += c.velocity_noise * z * n();
+            y[3] += c.velocity_noise * z * n();
+            y[4] += c.scale_noise * n();
+        }
+        // Keep the centre on the frame and the scale in range.
+        y[0] = y[0].clamp(0.0, fw - 1.0);
+        y[1] = y[1].clamp(0.0, fh - 1.0);
+        y[4] = y[4].clamp(c.min_scale.ln(), c.max_scale.ln());
+        y
+    }
+
+    /// The region every child of `particles` reaches within
+    /// [`REACH_SIGMAS`] deviations of the noise, rings included, clamped
+    /// to a `fw x fh` frame.
+    fn reachable(&self, particles: &[State], fw: usize, fh: usize) -> Rect {
+        let c = self.config;
+        let (lo, hi) = (c.min_scale.ln(), c.max_scale.ln());
+        let z0 = (self.size0.0 * self.size0.1).sqrt();
+        let (xmax, ymax) = (fw as f64 - 1.0, fh as f64 - 1.0);
+        let mut r = [
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        let mut take = |cx: (f64, f64), cy: (f64, f64), ls: f64| {
+            let s = ls.clamp(lo, hi).exp();
+            let (w, h) = (self.size0.0 * s, self.size0.1 * s);
+            let a = reach(cx.0.clamp(0.0, xmax), cy.0.clamp(0.0, ymax), w, h, c.ring);
+            let b = reach(cx.1.clamp(0.0, xmax), cy.1.clamp(0.0, ymax), w, h, c.ring);
+            r = [
+                r[0].min(a[0]),
+                r[1].max(b[1]),
+                r[2].min(a[2]),
+                r[3].max(b[3]),
+            ];
+        };
+        for x in particles {
+            let z = z0 * x[4].exp();
+            // constant velocity: the centre moves by v and the noise, the
+            // scale by its noise
+            let (dp, ds) = (
+                REACH_SIGMAS * c.position_noise * z,
+                REACH_SIGMAS * c.scale_noise,
+            );
+            let (mx, my) = (x[0] + x[2], x[1] + x[3]);
+            take((mx - dp, mx + dp), (my - dp, my + dp), x[4] + ds);
+            // a jump: around the centre, the scale kept
+            if c.jump_fraction > 0.0 {
+                let dj = REACH_SIGMAS * c.jump_spread * z;
+                take((x[0] - dj, x[0] + dj), (x[1] - dj, x[1] + dj), x[4]);
+            }
+        }
+        clamped_rect(r, fw, fh)
+    }
+}
+
+impl<'f> Proposal<State, ImageView<'f, u8>> for HistProposal<'_> {
+    type Error = AppearanceError;
+    type Scratch = Measure;
+
+    fn propose<R: Rng + ?Sized>(
+        &self,
+        _k: usize,
+        parent: &State,
+        frame: &ImageView<'f, u8>,
+        m: &mut Measure,
+        rng: &mut R,
+    ) -> std::result::Result<(State, f64), AppearanceError> {
+        let c = self.config;
+        let x = self.predict(parent, (frame.width() as f64, frame.height() as f64), rng);
+        let s = x[4].exp();
+        let (w, h) = (self.size0.0 * s, self.size0.1 * s);
+        let (rho_in, rho_out) = self.colour.rhos(m, frame, (x[0], x[1], w, h), c)?;
+        m.best_rho = m.best_rho.max(rho_in);
+        let ring0 = self.colour.ring0;
+        let excess = (rho_out * rho_out - ring0 * ring0).max(0.0);
+        Ok((x, -c.lambda * ((1.0 - rho_in) + c.ring_weight * excess)))
+    }
+}
+
 /// The histogram particle filter with scale; see the module docs.
 #[derive(Debug, Clone)]
 pub struct HistPfTracker {
@@ -282,12 +501,13 @@ pub struct HistPfTracker {
     guard: FrameGuard,
     /// Initial box size.
     size0: (f64, f64),
-    set: Option<ParticleSet<State>>,
+    /// The engine: the particle set and its keyed streams.
+    smc: Option<Smc<State>>,
+    /// The engine's per-chunk measurement memory.
+    chunks: Vec<Measure>,
     colour: Colour,
-    /// `rho_out` of the initial box: how target-like its surroundings were.
-    ring0: f64,
-    k: u64,
-    ancestors: Vec<usize>,
+    /// The measurement memory of the estimate.
+    measure: Measure,
 }
 
 impl HistPfTracker {
@@ -304,18 +524,15 @@ impl HistPfTracker {
             seed,
             guard: FrameGuard::default(),
             size0: (0.0, 0.0),
-            set: None,
+            smc: None,
+            chunks: Vec::new(),
             colour: Colour {
                 binning,
                 map: BinMap::new(),
                 reference: KernelHistogram::new(bins),
-                inner: KernelHistogram::new(bins),
-
-                ring: KernelHistogram::new(bins),
+                ring0: 0.0,
             },
-            ring0: 0.0,
-            k: 0,
-            ancestors: Vec::new(),
+            measure: Measure::default(),
         })
     }
 
@@ -326,12 +543,12 @@ impl HistPfTracker {
 
     /// The particles `[cx, cy, vx, vy, ln s]` (`None` before `init`).
     pub fn particles(&self) -> Option<&[State]> {
-        self.set.as_ref().map(|s| s.particles())
+        self.smc.as_ref().map(|s| s.set.particles())
     }
 
     /// The weighted-mean state (`None` before `init`).
     pub fn state(&self) -> Option<State> {
-        self.set.as_ref().map(|s| s.mean())
+        self.smc.as_ref().map(|s| s.set.mean())
     }
 
     fn check_channels(frame: &ImageView<'_, u8>) -> Result<()> {
@@ -349,29 +566,6 @@ impl HistPfTracker {
     fn size(&self, ls: f64) -> (f64, f64) {
         let s = ls.exp();
         (self.size0.0 * s, self.size0.1 * s)
-    }
-
-    /// Bins the frame region that every particle's ring can touch.
-    fn load_map(&mut self, frame: &ImageView<'_, u8>, ring: f64) -> Result<()> {
-        let (fw, fh) = (frame.width() as f64, frame.height() as f64);
-        let (mut x0, mut y0, mut x1, mut y1) = (fw, fh, 0f64, 0f64);
-        let set = self.set.as_ref().ok_or(TrackerError::NotInitialised)?;
-        for p in set.particles() {
-            let (w, h) = self.size(p[4]);
-            let (hw, hh) = (w * ring / 2.0 + 1.0, h * ring / 2.0 + 1.0);
-            x0 = x0.min(p[0] - hw);
-            x1 = x1.max(p[0] + hw);
-            y0 = y0.min(p[1] - hh);
-            y1 = y1.max(p[1] + hh);
-        }
-        let clamp = |v: f64, n: f64| v.floor().clamp(0.0, n - 1.0) as usize;
-        let (ax, ay) = (clamp(x0, fw), clamp(y0, fh));
-        let (bx, by) = (clamp(x1, fw).max(ax), clamp(y1, fh).max(ay));
-        let rect = Rect::new(ax, ay, bx - ax + 1, by - ay + 1);
-        self.colour
-            .binning
-            .bin_map_into(*frame, rect, &mut self.colour.map)?;
-        Ok(())
     }
 
     fn bbox(&self, x: &State) -> BBox {
@@ -399,18 +593,20 @@ impl Tracker for HistPfTracker {
         self.size0 = (w, h);
         let c = self.config;
         // The map for the reference (the box and its ring).
-        let x0 = State::new(cx, cy, 0.0, 0.0, 0.0);
-        self.set = Some(ParticleSet::new(vec![x0])?);
-        self.load_map(&frame, c.ring)?;
-        let step = sample_step(w, h, c.max_samples);
+        let rect = clamped_rect(reach(cx, cy, w, h, c.ring), frame.width(), frame.height());
         let colour = &mut self.colour;
+        colour.binning.bin_map_into(frame, rect, &mut colour.map)?;
+        let step = sample_step(w, h, c.max_samples);
         colour
             .reference
             .ellipse(&colour.map, cx, cy, w / 2.0, h / 2.0, step)?;
         if colour.reference.total() <= 0.0 {
             return Err(TrackerError::EmptyBox { bbox: target });
         }
-        self.ring0 = self.colour.rhos(cx, cy, w, h, &c)?.1;
+        colour.ring0 = 0.0;
+        colour.ring0 = colour
+            .rhos(&mut self.measure, &frame, (cx, cy, w, h), &c)?
+            .1;
         let mut rng = stream_rng(&[KEY, self.seed, u64::MAX]);
         let z = (w * h).sqrt();
         let particles = (0..c.particles)
@@ -428,9 +624,12 @@ impl Tracker for HistPfTracker {
                 )
             })
             .collect();
-        self.set = Some(ParticleSet::new(particles)?);
+        self.smc = Some(Smc::new(
+            select_predict_measure(Resampling::Systematic),
+            ParticleSet::new(particles)?,
+            stream_seed(&[KEY, self.seed]),
+        )?);
         self.guard.start(&frame);
-        self.k = 0;
         Ok(())
     }
 
@@ -438,70 +637,41 @@ impl Tracker for HistPfTracker {
         self.guard.check(&frame)?;
         Self::check_channels(&frame)?;
         let c = self.config;
-        let mut rng = stream_rng(&[KEY, self.seed, self.k]);
-        self.k += 1;
-        let (fw, fh) = (frame.width() as f64, frame.height() as f64);
-        let (lo, hi) = (c.min_scale.ln(), c.max_scale.ln());
-        let z0 = (self.size0.0 * self.size0.1).sqrt();
-        {
-            let set = self.set.as_mut().ok_or(TrackerError::NotInitialised)?;
-            set.resample(&Resampling::Systematic, &mut rng, &mut self.ancestors)?;
-            let (particles, _) = set.parts_mut();
-            for x in particles.iter_mut() {
-                let z = z0 * x[4].exp();
-                let jump = c.jump_fraction > 0.0 && rng.random::<f64>() < c.jump_fraction;
-                let mut n = || -> f64 { StandardNormal.sample(&mut rng) };
-                let mut y = *x;
-                if jump {
-                    y[0] += c.jump_spread * z * n();
-                    y[1] += c.jump_spread * z * n();
-                    y[2] = 0.0;
-                    y[3] = 0.0;
-                } else {
-                    y[0] += x[2] + c.position_noise * z * n();
-                    y[1] += x[3] + c.position_noise * z * n();
-                    y[2] += c.velocity_noise * z * n();
-                    y[3] += c.velocity_noise * z * n();
-                    y[4] += c.scale_noise * n();
-                }
-                // Keep the centre on the frame and the scale in range.
-                y[0] = y[0].clamp(0.0, fw - 1.0);
-                y[1] = y[1].clamp(0.0, fh - 1.0);
-                y[4] = y[4].clamp(lo, hi);
-                *x = y;
-            }
-        }
-        self.load_map(&frame, c.ring)?;
-        let set = self.set.as_mut().ok_or(TrackerError::NotInitialised)?;
-        let (particles, log_w) = set.parts_mut();
-        let mut best = 0f64;
-        for (x, lw) in particles.iter().zip(log_w.iter_mut()) {
-            let s = x[4].exp();
-            let (w, h) = (self.size0.0 * s, self.size0.1 * s);
-            let (rho_in, rho_out) = self.colour.rhos(x[0], x[1], w, h, &c)?;
-            best = best.max(rho_in);
-            let excess = (rho_out * rho_out - self.ring0 * self.ring0).max(0.0);
-            *lw = -c.lambda * ((1.0 - rho_in) + c.ring_weight * excess);
-        }
-        set.normalize()?;
-        let mean: State = set.mean();
-        let n = set.len();
+        let smc = self.smc.as_mut().ok_or(TrackerError::NotInitialised)?;
+        // Bin the region the step can read (before the engine's selection,
+        // from every particle it may select), then select, predict and
+        // weigh.
+        let proposal = HistProposal {
+            config: &c,
+            colour: &self.colour,
+            size0: self.size0,
+        };
+        let rect = proposal.reachable(smc.set.particles(), frame.width(), frame.height());
+        let colour = &mut self.colour;
+        colour.binning.bin_map_into(frame, rect, &mut colour.map)?;
+        let proposal = HistProposal {
+            config: &c,
+            colour: &self.colour,
+            size0: self.size0,
+        };
+        self.chunks.iter_mut().for_each(|m| m.best_rho = 0.0);
+        smc.step_with(&proposal, &frame, &mut self.chunks)?;
+        let best = self.chunks.iter().map(|m| m.best_rho).fold(0.0, f64::max);
+        let mean: State = smc.set.mean();
+        let n = smc.set.len();
         // Model update at the estimate (Nummiaro et al. 2003).
         let (w, h) = self.size(mean[4]);
-        let (rho_mean, _) = self.colour.rhos(mean[0], mean[1], w, h, &c)?;
+        let colour = &mut self.colour;
+        let (rho_mean, _) = colour.rhos(&mut self.measure, &frame, (mean[0], mean[1], w, h), &c)?;
         if c.update_rate > 0.0 && rho_mean >= c.update_threshold {
-            let colour = &mut self.colour;
             let core = c.update_core;
             let step = sample_step(w * core, h * core, c.max_samples);
-            colour.inner.ellipse(
-                &colour.map,
-                mean[0],
-                mean[1],
-                w * core / 2.0,
-                h * core / 2.0,
-                step,
-            )?;
-            colour.reference.blend(&colour.inner, c.update_rate)?;
+            let Measure {
+                inner, fallback, ..
+            } = &mut self.measure;
+            let map = colour.map_for(fallback, &frame, mean[0], mean[1], w, h, c.ring)?;
+            inner.ellipse(map, mean[0], mean[1], w * core / 2.0, h * core / 2.0, step)?;
+            colour.reference.blend(inner, c.update_rate)?;
         }
         Ok(Estimate {
             bbox: self.bbox(&mean),
@@ -551,6 +721,85 @@ mod tests {
         let got = run(&mut t, &frames, truth[0]);
         let (centre, size) = errors(&got, &truth);
         assert!(centre < 5.0 && size < 0.4, "centre {centre}, size {size}");
+    }
+
+    #[test]
+    fn a_box_outside_the_binned_region_measures_as_inside_it() {
+        let (frames, truth) = scene(2, true, 3.0, |k| growing(k, 1.0));
+        let frame = frames[1].view();
+        let c = HistPfConfig::default();
+        let mut t = HistPfTracker::new(c, 0).unwrap();
+        t.init(frames[0].view(), truth[0]).unwrap();
+        let (w, h) = (truth[0].width, truth[0].height);
+        let (cx, cy) = truth[0].center();
+        let whole = Rect::new(0, 0, frame.width(), frame.height());
+        let mut m = Measure::default();
+        let mut measured = |rect: Rect, at: (f64, f64)| {
+            let colour = &mut t.colour;
+            colour
+                .binning
+                .bin_map_into(frame, rect, &mut colour.map)
+                .unwrap();
+            colour.rhos(&mut m, &frame, (at.0, at.1, w, h), &c).unwrap()
+        };
+        for at in [(cx - 1.0, cy - 1.0), (cx + 20.0, cy - 7.5), (3.0, 2.0)] {
+            let inside = measured(whole, at);
+            // a region far from the box: the box bins its own
+            let outside = measured(Rect::new(150, 110, 5, 5), at);
+            assert_eq!(inside, outside, "{at:?}");
+        }
+        assert!(measured(whole, (cx - 1.0, cy - 1.0)).0 > 0.9);
+    }
+
+    #[test]
+    fn the_binned_region_holds_almost_every_child() {
+        let (frames, truth) = scene(2, true, 3.0, |k| growing(k, 1.0));
+        let c = HistPfConfig::default();
+        let mut t = HistPfTracker::new(c, 5).unwrap();
+        t.init(frames[0].view(), truth[0]).unwrap();
+        t.step(frames[1].view()).unwrap();
+        // the particles moved into a large frame, whose edges clamp nothing
+        let (fw, fh) = (2000, 2000);
+        let proposal = HistProposal {
+            config: &c,
+            colour: &t.colour,
+            size0: t.size0,
+        };
+        let parents: Vec<State> = t
+            .particles()
+            .unwrap()
+            .iter()
+            .map(|p| p + State::new(500.0, 500.0, 0.0, 0.0, 0.0))
+            .collect();
+        let parents = &parents[..];
+        let region = proposal.reachable(parents, fw, fh);
+        assert!(region.area() < fw * fh, "{region:?}");
+        let mut rng = stream_rng(&[1]);
+        let (mut inside, n) = (0, 20_000);
+        let mut touched = [usize::MAX, 0, usize::MAX, 0];
+        for i in 0..n {
+            let x = proposal.predict(
+                &parents[i % parents.len()],
+                (fw as f64, fh as f64),
+                &mut rng,
+            );
+            let (w, h) = t.size(x[4]);
+            let r = clamped_rect(reach(x[0], x[1], w, h, c.ring), fw, fh);
+            inside += usize::from(contains(region, r));
+            touched = [
+                touched[0].min(r.x),
+                touched[1].max(r.right()),
+                touched[2].min(r.y),
+                touched[3].max(r.bottom()),
+            ];
+        }
+        // the union over the parents leaves only the extreme draws of the
+        // outermost parents outside
+        let share = inside as f64 / n as f64;
+        assert!(share >= 0.999, "{share}");
+        // and it is not much more than the children touch
+        let touched = (touched[1] - touched[0]) * (touched[3] - touched[2]);
+        assert!(region.area() < 2 * touched, "{region:?} vs {touched}");
     }
 
     #[test]
