@@ -134,26 +134,33 @@ fn bootstrap_filter_with_10000_particles_matches_the_kalman_filter() {
     for (k, (z, kf)) in zs.iter().zip(&truth).enumerate() {
         pf.step(&mut set, &Bootstrap(&model), z, &[1, k as u64])
             .unwrap();
-        let m = set.mean();
-        let c = set.covariance();
-        // Monte Carlo error of the mean ~ sqrt(var / ESS); allow 5 sigma.
-        for i in 0..2 {
-            let sd = kf.cov()[(i, i)].sqrt();
-            let tol = 5.0 * sd / (set.ess().min(n as f64) * 0.5).sqrt();
-            assert!(
-                (m[i] - kf.mean()[i]).abs() < tol,
-                "step {k} mean {i}: {} vs {}",
-                m[i],
-                kf.mean()[i]
-            );
-            let rel = (c[(i, i)] / kf.cov()[(i, i)] - 1.0).abs();
-            assert!(
-                rel < 0.15,
-                "step {k} var {i}: {} vs {}",
-                c[(i, i)],
-                kf.cov()[(i, i)]
-            );
-        }
+        assert_near_kalman(&set, kf, k);
+    }
+}
+
+/// The weighted set's mean within 5 Monte Carlo sigma (`sqrt(var / ESS)`,
+/// doubled) and its variances within 15 % of the Kalman filter's at step
+/// `k`.
+fn assert_near_kalman(set: &ParticleSet<SVector<f64, 2>>, kf: &Gaussian<2>, k: usize) {
+    let n = set.len() as f64;
+    let m = set.mean();
+    let c = set.covariance();
+    for i in 0..2 {
+        let sd = kf.cov()[(i, i)].sqrt();
+        let tol = 5.0 * sd / (set.ess().min(n) * 0.5).sqrt();
+        assert!(
+            (m[i] - kf.mean()[i]).abs() < tol,
+            "step {k} mean {i}: {} vs {}",
+            m[i],
+            kf.mean()[i]
+        );
+        let rel = (c[(i, i)] / kf.cov()[(i, i)] - 1.0).abs();
+        assert!(
+            rel < 0.15,
+            "step {k} var {i}: {} vs {}",
+            c[(i, i)],
+            kf.cov()[(i, i)]
+        );
     }
 }
 
@@ -495,19 +502,7 @@ fn resampling_before_the_proposal_keeps_the_weighted_set() {
         assert!(set.ess() < 0.99 * n as f64, "step {k}: ess {}", set.ess());
         assert!(set.ess() > 0.02 * n as f64, "step {k}: ess {}", set.ess());
         assert!((set.ess() - report.ess).abs() < 1e-6 * n as f64);
-        let m = set.mean();
-        for i in 0..2 {
-            let sd = kf.cov()[(i, i)].sqrt();
-            let tol = 5.0 * sd / (set.ess() * 0.5).sqrt();
-            assert!(
-                (m[i] - kf.mean()[i]).abs() < tol,
-                "step {k} mean {i}: {} vs {}",
-                m[i],
-                kf.mean()[i]
-            );
-            let rel = (set.covariance()[(i, i)] / kf.cov()[(i, i)] - 1.0).abs();
-            assert!(rel < 0.15, "step {k} var {i}");
-        }
+        assert_near_kalman(&set, kf, k);
     }
     // MCMC moves follow a resampling after the weights
     let refused = ParticleFilter { mcmc: true, ..pf };
