@@ -145,11 +145,6 @@ impl<const D: usize> CueFilter<D> {
         &self.smc.set
     }
 
-    /// The particles and their weights, to move them (a re-initialisation).
-    pub fn set_mut(&mut self) -> &mut ParticleSet<SVector<f64, D>> {
-        &mut self.smc.set
-    }
-
     /// The configuration.
     pub fn filter(&self) -> &ParticleFilter {
         &self.smc.filter
