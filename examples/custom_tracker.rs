@@ -1,14 +1,14 @@
 //! A new particle tracker: a random walk weighed by an RGB-histogram cue on
-//! the particle engine. `cargo run --release --example custom_tracker [DIR]`
+//! the particle engine, in a `Shell` that checks frames and boxes.
+//! `cargo run --release --example custom_tracker [DIR]`
 
-use bayestrack::appearance::{Candidate, Frame, HistogramCue, HistogramDistance, RgbHistogram};
-use bayestrack::image::{BBox, ImageView};
-use bayestrack::nalgebra::SVector;
+use bayestrack::appearance::{Candidate, HistogramCue, HistogramDistance, RgbHistogram};
+use bayestrack::image::BBox;
 use bayestrack::otb::{OnBadFrame, Sequence, score_otb, track_source};
-use bayestrack::particle::Resampling;
-use bayestrack::rand::Rng;
 use bayestrack::rand_distr::{Distribution, StandardNormal};
-use bayestrack::trackers::{CueFilter, Estimate, Result, StateModel, Tracker, TrackerError};
+use bayestrack::trackers::{ChannelPolicy, CueFilter, Estimate, InitialBox, Planes, Result};
+use bayestrack::trackers::{Shell, StateModel, TrackerCore, TrackerError, select_predict_measure};
+use bayestrack::{nalgebra::SVector, particle::Resampling, rand::Rng};
 
 type Corner = SVector<f64, 2>;
 
@@ -35,27 +35,27 @@ struct Walker {
     pf: Option<(CueFilter<2>, HistogramCue)>,
 }
 
-impl Tracker for Walker {
+impl TrackerCore for Walker {
     fn name(&self) -> &'static str {
         "walker"
     }
-    fn init(&mut self, frame: ImageView<'_, u8>, bbox: BBox) -> Result<()> {
-        self.walk.size = (bbox.width, bbox.height);
+    fn channels(&self) -> ChannelPolicy {
+        ChannelPolicy::Rgb
+    }
+    fn start(&mut self, frame: &Planes<'_>, target: InitialBox) -> Result<()> {
+        let b = target.bbox;
+        self.walk.size = (b.width, b.height);
         self.walk.frame = (frame.width(), frame.height());
-        let rect = self.walk.candidate(&Corner::new(bbox.x, bbox.y));
-        let Some(Candidate::Window(r)) = rect else {
-            return Err(TrackerError::EmptyBox { bbox });
-        };
-        let reference = RgbHistogram::from_window(frame, r, 16)?;
+        let reference = RgbHistogram::from_window(frame.input(), target.rect, 16)?;
         let cue = HistogramCue::new(reference, HistogramDistance::Bhattacharyya, 0.1, 1)?;
-        let filter = bayestrack::trackers::select_predict_measure(Resampling::Systematic);
-        let particles = vec![Corner::new(bbox.x, bbox.y); 300];
+        let filter = select_predict_measure(Resampling::Systematic);
+        let particles = vec![Corner::new(b.x, b.y); 300];
         self.pf = Some((CueFilter::new(filter, particles, 7)?, cue));
         Ok(())
     }
-    fn step(&mut self, frame: ImageView<'_, u8>) -> Result<Estimate> {
+    fn track(&mut self, frame: &Planes<'_>) -> Result<Estimate> {
         let (pf, cue) = self.pf.as_mut().ok_or(TrackerError::NotInitialised)?;
-        let report = pf.step(&self.walk, cue, &Frame::new().with_rgb(frame))?;
+        let report = pf.step(&self.walk, cue, frame.cues())?;
         let (m, (w, h), n) = (pf.mean(), self.walk.size, pf.len());
         Ok(Estimate {
             bbox: BBox::new(m[0], m[1], w, h),
@@ -71,8 +71,8 @@ const CROSSING: &str = "../shared/data/sequences/Crossing";
 fn main() -> std::result::Result<(), Box<dyn std::error::Error>> {
     let seq = Sequence::open(std::env::args().nth(1).unwrap_or(CROSSING.into()))?;
     let init = seq.initial_box().ok_or("frame 1 has no ground-truth box")?;
-    let (mut t, mut frames, stop) = (Walker::default(), seq.source(), OnBadFrame::Stop);
-    let run = track_source(&mut t, &mut frames, init, stop, |_| Ok(()))?;
+    let (mut t, stop) = (Shell::wrap(Walker::default()), OnBadFrame::Stop);
+    let run = track_source(&mut t, &mut seq.source(), init, stop, |_| Ok(()))?;
     let auc = score_otb(&run.boxes, &seq.ground_truth)?.auc;
     println!("walker on {}: AUC {auc:.3}, {:.0} fps", seq.name, run.fps());
     Ok(())

@@ -110,7 +110,8 @@ use rand_distr::{Distribution, StandardNormal};
 
 use crate::engine::select_predict_measure;
 use crate::error::{Result, TrackerError};
-use crate::tracker::{Estimate, FrameGuard, Tracker, check_initial_box};
+use crate::shell::{ChannelPolicy, InitialBox, Needs, Planes, Shell, TrackerCore};
+use crate::tracker::Estimate;
 
 const NAME: &str = "hist-pf-scale";
 /// Key of the random streams ("histpf" in ASCII).
@@ -494,11 +495,13 @@ impl<'f> Proposal<State, ImageView<'f, u8>> for HistProposal<'_> {
 }
 
 /// The histogram particle filter with scale; see the module docs.
+pub type HistPfTracker = Shell<HistPfCore>;
+
+/// The model of [`HistPfTracker`].
 #[derive(Debug, Clone)]
-pub struct HistPfTracker {
+pub struct HistPfCore {
     config: HistPfConfig,
     seed: u64,
-    guard: FrameGuard,
     /// Initial box size.
     size0: (f64, f64),
     /// The engine: the particle set and its keyed streams.
@@ -516,13 +519,22 @@ impl HistPfTracker {
     /// # Errors
     /// [`TrackerError::InvalidParameter`] for a bad configuration.
     pub fn new(config: HistPfConfig, seed: u64) -> Result<Self> {
+        Ok(Shell::wrap(HistPfCore::new(config, seed)?))
+    }
+}
+
+impl HistPfCore {
+    /// The model of [`HistPfTracker::new`].
+    ///
+    /// # Errors
+    /// As [`HistPfTracker::new`].
+    pub fn new(config: HistPfConfig, seed: u64) -> Result<Self> {
         config.validate()?;
         let binning = HsvBinning::new(10, config.value_bins, 0.1, 0.2)?;
         let bins = binning.len();
         Ok(Self {
             config,
             seed,
-            guard: FrameGuard::default(),
             size0: (0.0, 0.0),
             smc: None,
             chunks: Vec::new(),
@@ -551,17 +563,6 @@ impl HistPfTracker {
         self.smc.as_ref().map(|s| s.set.mean())
     }
 
-    fn check_channels(frame: &ImageView<'_, u8>) -> Result<()> {
-        match frame.channels() {
-            1 | 3 => Ok(()),
-            got => Err(TrackerError::Channels {
-                tracker: NAME,
-                expected: "1 or 3",
-                got,
-            }),
-        }
-    }
-
     /// Box size at log-scale `ls`.
     fn size(&self, ls: f64) -> (f64, f64) {
         let s = ls.exp();
@@ -579,14 +580,21 @@ impl HistPfTracker {
     }
 }
 
-impl Tracker for HistPfTracker {
+impl TrackerCore for HistPfCore {
     fn name(&self) -> &'static str {
         NAME
     }
 
-    fn init(&mut self, frame: ImageView<'_, u8>, target: BBox) -> Result<()> {
-        Self::check_channels(&frame)?;
-        check_initial_box(target, frame.width(), frame.height())?;
+    fn channels(&self) -> ChannelPolicy {
+        ChannelPolicy::GrayOrRgb
+    }
+
+    fn needs(&self) -> Needs {
+        Needs::INPUT
+    }
+
+    fn start(&mut self, planes: &Planes<'_>, target: InitialBox) -> Result<()> {
+        let (frame, target) = (planes.input(), target.bbox);
         let (w, h) = (target.width, target.height);
         let (cx, cy) = target.center();
         let (cx, cy) = (cx - 1.0, cy - 1.0);
@@ -629,13 +637,11 @@ impl Tracker for HistPfTracker {
             ParticleSet::new(particles)?,
             stream_seed(&[KEY, self.seed]),
         )?);
-        self.guard.start(&frame);
         Ok(())
     }
 
-    fn step(&mut self, frame: ImageView<'_, u8>) -> Result<Estimate> {
-        self.guard.check(&frame)?;
-        Self::check_channels(&frame)?;
+    fn track(&mut self, planes: &Planes<'_>) -> Result<Estimate> {
+        let frame = planes.input();
         let c = self.config;
         let smc = self.smc.as_mut().ok_or(TrackerError::NotInitialised)?;
         // Bin the region the step can read (before the engine's selection,
@@ -687,6 +693,7 @@ impl Tracker for HistPfTracker {
 mod tests {
     use super::*;
     use crate::ncc_scale::tests::{errors, growing, run, scene};
+    use crate::tracker::Tracker;
     use bayestrack_image::Image;
 
     #[test]
@@ -735,7 +742,7 @@ mod tests {
         let whole = Rect::new(0, 0, frame.width(), frame.height());
         let mut m = Measure::default();
         let mut measured = |rect: Rect, at: (f64, f64)| {
-            let colour = &mut t.colour;
+            let colour = &mut t.core_mut().colour;
             colour
                 .binning
                 .bin_map_into(frame, rect, &mut colour.map)

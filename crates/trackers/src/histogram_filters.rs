@@ -105,8 +105,7 @@
 //! ```
 
 use bayestrack_appearance::{
-    Candidate, Frame, HistogramCue, HistogramDistance, HistogramMatch, RgbHistogram,
-    histogram_search,
+    Candidate, HistogramCue, HistogramDistance, HistogramMatch, RgbHistogram, histogram_search,
 };
 use bayestrack_image::{BBox, ImageView, Rect};
 use bayestrack_kalman::{Dynamics, Gaussian, Kf, LinearDynamics, LinearMeasurement, Ukf, nalgebra};
@@ -119,13 +118,8 @@ use bayestrack_options::{Codec, above, choice, options};
 
 use crate::engine::{CueFilter, StateModel, select_predict_measure};
 use crate::error::{Result, TrackerError};
-use crate::tracker::{Estimate, FrameGuard, Tracker, check_initial_box};
-
-/// What the ball trackers need: their cue is paper 001's RGB histogram, and
-/// gray replicated into three equal channels would make it a gray
-/// histogram under another name, so gray frames are refused.
-const COLOUR_ONLY: &str =
-    "3 (RGB: the RGB-histogram cue of paper 001 needs colour; for gray video use hist-pf-scale)";
+use crate::shell::{ChannelPolicy, InitialBox, Needs, Planes, Shell, TrackerCore};
+use crate::tracker::Estimate;
 
 /// Key of the particle filter's random streams ("ball" in ASCII).
 const KEY: u64 = 0x6261_6c6c;
@@ -313,28 +307,10 @@ struct Target {
 }
 
 impl Target {
-    /// Checks the frame and the box, and takes the reference histogram.
-    fn new(
-        name: &'static str,
-        frame: &ImageView<'_, u8>,
-        bbox: BBox,
-        config: &BallConfig,
-    ) -> Result<(Self, [f64; 2])> {
-        if frame.channels() != 3 {
-            return Err(TrackerError::Channels {
-                tracker: name,
-                expected: COLOUR_ONLY,
-                got: frame.channels(),
-            });
-        }
+    /// Takes the reference histogram of the initial window.
+    fn new(frame: ImageView<'_, u8>, rect: Rect, config: &BallConfig) -> Result<(Self, [f64; 2])> {
         let (fw, fh) = (frame.width(), frame.height());
-        check_initial_box(bbox, fw, fh)?;
-        let rect = bbox.to_rect(fw, fh).ok_or(TrackerError::BoxOutsideFrame {
-            bbox,
-            width: fw,
-            height: fh,
-        })?;
-        let reference = RgbHistogram::from_window(*frame, rect, config.bins)?;
+        let reference = RgbHistogram::from_window(frame, rect, config.bins)?;
         let (w, h) = (rect.width, rect.height);
         let half = |s: usize| (s as f64 - 1.0) / 2.0;
         let bounds = [
@@ -623,14 +599,20 @@ impl StateModel<4> for BallMotion<'_> {
 }
 
 /// One of Bócsi and Csató's (paper 001) ball trackers (KF, UKF or PF_N), see the module docs.
+///
+/// Its cue is the paper's RGB histogram: gray replicated into three equal
+/// channels would make it a gray histogram under another name, so gray
+/// frames are refused ([`ChannelPolicy::Rgb`]).
+pub type BallTracker = Shell<BallCore>;
+
+/// The model of [`BallTracker`].
 #[derive(Debug, Clone)]
-pub struct BallTracker {
+pub struct BallCore {
     /// The name it reports (the registry's entry, or the filter's name).
     name: &'static str,
     filter: BallFilter,
     config: BallConfig,
     seed: u64,
-    guard: FrameGuard,
     target: Option<Target>,
     belief: Option<Belief>,
     ukf: Ukf,
@@ -646,26 +628,7 @@ impl BallTracker {
     /// [`TrackerError::InvalidParameter`] for a bad configuration or zero
     /// particles.
     pub fn new(filter: BallFilter, config: BallConfig, seed: u64) -> Result<Self> {
-        config.validate()?;
-        if filter == BallFilter::Pf(0) {
-            return Err(TrackerError::InvalidParameter {
-                name: "particles",
-                value: 0.0,
-                reason: "need at least one particle",
-            });
-        }
-        let ukf = Ukf::new(config.ukf_alpha, config.ukf_beta, config.ukf_kappa)?;
-        Ok(Self {
-            name: filter.name(),
-            filter,
-            config,
-            seed,
-            guard: FrameGuard::default(),
-            target: None,
-            belief: None,
-            ukf,
-            hist: RgbHistogram::new(config.bins)?,
-        })
+        Ok(Shell::wrap(BallCore::new(filter, config, seed)?))
     }
 
     /// The Kalman-filter tracker.
@@ -703,9 +666,49 @@ impl BallTracker {
         particles: usize,
         seed: u64,
     ) -> Result<Self> {
-        Ok(Self {
+        Ok(Shell::wrap(BallCore {
             name,
-            ..Self::new(BallFilter::Pf(particles), config, seed)?
+            ..BallCore::new(BallFilter::Pf(particles), config, seed)?
+        }))
+    }
+
+    /// Tracks into `frame`, which arrived `dt` camera frames after the
+    /// previous one this tracker saw (1 when every frame is processed; more
+    /// when frames were dropped).
+    ///
+    /// # Errors
+    /// [`TrackerError::NotInitialised`], [`TrackerError::FrameSizeChanged`],
+    /// [`TrackerError::Channels`], [`TrackerError::InvalidParameter`] for a
+    /// non-positive `dt`, and filter errors.
+    pub fn step_elapsed(&mut self, frame: ImageView<'_, u8>, dt: f64) -> Result<Estimate> {
+        self.step_with(frame, |core, planes| core.track_elapsed(planes, dt))
+    }
+}
+
+impl BallCore {
+    /// The model of [`BallTracker::new`].
+    ///
+    /// # Errors
+    /// As [`BallTracker::new`].
+    pub fn new(filter: BallFilter, config: BallConfig, seed: u64) -> Result<Self> {
+        config.validate()?;
+        if filter == BallFilter::Pf(0) {
+            return Err(TrackerError::InvalidParameter {
+                name: "particles",
+                value: 0.0,
+                reason: "need at least one particle",
+            });
+        }
+        let ukf = Ukf::new(config.ukf_alpha, config.ukf_beta, config.ukf_kappa)?;
+        Ok(Self {
+            name: filter.name(),
+            filter,
+            config,
+            seed,
+            target: None,
+            belief: None,
+            ukf,
+            hist: RgbHistogram::new(config.bins)?,
         })
     }
 
@@ -728,24 +731,10 @@ impl BallTracker {
         }
     }
 
-    /// Tracks into `frame`, which arrived `dt` camera frames after the
-    /// previous one this tracker saw (1 when every frame is processed; more
-    /// when frames were dropped).
-    ///
-    /// # Errors
-    /// [`TrackerError::NotInitialised`], [`TrackerError::FrameSizeChanged`],
-    /// [`TrackerError::Channels`], [`TrackerError::InvalidParameter`] for a
-    /// non-positive `dt`, and filter errors.
-    pub fn step_elapsed(&mut self, frame: ImageView<'_, u8>, dt: f64) -> Result<Estimate> {
-        self.guard.check(&frame)?;
+    /// [`BallTracker::step_elapsed`] on the shell's planes.
+    fn track_elapsed(&mut self, planes: &Planes<'_>, dt: f64) -> Result<Estimate> {
         check_dt(dt)?;
-        if frame.channels() != 3 {
-            return Err(TrackerError::Channels {
-                tracker: self.name,
-                expected: COLOUR_ONLY,
-                got: frame.channels(),
-            });
-        }
+        let frame = planes.input();
         let (Some(target), Some(belief)) = (self.target.as_ref(), self.belief.as_mut()) else {
             return Err(TrackerError::NotInitialised);
         };
@@ -811,7 +800,7 @@ impl BallTracker {
                         qn * (dt / 4.0).sqrt(),
                     ),
                 };
-                let report = pf.step(&motion, cue, &Frame::new().with_rgb(frame))?;
+                let report = pf.step(&motion, cue, planes.cues())?;
                 // the best particle's distance, from its log-likelihood
                 // -d^2 / (2 sigma^2)
                 let two_s2 = 2.0 * c.likelihood_sigma * c.likelihood_sigma;
@@ -830,13 +819,21 @@ impl BallTracker {
     }
 }
 
-impl Tracker for BallTracker {
+impl TrackerCore for BallCore {
     fn name(&self) -> &'static str {
         self.name
     }
 
-    fn init(&mut self, frame: ImageView<'_, u8>, bbox: BBox) -> Result<()> {
-        let (target, centre) = Target::new(self.name, &frame, bbox, &self.config)?;
+    fn channels(&self) -> ChannelPolicy {
+        ChannelPolicy::Rgb
+    }
+
+    fn needs(&self) -> Needs {
+        Needs::INPUT
+    }
+
+    fn start(&mut self, frame: &Planes<'_>, target: InitialBox) -> Result<()> {
+        let (target, centre) = Target::new(frame.input(), target.rect, &self.config)?;
         let v0 = self.config.initial_speed;
         let belief = match self.filter {
             BallFilter::Kf | BallFilter::Ukf => {
@@ -868,20 +865,20 @@ impl Tracker for BallTracker {
                 Belief::Particles(Box::new(CueFilter::new(filter, particles, seed)?), cue)
             }
         };
-        self.guard.start(&frame);
         self.target = Some(target);
         self.belief = Some(belief);
         Ok(())
     }
 
-    fn step(&mut self, frame: ImageView<'_, u8>) -> Result<Estimate> {
-        self.step_elapsed(frame, 1.0)
+    fn track(&mut self, frame: &Planes<'_>) -> Result<Estimate> {
+        self.track_elapsed(frame, 1.0)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::tracker::Tracker;
     use bayestrack_image::Image;
 
     /// A 200x160 white frame with a dark disc of radius 10 at (cx, cy),
@@ -1028,7 +1025,7 @@ mod tests {
         let f0 = disc(120.0, 80.0);
         for t in [&mut kf, &mut ukf] {
             t.init(f0.view(), ball_box(120.0, 80.0)).unwrap();
-            let b = t.belief.as_mut().unwrap();
+            let b = t.core_mut().belief.as_mut().unwrap();
             let Belief::Gaussian(g) = b else { panic!() };
             *g = Gaussian::diagonal(
                 Vector4::new(187.5, 80.0, 6.0, 0.0),

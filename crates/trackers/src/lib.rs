@@ -13,6 +13,7 @@ mod mad_correlation;
 mod multi_target;
 mod ncc_scale;
 mod registry;
+mod shell;
 mod tracker;
 
 pub use affine_pf::{
@@ -37,4 +38,5 @@ pub use multi_target::{
 };
 pub use ncc_scale::{NccScaleConfig, NccScaleTracker};
 pub use registry::{REGISTRY, TrackerInfo, build_tracker, tracker_info};
+pub use shell::{ChannelPolicy, InitialBox, Needs, Planes, Shell, TrackerCore};
 pub use tracker::{Estimate, FrameGuard, Tracker, check_initial_box};

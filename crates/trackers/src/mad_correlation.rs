@@ -22,7 +22,8 @@ use nalgebra::Vector2;
 use rand::{Rng, RngExt};
 
 use crate::error::{Result, TrackerError};
-use crate::tracker::{Estimate, FrameGuard, Tracker, check_initial_box};
+use crate::shell::{ChannelPolicy, InitialBox, Needs, Planes, Shell, TrackerCore};
+use crate::tracker::Estimate;
 
 /// Copies a 1-channel frame, or converts a 3-channel (RGB) one, into `gray`.
 pub(crate) fn to_gray(
@@ -52,18 +53,6 @@ pub(crate) fn to_gray(
         }
     }
     Ok(())
-}
-
-/// The 0-based pixel rectangle of a checked initial box.
-fn initial_rect(bbox: BBox, width: usize, height: usize) -> Result<Rect> {
-    check_initial_box(bbox, width, height)?;
-    bbox.to_rect(width, height)
-        .filter(|r| r.fits_in(width, height))
-        .ok_or(TrackerError::BoxOutsideFrame {
-            bbox,
-            width,
-            height,
-        })
 }
 
 /// Where [`MadTracker`] searches for the template.
@@ -107,18 +96,31 @@ impl Default for MadTrackerConfig {
 /// model. The template is the gray content of the initial box and is never
 /// updated; each frame the window of smallest MAD (first in raster order on
 /// ties) becomes the estimate.
+pub type MadTracker = Shell<MadCore>;
+
+/// The model of [`MadTracker`].
 #[derive(Debug, Clone)]
-pub struct MadTracker {
+pub struct MadCore {
     config: MadTrackerConfig,
     template: Image<u8>,
-    gray: Image<u8>,
+    /// Frame size.
+    size: (usize, usize),
     search: MadSearch,
-    guard: FrameGuard,
     window: Option<Rect>,
     last_mad: f64,
 }
 
 impl MadTracker {
+    /// A tracker with `config`.
+    ///
+    /// # Errors
+    /// [`TrackerError::InvalidParameter`] for a NaN or negative `lost_mad`.
+    pub fn new(config: MadTrackerConfig) -> Result<Self> {
+        Ok(Shell::wrap(MadCore::new(config)?))
+    }
+}
+
+impl MadCore {
     /// A tracker with `config`.
     ///
     /// # Errors
@@ -134,9 +136,8 @@ impl MadTracker {
         Ok(Self {
             config,
             template: Image::new(1, 1, 1, 0)?,
-            gray: Image::new(1, 1, 1, 0)?,
+            size: (0, 0),
             search: MadSearch::new(),
-            guard: FrameGuard::default(),
             window: None,
             last_mad: 0.0,
         })
@@ -158,7 +159,7 @@ impl MadTracker {
     }
 
     fn region(&self, window: Rect) -> Rect {
-        let (w, h) = (self.gray.width(), self.gray.height());
+        let (w, h) = self.size;
         match self.config.search {
             SearchArea::Frame => Rect::new(0, 0, w, h),
             SearchArea::Region(r) => r,
@@ -173,20 +174,26 @@ impl MadTracker {
     }
 }
 
-impl Tracker for MadTracker {
+impl TrackerCore for MadCore {
     fn name(&self) -> &'static str {
         "mad"
     }
 
+    fn channels(&self) -> ChannelPolicy {
+        ChannelPolicy::GrayOrRgb
+    }
+
+    fn needs(&self) -> Needs {
+        Needs::GRAY
+    }
+
     /// # Errors
-    /// As [`Tracker::init`], plus [`AppearanceError::WindowOutside`] for a
-    /// [`SearchArea::Region`] outside the frame and
-    /// [`AppearanceError::TemplateLargerThanRegion`] when the template does
-    /// not fit in it.
-    fn init(&mut self, frame: ImageView<'_, u8>, target: BBox) -> Result<()> {
-        to_gray("mad", frame, &mut self.gray)?;
+    /// [`AppearanceError::WindowOutside`] for a [`SearchArea::Region`]
+    /// outside the frame and [`AppearanceError::TemplateLargerThanRegion`]
+    /// when the template does not fit in it.
+    fn start(&mut self, frame: &Planes<'_>, target: InitialBox) -> Result<()> {
         let (w, h) = (frame.width(), frame.height());
-        let rect = initial_rect(target, w, h)?;
+        let rect = target.rect;
         if let SearchArea::Region(r) = self.config.search {
             if !r.fits_in(w, h) {
                 return Err(AppearanceError::WindowOutside {
@@ -206,21 +213,19 @@ impl Tracker for MadTracker {
                 .into());
             }
         }
-        self.template = self.gray.crop(rect)?.to_image();
-        self.guard.start(&frame);
+        self.template = frame.gray()?.crop(rect)?.to_image();
+        self.size = (w, h);
         self.window = Some(rect);
         self.last_mad = 0.0;
         Ok(())
     }
 
-    fn step(&mut self, frame: ImageView<'_, u8>) -> Result<Estimate> {
-        self.guard.check(&frame)?;
+    fn track(&mut self, frame: &Planes<'_>) -> Result<Estimate> {
         let window = self.window.ok_or(TrackerError::NotInitialised)?;
-        to_gray("mad", frame, &mut self.gray)?;
         let region = self.region(window);
         let m = self
             .search
-            .search(self.gray.view(), self.template.view(), region)?;
+            .search(frame.gray()?, self.template.view(), region)?;
         let (tw, th) = (self.template.width(), self.template.height());
         let found = m.window(tw, th);
         self.window = Some(found);
@@ -482,18 +487,18 @@ impl<'a> Proposal<Vector2<f64>, Observation<'a>> for ArpProposal {
 /// the MAD likelihood of its window (eq. 7, log domain); the output is the
 /// weighted mean of the particles (eq. 8). The random streams are keyed by
 /// `(seed, frame)`.
+pub type PfCorrelationTracker = Shell<PfCorrelationCore>;
+
+/// The model of [`PfCorrelationTracker`].
 #[derive(Debug, Clone)]
-pub struct PfCorrelationTracker {
+pub struct PfCorrelationCore {
     config: PfCorrelationConfig,
     filter: ParticleFilter,
     likelihood: MadLikelihood,
     template: Image<u8>,
-    gray: Image<u8>,
-    guard: FrameGuard,
     set: Option<ParticleSet<Vector2<f64>>>,
     output: Vector2<f64>,
     drift: Vector2<f64>,
-    frame_index: u64,
     window: Rect,
     search: MadSearch,
 }
@@ -510,6 +515,16 @@ impl PfCorrelationTracker {
     /// non-finite spread, `B` or `lost_mad`, a non-finite `A`;
     /// [`TrackerError::Appearance`] for a `sigma` that is not positive.
     pub fn new(config: PfCorrelationConfig) -> Result<Self> {
+        Ok(Shell::wrap(PfCorrelationCore::new(config)?))
+    }
+}
+
+impl PfCorrelationCore {
+    /// The model of a tracker with `config`.
+    ///
+    /// # Errors
+    /// As [`PfCorrelationTracker::new`].
+    pub fn new(config: PfCorrelationConfig) -> Result<Self> {
         config.check()?;
         Ok(Self {
             filter: ParticleFilter {
@@ -521,12 +536,9 @@ impl PfCorrelationTracker {
             likelihood: MadLikelihood::new(config.sigma)?,
             config,
             template: Image::new(1, 1, 1, 0)?,
-            gray: Image::new(1, 1, 1, 0)?,
-            guard: FrameGuard::default(),
             set: None,
             output: Vector2::zeros(),
             drift: Vector2::zeros(),
-            frame_index: 0,
             window: Rect::new(0, 0, 1, 1),
             search: MadSearch::new(),
         })
@@ -550,17 +562,15 @@ impl PfCorrelationTracker {
     /// Frame 2 of [`ArpMotion::ConstantDrift`]: the MAD match within
     /// `margin` of the initial window gives the output and the drift `c`;
     /// every particle moves by `c`.
-    fn measure_drift(&mut self, margin: usize) -> Result<Estimate> {
-        let (w, h) = (self.gray.width(), self.gray.height());
+    fn measure_drift(&mut self, gray: ImageView<'_, u8>, margin: usize) -> Result<Estimate> {
+        let (w, h) = (gray.width(), gray.height());
         let r = self.window;
         let x0 = r.x.saturating_sub(margin);
         let y0 = r.y.saturating_sub(margin);
         let x1 = r.right().saturating_add(margin).min(w);
         let y1 = r.bottom().saturating_add(margin).min(h);
         let region = Rect::new(x0, y0, x1 - x0, y1 - y0);
-        let m = self
-            .search
-            .search(self.gray.view(), self.template.view(), region)?;
+        let m = self.search.search(gray, self.template.view(), region)?;
         let (tw, th) = (self.template.width(), self.template.height());
         let (cx, cy) = m.window(tw, th).center();
         let out = Vector2::new(cx, cy);
@@ -591,16 +601,23 @@ impl PfCorrelationTracker {
     }
 }
 
-impl Tracker for PfCorrelationTracker {
+impl TrackerCore for PfCorrelationCore {
     fn name(&self) -> &'static str {
         "pf-correlation"
     }
 
-    fn init(&mut self, frame: ImageView<'_, u8>, target: BBox) -> Result<()> {
-        to_gray("pf-correlation", frame, &mut self.gray)?;
+    fn channels(&self) -> ChannelPolicy {
+        ChannelPolicy::GrayOrRgb
+    }
+
+    fn needs(&self) -> Needs {
+        Needs::GRAY
+    }
+
+    fn start(&mut self, frame: &Planes<'_>, target: InitialBox) -> Result<()> {
         let (w, h) = (frame.width(), frame.height());
-        let rect = initial_rect(target, w, h)?;
-        self.template = self.gray.crop(rect)?.to_image();
+        let rect = target.rect;
+        self.template = frame.gray()?.crop(rect)?.to_image();
         let (cx, cy) = rect.center();
         let centre = Vector2::new(cx, cy);
         let mut rng = stream_rng(&[self.config.seed, INIT_STREAM]);
@@ -616,32 +633,27 @@ impl Tracker for PfCorrelationTracker {
             })
             .collect();
         self.set = Some(ParticleSet::new(particles)?);
-        self.guard.start(&frame);
         self.output = centre;
         self.drift = Vector2::zeros();
-        self.frame_index = 0;
         self.window = rect;
         Ok(())
     }
 
-    fn step(&mut self, frame: ImageView<'_, u8>) -> Result<Estimate> {
-        self.guard.check(&frame)?;
-        let set = self.set.as_mut().ok_or(TrackerError::NotInitialised)?;
-        to_gray("pf-correlation", frame, &mut self.gray)?;
-        self.frame_index += 1;
-        if let (ArpMotion::ConstantDrift { margin, .. }, 1) = (self.config.motion, self.frame_index)
-        {
-            return self.measure_drift(margin);
+    fn track(&mut self, frame: &Planes<'_>) -> Result<Estimate> {
+        let gray = frame.gray()?;
+        if let (ArpMotion::ConstantDrift { margin, .. }, 1) = (self.config.motion, frame.index()) {
+            return self.measure_drift(gray, margin);
         }
+        let set = self.set.as_mut().ok_or(TrackerError::NotInitialised)?;
         let z = Observation {
-            frame: self.gray.view(),
+            frame: gray,
             template: self.template.view(),
             likelihood: self.likelihood,
             motion: self.config.motion,
             drift: self.drift,
             cap: self.config.mad_cap.unwrap_or(f64::INFINITY),
         };
-        let key = [self.config.seed, STEP_STREAM, self.frame_index];
+        let key = [self.config.seed, STEP_STREAM, frame.index()];
         // resample last frame's weighted set, move, weigh (eq. 5-7)
         self.filter.step(set, &ArpProposal, &z, &key)?;
         // Eq. 8: the weighted mean
@@ -664,6 +676,7 @@ impl Tracker for PfCorrelationTracker {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::tracker::Tracker;
 
     /// A textured 8-bit frame (LCG noise).
     fn texture(w: usize, h: usize, seed: u32) -> Image<u8> {

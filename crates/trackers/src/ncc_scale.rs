@@ -76,7 +76,8 @@ use bayestrack_appearance::{NccSearch, NccTemplate};
 use bayestrack_image::{AreaSampler, BBox, Image, ImageView, ImageViewMut, Rect, gray_region_into};
 
 use crate::error::{Result, TrackerError};
-use crate::tracker::{Estimate, FrameGuard, Tracker, check_initial_box};
+use crate::shell::{ChannelPolicy, InitialBox, Needs, Planes, Shell, TrackerCore};
+use crate::tracker::Estimate;
 
 const NAME: &str = "ncc-scale";
 
@@ -265,10 +266,12 @@ struct State {
 }
 
 /// The fast NCC tracker with scale; see the module docs.
+pub type NccScaleTracker = Shell<NccScaleCore>;
+
+/// The model of [`NccScaleTracker`].
 #[derive(Debug, Clone)]
-pub struct NccScaleTracker {
+pub struct NccScaleCore {
     config: NccScaleConfig,
-    guard: FrameGuard,
     state: Option<State>,
     scratch: Scratch,
 }
@@ -570,10 +573,19 @@ impl NccScaleTracker {
     /// # Errors
     /// [`TrackerError::InvalidParameter`] for a bad configuration.
     pub fn new(config: NccScaleConfig) -> Result<Self> {
+        Ok(Shell::wrap(NccScaleCore::new(config)?))
+    }
+}
+
+impl NccScaleCore {
+    /// The model of [`NccScaleTracker::new`].
+    ///
+    /// # Errors
+    /// As [`NccScaleTracker::new`].
+    pub fn new(config: NccScaleConfig) -> Result<Self> {
         config.validate()?;
         Ok(Self {
             config,
-            guard: FrameGuard::default(),
             state: None,
             scratch: Scratch {
                 region: Region::new()?,
@@ -603,17 +615,6 @@ impl NccScaleTracker {
     pub fn template_size(&self) -> Option<(usize, usize)> {
         self.state.as_ref().map(|s| (s.tw, s.th))
     }
-
-    fn check_channels(frame: &ImageView<'_, u8>) -> Result<()> {
-        match frame.channels() {
-            1 | 3 => Ok(()),
-            got => Err(TrackerError::Channels {
-                tracker: NAME,
-                expected: "1 or 3",
-                got,
-            }),
-        }
-    }
 }
 
 fn bbox_of(s: &State) -> BBox {
@@ -626,14 +627,21 @@ fn bbox_of(s: &State) -> BBox {
     )
 }
 
-impl Tracker for NccScaleTracker {
+impl TrackerCore for NccScaleCore {
     fn name(&self) -> &'static str {
         NAME
     }
 
-    fn init(&mut self, frame: ImageView<'_, u8>, target: BBox) -> Result<()> {
-        Self::check_channels(&frame)?;
-        check_initial_box(target, frame.width(), frame.height())?;
+    fn channels(&self) -> ChannelPolicy {
+        ChannelPolicy::GrayOrRgb
+    }
+
+    fn needs(&self) -> Needs {
+        Needs::INPUT
+    }
+
+    fn start(&mut self, planes: &Planes<'_>, target: InitialBox) -> Result<()> {
+        let (frame, target) = (planes.input(), target.bbox);
         let (w0, h0) = (target.width, target.height);
         let (tw, th, rx, ry) = template_geometry(w0, h0, self.config.template_area);
         let (cx, cy) = target.center();
@@ -647,7 +655,6 @@ impl Tracker for NccScaleTracker {
         let ky = kernel_profile(th, self.config.border_weight);
         let mut template = NccTemplate::default();
         template.set_weighted(raw.view(), &kx, &ky)?;
-        self.guard.start(&frame);
         self.state = Some(State {
             w0,
             h0,
@@ -670,9 +677,8 @@ impl Tracker for NccScaleTracker {
         Ok(())
     }
 
-    fn step(&mut self, frame: ImageView<'_, u8>) -> Result<Estimate> {
-        self.guard.check(&frame)?;
-        Self::check_channels(&frame)?;
+    fn track(&mut self, planes: &Planes<'_>) -> Result<Estimate> {
+        let frame = planes.input();
         let c = self.config;
         let Some(s) = self.state.as_mut() else {
             return Err(TrackerError::NotInitialised);
@@ -773,6 +779,7 @@ impl Tracker for NccScaleTracker {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+    use crate::tracker::Tracker;
     use rand::{RngExt, SeedableRng};
     use rand_distr::{Distribution, StandardNormal};
     use rand_xoshiro::Xoshiro256PlusPlus;
