@@ -103,6 +103,7 @@ use bayestrack_appearance::{
     AppearanceError, BinMap, HsvBinning, KernelHistogram, Result as AppearanceResult,
 };
 use bayestrack_image::{BBox, ImageView, Rect};
+use bayestrack_options::options;
 use bayestrack_particle::{ParticleSet, Proposal, Resampling, Smc, stream_rng, stream_seed};
 use nalgebra::SVector;
 use rand::{Rng, RngExt};
@@ -119,79 +120,62 @@ const KEY: u64 = 0x6869_7374_7066;
 
 type State = SVector<f64, 5>;
 
-/// Every parameter of [`HistPfTracker`]; one set for every sequence.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct HistPfConfig {
-    /// Number of particles (200; measured on the three OTB sequences, 100
-    /// and 400 particles change the AUC by less than 0.03).
-    pub particles: usize,
-    /// Value bins of the HSV histogram (10, Pérez et al.): grey and dark
-    /// pixels, and every pixel of a gray frame, fall in these.
-    pub value_bins: usize,
-    /// `lambda` of `exp(-lambda D^2)` (20, Pérez et al. 2002).
-    pub lambda: f64,
-    /// Weight `beta` of the ring term (0.5).
-    pub ring_weight: f64,
-    /// The ring's outer box is the box grown by this factor (1.5: the ring
-    /// then has 1.25 times the box's area).
-    pub ring: f64,
-    /// Position noise `sigma_p`, fraction of the target size per frame (0.05).
-    pub position_noise: f64,
-    /// Velocity noise `sigma_v`, fraction of the target size per frame (0.05).
-    pub velocity_noise: f64,
-    /// Log-scale noise `sigma_s` per frame (0.02: 2 % size change per frame
-    /// at one standard deviation).
-    pub scale_noise: f64,
-    /// Fraction `e` of particles that jump instead (0.1).
-    pub jump_fraction: f64,
-    /// Jump spread `sigma_j`, fraction of the target size (0.5).
-    pub jump_spread: f64,
-    /// Smallest scale relative to the initial box (0.2).
-    pub min_scale: f64,
-    /// Largest scale relative to the initial box (5).
-    pub max_scale: f64,
-    /// Reference update rate `a` (0.05: a time constant of 20 frames; a
-    /// slow update, as Nummiaro et al. recommend, since every update may
-    /// take in some background).
-    pub update_rate: f64,
-    /// The update takes the histogram of the estimate's box shrunk by this
-    /// factor about its centre (0.75): the core of the estimate, which is
-    /// on the target even when the estimate is a little too large (a full
-    /// box that takes in background would teach the model the background,
-    /// and larger boxes would then look ever better).
-    pub update_core: f64,
-    /// `rho_in` the estimate needs for the update (0.8).
-    pub update_threshold: f64,
-    /// The target is reported lost when the best particle's `rho_in` is
-    /// below this (0.5).
-    pub lost_threshold: f64,
-    /// Most pixels a histogram counts (400): larger boxes are sampled on a
-    /// coarser grid, which keeps the cost per particle bounded.
-    pub max_samples: usize,
+options! {
+    /// Every parameter of [`HistPfTracker`]; one set for every sequence.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub struct HistPfConfig {
+        /// Number of particles (200; measured on the three OTB sequences, 100
+        /// and 400 particles change the AUC by less than 0.03).
+        pub particles: usize = 200;
+        /// Value bins of the HSV histogram (10, Pérez et al.): grey and dark
+        /// pixels, and every pixel of a gray frame, fall in these.
+        pub value_bins: usize = 10;
+        /// `lambda` of `exp(-lambda D^2)` (20, Pérez et al. 2002).
+        pub lambda: f64 = 20.0;
+        /// Weight `beta` of the ring term (0.5).
+        pub ring_weight: f64 = 0.5;
+        /// The ring's outer box is the box grown by this factor (1.5: the ring
+        /// then has 1.25 times the box's area).
+        pub ring: f64 = 1.5;
+        /// Position noise `sigma_p`, fraction of the target size per frame (0.05).
+        pub position_noise: f64 = 0.05;
+        /// Velocity noise `sigma_v`, fraction of the target size per frame (0.05).
+        pub velocity_noise: f64 = 0.05;
+        /// Log-scale noise `sigma_s` per frame (0.02: 2 % size change per frame
+        /// at one standard deviation).
+        pub scale_noise: f64 = 0.02;
+        /// Fraction `e` of particles that jump instead (0.1).
+        pub jump_fraction: f64 = 0.1;
+        /// Jump spread `sigma_j`, fraction of the target size (0.5).
+        pub jump_spread: f64 = 0.5;
+        /// Smallest scale relative to the initial box (0.2).
+        pub min_scale: f64 = 0.2;
+        /// Largest scale relative to the initial box (5).
+        pub max_scale: f64 = 5.0;
+        /// Reference update rate `a` (0.05: a time constant of 20 frames; a
+        /// slow update, as Nummiaro et al. recommend, since every update may
+        /// take in some background).
+        pub update_rate: f64 = 0.05;
+        /// The update takes the histogram of the estimate's box shrunk by this
+        /// factor about its centre (0.75): the core of the estimate, which is
+        /// on the target even when the estimate is a little too large (a full
+        /// box that takes in background would teach the model the background,
+        /// and larger boxes would then look ever better).
+        pub update_core: f64 = 0.75;
+        /// `rho_in` the estimate needs for the update (0.8).
+        pub update_threshold: f64 = 0.8;
+        /// The target is reported lost when the best particle's `rho_in` is
+        /// below this (0.5).
+        pub lost_threshold: f64 = 0.5;
+        /// Most pixels a histogram counts (400): larger boxes are sampled on a
+        /// coarser grid, which keeps the cost per particle bounded.
+        pub max_samples: usize = 400;
+    }
+    check check_hist_pf;
 }
 
-impl Default for HistPfConfig {
-    fn default() -> Self {
-        Self {
-            particles: 200,
-            value_bins: 10,
-            lambda: 20.0,
-            ring_weight: 0.5,
-            ring: 1.5,
-            position_noise: 0.05,
-            velocity_noise: 0.05,
-            scale_noise: 0.02,
-            jump_fraction: 0.1,
-            jump_spread: 0.5,
-            min_scale: 0.2,
-            max_scale: 5.0,
-            update_rate: 0.05,
-            update_core: 0.75,
-            update_threshold: 0.8,
-            lost_threshold: 0.5,
-            max_samples: 400,
-        }
-    }
+fn check_hist_pf(c: &HistPfConfig) -> std::result::Result<(), String> {
+    c.validate().map_err(|e| e.to_string())
 }
 
 impl HistPfConfig {

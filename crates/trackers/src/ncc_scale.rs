@@ -74,6 +74,7 @@
 
 use bayestrack_appearance::{NccSearch, NccTemplate};
 use bayestrack_image::{AreaSampler, BBox, Image, ImageView, ImageViewMut, Rect, gray_region_into};
+use bayestrack_options::options;
 
 use crate::error::{Result, TrackerError};
 use crate::shell::{ChannelPolicy, InitialBox, Needs, Planes, Shell, TrackerCore};
@@ -81,96 +82,81 @@ use crate::tracker::Estimate;
 
 const NAME: &str = "ncc-scale";
 
-/// Every parameter of [`NccScaleTracker`], with defaults chosen from the
-/// literature and first principles (see each field); one set for every
-/// sequence.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct NccScaleConfig {
-    /// Largest template, in template pixels (400, e.g. 20x20): the initial
-    /// box is resampled down to this area. Template trackers work with
-    /// patches of a few hundred pixels (KCF/DSST resample to about 50x50
-    /// cells of 4 pixels; Xu, Gao and Yang 2015 (paper 002) uses 36x36); the search cost grows with
-    /// this area times the number of offsets.
-    pub template_area: usize,
-    /// Weight `f` of the template's edges relative to its centre (0.25):
-    /// pixel `(u, v)` is weighted `k(x_u) k(y_v)`, `k(x) = f + (1 - f)(1 - x^2)`
-    /// with `x` the normalised distance from the middle (a separable
-    /// Epanechnikov profile, as in kernel-based tracking, Comaniciu et al.
-    /// 2003, with a floor), so the box corners, usually background, count
-    /// less; 1 gives plain NCC. The window's variance is weighted alike
-    /// ([`bayestrack_appearance::NccTemplate::set_weighted`]).
-    pub border_weight: f64,
-    /// Search margin on each side of the prediction, as a fraction of the
-    /// template side `sqrt(tw th)` (0.75): a search window of 2.5 target
-    /// sizes, as in KCF's padding of 1.5.
-    pub search_margin: f64,
-    /// Ratio between neighbouring scales searched (1.03; DSST's scale step
-    /// is 1.02 over 33 scales; with three scales and the parabola through
-    /// their scores, a coarser step sees the change of a few frames).
-    pub scale_step: f64,
-    /// Fraction `k` of the estimated log-scale change applied per frame
-    /// (0.5): `s <- s q^(k v)` with `v` the vertex of the parabola through
-    /// the three scales' scores, in `[-1, 1]`. A first-order filter on the
-    /// scale, which averages the noisy per-frame scale evidence.
-    pub scale_gain: f64,
-    /// Factor applied to the score of the two scales other than the
-    /// current one (0.995): a scale change needs a clearer match than a
-    /// translation (SAMF uses a similar scale weight).
-    pub scale_penalty: f64,
-    /// Smallest scale relative to the initial box (0.2).
-    pub min_scale: f64,
-    /// Largest scale relative to the initial box (5).
-    pub max_scale: f64,
-    /// Weight `b` of the motion prior: the score at offset `d` from the
-    /// prediction (template pixels) is lowered by `b (d / m)^2`, `m` the
-    /// search margin (0.1): breaks near-ties in favour of smooth motion.
-    pub motion_penalty: f64,
-    /// Gain `g` of the velocity estimate (0.5): the velocity is the
-    /// displacement smoothed over about two frames.
-    pub velocity_gain: f64,
-    /// Template learning rate `a` (0.2, a time constant of 5 frames; MOSSE
-    /// adapts its filter at 0.125 per frame). Raw-pixel templates need fast
-    /// adaptation under pose and illumination change; the scale does not
-    /// drift with them because it is measured against the initial template
-    /// ([`NccScaleConfig::anchor_weight`]).
-    pub update_rate: f64,
-    /// Score the match needs for the template update (0.5): a weaker match
-    /// may be an occluder or background, which would corrupt the template.
-    pub update_threshold: f64,
-    /// Weight `l` of the initial template when choosing among the scales
-    /// (1): each scale's peak is scored `(1 - l) NCC_adaptive + l NCC_initial`.
-    /// The initial template fixes what scale 1 means; an adapted template
-    /// lets the scale drift (a template updated from slightly zoomed
-    /// windows prefers zooming further).
-    pub anchor_weight: f64,
-    /// Score below which the target is reported lost (0.35).
-    pub lost_threshold: f64,
-    /// Factor on the search margin of the wide search (2): a match weaker
-    /// than [`NccScaleConfig::update_threshold`] is searched for again in
-    /// the wide window, as is every frame after a loss.
-    pub wide_margin: f64,
+options! {
+    /// Every parameter of [`NccScaleTracker`], with defaults chosen from the
+    /// literature and first principles (see each field); one set for every
+    /// sequence.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub struct NccScaleConfig {
+        /// Largest template, in template pixels (400, e.g. 20x20): the initial
+        /// box is resampled down to this area. Template trackers work with
+        /// patches of a few hundred pixels (KCF/DSST resample to about 50x50
+        /// cells of 4 pixels; Xu, Gao and Yang 2015 (paper 002) uses 36x36); the search cost grows with
+        /// this area times the number of offsets.
+        pub template_area: usize = 400;
+        /// Weight `f` of the template's edges relative to its centre (0.25):
+        /// pixel `(u, v)` is weighted `k(x_u) k(y_v)`, `k(x) = f + (1 - f)(1 - x^2)`
+        /// with `x` the normalised distance from the middle (a separable
+        /// Epanechnikov profile, as in kernel-based tracking, Comaniciu et al.
+        /// 2003, with a floor), so the box corners, usually background, count
+        /// less; 1 gives plain NCC. The window's variance is weighted alike
+        /// ([`bayestrack_appearance::NccTemplate::set_weighted`]).
+        pub border_weight: f64 = 0.25;
+        /// Search margin on each side of the prediction, as a fraction of the
+        /// template side `sqrt(tw th)` (0.75): a search window of 2.5 target
+        /// sizes, as in KCF's padding of 1.5.
+        pub search_margin: f64 = 0.75;
+        /// Ratio between neighbouring scales searched (1.03; DSST's scale step
+        /// is 1.02 over 33 scales; with three scales and the parabola through
+        /// their scores, a coarser step sees the change of a few frames).
+        pub scale_step: f64 = 1.03;
+        /// Fraction `k` of the estimated log-scale change applied per frame
+        /// (0.5): `s <- s q^(k v)` with `v` the vertex of the parabola through
+        /// the three scales' scores, in `[-1, 1]`. A first-order filter on the
+        /// scale, which averages the noisy per-frame scale evidence.
+        pub scale_gain: f64 = 0.5;
+        /// Factor applied to the score of the two scales other than the
+        /// current one (0.995): a scale change needs a clearer match than a
+        /// translation (SAMF uses a similar scale weight).
+        pub scale_penalty: f64 = 0.995;
+        /// Smallest scale relative to the initial box (0.2).
+        pub min_scale: f64 = 0.2;
+        /// Largest scale relative to the initial box (5).
+        pub max_scale: f64 = 5.0;
+        /// Weight `b` of the motion prior: the score at offset `d` from the
+        /// prediction (template pixels) is lowered by `b (d / m)^2`, `m` the
+        /// search margin (0.1): breaks near-ties in favour of smooth motion.
+        pub motion_penalty: f64 = 0.1;
+        /// Gain `g` of the velocity estimate (0.5): the velocity is the
+        /// displacement smoothed over about two frames.
+        pub velocity_gain: f64 = 0.5;
+        /// Template learning rate `a` (0.2, a time constant of 5 frames; MOSSE
+        /// adapts its filter at 0.125 per frame). Raw-pixel templates need fast
+        /// adaptation under pose and illumination change; the scale does not
+        /// drift with them because it is measured against the initial template
+        /// ([`NccScaleConfig::anchor_weight`]).
+        pub update_rate: f64 = 0.2;
+        /// Score the match needs for the template update (0.5): a weaker match
+        /// may be an occluder or background, which would corrupt the template.
+        pub update_threshold: f64 = 0.5;
+        /// Weight `l` of the initial template when choosing among the scales
+        /// (1): each scale's peak is scored `(1 - l) NCC_adaptive + l NCC_initial`.
+        /// The initial template fixes what scale 1 means; an adapted template
+        /// lets the scale drift (a template updated from slightly zoomed
+        /// windows prefers zooming further).
+        pub anchor_weight: f64 = 1.0;
+        /// Score below which the target is reported lost (0.35).
+        pub lost_threshold: f64 = 0.35;
+        /// Factor on the search margin of the wide search (2): a match weaker
+        /// than [`NccScaleConfig::update_threshold`] is searched for again in
+        /// the wide window, as is every frame after a loss.
+        pub wide_margin: f64 = 2.0;
+    }
+    check check_ncc_scale;
 }
 
-impl Default for NccScaleConfig {
-    fn default() -> Self {
-        Self {
-            template_area: 400,
-            border_weight: 0.25,
-            search_margin: 0.75,
-            scale_step: 1.03,
-            scale_gain: 0.5,
-            scale_penalty: 0.995,
-            min_scale: 0.2,
-            max_scale: 5.0,
-            motion_penalty: 0.1,
-            velocity_gain: 0.5,
-            update_rate: 0.2,
-            update_threshold: 0.5,
-            anchor_weight: 1.0,
-            lost_threshold: 0.35,
-            wide_margin: 2.0,
-        }
-    }
+fn check_ncc_scale(c: &NccScaleConfig) -> std::result::Result<(), String> {
+    c.validate().map_err(|e| e.to_string())
 }
 
 impl NccScaleConfig {

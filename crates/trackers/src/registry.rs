@@ -192,22 +192,19 @@ pub const REGISTRY: &[TrackerInfo] = &[
         name: "ncc-scale",
         summary: "real video: centre-weighted gray NCC template searched around a constant-velocity prediction at 3 scales (x/1.03, 1, x1.03; scale judged by the first frame's template), wide second look on weak matches, guarded template update; deterministic",
         handles_scale: true,
-        options: Vec::new,
-        build: |_, set| {
-            fixed("ncc-scale", set, || {
-                NccScaleTracker::new(NccScaleConfig::default())
-            })
-        },
+        options: NccScaleConfig::specs,
+        build: |_, set| boxed(NccScaleTracker::new(options_of("ncc-scale", &[], set)?)),
     },
     TrackerInfo {
         name: "hist-pf-scale",
         summary: "real video: paper 001's PF with scale in the state (x, y, vx, vy, ln s), 200 particles, kernel-weighted HSV histogram (Pérez et al.), Bhattacharyya likelihood with a background-ring term, slow guarded model update",
         handles_scale: true,
-        options: Vec::new,
+        options: HistPfConfig::specs,
         build: |seed, set| {
-            fixed("hist-pf-scale", set, || {
-                HistPfTracker::new(HistPfConfig::default(), seed)
-            })
+            boxed(HistPfTracker::new(
+                options_of("hist-pf-scale", &[], set)?,
+                seed,
+            ))
         },
     },
     TrackerInfo {
@@ -347,6 +344,10 @@ mod tests {
         assert_eq!(particles("ball-pf10", &[]), ("ball-pf10", 10));
         // a preset is a starting point, not a lock
         assert_eq!(particles("ball-pf10", &[("particles", "12")]).1, 12);
+        assert_eq!(
+            particles("hist-pf-scale", &[("particles", "50")]),
+            ("hist-pf-scale", 50)
+        );
     }
 
     #[test]
@@ -371,6 +372,14 @@ mod tests {
             .unwrap()
             .to_string();
         assert!(err.contains("hkpf") && err.contains("particles"), "{err}");
+        // rules between options are checked when set
+        let err = tracker_info("ncc-scale")
+            .unwrap()
+            .build_with(0, &set(&[("max_scale", "0.5")]))
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(err.contains("ncc-scale") && err.contains("max_scale"), "{err}");
     }
 
     #[test]
