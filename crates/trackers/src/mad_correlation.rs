@@ -15,6 +15,7 @@
 
 use bayestrack_appearance::{AppearanceError, MadLikelihood, MadSearch, mad};
 use bayestrack_image::{BBox, Image, ImageView, Rect, rgb_to_gray_into};
+use bayestrack_options::{Codec, above, choice, options};
 use bayestrack_particle::{
     Degenerate, ParticleFilter, ParticleSet, Proposal, ResampleTiming, Resampling, stream_rng,
 };
@@ -71,25 +72,62 @@ pub enum SearchArea {
     Region(Rect),
 }
 
-/// Settings of [`MadTracker`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct MadTrackerConfig {
-    /// Where to search.
-    pub search: SearchArea,
-    /// The tracker reports the target lost when the best MAD (gray levels)
-    /// exceeds this.
-    pub lost_mad: f64,
+options! {
+    /// Settings of [`MadTracker`], each an option of `bayestrack track
+    /// --tracker mad --set key=value`.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub struct MadTrackerConfig {
+        /// Where to search: `frame` (the whole frame, the `M x N` parameter
+        /// space `E(i, j)` of sec. 2 (4)), `window:M` (the previous match
+        /// grown by `M` px on every side; 16, about three frames of the road
+        /// scene's motion) or `region:X,Y,W,H` (a fixed 0-based region).
+        pub search: SearchArea = SearchArea::Window { margin: 16 }, via SearchAreaCodec;
+        /// The tracker reports the target lost when the best MAD (gray
+        /// levels) exceeds this (20).
+        pub lost_mad: f64 = 20.0, in 0.0..=255.0;
+    }
 }
 
-impl Default for MadTrackerConfig {
-    /// A window search with a 16-pixel margin (about three frames of the
-    /// road scene's motion), lost above a MAD of 20 gray levels.
-    fn default() -> Self {
-        Self {
-            search: SearchArea::Window { margin: 16 },
-            lost_mad: 20.0,
+/// Reads a [`SearchArea`]: `frame`, `window:M` or `region:X,Y,W,H`.
+#[derive(Debug, Clone, Copy)]
+pub struct SearchAreaCodec;
+
+impl Codec<SearchArea> for SearchAreaCodec {
+    fn type_name() -> &'static str {
+        "search"
+    }
+    fn parse(s: &str) -> Option<SearchArea> {
+        let s = s.trim();
+        if s == "frame" {
+            return Some(SearchArea::Frame);
+        }
+        if let Some(m) = s.strip_prefix("window:") {
+            return Some(SearchArea::Window {
+                margin: m.trim().parse().ok()?,
+            });
+        }
+        let [x, y, w, h] = numbers::<usize, 4>(s.strip_prefix("region:")?)?;
+        (w > 0 && h > 0).then_some(SearchArea::Region(Rect::new(x, y, w, h)))
+    }
+    fn format(v: &SearchArea) -> String {
+        match v {
+            SearchArea::Frame => "frame".into(),
+            SearchArea::Window { margin } => format!("window:{margin}"),
+            SearchArea::Region(r) => format!("region:{},{},{},{}", r.x, r.y, r.width, r.height),
         }
     }
+    fn domain() -> String {
+        "frame|window:M|region:X,Y,W,H (pixels, 0-based)".into()
+    }
+}
+
+/// `N` comma-separated numbers.
+fn numbers<T: std::str::FromStr, const N: usize>(s: &str) -> Option<[T; N]> {
+    let v: Vec<T> = s
+        .split(',')
+        .map(|p| p.trim().parse().ok())
+        .collect::<Option<_>>()?;
+    v.try_into().ok()
 }
 
 /// Dong and Chen (paper 004) sec. 2: exhaustive MAD template matching under a translation
@@ -321,51 +359,115 @@ impl ArpMotion {
     }
 }
 
-/// Settings of [`PfCorrelationTracker`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PfCorrelationConfig {
-    /// `Ns`, the number of particles (15 in Dong and Chen (paper 004) sec. 3.3).
-    pub particles: usize,
-    /// `(b1, b2)` of eq. 4: the half-widths in pixels of the uniform initial
-    /// spread around the initial centre.
-    pub spread: [f64; 2],
-    /// The dynamics of eq. 5-6.
-    pub motion: ArpMotion,
-    /// `sigma` of eq. 7 in gray levels: `p = exp(-MAD / (2 sigma^2))`.
-    pub sigma: f64,
-    /// Resampling scheme, applied after the output of every frame.
-    pub resampling: Resampling,
-    /// Seed of every random stream of the tracker.
-    pub seed: u64,
-    /// The tracker reports the target lost when the MAD at its output
-    /// exceeds this (gray levels).
-    pub lost_mad: f64,
-    /// Not in the paper: a cap on the MAD inside eq. 7,
-    /// `p = exp(-min(MAD, cap) / (2 sigma^2))`. Windows worse than the cap
-    /// are equally unlikely, so where no particle sees the target (an
-    /// occlusion) the weights are flat and the particles coast with the
-    /// ARP. `None` is eq. 7 as printed.
-    pub mad_cap: Option<f64>,
+options! {
+    /// Settings of [`PfCorrelationTracker`], each an option of `bayestrack
+    /// track --tracker pf-correlation --set key=value` (the registry sets
+    /// `seed` from `--seed`; `--set seed=S` overrides it).
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub struct PfCorrelationConfig {
+        /// `Ns`, the number of particles (15 in Dong and Chen (paper 004) sec. 3.3).
+        pub particles: usize = 15, in 1..=1_000_000;
+        /// `(b1, b2)` of eq. 4: the half-widths in pixels of the uniform
+        /// initial spread around the initial centre (5, 5).
+        pub spread: [f64; 2] = [5.0, 5.0], via PairCodec;
+        /// The dynamics of eq. 5-6: `position:A1,A2,B1,B2`, `drift:B1,B2,G`
+        /// (the default, `B = 4` px and gain 0.5) or
+        /// `constant-drift:B1,B2,MARGIN` (see [`ArpMotion`]).
+        pub motion: ArpMotion = ArpMotion::Drift { b: [4.0, 4.0], gain: 0.5 }, via ArpCodec;
+        /// `sigma` of eq. 7 in gray levels: `p = exp(-MAD / (2 sigma^2))` (1.5).
+        pub sigma: f64 = 1.5, in above(0.0);
+        /// Resampling scheme, applied after the output of every frame
+        /// (systematic).
+        pub resampling: Resampling = Resampling::Systematic, via ResamplingCodec;
+        /// Seed of every random stream of the tracker (0).
+        pub seed: u64 = 0;
+        /// The tracker reports the target lost when the MAD at its output
+        /// exceeds this (gray levels; 20).
+        pub lost_mad: f64 = 20.0, in 0.0..=255.0;
+        /// Not in the paper: a cap on the MAD inside eq. 7,
+        /// `p = exp(-min(MAD, cap) / (2 sigma^2))`. Windows worse than the cap
+        /// are equally unlikely, so where no particle sees the target (an
+        /// occlusion) the weights are flat and the particles coast with the
+        /// ARP. `none` (the default) is eq. 7 as printed.
+        pub mad_cap: Option<f64> = None;
+    }
+    check check_pf_correlation;
 }
 
-impl Default for PfCorrelationConfig {
-    /// `Ns = 15`, spread 5 px, the [`ArpMotion::Drift`] model with `B = 4`
-    /// px and gain 0.5, `sigma = 1.5` gray levels, systematic resampling,
-    /// seed 0, lost above a MAD of 20, no MAD cap (eq. 7 as printed).
-    fn default() -> Self {
-        Self {
-            particles: 15,
-            spread: [5.0, 5.0],
-            motion: ArpMotion::Drift {
-                b: [4.0, 4.0],
-                gain: 0.5,
-            },
-            sigma: 1.5,
-            resampling: Resampling::Systematic,
-            seed: 0,
-            lost_mad: 20.0,
-            mad_cap: None,
+fn check_pf_correlation(c: &PfCorrelationConfig) -> std::result::Result<(), String> {
+    c.check().map_err(|e| e.to_string())
+}
+
+choice! {
+    /// Reads a [`Resampling`] scheme by its name.
+    pub codec ResamplingCodec for Resampling {
+        Multinomial = "multinomial",
+        Residual = "residual",
+        Systematic = "systematic",
+        Stratified = "stratified",
+    }
+}
+
+/// Reads `[f64; 2]` as `A,B` (finite).
+#[derive(Debug, Clone, Copy)]
+pub struct PairCodec;
+
+impl Codec<[f64; 2]> for PairCodec {
+    fn type_name() -> &'static str {
+        "pair"
+    }
+    fn parse(s: &str) -> Option<[f64; 2]> {
+        numbers::<f64, 2>(s).filter(|v| v.iter().all(|x| x.is_finite()))
+    }
+    fn format(v: &[f64; 2]) -> String {
+        format!("{},{}", v[0], v[1])
+    }
+    fn domain() -> String {
+        "A,B (two finite numbers)".into()
+    }
+}
+
+/// Reads an [`ArpMotion`]: `position:A1,A2,B1,B2`, `drift:B1,B2,G` or
+/// `constant-drift:B1,B2,MARGIN`.
+#[derive(Debug, Clone, Copy)]
+pub struct ArpCodec;
+
+impl Codec<ArpMotion> for ArpCodec {
+    fn type_name() -> &'static str {
+        "arp"
+    }
+    fn parse(s: &str) -> Option<ArpMotion> {
+        let s = s.trim();
+        let m = if let Some(r) = s.strip_prefix("position:") {
+            let [a1, a2, b1, b2] = numbers::<f64, 4>(r)?;
+            ArpMotion::Position {
+                a: [a1, a2],
+                b: [b1, b2],
+            }
+        } else if let Some(r) = s.strip_prefix("drift:") {
+            let [b1, b2, gain] = numbers::<f64, 3>(r)?;
+            ArpMotion::Drift { b: [b1, b2], gain }
+        } else {
+            let (b, margin) = s.strip_prefix("constant-drift:")?.rsplit_once(',')?;
+            ArpMotion::ConstantDrift {
+                b: numbers::<f64, 2>(b)?,
+                margin: margin.trim().parse().ok()?,
+            }
+        };
+        m.check().is_ok().then_some(m)
+    }
+    fn format(v: &ArpMotion) -> String {
+        match v {
+            ArpMotion::Position { a, b } => format!("position:{},{},{},{}", a[0], a[1], b[0], b[1]),
+            ArpMotion::Drift { b, gain } => format!("drift:{},{},{gain}", b[0], b[1]),
+            ArpMotion::ConstantDrift { b, margin } => {
+                format!("constant-drift:{},{},{margin}", b[0], b[1])
+            }
         }
+    }
+    fn domain() -> String {
+        "position:A1,A2,B1,B2|drift:B1,B2,G (G in [0, 1])|constant-drift:B1,B2,MARGIN (B >= 0 px)"
+            .into()
     }
 }
 

@@ -129,21 +129,22 @@ pub const REGISTRY: &[TrackerInfo] = &[
         name: "mad",
         summary: "paper 004 sec. 2: exhaustive MAD template search in a 16 px window, fixed template, translation only",
         handles_scale: false,
-        options: Vec::new,
-        build: |_, set| fixed("mad", set, || MadTracker::new(MadTrackerConfig::default())),
+        options: MadTrackerConfig::specs,
+        build: |_, set| boxed(MadTracker::new(options_of("mad", &[], set)?)),
     },
     TrackerInfo {
         name: "pf-correlation",
         summary: "paper 004 sec. 3: 15-particle correlation PF, ARP on the displacement (adaptive drift), MAD likelihood of eq. 7 as printed, translation only",
         handles_scale: false,
-        options: Vec::new,
+        options: PfCorrelationConfig::specs,
         build: |seed, set| {
-            fixed("pf-correlation", set, || {
-                PfCorrelationTracker::new(PfCorrelationConfig {
-                    seed,
-                    ..PfCorrelationConfig::default()
-                })
-            })
+            let seed = seed.to_string();
+            let preset = [("seed", seed.as_str())];
+            boxed(PfCorrelationTracker::new(options_of(
+                "pf-correlation",
+                &preset,
+                set,
+            )?))
         },
     },
     TrackerInfo {
@@ -348,6 +349,8 @@ mod tests {
             particles("hist-pf-scale", &[("particles", "50")]),
             ("hist-pf-scale", 50)
         );
+        let pf = &[("particles", "40"), ("motion", "constant-drift:2,2,8")];
+        assert_eq!(particles("pf-correlation", pf), ("pf-correlation", 40));
     }
 
     #[test]
@@ -379,7 +382,37 @@ mod tests {
             .err()
             .unwrap()
             .to_string();
-        assert!(err.contains("ncc-scale") && err.contains("max_scale"), "{err}");
+        assert!(
+            err.contains("ncc-scale") && err.contains("max_scale"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn every_listed_default_reads_back() {
+        // what `trackers --options` prints is what `--set` takes
+        for info in REGISTRY {
+            let pairs: Vec<(String, String)> = info
+                .options()
+                .into_iter()
+                .map(|s| (s.key.to_string(), s.default))
+                .collect();
+            assert!(
+                info.build_with(3, &pairs).is_ok(),
+                "{}: {pairs:?}",
+                info.name
+            );
+        }
+        let bad = |name: &str, k: &str, v: &str| {
+            let r = tracker_info(name).unwrap().build_with(0, &set(&[(k, v)]));
+            assert!(r.is_err(), "{name} took {k}={v}");
+        };
+        bad("mad", "search", "region:1,2,0,5");
+        bad("mad", "search", "window:-3");
+        bad("pf-correlation", "motion", "drift:1,1,1.5");
+        bad("pf-correlation", "motion", "position:1,nan,1,1");
+        bad("pf-correlation", "spread", "1");
+        bad("pf-correlation", "resampling", "best");
     }
 
     #[test]
