@@ -11,6 +11,8 @@
 //! OR (eq. 9, `w = sum_i lambda_i w_i`) is a weighted log-sum-exp, AND
 //! (eq. 11, `w = prod_i lambda_i w_i`) a sum of logs.
 
+use std::any::Any;
+
 use bayestrack_image::{
     Affine2, Border, ImageError, ImageView, ImageViewMut, Rect, Rgb, warp_into,
 };
@@ -35,6 +37,10 @@ pub enum Candidate {
 
 /// The planes of one frame that cues may read. Absent planes are `None`;
 /// a cue that needs one fails with [`AppearanceError::MissingPlane`].
+///
+/// A cue of your own that reads a plane of its own (gradients, a
+/// probability map) finds it by name among [`Frame::planes`], set with
+/// [`Frame::with_planes`]: no change to this type needed.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Frame<'a> {
     /// 1-channel 8-bit gray.
@@ -45,6 +51,8 @@ pub struct Frame<'a> {
     pub hsv: Option<ImageView<'a, f32>>,
     /// 1-channel interframe difference in `[0, 1]` (or a priority field).
     pub ifd: Option<ImageView<'a, f32>>,
+    /// Further planes by name, for cues beyond this crate's.
+    pub planes: &'a [(&'static str, ImageView<'a, f32>)],
 }
 
 impl<'a> Frame<'a> {
@@ -72,20 +80,74 @@ impl<'a> Frame<'a> {
         self.ifd = Some(v);
         self
     }
+    /// Sets the named planes.
+    pub fn with_planes(mut self, planes: &'a [(&'static str, ImageView<'a, f32>)]) -> Self {
+        self.planes = planes;
+        self
+    }
+
+    /// The named plane `name`.
+    ///
+    /// # Errors
+    /// [`AppearanceError::MissingPlane`] naming `cue` and the plane.
+    pub fn plane(&self, cue: &'static str, name: &'static str) -> Result<ImageView<'a, f32>> {
+        let found = self.planes.iter().find(|(n, _)| *n == name);
+        plane(found.map(|(_, v)| *v), cue, name)
+    }
 }
 
 /// Reusable buffers for cue evaluation: keep one per worker so that
 /// scoring a particle allocates nothing after the first call.
-#[derive(Clone, Debug, Default)]
+///
+/// A cue of your own keeps its buffers here too, by type
+/// ([`Scratch::get`]): no change to this type needed.
+#[derive(Default)]
 pub struct Scratch {
     patch: Vec<f32>,
     hist: Option<RgbHistogram>,
+    others: Vec<Box<dyn Any + Send>>,
+}
+
+impl Clone for Scratch {
+    /// Buffers carry no state between calls: a clone starts with the
+    /// built-in buffers' contents and without the others.
+    fn clone(&self) -> Self {
+        Self {
+            patch: self.patch.clone(),
+            hist: self.hist.clone(),
+            others: Vec::new(),
+        }
+    }
+}
+
+impl std::fmt::Debug for Scratch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Scratch")
+            .field("patch", &self.patch.len())
+            .field("others", &self.others.len())
+            .finish()
+    }
 }
 
 impl Scratch {
     /// Empty buffers (they grow on first use).
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// The buffer of type `T`, created by `T::default()` on first use.
+    pub fn get<T: Default + Send + 'static>(&mut self) -> &mut T {
+        let i = match self.others.iter().position(|b| b.is::<T>()) {
+            Some(i) => i,
+            None => {
+                self.others.push(Box::new(T::default()));
+                self.others.len() - 1
+            }
+        };
+        match self.others[i].downcast_mut::<T>() {
+            Some(t) => t,
+            None => unreachable!("position() found a T"),
+        }
     }
 
     fn patch(&mut self, w: usize, h: usize, ch: usize) -> Result<ImageViewMut<'_, f32>> {
@@ -654,6 +716,45 @@ mod tests {
 
     fn w(x: usize, y: usize) -> Candidate {
         Candidate::Window(Rect::new(x, y, 4, 4))
+    }
+
+    /// A cue of its own: the mean of a named plane over the window, with a
+    /// buffer of its own in the scratch.
+    struct MeanOf(&'static str);
+
+    impl Cue for MeanOf {
+        fn name(&self) -> &'static str {
+            "mean-of"
+        }
+        fn log_likelihood(&self, f: &Frame<'_>, c: &Candidate, s: &mut Scratch) -> Result<f64> {
+            let Candidate::Window(r) = *c else {
+                return Ok(f64::NEG_INFINITY);
+            };
+            let p = f.plane(self.name(), self.0)?;
+            let calls: &mut usize = s.get();
+            *calls += 1;
+            let row = |y: usize| p.row(y)[r.x..r.right()].iter().sum::<f32>();
+            let sum: f32 = (r.y..r.bottom()).map(row).sum();
+            Ok((sum / (r.width * r.height) as f32).into())
+        }
+    }
+
+    #[test]
+    fn a_new_cue_reads_its_own_plane_and_keeps_its_own_buffers() {
+        let img = bayestrack_image::Image::from_fn(4, 3, |x, _| x as f32).unwrap();
+        let planes = [("ramp", img.view())];
+        let f = Frame::new().with_planes(&planes);
+        let mut s = Scratch::new();
+        let window = Candidate::Window(Rect::new(1, 0, 3, 3));
+        let v = MeanOf("ramp").log_likelihood(&f, &window, &mut s).unwrap();
+        assert_eq!(v, 2.0); // columns 1, 2, 3
+        MeanOf("ramp").log_likelihood(&f, &window, &mut s).unwrap();
+        assert_eq!(*s.get::<usize>(), 2);
+        assert!(matches!(
+            MeanOf("edges").log_likelihood(&f, &w(0, 0), &mut s),
+            Err(AppearanceError::MissingPlane { plane: "edges", .. })
+        ));
+        assert_eq!(*s.clone().get::<usize>(), 0, "clones start afresh");
     }
 
     #[test]
