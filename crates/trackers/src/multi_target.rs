@@ -29,7 +29,6 @@ use nalgebra::{SMatrix, SVector, Vector4};
 
 use crate::error::{Result, TrackerError};
 use crate::mad_correlation::to_gray;
-use crate::tracker::FrameGuard;
 
 /// Centroid and window size of a target: the measurement of eq. 19 and
 /// what eq. 20-21 compare.
@@ -304,7 +303,6 @@ pub struct MultiTargetTracker {
     gray: Image<u8>,
     diff: Image<u8>,
     mask: Image<bool>,
-    guard: FrameGuard,
     tracks: Vec<TrackState>,
     next_id: u64,
 }
@@ -375,8 +373,6 @@ impl MultiTargetTracker {
         let sensor = LinearMeasurement::new(measurement_matrix(), r)?;
         let mut bg = Image::new(1, 1, 1, 0)?;
         to_gray("multi-target", background, &mut bg)?;
-        let mut guard = FrameGuard::default();
-        guard.start(&background);
         let (w, h) = (background.width(), background.height());
         Ok(Self {
             config,
@@ -387,7 +383,6 @@ impl MultiTargetTracker {
             gray: Image::new(w, h, 1, 0)?,
             diff: Image::new(w, h, 1, 0)?,
             mask: Image::new(w, h, 1, false)?,
-            guard,
             tracks: Vec::new(),
             next_id: 0,
         })
@@ -403,7 +398,17 @@ impl MultiTargetTracker {
     /// # Errors
     /// [`TrackerError::FrameSizeChanged`], [`TrackerError::Channels`].
     pub fn detect(&mut self, frame: ImageView<'_, u8>) -> Result<Vec<Detection>> {
-        self.guard.check(&frame)?;
+        // Frames are compared with the background, gray, in either
+        // channel count: only the size must match.
+        let (width, height) = (self.background.width(), self.background.height());
+        if (frame.width(), frame.height()) != (width, height) {
+            return Err(TrackerError::FrameSizeChanged {
+                width,
+                height,
+                got_width: frame.width(),
+                got_height: frame.height(),
+            });
+        }
         to_gray("multi-target", frame, &mut self.gray)?;
         abs_diff_into(
             self.gray.view(),

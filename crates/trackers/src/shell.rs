@@ -24,7 +24,7 @@ use bayestrack_appearance::Frame;
 use bayestrack_image::{BBox, Image, ImageView, Rect, rgb_to_gray_into, rgb_to_hsv_into};
 
 use crate::error::{Result, TrackerError};
-use crate::tracker::{Estimate, Tracker, check_initial_box};
+use crate::tracker::{Estimate, FrameGuard, Tracker, check_initial_box};
 
 /// Which first frames a tracker accepts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -178,8 +178,7 @@ pub trait TrackerCore: Send {
 #[derive(Debug, Clone)]
 pub struct Shell<C> {
     core: C,
-    /// Width, height and channels of the first frame; `None` before `init`.
-    first: Option<(usize, usize, usize)>,
+    guard: FrameGuard,
     index: u64,
     gray: Option<Image<u8>>,
     hsv: Option<Image<f32>>,
@@ -189,8 +188,8 @@ impl<C: TrackerCore> Shell<C> {
     /// A shell around `core`.
     pub fn wrap(core: C) -> Self {
         Self {
+            guard: FrameGuard::named(core.name()),
             core,
-            first: None,
             index: 0,
             gray: None,
             hsv: None,
@@ -220,26 +219,7 @@ impl<C: TrackerCore> Shell<C> {
         frame: ImageView<'_, u8>,
         track: impl FnOnce(&mut C, &Planes<'_>) -> Result<T>,
     ) -> Result<T> {
-        let (width, height, channels) = self.first.ok_or(TrackerError::NotInitialised)?;
-        if (frame.width(), frame.height()) != (width, height) {
-            return Err(TrackerError::FrameSizeChanged {
-                width,
-                height,
-                got_width: frame.width(),
-                got_height: frame.height(),
-            });
-        }
-        if frame.channels() != channels {
-            return Err(TrackerError::Channels {
-                tracker: self.core.name(),
-                expected: if channels == 1 {
-                    "1 (as the first frame)"
-                } else {
-                    "3 (as the first frame)"
-                },
-                got: frame.channels(),
-            });
-        }
+        self.guard.check(&frame)?;
         let index = self.index + 1;
         let planes = build(
             self.core.needs(),
@@ -334,11 +314,11 @@ impl<C: TrackerCore> Tracker for Shell<C> {
                 height: h,
             },
         )?;
-        self.first = None;
+        self.guard.reset();
         let planes = build(self.core.needs(), frame, 0, &mut self.gray, &mut self.hsv)?;
         self.core
             .start(&planes, InitialBox { bbox: target, rect })?;
-        self.first = Some((w, h, frame.channels()));
+        self.guard.start(&frame);
         self.index = 0;
         Ok(())
     }

@@ -71,31 +71,66 @@ pub fn check_initial_box(bbox: BBox, width: usize, height: usize) -> Result<()> 
     Ok(())
 }
 
-/// Remembers the first frame's size and rejects frames of another size.
+/// Remembers the first frame's size and channel count, and refuses later
+/// frames of another size or channel count (a gray frame after a colour
+/// first frame, whatever the tracker: matching channels is the frame
+/// source's job). [`crate::Shell`] keeps one for every tracker core.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct FrameGuard {
-    size: Option<(usize, usize)>,
+    /// Width, height and channels of the first frame.
+    first: Option<(usize, usize, usize)>,
+    /// The tracker named in errors.
+    tracker: &'static str,
 }
 
 impl FrameGuard {
-    /// Records the size of the first frame.
+    /// A guard whose errors name `tracker`.
+    pub fn named(tracker: &'static str) -> Self {
+        Self {
+            first: None,
+            tracker,
+        }
+    }
+
+    /// Records the size and channels of the first frame.
     pub fn start(&mut self, frame: &ImageView<'_, u8>) {
-        self.size = Some((frame.width(), frame.height()));
+        self.first = Some((frame.width(), frame.height(), frame.channels()));
+    }
+
+    /// Forgets the first frame (before a new `init`).
+    pub fn reset(&mut self) {
+        self.first = None;
     }
 
     /// Checks a later frame.
     ///
     /// # Errors
     /// [`TrackerError::NotInitialised`] before [`FrameGuard::start`],
-    /// [`TrackerError::FrameSizeChanged`] for another size.
+    /// [`TrackerError::FrameSizeChanged`] for another size,
+    /// [`TrackerError::Channels`] for another channel count.
     pub fn check(&self, frame: &ImageView<'_, u8>) -> Result<()> {
-        let (width, height) = self.size.ok_or(TrackerError::NotInitialised)?;
+        let (width, height, channels) = self.first.ok_or(TrackerError::NotInitialised)?;
         if (frame.width(), frame.height()) != (width, height) {
             return Err(TrackerError::FrameSizeChanged {
                 width,
                 height,
                 got_width: frame.width(),
                 got_height: frame.height(),
+            });
+        }
+        if frame.channels() != channels {
+            return Err(TrackerError::Channels {
+                tracker: if self.tracker.is_empty() {
+                    "tracker"
+                } else {
+                    self.tracker
+                },
+                expected: if channels == 1 {
+                    "1 (as the first frame)"
+                } else {
+                    "3 (as the first frame)"
+                },
+                got: frame.channels(),
             });
         }
         Ok(())
@@ -138,6 +173,16 @@ mod tests {
         assert!(matches!(
             g.check(&b.view()),
             Err(TrackerError::FrameSizeChanged { .. })
+        ));
+        let rgb = Image::new(8, 6, 3, 0u8).unwrap();
+        assert!(matches!(
+            g.check(&rgb.view()),
+            Err(TrackerError::Channels { got: 3, .. })
+        ));
+        g.reset();
+        assert!(matches!(
+            g.check(&a.view()),
+            Err(TrackerError::NotInitialised)
         ));
     }
 }
