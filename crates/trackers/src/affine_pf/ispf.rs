@@ -35,7 +35,7 @@ pub struct IspfConfig {
     pub spread: AlgebraVector,
     /// The stopping threshold (default `mu_T - sigma_T`, see [`StopRule`]).
     pub stop_rule: StopRule,
-    /// `lambda` of the resampling weights `exp(lambda (S_i - S_max))` (20).
+    /// `lambda` of the selection weights `exp(lambda (S_i - S_max))` (20).
     pub weight_lambda: f64,
     /// Check the stopping threshold after every tuned particle instead of
     /// after every whole batch (false: paper 002 sec. 3.2 counts stopping
@@ -96,7 +96,7 @@ impl IspfConfig {
 /// 1. the autoregressive prediction `M_pred = M_{k-1} exp(V_k)`,
 ///    `V_k = a log(M_{k-2}^-1 M_{k-1})`;
 /// 2. batches of [`IspfConfig::batch`] particles: the first drawn around
-///    `M_pred`, the later ones around tuned particles resampled by their
+///    `M_pred`, the later ones around tuned particles drawn by their
 ///    weights (the "chain" of hypotheses paper 002 describes), each by
 ///    `M exp(v)`, `v ~ N(0, Psi_I)` with the fixed wide spread; every
 ///    particle of a batch is tuned to its best neighbour and scored;

@@ -63,7 +63,7 @@
 //! `lambda (S_i - S_max)`, unscorable particles at zero weight) and the
 //! engine selects the batch's parents by multinomial draws
 //! ([`ParticleSet::draw_ancestors`]; a batch has 5, 10, 20, ... particles,
-//! not the set's size, so the set is drawn from rather than resampled in
+//! not the set's size, so the set is drawn from rather than replaced in
 //! place). HKPF draws a fixed number of particles from the dynamics and
 //! keeps the best (eq. 2): it selects nothing.
 //!

@@ -36,7 +36,7 @@ pub struct StpfConfig {
     pub pose_sigma: [f64; 4],
     /// The stopping threshold (default `mu_T - sigma_T`, see [`StopRule`]).
     pub stop_rule: StopRule,
-    /// `lambda` of the resampling weights `w_i = exp(lambda (S_i - S_max))`
+    /// `lambda` of the selection weights `w_i = exp(lambda (S_i - S_max))`
     /// of step 4-3 (20: a particle 0.05 less similar weighs e^-1 as much;
     /// the paper does not give its weights).
     pub weight_lambda: f64,
@@ -98,7 +98,7 @@ impl StpfConfig {
 ///    ([`StopRule`]);
 /// 3. while no particle has passed the threshold and fewer than `N_max`
 ///    were used: the next batch has `Delta N_t = min(ceil(alpha_inc
-///    Delta N_{t-1}), N_max - n)` particles, drawn by multinomial resampling
+///    Delta N_{t-1}), N_max - n)` particles, drawn by multinomial selection
 ///    of all tuned particles so far by their weights, each moved by
 ///    `M exp(v)`, `v ~ N(0, (1 - S_max^{t-1}) Psi_C)` (`S_max^{t-1}` the
 ///    best similarity of the previous batch), tuned and scored, stopping
