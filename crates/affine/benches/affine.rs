@@ -12,7 +12,9 @@
 
 use std::hint::black_box;
 
-use bayestrack_affine::{Affine2, AlgebraVector, Lwpr, LwprConfig, PoseConfig, PoseEstimator};
+use bayestrack_affine::{
+    Affine2, AffineGroup, AlgebraVector, Lwpr, LwprConfig, PoseConfig, PoseEstimator,
+};
 use bayestrack_image::Image;
 use criterion::{BatchSize, Criterion};
 use rand::{RngExt, SeedableRng};
@@ -172,7 +174,7 @@ fn pose_setup(pool: usize) -> (Image<f32>, PoseEstimator, Affine2) {
         v as f32
     })
     .unwrap();
-    let m_star = Affine2::translation(80.0, 80.0).unwrap();
+    let m_star = Affine2::translation(80.0, 80.0);
     // The 1296-feature estimator is trained after the 144-feature one from
     // the same generator (the order of the original bench).
     if pool == 1 {

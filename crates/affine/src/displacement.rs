@@ -115,8 +115,9 @@ impl DisplacementPredictor {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::Affine2;
     use crate::dynamics::BrownianDynamics;
-    use crate::group::{Affine2, AlgebraVector};
+    use crate::group::{AffineGroup, AlgebraVector};
     use rand::SeedableRng;
     use rand_distr::{Distribution, StandardNormal};
     use rand_xoshiro::Xoshiro256PlusPlus;
@@ -158,7 +159,7 @@ mod tests {
         let mut kf =
             DisplacementPredictor::new(Vector2::new(40.0, 30.0), 1.0, 1e-3, 0.5, [1.0, 1.0, 1.0])
                 .unwrap();
-        let mut m = Affine2::translation(40.0, 30.0).unwrap();
+        let mut m = Affine2::translation(40.0, 30.0);
         let still = BrownianDynamics::from_std(&AlgebraVector::zeros()).unwrap();
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(1);
         for k in 1..10 {
@@ -168,7 +169,7 @@ mod tests {
             m = still.propagate(&m, d, &mut rng).unwrap();
             assert!((m.offset() - pred).norm() < 1e-12);
             // The "tracker" measures the true centre; feed it back.
-            m = Affine2::translation(z[0], z[1]).unwrap();
+            m = Affine2::translation(z[0], z[1]);
             kf.update(Some(z)).unwrap();
         }
         let v = kf.belief().mean()[2];

@@ -1,6 +1,10 @@
 //! The affine group Aff(2) as 3x3 matrices, its Lie algebra in the basis
 //! A1..A6 of Xu, Gao and Yang 2015 (paper 002) eq. 3, and exp / log.
 //!
+//! The elements are [`Affine2`]s, the affine map type of
+//! `bayestrack-image` (one type for warps, poses and trackers' estimates);
+//! the group structure is the extension trait [`AffineGroup`].
+//!
 //! Basis (Xu, Gao and Yang 2015 (paper 002) eq. 3):
 //!
 //! ```text
@@ -13,7 +17,8 @@
 //! (u in [-w/2, w/2], v in [-h/2, h/2]), to image coordinates:
 //! (x, y, 1)^T = M (u, v, 1)^T. The translation of M is the target centre.
 
-use nalgebra::{Matrix2, Matrix3, Vector2, Vector3, Vector6};
+use bayestrack_image::{Affine2, BBox};
+use nalgebra::{Matrix2, Matrix3, Vector2, Vector6};
 
 use crate::error::{AffineError, Result, check_finite};
 
@@ -113,54 +118,70 @@ impl AffineParams {
     }
 }
 
-/// An axis-aligned box (x, y, w, h): top-left corner, width and height, in
-/// image coordinates (OTB convention up to the 1-based offset, which the
-/// caller adds when writing OTB files).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct BBox {
-    /// Left edge.
-    pub x: f64,
-    /// Top edge.
-    pub y: f64,
-    /// Width.
-    pub w: f64,
-    /// Height.
-    pub h: f64,
-}
-
-/// An element of Aff(2): a 3x3 matrix `[A b; 0 0 1]` with finite entries.
+/// The group structure of Aff(2) on [`Affine2`], the workspace's one
+/// affine map type (owned by `bayestrack-image`, which warps through it).
 ///
-/// The linear part may be singular (use [`Affine2::inverse`] or
-/// [`Affine2::log`], which report it).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Affine2 {
-    m: Matrix3<f64>,
-}
-
-impl Default for Affine2 {
-    fn default() -> Self {
-        Self::identity()
-    }
-}
-
-impl std::ops::Mul for Affine2 {
-    type Output = Affine2;
-    fn mul(self, rhs: Affine2) -> Affine2 {
-        self.compose(&rhs)
-    }
-}
-
-impl Affine2 {
-    /// The identity element.
-    pub fn identity() -> Self {
-        Self {
-            m: Matrix3::identity(),
-        }
-    }
-
+/// An element is the 3x3 matrix `[A b; 0 0 1]` with finite entries; the
+/// linear part may be singular ([`AffineGroup::try_inverse`] and
+/// [`AffineGroup::log`] report it). Group product and plain inverse are
+/// `Affine2`'s own ([`Affine2::compose`] or `*`, [`Affine2::inverse`]);
+/// this trait adds the nalgebra views, exp / log in the basis A1..A6, pose
+/// parameters and the bounding box of a centred template. Bring it into
+/// scope with `use bayestrack_affine::AffineGroup;`.
+pub trait AffineGroup: Sized + sealed::Sealed {
     /// Wraps a 3x3 matrix; fails if a value is not finite or the bottom row is
-    /// not (0, 0, 1).
-    pub fn from_matrix(m: Matrix3<f64>) -> Result<Self> {
+    /// not exactly (0, 0, 1).
+    fn from_matrix(m: Matrix3<f64>) -> Result<Self>;
+    /// Builds `[a b; 0 1]` from a linear part and a translation.
+    fn from_parts(a: Matrix2<f64>, b: Vector2<f64>) -> Result<Self>;
+    /// The 3x3 matrix.
+    fn matrix(&self) -> Matrix3<f64>;
+    /// The 2x2 linear part A.
+    fn linear(&self) -> Matrix2<f64>;
+    /// The translation b (image position of the template centre).
+    fn offset(&self) -> Vector2<f64>;
+    /// Maps a template point to image coordinates ([`Affine2::apply`] on
+    /// nalgebra vectors).
+    fn map_point(&self, p: Vector2<f64>) -> Vector2<f64>;
+    /// Group inverse; fails with [`AffineError::Singular`] where
+    /// [`Affine2::inverse`] gives `None` (a linear part singular relative to
+    /// the size of its entries, or an inverse that overflows).
+    fn try_inverse(&self) -> Result<Self>;
+    /// The group exponential `exp(sum_i w_i A_i)`.
+    ///
+    /// Scaling and squaring with a [6/6] Pade approximant (backward error
+    /// below 1e-16 after scaling to 1-norm <= 1/2). Fails on non-finite input
+    /// or when the result overflows.
+    fn exp(w: &AlgebraVector) -> Result<Self>;
+    /// The exponential of a 3x3 algebra element (bottom row zero).
+    fn exp_matrix(x: &Matrix3<f64>) -> Result<Self>;
+    /// The principal logarithm, in basis coordinates. Fails when the linear
+    /// part has non-positive determinant or a (double) eigenvalue on the
+    /// negative real axis, where no principal real logarithm exists.
+    fn log(&self) -> Result<AlgebraVector>;
+    /// The principal logarithm as a 3x3 algebra matrix.
+    fn log_matrix(&self) -> Result<Matrix3<f64>>;
+    /// Builds the matrix of pose parameters
+    /// `A = R(theta) R(-skew) diag(scale, scale*aspect) R(skew)`, `b = (dx, dy)`.
+    /// Fails on non-finite values or non-positive scale or aspect.
+    fn from_params(p: &AffineParams) -> Result<Self>;
+    /// Canonical pose parameters (see [`AffineParams`]). Fails when the linear
+    /// part is singular or reflects (det <= 0).
+    fn params(&self) -> Result<AffineParams>;
+    /// The axis-aligned box of the four corners of a `w x h` template
+    /// (centred on the template origin) mapped through this element: the
+    /// corners are pixel edges in 0-based pixel-centre image coordinates,
+    /// returned as the workspace's [`BBox`] ([`BBox::from_edges`]).
+    fn bounding_box(&self, w: f64, h: f64) -> Result<BBox>;
+}
+
+mod sealed {
+    pub trait Sealed {}
+    impl Sealed for super::Affine2 {}
+}
+
+impl AffineGroup for Affine2 {
+    fn from_matrix(m: Matrix3<f64>) -> Result<Self> {
         check_finite("affine matrix", m.as_slice())?;
         if m[(2, 0)] != 0.0 || m[(2, 1)] != 0.0 || m[(2, 2)] != 1.0 {
             return Err(AffineError::NotAffine {
@@ -170,11 +191,13 @@ impl Affine2 {
                 r2: m[(2, 2)],
             });
         }
-        Ok(Self { m })
+        Ok(Affine2::from_rows([
+            [m[(0, 0)], m[(0, 1)], m[(0, 2)]],
+            [m[(1, 0)], m[(1, 1)], m[(1, 2)]],
+        ])?)
     }
 
-    /// Builds `[a b; 0 1]` from a linear part and a translation.
-    pub fn from_parts(a: Matrix2<f64>, b: Vector2<f64>) -> Result<Self> {
+    fn from_parts(a: Matrix2<f64>, b: Vector2<f64>) -> Result<Self> {
         let m = Matrix3::new(
             a[(0, 0)],
             a[(0, 1)],
@@ -189,66 +212,34 @@ impl Affine2 {
         Self::from_matrix(m)
     }
 
-    /// A pure translation, `exp(dx A5 + dy A6)`.
-    pub fn translation(dx: f64, dy: f64) -> Result<Self> {
-        Self::from_parts(Matrix2::identity(), Vector2::new(dx, dy))
+    fn matrix(&self) -> Matrix3<f64> {
+        let [a, b, tx, c, d, ty] = self.as_array();
+        Matrix3::new(a, b, tx, c, d, ty, 0.0, 0.0, 1.0)
     }
 
-    /// The 3x3 matrix.
-    pub fn matrix(&self) -> &Matrix3<f64> {
-        &self.m
+    fn linear(&self) -> Matrix2<f64> {
+        let [a, b, _, c, d, _] = self.as_array();
+        Matrix2::new(a, b, c, d)
     }
 
-    /// The 2x2 linear part A.
-    pub fn linear(&self) -> Matrix2<f64> {
-        self.m.fixed_view::<2, 2>(0, 0).into_owned()
+    fn offset(&self) -> Vector2<f64> {
+        let [_, _, tx, _, _, ty] = self.as_array();
+        Vector2::new(tx, ty)
     }
 
-    /// The translation b (image position of the template centre).
-    pub fn offset(&self) -> Vector2<f64> {
-        Vector2::new(self.m[(0, 2)], self.m[(1, 2)])
+    fn map_point(&self, p: Vector2<f64>) -> Vector2<f64> {
+        let (x, y) = self.apply(p[0], p[1]);
+        Vector2::new(x, y)
     }
 
-    /// Determinant of the linear part.
-    pub fn det(&self) -> f64 {
-        self.m[(0, 0)] * self.m[(1, 1)] - self.m[(0, 1)] * self.m[(1, 0)]
+    fn try_inverse(&self) -> Result<Self> {
+        self.inverse().ok_or(AffineError::Singular {
+            op: "inverse",
+            det: self.det(),
+        })
     }
 
-    /// Maps a template point (u, v) to image coordinates.
-    pub fn apply(&self, p: Vector2<f64>) -> Vector2<f64> {
-        let q = self.m * Vector3::new(p[0], p[1], 1.0);
-        Vector2::new(q[0], q[1])
-    }
-
-    /// Group product `self * other` (apply `other` first).
-    pub fn compose(&self, other: &Affine2) -> Affine2 {
-        let mut m = self.m * other.m;
-        m[(2, 0)] = 0.0;
-        m[(2, 1)] = 0.0;
-        m[(2, 2)] = 1.0;
-        Affine2 { m }
-    }
-
-    /// Group inverse; fails when the linear part is singular (relative to the
-    /// size of its entries) or the inverse overflows.
-    pub fn inverse(&self) -> Result<Affine2> {
-        let det = self.det();
-        let a = self.linear();
-        let scale = a.amax().max(f64::MIN_POSITIVE);
-        if det == 0.0 || (det / (scale * scale)).abs() < 1e-14 {
-            return Err(AffineError::Singular { op: "inverse", det });
-        }
-        let inv_a = Matrix2::new(a[(1, 1)], -a[(0, 1)], -a[(1, 0)], a[(0, 0)]) / det;
-        let b = -(inv_a * self.offset());
-        Self::from_parts(inv_a, b).map_err(|_| AffineError::Singular { op: "inverse", det })
-    }
-
-    /// The group exponential `exp(sum_i w_i A_i)`.
-    ///
-    /// Scaling and squaring with a [6/6] Pade approximant (backward error
-    /// below 1e-16 after scaling to 1-norm <= 1/2). Fails on non-finite input
-    /// or when the result overflows.
-    pub fn exp(w: &AlgebraVector) -> Result<Affine2> {
+    fn exp(w: &AlgebraVector) -> Result<Self> {
         check_finite("algebra vector", w.as_slice())?;
         let x = hat(w);
         let out_of_range = || AffineError::InvalidParameter {
@@ -272,15 +263,11 @@ impl Affine2 {
         Ok(g)
     }
 
-    /// The exponential of a 3x3 algebra element (bottom row zero).
-    pub fn exp_matrix(x: &Matrix3<f64>) -> Result<Affine2> {
+    fn exp_matrix(x: &Matrix3<f64>) -> Result<Self> {
         Self::exp(&vee(x)?)
     }
 
-    /// The principal logarithm, in basis coordinates. Fails when the linear
-    /// part has non-positive determinant or a (double) eigenvalue on the
-    /// negative real axis, where no principal real logarithm exists.
-    pub fn log(&self) -> Result<AlgebraVector> {
+    fn log(&self) -> Result<AlgebraVector> {
         let a = self.linear();
         let det = self.det();
         let tr = a.trace();
@@ -360,15 +347,11 @@ impl Affine2 {
         Ok(out)
     }
 
-    /// The principal logarithm as a 3x3 algebra matrix.
-    pub fn log_matrix(&self) -> Result<Matrix3<f64>> {
+    fn log_matrix(&self) -> Result<Matrix3<f64>> {
         Ok(hat(&self.log()?))
     }
 
-    /// Builds the matrix of pose parameters
-    /// `A = R(theta) R(-skew) diag(scale, scale*aspect) R(skew)`, `b = (dx, dy)`.
-    /// Fails on non-finite values or non-positive scale or aspect.
-    pub fn from_params(p: &AffineParams) -> Result<Affine2> {
+    fn from_params(p: &AffineParams) -> Result<Self> {
         check_finite(
             "affine parameters",
             &[p.dx, p.dy, p.theta, p.scale, p.aspect, p.skew],
@@ -392,9 +375,7 @@ impl Affine2 {
         Self::from_parts(a, Vector2::new(p.dx, p.dy))
     }
 
-    /// Canonical pose parameters (see [`AffineParams`]). Fails when the linear
-    /// part is singular or reflects (det <= 0).
-    pub fn params(&self) -> Result<AffineParams> {
+    fn params(&self) -> Result<AffineParams> {
         let a = self.linear();
         let det = self.det();
         let scale_ref = a.amax().max(f64::MIN_POSITIVE);
@@ -432,8 +413,8 @@ impl Affine2 {
         }
         theta = wrap_angle(theta);
         Ok(AffineParams {
-            dx: self.m[(0, 2)],
-            dy: self.m[(1, 2)],
+            dx: self.offset()[0],
+            dy: self.offset()[1],
             theta,
             scale: s1,
             aspect,
@@ -441,9 +422,7 @@ impl Affine2 {
         })
     }
 
-    /// Axis-aligned bounding box of the four corners of a `w x h` template
-    /// (centred on the template origin) mapped through this element.
-    pub fn bounding_box(&self, w: f64, h: f64) -> Result<BBox> {
+    fn bounding_box(&self, w: f64, h: f64) -> Result<BBox> {
         check_finite("template size", &[w, h])?;
         if w <= 0.0 || h <= 0.0 {
             return Err(AffineError::InvalidParameter {
@@ -462,16 +441,11 @@ impl Affine2 {
         let mut lo = Vector2::new(f64::INFINITY, f64::INFINITY);
         let mut hi = Vector2::new(f64::NEG_INFINITY, f64::NEG_INFINITY);
         for c in corners {
-            let p = self.apply(c);
+            let p = self.map_point(c);
             lo = lo.inf(&p);
             hi = hi.sup(&p);
         }
-        Ok(BBox {
-            x: lo[0],
-            y: lo[1],
-            w: hi[0] - lo[0],
-            h: hi[1] - lo[1],
-        })
+        Ok(BBox::from_edges(lo[0], lo[1], hi[0], hi[1]))
     }
 }
 
@@ -542,7 +516,7 @@ mod tests {
     use proptest::prelude::*;
     use std::f64::consts::PI;
 
-    fn close(a: &Matrix3<f64>, b: &Matrix3<f64>, tol: f64) -> bool {
+    fn close(a: Matrix3<f64>, b: Matrix3<f64>, tol: f64) -> bool {
         (a - b).amax() <= tol * (1.0 + b.amax())
     }
 
@@ -604,7 +578,7 @@ mod tests {
         let e = Affine2::exp(&w).unwrap();
         let x = hat(&w);
         let reference = x.exp();
-        assert!(close(e.matrix(), &reference, 1e-12));
+        assert!(close(e.matrix(), reference, 1e-12));
         // Taylor series for a small element.
         let w = Vector6::new(1e-3, 2e-3, -1e-3, 5e-4, 0.01, 0.02);
         let x = hat(&w);
@@ -614,7 +588,7 @@ mod tests {
             term = term * x / k as f64;
             sum += term;
         }
-        assert!(close(Affine2::exp(&w).unwrap().matrix(), &sum, 1e-15));
+        assert!(close(Affine2::exp(&w).unwrap().matrix(), sum, 1e-15));
     }
 
     #[test]
@@ -652,7 +626,7 @@ mod tests {
         assert!((p.dy - t).abs() < 1e-15 && p.dx == 0.0);
         // A5 and A6 commute: exp(a A5 + b A6) is a pure translation.
         let m = Affine2::exp(&Vector6::new(0.0, 0.0, 0.0, 0.0, 3.0, -4.0)).unwrap();
-        assert_eq!(m, Affine2::translation(3.0, -4.0).unwrap());
+        assert_eq!(m, Affine2::translation(3.0, -4.0));
     }
 
     #[test]
@@ -683,12 +657,8 @@ mod tests {
             .unwrap();
         assert_eq!(
             bx,
-            BBox {
-                x: 40.0,
-                y: 35.0,
-                w: 20.0,
-                h: 10.0
-            }
+            // edges 40..60 x 35..45 in 0-based pixel-centre coordinates
+            BBox::new(41.5, 36.5, 20.0, 10.0)
         );
         // A 90 degree rotation swaps width and height.
         let mut p = AffineParams::at(0.0, 0.0);
@@ -697,13 +667,16 @@ mod tests {
             .unwrap()
             .bounding_box(20.0, 10.0)
             .unwrap();
-        assert!((bx.w - 10.0).abs() < 1e-12 && (bx.h - 20.0).abs() < 1e-12);
+        assert!((bx.width - 10.0).abs() < 1e-12 && (bx.height - 20.0).abs() < 1e-12);
     }
 
     #[test]
     fn bad_input_gives_typed_errors() {
         let sing = Affine2::from_parts(Matrix2::new(1.0, 2.0, 2.0, 4.0), Vector2::zeros()).unwrap();
-        assert!(matches!(sing.inverse(), Err(AffineError::Singular { .. })));
+        assert!(matches!(
+            sing.try_inverse(),
+            Err(AffineError::Singular { .. })
+        ));
         assert!(matches!(sing.log(), Err(AffineError::NoRealLog { .. })));
         let refl =
             Affine2::from_parts(Matrix2::new(1.0, 0.0, 0.0, -1.0), Vector2::zeros()).unwrap();
@@ -782,13 +755,23 @@ mod tests {
         fn inverse_and_compose(w in small_algebra(), v in small_algebra()) {
             let a = Affine2::exp(&w).unwrap();
             let b = Affine2::exp(&v).unwrap();
-            let ai = a.inverse().unwrap();
-            prop_assert!(close((a * ai).matrix(), &Matrix3::identity(), 1e-13));
+            let ai = a.try_inverse().unwrap();
+            prop_assert!(close((a * ai).matrix(), Matrix3::identity(), 1e-13));
             // exp(-w) is the inverse of exp(w).
             let an = Affine2::exp(&(-w)).unwrap();
             prop_assert!(close(an.matrix(), ai.matrix(), 1e-12));
             // Associativity of compose with the matrix product.
-            prop_assert!(close((a * b).matrix(), &(a.matrix() * b.matrix()), 1e-14));
+            prop_assert!(close((a * b).matrix(), a.matrix() * b.matrix(), 1e-14));
+            // bit for bit (the product Affine2 had before it moved to
+            // bayestrack-image was nalgebra's; -0 and +0 compare equal)
+            let mut p = a.matrix() * b.matrix();
+            p[(2, 0)] = 0.0;
+            p[(2, 1)] = 0.0;
+            p[(2, 2)] = 1.0;
+            prop_assert_eq!((a * b).matrix(), p);
+            let (x, y) = a.apply(v[4], v[5]);
+            let q = a.matrix() * nalgebra::Vector3::new(v[4], v[5], 1.0);
+            prop_assert_eq!((x, y), (q[0], q[1]));
         }
 
         #[test]

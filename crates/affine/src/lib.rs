@@ -5,10 +5,13 @@ pub mod dynamics;
 pub mod error;
 pub mod group;
 
+/// The workspace's one affine map type (from `bayestrack-image`; the group
+/// operations are [`AffineGroup`]'s).
+pub use bayestrack_image::Affine2;
 pub use displacement::DisplacementPredictor;
 pub use dynamics::BrownianDynamics;
 pub use error::{AffineError, Result};
-pub use group::{Affine2, AffineParams, AlgebraVector, BBox, basis, hat, vee};
+pub use group::{AffineGroup, AffineParams, AlgebraVector, basis, hat, vee};
 pub mod lwpr;
 
 pub use lwpr::{Kernel, Lwpr, LwprConfig, Prediction};

@@ -2,8 +2,15 @@
 
 use crate::{ImageError, ImageViewMut, Rect, Result, Rgb};
 
-/// A box in OTB convention: 1-based top-left corner `(x, y)` plus width and
-/// height, in (possibly fractional) pixels.
+/// An axis-aligned box: the one box type of the workspace (trackers'
+/// estimates, ground truth, metrics, drawing, affine poses' bounding boxes).
+///
+/// The numbers are OTB's: 1-based top-left corner `(x, y)` plus width and
+/// height, in (possibly fractional) pixels; pixel `(i, j)` (1-based) covers
+/// `[i, i + 1) x [j, j + 1)`. Code that works in 0-based pixel-centre
+/// coordinates (warps, affine poses: pixel `i` 0-based has its centre at
+/// `i` and covers `[i - 0.5, i + 0.5)`) converts with [`BBox::from_edges`]
+/// and [`BBox::edges`]; integer pixel regions are [`Rect`]s.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct BBox {
     /// 1-based left edge.
@@ -33,6 +40,20 @@ impl BBox {
             width,
             height,
         }
+    }
+
+    /// The box whose edges are at `left..right` and `top..bottom` in 0-based
+    /// pixel-centre coordinates (those of [`warp_into`](crate::warp_into) and of
+    /// affine poses): `x = left + 1.5`, `width = right - left`.
+    pub fn from_edges(left: f64, top: f64, right: f64, bottom: f64) -> Self {
+        Self::new(left + 1.5, top + 1.5, right - left, bottom - top)
+    }
+
+    /// The edges `(left, top, right, bottom)` in 0-based pixel-centre
+    /// coordinates (inverse of [`BBox::from_edges`]).
+    pub fn edges(&self) -> (f64, f64, f64, f64) {
+        let (left, top) = (self.x - 1.5, self.y - 1.5);
+        (left, top, left + self.width, top + self.height)
     }
 
     /// Centre in OTB convention: `(x + (w - 1) / 2, y + (h - 1) / 2)`, 1-based.
@@ -137,6 +158,12 @@ mod tests {
     fn boxes_and_rects() {
         let b = BBox::new(2.0, 3.0, 4.0, 2.0);
         assert_eq!(b.center(), (3.5, 3.5));
+        // 0-based pixel-centre edges: the centre of the box is at
+        // center() - 1 there
+        assert_eq!(b.edges(), (0.5, 1.5, 4.5, 3.5));
+        assert_eq!(BBox::from_edges(0.5, 1.5, 4.5, 3.5), b);
+        let (l, t, r, bt) = b.edges();
+        assert_eq!(((l + r) / 2.0 + 1.0, (t + bt) / 2.0 + 1.0), b.center());
         assert_eq!(b.to_rect(100, 100), Some(Rect::new(1, 2, 4, 2)));
         assert_eq!(BBox::from_rect(Rect::new(1, 2, 4, 2)), b);
         assert_eq!(b.to_rect(3, 100), Some(Rect::new(1, 2, 2, 2)));

@@ -10,10 +10,16 @@
 use crate::warp_simd::InsideWarp;
 use crate::{Image, ImageError, ImageView, ImageViewMut, Pixel, Result, SimdLevel};
 
-/// A 2-D affine map `(u, v) -> (a u + b v + tx, c u + d v + ty)`.
+/// A 2-D affine map `(u, v) -> (a u + b v + tx, c u + d v + ty)`: the one
+/// affine map type of the workspace.
 ///
 /// Stored as the top two rows of the 3x3 homogeneous matrix, row-major:
-/// `[a, b, tx, c, d, ty]`.
+/// `[a, b, tx, c, d, ty]`. This crate uses it for warps (patch to image
+/// coordinates); `bayestrack-affine` adds the group structure of Aff(2)
+/// (exp / log in the basis of paper 002, pose parameters) through its
+/// `AffineGroup` extension trait, and trackers report it as their pose.
+/// Values built by [`Affine2::from_rows`] and friends are finite; only
+/// [`Affine2::translation`] takes its offsets unchecked.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Affine2 {
     m: [f64; 6],
@@ -25,11 +31,24 @@ impl Default for Affine2 {
     }
 }
 
+/// `a * b` is [`Affine2::compose`]: first `b`, then `a`.
+impl std::ops::Mul for Affine2 {
+    type Output = Affine2;
+    fn mul(self, rhs: Affine2) -> Affine2 {
+        self.compose(&rhs)
+    }
+}
+
 impl Affine2 {
     /// The identity map.
     pub const IDENTITY: Self = Self {
         m: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0],
     };
+
+    /// The identity map (as [`Affine2::IDENTITY`]).
+    pub const fn identity() -> Self {
+        Self::IDENTITY
+    }
 
     /// From the two top rows `[[a, b, tx], [c, d, ty]]`.
     ///
@@ -120,6 +139,12 @@ impl Affine2 {
         [[m[0], m[1], m[2]], [m[3], m[4], m[5]], [0.0, 0.0, 1.0]]
     }
 
+    /// Determinant of the linear part, `a d - b c`.
+    pub fn det(&self) -> f64 {
+        let m = &self.m;
+        m[0] * m[4] - m[1] * m[3]
+    }
+
     /// Applies the map to a point.
     #[inline]
     pub fn apply(&self, u: f64, v: f64) -> (f64, f64) {
@@ -143,17 +168,20 @@ impl Affine2 {
         }
     }
 
-    /// The inverse map, or `None` if the linear part is singular.
+    /// The inverse map, or `None` if the linear part is singular relative
+    /// to the size of its entries (`|det| < 1e-14 max(|a|, |b|, |c|, |d|)^2`)
+    /// or the inverse overflows.
     pub fn inverse(&self) -> Option<Self> {
         let [a, b, tx, c, d, ty] = self.m;
-        let det = a * d - b * c;
-        if det.abs() < 1e-300 || !det.is_finite() {
+        let det = self.det();
+        let scale = a.abs().max(b.abs()).max(c.abs()).max(d.abs());
+        let scale = scale.max(f64::MIN_POSITIVE);
+        if det == 0.0 || !det.is_finite() || (det / (scale * scale)).abs() < 1e-14 {
             return None;
         }
         let (ia, ib, ic, id) = (d / det, -b / det, -c / det, a / det);
-        Some(Self {
-            m: [ia, ib, -(ia * tx + ib * ty), ic, id, -(ic * tx + id * ty)],
-        })
+        let m = [ia, ib, -(ia * tx + ib * ty), ic, id, -(ic * tx + id * ty)];
+        m.iter().all(|v| v.is_finite()).then_some(Self { m })
     }
 }
 
@@ -500,6 +528,15 @@ mod tests {
         let id = a.compose(&i);
         for (x, y) in id.as_array().iter().zip(Affine2::IDENTITY.as_array()) {
             assert!((x - y).abs() < 1e-12);
+        }
+        assert_eq!(a.det(), 1.2 * 0.9 - 0.3 * -0.2);
+        assert_eq!(Affine2::identity(), Affine2::IDENTITY);
+        // singular relative to the entries' size, whatever their scale
+        for s in [1e-3, 1.0, 1e6] {
+            let nearly = Affine2::from_rows([[s, 2.0 * s, 1.0], [s, 2.0 * s + 1e-15 * s, 0.0]]);
+            assert_eq!(nearly.unwrap().inverse(), None, "scale {s}");
+            let small = Affine2::from_rows([[1e-3 * s, 0.0, 1.0], [0.0, 1e-3 * s, 0.0]]).unwrap();
+            assert!(small.inverse().is_some(), "scale {s}");
         }
         let cm = [1.2, -0.2, 0.0, 0.3, 0.9, 0.0, 4.0, -1.0, 1.0];
         assert_eq!(Affine2::from_column_major(&cm).unwrap(), a);

@@ -5,6 +5,7 @@ mod filter;
 mod proposal;
 mod resample;
 mod seed;
+mod select;
 mod set;
 mod smc;
 

@@ -17,8 +17,8 @@ mod shell;
 mod tracker;
 
 pub use affine_pf::{
-    AppearanceConfig, FrameStats, HkpfConfig, HkpfTracker, IspfConfig, IspfTracker, RegionConfig,
-    ScoredPose, StopRule, StpfConfig, StpfTracker, UpdateRule,
+    AffineTracker, AppearanceConfig, FrameStats, HkpfConfig, HkpfTracker, IspfConfig, IspfTracker,
+    RegionConfig, ScoredPose, StopRule, StpfConfig, StpfTracker, UpdateRule,
 };
 pub use condensation::{
     CAvq, CAvqConfig, Condensation, CondensationReport, ContourConfig, ContourTracker, CueSet,

@@ -1,7 +1,6 @@
 //! The one interface every tracker implements.
 
-use bayestrack_image::{BBox, ImageView};
-use nalgebra::Matrix3;
+use bayestrack_image::{Affine2, BBox, ImageView};
 
 use crate::error::{Result, TrackerError};
 
@@ -12,7 +11,7 @@ pub struct Estimate {
     pub bbox: BBox,
     /// The affine pose, for trackers that estimate one (maps template
     /// coordinates centred on the template to 0-based image coordinates).
-    pub pose: Option<Matrix3<f64>>,
+    pub pose: Option<Affine2>,
     /// Particles used in this frame (0 for deterministic trackers).
     pub particles: usize,
     /// Appearance-model evaluations in this frame (windows scored).

@@ -9,11 +9,11 @@
 //! with the truth directly. Error = RMS distance of the four template
 //! corners and the centre ([`bayestrack_affine::pose_error`]).
 
-use bayestrack_affine::{Affine2, pose_error};
+use bayestrack_affine::{Affine2, AffineGroup, pose_error};
 use bayestrack_image::{BBox, Image};
 use bayestrack_trackers::{
-    Estimate, HkpfConfig, HkpfTracker, IspfConfig, IspfTracker, StopRule, StpfConfig, StpfTracker,
-    Tracker, TrackerError, UpdateRule, build_tracker,
+    AffineTracker, Estimate, HkpfConfig, HkpfTracker, IspfConfig, IspfTracker, StopRule,
+    StpfConfig, StpfTracker, Tracker, TrackerError, UpdateRule, build_tracker,
 };
 use nalgebra::{Matrix2, Vector2};
 use rand::{RngExt, SeedableRng};
@@ -102,7 +102,7 @@ fn scene(m: &Motion, channels: usize, seed: u64) -> (Vec<Image<u8>>, Vec<Affine2
         for y in 0..H {
             for x in 0..W {
                 let mut v = bg.as_slice()[y * W + x];
-                let p = inv.apply(Vector2::new(x as f64, y as f64));
+                let p = inv.map_point(Vector2::new(x as f64, y as f64));
                 let inside = (TW / 2.0 - p[0].abs()).min(TH / 2.0 - p[1].abs());
                 if inside > -0.5 {
                     let alpha = (inside + 0.5).clamp(0.0, 1.0);
@@ -163,7 +163,7 @@ fn run(t: &mut dyn Tracker, frames: &[Image<u8>], poses: &[Affine2]) -> Run {
     let mut estimates = Vec::new();
     for (f, p) in frames.iter().zip(poses).skip(1) {
         let e = t.step(f.view()).unwrap();
-        let m = Affine2::from_matrix(e.pose.unwrap()).unwrap();
+        let m = e.pose.unwrap();
         errors.push(pose_error(&m, p, TW, TH));
         estimates.push(e);
     }
@@ -301,15 +301,12 @@ fn seeded_and_thread_independent() {
         5,
     );
     for name in ["stpf", "ispf", "hkpf"] {
-        let poses_of = |seed: u64| -> Vec<([f64; 9], usize)> {
+        let poses_of = |seed: u64| -> Vec<([f64; 6], usize)> {
             let mut t = build_tracker(name, seed).unwrap();
             run(t.as_mut(), &frames, &poses)
                 .estimates
                 .iter()
-                .map(|e| {
-                    let m = e.pose.unwrap();
-                    (std::array::from_fn(|i| m.as_slice()[i]), e.particles)
-                })
+                .map(|e| (e.pose.unwrap().as_array(), e.particles))
                 .collect()
         };
         let a = poses_of(7);
@@ -351,10 +348,10 @@ fn registry_builds_them_and_they_report_their_work() {
     assert_eq!(t.particles().len(), e.particles);
     assert!(s.pose_estimator_calls >= e.particles && s.batches >= 1);
     assert!(s.best_similarity > s.stop_threshold || e.particles == 50);
-    assert_eq!(e.pose.unwrap(), *t.pose().unwrap().matrix());
+    assert_eq!(e.pose.unwrap(), t.pose().unwrap());
     // The box is the bounding box of the posed template.
     let bb = t.pose().unwrap().bounding_box(TW, TH).unwrap();
-    assert!((e.bbox.x - (bb.x + 1.5)).abs() < 1e-9 && (e.bbox.width - bb.w).abs() < 1e-9);
+    assert_eq!(e.bbox, bb);
     // A frame without the target: lost, not an error.
     let flat = Image::new(W, H, 1, 90u8).unwrap();
     let e = t.step(flat.view()).unwrap();
@@ -487,7 +484,7 @@ fn a_target_leaving_the_frame_does_not_carry_the_pose_away() {
     for mut t in trackers {
         let r = run(t.as_mut(), &frames, &poses);
         for (k, e) in r.estimates.iter().enumerate() {
-            let c = Affine2::from_matrix(e.pose.unwrap()).unwrap().offset();
+            let c = e.pose.unwrap().offset();
             assert!(
                 (0.0..W as f64).contains(&c[0]) && (0.0..H as f64).contains(&c[1]),
                 "{} frame {}: centre {c:?}",

@@ -37,7 +37,7 @@ use bayestrack_otb::Table;
 use bayestrack_otb::metrics::{FeaturePoints, rms_error_eq6};
 use bayestrack_otb::plot::{Series, line_chart};
 use bayestrack_trackers::{
-    FrameStats, HkpfConfig, HkpfTracker, IspfConfig, IspfTracker, StpfConfig, StpfTracker, Tracker,
+    AffineTracker, HkpfConfig, HkpfTracker, IspfConfig, IspfTracker, StpfConfig, StpfTracker,
 };
 use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;

@@ -3,58 +3,25 @@
 use super::*;
 
 /// A fresh tracker of `filter` for `setting`, seeded with `seed`.
-pub(super) enum AnyTracker {
-    Hkpf(HkpfTracker),
-    Ispf(IspfTracker),
-    Stpf(StpfTracker),
-}
-
-impl AnyTracker {
-    pub(super) fn new(
-        filter: Filter,
-        setting: Setting,
-        config: &AffineConfig,
-        seed: u64,
-    ) -> bayestrack_trackers::Result<Self> {
-        Ok(match filter {
-            Filter::Hkpf => Self::Hkpf(HkpfTracker::new(
-                HkpfConfig {
-                    particles: config
-                        .hkpf_particles
-                        .unwrap_or_else(|| setting.hkpf_particles()),
-                    ..HkpfConfig::default()
-                },
-                seed,
-            )?),
-            Filter::Ispf => Self::Ispf(IspfTracker::new(config.ispf(), seed)?),
-            Filter::Stpf => Self::Stpf(StpfTracker::new(config.stpf(), seed)?),
-        })
-    }
-
-    pub(super) fn tracker(&mut self) -> &mut dyn Tracker {
-        match self {
-            Self::Hkpf(t) => t,
-            Self::Ispf(t) => t,
-            Self::Stpf(t) => t,
-        }
-    }
-
-    pub(super) fn stats(&self) -> FrameStats {
-        match self {
-            Self::Hkpf(t) => t.stats(),
-            Self::Ispf(t) => t.stats(),
-            Self::Stpf(t) => t.stats(),
-        }
-    }
-
-    pub(super) fn pose(&self) -> Option<Matrix3<f64>> {
-        match self {
-            Self::Hkpf(t) => t.pose(),
-            Self::Ispf(t) => t.pose(),
-            Self::Stpf(t) => t.pose(),
-        }
-        .map(|p| *p.matrix())
-    }
+pub(super) fn new_tracker(
+    filter: Filter,
+    setting: Setting,
+    config: &AffineConfig,
+    seed: u64,
+) -> bayestrack_trackers::Result<Box<dyn AffineTracker>> {
+    Ok(match filter {
+        Filter::Hkpf => Box::new(HkpfTracker::new(
+            HkpfConfig {
+                particles: config
+                    .hkpf_particles
+                    .unwrap_or_else(|| setting.hkpf_particles()),
+                ..HkpfConfig::default()
+            },
+            seed,
+        )?),
+        Filter::Ispf => Box::new(IspfTracker::new(config.ispf(), seed)?),
+        Filter::Stpf => Box::new(StpfTracker::new(config.stpf(), seed)?),
+    })
 }
 
 pub(super) fn matrix(rows: &[[f64; 3]; 3]) -> Matrix3<f64> {
@@ -89,7 +56,7 @@ pub(super) fn track(
             .ok_or_else(|| failed(format!("frame {} has no affine truth", k + 1)))
     };
     let mut t =
-        AnyTracker::new(filter, setting, config, run as u64).map_err(|e| failed(e.to_string()))?;
+        new_tracker(filter, setting, config, run as u64).map_err(|e| failed(e.to_string()))?;
     let first = affine(0)?;
     let init_box = truth[0]
         .objects
@@ -97,12 +64,12 @@ pub(super) fn track(
         .ok_or_else(|| failed("no target in frame 1".into()))?
         .bbox;
     let start = Instant::now();
-    t.tracker()
-        .init(frames[0].view(), init_box)
+    t.init(frames[0].view(), init_box)
         .map_err(|e| failed(format!("frame 1: {e}")))?;
     let mut seconds = start.elapsed().as_secs_f64();
     let est0 = t
         .pose()
+        .map(|p| matrix(&p.to_matrix3()))
         .ok_or_else(|| failed("no pose after init".into()))?;
     // The scene's template points in the tracker's template coordinates.
     let carry = est0
@@ -119,13 +86,13 @@ pub(super) fn track(
     for (k, frame) in frames.iter().enumerate().skip(1) {
         let start = Instant::now();
         let est = t
-            .tracker()
             .step(frame.view())
             .map_err(|e| failed(format!("frame {}: {e}", k + 1)))?;
         seconds += start.elapsed().as_secs_f64();
         let stats = t.stats();
         let m = est
             .pose
+            .map(|p| matrix(&p.to_matrix3()))
             .ok_or_else(|| failed(format!("frame {}: no pose", k + 1)))?;
         let mut estimated = FeaturePoints {
             center: apply(&m, centre),

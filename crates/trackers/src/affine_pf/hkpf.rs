@@ -2,10 +2,10 @@
 //! (2011), as paper 002 (Xu, Gao and Yang 2015, sections 0-2) describes it:
 //! coarse then fine, no pose tuning.
 
-use bayestrack_affine::{Affine2, BrownianDynamics};
+use bayestrack_affine::{Affine2, AffineGroup, BrownianDynamics};
 use bayestrack_image::{BBox, ImageView};
 
-use super::{AppearanceConfig, Core, FrameStats, Region, RegionConfig, ScoredPose};
+use super::{AffineTracker, AppearanceConfig, Core, FrameStats, Region, RegionConfig, ScoredPose};
 use crate::error::{Result, TrackerError};
 use crate::tracker::{Estimate, Tracker};
 
@@ -88,24 +88,22 @@ impl HkpfTracker {
     pub fn config(&self) -> &HkpfConfig {
         &self.config
     }
+}
 
-    /// The current pose estimate `M*` (`None` before `init`).
-    pub fn pose(&self) -> Option<Affine2> {
+impl AffineTracker for HkpfTracker {
+    fn pose(&self) -> Option<Affine2> {
         self.region.as_ref().map(|_| self.core.pose)
     }
 
-    /// The particles of the last frame with their similarities.
-    pub fn particles(&self) -> &[ScoredPose] {
-        &self.core.scored
-    }
-
-    /// What the last frame cost.
-    pub fn stats(&self) -> FrameStats {
+    fn stats(&self) -> FrameStats {
         self.core.stats
     }
 
-    /// The appearance model (`None` before `init`).
-    pub fn model(&self) -> Option<&bayestrack_appearance::TargetModel> {
+    fn particles(&self) -> &[ScoredPose] {
+        &self.core.scored
+    }
+
+    fn model(&self) -> Option<&bayestrack_appearance::TargetModel> {
         self.core.model()
     }
 }

@@ -2,11 +2,11 @@
 //! Li, Tan, Chen and Huang (2012), the filter paper 002 (Xu, Gao and Yang
 //! 2015) improves on.
 
-use bayestrack_affine::{Affine2, AlgebraVector, BrownianDynamics};
+use bayestrack_affine::{Affine2, AffineGroup, AlgebraVector, BrownianDynamics};
 use bayestrack_image::{BBox, ImageView};
 use nalgebra::Vector2;
 
-use super::{AppearanceConfig, Core, FrameStats, ScoredPose, StopRule};
+use super::{AffineTracker, AppearanceConfig, Core, FrameStats, ScoredPose, StopRule};
 use crate::error::{Result, TrackerError};
 use crate::tracker::{Estimate, Tracker};
 
@@ -35,7 +35,7 @@ pub struct IspfConfig {
     pub spread: AlgebraVector,
     /// The stopping threshold (default `mu_T - sigma_T`, see [`StopRule`]).
     pub stop_rule: StopRule,
-    /// `lambda` of the resampling weights `exp(lambda (S_i - S_max))` (20).
+    /// `lambda` of the selection weights `exp(lambda (S_i - S_max))` (20).
     pub weight_lambda: f64,
     /// Check the stopping threshold after every tuned particle instead of
     /// after every whole batch (false: paper 002 sec. 3.2 counts stopping
@@ -96,7 +96,7 @@ impl IspfConfig {
 /// 1. the autoregressive prediction `M_pred = M_{k-1} exp(V_k)`,
 ///    `V_k = a log(M_{k-2}^-1 M_{k-1})`;
 /// 2. batches of [`IspfConfig::batch`] particles: the first drawn around
-///    `M_pred`, the later ones around tuned particles resampled by their
+///    `M_pred`, the later ones around tuned particles drawn by their
 ///    weights (the "chain" of hypotheses paper 002 describes), each by
 ///    `M exp(v)`, `v ~ N(0, Psi_I)` with the fixed wide spread; every
 ///    particle of a batch is tuned to its best neighbour and scored;
@@ -139,24 +139,22 @@ impl IspfTracker {
     pub fn config(&self) -> &IspfConfig {
         &self.config
     }
+}
 
-    /// The current pose estimate `M*` (`None` before `init`).
-    pub fn pose(&self) -> Option<Affine2> {
+impl AffineTracker for IspfTracker {
+    fn pose(&self) -> Option<Affine2> {
         self.started.then_some(self.core.pose)
     }
 
-    /// The tuned particles of the last frame with their similarities.
-    pub fn particles(&self) -> &[ScoredPose] {
-        &self.core.scored
-    }
-
-    /// What the last frame cost.
-    pub fn stats(&self) -> FrameStats {
+    fn stats(&self) -> FrameStats {
         self.core.stats
     }
 
-    /// The appearance model (`None` before `init`).
-    pub fn model(&self) -> Option<&bayestrack_appearance::TargetModel> {
+    fn particles(&self) -> &[ScoredPose] {
+        &self.core.scored
+    }
+
+    fn model(&self) -> Option<&bayestrack_appearance::TargetModel> {
         self.core.model()
     }
 }
@@ -194,16 +192,15 @@ impl Tracker for IspfTracker {
         let mut n = 0;
         while n < c.max_particles {
             let size = c.batch.min(c.max_particles - n);
-            let resampled = n > 0 && core.resample(size, c.weight_lambda, &mut rng)?;
+            let drawn = n > 0 && core.draw_parents(size, c.weight_lambda, &mut rng)?;
             core.stats.batches += 1;
             for i in 0..size {
                 if c.stop_inside_batch && s_max > threshold {
                     break;
                 }
-                let source = if resampled {
-                    core.scored[core.ancestors[i]].pose
-                } else {
-                    m_pred
+                let source = match core.parent(i) {
+                    Some(parent) if drawn => parent,
+                    _ => m_pred,
                 };
                 let m = wide.propagate(&source, Vector2::zeros(), &mut rng)?;
                 let tuned = core.tune(&m)?;
@@ -219,7 +216,7 @@ impl Tracker for IspfTracker {
         let est = core.finish(m_pred, true, &mut rng)?;
         // The autoregressive velocity for the next frame.
         let step = m_prev
-            .inverse()
+            .try_inverse()
             .and_then(|inv| inv.compose(&core.pose).log());
         self.velocity = match step {
             Ok(v) => v * c.ar_coefficient,

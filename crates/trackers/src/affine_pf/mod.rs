@@ -56,6 +56,17 @@
 //! STPF) the pose estimator is trained on
 //! [`AppearanceConfig::training_per_update`] perturbations of `M*`.
 //!
+//! ## Selection
+//! ISPF's and STPF's later batches draw their parents among all the
+//! particles tuned so far in the frame: those become the particle engine's
+//! weighted set ([`bayestrack_particle::ParticleSet`], log-weights
+//! `lambda (S_i - S_max)`, unscorable particles at zero weight) and the
+//! engine selects the batch's parents by multinomial draws
+//! ([`ParticleSet::draw_ancestors`]; a batch has 5, 10, 20, ... particles,
+//! not the set's size, so the set is drawn from rather than replaced in
+//! place). HKPF draws a fixed number of particles from the dynamics and
+//! keeps the best (eq. 2): it selects nothing.
+//!
 //! # Randomness
 //! Initialisation draws from `stream_rng([key, seed, u64::MAX])`, frame `k`
 //! from `stream_rng([key, seed, k])`. The trackers run on one thread, so
@@ -70,18 +81,19 @@ pub use ispf::{IspfConfig, IspfTracker};
 pub use stpf::{StpfConfig, StpfTracker};
 
 use bayestrack_affine::{
-    Affine2, AffineError, AlgebraVector, DisplacementPredictor, PoseConfig, PoseEstimator,
+    Affine2, AffineError, AffineGroup, AlgebraVector, DisplacementPredictor, PoseConfig,
+    PoseEstimator,
 };
 use bayestrack_appearance::{OnlineGaussian, TargetModel};
 use bayestrack_image::{BBox, Border, Image, ImageError, ImageView, ImageViewMut, warp_into};
-use bayestrack_particle::{Resampler, Resampling, stream_rng};
+use bayestrack_particle::{ParticleSet, Resampling, stream_rng};
 use nalgebra::{Matrix2, Matrix6, Vector2};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
 use crate::error::{Result, TrackerError};
-use crate::tracker::{Estimate, FrameGuard, check_initial_box};
+use crate::tracker::{Estimate, FrameGuard, Tracker, check_initial_box};
 
 /// When pose tuning has found a good enough particle (Algorithm 1 steps 2,
 /// 4 and 5). Paper 002 writes the threshold both ways.
@@ -477,6 +489,27 @@ pub struct FrameStats {
     pub manoeuvre: bool,
 }
 
+/// What the paper-002 trackers ([`HkpfTracker`], [`IspfTracker`],
+/// [`StpfTracker`]) report beyond [`Tracker`]: the pose before the first
+/// step, the cost of the last frame and its particles. The `affine`
+/// experiment drives all three as `Box<dyn AffineTracker>`; the pose of
+/// every frame is also in [`Estimate::pose`].
+pub trait AffineTracker: Tracker {
+    /// The current pose estimate `M*` (`None` before `init`; after `init`,
+    /// `M_0`, the translation to the initial box's centre).
+    fn pose(&self) -> Option<Affine2>;
+
+    /// What the last frame cost.
+    fn stats(&self) -> FrameStats;
+
+    /// The particles of the last frame with their similarities (tuned, for
+    /// ISPF and STPF).
+    fn particles(&self) -> &[ScoredPose];
+
+    /// The appearance model (`None` before `init`).
+    fn model(&self) -> Option<&TargetModel>;
+}
+
 /// A scored particle: its pose and similarity (`f64::NEG_INFINITY` when it
 /// could not be scored).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -505,8 +538,10 @@ pub(crate) struct Core {
     pub(crate) k: u64,
     pub(crate) stats: FrameStats,
     pub(crate) scored: Vec<ScoredPose>,
-    pub(crate) weights: Vec<f64>,
-    pub(crate) ancestors: Vec<usize>,
+    /// The scored particles as the particle engine's weighted set (the
+    /// pool the next batch's parents are drawn from).
+    pool: Option<ParticleSet<Affine2>>,
+    ancestors: Vec<usize>,
 }
 
 impl Core {
@@ -533,7 +568,7 @@ impl Core {
             k: 0,
             stats: FrameStats::default(),
             scored: Vec::new(),
-            weights: Vec::new(),
+            pool: None,
             ancestors: Vec::new(),
             cfg,
         })
@@ -596,7 +631,7 @@ impl Core {
         let (w, h) = (target.width, target.height);
         let (cx, cy) = target.center();
         let centre = Vector2::new(cx - 1.0, cy - 1.0);
-        let m0 = Affine2::translation(centre[0], centre[1])?;
+        let m0 = Affine2::translation(centre[0], centre[1]);
         let mut pe = PoseEstimator::new(self.cfg.pose.clone(), w, h)?;
         let ps = self.cfg.pose.patch_size;
         // The template: the box may touch the border, where the outermost
@@ -641,7 +676,7 @@ impl Core {
             (0.0, 1.0),
             (1.0, 1.0),
         ] {
-            let m = Affine2::translation(i * w, j * h)?.compose(&m0);
+            let m = Affine2::translation(i * w, j * h).compose(&m0);
             if let Some(s) = self.score(&m)? {
                 background.push(s);
             }
@@ -666,6 +701,7 @@ impl Core {
         self.guard.start(frame);
         self.stats = FrameStats::default();
         self.scored.clear();
+        self.pool = None;
         Ok(centre)
     }
 
@@ -675,6 +711,7 @@ impl Core {
         self.load(frame)?;
         self.stats = FrameStats::default();
         self.scored.clear();
+        self.pool = None;
         Ok(())
     }
 
@@ -772,30 +809,48 @@ impl Core {
             .reduce(|a, b| if b.similarity > a.similarity { b } else { a })
     }
 
-    /// Fills `ancestors` (length `n`) by multinomial resampling of the
-    /// scored particles with weights `exp(lambda (S_i - S_max))`; returns
-    /// false when no particle could be scored.
-    pub(crate) fn resample<R: Rng + ?Sized>(
+    /// Draws the `n` parents of the next batch among the frame's scored
+    /// particles; false when no particle could be scored. The particles
+    /// become a [`ParticleSet`] of their poses with log-weights
+    /// `lambda (S_i - S_max)` (tempered likelihoods; a particle that could
+    /// not be scored weighs zero), and the engine selects among them
+    /// ([`ParticleSet::draw_ancestors`], multinomial); the parents are then
+    /// [`Core::parent`]`(0..n)`.
+    pub(crate) fn draw_parents<R: Rng + ?Sized>(
         &mut self,
         n: usize,
         lambda: f64,
         rng: &mut R,
     ) -> Result<bool> {
         let Some(best) = self.best() else {
+            self.pool = None;
             return Ok(false);
         };
-        self.weights.clear();
-        self.weights.extend(self.scored.iter().map(|p| {
-            if p.similarity.is_finite() {
-                (lambda * (p.similarity - best.similarity)).exp()
-            } else {
-                0.0
-            }
-        }));
+        let log_weights = self
+            .scored
+            .iter()
+            .map(|p| {
+                if p.similarity.is_finite() {
+                    lambda * (p.similarity - best.similarity)
+                } else {
+                    f64::NEG_INFINITY
+                }
+            })
+            .collect();
+        let poses = self.scored.iter().map(|p| p.pose).collect();
+        let pool = self
+            .pool
+            .insert(ParticleSet::from_log_weights(poses, log_weights)?);
         self.ancestors.clear();
         self.ancestors.resize(n, 0);
-        Resampling::Multinomial.resample(&self.weights, rng, &mut self.ancestors)?;
+        pool.draw_ancestors(&Resampling::Multinomial, rng, &mut self.ancestors)?;
         Ok(true)
+    }
+
+    /// Parent `i` of the batch [`Core::draw_parents`] last drew.
+    pub(crate) fn parent(&self, i: usize) -> Option<Affine2> {
+        let pool = self.pool.as_ref()?;
+        Some(pool.particles()[*self.ancestors.get(i)?])
     }
 
     /// The end of a frame: adopts `m_star` (or keeps `fallback` when no
@@ -825,7 +880,7 @@ impl Core {
             self.bg.clear();
             for (i, j) in [(-1.0, 0.0), (1.0, 0.0), (0.0, -1.0), (0.0, 1.0)] {
                 let shift = a * Vector2::new(i * w, j * h);
-                let m = Affine2::translation(shift[0], shift[1])?.compose(&pose);
+                let m = Affine2::translation(shift[0], shift[1]).compose(&pose);
                 if let Some(s) = self.score(&m)? {
                     self.bg.push(s);
                 }
@@ -843,10 +898,9 @@ impl Core {
             }
         }
         let (w, h) = self.size;
-        let bb = pose.bounding_box(w, h)?;
         Ok(Estimate {
-            bbox: BBox::new(bb.x + 1.5, bb.y + 1.5, bb.w, bb.h),
-            pose: Some(*pose.matrix()),
+            bbox: pose.bounding_box(w, h)?,
+            pose: Some(pose),
             particles: self.stats.particles,
             evaluations: self.stats.evaluations,
             lost: best.is_none() || score <= lost_threshold,

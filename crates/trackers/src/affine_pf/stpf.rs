@@ -1,11 +1,13 @@
 //! The self-tuning hierarchical Kalman-particle filter of paper 002 (Xu,
 //! Gao and Yang 2015, Algorithm 1).
 
-use bayestrack_affine::{Affine2, BrownianDynamics};
+use bayestrack_affine::{Affine2, AffineGroup, BrownianDynamics};
 use bayestrack_image::{BBox, ImageView};
 use nalgebra::Vector2;
 
-use super::{AppearanceConfig, Core, FrameStats, Region, RegionConfig, ScoredPose, StopRule};
+use super::{
+    AffineTracker, AppearanceConfig, Core, FrameStats, Region, RegionConfig, ScoredPose, StopRule,
+};
 use crate::error::{Result, TrackerError};
 use crate::tracker::{Estimate, Tracker};
 
@@ -34,7 +36,7 @@ pub struct StpfConfig {
     pub pose_sigma: [f64; 4],
     /// The stopping threshold (default `mu_T - sigma_T`, see [`StopRule`]).
     pub stop_rule: StopRule,
-    /// `lambda` of the resampling weights `w_i = exp(lambda (S_i - S_max))`
+    /// `lambda` of the selection weights `w_i = exp(lambda (S_i - S_max))`
     /// of step 4-3 (20: a particle 0.05 less similar weighs e^-1 as much;
     /// the paper does not give its weights).
     pub weight_lambda: f64,
@@ -96,7 +98,7 @@ impl StpfConfig {
 ///    ([`StopRule`]);
 /// 3. while no particle has passed the threshold and fewer than `N_max`
 ///    were used: the next batch has `Delta N_t = min(ceil(alpha_inc
-///    Delta N_{t-1}), N_max - n)` particles, drawn by multinomial resampling
+///    Delta N_{t-1}), N_max - n)` particles, drawn by multinomial selection
 ///    of all tuned particles so far by their weights, each moved by
 ///    `M exp(v)`, `v ~ N(0, (1 - S_max^{t-1}) Psi_C)` (`S_max^{t-1}` the
 ///    best similarity of the previous batch), tuned and scored, stopping
@@ -135,24 +137,22 @@ impl StpfTracker {
     pub fn config(&self) -> &StpfConfig {
         &self.config
     }
+}
 
-    /// The current pose estimate `M*` (`None` before `init`).
-    pub fn pose(&self) -> Option<Affine2> {
+impl AffineTracker for StpfTracker {
+    fn pose(&self) -> Option<Affine2> {
         self.region.as_ref().map(|_| self.core.pose)
     }
 
-    /// The tuned particles of the last frame with their similarities.
-    pub fn particles(&self) -> &[ScoredPose] {
-        &self.core.scored
-    }
-
-    /// What the last frame cost.
-    pub fn stats(&self) -> FrameStats {
+    fn stats(&self) -> FrameStats {
         self.core.stats
     }
 
-    /// The appearance model (`None` before `init`).
-    pub fn model(&self) -> Option<&bayestrack_appearance::TargetModel> {
+    fn particles(&self) -> &[ScoredPose] {
+        &self.core.scored
+    }
+
+    fn model(&self) -> Option<&bayestrack_appearance::TargetModel> {
         self.core.model()
     }
 }
@@ -209,16 +209,15 @@ impl Tracker for StpfTracker {
             batch = size;
             core.stats.batches += 1;
             let spread = 1.0 - s_prev.clamp(0.0, 1.0);
-            let resampled = core.resample(size, c.weight_lambda, &mut rng)?;
+            let drawn = core.draw_parents(size, c.weight_lambda, &mut rng)?;
             let moved = psi.scaled(spread)?;
             let mut s_batch = f64::NEG_INFINITY;
             for i in 0..size {
                 if s_batch > threshold {
                     break;
                 }
-                let m = if resampled {
-                    let source = core.scored[core.ancestors[i]].pose;
-                    moved.propagate(&source, Vector2::zeros(), &mut rng)?
+                let m = if let Some(parent) = core.parent(i).filter(|_| drawn) {
+                    moved.propagate(&parent, Vector2::zeros(), &mut rng)?
                 } else {
                     // No particle could be scored yet: draw from the
                     // dynamics again.

@@ -35,7 +35,7 @@ use bayestrack_affine::{BSplineDegree, ClosedBSpline, ShapeSpace, shape_affine};
 use bayestrack_appearance::{AppearanceError, Candidate, Cue, Frame, Scratch, SkinModel};
 use bayestrack_image::{Affine2, BBox, ImageView, Rgb};
 use bayestrack_particle::stream_rng;
-use nalgebra::{Matrix3, SVector, Vector2};
+use nalgebra::{SVector, Vector2};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 
@@ -491,12 +491,11 @@ impl ContourModel {
             x1 = x1.max(x);
             y1 = y1.max(y);
         }
-        let r = pose.to_matrix3();
         Ok(ObjectStep {
             centre: (m[0], m[1]),
             // The samples' extent as pixel areas, OTB 1-based.
             bbox: BBox::new(x0 + 0.5, y0 + 0.5, x1 - x0 + 1.0, y1 - y0 + 1.0),
-            pose: Some(Matrix3::from_fn(|i, j| r[i][j])),
+            pose: Some(pose),
             report,
         })
     }

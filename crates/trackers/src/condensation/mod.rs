@@ -66,9 +66,9 @@ pub use points::{PointCloudConfig, PointCloudTracker};
 use bayestrack_appearance::{
     Candidate, Cue, DEFAULT_FLOOR, Frame, Fusion, FusionRule, Scratch, interframe_difference_into,
 };
-use bayestrack_image::{BBox, Image, ImageView, rgb_to_gray_into};
+use bayestrack_image::{Affine2, BBox, Image, ImageView, rgb_to_gray_into};
 use bayestrack_particle::{ParticleSet, Resampling};
-use nalgebra::{Matrix3, SVector};
+use nalgebra::SVector;
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 
@@ -435,7 +435,7 @@ struct ObjectStep {
     /// The box (OTB convention).
     bbox: BBox,
     /// The mean pose (contours).
-    pose: Option<Matrix3<f64>>,
+    pose: Option<Affine2>,
     /// The filter step.
     report: CondensationReport,
 }
