@@ -3,11 +3,11 @@
 //! coarse then fine, no pose tuning.
 
 use bayestrack_affine::{Affine2, AffineGroup, BrownianDynamics};
-use bayestrack_image::{BBox, ImageView};
 
 use super::{AffineTracker, AppearanceConfig, Core, FrameStats, Region, RegionConfig, ScoredPose};
 use crate::error::{Result, TrackerError};
-use crate::tracker::{Estimate, Tracker};
+use crate::shell::{ChannelPolicy, InitialBox, Planes, Shell, TrackerCore};
+use crate::tracker::Estimate;
 
 const NAME: &str = "hkpf";
 /// Key of the random streams ("hkpf" in ASCII).
@@ -62,8 +62,11 @@ impl HkpfConfig {
 /// best one is the estimate `M*` (eq. 2) and its centre the Kalman
 /// measurement. The template, TSD and BSD are updated as for the
 /// self-tuning filter; there is no pose estimator.
+pub type HkpfTracker = Shell<HkpfCore>;
+
+/// The model of [`HkpfTracker`].
 #[derive(Debug, Clone)]
-pub struct HkpfTracker {
+pub struct HkpfCore {
     config: HkpfConfig,
     core: Core,
     region: Option<Region>,
@@ -75,8 +78,18 @@ impl HkpfTracker {
     /// # Errors
     /// [`TrackerError::InvalidParameter`] for a bad configuration.
     pub fn new(config: HkpfConfig, seed: u64) -> Result<Self> {
+        Ok(Shell::wrap(HkpfCore::new(config, seed)?))
+    }
+}
+
+impl HkpfCore {
+    /// The model of [`HkpfTracker::new`].
+    ///
+    /// # Errors
+    /// As [`HkpfTracker::new`].
+    pub fn new(config: HkpfConfig, seed: u64) -> Result<Self> {
         config.validate()?;
-        let core = Core::new(NAME, KEY, seed, config.appearance.clone())?;
+        let core = Core::new(KEY, seed, config.appearance.clone())?;
         Ok(Self {
             config,
             core,
@@ -92,35 +105,41 @@ impl HkpfTracker {
 
 impl AffineTracker for HkpfTracker {
     fn pose(&self) -> Option<Affine2> {
-        self.region.as_ref().map(|_| self.core.pose)
+        self.core().region.as_ref().map(|_| self.core().core.pose)
     }
 
     fn stats(&self) -> FrameStats {
-        self.core.stats
+        self.core().core.stats
     }
 
     fn particles(&self) -> &[ScoredPose] {
-        &self.core.scored
+        &self.core().core.scored
     }
 
     fn model(&self) -> Option<&bayestrack_appearance::TargetModel> {
-        self.core.model()
+        self.core().core.model()
     }
 }
 
-impl Tracker for HkpfTracker {
+impl TrackerCore for HkpfCore {
     fn name(&self) -> &'static str {
         NAME
     }
 
-    fn init(&mut self, frame: ImageView<'_, u8>, target: BBox) -> Result<()> {
+    fn channels(&self) -> ChannelPolicy {
+        ChannelPolicy::GrayOrRgb
+    }
+
+    fn start(&mut self, planes: &Planes<'_>, target: InitialBox) -> Result<()> {
+        let (frame, target) = (planes.input(), target.bbox);
         self.region = None;
         let centre = self.core.init(&frame, target, false)?;
         self.region = Some(Region::new(self.config.region, centre)?);
         Ok(())
     }
 
-    fn step(&mut self, frame: ImageView<'_, u8>) -> Result<Estimate> {
+    fn track(&mut self, planes: &Planes<'_>) -> Result<Estimate> {
+        let frame = planes.input();
         let region = self.region.as_mut().ok_or(TrackerError::NotInitialised)?;
         let core = &mut self.core;
         core.begin(&frame)?;

@@ -3,12 +3,12 @@
 //! 2015) improves on.
 
 use bayestrack_affine::{Affine2, AffineGroup, AlgebraVector, BrownianDynamics};
-use bayestrack_image::{BBox, ImageView};
 use nalgebra::Vector2;
 
 use super::{AffineTracker, AppearanceConfig, Core, FrameStats, ScoredPose, StopRule};
 use crate::error::{Result, TrackerError};
-use crate::tracker::{Estimate, Tracker};
+use crate::shell::{ChannelPolicy, InitialBox, Planes, Shell, TrackerCore};
+use crate::tracker::Estimate;
 
 const NAME: &str = "ispf";
 /// Key of the random streams ("ispf" in ASCII).
@@ -111,8 +111,11 @@ impl IspfConfig {
 /// 3.2 credits stopping "in time ... rather than computing all particles"
 /// to its own filter). The batch size is constant (paper 002's geometric
 /// growth is its own).
+pub type IspfTracker = Shell<IspfCore>;
+
+/// The model of [`IspfTracker`].
 #[derive(Debug, Clone)]
-pub struct IspfTracker {
+pub struct IspfCore {
     config: IspfConfig,
     core: Core,
     velocity: AlgebraVector,
@@ -125,8 +128,18 @@ impl IspfTracker {
     /// # Errors
     /// [`TrackerError::InvalidParameter`] for a bad configuration.
     pub fn new(config: IspfConfig, seed: u64) -> Result<Self> {
+        Ok(Shell::wrap(IspfCore::new(config, seed)?))
+    }
+}
+
+impl IspfCore {
+    /// The model of [`IspfTracker::new`].
+    ///
+    /// # Errors
+    /// As [`IspfTracker::new`].
+    pub fn new(config: IspfConfig, seed: u64) -> Result<Self> {
         config.validate()?;
-        let core = Core::new(NAME, KEY, seed, config.appearance.clone())?;
+        let core = Core::new(KEY, seed, config.appearance.clone())?;
         Ok(Self {
             config,
             core,
@@ -143,28 +156,33 @@ impl IspfTracker {
 
 impl AffineTracker for IspfTracker {
     fn pose(&self) -> Option<Affine2> {
-        self.started.then_some(self.core.pose)
+        self.core().started.then_some(self.core().core.pose)
     }
 
     fn stats(&self) -> FrameStats {
-        self.core.stats
+        self.core().core.stats
     }
 
     fn particles(&self) -> &[ScoredPose] {
-        &self.core.scored
+        &self.core().core.scored
     }
 
     fn model(&self) -> Option<&bayestrack_appearance::TargetModel> {
-        self.core.model()
+        self.core().core.model()
     }
 }
 
-impl Tracker for IspfTracker {
+impl TrackerCore for IspfCore {
     fn name(&self) -> &'static str {
         NAME
     }
 
-    fn init(&mut self, frame: ImageView<'_, u8>, target: BBox) -> Result<()> {
+    fn channels(&self) -> ChannelPolicy {
+        ChannelPolicy::GrayOrRgb
+    }
+
+    fn start(&mut self, planes: &Planes<'_>, target: InitialBox) -> Result<()> {
+        let (frame, target) = (planes.input(), target.bbox);
         self.started = false;
         self.core.init(&frame, target, true)?;
         self.velocity = AlgebraVector::zeros();
@@ -172,7 +190,8 @@ impl Tracker for IspfTracker {
         Ok(())
     }
 
-    fn step(&mut self, frame: ImageView<'_, u8>) -> Result<Estimate> {
+    fn track(&mut self, planes: &Planes<'_>) -> Result<Estimate> {
+        let frame = planes.input();
         if !self.started {
             return Err(TrackerError::NotInitialised);
         }

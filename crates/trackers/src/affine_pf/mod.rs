@@ -93,7 +93,7 @@ use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
 use crate::error::{Result, TrackerError};
-use crate::tracker::{Estimate, FrameGuard, Tracker, check_initial_box};
+use crate::tracker::{Estimate, Tracker};
 
 /// When pose tuning has found a good enough particle (Algorithm 1 steps 2,
 /// 4 and 5). Paper 002 writes the threshold both ways.
@@ -523,11 +523,9 @@ pub struct ScoredPose {
 /// State shared by the three trackers.
 #[derive(Debug, Clone)]
 pub(crate) struct Core {
-    name: &'static str,
     key: u64,
     seed: u64,
     cfg: AppearanceConfig,
-    guard: FrameGuard,
     gray: Image<f32>,
     size: (f64, f64),
     pe: Option<PoseEstimator>,
@@ -546,7 +544,6 @@ pub(crate) struct Core {
 
 impl Core {
     pub(crate) fn new(
-        name: &'static str,
         key: u64,
         seed: u64,
         cfg: AppearanceConfig,
@@ -554,10 +551,8 @@ impl Core {
         cfg.validate()?;
         let ps = cfg.pose.patch_size;
         Ok(Self {
-            name,
             key,
             seed,
-            guard: FrameGuard::default(),
             gray: Image::new(1, 1, 1, 0f32)?,
             size: (0.0, 0.0),
             pe: None,
@@ -586,18 +581,9 @@ impl Core {
         rng
     }
 
-    /// Checks the channels and converts the frame to gray `f32`.
+    /// Converts the frame (1 or 3 channels, checked by the shell) to gray
+    /// `f32` in `[0, 1]`.
     fn load(&mut self, frame: &ImageView<'_, u8>) -> Result<()> {
-        match frame.channels() {
-            1 | 3 => {}
-            got => {
-                return Err(TrackerError::Channels {
-                    tracker: self.name,
-                    expected: "1 or 3",
-                    got,
-                });
-            }
-        }
         if (self.gray.width(), self.gray.height()) != (frame.width(), frame.height()) {
             self.gray = Image::new(frame.width(), frame.height(), 1, 0f32)?;
         }
@@ -606,7 +592,8 @@ impl Core {
         Ok(())
     }
 
-    /// Starts on a frame: checks and converts it, builds the template,
+    /// Starts on a frame (checked, with a checked box, by the shell):
+    /// converts it, builds the template,
     /// TSD, BSD and pose estimator (trained on `initial_training`
     /// perturbations when `train`). Returns the initial centre.
     pub(crate) fn init(
@@ -615,18 +602,6 @@ impl Core {
         target: BBox,
         train: bool,
     ) -> Result<Vector2<f64>> {
-        // Channels first: a wrong frame is reported as such.
-        match frame.channels() {
-            1 | 3 => {}
-            got => {
-                return Err(TrackerError::Channels {
-                    tracker: self.name,
-                    expected: "1 or 3",
-                    got,
-                });
-            }
-        }
-        check_initial_box(target, frame.width(), frame.height())?;
         self.load(frame)?;
         let (w, h) = (target.width, target.height);
         let (cx, cy) = target.center();
@@ -698,16 +673,15 @@ impl Core {
             pe.train(self.gray.view(), &m0, self.cfg.initial_training, &mut rng)?;
         }
         self.pe = Some(pe);
-        self.guard.start(frame);
         self.stats = FrameStats::default();
         self.scored.clear();
         self.pool = None;
         Ok(centre)
     }
 
-    /// Checks a later frame and converts it; resets the frame's counters.
+    /// Converts a later frame (checked by the shell); resets the frame's
+    /// counters.
     pub(crate) fn begin(&mut self, frame: &ImageView<'_, u8>) -> Result<()> {
-        self.guard.check(frame)?;
         self.load(frame)?;
         self.stats = FrameStats::default();
         self.scored.clear();

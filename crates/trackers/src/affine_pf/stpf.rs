@@ -2,14 +2,14 @@
 //! Gao and Yang 2015, Algorithm 1).
 
 use bayestrack_affine::{Affine2, AffineGroup, BrownianDynamics};
-use bayestrack_image::{BBox, ImageView};
 use nalgebra::Vector2;
 
 use super::{
     AffineTracker, AppearanceConfig, Core, FrameStats, Region, RegionConfig, ScoredPose, StopRule,
 };
 use crate::error::{Result, TrackerError};
-use crate::tracker::{Estimate, Tracker};
+use crate::shell::{ChannelPolicy, InitialBox, Planes, Shell, TrackerCore};
+use crate::tracker::Estimate;
 
 const NAME: &str = "stpf";
 /// Key of the random streams ("stpf" in ASCII).
@@ -111,8 +111,11 @@ impl StpfConfig {
 /// The particle count reported is the number of particles tuned; particles
 /// a batch did not reach after an early stop are not counted (paper 002:
 /// "not all particles need to be calculated").
+pub type StpfTracker = Shell<StpfCore>;
+
+/// The model of [`StpfTracker`].
 #[derive(Debug, Clone)]
-pub struct StpfTracker {
+pub struct StpfCore {
     config: StpfConfig,
     core: Core,
     region: Option<Region>,
@@ -124,8 +127,18 @@ impl StpfTracker {
     /// # Errors
     /// [`TrackerError::InvalidParameter`] for a bad configuration.
     pub fn new(config: StpfConfig, seed: u64) -> Result<Self> {
+        Ok(Shell::wrap(StpfCore::new(config, seed)?))
+    }
+}
+
+impl StpfCore {
+    /// The model of [`StpfTracker::new`].
+    ///
+    /// # Errors
+    /// As [`StpfTracker::new`].
+    pub fn new(config: StpfConfig, seed: u64) -> Result<Self> {
         config.validate()?;
-        let core = Core::new(NAME, KEY, seed, config.appearance.clone())?;
+        let core = Core::new(KEY, seed, config.appearance.clone())?;
         Ok(Self {
             config,
             core,
@@ -141,35 +154,41 @@ impl StpfTracker {
 
 impl AffineTracker for StpfTracker {
     fn pose(&self) -> Option<Affine2> {
-        self.region.as_ref().map(|_| self.core.pose)
+        self.core().region.as_ref().map(|_| self.core().core.pose)
     }
 
     fn stats(&self) -> FrameStats {
-        self.core.stats
+        self.core().core.stats
     }
 
     fn particles(&self) -> &[ScoredPose] {
-        &self.core.scored
+        &self.core().core.scored
     }
 
     fn model(&self) -> Option<&bayestrack_appearance::TargetModel> {
-        self.core.model()
+        self.core().core.model()
     }
 }
 
-impl Tracker for StpfTracker {
+impl TrackerCore for StpfCore {
     fn name(&self) -> &'static str {
         NAME
     }
 
-    fn init(&mut self, frame: ImageView<'_, u8>, target: BBox) -> Result<()> {
+    fn channels(&self) -> ChannelPolicy {
+        ChannelPolicy::GrayOrRgb
+    }
+
+    fn start(&mut self, planes: &Planes<'_>, target: InitialBox) -> Result<()> {
+        let (frame, target) = (planes.input(), target.bbox);
         self.region = None;
         let centre = self.core.init(&frame, target, true)?;
         self.region = Some(Region::new(self.config.region, centre)?);
         Ok(())
     }
 
-    fn step(&mut self, frame: ImageView<'_, u8>) -> Result<Estimate> {
+    fn track(&mut self, planes: &Planes<'_>) -> Result<Estimate> {
+        let frame = planes.input();
         let c = &self.config;
         let region = self.region.as_mut().ok_or(TrackerError::NotInitialised)?;
         let core = &mut self.core;
