@@ -351,3 +351,83 @@ fn a_measurement_too_large_for_its_statistics_is_an_error() {
     assert!(inn.nis.is_finite() && inn.log_likelihood.is_finite());
     assert!(u.posterior.mean().iter().all(|v| v.is_finite()));
 }
+
+/// `x -> x^2`: a model whose sigma points do not average to `f(mean)`, so
+/// the covariance weight `Wc_0` matters.
+struct Square;
+
+impl bayestrack_kalman::Dynamics<1> for Square {
+    fn propagate(&self, x: &Vector1<f64>) -> Vector1<f64> {
+        Vector1::new(x[0] * x[0])
+    }
+    fn process_noise(&self) -> Matrix1<f64> {
+        Matrix1::new(1e-4)
+    }
+}
+
+#[test]
+fn ukf_parameters_that_give_an_indefinite_covariance_are_refused() {
+    // issue 28: `Ukf::new(1, -1e6, 0).predict(..)` returned variance -999995
+    let prior = Gaussian::new(Vector1::new(1.0), Matrix1::new(1.0)).unwrap();
+    let ukf = Ukf::new(1.0, -1e6, 0.0).unwrap();
+    assert!(matches!(
+        ukf.predict(&prior, &Square),
+        Err(KalmanError::InvalidParameter { name: "beta", .. })
+    ));
+    assert!(matches!(
+        ukf.weights(1),
+        Err(KalmanError::InvalidParameter { name: "beta", .. })
+    ));
+    // Julier's kappa = 3 - L with beta = 0 for L = 5: alpha^2 kappa + beta L < 0
+    assert!(matches!(
+        Ukf::new(1.0, 0.0, -2.0).unwrap().weights(5),
+        Err(KalmanError::InvalidParameter { name: "kappa", .. })
+    ));
+    // the usual parameters stay valid
+    for (a, b, k, l) in [(1e-3, 2.0, 0.0, 5), (1.0, 0.0, 2.0, 2), (0.5, 2.0, -4.0, 10)] {
+        assert!(Ukf::new(a, b, k).unwrap().weights(l).is_ok(), "{a} {b} {k} {l}");
+    }
+}
+
+#[test]
+fn a_tiny_alpha_is_blamed_on_alpha() {
+    // issue 28: `Ukf::new(1e-160, ..)` had weights (-inf, -inf, inf), and a
+    // tiny alpha was reported as "kappa = 0"
+    for alpha in [1e-160, 1e-300, 1e-5, f64::MIN_POSITIVE / 4.0] {
+        let err = Ukf::new(alpha, 2.0, 0.0)
+            .and_then(|u| u.weights(3))
+            .unwrap_err();
+        assert!(
+            matches!(err, KalmanError::InvalidParameter { name: "alpha", .. }),
+            "{alpha}: {err}"
+        );
+    }
+    // alpha^2 overflows
+    assert!(matches!(
+        Ukf::new(1e200, 2.0, 0.0),
+        Err(KalmanError::InvalidParameter { name: "alpha", .. })
+    ));
+    // L + kappa so close to 0 that the points collapse onto the mean
+    let err = Ukf::new(1.0, 2.0, -3.0 + 1e-300).unwrap().weights(3).unwrap_err();
+    assert!(matches!(err, KalmanError::InvalidParameter { name: "kappa", .. }), "{err}");
+}
+
+#[test]
+fn a_spread_that_overflows_the_covariance_names_the_sigma_point_scale() {
+    // alpha^2 (L + kappa) = 1e300 times a covariance of 1e10 is not a number
+    let prior = Gaussian::new(Vector1::new(1.0), Matrix1::new(1e10)).unwrap();
+    let err = Ukf::new(1.0, 2.0, 1e300)
+        .unwrap()
+        .predict(&prior, &Square)
+        .unwrap_err();
+    assert!(
+        matches!(
+            err,
+            KalmanError::InvalidParameter {
+                name: "alpha^2 (L + kappa)",
+                ..
+            }
+        ),
+        "{err}"
+    );
+}
