@@ -431,3 +431,36 @@ fn a_spread_that_overflows_the_covariance_names_the_sigma_point_scale() {
         "{err}"
     );
 }
+
+#[test]
+fn densities_and_chi_square_statistics_that_overflow_are_errors() {
+    use bayestrack_kalman::{ChiSquareBand, chi_square_cdf, chi_square_quantile, nees};
+    // log_pdf returned NaN and -inf, nees NaN, with Ok
+    let wide = Gaussian::new(Vector2::new(1e308, -1e308), Matrix2::identity() * 1e308).unwrap();
+    let far = Vector2::new(-1e308, 1e308);
+    assert!(matches!(
+        wide.log_pdf(&far),
+        Err(KalmanError::NonFinite {
+            step: Step::Evaluate,
+            ..
+        })
+    ));
+    assert!(wide.mahalanobis_sq(&far).is_err());
+    let narrow = Gaussian::new(Vector2::zeros(), Matrix2::identity() * 1e-300).unwrap();
+    assert!(nees(&Vector2::new(1e300, 0.0), &narrow).is_err());
+    let tiny = Gaussian::new(Vector2::new(1.0, 1.0), Matrix2::identity() * 5e-324).unwrap();
+    assert!(tiny.log_pdf(&Vector2::zeros()).is_err());
+    // dof * runs overflowed (a panic in debug builds)
+    assert!(matches!(
+        ChiSquareBand::for_average(usize::MAX, 2, 0.95),
+        Err(KalmanError::InvalidParameter { name: "runs", .. })
+    ));
+    // k = 1e308 never returned; k = 1e20 had a CDF of 0 at its median;
+    // p = 1e-300 returned 3e-61
+    assert!(chi_square_quantile(0.5, 1e308).is_err());
+    assert!(chi_square_cdf(1e20, 1e20).is_err());
+    assert!(chi_square_quantile(0.975, 1e10).is_ok());
+    // with 2 degrees of freedom the quantile is -2 ln(1 - p) = 2e-300
+    let q = chi_square_quantile(1e-300, 2.0).unwrap();
+    assert!((q / 2e-300 - 1.0).abs() < 1e-9, "{q}");
+}

@@ -203,6 +203,39 @@ proptest! {
         }
     }
 
+    #[test]
+    fn chi_square_functions_take_extreme_numbers(x in extreme_f64(), k in extreme_f64(), p in extreme_f64()) {
+        if let Ok(c) = chi_square_cdf(x, k) {
+            prop_assert!((0.0..=1.0).contains(&c), "cdf({x}, {k}) = {c}");
+        }
+        if let Ok(q) = chi_square_quantile(p, k) {
+            prop_assert!(q.is_finite() && q >= 0.0, "quantile({p}, {k}) = {q}");
+            let c = chi_square_cdf(q, k).unwrap();
+            // below 1e-300 the CDF of a small k steps by more than 1e-6
+            // between neighbouring floats
+            prop_assert!((c - p).abs() < 1e-6 || q < 1e-300, "cdf(quantile({p}, {k})) = {c}");
+        }
+    }
+
+    /// Densities at any point of any belief: an error or a finite number.
+    #[test]
+    fn densities_are_finite_or_an_error(
+        mean in prop::array::uniform3(extreme_f64()),
+        x in prop::array::uniform3(extreme_f64()),
+        p in psd3(),
+    ) {
+        let Ok(g) = Gaussian::new(Vector3::from(mean), p) else {
+            return Ok(());
+        };
+        let x = Vector3::from(x);
+        if let Ok(l) = g.log_pdf(&x) {
+            prop_assert!(l.is_finite(), "log_pdf = {l}");
+        }
+        if let Ok(d) = g.mahalanobis_sq(&x) {
+            prop_assert!(d.is_finite() && d >= 0.0, "mahalanobis_sq = {d}");
+        }
+    }
+
     /// Issue 28: any `(alpha, beta, kappa)` the UKF accepts gives finite
     /// weights that sum to 1 and a positive semi-definite covariance for
     /// every model, in the additive and the augmented forms.
