@@ -242,3 +242,36 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn an_online_gaussian_never_holds_inf_or_nan() {
+    use bayestrack_appearance::OnlineGaussian;
+    // std = 1e200 had variance inf; 1e308 after -1e308 made mean and
+    // variance inf and NaN, with Ok
+    assert!(OnlineGaussian::new(0.0, 1e200, 0.5).is_err());
+    let mut g = OnlineGaussian::new(-1e308, 1.0, 0.5).unwrap();
+    assert!(g.update(1e308).is_err());
+    assert_eq!((g.mean(), g.std(), g.count()), (-1e308, 1.0, 0));
+    assert!(OnlineGaussian::from_samples(&[1e308, -1e308, 1e308], 0.5).is_err());
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: cases(256), ..ProptestConfig::default() })]
+
+    #[test]
+    fn online_gaussians_stay_finite_or_refuse(
+        mean in bayestrack_testkit::strategies::extreme_f64(),
+        std in bayestrack_testkit::strategies::extreme_f64(),
+        rate in bayestrack_testkit::strategies::extreme_f64(),
+        xs in prop::collection::vec(bayestrack_testkit::strategies::extreme_f64(), 0..8),
+    ) {
+        use bayestrack_appearance::OnlineGaussian;
+        let Ok(mut g) = OnlineGaussian::new(mean, std, rate) else {
+            return Ok(());
+        };
+        for x in xs {
+            let _ = g.update(x);
+            prop_assert!(g.mean().is_finite() && g.std().is_finite() && g.std() >= 0.0, "{g:?}");
+        }
+    }
+}
