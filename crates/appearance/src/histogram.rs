@@ -210,7 +210,8 @@ impl RgbHistogram {
         let mut finite = true;
         for y in 0..patch.height() {
             for p in patch.row(y).chunks_exact(3) {
-                finite &= p[0].abs() <= f32::MAX && p[1].abs() <= f32::MAX && p[2].abs() <= f32::MAX;
+                finite &=
+                    p[0].abs() <= f32::MAX && p[1].abs() <= f32::MAX && p[2].abs() <= f32::MAX;
                 let q = |v: f32| v.round().clamp(0.0, 255.0) as u8;
                 self.add([q(p[0]), q(p[1]), q(p[2])]);
             }

@@ -191,7 +191,9 @@ fn check_finite_template<T: MadPixel>(template: &ImageView<'_, T>) -> Result<()>
     }
     for r in 0..template.height() {
         if !template.row(r).iter().all(|v| v.to_f32().is_finite()) {
-            return Err(AppearanceError::NonFinite { what: "MAD template" });
+            return Err(AppearanceError::NonFinite {
+                what: "MAD template",
+            });
         }
     }
     Ok(())

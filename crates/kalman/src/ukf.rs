@@ -334,10 +334,14 @@ impl Ukf {
             reason,
         };
         if !(l + self.kappa > 0.0) {
-            return kappa("L + kappa must be positive (L: the state dimension, augmented by the noise dimensions)");
+            return kappa(
+                "L + kappa must be positive (L: the state dimension, augmented by the noise dimensions)",
+            );
         }
         if !(c >= MIN_SPREAD) {
-            return kappa("alpha^2 (L + kappa) must be at least 1e-8: closer to the mean, round-off replaces the covariance of the sigma points");
+            return kappa(
+                "alpha^2 (L + kappa) must be at least 1e-8: closer to the mean, round-off replaces the covariance of the sigma points",
+            );
         }
         if !(0.5 / c > 0.0) {
             return kappa("alpha^2 (L + kappa) overflows");

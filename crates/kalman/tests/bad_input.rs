@@ -384,8 +384,15 @@ fn ukf_parameters_that_give_an_indefinite_covariance_are_refused() {
         Err(KalmanError::InvalidParameter { name: "kappa", .. })
     ));
     // the usual parameters stay valid
-    for (a, b, k, l) in [(1e-3, 2.0, 0.0, 5), (1.0, 0.0, 2.0, 2), (0.5, 2.0, -4.0, 10)] {
-        assert!(Ukf::new(a, b, k).unwrap().weights(l).is_ok(), "{a} {b} {k} {l}");
+    for (a, b, k, l) in [
+        (1e-3, 2.0, 0.0, 5),
+        (1.0, 0.0, 2.0, 2),
+        (0.5, 2.0, -4.0, 10),
+    ] {
+        assert!(
+            Ukf::new(a, b, k).unwrap().weights(l).is_ok(),
+            "{a} {b} {k} {l}"
+        );
     }
 }
 
@@ -408,8 +415,14 @@ fn a_tiny_alpha_is_blamed_on_alpha() {
         Err(KalmanError::InvalidParameter { name: "alpha", .. })
     ));
     // L + kappa so close to 0 that the points collapse onto the mean
-    let err = Ukf::new(1.0, 2.0, -3.0 + 1e-300).unwrap().weights(3).unwrap_err();
-    assert!(matches!(err, KalmanError::InvalidParameter { name: "kappa", .. }), "{err}");
+    let err = Ukf::new(1.0, 2.0, -3.0 + 1e-300)
+        .unwrap()
+        .weights(3)
+        .unwrap_err();
+    assert!(
+        matches!(err, KalmanError::InvalidParameter { name: "kappa", .. }),
+        "{err}"
+    );
 }
 
 #[test]
