@@ -222,10 +222,11 @@ proptest! {
                 prop_assert!(out.as_slice().iter().all(|v| v.is_finite() && *v >= 0.0));
             }
         }
-        if frame.width() == template.width() && frame.height() == template.height() {
-            if let Ok(c) = ncc(frame.view(), template.view()) {
-                prop_assert!(c.is_finite() && (-1.0..=1.0).contains(&c), "{c}");
-            }
+        if frame.width() == template.width()
+            && frame.height() == template.height()
+            && let Ok(c) = ncc(frame.view(), template.view())
+        {
+            prop_assert!(c.is_finite() && (-1.0..=1.0).contains(&c), "{c}");
         }
         if let Ok(t) = NccTemplate::new(template.view()) {
             prop_assert!(t.values().iter().all(|v| v.is_finite()));

@@ -245,7 +245,7 @@ impl Ukf {
     /// [`KalmanError::InvalidParameter`] naming `alpha` outside
     /// `[1e-4, 1e150]` or NaN, or a non-finite `beta` or `kappa`.
     pub fn new(alpha: f64, beta: f64, kappa: f64) -> Result<Self> {
-        if !(alpha >= MIN_ALPHA && alpha <= MAX_ALPHA) {
+        if !(MIN_ALPHA..=MAX_ALPHA).contains(&alpha) {
             return Err(KalmanError::InvalidParameter {
                 name: "alpha",
                 value: alpha,
@@ -333,17 +333,18 @@ impl Ukf {
             value: self.kappa,
             reason,
         };
-        if !(l + self.kappa > 0.0) {
+        // kappa and alpha are finite (checked by `new`): nothing below is NaN
+        if l + self.kappa <= 0.0 {
             return kappa(
                 "L + kappa must be positive (L: the state dimension, augmented by the noise dimensions)",
             );
         }
-        if !(c >= MIN_SPREAD) {
+        if c < MIN_SPREAD {
             return kappa(
                 "alpha^2 (L + kappa) must be at least 1e-8: closer to the mean, round-off replaces the covariance of the sigma points",
             );
         }
-        if !(0.5 / c > 0.0) {
+        if c.is_infinite() {
             return kappa("alpha^2 (L + kappa) overflows");
         }
         let reason = "alpha^2 kappa + beta L must be >= 0 (L: the state dimension), or the sigma-point covariance can be indefinite";

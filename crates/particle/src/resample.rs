@@ -258,8 +258,7 @@ impl Resampler for Resampling {
         ancestors: &mut [usize],
     ) -> Result<()> {
         let total = checked_total(weights)?;
-        // MIN_TOTAL <= total < inf, as float compares
-        if total >= MIN_TOTAL && total < f64::INFINITY {
+        if (MIN_TOTAL..f64::INFINITY).contains(&total) {
             self.resample_checked(weights, total, rng, ancestors);
         } else {
             // finite weights whose sum overflows (1e308 each), or so small
