@@ -276,3 +276,20 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn float_maps_with_nan_are_errors() {
+    use bayestrack_appearance::{PriorityIfd, SkinModel, interframe_difference};
+    // each returned NaN in its output map with Ok
+    let a = Image::from_vec(3, 2, 1, vec![0.1f32, f32::NAN, 0.3, 0.4, 0.5, 0.6]).unwrap();
+    let b = Image::from_vec(3, 2, 1, vec![0.2f32; 6]).unwrap();
+    assert!(interframe_difference(a.view(), b.view()).is_err());
+    assert!(interframe_difference(b.view(), b.view()).is_ok());
+    assert!(PriorityIfd::new(a.view()).is_err());
+    let mut p = PriorityIfd::new(b.view()).unwrap();
+    assert!(p.reset(a.view()).is_err());
+    let hsv = Image::from_vec(2, 1, 3, vec![0.1f32, 0.5, 0.5, f32::NAN, 0.5, 0.5]).unwrap();
+    let skin = SkinModel::new(0.05, 0.5, 0.05).unwrap();
+    let mut out = Image::new(2, 1, 1, 0f32).unwrap();
+    assert!(skin.map_hsv_into(hsv.view(), &mut out.view_mut()).is_err());
+}
