@@ -200,15 +200,27 @@ impl RgbHistogram {
     /// values are rounded and clamped.
     ///
     /// # Errors
-    /// [`ImageError::Channels`] unless the patch has 3 channels.
+    /// [`ImageError::Channels`] unless the patch has 3 channels;
+    /// [`AppearanceError::NonFinite`] for a NaN or infinite value (NaN was
+    /// counted in bin 0); the histogram is then empty.
     pub fn compute_f32(&mut self, patch: ImageView<'_, f32>) -> Result<()> {
         patch.expect_channels("RgbHistogram", 3)?;
         self.clear();
+        // `|v| <= MAX` fails for NaN and +-inf: one compare per value
+        let mut finite = true;
         for y in 0..patch.height() {
             for p in patch.row(y).chunks_exact(3) {
+                finite &=
+                    p[0].abs() <= f32::MAX && p[1].abs() <= f32::MAX && p[2].abs() <= f32::MAX;
                 let q = |v: f32| v.round().clamp(0.0, 255.0) as u8;
                 self.add([q(p[0]), q(p[1]), q(p[2])]);
             }
+        }
+        if !finite {
+            self.clear();
+            return Err(AppearanceError::NonFinite {
+                what: "f32 patch of an RGB histogram",
+            });
         }
         Ok(())
     }

@@ -22,7 +22,9 @@ use crate::{AppearanceError, Result};
 ///
 /// # Errors
 /// [`ImageError::SizeMismatch`] if the frames or `out` differ in size;
-/// [`ImageError::Channels`] for inputs that are not 1- or 3-channel.
+/// [`ImageError::Channels`] for inputs that are not 1- or 3-channel;
+/// [`AppearanceError::NonFinite`] when a float frame holds NaN or infinite
+/// pixels (the difference is then not a number; `out` holds it).
 pub fn interframe_difference_into<T: Pixel>(
     current: ImageView<'_, T>,
     previous: ImageView<'_, T>,
@@ -74,6 +76,32 @@ pub fn interframe_difference_into<T: Pixel>(
                 got,
             }
             .into());
+        }
+    }
+    // only a scalar that holds NaN (a float) can give a non-finite
+    // difference; for integer pixels this folds away
+    if T::from_f32(f32::NAN).to_f32().is_nan() {
+        let finite = (0..out.height()).all(|y| {
+            out.row_mut(y)
+                .iter()
+                .fold(true, |ok, &v| ok & (v.abs() <= f32::MAX))
+        });
+        if !finite {
+            return Err(AppearanceError::NonFinite {
+                what: "interframe difference (NaN or infinite pixels in a frame)",
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Refuses an IFD map with a NaN or infinite value (it weights particles).
+fn check_finite_field(ifd: &ImageView<'_, f32>) -> Result<()> {
+    for y in 0..ifd.height() {
+        if !ifd.row(y).iter().all(|v| v.is_finite()) {
+            return Err(AppearanceError::NonFinite {
+                what: "IFD map of PriorityIfd",
+            });
         }
     }
     Ok(())
@@ -203,9 +231,11 @@ impl PriorityIfd {
     /// `V^0 = dP` (a copy of the 1-channel IFD map).
     ///
     /// # Errors
-    /// [`ImageError::Channels`] unless `ifd` has 1 channel.
+    /// [`ImageError::Channels`] unless `ifd` has 1 channel;
+    /// [`AppearanceError::NonFinite`] for a NaN or infinite value.
     pub fn new(ifd: ImageView<'_, f32>) -> Result<Self> {
         ifd.expect_channels("PriorityIfd", 1)?;
+        check_finite_field(&ifd)?;
         Ok(Self {
             field: ifd.to_image(),
             level: 0,
@@ -215,9 +245,12 @@ impl PriorityIfd {
     /// Restarts from a new IFD map, reusing the buffer when the size is unchanged.
     ///
     /// # Errors
-    /// [`ImageError::Channels`] unless `ifd` has 1 channel.
+    /// [`ImageError::Channels`] unless `ifd` has 1 channel;
+    /// [`AppearanceError::NonFinite`] for a NaN or infinite value (the
+    /// field is then unchanged).
     pub fn reset(&mut self, ifd: ImageView<'_, f32>) -> Result<()> {
         ifd.expect_channels("PriorityIfd", 1)?;
+        check_finite_field(&ifd)?;
         self.field.reshape(ifd.width(), ifd.height(), 1, 0.0)?;
         for y in 0..ifd.height() {
             self.field.row_mut(y).copy_from_slice(ifd.row(y));

@@ -479,14 +479,27 @@ impl KernelHistogram {
                 reason: "must be finite and >= 0",
             });
         }
-        for (w, &k) in self.weights.iter_mut().zip(v) {
-            *w *= k;
-        }
-        let s: f32 = self.weights.iter().sum();
-        if s > 0.0 {
-            self.weights.iter_mut().for_each(|w| *w /= s);
-        } else {
+        let s: f32 = self.weights.iter().zip(v).map(|(&w, &k)| w * k).sum();
+        if (f32::MIN_POSITIVE..=f32::MAX).contains(&s) {
+            for (w, &k) in self.weights.iter_mut().zip(v) {
+                *w = *w * k / s;
+            }
+        } else if s == 0.0 {
+            self.weights.fill(0.0);
             self.total = 0.0;
+        } else {
+            // the f32 sum is subnormal (bin weights of 1e-44 turned a
+            // 0.75 / 0.25 split into 0.71 / 0.29) or overflowed:
+            // products (exact) and sum in f64
+            let s: f64 = self
+                .weights
+                .iter()
+                .zip(v)
+                .map(|(&w, &k)| f64::from(w) * f64::from(k))
+                .sum();
+            for (w, &k) in self.weights.iter_mut().zip(v) {
+                *w = (f64::from(*w) * f64::from(k) / s) as f32;
+            }
         }
         Ok(())
     }
@@ -681,6 +694,17 @@ mod tests {
         let mut bad = v.clone();
         bad[0] = f32::NAN;
         assert!(t.reweight(&bad).is_err());
+        // issue 28: subnormal bin weights lost the histogram's ratios
+        // (a uniform reweighting leaves the 0.75 / 0.25 split as it is)
+        for scale in [f32::MAX, 1e-44, 1e-40] {
+            let mut u = t.clone();
+            u.reweight(&vec![scale; b.len()]).unwrap();
+            let w = u.weights();
+            let sum: f32 = w.iter().sum();
+            assert!(w.iter().all(|x| x.is_finite()), "{scale}");
+            assert!((sum - 1.0).abs() < 1e-5, "{scale}: {sum}");
+            assert!((w[red] - 0.75).abs() < 1e-5, "{scale}: {}", w[red]);
+        }
         t.reweight(&vec![0.0; b.len()]).unwrap();
         assert_eq!(t.total(), 0.0);
     }

@@ -159,7 +159,10 @@ fn check_template<T: Pixel>(frame: &ImageView<'_, T>, template: &ImageView<'_, T
 ///
 /// # Errors
 /// [`AppearanceError::WindowOutside`] if the window leaves the frame;
-/// [`ImageError::Channels`] if the channel counts differ.
+/// [`ImageError::Channels`] if the channel counts differ;
+/// [`AppearanceError::NonFinite`] when the MAD is not a number (NaN or
+/// infinite pixels in a float template or window, or differences that
+/// overflow the pixel type).
 pub fn mad<T: MadPixel>(
     frame: ImageView<'_, T>,
     template: ImageView<'_, T>,
@@ -169,7 +172,40 @@ pub fn mad<T: MadPixel>(
     check_template(&frame, &template)?;
     let window = Rect::new(x, y, template.width(), template.height());
     check_window("mad", window, frame.width(), frame.height())?;
-    Ok(mad_unchecked(&frame, &template, x, y))
+    check_finite_template(&template)?;
+    let m = mad_unchecked(&frame, &template, x, y);
+    if !m.is_finite() {
+        return Err(AppearanceError::NonFinite {
+            what: "MAD window of the frame (NaN or infinite pixels, or differences beyond the \
+                   pixel type's range)",
+        });
+    }
+    Ok(m)
+}
+
+/// Refuses a float template with a NaN or infinite pixel (every window's
+/// MAD would be NaN or infinite). Byte templates pass at once.
+fn check_finite_template<T: MadPixel>(template: &ImageView<'_, T>) -> Result<()> {
+    if T::as_bytes(template).is_some() {
+        return Ok(());
+    }
+    for r in 0..template.height() {
+        if !template.row(r).iter().all(|v| v.to_f32().is_finite()) {
+            return Err(AppearanceError::NonFinite {
+                what: "MAD template",
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The error of a search whose SAD at some position was NaN or infinite
+/// (the template was checked first, so the frame is the cause).
+fn non_finite_region() -> AppearanceError {
+    AppearanceError::NonFinite {
+        what: "MAD search region of the frame (NaN or infinite pixels, or differences beyond \
+               the pixel type's range)",
+    }
 }
 
 #[inline]
@@ -232,7 +268,10 @@ fn check_region<T: Pixel>(
 ///
 /// # Errors
 /// [`AppearanceError::WindowOutside`] if `region` leaves the frame;
-/// [`AppearanceError::TemplateLargerThanRegion`]; [`ImageError::Channels`].
+/// [`AppearanceError::TemplateLargerThanRegion`]; [`ImageError::Channels`];
+/// [`AppearanceError::NonFinite`] naming the template or the frame region
+/// when a float image holds NaN or infinite pixels (a NaN frame returned
+/// position (0, 0) with MAD inf) or values whose differences overflow.
 pub fn mad_search<T: MadPixel>(
     frame: ImageView<'_, T>,
     template: ImageView<'_, T>,
@@ -332,6 +371,7 @@ impl MadSearch {
         region: Rect,
     ) -> Result<MadMatch> {
         check_region(&frame, &template, region)?;
+        check_finite_template(&template)?;
         let (tw, th, ch) = (template.width(), template.height(), template.channels());
         let n = tw * ch;
         let (npx, npy) = (region.width - tw + 1, region.height - th + 1);
@@ -352,6 +392,8 @@ impl MadSearch {
             });
         }
         let mut sums = [0f64; SAD_CHUNK];
+        // every SAD is >= 0; `s <= MAX` fails for NaN and inf alike
+        let mut finite = true;
         for j in 0..npy {
             let y = region.y + j;
             let mut i0 = 0;
@@ -359,12 +401,16 @@ impl MadSearch {
                 let k = (npx - i0).min(SAD_CHUNK);
                 T::sad_positions(&frame, &template, region.x + i0, y, &mut sums[..k]);
                 for (i, &s) in sums[..k].iter().enumerate() {
+                    finite &= s <= f64::MAX;
                     if better(s, y, region.x + i0 + i, &best) {
                         best = (s, y, region.x + i0 + i);
                     }
                 }
                 i0 += k;
             }
+        }
+        if !finite {
+            return Err(non_finite_region());
         }
         Ok(MadMatch {
             x: best.2,
@@ -556,7 +602,9 @@ impl MadSearch {
 /// (region.height - th + 1)`. Allocation-free.
 ///
 /// # Errors
-/// As [`mad_search`], plus [`ImageError::SizeMismatch`] for a wrong `out`.
+/// As [`mad_search`] (a MAD that is not a finite `f32`), plus
+/// [`ImageError::SizeMismatch`] for a wrong `out`; on error `out` holds
+/// partial results.
 pub fn mad_map_into<T: MadPixel>(
     frame: ImageView<'_, T>,
     template: ImageView<'_, T>,
@@ -578,6 +626,7 @@ pub fn mad_map_into<T: MadPixel>(
         }
         .into());
     }
+    check_finite_template(&template)?;
     let norm = 1.0 / (tw * th * template.channels()) as f64;
     if let (Some(f), Some(t)) = (T::as_bytes(&frame), T::as_bytes(&template))
         && fits_u32(&t)
@@ -599,6 +648,8 @@ pub fn mad_map_into<T: MadPixel>(
         return Ok(());
     }
     let mut sums = [0f64; SAD_CHUNK];
+    // `o <= MAX` fails for NaN and inf (and a MAD beyond f32) alike
+    let mut finite = true;
     for j in 0..oh {
         let mut i0 = 0;
         while i0 < ow {
@@ -612,9 +663,13 @@ pub fn mad_map_into<T: MadPixel>(
             );
             for (o, &s) in out.row_mut(j)[i0..i0 + n].iter_mut().zip(&sums[..n]) {
                 *o = (s * norm) as f32;
+                finite &= *o <= f32::MAX;
             }
             i0 += n;
         }
+    }
+    if !finite {
+        return Err(non_finite_region());
     }
     Ok(())
 }

@@ -80,9 +80,17 @@ impl OnlineGaussian {
             });
         }
         check_rate("rate", rate)?;
+        let var = std * std;
+        if !var.is_finite() {
+            return Err(AppearanceError::InvalidParameter {
+                name: "std",
+                value: std.to_string(),
+                reason: "its square overflows (the variance would be infinite)",
+            });
+        }
         Ok(Self {
             mean,
-            var: std * std,
+            var,
             rate,
             count: 0,
         })
@@ -128,14 +136,24 @@ impl OnlineGaussian {
     /// `var = (1 - r) (var + r (x - mean_old)^2)`.
     ///
     /// # Errors
-    /// [`AppearanceError::NonFinite`] for a NaN or infinite sample.
+    /// [`AppearanceError::NonFinite`] for a NaN or infinite sample, or one
+    /// so far from the mean that the mean or variance would overflow
+    /// (1e308 after -1e308 made them inf and NaN); the distribution is
+    /// then unchanged.
     pub fn update(&mut self, x: f64) -> Result<()> {
         if !x.is_finite() {
             return Err(AppearanceError::NonFinite { what: "sample" });
         }
         let d = x - self.mean;
-        self.mean += self.rate * d;
-        self.var = (1.0 - self.rate) * (self.var + self.rate * d * d);
+        let mean = self.mean + self.rate * d;
+        let var = (1.0 - self.rate) * (self.var + self.rate * d * d);
+        if !(mean.is_finite() && var.is_finite()) {
+            return Err(AppearanceError::NonFinite {
+                what: "updated mean or variance (the sample is too far from the mean)",
+            });
+        }
+        self.mean = mean;
+        self.var = var;
         self.count += 1;
         Ok(())
     }

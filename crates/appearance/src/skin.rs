@@ -191,7 +191,9 @@ impl SkinModel {
     ///
     /// # Errors
     /// [`ImageError::Channels`] unless `hsv` has 3 channels;
-    /// [`ImageError::SizeMismatch`] for a wrong `out`.
+    /// [`ImageError::SizeMismatch`] for a wrong `out`;
+    /// [`AppearanceError::NonFinite`] for a NaN or infinite hue or
+    /// saturation (its score was NaN; `out` holds the map computed).
     pub fn map_hsv_into(
         &self,
         hsv: ImageView<'_, f32>,
@@ -199,11 +201,19 @@ impl SkinModel {
     ) -> Result<()> {
         hsv.expect_channels("skin map", 3)?;
         check_out(&hsv, out)?;
+        // `|v| <= MAX` fails for NaN and +-inf: one compare per value
+        let mut finite = true;
         for y in 0..hsv.height() {
             let row = hsv.row(y);
             for (d, p) in out.row_mut(y).iter_mut().zip(row.chunks_exact(3)) {
+                finite &= p[0].abs() <= f32::MAX && p[1].abs() <= f32::MAX;
                 *d = self.score_hsv(p[0], p[1]);
             }
+        }
+        if !finite {
+            return Err(AppearanceError::NonFinite {
+                what: "HSV frame of the skin map",
+            });
         }
         Ok(())
     }

@@ -92,19 +92,20 @@ impl Rect {
         }
     }
 
-    /// One past the right-most column.
+    /// One past the right-most column (`usize::MAX` when that overflows:
+    /// such a rectangle fits in no frame).
     pub const fn right(&self) -> usize {
-        self.x + self.width
+        self.x.saturating_add(self.width)
     }
 
-    /// One past the bottom row.
+    /// One past the bottom row (`usize::MAX` when that overflows).
     pub const fn bottom(&self) -> usize {
-        self.y + self.height
+        self.y.saturating_add(self.height)
     }
 
-    /// Number of pixels.
+    /// Number of pixels (`usize::MAX` when that overflows).
     pub const fn area(&self) -> usize {
-        self.width * self.height
+        self.width.saturating_mul(self.height)
     }
 
     /// Whether the rectangle is non-empty and lies inside a `width x height` frame.
@@ -135,6 +136,56 @@ impl fmt::Display for Rect {
 }
 
 /// Checks a geometry and returns the minimal buffer length it needs.
+/// [`check_geometry`] with an empty buffer: keeps its
+/// [`ImageError::ZeroSize`] and drops the buffer-size error it must give
+/// (the caller allocates the buffer).
+fn zero_size_only(e: ImageError) -> Result<()> {
+    match e {
+        ImageError::ZeroSize { .. } => Err(e),
+        _ => Ok(()),
+    }
+}
+
+/// Element count of a packed `width x height x channels` image.
+fn element_count(width: usize, height: usize, channels: usize) -> Result<usize> {
+    width
+        .checked_mul(height)
+        .and_then(|n| n.checked_mul(channels))
+        .ok_or(ImageError::TooLarge {
+            width,
+            height,
+            channels,
+        })
+}
+
+/// Above this many elements a buffer is reserved fallibly first, so that
+/// a size the allocator refuses is [`ImageError::TooLarge`] instead of an
+/// abort; below it `vec!` keeps its zeroed-allocation fast path.
+const FALLIBLE_ALLOCATION: usize = 1 << 24;
+
+/// `len` copies of `fill`, or [`ImageError::TooLarge`] when they cannot be
+/// allocated.
+fn filled<T: Copy>(
+    len: usize,
+    fill: T,
+    width: usize,
+    height: usize,
+    channels: usize,
+) -> Result<Vec<T>> {
+    if len <= FALLIBLE_ALLOCATION {
+        return Ok(vec![fill; len]);
+    }
+    let mut data = Vec::new();
+    data.try_reserve_exact(len)
+        .map_err(|_| ImageError::TooLarge {
+            width,
+            height,
+            channels,
+        })?;
+    data.resize(len, fill);
+    Ok(data)
+}
+
 fn check_geometry(
     len: usize,
     width: usize,
@@ -196,25 +247,19 @@ impl<T: Copy> Image<T> {
     /// A `width x height` image with `channels` channels, every element `fill`.
     ///
     /// # Errors
-    /// [`ImageError::ZeroSize`] if any dimension is zero.
+    /// [`ImageError::ZeroSize`] if any dimension is zero;
+    /// [`ImageError::TooLarge`] when `width * height * channels` overflows
+    /// or cannot be allocated.
     pub fn new(width: usize, height: usize, channels: usize, fill: T) -> Result<Self> {
-        let len = width
-            .checked_mul(height)
-            .and_then(|n| n.checked_mul(channels))
-            .ok_or(ImageError::BufferSize {
-                len: usize::MAX,
-                width,
-                height,
-                channels,
-                stride: width.saturating_mul(channels),
-            })?;
-        check_geometry(len, width, height, channels, width * channels)?;
+        let stride = width.saturating_mul(channels);
+        check_geometry(0, width, height, channels, stride).or_else(zero_size_only)?;
+        let len = element_count(width, height, channels)?;
         Ok(Self {
-            data: vec![fill; len],
+            data: filled(len, fill, width, height, channels)?,
             width,
             height,
             channels,
-            stride: width * channels,
+            stride,
         })
     }
 
@@ -247,14 +292,23 @@ impl<T: Copy> Image<T> {
     /// A single-channel image with `f(x, y)` at each pixel.
     ///
     /// # Errors
-    /// [`ImageError::ZeroSize`] if `width` or `height` is zero.
+    /// [`ImageError::ZeroSize`] if `width` or `height` is zero;
+    /// [`ImageError::TooLarge`] when `width * height` overflows or cannot
+    /// be allocated.
     pub fn from_fn(
         width: usize,
         height: usize,
         mut f: impl FnMut(usize, usize) -> T,
     ) -> Result<Self> {
-        check_geometry(width * height, width, height, 1, width)?;
-        let mut data = Vec::with_capacity(width * height);
+        check_geometry(0, width, height, 1, width).or_else(zero_size_only)?;
+        let len = element_count(width, height, 1)?;
+        let mut data = Vec::new();
+        data.try_reserve_exact(len)
+            .map_err(|_| ImageError::TooLarge {
+                width,
+                height,
+                channels: 1,
+            })?;
         for y in 0..height {
             for x in 0..width {
                 data.push(f(x, y));
@@ -375,18 +429,25 @@ impl<T: Copy> Image<T> {
     /// way, treat the contents as unspecified.
     ///
     /// # Errors
-    /// [`ImageError::ZeroSize`] if any dimension is zero.
+    /// [`ImageError::ZeroSize`] if any dimension is zero;
+    /// [`ImageError::TooLarge`] when the new size overflows or cannot be
+    /// allocated (the image is then unchanged).
     pub fn reshape(&mut self, width: usize, height: usize, channels: usize, fill: T) -> Result<()> {
-        check_geometry(
-            width.saturating_mul(height).saturating_mul(channels),
-            width,
-            height,
-            channels,
-            width.saturating_mul(channels),
-        )?;
+        check_geometry(0, width, height, channels, width.saturating_mul(channels))
+            .or_else(zero_size_only)?;
+        let len = element_count(width, height, channels)?;
         if self.width != width || self.height != height || self.channels != channels {
+            if len > self.data.len() {
+                self.data
+                    .try_reserve_exact(len - self.data.len())
+                    .map_err(|_| ImageError::TooLarge {
+                        width,
+                        height,
+                        channels,
+                    })?;
+            }
             self.data.clear();
-            self.data.resize(width * height * channels, fill);
+            self.data.resize(len, fill);
             self.width = width;
             self.height = height;
             self.channels = channels;

@@ -38,6 +38,19 @@ pub enum ImageError {
         /// Row stride in elements.
         stride: usize,
     },
+    /// An image whose element count overflows `usize`, or whose buffer
+    /// cannot be allocated.
+    #[error(
+        "image of {width}x{height}x{channels} elements is too large (its size overflows, or memory for it cannot be allocated)"
+    )]
+    TooLarge {
+        /// Requested width in pixels.
+        width: usize,
+        /// Requested height in pixels.
+        height: usize,
+        /// Requested number of channels.
+        channels: usize,
+    },
     /// The image has the wrong number of channels for this operation.
     #[error("{operation} needs {expected} channel(s), the image has {got}")]
     Channels {

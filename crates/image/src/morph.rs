@@ -24,6 +24,9 @@ fn pass_1d(
     mut set: impl FnMut(usize, bool),
 ) {
     // Count set pixels in the window [i - r, i + r] clipped to [0, len).
+    // A radius of `len` or more covers the whole line, as `len` does (and
+    // `i + r` cannot overflow).
+    let r = r.min(len);
     let mut count = 0usize;
     for j in 0..r.min(len) {
         count += usize::from(get(j));

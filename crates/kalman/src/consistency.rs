@@ -36,7 +36,7 @@ impl ChiSquareBand {
     /// `confidence` (0.95 for the usual 95% band).
     ///
     /// # Errors
-    /// [`KalmanError::InvalidParameter`] for zero `dof` or `runs`, or a
+    /// [`KalmanError::InvalidParameter`] for zero `dof` or `runs`, `dof * runs` above 1e10, or a
     /// confidence outside (0, 1).
     pub fn for_average(dof: usize, runs: usize, confidence: f64) -> Result<Self> {
         if dof == 0 || runs == 0 {
@@ -53,7 +53,13 @@ impl ChiSquareBand {
                 reason: "must lie in (0, 1)",
             });
         }
-        let k = (dof * runs) as f64;
+        let Some(k) = dof.checked_mul(runs).map(|k| k as f64) else {
+            return Err(KalmanError::InvalidParameter {
+                name: "runs",
+                value: runs as f64,
+                reason: "dof * runs overflows",
+            });
+        };
         let tail = 0.5 * (1.0 - confidence);
         Ok(Self {
             lower: chi_square_quantile(tail, k)? / runs as f64,
@@ -148,7 +154,8 @@ fn gamma_p(a: f64, x: f64) -> f64 {
 ///
 /// # Errors
 /// [`KalmanError::InvalidParameter`] for a NaN `x` (it returned 0) or `k`
-/// not positive and finite (a negative `k` returned 0.68).
+/// outside `(0, 1e10]` (a negative `k` returned 0.68, `k = 1e20` a CDF
+/// of 0 at the median).
 pub fn chi_square_cdf(x: f64, k: f64) -> Result<f64> {
     check_dof(k)?;
     if x.is_nan() {
@@ -169,13 +176,18 @@ fn cdf(x: f64, k: f64) -> f64 {
     gamma_p(0.5 * k, 0.5 * x)
 }
 
-/// Degrees of freedom must be positive and finite.
+/// The most degrees of freedom the CDF resolves: the series and continued
+/// fraction of `gamma_p` lose accuracy beyond (at 1e12 the CDF is off by
+/// 4e-5, at 1e15 by 0.15).
+const MAX_DOF: f64 = 1e10;
+
+/// Degrees of freedom must lie in `(0, 1e10]`.
 fn check_dof(k: f64) -> Result<()> {
-    if !(k > 0.0 && k.is_finite()) {
+    if !(k > 0.0 && k <= MAX_DOF) {
         return Err(KalmanError::InvalidParameter {
             name: "k",
             value: k,
-            reason: "degrees of freedom must be positive",
+            reason: "degrees of freedom must lie in (0, 1e10] (beyond, the CDF loses its accuracy)",
         });
     }
     Ok(())
@@ -185,7 +197,7 @@ fn check_dof(k: f64) -> Result<()> {
 /// freedom (bisection on the CDF to 1e-12 relative precision).
 ///
 /// # Errors
-/// [`KalmanError::InvalidParameter`] for `p` outside (0, 1) or `k <= 0`.
+/// [`KalmanError::InvalidParameter`] for `p` outside (0, 1) or `k` outside `(0, 1e10]`.
 pub fn chi_square_quantile(p: f64, k: f64) -> Result<f64> {
     if !(p > 0.0 && p < 1.0) {
         return Err(KalmanError::InvalidParameter {
@@ -198,9 +210,25 @@ pub fn chi_square_quantile(p: f64, k: f64) -> Result<f64> {
     let (mut lo, mut hi) = (0.0, k.max(1.0));
     while cdf(hi, k) < p {
         hi *= 2.0;
+        if hi > f64::MAX {
+            // the CDF never reached p before overflow (its NaN at infinity
+            // reads as 0): the degrees of freedom are beyond its range
+            return Err(KalmanError::InvalidParameter {
+                name: "k",
+                value: k,
+                reason: "degrees of freedom too large for the chi-square quantile",
+            });
+        }
     }
-    for _ in 0..200 {
+    // up to 2,200 halvings: from 2^1024 down past the smallest subnormal
+    // (a tiny p with a small k has a quantile such as 1e-3000, which
+    // rounds to 0; 200 halvings stopped at 3e-61, whose CDF is 1.7e-6
+    // for p = 2e-308)
+    for _ in 0..2200 {
         let mid = 0.5 * (lo + hi);
+        if mid <= lo || mid >= hi {
+            break;
+        }
         if cdf(mid, k) < p {
             lo = mid;
         } else {
@@ -210,7 +238,17 @@ pub fn chi_square_quantile(p: f64, k: f64) -> Result<f64> {
             break;
         }
     }
-    Ok(0.5 * (lo + hi))
+    let mid = 0.5 * (lo + hi);
+    if mid > lo && mid < hi {
+        return Ok(mid);
+    }
+    // adjacent floats (the quantile is below the smallest subnormal, or
+    // the CDF steps past p between neighbours): the one nearer in CDF
+    if (cdf(lo, k) - p).abs() <= (cdf(hi, k) - p).abs() {
+        Ok(lo)
+    } else {
+        Ok(hi)
+    }
 }
 
 #[cfg(test)]

@@ -161,9 +161,23 @@ impl<const N: usize> FactoredGaussian<N> {
     /// Squared Mahalanobis distance of `x`.
     ///
     /// # Errors
-    /// [`KalmanError::NonFinite`](crate::KalmanError::NonFinite) for a non-finite `x`.
+    /// [`KalmanError::NonFinite`](crate::KalmanError::NonFinite) for a non-finite `x`, or one so far
+    /// from the mean (in standard deviations) that the distance overflows.
     pub fn mahalanobis_sq(&self, x: &SVector<f64, N>) -> Result<f64> {
         linalg::check_finite_vec(x, "evaluation point", Step::Evaluate)?;
+        let d = self.whitened_sq(x);
+        if !d.is_finite() {
+            return Err(crate::KalmanError::NonFinite {
+                what: "squared Mahalanobis distance (the point is too far from the mean)",
+                step: Step::Evaluate,
+            });
+        }
+        Ok(d)
+    }
+
+    /// `|L^{-1} (x - mean)|^2`, unchecked.
+    #[inline]
+    fn whitened_sq(&self, x: &SVector<f64, N>) -> f64 {
         let mut y = x - self.mean;
         // forward substitution L y = x - mean
         for i in 0..N {
@@ -173,16 +187,25 @@ impl<const N: usize> FactoredGaussian<N> {
             }
             y[i] = s / self.l[(i, i)];
         }
-        Ok(y.norm_squared())
+        y.norm_squared()
     }
 
     /// Log density at `x`.
     ///
     /// # Errors
-    /// [`KalmanError::NonFinite`](crate::KalmanError::NonFinite) for a non-finite `x`.
+    /// As [`FactoredGaussian::mahalanobis_sq`], and
+    /// [`KalmanError::NonFinite`](crate::KalmanError::NonFinite) when the log density underflows to
+    /// `-inf` (a density of exactly 0 is not a likelihood a filter can use).
     #[inline]
     pub fn log_pdf(&self, x: &SVector<f64, N>) -> Result<f64> {
-        Ok(self.log_norm - 0.5 * self.mahalanobis_sq(x)?)
+        let l = self.log_norm - 0.5 * self.mahalanobis_sq(x)?;
+        if !l.is_finite() {
+            return Err(crate::KalmanError::NonFinite {
+                what: "log density",
+                step: Step::Evaluate,
+            });
+        }
+        Ok(l)
     }
 }
 

@@ -78,6 +78,16 @@ pub struct Ukf {
     kappa: f64,
 }
 
+/// The smallest `alpha` accepted: van der Merwe's lower end (see [`Ukf::new`]).
+const MIN_ALPHA: f64 = 1e-4;
+
+/// The largest `alpha` accepted: `alpha^2` stays finite.
+const MAX_ALPHA: f64 = 1e150;
+
+/// The smallest `c = alpha^2 (L + kappa)`: points 1e-4 standard deviations
+/// from the mean.
+const MIN_SPREAD: f64 = 1e-8;
+
 /// Weights of a sigma-point set of dimension `L`.
 #[derive(Debug, Clone, Copy)]
 struct Weights {
@@ -197,6 +207,24 @@ impl<const N: usize, const M: usize, const W: usize, T: NoisyMeasurement<N, M, W
     }
 }
 
+/// The error of a failed square root of `c A`: the sigma-point scale `c`
+/// when `A` is finite and `c A` is not (a huge `alpha` or `kappa`),
+/// otherwise `err` (about `A` itself).
+#[cold]
+#[inline(never)]
+fn spread_error(err: KalmanError, a: &[f64], c: f64) -> KalmanError {
+    let finite = a.iter().all(|x| x.is_finite());
+    if finite && a.iter().any(|x| !(x * c).is_finite()) {
+        return KalmanError::InvalidParameter {
+            name: "alpha^2 (L + kappa)",
+            value: c,
+            reason: "scaled by it, a covariance overflows: alpha or kappa is too large for \
+                     this covariance",
+        };
+    }
+    err
+}
+
 fn no_output<const K: usize>(_: &SVector<f64, K>, _: &SVector<f64, 0>) -> SVector<f64, 0> {
     SVector::zeros()
 }
@@ -205,15 +233,24 @@ impl Ukf {
     /// Scaled sigma points with spread `alpha`, prior-knowledge `beta` (2 is
     /// optimal for Gaussians) and secondary scaling `kappa`.
     ///
+    /// `alpha` lies in `[1e-4, 1e150]`: van der Merwe's range starts at
+    /// 1e-4, and below it the points sit so close to the mean that the
+    /// round-off of `f(X_i) - f(X_0)`, multiplied by `W_i ~ 1 / alpha^2`,
+    /// replaces the covariance (at 1e-160 the weights themselves overflow);
+    /// above 1e150 `alpha^2` overflows. The conditions that also involve
+    /// the state dimension `L` are checked by [`Ukf::weights`] and every
+    /// filter step.
+    ///
     /// # Errors
-    /// [`KalmanError::InvalidParameter`] for a non-positive or non-finite
-    /// `alpha`, or a non-finite `beta` or `kappa`.
+    /// [`KalmanError::InvalidParameter`] naming `alpha` outside
+    /// `[1e-4, 1e150]` or NaN, or a non-finite `beta` or `kappa`.
     pub fn new(alpha: f64, beta: f64, kappa: f64) -> Result<Self> {
-        if !(alpha > 0.0 && alpha.is_finite()) {
+        if !(MIN_ALPHA..=MAX_ALPHA).contains(&alpha) {
             return Err(KalmanError::InvalidParameter {
                 name: "alpha",
                 value: alpha,
-                reason: "must be positive and finite",
+                reason: "must lie in [1e-4, 1e150] (below 1e-4 round-off replaces the \
+                         covariance of the sigma points; above, alpha^2 overflows)",
             });
         }
         for (name, value) in [("beta", beta), ("kappa", kappa)] {
@@ -245,28 +282,39 @@ impl Ukf {
 
     /// The weights `(Wm_0, Wc_0, W_i)` for a state of dimension `l`.
     ///
+    /// Valid parameters for dimension `L` have
+    /// - `1e-8 <= c = alpha^2 (L + kappa) < inf`: the sigma points exist
+    ///   and lie at least 1e-4 standard deviations from the mean;
+    /// - `alpha^2 kappa + beta L >= 0`: the sigma-point covariance
+    ///   `sum W_i dX_i dX_i^T + (beta - alpha^2) d d^T` (see `transform`)
+    ///   is positive semi-definite for every model. With all deviations
+    ///   `dX_i` equal (an even `f`) it is `2 L W_i (1 + (beta - alpha^2)
+    ///   L / c) dX dX^T`, so the condition is also necessary: `beta = -1e6`
+    ///   gave a variance of -999995, and Julier's `kappa = 3 - L` with
+    ///   `beta = 0` fails it for `L > 3`.
+    ///
     /// # Errors
-    /// [`KalmanError::InvalidParameter`] when `alpha^2 (l + kappa) <= 0`.
+    /// [`KalmanError::InvalidParameter`] naming `kappa` or `beta` (the
+    /// parameter that breaks the condition) otherwise.
     pub fn weights(&self, l: usize) -> Result<(f64, f64, f64)> {
         let w = self.weights_for(l)?;
         Ok((w.wm0, w.wc0, w.wi))
     }
 
+    #[inline(always)]
     fn weights_for(&self, l: usize) -> Result<Weights> {
         let a2 = self.alpha * self.alpha;
-        let c = a2 * (l as f64 + self.kappa);
+        let lf = l as f64;
+        let c = a2 * (lf + self.kappa);
         let wi = 0.5 / c;
-        // 0 < c < inf, as two float compares (1 / inf = 0); written with
-        // `is_finite` it compiles to integer bit tests on every step
-        let valid = c > 0.0 && wi > 0.0;
+        // MIN_SPREAD <= c < inf (1 / inf = 0) and a positive semi-definite
+        // covariance, as float compares (`is_finite` compiles to integer
+        // bit tests on every step)
+        let valid = c >= MIN_SPREAD && wi > 0.0 && a2 * self.kappa + self.beta * lf >= 0.0;
         if !valid {
-            return Err(KalmanError::InvalidParameter {
-                name: "kappa",
-                value: self.kappa,
-                reason: "alpha^2 (L + kappa) must be positive",
-            });
+            return Err(self.weights_error(lf, c));
         }
-        let wm0 = (c - l as f64) / c;
+        let wm0 = (c - lf) / c;
         Ok(Weights {
             wm0,
             wc0: wm0 + 1.0 - a2 + self.beta,
@@ -274,6 +322,41 @@ impl Ukf {
             c,
             g: self.beta - a2,
         })
+    }
+
+    /// Which parameter makes the weights of dimension `l` invalid.
+    #[cold]
+    #[inline(never)]
+    fn weights_error(&self, l: f64, c: f64) -> KalmanError {
+        let kappa = |reason| KalmanError::InvalidParameter {
+            name: "kappa",
+            value: self.kappa,
+            reason,
+        };
+        // kappa and alpha are finite (checked by `new`): nothing below is NaN
+        if l + self.kappa <= 0.0 {
+            return kappa(
+                "L + kappa must be positive (L: the state dimension, augmented by the noise dimensions)",
+            );
+        }
+        if c < MIN_SPREAD {
+            return kappa(
+                "alpha^2 (L + kappa) must be at least 1e-8: closer to the mean, round-off replaces the covariance of the sigma points",
+            );
+        }
+        if c.is_infinite() {
+            return kappa("alpha^2 (L + kappa) overflows");
+        }
+        let reason = "alpha^2 kappa + beta L must be >= 0 (L: the state dimension), or the sigma-point covariance can be indefinite";
+        if self.beta < 0.0 {
+            KalmanError::InvalidParameter {
+                name: "beta",
+                value: self.beta,
+                reason,
+            }
+        } else {
+            kappa(reason)
+        }
     }
 
     /// Pushes the sigma points of `[x; v; w] ~ N([m; mv; mw], diag(P, Qv, Rw))`
@@ -320,9 +403,12 @@ impl Ukf {
         // `j` from rows `j..`, so the points agree exactly with the mean in
         // the leading coordinates and a model that reads only those is
         // evaluated once for them (identical calls are merged).
-        let sp = linalg::psd_sqrt(&(prior.cov() * wt.c), "state covariance P", step)?;
-        let sv = linalg::psd_sqrt(&(v.cov() * wt.c), "process noise covariance", step)?;
-        let sw = linalg::psd_sqrt(&(w.cov() * wt.c), "measurement noise covariance", step)?;
+        let sp = linalg::psd_sqrt(&(prior.cov() * wt.c), "state covariance P", step)
+            .map_err(|e| spread_error(e, prior.cov().as_slice(), wt.c))?;
+        let sv = linalg::psd_sqrt(&(v.cov() * wt.c), "process noise covariance", step)
+            .map_err(|e| spread_error(e, v.cov().as_slice(), wt.c))?;
+        let sw = linalg::psd_sqrt(&(w.cov() * wt.c), "measurement noise covariance", step)
+            .map_err(|e| spread_error(e, w.cov().as_slice(), wt.c))?;
         let (m, mv, mw) = (prior.mean(), v.mean(), w.mean());
 
         let xf0 = f(m, mv);

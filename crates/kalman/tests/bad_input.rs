@@ -351,3 +351,129 @@ fn a_measurement_too_large_for_its_statistics_is_an_error() {
     assert!(inn.nis.is_finite() && inn.log_likelihood.is_finite());
     assert!(u.posterior.mean().iter().all(|v| v.is_finite()));
 }
+
+/// `x -> x^2`: a model whose sigma points do not average to `f(mean)`, so
+/// the covariance weight `Wc_0` matters.
+struct Square;
+
+impl bayestrack_kalman::Dynamics<1> for Square {
+    fn propagate(&self, x: &Vector1<f64>) -> Vector1<f64> {
+        Vector1::new(x[0] * x[0])
+    }
+    fn process_noise(&self) -> Matrix1<f64> {
+        Matrix1::new(1e-4)
+    }
+}
+
+#[test]
+fn ukf_parameters_that_give_an_indefinite_covariance_are_refused() {
+    // issue 28: `Ukf::new(1, -1e6, 0).predict(..)` returned variance -999995
+    let prior = Gaussian::new(Vector1::new(1.0), Matrix1::new(1.0)).unwrap();
+    let ukf = Ukf::new(1.0, -1e6, 0.0).unwrap();
+    assert!(matches!(
+        ukf.predict(&prior, &Square),
+        Err(KalmanError::InvalidParameter { name: "beta", .. })
+    ));
+    assert!(matches!(
+        ukf.weights(1),
+        Err(KalmanError::InvalidParameter { name: "beta", .. })
+    ));
+    // Julier's kappa = 3 - L with beta = 0 for L = 5: alpha^2 kappa + beta L < 0
+    assert!(matches!(
+        Ukf::new(1.0, 0.0, -2.0).unwrap().weights(5),
+        Err(KalmanError::InvalidParameter { name: "kappa", .. })
+    ));
+    // the usual parameters stay valid
+    for (a, b, k, l) in [
+        (1e-3, 2.0, 0.0, 5),
+        (1.0, 0.0, 2.0, 2),
+        (0.5, 2.0, -4.0, 10),
+    ] {
+        assert!(
+            Ukf::new(a, b, k).unwrap().weights(l).is_ok(),
+            "{a} {b} {k} {l}"
+        );
+    }
+}
+
+#[test]
+fn a_tiny_alpha_is_blamed_on_alpha() {
+    // issue 28: `Ukf::new(1e-160, ..)` had weights (-inf, -inf, inf), and a
+    // tiny alpha was reported as "kappa = 0"
+    for alpha in [1e-160, 1e-300, 1e-5, f64::MIN_POSITIVE / 4.0] {
+        let err = Ukf::new(alpha, 2.0, 0.0)
+            .and_then(|u| u.weights(3))
+            .unwrap_err();
+        assert!(
+            matches!(err, KalmanError::InvalidParameter { name: "alpha", .. }),
+            "{alpha}: {err}"
+        );
+    }
+    // alpha^2 overflows
+    assert!(matches!(
+        Ukf::new(1e200, 2.0, 0.0),
+        Err(KalmanError::InvalidParameter { name: "alpha", .. })
+    ));
+    // L + kappa so close to 0 that the points collapse onto the mean
+    let err = Ukf::new(1.0, 2.0, -3.0 + 1e-300)
+        .unwrap()
+        .weights(3)
+        .unwrap_err();
+    assert!(
+        matches!(err, KalmanError::InvalidParameter { name: "kappa", .. }),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_spread_that_overflows_the_covariance_names_the_sigma_point_scale() {
+    // alpha^2 (L + kappa) = 1e300 times a covariance of 1e10 is not a number
+    let prior = Gaussian::new(Vector1::new(1.0), Matrix1::new(1e10)).unwrap();
+    let err = Ukf::new(1.0, 2.0, 1e300)
+        .unwrap()
+        .predict(&prior, &Square)
+        .unwrap_err();
+    assert!(
+        matches!(
+            err,
+            KalmanError::InvalidParameter {
+                name: "alpha^2 (L + kappa)",
+                ..
+            }
+        ),
+        "{err}"
+    );
+}
+
+#[test]
+fn densities_and_chi_square_statistics_that_overflow_are_errors() {
+    use bayestrack_kalman::{ChiSquareBand, chi_square_cdf, chi_square_quantile, nees};
+    // log_pdf returned NaN and -inf, nees NaN, with Ok
+    let wide = Gaussian::new(Vector2::new(1e308, -1e308), Matrix2::identity() * 1e308).unwrap();
+    let far = Vector2::new(-1e308, 1e308);
+    assert!(matches!(
+        wide.log_pdf(&far),
+        Err(KalmanError::NonFinite {
+            step: Step::Evaluate,
+            ..
+        })
+    ));
+    assert!(wide.mahalanobis_sq(&far).is_err());
+    let narrow = Gaussian::new(Vector2::zeros(), Matrix2::identity() * 1e-300).unwrap();
+    assert!(nees(&Vector2::new(1e300, 0.0), &narrow).is_err());
+    let tiny = Gaussian::new(Vector2::new(1.0, 1.0), Matrix2::identity() * 5e-324).unwrap();
+    assert!(tiny.log_pdf(&Vector2::zeros()).is_err());
+    // dof * runs overflowed (a panic in debug builds)
+    assert!(matches!(
+        ChiSquareBand::for_average(usize::MAX, 2, 0.95),
+        Err(KalmanError::InvalidParameter { name: "runs", .. })
+    ));
+    // k = 1e308 never returned; k = 1e20 had a CDF of 0 at its median;
+    // p = 1e-300 returned 3e-61
+    assert!(chi_square_quantile(0.5, 1e308).is_err());
+    assert!(chi_square_cdf(1e20, 1e20).is_err());
+    assert!(chi_square_quantile(0.975, 1e10).is_ok());
+    // with 2 degrees of freedom the quantile is -2 ln(1 - p) = 2e-300
+    let q = chi_square_quantile(1e-300, 2.0).unwrap();
+    assert!((q / 2e-300 - 1.0).abs() < 1e-9, "{q}");
+}

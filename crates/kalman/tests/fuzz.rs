@@ -10,7 +10,8 @@ use bayestrack_kalman::{
 use nalgebra::{Matrix2, Matrix2x3, Matrix3, Vector2, Vector3};
 use proptest::prelude::*;
 
-use bayestrack_testkit::strategies::{cases, psd3, psd3_of};
+use bayestrack_kalman::Additive;
+use bayestrack_testkit::strategies::{cases, extreme_f64, psd3, psd3_of, spd3};
 
 /// A number at any scale from 1e-300 to 1e300, either sign, sometimes 0.
 fn scaled() -> impl Strategy<Value = f64> {
@@ -99,6 +100,40 @@ impl MeasurementJacobian<3, 2> for Model {
     }
 }
 
+/// A strongly nonlinear model with even components: the sigma points'
+/// deviations of `x0^2` are all equal, the case in which a negative
+/// covariance weight shows.
+struct Even;
+
+impl Dynamics<3> for Even {
+    fn propagate(&self, x: &Vector3<f64>) -> Vector3<f64> {
+        Vector3::new(x[0] * x[0], x[1] * x[2], x[0].cos())
+    }
+    fn process_noise(&self) -> Matrix3<f64> {
+        Matrix3::identity() * 1e-6
+    }
+}
+
+impl Measurement<3, 2> for Even {
+    fn observe(&self, x: &Vector3<f64>) -> Vector2<f64> {
+        Vector2::new(x[0] * x[0], x[1].abs())
+    }
+    fn measurement_noise(&self) -> Matrix2<f64> {
+        Matrix2::identity() * 1e-4
+    }
+}
+
+/// Finite, symmetric and positive semi-definite to round-off (smallest
+/// eigenvalue above `-1e-9` of the largest entry, or of `scale`: an
+/// update's `P - K S K^T` is PSD to the round-off of the prior's `P`).
+fn psd_belief(g: &Gaussian<3>, scale: f64) -> bool {
+    let cov = g.cov();
+    let finite = g.mean().iter().chain(cov.iter()).all(|v| v.is_finite());
+    finite
+        && cov == &cov.transpose()
+        && cov.symmetric_eigenvalues().min() >= -1e-9 * cov.amax().max(scale)
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: cases(192), ..ProptestConfig::default() })]
 
@@ -165,6 +200,79 @@ proptest! {
         }
         if let Ok(q) = chi_square_quantile(p, k.abs().min(1e6)) {
             prop_assert!(q.is_finite() && q >= 0.0, "quantile({p}, {k}) = {q}");
+        }
+    }
+
+    #[test]
+    fn chi_square_functions_take_extreme_numbers(x in extreme_f64(), k in extreme_f64(), p in extreme_f64()) {
+        if let Ok(c) = chi_square_cdf(x, k) {
+            prop_assert!((0.0..=1.0).contains(&c), "cdf({x}, {k}) = {c}");
+        }
+        if let Ok(q) = chi_square_quantile(p, k) {
+            prop_assert!(q.is_finite() && q >= 0.0, "quantile({p}, {k}) = {q}");
+            let c = chi_square_cdf(q, k).unwrap();
+            // below 1e-300 the CDF of a small k steps by more than 1e-6
+            // between neighbouring floats
+            prop_assert!((c - p).abs() < 1e-6 || q < 1e-300, "cdf(quantile({p}, {k})) = {c}");
+        }
+    }
+
+    /// Densities at any point of any belief: an error or a finite number.
+    #[test]
+    fn densities_are_finite_or_an_error(
+        mean in prop::array::uniform3(extreme_f64()),
+        x in prop::array::uniform3(extreme_f64()),
+        p in psd3(),
+    ) {
+        let Ok(g) = Gaussian::new(Vector3::from(mean), p) else {
+            return Ok(());
+        };
+        let x = Vector3::from(x);
+        if let Ok(l) = g.log_pdf(&x) {
+            prop_assert!(l.is_finite(), "log_pdf = {l}");
+        }
+        if let Ok(d) = g.mahalanobis_sq(&x) {
+            prop_assert!(d.is_finite() && d >= 0.0, "mahalanobis_sq = {d}");
+        }
+    }
+
+    /// Issue 28: any `(alpha, beta, kappa)` the UKF accepts gives finite
+    /// weights that sum to 1 and a positive semi-definite covariance for
+    /// every model, in the additive and the augmented forms.
+    #[test]
+    fn ukf_parameters_give_finite_weights_and_psd_covariances_or_an_error(
+        alpha in prop_oneof![extreme_f64(), 1e-5f64..3.0],
+        beta in prop_oneof![extreme_f64(), -3.0f64..3.0],
+        kappa in prop_oneof![extreme_f64(), -6.0f64..6.0],
+        p in spd3(),
+        e in -8i32..8,
+        mean in prop::array::uniform3(-3.0f64..3.0),
+    ) {
+        let Ok(ukf) = Ukf::new(alpha, beta, kappa) else {
+            return Ok(());
+        };
+        for l in 1..12 {
+            if let Ok((wm0, wc0, wi)) = ukf.weights(l) {
+                prop_assert!(wm0.is_finite() && wc0.is_finite() && wi.is_finite() && wi > 0.0);
+                let sum = wm0 + 2.0 * l as f64 * wi;
+                prop_assert!((sum - 1.0).abs() <= 1e-9 * (1.0 + wm0.abs()), "weights sum to {sum}");
+            }
+        }
+        let prior = Gaussian::new(Vector3::from(mean), p * 10f64.powi(e)).unwrap();
+        let z = Vector2::new(1.0, 0.5);
+        let scale = prior.cov().amax();
+        if let Ok(g) = ukf.predict(&prior, &Even) {
+            prop_assert!(psd_belief(&g, 0.0), "predict {alpha} {beta} {kappa}: {g:?}");
+        }
+        if let Ok(u) = ukf.update(&prior, &Even, Some(&z)) {
+            prop_assert!(psd_belief(&u.posterior, scale), "update {alpha} {beta} {kappa}: {u:?}");
+        }
+        if let Ok(g) = ukf.predict_augmented(&prior, &Additive(&Even)) {
+            prop_assert!(psd_belief(&g, 0.0), "augmented {alpha} {beta} {kappa}: {g:?}");
+        }
+        if let Ok(s) = ukf.step_augmented(&prior, &Additive(&Even), &Additive(&Even), Some(&z)) {
+            let scale = s.predicted.cov().amax();
+            prop_assert!(psd_belief(&s.predicted, 0.0) && psd_belief(&s.update.posterior, scale), "{s:?}");
         }
     }
 }

@@ -72,6 +72,12 @@ impl Resampling {
     }
 }
 
+/// The smallest weight total resampled as given: the points
+/// `(u + j) total / M` stay normal floats (full precision) for any `M` up
+/// to `2^64`. Smaller totals are resampled as the ratios to the largest
+/// weight.
+const MIN_TOTAL: f64 = 1e-280;
+
 /// Checks weights and returns their sum.
 pub(crate) fn checked_total(weights: &[f64]) -> Result<f64> {
     if weights.is_empty() {
@@ -252,11 +258,13 @@ impl Resampler for Resampling {
         ancestors: &mut [usize],
     ) -> Result<()> {
         let total = checked_total(weights)?;
-        if total.is_finite() {
+        if (MIN_TOTAL..f64::INFINITY).contains(&total) {
             self.resample_checked(weights, total, rng, ancestors);
         } else {
-            // finite weights whose sum overflows (1e308 each): relative to
-            // the largest they sum to at most N
+            // finite weights whose sum overflows (1e308 each), or so small
+            // that the points `total j / M` round to a few values (5e-324
+            // each: every point was 0, every draw particle 0): relative to
+            // the largest they sum to between 1 and N
             let max = weights.iter().copied().fold(0.0, f64::max);
             let scaled: Vec<f64> = weights.iter().map(|&w| w / max).collect();
             let total = scaled.iter().sum();
@@ -337,6 +345,29 @@ mod tests {
             for i in [0, 1, 3] {
                 assert!(
                     (counts[i] as f64 - 1000.0 / 3.0).abs() < 60.0,
+                    "{scheme:?}: {counts:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn subnormal_weights_are_resampled_as_their_ratios() {
+        // issue 28: weights of 5e-324 summed to a subnormal total whose
+        // points all rounded to 0: every draw went to particle 0
+        let mut rng = stream_rng(&[3]);
+        let mut a = [0usize; 1000];
+        let tiny = 5e-324;
+        for scheme in Resampling::ALL {
+            scheme
+                .resample(&[tiny, tiny, 0.0, tiny, tiny], &mut rng, &mut a)
+                .unwrap();
+            let mut counts = [0usize; 5];
+            a.iter().for_each(|&i| counts[i] += 1);
+            assert_eq!(counts[2], 0, "{scheme:?}");
+            for i in [0, 1, 3, 4] {
+                assert!(
+                    (counts[i] as f64 - 250.0).abs() < 60.0,
                     "{scheme:?}: {counts:?}"
                 );
             }

@@ -221,13 +221,20 @@ impl<T: Clone> ParticleSet<T> {
     /// Particles with (unnormalised) log-weights; normalised here.
     ///
     /// # Errors
-    /// As [`log_sum_exp`], and [`ParticleError::LengthMismatch`].
-    pub fn from_log_weights(particles: Vec<T>, log_weights: Vec<f64>) -> Result<Self> {
+    /// As [`log_sum_exp`], [`ParticleError::LengthMismatch`], and
+    /// [`ParticleError::NonFiniteState`] as [`ParticleSet::new`].
+    pub fn from_log_weights(particles: Vec<T>, log_weights: Vec<f64>) -> Result<Self>
+    where
+        T: Finite,
+    {
         if particles.len() != log_weights.len() {
             return Err(ParticleError::LengthMismatch {
                 particles: particles.len(),
                 weights: log_weights.len(),
             });
+        }
+        if let Some(index) = particles.iter().position(|p| !p.is_finite()) {
+            return Err(ParticleError::NonFiniteState { index });
         }
         let mut set = Self {
             particles,
@@ -433,6 +440,23 @@ mod tests {
     fn set(xs: &[f64], lw: &[f64]) -> ParticleSet<Vector1<f64>> {
         ParticleSet::from_log_weights(xs.iter().map(|&x| Vector1::new(x)).collect(), lw.to_vec())
             .unwrap()
+    }
+
+    #[test]
+    fn a_non_finite_state_is_refused_by_every_constructor() {
+        // issue 28: from_log_weights took NaN and infinite states that
+        // `new` refuses
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let xs = vec![Vector1::new(0.0), Vector1::new(bad)];
+            assert_eq!(
+                ParticleSet::from_log_weights(xs.clone(), vec![0.0, 0.0]),
+                Err(ParticleError::NonFiniteState { index: 1 })
+            );
+            assert_eq!(
+                ParticleSet::new(xs),
+                Err(ParticleError::NonFiniteState { index: 1 })
+            );
+        }
     }
 
     #[test]

@@ -10,7 +10,7 @@ use nalgebra::{SVector, Vector1};
 use proptest::prelude::*;
 use rand::Rng;
 
-use bayestrack_testkit::strategies::cases;
+use bayestrack_testkit::strategies::{cases, extreme_f64};
 
 /// Any log-weight: ordinary, huge of either sign, minus infinity, NaN,
 /// plus infinity, subnormal.
@@ -145,5 +145,51 @@ proptest! {
             }
             Err(_) => prop_assert!(n == 0 || xs.iter().any(|x| !x.is_finite())),
         }
+    }
+
+    /// Issue 28 (subnormal weights): systematic resampling gives particle
+    /// `i` `floor(M w_i)` or `ceil(M w_i)` copies at every magnitude of the
+    /// weights, subnormal (all points landed on particle 0) or overflowing
+    /// their sum.
+    #[test]
+    fn systematic_copies_hold_at_every_weight_magnitude(
+        base in prop::collection::vec(0.0f64..1.0, 1..12),
+        e in prop_oneof![-325i32..-318, -318i32..310],
+        m in 1usize..200,
+        seed in any::<u64>(),
+    ) {
+        // 10^e in two factors (`powi(-323)` is `1 / 10^323 = 1 / inf = 0`)
+        let f = 10f64.powi(e / 2) * 10f64.powi(e - e / 2);
+        let weights: Vec<f64> = base.iter().map(|w| w * f).collect();
+        let max = weights.iter().copied().fold(0.0, f64::max);
+        if !(max > 0.0 && max.is_finite()) {
+            return Ok(());
+        }
+        let ratios: Vec<f64> = weights.iter().map(|w| w / max).collect();
+        let total: f64 = ratios.iter().sum();
+        let mut rng = stream_rng(&[seed]);
+        let mut ancestors = vec![usize::MAX; m];
+        Resampling::Systematic.resample(&weights, &mut rng, &mut ancestors).unwrap();
+        let mut counts = vec![0usize; weights.len()];
+        ancestors.iter().for_each(|&a| counts[a] += 1);
+        for (i, &c) in counts.iter().enumerate() {
+            let expected = m as f64 * ratios[i] / total;
+            prop_assert!(
+                c as f64 >= expected.floor() - 1e-9 - 1.0 * f64::from(expected.fract() < 1e-9)
+                    && c as f64 <= expected.ceil() + 1e-9 + 1.0 * f64::from(expected.fract() > 1.0 - 1e-9),
+                "particle {i}: {c} copies, expected {expected} ({weights:?})"
+            );
+        }
+    }
+
+    /// Particles with any states enter by either constructor only when
+    /// finite.
+    #[test]
+    fn from_log_weights_refuses_non_finite_states(
+        xs in prop::collection::vec(extreme_f64(), 1..10),
+    ) {
+        let n = xs.len();
+        let set = ParticleSet::from_log_weights(xs.iter().map(|&x| Vector1::new(x)).collect(), vec![0.0; n]);
+        prop_assert_eq!(set.is_ok(), xs.iter().all(|x| x.is_finite()));
     }
 }

@@ -63,3 +63,48 @@ pub fn spd3() -> impl Strategy<Value = Matrix3<f64>> {
         a * a.transpose() + Matrix3::identity() * d
     })
 }
+
+/// Any `f64` a caller can hand a library, weighted towards the edges:
+/// `±1e308`, `±f64::MAX`, subnormals, `f64::MIN_POSITIVE`, `±0`, NaN,
+/// `±inf`, tiny and huge values at random scales, and ordinary numbers.
+pub fn extreme_f64() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        3 => prop::sample::select(vec![
+            0.0,
+            -0.0,
+            1e308,
+            -1e308,
+            f64::MAX,
+            -f64::MAX,
+            f64::MIN_POSITIVE,
+            f64::MIN_POSITIVE / 2.0,
+            5e-324,
+            -5e-324,
+            1e-160,
+            1e154,
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            1.0,
+            -1.0,
+        ]),
+        3 => (-1.0f64..1.0, -324i32..309).prop_map(|(m, e)| m * 10f64.powi(e)),
+        4 => -10.0f64..10.0,
+    ]
+}
+
+/// [`extreme_f64`] narrowed to `f32` (values beyond its range become
+/// `±inf`, tiny ones its subnormals or 0).
+pub fn extreme_f32() -> impl Strategy<Value = f32> {
+    prop_oneof![
+        1 => prop::sample::select(vec![
+            f32::MAX,
+            -f32::MAX,
+            f32::MIN_POSITIVE,
+            1e-45,
+            3e38,
+            f32::NAN,
+        ]),
+        4 => extreme_f64().prop_map(|x| x as f32),
+    ]
+}
