@@ -21,6 +21,19 @@ impl Finite for f64 {
     }
 }
 
+/// Integers are always finite (particles that are labels or indices).
+macro_rules! finite_integers {
+    ($($t:ty),*) => {$(
+        impl Finite for $t {
+            #[inline]
+            fn is_finite(&self) -> bool {
+                true
+            }
+        }
+    )*};
+}
+finite_integers!(u8, u16, u32, u64, usize, i8, i16, i32, i64, isize);
+
 impl<const R: usize, const C: usize> Finite for SMatrix<f64, R, C> {
     #[inline]
     fn is_finite(&self) -> bool {

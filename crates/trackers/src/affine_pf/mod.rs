@@ -87,7 +87,7 @@ use bayestrack_affine::{
 use bayestrack_appearance::{OnlineGaussian, TargetModel};
 use bayestrack_image::{BBox, Border, Image, ImageError, ImageView, ImageViewMut, warp_into};
 use bayestrack_particle::{ParticleSet, Resampling, stream_rng};
-use nalgebra::{Matrix2, Matrix6, Vector2};
+use nalgebra::{Matrix2, Matrix3, Matrix6, Vector2};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
@@ -538,7 +538,7 @@ pub(crate) struct Core {
     pub(crate) scored: Vec<ScoredPose>,
     /// The scored particles as the particle engine's weighted set (the
     /// pool the next batch's parents are drawn from).
-    pool: Option<ParticleSet<Affine2>>,
+    pool: Option<ParticleSet<Matrix3<f64>>>,
     ancestors: Vec<usize>,
 }
 
@@ -811,7 +811,9 @@ impl Core {
                 }
             })
             .collect();
-        let poses = self.scored.iter().map(|p| p.pose).collect();
+        // The set holds the poses as 3x3 matrices (finite, as the engine
+        // checks); [`Core::parent`] reads them back exactly.
+        let poses = self.scored.iter().map(|p| p.pose.matrix()).collect();
         let pool = self
             .pool
             .insert(ParticleSet::from_log_weights(poses, log_weights)?);
@@ -824,7 +826,7 @@ impl Core {
     /// Parent `i` of the batch [`Core::draw_parents`] last drew.
     pub(crate) fn parent(&self, i: usize) -> Option<Affine2> {
         let pool = self.pool.as_ref()?;
-        Some(pool.particles()[*self.ancestors.get(i)?])
+        Affine2::from_matrix(pool.particles()[*self.ancestors.get(i)?]).ok()
     }
 
     /// The end of a frame: adopts `m_star` (or keeps `fallback` when no
