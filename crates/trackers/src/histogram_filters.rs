@@ -287,6 +287,9 @@ impl BallConfig {
         if self.max_evaluations == Some(0) {
             return bad("max_evaluations", 0.0, "need at least one window per frame");
         }
+        // The UKF's parameters as its 4-dimensional state uses them: finite
+        // weights and a covariance that cannot turn negative.
+        Ukf::new(self.ukf_alpha, self.ukf_beta, self.ukf_kappa)?.weights(4)?;
         Ok(())
     }
 }
@@ -1178,6 +1181,23 @@ mod tests {
             assert!(t.step(frame.view()).is_ok());
         }
         assert!(BallTracker::pf(BallConfig::default(), 0, 0).is_err());
+        // UKF parameters the filter would refuse at its first step are
+        // refused with the configuration (issue 28's ukf_kappa=-4,
+        // ukf_alpha=1e-300), for every filter and through --set
+        for (alpha, kappa) in [(1.0, -4.0), (1e-300, 0.0)] {
+            let bad = BallConfig {
+                ukf_alpha: alpha,
+                ukf_kappa: kappa,
+                ..BallConfig::default()
+            };
+            assert!(BallTracker::kf(bad).is_err(), "{alpha} {kappa}");
+            let mut o = BallConfig::default();
+            let set = [("ukf_alpha", alpha), ("ukf_kappa", kappa)];
+            let refused = set.iter().any(|(k, v)| {
+                bayestrack_options::Options::set(&mut o, k, &v.to_string()).is_err()
+            });
+            assert!(refused, "{alpha} {kappa}");
+        }
         let bad = BallConfig {
             likelihood_sigma: -1.0,
             ..BallConfig::default()
