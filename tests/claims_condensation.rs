@@ -1,14 +1,19 @@
 //! The claims of paper 003 (Lee, Jo and Kang 2005) that our quick
 //! `condensation` run reproduces, and those it does not (asserted as
 //! measured, so that a change that makes them reproduce is noticed). See
-//! docs/reproduction.md, section `condensation`. Every bound was checked by
-//! breaking the trackers on purpose (listed there).
+//! docs/reproduction.md, section `condensation`. The grid claims read the
+//! quick run (2 runs, means over runs and frames); the re-initialisation
+//! and crossing claims, whose outcome is all or nothing per run, count
+//! over 8 runs. Every bound was checked by breaking the trackers on
+//! purpose (listed there).
 
 use std::sync::OnceLock;
 
 use bayestrack_experiments::condensation::{
-    CondensationConfig, CondensationResult, Cue, GridSummary, Representation, SIDE_TRACKERS, run,
+    CondensationConfig, CondensationExperiment, CondensationResult, CrossingCount, CrossingRun,
+    Cue, Done, GridKey, GridSummary, ReinitRun, Representation, SIDE_TRACKERS, run,
 };
+use bayestrack_experiments::driver::run_jobs;
 
 fn result() -> &'static CondensationResult {
     static CELL: OnceLock<CondensationResult> = OnceLock::new();
@@ -77,36 +82,102 @@ fn not_reproduced_the_or_point_cloud_follows_the_moving_distractors() {
     assert!(and.centre <= 7.0 && and.loss <= 0.05, "{and:?}");
 }
 
+/// Runs of the re-initialisation and crossing claims: their outcome is
+/// all or nothing per run (a set locks on or not, keeps its identity or
+/// not), so a claim on two runs hangs on the random streams. 8 runs of the
+/// quick scenes (run `r`: scene seed `1 + r`, trackers seeded `r`).
+const SIDE_RUNS: usize = 8;
+
+/// The re-initialisation and crossing runs of [`SIDE_RUNS`] runs at quick
+/// scale (only those jobs of the experiment, not its grid).
+fn side() -> &'static (Vec<ReinitRun>, Vec<CrossingRun>) {
+    static CELL: OnceLock<(Vec<ReinitRun>, Vec<CrossingRun>)> = OnceLock::new();
+    CELL.get_or_init(|| {
+        let config = CondensationConfig {
+            runs: SIDE_RUNS,
+            ..CondensationConfig::quick()
+        };
+        // Job order: the grid (key-major), then per run the side trackers'
+        // re-initialisation and crossing jobs, then the snapshot.
+        let grid = GridKey::all().len() * SIDE_RUNS;
+        let jobs: Vec<usize> = (grid..grid + SIDE_TRACKERS.len() * 4 * SIDE_RUNS).collect();
+        let mut reinit = Vec::new();
+        let mut crossing = Vec::new();
+        for d in run_jobs::<CondensationExperiment>(&config, &jobs, None, false).unwrap() {
+            match d {
+                Done::Reinit(r) => reinit.push(r),
+                Done::Crossing(c) => crossing.push(c),
+                _ => panic!("not a side job"),
+            }
+        }
+        assert_eq!(reinit.len(), SIDE_TRACKERS.len() * 2 * SIDE_RUNS);
+        assert_eq!(crossing.len(), reinit.len());
+        (reinit, crossing)
+    })
+}
+
+/// Lock-on frames per run of one tracker, with or without c-AVQ.
+fn lock_on(key: GridKey, avq: bool) -> Vec<Option<usize>> {
+    side()
+        .0
+        .iter()
+        .filter(|r| r.key == key && r.avq == avq)
+        .map(|r| r.lock_on)
+        .collect()
+}
+
+/// Crossing counts per run of one tracker, with or without priority.
+fn crossings(key: GridKey, priority: bool) -> Vec<CrossingCount> {
+    side()
+        .1
+        .iter()
+        .filter(|c| c.key == key && c.priority == priority)
+        .map(|c| c.count)
+        .collect()
+}
+
+/// The counts pooled over runs.
+fn pooled(runs: &[CrossingCount]) -> CrossingCount {
+    let mut p = CrossingCount::default();
+    for c in runs {
+        p.kept += c.kept;
+        p.swapped += c.swapped;
+        p.merged += c.merged;
+        p.lost += c.lost;
+    }
+    p
+}
+
+fn share(n: usize, of: &CrossingCount) -> f64 {
+    n as f64 / of.total() as f64
+}
+
 #[test]
-fn cavq_locks_onto_the_entering_object_and_nothing_else_does() {
-    // Sec. 4: with c-AVQ the set jumps to a newcomer entering through the
-    // border. Measured (quick, 2 runs), frames from the entry to lock-on:
-    // points AND N=50 13 / never, contour AND N=100 7 / never with c-AVQ;
-    // never without. The OR cloud is already on the distractors (above):
-    // never either way. Bound: some run locks on within 15 frames with
-    // c-AVQ, none does within 45 frames without.
-    let summary = result().reinit_summary();
+fn cavq_locks_onto_the_entering_object_in_most_runs() {
+    // Sec. 4: a set "in pause position has to move and track the new
+    // object instantaneously"; c-AVQ shifts it onto the winning cluster of
+    // the border stripes. Read over runs: with c-AVQ most runs (at least
+    // half) lock on within 15 frames (half a second at 30 fps) of the
+    // entry; without, the set stays on the face: at most a quarter of the
+    // runs reach the newcomer within the 45 quick frames (by diffusion),
+    // and fewer than with c-AVQ. The OR cloud is already on the
+    // distractors (above): not asserted. Per-run numbers: docs/reproduction.md.
     for key in &SIDE_TRACKERS[1..] {
-        let with = summary.iter().find(|s| s.key == *key && s.avq).unwrap();
-        let without = summary.iter().find(|s| s.key == *key && !s.avq).unwrap();
-        println!(
-            "{}: with {:?}, without {:?}",
-            key.label(),
-            with.lock_on,
-            without.lock_on
+        let with = lock_on(*key, true);
+        let without = lock_on(*key, false);
+        println!("{}: with {with:?}\n   without {without:?}", key.label());
+        let fast = with.iter().flatten().filter(|&&k| k <= 15).count();
+        let locked = |v: &[Option<usize>]| v.iter().flatten().count();
+        assert!(2 * fast >= SIDE_RUNS, "{}: {with:?}", key.label());
+        assert!(
+            4 * locked(&without) <= SIDE_RUNS,
+            "{}: {without:?}",
+            key.label()
         );
         assert!(
-            with.lock_on.iter().flatten().any(|&k| k <= 15),
-            "{}: {:?}",
-            key.label(),
-            with.lock_on
-        );
-        assert_eq!(
-            without.locked(),
-            0,
-            "{}: {:?}",
-            key.label(),
-            without.lock_on
+            locked(&without) < fast,
+            "{}: {with:?} {without:?}",
+            key.label()
         );
     }
 }
@@ -114,35 +185,30 @@ fn cavq_locks_onto_the_entering_object_and_nothing_else_does() {
 #[test]
 fn priority_ifd_keeps_crossing_contours_apart_some_of_the_time() {
     // Sec. 5: with the priority-subtracted IFD (eq. 15) two crossing
-    // objects keep their identities. Measured (quick, frames after the
-    // crossing pooled over 2 runs), kept / swapped / merged / lost: contour
-    // AND N=100 34 / 0 / 50 / 16 % with priority, 0 / 0 / 100 / 0 %
-    // without (both sets follow the object in front). Partly reproduced:
-    // priority keeps the sets apart, but half the time the second set
-    // still lands on the first object. The point clouds are lost either way
-    // (not reproduced).
-    let summary = result().crossing_summary();
-    let get = |i: usize, priority: bool| {
-        *summary
-            .iter()
-            .find(|s| s.key == SIDE_TRACKERS[i] && s.priority == priority)
-            .unwrap()
-    };
-    for (i, key) in SIDE_TRACKERS.iter().enumerate() {
+    // objects are tracked "at different direction". Frames after the
+    // crossing pooled over the runs (kept / swapped / merged / lost; per
+    // run in docs/reproduction.md). Partly reproduced: priority keeps the
+    // contour sets apart in a good share of the frames (bound: a quarter),
+    // without it both sets follow the object in front (bound: kept <= 5 %,
+    // merged >= 80 %). The OR point clouds are lost either way (not
+    // reproduced; bound: lost >= 90 %).
+    for key in SIDE_TRACKERS {
         println!(
             "{}: with {:?}\n   without {:?}",
             key.label(),
-            get(i, true),
-            get(i, false)
+            crossings(key, true),
+            crossings(key, false)
         );
     }
-    let share = |s: &bayestrack_experiments::condensation::CrossingSummary, n: usize| {
-        n as f64 / s.count.total() as f64
-    };
-    let (with, without) = (get(2, true), get(2, false));
-    assert!(share(&with, with.count.kept) >= 0.25, "{with:?}");
-    assert!(share(&without, without.count.kept) <= 0.05, "{without:?}");
-    assert!(share(&without, without.count.merged) >= 0.8, "{without:?}");
-    let or = get(0, true);
-    assert!(share(&or, or.count.lost) >= 0.9, "{or:?}");
+    let contour = SIDE_TRACKERS[2];
+    let (with, without) = (
+        pooled(&crossings(contour, true)),
+        pooled(&crossings(contour, false)),
+    );
+    println!("contour pooled: with {with:?}, without {without:?}");
+    assert!(share(with.kept, &with) >= 0.25, "{with:?}");
+    assert!(share(without.kept, &without) <= 0.05, "{without:?}");
+    assert!(share(without.merged, &without) >= 0.8, "{without:?}");
+    let or = pooled(&crossings(SIDE_TRACKERS[0], true));
+    assert!(share(or.lost, &or) >= 0.9, "{or:?}");
 }
