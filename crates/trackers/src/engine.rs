@@ -145,6 +145,14 @@ impl<const D: usize> CueFilter<D> {
         &self.smc.set
     }
 
+    /// Moves every state in place with `f`, the weights left as they are
+    /// (a re-initialisation that moves the set, such as the c-AVQ shift of
+    /// CONDENSATION).
+    pub fn move_states(&mut self, mut f: impl FnMut(&mut SVector<f64, D>)) {
+        let (states, _) = self.smc.set.parts_mut();
+        states.iter_mut().for_each(&mut f);
+    }
+
     /// The configuration.
     pub fn filter(&self) -> &ParticleFilter {
         &self.smc.filter

@@ -23,7 +23,7 @@ pub use affine_pf::{
 pub use condensation::{
     CAvq, CAvqConfig, Condensation, CondensationReport, ContourConfig, ContourTracker, CueSet,
     CurveCue, CurveCueKind, LOST_LOG_LIKELIHOOD, MultiCondensation, MultiConfig, ObjectConfig,
-    ObjectEstimate, PointCloudConfig, PointCloudTracker, StepBuffers,
+    ObjectEstimate, PointCloudConfig, PointCloudTracker,
 };
 pub use engine::{CueFilter, CueProposal, StateModel, select_predict_measure};
 pub use error::{Result, TrackerError};

@@ -34,15 +34,17 @@
 use bayestrack_affine::{BSplineDegree, ClosedBSpline, ShapeSpace, shape_affine};
 use bayestrack_appearance::{AppearanceError, Candidate, Cue, Frame, Scratch, SkinModel};
 use bayestrack_image::{Affine2, BBox, ImageView, Rgb};
-use bayestrack_particle::stream_rng;
+use bayestrack_particle::{stream_rng, stream_seed};
 use nalgebra::{SVector, Vector2};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 
 use super::{
-    CAvq, CAvqConfig, Condensation, CueSet, Engine, FLOOR, ObjectFilter, ObjectStep, Planes,
-    check_channels, check_damping, check_particles, check_positive, frame_planes, second_order,
+    CAvq, CAvqConfig, Condensation, CondensationReport, CueSet, FLOOR, Object, ObjectFilter,
+    ObjectStep, Planes, check_channels, check_damping, check_particles, check_positive,
+    frame_planes, second_order,
 };
+use crate::engine::StateModel;
 use crate::error::{Result, TrackerError};
 use crate::tracker::{Estimate, FrameGuard, Tracker, check_initial_box};
 
@@ -302,7 +304,6 @@ pub(super) struct ContourModel {
     sigma: [f64; 4],
     rho: f64,
     alpha_range: (f64, f64),
-    condensation: Condensation,
     frame: (usize, usize),
     /// The template curve's samples (template coordinates, centred on the
     /// control points' centroid).
@@ -347,14 +348,16 @@ impl ContourModel {
         )?)
     }
 
-    /// Contours around `target`'s centre (each component drawn with its
-    /// diffusion deviation), at rest, with the cue of `config`.
+    /// Contours around `target`'s centre (each component drawn from `rng`
+    /// with its diffusion deviation), at rest, with the cue of `config`;
+    /// the filter's random streams keyed by `seed`.
     pub(super) fn object<R: Rng + ?Sized>(
         config: &ContourConfig,
         frame: ImageView<'_, u8>,
         target: BBox,
         outline: Option<&[Vector2<f64>]>,
         rng: &mut R,
+        seed: u64,
     ) -> Result<ObjectFilter> {
         let rect =
             target
@@ -416,19 +419,21 @@ impl ContourModel {
             sigma,
             rho: config.velocity_damping,
             alpha_range: config.alpha_range,
-            condensation: config.condensation,
             frame: (frame.width(), frame.height()),
             samples,
         };
-        Ok(ObjectFilter::Contour(
-            Box::new(model),
-            Engine::new(particles, cue)?,
-        ))
+        Ok(ObjectFilter::Contour(Box::new(Object::new(
+            model,
+            cue,
+            &config.condensation,
+            particles,
+            seed,
+        )?)))
     }
 
     /// The pose a state is scored as, `None` when impossible.
     #[inline]
-    fn candidate(&self, s: &SVector<f64, 8>) -> Option<Candidate> {
+    fn pose(&self, s: &SVector<f64, 8>) -> Option<Candidate> {
         let (w, h) = self.frame;
         let inside = s[0] >= -0.5 && s[1] >= -0.5 && s[0] < w as f64 - 0.5 && s[1] < h as f64 - 0.5;
         let (lo, hi) = self.alpha_range;
@@ -452,28 +457,13 @@ impl ContourModel {
             .collect()
     }
 
-    pub(super) fn step<R: Rng + ?Sized>(
+    /// The frame's estimate from the weighted-mean state `m` (eq. 4).
+    pub(super) fn estimate(
         &self,
-        engine: &mut Engine<8>,
-        frame: &Frame<'_>,
-        rng: &mut R,
+        m: &SVector<f64, 8>,
+        report: CondensationReport,
     ) -> Result<ObjectStep> {
-        let (sigma, rho) = (self.sigma, self.rho);
-        let report = engine.step(
-            &self.condensation,
-            frame,
-            rng,
-            |p, rng| {
-                for i in 0..4 {
-                    let (q, qp) = second_order(p[i], p[i + 4], rho, sigma[i], rng);
-                    p[i] = q;
-                    p[i + 4] = qp;
-                }
-            },
-            |p| self.candidate(p),
-        )?;
-        let m = engine.mean();
-        let pose = pose_of(&m).ok_or(TrackerError::InvalidParameter {
+        let pose = pose_of(m).ok_or(TrackerError::InvalidParameter {
             name: "mean contour",
             value: f64::NAN,
             reason: "the weighted mean state is not finite",
@@ -501,6 +491,30 @@ impl ContourModel {
     }
 }
 
+impl StateModel<8> for ContourModel {
+    /// Eq. 10 on `(x, y, theta, alpha)`.
+    #[inline]
+    fn predict<R: Rng + ?Sized>(
+        &self,
+        _k: usize,
+        p: &SVector<f64, 8>,
+        rng: &mut R,
+    ) -> SVector<f64, 8> {
+        let mut x = *p;
+        for i in 0..4 {
+            let (q, qp) = second_order(p[i], p[i + 4], self.rho, self.sigma[i], rng);
+            x[i] = q;
+            x[i + 4] = qp;
+        }
+        x
+    }
+
+    #[inline]
+    fn candidate(&self, s: &SVector<f64, 8>) -> Option<Candidate> {
+        self.pose(s)
+    }
+}
+
 /// Lee, Jo and Kang (2005) sec. 3.2-3.3: CONDENSATION (Isard and Blake
 /// 1998) with deformable B-spline contour particles in the planar affine
 /// shape space (eq. 13), weighted by IFD AND skin colour along the curve
@@ -515,7 +529,6 @@ pub struct ContourTracker {
     config: ContourConfig,
     outline: Option<Vec<Vector2<f64>>>,
     seed: u64,
-    k: u64,
     guard: FrameGuard,
     planes: Planes,
     object: Option<ObjectFilter>,
@@ -535,7 +548,6 @@ impl ContourTracker {
             config,
             outline: None,
             seed,
-            k: 0,
             guard: FrameGuard::default(),
             planes: Planes::new()?,
             object: None,
@@ -572,7 +584,7 @@ impl ContourTracker {
     /// alpha_prev]`, once initialised.
     pub fn particles(&self) -> Option<&[SVector<f64, 8>]> {
         match &self.object {
-            Some(ObjectFilter::Contour(_, e)) => Some(e.set.particles()),
+            Some(ObjectFilter::Contour(o)) => Some(o.filter.set().particles()),
             _ => None,
         }
     }
@@ -580,7 +592,7 @@ impl ContourTracker {
     /// The normalised weights `pi_i`, once initialised.
     pub fn weights(&self) -> Option<Vec<f64>> {
         match &self.object {
-            Some(ObjectFilter::Contour(_, e)) => Some(e.set.weights()),
+            Some(ObjectFilter::Contour(o)) => Some(o.filter.set().weights()),
             _ => None,
         }
     }
@@ -589,7 +601,7 @@ impl ContourTracker {
     /// draw particles or score the mean contour); empty before `init`.
     pub fn curve(&self, state: &SVector<f64, 8>) -> Vec<Vector2<f64>> {
         match &self.object {
-            Some(ObjectFilter::Contour(m, _)) => m.curve(state),
+            Some(ObjectFilter::Contour(o)) => o.model.curve(state),
             _ => Vec::new(),
         }
     }
@@ -597,7 +609,7 @@ impl ContourTracker {
     /// The weighted-mean state (eq. 4), once initialised.
     pub fn mean_state(&self) -> Option<SVector<f64, 8>> {
         match &self.object {
-            Some(ObjectFilter::Contour(_, e)) => Some(e.mean()),
+            Some(ObjectFilter::Contour(o)) => Some(o.mean()),
             _ => None,
         }
     }
@@ -628,10 +640,10 @@ impl Tracker for ContourTracker {
             target,
             self.outline.as_deref(),
             &mut rng,
+            stream_seed(&[KEY, self.seed]),
         )?);
         self.planes.start(frame)?;
         self.guard.start(&frame);
-        self.k = 0;
         Ok(())
     }
 
@@ -639,8 +651,6 @@ impl Tracker for ContourTracker {
         self.guard.check(&frame)?;
         check_channels(self.name(), self.config.cues, &frame)?;
         let object = self.object.as_mut().ok_or(TrackerError::NotInitialised)?;
-        let mut rng = stream_rng(&[KEY, self.seed, self.k]);
-        self.k += 1;
         self.planes.update(frame)?;
         self.reinitialised = false;
         if let Some(avq) = &mut self.avq
@@ -650,7 +660,7 @@ impl Tracker for ContourTracker {
             self.reinitialised = true;
         }
         let planes = frame_planes(frame, self.planes.ifd.view());
-        let s = object.step(&planes, &mut rng)?;
+        let s = object.step(&planes)?;
         Ok(Estimate {
             bbox: s.bbox,
             pose: s.pose,

@@ -1,7 +1,11 @@
 //! CONDENSATION trackers with skin colour and interframe difference (Lee,
 //! Jo and Kang 2005; CONDENSATION after Isard and Blake 1998).
 //!
-//! One step of [`Condensation`] (Lee, Jo and Kang 2005, sec. 2):
+//! CONDENSATION is the particle engine of `bayestrack-particle` (a
+//! `ParticleFilter` run through the trackers' `CueFilter`) configured by
+//! [`Condensation::filter`]: selection at the start of a step, adaptive on
+//! eq. 16, a measurement with no evidence anywhere ignored. One step
+//! (Lee, Jo and Kang 2005, sec. 2):
 //!
 //! 1. **select** (sec. 2.1): roulette-wheel selection from the cumulative
 //!    weights, i.e. the multinomial resampler of `bayestrack-particle`,
@@ -47,11 +51,13 @@
 //! several objects by the priority-subtracted IFD ([`MultiCondensation`],
 //! sec. 5).
 //!
-//! Randomness: frame `k` of a tracker seeded `s` draws from
-//! `stream_rng([key, s, k])` (one stream per object in
-//! [`MultiCondensation`]); the particles are processed in order on the
-//! calling thread, so the output is the same bits on any thread and any
-//! thread count.
+//! Randomness: the engine's keyed streams. An object's filter is seeded
+//! `stream_seed([key, s])` for a tracker seeded `s` (`[key, s, id]` for
+//! object `id` of [`MultiCondensation`]), and its step `k` draws from the
+//! streams keyed `[seed, k]` (one per chunk of particles, the selection
+//! its own), so the output is the same bits on any thread count. The
+//! initial particles draw from `stream_rng([key, s, u64::MAX])`
+//! (`[key, s, id, u64::MAX]`).
 
 mod avq;
 mod contour;
@@ -64,14 +70,17 @@ pub use multi::{MultiCondensation, MultiConfig, ObjectConfig, ObjectEstimate};
 pub use points::{PointCloudConfig, PointCloudTracker};
 
 use bayestrack_appearance::{
-    Candidate, Cue, DEFAULT_FLOOR, Frame, Fusion, FusionRule, Scratch, interframe_difference_into,
+    Cue, DEFAULT_FLOOR, Frame, Fusion, FusionRule, interframe_difference_into,
 };
 use bayestrack_image::{Affine2, BBox, Image, ImageView, rgb_to_gray_into};
-use bayestrack_particle::{ParticleSet, Resampling};
+use bayestrack_particle::{
+    Degenerate, ParticleFilter, ResamplePolicy, ResampleTiming, Resampling, StepReport,
+};
 use nalgebra::SVector;
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 
+use crate::engine::{CueFilter, StateModel};
 use crate::error::{Result, TrackerError};
 
 /// A particle whose best log-likelihood is below this saw no evidence at
@@ -201,75 +210,24 @@ impl Condensation {
         Ok(())
     }
 
-    /// One select / predict / measure step on `set`: `predict` moves a
-    /// particle (drift and diffusion), `measure` returns its
-    /// log-likelihood (minus infinity for an impossible configuration).
-    /// When every particle gets zero likelihood the measurement is ignored
-    /// (the weights stay those after selection) and the report says so.
-    /// Allocation-free once `buffers` have grown to `N`.
-    ///
-    /// # Errors
-    /// Whatever `measure` returns; [`TrackerError::Particle`] for a NaN or
-    /// `+inf` log-likelihood.
-    pub fn step<T: Clone, R: Rng + ?Sized>(
-        &self,
-        set: &mut ParticleSet<T>,
-        rng: &mut R,
-        buffers: &mut StepBuffers,
-        mut predict: impl FnMut(&mut T, &mut R),
-        mut measure: impl FnMut(&T) -> Result<f64>,
-    ) -> Result<CondensationReport> {
-        let n = set.len();
-        let ess_before = set.ess();
-        // 1. select (roulette wheel), adaptively on eq. 16
-        let resampled = ess_before * self.pi_threshold < n as f64;
-        if resampled {
-            set.resample(&self.resampling, rng, &mut buffers.ancestors)?;
+    /// The particle filter this is: the engine of `bayestrack-particle`
+    /// selecting at the start of a step ([`ResampleTiming::BeforeProposal`])
+    /// when `N_eff < N / c` ([`ResamplePolicy::Ess`] with `1 / c`), with
+    /// [`Condensation::resampling`], and ignoring a measurement in which
+    /// every particle has zero likelihood ([`Degenerate::IgnoreMeasurement`]:
+    /// the weights stay those after selection).
+    pub fn filter(&self) -> ParticleFilter {
+        ParticleFilter {
+            resampling: self.resampling,
+            policy: ResamplePolicy::Ess(1.0 / self.pi_threshold),
+            timing: ResampleTiming::BeforeProposal,
+            degenerate: Degenerate::IgnoreMeasurement,
+            ..ParticleFilter::default()
         }
-        // 2. predict, 3. measure
-        let (particles, log_w) = set.parts_mut();
-        buffers.log_likelihoods.clear();
-        let mut best = f64::NEG_INFINITY;
-        for p in particles.iter_mut() {
-            predict(p, rng);
-            let l = measure(p)?;
-            if l.is_nan() || l == f64::INFINITY {
-                return Err(bayestrack_particle::ParticleError::NonFiniteWeight {
-                    index: buffers.log_likelihoods.len(),
-                    value: l,
-                }
-                .into());
-            }
-            best = best.max(l);
-            buffers.log_likelihoods.push(l);
-        }
-        let degenerate = best == f64::NEG_INFINITY;
-        if !degenerate {
-            for (lw, &l) in log_w.iter_mut().zip(&buffers.log_likelihoods) {
-                *lw += l;
-            }
-            set.normalize()?;
-        }
-        Ok(CondensationReport {
-            ess: set.ess(),
-            resampled,
-            evaluations: n,
-            degenerate,
-            best_log_likelihood: best,
-        })
     }
 }
 
-/// Buffers reused from step to step by [`Condensation::step`].
-#[derive(Debug, Clone, Default)]
-pub struct StepBuffers {
-    /// Ancestor indices drawn by the selection.
-    pub ancestors: Vec<usize>,
-    /// The log-likelihoods of the latest measurement.
-    pub log_likelihoods: Vec<f64>,
-}
-
-/// What one [`Condensation::step`] did.
+/// What one CONDENSATION step of an object did.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CondensationReport {
     /// Effective particle size (eq. 16) after the measurement.
@@ -285,6 +243,17 @@ pub struct CondensationReport {
 }
 
 impl CondensationReport {
+    /// The report of an engine step over `n` particles.
+    fn new(step: &StepReport, n: usize) -> Self {
+        Self {
+            ess: step.ess,
+            resampled: step.resampled,
+            evaluations: n,
+            degenerate: step.degenerate,
+            best_log_likelihood: step.max_log_increment,
+        }
+    }
+
     /// Whether the step saw no evidence for the target anywhere
     /// ([`LOST_LOG_LIKELIHOOD`]).
     pub fn lost(&self) -> bool {
@@ -440,115 +409,111 @@ struct ObjectStep {
     report: CondensationReport,
 }
 
-/// A particle set with its cue and buffers: the part of a tracker that is
-/// one object.
-struct Engine<const D: usize> {
-    set: ParticleSet<SVector<f64, D>>,
+/// One object: its model (dynamics and candidates), its cue and the
+/// engine's filter ([`CueFilter`]: the particle set, the keyed random
+/// streams and the cue's scratch).
+struct Object<M, const D: usize> {
+    model: M,
     cue: Box<dyn Cue + Send + Sync>,
-    buffers: StepBuffers,
-    scratch: Scratch,
+    filter: CueFilter<D>,
 }
 
-impl<const D: usize> std::fmt::Debug for Engine<D> {
+impl<M, const D: usize> std::fmt::Debug for Object<M, D> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Engine")
-            .field("particles", &self.set.len())
+        f.debug_struct("Object")
+            .field("particles", &self.filter.len())
             .field("cue", &self.cue.name())
+            .field("k", &self.filter.set().k())
             .finish()
     }
 }
 
-impl<const D: usize> Engine<D> {
-    fn new(particles: Vec<SVector<f64, D>>, cue: Box<dyn Cue + Send + Sync>) -> Result<Self> {
+impl<M: StateModel<D>, const D: usize> Object<M, D> {
+    /// An object of `particles` (equally weighted) filtered by
+    /// `condensation`, its random streams keyed by `seed`.
+    fn new(
+        model: M,
+        cue: Box<dyn Cue + Send + Sync>,
+        condensation: &Condensation,
+        particles: Vec<SVector<f64, D>>,
+        seed: u64,
+    ) -> Result<Self> {
         Ok(Self {
-            set: ParticleSet::new(particles)?,
+            model,
             cue,
-            buffers: StepBuffers::default(),
-            scratch: Scratch::new(),
+            filter: CueFilter::new(condensation.filter(), particles, seed)?,
         })
     }
 
-    /// One CONDENSATION step with `predict` and the candidate each state
-    /// is scored as (`None`: impossible, zero likelihood).
-    fn step<R: Rng + ?Sized>(
-        &mut self,
-        condensation: &Condensation,
-        frame: &Frame<'_>,
-        rng: &mut R,
-        predict: impl FnMut(&mut SVector<f64, D>, &mut R),
-        candidate: impl Fn(&SVector<f64, D>) -> Option<Candidate>,
-    ) -> Result<CondensationReport> {
-        let Self {
-            set,
-            cue,
-            buffers,
-            scratch,
-        } = self;
-        condensation.step(set, rng, buffers, predict, |s| match candidate(s) {
-            Some(c) => Ok(cue.log_likelihood_or_zero(frame, &c, scratch)?),
-            None => Ok(f64::NEG_INFINITY),
-        })
+    /// One select / predict / measure step of the engine.
+    fn step(&mut self, frame: &Frame<'_>) -> Result<CondensationReport> {
+        let report = self.filter.step(&self.model, &*self.cue, frame)?;
+        Ok(CondensationReport::new(&report, self.filter.len()))
     }
 
     /// The weighted mean (eq. 4).
     fn mean(&self) -> SVector<f64, D> {
-        self.set.mean()
+        self.filter.mean()
     }
 
     /// Moves every particle (and its previous position) by `(dx, dy)`:
     /// the c-AVQ shift of the set's mean.
     fn shift(&mut self, dx: f64, dy: f64) {
         let half = D / 2;
-        let (particles, _) = self.set.parts_mut();
-        for p in particles {
+        self.filter.move_states(|p| {
             p[0] += dx;
             p[1] += dy;
             p[half] += dx;
             p[half + 1] += dy;
-        }
+        });
     }
 }
 
 /// One tracked object in either representation.
 #[derive(Debug)]
 enum ObjectFilter {
-    Points(points::PointModel, Engine<4>),
-    Contour(Box<contour::ContourModel>, Engine<8>),
+    Points(Box<Object<points::PointModel, 4>>),
+    Contour(Box<Object<contour::ContourModel, 8>>),
 }
 
 impl ObjectFilter {
-    fn step<R: Rng + ?Sized>(&mut self, frame: &Frame<'_>, rng: &mut R) -> Result<ObjectStep> {
+    fn step(&mut self, frame: &Frame<'_>) -> Result<ObjectStep> {
         match self {
-            ObjectFilter::Points(model, engine) => model.step(engine, frame, rng),
-            ObjectFilter::Contour(model, engine) => model.step(engine, frame, rng),
+            ObjectFilter::Points(o) => {
+                let report = o.step(frame)?;
+                Ok(o.model.estimate(&o.mean(), report))
+            }
+            ObjectFilter::Contour(o) => {
+                let report = o.step(frame)?;
+                o.model.estimate(&o.mean(), report)
+            }
         }
     }
 
     fn centre(&self) -> (f64, f64) {
-        let (x, y) = match self {
-            ObjectFilter::Points(_, e) => {
-                let m = e.mean();
+        match self {
+            ObjectFilter::Points(o) => {
+                let m = o.mean();
                 (m[0], m[1])
             }
-            ObjectFilter::Contour(_, e) => {
-                let m = e.mean();
+            ObjectFilter::Contour(o) => {
+                let m = o.mean();
                 (m[0], m[1])
             }
-        };
-        (x, y)
+        }
     }
 
     fn shift(&mut self, dx: f64, dy: f64) {
         match self {
-            ObjectFilter::Points(_, e) => e.shift(dx, dy),
-            ObjectFilter::Contour(_, e) => e.shift(dx, dy),
+            ObjectFilter::Points(o) => o.shift(dx, dy),
+            ObjectFilter::Contour(o) => o.shift(dx, dy),
         }
     }
 
     fn len(&self) -> usize {
         match self {
-            ObjectFilter::Points(_, e) => e.set.len(),
-            ObjectFilter::Contour(_, e) => e.set.len(),
+            ObjectFilter::Points(o) => o.filter.len(),
+            ObjectFilter::Contour(o) => o.filter.len(),
         }
     }
 }
@@ -559,22 +524,39 @@ const FLOOR: f64 = DEFAULT_FLOOR;
 #[cfg(test)]
 mod tests {
     use super::*;
-    use bayestrack_particle::stream_rng;
+    use bayestrack_particle::{ParticleSet, stream_rng};
+
+    /// A proposal that keeps the particle and weighs it by `f`.
+    struct Stay<F>(F);
+
+    impl<F: Fn(f64) -> f64 + Sync> bayestrack_particle::Proposal<SVector<f64, 1>, ()> for Stay<F> {
+        type Error = std::convert::Infallible;
+        type Scratch = ();
+        fn propose<R: Rng + ?Sized>(
+            &self,
+            _k: usize,
+            x: &SVector<f64, 1>,
+            _z: &(),
+            _scratch: &mut (),
+            _rng: &mut R,
+        ) -> std::result::Result<(SVector<f64, 1>, f64), Self::Error> {
+            Ok((*x, (self.0)(x[0])))
+        }
+    }
 
     #[test]
     fn condensation_selects_on_the_pi_threshold_and_weights_by_the_likelihood() {
         // Four particles on a line, the likelihood peaks at 2.
-        let mut set = ParticleSet::new(vec![0.0f64, 1.0, 2.0, 3.0]).unwrap();
-        let mut rng = stream_rng(&[1]);
-        let mut buffers = StepBuffers::default();
+        let particles = [0.0, 1.0, 2.0, 3.0].map(SVector::<f64, 1>::new);
+        let mut set = ParticleSet::new(particles.to_vec()).unwrap();
         let c = Condensation::POINT_CLOUD;
-        let r = c
+        let f = c.filter();
+        let r = f
             .step(
                 &mut set,
-                &mut rng,
-                &mut buffers,
-                |_, _| {},
-                |&x| Ok(-2.0 * (x - 2.0f64).powi(2)),
+                &Stay(|x: f64| -2.0 * (x - 2.0).powi(2)),
+                &(),
+                &[1],
             )
             .unwrap();
         assert!(!r.resampled, "equal weights are not selected");
@@ -582,36 +564,33 @@ mod tests {
         let z: f64 = [8.0f64, 2.0, 0.0, 2.0].iter().map(|d| (-d).exp()).sum();
         assert!((w[2] - 1.0 / z).abs() < 1e-12);
         assert!((r.ess - 1.0 / w.iter().map(|v| v * v).sum::<f64>()).abs() < 1e-9);
-        // N_eff = 1.56 < 4 / 2: the next step selects.
+        assert_eq!(r.max_log_increment, 0.0);
+        // N_eff = 1.56 < 4 / 2: the next step selects, before it measures.
         assert!(r.ess < 2.0);
-        let r2 = c
-            .step(&mut set, &mut rng, &mut buffers, |_, _| {}, |_| Ok(0.0))
-            .unwrap();
+        let r2 = f.step(&mut set, &Stay(|_| 0.0), &(), &[2]).unwrap();
         assert!(r2.resampled);
         assert!((r2.ess - 4.0).abs() < 1e-9);
+        // N_eff = 4 is not below 4 / 1.5: no selection.
+        let r2b = CondensationReport::new(
+            &Condensation::CONTOURS
+                .filter()
+                .step(&mut set, &Stay(|_| 0.0), &(), &[3])
+                .unwrap(),
+            4,
+        );
+        assert!(!r2b.resampled && !r2b.lost() && r2b.evaluations == 4);
         // Zero likelihood everywhere: the measurement is ignored.
         let before = set.weights();
-        let r3 = c
-            .step(
-                &mut set,
-                &mut rng,
-                &mut buffers,
-                |_, _| {},
-                |_| Ok(f64::NEG_INFINITY),
-            )
-            .unwrap();
-        assert!(r3.degenerate && r3.lost());
-        assert_eq!(set.weights(), before);
-        assert!(
-            c.step(
-                &mut set,
-                &mut rng,
-                &mut buffers,
-                |_, _| {},
-                |_| Ok(f64::NAN)
-            )
-            .is_err()
+        let r3 = CondensationReport::new(
+            &f.step(&mut set, &Stay(|_| f64::NEG_INFINITY), &(), &[4])
+                .unwrap(),
+            4,
         );
+        assert!(r3.degenerate && r3.lost());
+        for (a, b) in set.weights().iter().zip(&before) {
+            assert!((a - b).abs() < 1e-15, "{a} {b}");
+        }
+        assert!(f.step(&mut set, &Stay(|_| f64::NAN), &(), &[5]).is_err());
         assert!(
             Condensation {
                 pi_threshold: 0.5,

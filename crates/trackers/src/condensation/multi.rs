@@ -26,7 +26,7 @@
 
 use bayestrack_appearance::{PriorityIfd, Suppression};
 use bayestrack_image::{BBox, ImageView};
-use bayestrack_particle::stream_rng;
+use bayestrack_particle::{stream_rng, stream_seed};
 
 use super::contour::ContourModel;
 use super::points::PointModel;
@@ -182,9 +182,13 @@ impl MultiCondensation {
         }
         let id = self.next_id;
         let mut rng = stream_rng(&[KEY, self.seed, id, u64::MAX]);
+        // one filter, and so one family of random streams, per object
+        let seed = stream_seed(&[KEY, self.seed, id]);
         let object = match &self.config.object {
-            ObjectConfig::Points(c) => PointModel::object(c, frame, target, &mut rng)?,
-            ObjectConfig::Contour(c) => ContourModel::object(c, frame, target, None, &mut rng)?,
+            ObjectConfig::Points(c) => PointModel::object(c, frame, target, &mut rng, seed)?,
+            ObjectConfig::Contour(c) => {
+                ContourModel::object(c, frame, target, None, &mut rng, seed)?
+            }
         };
         if first {
             self.planes.start(frame)?;
@@ -213,7 +217,6 @@ impl MultiCondensation {
     pub fn step(&mut self, frame: ImageView<'_, u8>) -> Result<Vec<ObjectEstimate>> {
         self.guard.check(&frame)?;
         check_channels("condensation-multi", self.config.object.cues(), &frame)?;
-        let k = self.k;
         self.k += 1;
         self.planes.update(frame)?;
         let field = match &mut self.field {
@@ -225,13 +228,12 @@ impl MultiCondensation {
         };
         let mut out = Vec::with_capacity(self.objects.len());
         for (priority, (id, object)) in self.objects.iter_mut().enumerate() {
-            let mut rng = stream_rng(&[KEY, self.seed, *id, k]);
             let ifd = if self.config.priority {
                 field.field()
             } else {
                 self.planes.ifd.view()
             };
-            let s = object.step(&frame_planes(frame, ifd), &mut rng)?;
+            let s = object.step(&frame_planes(frame, ifd))?;
             if self.config.priority {
                 let c = self.config.claim_scale;
                 let (w, h) = (s.bbox.width * c, s.bbox.height * c);

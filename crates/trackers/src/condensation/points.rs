@@ -16,16 +16,18 @@
 //! `bayestrack-appearance`. A particle whose centre leaves the frame gets
 //! zero weight (sec. 2.3).
 
-use bayestrack_appearance::{Candidate, Frame, IfdCue, SkinCue, SkinModel};
+use bayestrack_appearance::{Candidate, IfdCue, SkinCue, SkinModel};
 use bayestrack_image::{BBox, ImageView, Rect};
-use bayestrack_particle::stream_rng;
+use bayestrack_particle::{stream_rng, stream_seed};
 use nalgebra::{SVector, Vector4};
 use rand::{Rng, RngExt};
 
 use super::{
-    CAvq, CAvqConfig, Condensation, CueSet, Engine, FLOOR, ObjectFilter, ObjectStep, Planes,
-    check_channels, check_damping, check_particles, check_positive, frame_planes, second_order,
+    CAvq, CAvqConfig, Condensation, CondensationReport, CueSet, FLOOR, Object, ObjectFilter,
+    ObjectStep, Planes, check_channels, check_damping, check_particles, check_positive,
+    frame_planes, second_order,
 };
+use crate::engine::StateModel;
 use crate::error::{Result, TrackerError};
 use crate::tracker::{Estimate, FrameGuard, Tracker, check_initial_box};
 
@@ -104,18 +106,19 @@ pub(super) struct PointModel {
     sigma: f64,
     rho: f64,
     radius: usize,
-    condensation: Condensation,
     frame: (usize, usize),
     size: (f64, f64),
 }
 
 impl PointModel {
-    /// Particles uniform over `target`, at rest, with the cue of `config`.
+    /// Particles uniform over `target` (drawn from `rng`), at rest, with
+    /// the cue of `config`; the filter's random streams keyed by `seed`.
     pub(super) fn object<R: Rng + ?Sized>(
         config: &PointCloudConfig,
         frame: ImageView<'_, u8>,
         target: BBox,
         rng: &mut R,
+        seed: u64,
     ) -> Result<ObjectFilter> {
         let rect =
             target
@@ -144,11 +147,16 @@ impl PointModel {
             sigma: config.sigma,
             rho: config.velocity_damping,
             radius: config.support_radius,
-            condensation: config.condensation,
             frame: (frame.width(), frame.height()),
             size: (target.width, target.height),
         };
-        Ok(ObjectFilter::Points(model, Engine::new(particles, cue)?))
+        Ok(ObjectFilter::Points(Box::new(Object::new(
+            model,
+            cue,
+            &config.condensation,
+            particles,
+            seed,
+        )?)))
     }
 
     /// The support window of a particle, `None` when its centre is off the
@@ -166,27 +174,10 @@ impl PointModel {
         Some(Candidate::Window(Rect::new(x0, y0, x1 - x0, y1 - y0)))
     }
 
-    pub(super) fn step<R: Rng + ?Sized>(
-        &self,
-        engine: &mut Engine<4>,
-        frame: &Frame<'_>,
-        rng: &mut R,
-    ) -> Result<ObjectStep> {
-        let (sigma, rho) = (self.sigma, self.rho);
-        let report = engine.step(
-            &self.condensation,
-            frame,
-            rng,
-            |p, rng| {
-                let (x, xp) = second_order(p[0], p[2], rho, sigma, rng);
-                let (y, yp) = second_order(p[1], p[3], rho, sigma, rng);
-                *p = Vector4::new(x, y, xp, yp);
-            },
-            |p| self.support(p),
-        )?;
-        let m = engine.mean();
+    /// The frame's estimate from the weighted-mean state `m` (eq. 4).
+    pub(super) fn estimate(&self, m: &SVector<f64, 4>, report: CondensationReport) -> ObjectStep {
         let (w, h) = self.size;
-        Ok(ObjectStep {
+        ObjectStep {
             centre: (m[0], m[1]),
             // OTB centre = 0-based centre + 1.
             bbox: BBox::new(
@@ -197,7 +188,27 @@ impl PointModel {
             ),
             pose: None,
             report,
-        })
+        }
+    }
+}
+
+impl StateModel<4> for PointModel {
+    /// Eq. 10 on `(x, y)`.
+    #[inline]
+    fn predict<R: Rng + ?Sized>(
+        &self,
+        _k: usize,
+        p: &SVector<f64, 4>,
+        rng: &mut R,
+    ) -> SVector<f64, 4> {
+        let (x, xp) = second_order(p[0], p[2], self.rho, self.sigma, rng);
+        let (y, yp) = second_order(p[1], p[3], self.rho, self.sigma, rng);
+        Vector4::new(x, y, xp, yp)
+    }
+
+    #[inline]
+    fn candidate(&self, s: &SVector<f64, 4>) -> Option<Candidate> {
+        self.support(s)
     }
 }
 
@@ -211,7 +222,6 @@ impl PointModel {
 pub struct PointCloudTracker {
     config: PointCloudConfig,
     seed: u64,
-    k: u64,
     guard: FrameGuard,
     planes: Planes,
     object: Option<ObjectFilter>,
@@ -229,7 +239,6 @@ impl PointCloudTracker {
         Ok(Self {
             config,
             seed,
-            k: 0,
             guard: FrameGuard::default(),
             planes: Planes::new()?,
             object: None,
@@ -247,7 +256,7 @@ impl PointCloudTracker {
     /// initialised.
     pub fn particles(&self) -> Option<&[Vector4<f64>]> {
         match &self.object {
-            Some(ObjectFilter::Points(_, e)) => Some(e.set.particles()),
+            Some(ObjectFilter::Points(o)) => Some(o.filter.set().particles()),
             _ => None,
         }
     }
@@ -255,7 +264,7 @@ impl PointCloudTracker {
     /// The normalised weights `pi_i`, once initialised.
     pub fn weights(&self) -> Option<Vec<f64>> {
         match &self.object {
-            Some(ObjectFilter::Points(_, e)) => Some(e.set.weights()),
+            Some(ObjectFilter::Points(o)) => Some(o.filter.set().weights()),
             _ => None,
         }
     }
@@ -285,10 +294,15 @@ impl Tracker for PointCloudTracker {
         check_channels(self.name(), self.config.cues, &frame)?;
         check_initial_box(target, frame.width(), frame.height())?;
         let mut rng = stream_rng(&[KEY, self.seed, u64::MAX]);
-        self.object = Some(PointModel::object(&self.config, frame, target, &mut rng)?);
+        self.object = Some(PointModel::object(
+            &self.config,
+            frame,
+            target,
+            &mut rng,
+            stream_seed(&[KEY, self.seed]),
+        )?);
         self.planes.start(frame)?;
         self.guard.start(&frame);
-        self.k = 0;
         Ok(())
     }
 
@@ -296,8 +310,6 @@ impl Tracker for PointCloudTracker {
         self.guard.check(&frame)?;
         check_channels(self.name(), self.config.cues, &frame)?;
         let object = self.object.as_mut().ok_or(TrackerError::NotInitialised)?;
-        let mut rng = stream_rng(&[KEY, self.seed, self.k]);
-        self.k += 1;
         self.planes.update(frame)?;
         self.reinitialised = false;
         if let Some(avq) = &mut self.avq
@@ -307,7 +319,7 @@ impl Tracker for PointCloudTracker {
             self.reinitialised = true;
         }
         let planes = frame_planes(frame, self.planes.ifd.view());
-        let s = object.step(&planes, &mut rng)?;
+        let s = object.step(&planes)?;
         Ok(Estimate {
             bbox: s.bbox,
             pose: None,
@@ -329,7 +341,6 @@ mod tests {
             sigma: 1.0,
             rho: 0.5,
             radius: 2,
-            condensation: Condensation::POINT_CLOUD,
             frame: (20, 10),
             size: (5.0, 5.0),
         };
