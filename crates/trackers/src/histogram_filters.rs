@@ -1193,9 +1193,9 @@ mod tests {
             assert!(BallTracker::kf(bad).is_err(), "{alpha} {kappa}");
             let mut o = BallConfig::default();
             let set = [("ukf_alpha", alpha), ("ukf_kappa", kappa)];
-            let refused = set.iter().any(|(k, v)| {
-                bayestrack_options::Options::set(&mut o, k, &v.to_string()).is_err()
-            });
+            let refused = set
+                .iter()
+                .any(|(k, v)| bayestrack_options::Options::set(&mut o, k, &v.to_string()).is_err());
             assert!(refused, "{alpha} {kappa}");
         }
         let bad = BallConfig {

@@ -20,7 +20,7 @@
 
 use std::ops::Deref;
 
-use bayestrack_appearance::Frame;
+use bayestrack_appearance::{Frame, interframe_difference_into};
 use bayestrack_image::{BBox, Image, ImageView, Rect, rgb_to_gray_into, rgb_to_hsv_into};
 
 use crate::error::{Result, TrackerError};
@@ -37,7 +37,7 @@ pub enum ChannelPolicy {
 }
 
 impl ChannelPolicy {
-    fn check(self, tracker: &'static str, channels: usize) -> Result<()> {
+    pub(crate) fn check(self, tracker: &'static str, channels: usize) -> Result<()> {
         let (ok, expected) = match self {
             Self::GrayOrRgb => (channels == 1 || channels == 3, "1 or 3"),
             Self::Rgb => (
@@ -67,6 +67,10 @@ pub struct Needs {
     pub gray: bool,
     /// 3-channel HSV (`bayestrack_image::rgb_to_hsv`), from RGB inputs only.
     pub hsv: bool,
+    /// The interframe difference `|I_t - I_{t-1}|` of the 8-bit gray planes
+    /// in `[0, 1]` (`bayestrack_appearance::interframe_difference`), zero
+    /// on the first frame; implies `gray`.
+    pub ifd: bool,
 }
 
 impl Needs {
@@ -74,11 +78,13 @@ impl Needs {
     pub const INPUT: Self = Self {
         gray: false,
         hsv: false,
+        ifd: false,
     };
     /// The gray plane.
     pub const GRAY: Self = Self {
         gray: true,
         hsv: false,
+        ifd: false,
     };
 }
 
@@ -180,8 +186,7 @@ pub struct Shell<C> {
     core: C,
     guard: FrameGuard,
     index: u64,
-    gray: Option<Image<u8>>,
-    hsv: Option<Image<f32>>,
+    buffers: PlaneBuffers,
 }
 
 impl<C: TrackerCore> Shell<C> {
@@ -191,8 +196,7 @@ impl<C: TrackerCore> Shell<C> {
             guard: FrameGuard::named(core.name()),
             core,
             index: 0,
-            gray: None,
-            hsv: None,
+            buffers: PlaneBuffers::default(),
         }
     }
 
@@ -221,52 +225,110 @@ impl<C: TrackerCore> Shell<C> {
     ) -> Result<T> {
         self.guard.check(&frame)?;
         let index = self.index + 1;
-        let planes = build(
-            self.core.needs(),
-            frame,
-            index,
-            &mut self.gray,
-            &mut self.hsv,
-        )?;
+        let planes = self.buffers.build(self.core.needs(), frame, index)?;
         let out = track(&mut self.core, &planes)?;
         self.index = index;
         Ok(out)
     }
 }
 
-/// The planes of `frame` that `needs` asks for, in `gray` and `hsv`.
-fn build<'a>(
-    needs: Needs,
-    frame: ImageView<'a, u8>,
-    index: u64,
-    gray: &'a mut Option<Image<u8>>,
-    hsv: &'a mut Option<Image<f32>>,
-) -> Result<Planes<'a>> {
-    let (w, h) = (frame.width(), frame.height());
-    let rgb = frame.channels() == 3;
-    let mut cues = Frame::new();
-    if rgb {
-        cues = cues.with_rgb(frame);
-    }
-    if needs.gray {
-        if rgb {
-            let gray = reshaped(gray, w, h, 1, 0)?;
-            rgb_to_gray_into(frame, &mut gray.view_mut())?;
-            cues = cues.with_gray(gray.view());
-        } else {
-            cues = cues.with_gray(frame);
+/// The buffers behind [`Planes`], kept from frame to frame (the previous
+/// gray plane for the interframe difference). [`Shell`] keeps one; a
+/// multi-object tracker outside the shell keeps its own.
+#[derive(Debug, Clone, Default)]
+pub struct PlaneBuffers {
+    gray: Option<Image<u8>>,
+    previous: Option<Image<u8>>,
+    hsv: Option<Image<f32>>,
+    ifd: Option<Image<f32>>,
+}
+
+impl PlaneBuffers {
+    /// The planes of `frame` that `needs` asks for; `index` 0 starts a
+    /// sequence (a zero interframe difference), later ones difference
+    /// against the frame built before.
+    ///
+    /// # Errors
+    /// Image errors (a frame of 2 or 4 channels, or a size that cannot be
+    /// allocated).
+    pub fn build<'a>(
+        &'a mut self,
+        needs: Needs,
+        frame: ImageView<'a, u8>,
+        index: u64,
+    ) -> Result<Planes<'a>> {
+        let (w, h) = (frame.width(), frame.height());
+        let rgb = frame.channels() == 3;
+        if !rgb {
+            frame.expect_channels("tracker shell", 1)?;
         }
+        let mut cues = Frame::new();
+        if rgb {
+            cues = cues.with_rgb(frame);
+        }
+        if needs.hsv && rgb {
+            let hsv = reshaped(&mut self.hsv, w, h, 3, 0.0)?;
+            rgb_to_hsv_into(frame, &mut hsv.view_mut())?;
+        }
+        // The 8-bit gray plane of an RGB frame, in `gray`.
+        if (needs.gray || needs.ifd) && rgb {
+            let gray = reshaped(&mut self.gray, w, h, 1, 0)?;
+            rgb_to_gray_into(frame, &mut gray.view_mut())?;
+        }
+        if needs.ifd {
+            let ifd = reshaped(&mut self.ifd, w, h, 1, 0.0)?;
+            let current = if rgb {
+                self.gray.as_ref().map(|g| g.view())
+            } else {
+                Some(frame)
+            };
+            let current = current.ok_or(undeclared("gray"))?;
+            let previous = reshaped(&mut self.previous, w, h, 1, 0)?;
+            if index == 0 {
+                ifd.fill(0.0);
+            } else {
+                interframe_difference_into(current, previous.view(), &mut ifd.view_mut())?;
+            }
+            if rgb {
+                // the current gray plane becomes the previous one
+                std::mem::swap(&mut self.gray, &mut self.previous);
+            } else {
+                for y in 0..h {
+                    previous.row_mut(y).copy_from_slice(&frame.row(y)[..w]);
+                }
+            }
+        }
+        if needs.gray || needs.ifd {
+            let gray = match (rgb, needs.ifd) {
+                (false, _) => Some(frame),
+                // after the swap, the current gray plane is `previous`
+                (true, true) => self.previous.as_ref().map(|g| g.view()),
+                (true, false) => self.gray.as_ref().map(|g| g.view()),
+            };
+            cues = cues.with_gray(gray.ok_or(undeclared("gray"))?);
+        }
+        if needs.hsv && rgb {
+            cues = cues.with_hsv(
+                self.hsv
+                    .as_ref()
+                    .map(|p| p.view())
+                    .ok_or(undeclared("hsv"))?,
+            );
+        }
+        if needs.ifd {
+            cues = cues.with_ifd(
+                self.ifd
+                    .as_ref()
+                    .map(|p| p.view())
+                    .ok_or(undeclared("ifd"))?,
+            );
+        }
+        Ok(Planes {
+            input: frame,
+            cues,
+            index,
+        })
     }
-    if needs.hsv && rgb {
-        let hsv = reshaped(hsv, w, h, 3, 0.0)?;
-        rgb_to_hsv_into(frame, &mut hsv.view_mut())?;
-        cues = cues.with_hsv(hsv.view());
-    }
-    Ok(Planes {
-        input: frame,
-        cues,
-        index,
-    })
 }
 
 /// The buffer in `slot`, created or reshaped to `w x h x channels`.
@@ -315,7 +377,7 @@ impl<C: TrackerCore> Tracker for Shell<C> {
             },
         )?;
         self.guard.reset();
-        let planes = build(self.core.needs(), frame, 0, &mut self.gray, &mut self.hsv)?;
+        let planes = self.buffers.build(self.core.needs(), frame, 0)?;
         self.core
             .start(&planes, InitialBox { bbox: target, rect })?;
         self.guard.start(&frame);
@@ -351,6 +413,7 @@ mod tests {
             Needs {
                 gray: true,
                 hsv: true,
+                ifd: true,
             }
         }
         fn start(&mut self, frame: &Planes<'_>, target: InitialBox) -> Result<()> {
@@ -402,6 +465,41 @@ mod tests {
         g.init(frame(1, 6).view(), BBox::new(1.0, 1.0, 8.0, 6.0))
             .unwrap();
         assert_eq!(g.seen, vec![(0, true, false, false)]);
+    }
+
+    #[test]
+    fn the_interframe_difference_is_of_consecutive_frames() {
+        use bayestrack_image::rgb_to_gray;
+        let needs = Needs {
+            ifd: true,
+            ..Needs::INPUT
+        };
+        for channels in [1, 3] {
+            let frame = |k: usize| {
+                let data = (0..8 * 6 * channels)
+                    .map(|i| ((i * 37 + k * k * 11 + i / 5 * k) % 251) as u8)
+                    .collect();
+                Image::from_vec(8, 6, channels, data).unwrap()
+            };
+            let gray = |k: usize| match channels {
+                1 => frame(k),
+                _ => rgb_to_gray(frame(k).view()).unwrap(),
+            };
+            let mut b = PlaneBuffers::default();
+            for k in 0..4 {
+                let f = frame(k);
+                let p = b.build(needs, f.view(), k as u64).unwrap();
+                let got = p.cues().ifd.unwrap().to_image();
+                assert_eq!(p.gray().unwrap().to_image(), gray(k), "{channels} {k}");
+                let want = if k == 0 {
+                    Image::new(8, 6, 1, 0.0).unwrap()
+                } else {
+                    bayestrack_appearance::interframe_difference(gray(k).view(), gray(k - 1).view())
+                        .unwrap()
+                };
+                assert_eq!(got, want, "{channels} channels, frame {k}");
+            }
+        }
     }
 
     #[test]

@@ -543,11 +543,7 @@ pub(crate) struct Core {
 }
 
 impl Core {
-    pub(crate) fn new(
-        key: u64,
-        seed: u64,
-        cfg: AppearanceConfig,
-    ) -> Result<Self> {
+    pub(crate) fn new(key: u64, seed: u64, cfg: AppearanceConfig) -> Result<Self> {
         cfg.validate()?;
         let ps = cfg.pose.patch_size;
         Ok(Self {

@@ -40,13 +40,13 @@ use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 
 use super::{
-    CAvq, CAvqConfig, Condensation, CondensationReport, CueSet, FLOOR, Object, ObjectFilter,
-    ObjectStep, Planes, check_channels, check_damping, check_particles, check_positive,
-    frame_planes, second_order,
+    CAvq, CAvqConfig, Condensation, CondensationReport, CueSet, FLOOR, NEEDS, Object, ObjectFilter,
+    ObjectStep, channel_policy, check_damping, check_particles, check_positive, second_order,
 };
 use crate::engine::StateModel;
 use crate::error::{Result, TrackerError};
-use crate::tracker::{Estimate, FrameGuard, Tracker, check_initial_box};
+use crate::shell::{ChannelPolicy, InitialBox, Needs, Planes, Shell, TrackerCore};
+use crate::tracker::Estimate;
 
 /// Key of the random streams ("c-contour" in ASCII, truncated).
 const KEY: u64 = 0x632d_636f_6e74_6f75;
@@ -524,13 +524,14 @@ impl StateModel<8> for ContourModel {
 ///
 /// Frames: RGB, or gray with [`CueSet::Ifd`] (a skin cue on a gray frame is
 /// [`TrackerError::Channels`]).
+pub type ContourTracker = Shell<ContourCore>;
+
+/// The model of [`ContourTracker`].
 #[derive(Debug)]
-pub struct ContourTracker {
+pub struct ContourCore {
     config: ContourConfig,
     outline: Option<Vec<Vector2<f64>>>,
     seed: u64,
-    guard: FrameGuard,
-    planes: Planes,
     object: Option<ObjectFilter>,
     avq: Option<CAvq>,
     reinitialised: bool,
@@ -543,13 +544,39 @@ impl ContourTracker {
     /// # Errors
     /// [`TrackerError::InvalidParameter`] for a bad configuration.
     pub fn new(config: ContourConfig, seed: u64) -> Result<Self> {
+        Ok(Shell::wrap(ContourCore::new(config, seed)?))
+    }
+
+    /// A tracker with its own template: closed B-spline control points in
+    /// box units (`(-0.5, -0.5)` is the initial box's top-left corner,
+    /// `(0.5, 0.5)` its bottom-right), e.g. a hand's outline;
+    /// `config.control_points` is ignored.
+    ///
+    /// # Errors
+    /// As [`ContourTracker::new`], and [`TrackerError::Affine`] for too few
+    /// or non-finite points.
+    pub fn with_outline(
+        config: ContourConfig,
+        outline: Vec<Vector2<f64>>,
+        seed: u64,
+    ) -> Result<Self> {
+        Ok(Shell::wrap(ContourCore::with_outline(
+            config, outline, seed,
+        )?))
+    }
+}
+
+impl ContourCore {
+    /// The model of [`ContourTracker::new`].
+    ///
+    /// # Errors
+    /// As [`ContourTracker::new`].
+    pub fn new(config: ContourConfig, seed: u64) -> Result<Self> {
         config.validate()?;
         Ok(Self {
             config,
             outline: None,
             seed,
-            guard: FrameGuard::default(),
-            planes: Planes::new()?,
             object: None,
             avq: config.avq.map(CAvq::new).transpose()?,
             reinitialised: false,
@@ -625,14 +652,21 @@ impl ContourTracker {
     }
 }
 
-impl Tracker for ContourTracker {
+impl TrackerCore for ContourCore {
     fn name(&self) -> &'static str {
         "condensation-contour"
     }
 
-    fn init(&mut self, frame: ImageView<'_, u8>, target: BBox) -> Result<()> {
-        check_channels(self.name(), self.config.cues, &frame)?;
-        check_initial_box(target, frame.width(), frame.height())?;
+    fn channels(&self) -> ChannelPolicy {
+        channel_policy(self.config.cues)
+    }
+
+    fn needs(&self) -> Needs {
+        NEEDS
+    }
+
+    fn start(&mut self, planes: &Planes<'_>, target: InitialBox) -> Result<()> {
+        let (frame, target) = (planes.input(), target.bbox);
         let mut rng = stream_rng(&[KEY, self.seed, u64::MAX]);
         self.object = Some(ContourModel::object(
             &self.config,
@@ -642,25 +676,20 @@ impl Tracker for ContourTracker {
             &mut rng,
             stream_seed(&[KEY, self.seed]),
         )?);
-        self.planes.start(frame)?;
-        self.guard.start(&frame);
         Ok(())
     }
 
-    fn step(&mut self, frame: ImageView<'_, u8>) -> Result<Estimate> {
-        self.guard.check(&frame)?;
-        check_channels(self.name(), self.config.cues, &frame)?;
+    fn track(&mut self, planes: &Planes<'_>) -> Result<Estimate> {
         let object = self.object.as_mut().ok_or(TrackerError::NotInitialised)?;
-        self.planes.update(frame)?;
+        let ifd = planes.cues().ifd.ok_or(TrackerError::NotInitialised)?;
         self.reinitialised = false;
         if let Some(avq) = &mut self.avq
-            && let Some((dx, dy)) = avq.reinitialise(self.planes.ifd.view(), object.centre())
+            && let Some((dx, dy)) = avq.reinitialise(ifd, object.centre())
         {
             object.shift(dx, dy);
             self.reinitialised = true;
         }
-        let planes = frame_planes(frame, self.planes.ifd.view());
-        let s = object.step(&planes)?;
+        let s = object.step(planes.cues())?;
         Ok(Estimate {
             bbox: s.bbox,
             pose: s.pose,

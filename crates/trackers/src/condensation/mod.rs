@@ -69,10 +69,8 @@ pub use contour::{ContourConfig, ContourTracker, CurveCue, CurveCueKind};
 pub use multi::{MultiCondensation, MultiConfig, ObjectConfig, ObjectEstimate};
 pub use points::{PointCloudConfig, PointCloudTracker};
 
-use bayestrack_appearance::{
-    Cue, DEFAULT_FLOOR, Frame, Fusion, FusionRule, interframe_difference_into,
-};
-use bayestrack_image::{Affine2, BBox, Image, ImageView, rgb_to_gray_into};
+use bayestrack_appearance::{Cue, DEFAULT_FLOOR, Frame, Fusion, FusionRule};
+use bayestrack_image::{Affine2, BBox};
 use bayestrack_particle::{
     Degenerate, ParticleFilter, ResamplePolicy, ResampleTiming, Resampling, StepReport,
 };
@@ -82,6 +80,7 @@ use rand_distr::{Distribution, StandardNormal};
 
 use crate::engine::{CueFilter, StateModel};
 use crate::error::{Result, TrackerError};
+use crate::shell::{ChannelPolicy, Needs};
 
 /// A particle whose best log-likelihood is below this saw no evidence at
 /// all: every cue score under it is at the log floor (`ln 1e-12`, about
@@ -308,91 +307,25 @@ fn check_particles(n: usize) -> Result<()> {
     Ok(())
 }
 
-/// The planes kept from frame to frame: the previous frame's 8-bit luma
-/// and the IFD map (eq. 7), computed once per frame over the whole image
-/// on BT.601 luma rounded to 8 bits (`rgb_to_gray_into`, then
-/// `interframe_difference_into` on the two gray planes: half the work of
+/// The planes CONDENSATION reads, built by the shell once per frame: the
+/// input (RGB for the skin cue) and the IFD map (eq. 7), computed over the
+/// whole image on BT.601 luma rounded to 8 bits (half the work of
 /// differencing two RGB frames, and within 1/255 of the float-luma
 /// difference). The c-AVQ stripes and the priority field of eq. 15 need the
 /// whole map; the skin cue, which costs an HSV conversion per pixel, is
 /// only evaluated at the particles' pixels.
-#[derive(Debug, Clone)]
-struct Planes {
-    luma: Image<u8>,
-    previous: Image<u8>,
-    ifd: Image<f32>,
-}
+const NEEDS: Needs = Needs {
+    gray: false,
+    hsv: false,
+    ifd: true,
+};
 
-impl Planes {
-    fn new() -> Result<Self> {
-        Ok(Self {
-            luma: Image::new(1, 1, 1, 0)?,
-            previous: Image::new(1, 1, 1, 0)?,
-            ifd: Image::new(1, 1, 1, 0.0)?,
-        })
-    }
-
-    /// The 8-bit luma of `frame` into `out`.
-    fn luma_into(frame: ImageView<'_, u8>, out: &mut Image<u8>) -> Result<()> {
-        out.reshape(frame.width(), frame.height(), 1, 0)?;
-        if frame.channels() == 3 {
-            rgb_to_gray_into(frame, &mut out.view_mut())?;
-        } else {
-            frame.expect_channels("condensation", 1)?;
-            for y in 0..frame.height() {
-                out.row_mut(y).copy_from_slice(frame.row(y));
-            }
-        }
-        Ok(())
-    }
-
-    fn start(&mut self, frame: ImageView<'_, u8>) -> Result<()> {
-        Self::luma_into(frame, &mut self.previous)?;
-        self.ifd.reshape(frame.width(), frame.height(), 1, 0.0)?;
-        self.ifd.fill(0.0);
-        Ok(())
-    }
-
-    /// `dP_t = |I_t - I_{t-1}|`, then remembers `I_t`.
-    fn update(&mut self, frame: ImageView<'_, u8>) -> Result<()> {
-        Self::luma_into(frame, &mut self.luma)?;
-        interframe_difference_into(
-            self.luma.view(),
-            self.previous.view(),
-            &mut self.ifd.view_mut(),
-        )?;
-        std::mem::swap(&mut self.luma, &mut self.previous);
-        Ok(())
-    }
-}
-
-/// Checks a frame's channels for a cue set.
-fn check_channels(tracker: &'static str, cues: CueSet, frame: &ImageView<'_, u8>) -> Result<()> {
-    let got = frame.channels();
-    if cues.uses_skin() && got != 3 {
-        return Err(TrackerError::Channels {
-            tracker,
-            expected: "3 (RGB: the skin cue needs colour; use CueSet::Ifd for gray video)",
-            got,
-        });
-    }
-    if got != 1 && got != 3 {
-        return Err(TrackerError::Channels {
-            tracker,
-            expected: "1 or 3",
-            got,
-        });
-    }
-    Ok(())
-}
-
-/// The planes the cues read for one frame.
-fn frame_planes<'a>(frame: ImageView<'a, u8>, ifd: ImageView<'a, f32>) -> Frame<'a> {
-    let f = Frame::new().with_ifd(ifd);
-    if frame.channels() == 3 {
-        f.with_rgb(frame)
+/// The frames a cue set accepts: the skin cue needs colour.
+fn channel_policy(cues: CueSet) -> ChannelPolicy {
+    if cues.uses_skin() {
+        ChannelPolicy::Rgb
     } else {
-        f.with_gray(frame)
+        ChannelPolicy::GrayOrRgb
     }
 }
 

@@ -30,10 +30,9 @@ use bayestrack_particle::{stream_rng, stream_seed};
 
 use super::contour::ContourModel;
 use super::points::PointModel;
-use super::{
-    ContourConfig, CueSet, ObjectFilter, Planes, PointCloudConfig, check_channels, frame_planes,
-};
+use super::{ContourConfig, CueSet, NEEDS, ObjectFilter, PointCloudConfig, channel_policy};
 use crate::error::{Result, TrackerError};
+use crate::shell::PlaneBuffers;
 use crate::tracker::{FrameGuard, check_initial_box};
 
 /// Key of the random streams ("c-multi" in ASCII).
@@ -116,7 +115,7 @@ pub struct MultiCondensation {
     seed: u64,
     k: u64,
     guard: FrameGuard,
-    planes: Planes,
+    planes: PlaneBuffers,
     field: Option<PriorityIfd>,
     objects: Vec<(u64, ObjectFilter)>,
     next_id: u64,
@@ -140,8 +139,8 @@ impl MultiCondensation {
             config,
             seed,
             k: 0,
-            guard: FrameGuard::default(),
-            planes: Planes::new()?,
+            guard: FrameGuard::named("condensation-multi"),
+            planes: PlaneBuffers::default(),
             field: None,
             objects: Vec::new(),
             next_id: 0,
@@ -174,7 +173,7 @@ impl MultiCondensation {
     /// [`TrackerError::Channels`], [`TrackerError::FrameSizeChanged`], and
     /// model errors (a box with no skin hue to learn).
     pub fn add_object(&mut self, frame: ImageView<'_, u8>, target: BBox) -> Result<u64> {
-        check_channels("condensation-multi", self.config.object.cues(), &frame)?;
+        channel_policy(self.config.object.cues()).check("condensation-multi", frame.channels())?;
         check_initial_box(target, frame.width(), frame.height())?;
         let first = self.objects.is_empty() && self.k == 0;
         if !first {
@@ -191,7 +190,7 @@ impl MultiCondensation {
             }
         };
         if first {
-            self.planes.start(frame)?;
+            self.planes.build(NEEDS, frame, 0)?;
             self.guard.start(&frame);
         }
         self.objects.push((id, object));
@@ -216,24 +215,24 @@ impl MultiCondensation {
     /// model errors.
     pub fn step(&mut self, frame: ImageView<'_, u8>) -> Result<Vec<ObjectEstimate>> {
         self.guard.check(&frame)?;
-        check_channels("condensation-multi", self.config.object.cues(), &frame)?;
         self.k += 1;
-        self.planes.update(frame)?;
+        let planes = self.planes.build(NEEDS, frame, self.k)?;
+        let ifd = planes.cues().ifd.ok_or(TrackerError::NotInitialised)?;
         let field = match &mut self.field {
             Some(f) => {
-                f.reset(self.planes.ifd.view())?;
+                f.reset(ifd)?;
                 f
             }
-            None => self.field.insert(PriorityIfd::new(self.planes.ifd.view())?),
+            None => self.field.insert(PriorityIfd::new(ifd)?),
         };
         let mut out = Vec::with_capacity(self.objects.len());
         for (priority, (id, object)) in self.objects.iter_mut().enumerate() {
             let ifd = if self.config.priority {
                 field.field()
             } else {
-                self.planes.ifd.view()
+                ifd
             };
-            let s = object.step(&frame_planes(frame, ifd))?;
+            let s = object.step(&planes.cues().with_ifd(ifd))?;
             if self.config.priority {
                 let c = self.config.claim_scale;
                 let (w, h) = (s.bbox.width * c, s.bbox.height * c);

@@ -23,13 +23,13 @@ use nalgebra::{SVector, Vector4};
 use rand::{Rng, RngExt};
 
 use super::{
-    CAvq, CAvqConfig, Condensation, CondensationReport, CueSet, FLOOR, Object, ObjectFilter,
-    ObjectStep, Planes, check_channels, check_damping, check_particles, check_positive,
-    frame_planes, second_order,
+    CAvq, CAvqConfig, Condensation, CondensationReport, CueSet, FLOOR, NEEDS, Object, ObjectFilter,
+    ObjectStep, channel_policy, check_damping, check_particles, check_positive, second_order,
 };
 use crate::engine::StateModel;
 use crate::error::{Result, TrackerError};
-use crate::tracker::{Estimate, FrameGuard, Tracker, check_initial_box};
+use crate::shell::{ChannelPolicy, InitialBox, Needs, Planes, Shell, TrackerCore};
+use crate::tracker::Estimate;
 
 /// Key of the random streams ("c-points" in ASCII).
 const KEY: u64 = 0x632d_706f_696e_7473;
@@ -218,12 +218,13 @@ impl StateModel<4> for PointModel {
 ///
 /// Frames: RGB, or gray with [`CueSet::Ifd`] (a skin cue on a gray frame is
 /// [`TrackerError::Channels`]).
+pub type PointCloudTracker = Shell<PointCloudCore>;
+
+/// The model of [`PointCloudTracker`].
 #[derive(Debug)]
-pub struct PointCloudTracker {
+pub struct PointCloudCore {
     config: PointCloudConfig,
     seed: u64,
-    guard: FrameGuard,
-    planes: Planes,
     object: Option<ObjectFilter>,
     avq: Option<CAvq>,
     reinitialised: bool,
@@ -235,12 +236,20 @@ impl PointCloudTracker {
     /// # Errors
     /// [`TrackerError::InvalidParameter`] for a bad configuration.
     pub fn new(config: PointCloudConfig, seed: u64) -> Result<Self> {
+        Ok(Shell::wrap(PointCloudCore::new(config, seed)?))
+    }
+}
+
+impl PointCloudCore {
+    /// The model of [`PointCloudTracker::new`].
+    ///
+    /// # Errors
+    /// As [`PointCloudTracker::new`].
+    pub fn new(config: PointCloudConfig, seed: u64) -> Result<Self> {
         config.validate()?;
         Ok(Self {
             config,
             seed,
-            guard: FrameGuard::default(),
-            planes: Planes::new()?,
             object: None,
             avq: config.avq.map(CAvq::new).transpose()?,
             reinitialised: false,
@@ -269,11 +278,6 @@ impl PointCloudTracker {
         }
     }
 
-    /// The last frame's IFD map (eq. 7).
-    pub fn ifd(&self) -> ImageView<'_, f32> {
-        self.planes.ifd.view()
-    }
-
     /// Whether c-AVQ moved the set in the last step.
     pub fn reinitialised(&self) -> bool {
         self.reinitialised
@@ -285,14 +289,21 @@ impl PointCloudTracker {
     }
 }
 
-impl Tracker for PointCloudTracker {
+impl TrackerCore for PointCloudCore {
     fn name(&self) -> &'static str {
         "condensation-points"
     }
 
-    fn init(&mut self, frame: ImageView<'_, u8>, target: BBox) -> Result<()> {
-        check_channels(self.name(), self.config.cues, &frame)?;
-        check_initial_box(target, frame.width(), frame.height())?;
+    fn channels(&self) -> ChannelPolicy {
+        channel_policy(self.config.cues)
+    }
+
+    fn needs(&self) -> Needs {
+        NEEDS
+    }
+
+    fn start(&mut self, planes: &Planes<'_>, target: InitialBox) -> Result<()> {
+        let (frame, target) = (planes.input(), target.bbox);
         let mut rng = stream_rng(&[KEY, self.seed, u64::MAX]);
         self.object = Some(PointModel::object(
             &self.config,
@@ -301,25 +312,20 @@ impl Tracker for PointCloudTracker {
             &mut rng,
             stream_seed(&[KEY, self.seed]),
         )?);
-        self.planes.start(frame)?;
-        self.guard.start(&frame);
         Ok(())
     }
 
-    fn step(&mut self, frame: ImageView<'_, u8>) -> Result<Estimate> {
-        self.guard.check(&frame)?;
-        check_channels(self.name(), self.config.cues, &frame)?;
+    fn track(&mut self, planes: &Planes<'_>) -> Result<Estimate> {
         let object = self.object.as_mut().ok_or(TrackerError::NotInitialised)?;
-        self.planes.update(frame)?;
+        let ifd = planes.cues().ifd.ok_or(TrackerError::NotInitialised)?;
         self.reinitialised = false;
         if let Some(avq) = &mut self.avq
-            && let Some((dx, dy)) = avq.reinitialise(self.planes.ifd.view(), object.centre())
+            && let Some((dx, dy)) = avq.reinitialise(ifd, object.centre())
         {
             object.shift(dx, dy);
             self.reinitialised = true;
         }
-        let planes = frame_planes(frame, self.planes.ifd.view());
-        let s = object.step(&planes)?;
+        let s = object.step(planes.cues())?;
         Ok(Estimate {
             bbox: s.bbox,
             pose: None,
@@ -333,6 +339,7 @@ impl Tracker for PointCloudTracker {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::tracker::Tracker;
     use bayestrack_image::Image;
 
     #[test]
