@@ -164,12 +164,37 @@ fn decode(path: &Path) -> Result<image::DynamicImage> {
 /// Decodes a PNG/JPEG file's `bytes`; `path` names it in errors (and
 /// gives the format when the bytes do not).
 fn decode_bytes(bytes: &[u8], path: &Path) -> Result<image::DynamicImage> {
-    let format = image::guess_format(bytes)
-        .or_else(|_| image::ImageFormat::from_path(path))
-        .map_err(|source| ImageError::Decode {
-            path: path.to_path_buf(),
-            source,
-        })?;
+    let format = match image::guess_format(bytes) {
+        Ok(format) => format,
+        Err(guess) => {
+            // The bytes start with no image signature: a file named .png
+            // that is not one (text, another format) is not "truncated".
+            let source = match image::ImageFormat::from_path(path) {
+                Ok(named) => {
+                    let ext = path
+                        .extension()
+                        .map_or(String::new(), |e| e.to_string_lossy().into_owned());
+                    let kind = match named {
+                        image::ImageFormat::Jpeg => "JPEG",
+                        image::ImageFormat::Png => "PNG",
+                        _ => "image",
+                    };
+                    image::ImageError::Decoding(image::error::DecodingError::new(
+                        image::error::ImageFormatHint::Exact(named),
+                        format!(
+                            "not a {kind} file: its bytes do not start with the {kind} \
+                             signature (another format, or text, named .{ext})"
+                        ),
+                    ))
+                }
+                Err(_) => guess,
+            };
+            return Err(ImageError::Decode {
+                path: path.to_path_buf(),
+                source,
+            });
+        }
+    };
     if !has_end_marker(bytes, format) {
         return Err(ImageError::Truncated {
             path: path.to_path_buf(),
@@ -444,6 +469,11 @@ mod tests {
         fs::write(&trunc, &bytes[..bytes.len() / 2]).unwrap();
         let text = d.join("text.jpg");
         fs::write(&text, "hello, I am not a JPEG").unwrap();
+        let named = d.join("text.png");
+        fs::write(&named, "a text file named .png\n").unwrap();
+        let e = read_frame(&named).unwrap_err();
+        assert!(matches!(e, ImageError::Decode { .. }), "{e:?}");
+        assert!(e.to_string().contains("not a PNG file"), "{e}");
         for p in [&trunc, &text] {
             match read_frame(p) {
                 Err(e @ (ImageError::Decode { .. } | ImageError::Truncated { .. })) => {

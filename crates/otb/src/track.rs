@@ -70,14 +70,24 @@ pub struct TrackRun {
     /// 1-based source positions of the frames run, one per box.
     pub numbers: Vec<usize>,
     /// Source positions of frames whose channel count differed from the
-    /// first frame's and which were converted to it ([`track_source`]).
+    /// first frame's and which were converted to it ([`track_source`]):
+    /// the first [`CONVERTED_LISTED`] of them ([`TrackRun::converted_count`]
+    /// counts them all), so the list does not grow with a long stream.
     pub converted: Vec<usize>,
+    /// Frames converted to the first frame's channel count, all of them.
+    pub converted_count: usize,
+    /// Frames run (one box each), also where [`track_stream`] keeps no
+    /// boxes.
+    pub frames_run: usize,
 }
+
+/// How many converted frames [`TrackRun::converted`] lists.
+pub const CONVERTED_LISTED: usize = 16;
 
 impl TrackRun {
     /// Frames the tracker processed per second of its own time.
     pub fn fps(&self) -> f64 {
-        let seen = self.boxes.len() - self.skipped.len();
+        let seen = self.frames_run - self.skipped.len();
         if self.tracker_seconds > 0.0 {
             seen as f64 / self.tracker_seconds
         } else {
@@ -123,6 +133,7 @@ where
         |index, _| path(index),
         |index, _| path(index).display().to_string(),
         false,
+        true,
         init,
         on_bad_frame,
         &mut sink,
@@ -184,6 +195,41 @@ pub fn track_source<S>(
     source: &mut dyn FrameSource,
     init: BBox,
     on_bad_frame: OnBadFrame,
+    sink: S,
+) -> Result<TrackRun, OtbError>
+where
+    S: FnMut(FrameBox<'_>) -> Result<(), OtbError>,
+{
+    source_loop(tracker, source, init, on_bad_frame, true, sink)
+}
+
+/// [`track_source`] for a source of any length (a camera, a Y4M stream of
+/// millions of frames): the boxes go to `sink` only, and the returned
+/// [`TrackRun`] keeps none ([`TrackRun::boxes`] and [`TrackRun::numbers`]
+/// are empty, [`TrackRun::frames_run`] counts them), so memory stays the
+/// same however long the source runs.
+///
+/// # Errors
+/// As [`track_source`].
+pub fn track_stream<S>(
+    tracker: &mut dyn Tracker,
+    source: &mut dyn FrameSource,
+    init: BBox,
+    on_bad_frame: OnBadFrame,
+    sink: S,
+) -> Result<TrackRun, OtbError>
+where
+    S: FnMut(FrameBox<'_>) -> Result<(), OtbError>,
+{
+    source_loop(tracker, source, init, on_bad_frame, false, sink)
+}
+
+fn source_loop<S>(
+    tracker: &mut dyn Tracker,
+    source: &mut dyn FrameSource,
+    init: BBox,
+    on_bad_frame: OnBadFrame,
+    keep_boxes: bool,
     mut sink: S,
 ) -> Result<TrackRun, OtbError>
 where
@@ -203,6 +249,7 @@ where
         |_, name| PathBuf::from(format!("{describe}: {name}")),
         |_, number| format!("frame {number}"),
         true,
+        keep_boxes,
         init,
         on_bad_frame,
         &mut sink,
@@ -230,6 +277,7 @@ fn run_frames<'f, S>(
     error_path: impl Fn(usize, &str) -> PathBuf,
     skipped_name: impl Fn(usize, usize) -> String,
     convert_channels: bool,
+    keep_boxes: bool,
     init: BBox,
     on_bad_frame: OnBadFrame,
     sink: &mut S,
@@ -247,7 +295,11 @@ where
             source: Box::new(source),
         }
     };
-    let capacity = frames.size_hint().0;
+    let capacity = if keep_boxes {
+        frames.size_hint().0
+    } else {
+        0
+    };
     let first = frames.next().ok_or(OtbError::NoFramesToTrack)??;
     let channels = first.image.channels();
     let init = clip_initial_box(init, first.image.width(), first.image.height()).unwrap_or(init);
@@ -260,14 +312,22 @@ where
         init,
         numbers: Vec::with_capacity(capacity + 1),
         converted: Vec::new(),
+        converted_count: 0,
+        frames_run: 0,
+    };
+    let record = |run: &mut TrackRun, bbox: BBox, number: usize| {
+        run.frames_run += 1;
+        if keep_boxes {
+            run.boxes.push(bbox);
+            run.numbers.push(number);
+        }
     };
     let start = Instant::now();
     tracker
         .init(first.image.view(), init)
         .map_err(refused(&first, 0))?;
     run.tracker_seconds += start.elapsed().as_secs_f64();
-    run.boxes.push(init);
-    run.numbers.push(first.number);
+    record(&mut run, init, first.number);
     sink(FrameBox {
         index: 0,
         number: first.number,
@@ -287,8 +347,7 @@ where
                 let number = previous + 1;
                 previous = number;
                 run.skipped.push((index, e.to_string()));
-                run.boxes.push(last);
-                run.numbers.push(number);
+                record(&mut run, last, number);
                 sink(FrameBox {
                     index,
                     number,
@@ -304,7 +363,10 @@ where
         previous = frame.number;
         if convert_channels && let Some(converted) = match_channels(&frame.image, channels) {
             frame.image = Cow::Owned(converted);
-            run.converted.push(frame.number);
+            if run.converted.len() < CONVERTED_LISTED {
+                run.converted.push(frame.number);
+            }
+            run.converted_count += 1;
         }
         let start = Instant::now();
         let estimate = tracker
@@ -314,8 +376,7 @@ where
         last = estimate.bbox;
         run.lost_frames += usize::from(estimate.lost);
         run.particles += estimate.particles;
-        run.boxes.push(last);
-        run.numbers.push(frame.number);
+        record(&mut run, last, frame.number);
         sink(FrameBox {
             index,
             number: frame.number,
