@@ -46,9 +46,9 @@ pub fn check_box(x: f64, y: f64, w: f64, h: f64) -> Result<BBox, String> {
 }
 
 /// `v` as a short text: the shortest form that reads back to `v`, in
-/// exponent form from 1e15 up (never a 300-digit decimal).
+/// exponent form from 1e15 up and below 1e-5 (never a 300-digit decimal).
 pub fn short_number(v: f64) -> String {
-    if v.is_finite() && v.abs() >= 1e15 {
+    if v.is_finite() && v != 0.0 && !(1e-5..1e15).contains(&v.abs()) {
         format!("{v:e}")
     } else {
         format!("{v}")
@@ -308,6 +308,8 @@ mod tests {
     fn huge_numbers_are_printed_short() {
         assert_eq!(short_number(1e300), "1e300");
         assert_eq!(short_number(12.5), "12.5");
+        assert_eq!(short_number(1e-300), "1e-300");
+        assert_eq!(short_number(0.0), "0");
         let e = parse_ground_truth("1,2,3,4\n1e300,1,0,4\n", "gt.txt").unwrap_err();
         assert!(!e.to_string().contains("000000000"), "{e}");
     }
