@@ -65,7 +65,9 @@ any decoder can pipe Y4M instead:
 Boxes use the OTB convention: x,y is the 1-based top-left pixel, w,h the size.
 The first frame's box is the initial box; one box per frame run is written as
 soon as it is known (a row whole or not at all), so an interrupted or failed
-run keeps every box written so far. Scores (with ground truth): success AUC
+run keeps every box written so far. The --out file is created with the first
+box: a run that fails before it leaves the previous file as it was. An --out
+that is an input (by any name or link), or in the --draw folder, is refused. Scores (with ground truth): success AUC
 (mean of the success curve at IoU thresholds 0, 0.05, ..., 1), precision at
 20 px centre error, mean IoU; unlabelled rows (0,0,0,0) and frames past the
 last ground-truth row are not scored. fps counts only the tracker's own time
