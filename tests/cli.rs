@@ -841,6 +841,26 @@ fn a_closed_standard_output_is_an_error() {
     assert!(!err.contains("write -:"), "{err}");
 }
 
+#[cfg(unix)]
+#[test]
+fn a_standard_output_that_stops_reading_is_named_so() {
+    let dir = tmpdir("broken-pipe");
+    write_sequence(&dir, 30, 30);
+    let err_file = dir.join("stderr.txt");
+    // `true` exits at once: every row written after that fails (EPIPE).
+    let o = Command::new("sh")
+        .arg("-c")
+        .arg("\"$0\" track --seq \"$1\" --tracker mad 2>\"$2\" | true; cat \"$2\"")
+        .arg(env!("CARGO_BIN_EXE_bayestrack"))
+        .arg(&dir)
+        .arg(&err_file)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stdout);
+    assert!(err.contains("cannot write standard output"), "{err}");
+    assert!(!err.contains("write -:"), "{err}");
+}
+
 #[test]
 fn frame_folders_with_a_gap_a_duplicate_or_an_odd_name_are_refused() {
     let gap = tmpdir("gap");

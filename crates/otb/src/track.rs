@@ -512,4 +512,81 @@ mod tests {
         );
         assert!(matches!(first_bad, Err(OtbError::IndexOutOfRange { .. })));
     }
+
+    /// A Y4M stream of `n` 8x4 gray frames.
+    fn gray_stream(n: usize) -> Vec<u8> {
+        let mut out = b"YUV4MPEG2 W8 H4 Cmono\n".to_vec();
+        for k in 0..n {
+            out.extend(b"FRAME\n");
+            out.extend(std::iter::repeat_n((k % 200) as u8, 32));
+        }
+        out
+    }
+
+    /// What a run keeps per frame stays bounded on a long stream: no box,
+    /// no number, at most [`CONVERTED_LISTED`] converted frames (issue 28:
+    /// about 80 bytes a frame over millions of frames).
+    #[test]
+    fn a_streamed_run_keeps_nothing_per_frame() {
+        let bytes = gray_stream(5000);
+        let mut source = crate::source::Y4mSource::new(&bytes[..], "long").unwrap();
+        let mut sunk = 0;
+        let run = track_stream(
+            &mut Drift {
+                bbox: BBox::new(1.0, 1.0, 2.0, 2.0),
+                width: 0,
+            },
+            &mut source,
+            BBox::new(1.0, 1.0, 2.0, 2.0),
+            OnBadFrame::Stop,
+            |_| {
+                sunk += 1;
+                Ok(())
+            },
+        )
+        .unwrap();
+        assert_eq!((run.frames_run, sunk), (5000, 5000));
+        assert!(run.boxes.is_empty() && run.numbers.is_empty());
+        assert!(run.boxes.capacity() <= 1 && run.numbers.capacity() <= 1);
+        assert!(run.fps() > 0.0);
+        // a source of colour frames after a gray one lists only the first
+        // converted frames, and counts them all
+        let mut colour = b"YUV4MPEG2 W8 H4 C444\n".to_vec();
+        for _ in 0..100 {
+            colour.extend(b"FRAME\n");
+            colour.extend([128u8; 96]);
+        }
+        let mut frames = crate::source::Y4mSource::new(&bytes[..32 + 6 + 22], "g")
+            .unwrap()
+            .chain(crate::source::Y4mSource::new(&colour[..], "c").unwrap());
+        struct Chain<I>(I);
+        impl<I: Iterator<Item = Result<crate::source::Frame, OtbError>>> Iterator for Chain<I> {
+            type Item = I::Item;
+            fn next(&mut self) -> Option<Self::Item> {
+                self.0.next()
+            }
+        }
+        impl<I: Iterator<Item = Result<crate::source::Frame, OtbError>>> FrameSource for Chain<I> {
+            fn describe(&self) -> String {
+                "chain".into()
+            }
+            fn remaining(&self) -> Option<usize> {
+                None
+            }
+        }
+        let mut chain = Chain(frames.by_ref());
+        let run = track_stream(
+            &mut Drift {
+                bbox: BBox::new(1.0, 1.0, 2.0, 2.0),
+                width: 0,
+            },
+            &mut chain,
+            BBox::new(1.0, 1.0, 2.0, 2.0),
+            OnBadFrame::Stop,
+            |_| Ok(()),
+        )
+        .unwrap();
+        assert_eq!(run.converted_count, 100);
+        assert_eq!(run.converted.len(), CONVERTED_LISTED);
+    }
 }
