@@ -13,7 +13,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use bayestrack::image::{BBox, Rgb, write_frame_with_boxes};
-use bayestrack::otb::ground_truth::{check_box, read_ground_truth};
+use bayestrack::otb::ground_truth::{check_box, read_ground_truth, short_number};
 use bayestrack::otb::metrics::score_otb;
 use bayestrack::otb::sequence::Sequence;
 use bayestrack::otb::source::{FrameSelection, FrameSource, Select, VideoSource, Y4mSource};
@@ -173,10 +173,42 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(msg) => {
-            eprintln!("error: {msg}");
+            eprintln!("error: {}", shorten_numbers(&msg));
             ExitCode::FAILURE
         }
     }
+}
+
+/// `text` with every number written out in more than 20 characters (Rust
+/// prints `1e300` as a 301-digit decimal) in its short form (`1e300`),
+/// whichever crate formatted it.
+fn shorten_numbers(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(start) = rest.find(|c: char| c.is_ascii_digit()) {
+        out.push_str(&rest[..start]);
+        let tail = &rest[start..];
+        let mut end = tail
+            .find(|c: char| !c.is_ascii_digit())
+            .unwrap_or(tail.len());
+        if tail[end..].starts_with('.') {
+            let frac = &tail[end + 1..];
+            let digits = frac
+                .find(|c: char| !c.is_ascii_digit())
+                .unwrap_or(frac.len());
+            if digits > 0 {
+                end += 1 + digits;
+            }
+        }
+        let number = &tail[..end];
+        match number.parse::<f64>() {
+            Ok(v) if number.len() > 20 => out.push_str(&short_number(v)),
+            _ => out.push_str(number),
+        }
+        rest = &tail[end..];
+    }
+    out.push_str(rest);
+    out
 }
 
 fn list_trackers() {
@@ -470,7 +502,7 @@ fn track(args: &TrackArgs, stdout_closed: bool) -> Result<(), String> {
         },
     };
     for note in &notes {
-        eprintln!("note: {note}");
+        eprintln!("note: {}", shorten_numbers(note));
     }
     let mut inputs: Vec<InputFile<'_>> = Vec::new();
     if let Input::Folder(seq) = &input {
@@ -693,6 +725,16 @@ mod tests {
         .unwrap();
         assert_eq!(std::fs::read(&target).unwrap(), b"whole");
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn long_numbers_are_printed_short() {
+        let long = format!("box {},1,5,5 is outside", 1e300);
+        assert_eq!(super::shorten_numbers(&long), "box 1e300,1,5,5 is outside");
+        let tiny = format!("alpha {} too small", 1e-300);
+        assert_eq!(super::shorten_numbers(&tiny), "alpha 1e-300 too small");
+        let plain = "frame 12 of 0300.jpg at 1.5, 2026";
+        assert_eq!(super::shorten_numbers(plain), plain);
     }
 
     #[test]
