@@ -17,7 +17,7 @@ use bayestrack::otb::ground_truth::{check_box, read_ground_truth, short_number};
 use bayestrack::otb::metrics::score_otb;
 use bayestrack::otb::sequence::Sequence;
 use bayestrack::otb::source::{FrameSelection, FrameSource, Select, VideoSource, Y4mSource};
-use bayestrack::otb::track::{OnBadFrame, track_stream};
+use bayestrack::otb::track::{OnBadFrame, SKIPPED_LISTED, track_stream};
 use bayestrack::otb::write::{BoxFile, box_row};
 use bayestrack::otb::{OtbError, WriteError};
 use bayestrack::trackers::{REGISTRY, tracker_info};
@@ -585,7 +585,7 @@ fn track(args: &TrackArgs, stdout_closed: bool) -> Result<(), String> {
         } else {
             unscored += 1;
         }
-        if f.frame.is_none() {
+        if f.frame.is_none() && skipped_numbers.len() < SKIPPED_LISTED {
             skipped_numbers.push(f.number);
         }
         if let (Some(dir), Some(frame)) = (&args.draw, f.frame) {
@@ -640,6 +640,13 @@ fn track(args: &TrackArgs, stdout_closed: bool) -> Result<(), String> {
     }
     for ((_, why), number) in run.skipped.iter().zip(&skipped_numbers) {
         eprintln!("skipped frame {number}: {why}");
+    }
+    if run.skipped_count > run.skipped.len() {
+        eprintln!(
+            "... and {} more skipped frames ({} in all)",
+            run.skipped_count - run.skipped.len(),
+            run.skipped_count
+        );
     }
     if let Some(first) = run.converted.first() {
         let n = run.converted_count;

@@ -823,7 +823,7 @@ fn run_cell(
     let score =
         score_otb(&run.boxes, &seq.ground_truth).map_err(|e| CellError::Failed(e.to_string()))?;
     if let Timing::PerCall(seconds) = options.timing {
-        run.tracker_seconds = (run.frames_run - run.skipped.len()) as f64 * seconds;
+        run.tracker_seconds = (run.frames_run - run.skipped_count) as f64 * seconds;
     }
     let score = CellScore {
         score,

@@ -58,8 +58,12 @@ pub struct TrackRun {
     /// Seconds spent inside the tracker's `init` and `step` calls.
     pub tracker_seconds: f64,
     /// 0-based indices of frames skipped because they did not decode, with
-    /// the reason.
+    /// the reason: the first [`SKIPPED_LISTED`] of them
+    /// ([`TrackRun::skipped_count`] counts them all), so the list does not
+    /// grow with a long stream of bad frames.
     pub skipped: Vec<(usize, String)>,
+    /// Frames skipped because they did not decode, all of them.
+    pub skipped_count: usize,
     /// Frames on which the tracker reported the target lost.
     pub lost_frames: usize,
     /// Particles summed over frames (0 for deterministic trackers).
@@ -81,13 +85,16 @@ pub struct TrackRun {
     pub frames_run: usize,
 }
 
+/// How many skipped frames [`TrackRun::skipped`] lists.
+pub const SKIPPED_LISTED: usize = 100;
+
 /// How many converted frames [`TrackRun::converted`] lists.
 pub const CONVERTED_LISTED: usize = 16;
 
 impl TrackRun {
     /// Frames the tracker processed per second of its own time.
     pub fn fps(&self) -> f64 {
-        let seen = self.frames_run - self.skipped.len();
+        let seen = self.frames_run - self.skipped_count;
         if self.tracker_seconds > 0.0 {
             seen as f64 / self.tracker_seconds
         } else {
@@ -307,6 +314,7 @@ where
         boxes: Vec::with_capacity(capacity + 1),
         tracker_seconds: 0.0,
         skipped: Vec::new(),
+        skipped_count: 0,
         lost_frames: 0,
         particles: 0,
         init,
@@ -346,7 +354,10 @@ where
             Err(e) if on_bad_frame == OnBadFrame::Skip => {
                 let number = previous + 1;
                 previous = number;
-                run.skipped.push((index, e.to_string()));
+                if run.skipped.len() < SKIPPED_LISTED {
+                    run.skipped.push((index, e.to_string()));
+                }
+                run.skipped_count += 1;
                 record(&mut run, last, number);
                 sink(FrameBox {
                     index,
@@ -498,7 +509,7 @@ mod tests {
         .unwrap();
         let xs: Vec<f64> = run.boxes.iter().map(|b| b.x).collect();
         assert_eq!(xs, vec![1.0, 2.0, 2.0, 3.0]);
-        assert_eq!(run.skipped.len(), 1);
+        assert_eq!((run.skipped.len(), run.skipped_count), (1, 1));
         assert_eq!(run.skipped[0].0, 2);
         // A bad first frame cannot be skipped.
         let first_bad = track_frames(
@@ -588,5 +599,26 @@ mod tests {
         .unwrap();
         assert_eq!(run.converted_count, 100);
         assert_eq!(run.converted.len(), CONVERTED_LISTED);
+        // every other frame with a broken FRAME line, skipped: the reasons
+        // are listed for the first SKIPPED_LISTED, counted for all
+        let mut broken = gray_stream(300);
+        for k in (1..300).step_by(2) {
+            let at = 22 + k * 38;
+            broken[at..at + 5].copy_from_slice(b"FRAMX");
+        }
+        let mut source = crate::source::Y4mSource::new(&broken[..], "broken").unwrap();
+        let run = track_stream(
+            &mut Drift {
+                bbox: BBox::new(1.0, 1.0, 2.0, 2.0),
+                width: 0,
+            },
+            &mut source,
+            BBox::new(1.0, 1.0, 2.0, 2.0),
+            OnBadFrame::Skip,
+            |_| Ok(()),
+        )
+        .unwrap();
+        assert_eq!(run.frames_run, 300);
+        assert_eq!((run.skipped.len(), run.skipped_count), (SKIPPED_LISTED, 150));
     }
 }
