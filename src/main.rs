@@ -67,7 +67,8 @@ The first frame's box is the initial box; one box per frame run is written as
 soon as it is known (a row whole or not at all), so an interrupted or failed
 run keeps every box written so far. The --out file is created with the first
 box: a run that fails before it leaves the previous file as it was. An --out
-that is an input (by any name or link), or in the --draw folder, is refused. Scores (with ground truth): success AUC
+that is an input (by any name or link), or a .png in the --draw folder, is
+refused. Scores (with ground truth): success AUC
 (mean of the success curve at IoU thresholds 0, 0.05, ..., 1), precision at
 20 px centre error, mean IoU; unlabelled rows (0,0,0,0) and frames past the
 last ground-truth row are not scored. fps counts only the tracker's own time
@@ -350,13 +351,21 @@ enum InputFile<'a> {
 }
 
 /// Refuses an `--out` that is one of the inputs (the same file, by
-/// whatever name: a hard link, a symlink's target, standard input), or
-/// that lies in the `--draw` folder, before anything is written.
+/// whatever name: a hard link, a symlink's target, standard input), or a
+/// `.png` in the `--draw` folder (a name a drawn frame takes), before
+/// anything is written.
 fn check_out(out: &Path, inputs: &[InputFile<'_>], draw: Option<&Path>) -> Result<(), String> {
     if out == Path::new("-") {
         return Ok(());
     }
-    if let Some(dir) = draw {
+    let name = out
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    // the names drawn frames take (`0003.png`, and `0003.png.part` while
+    // one is written)
+    let drawn_name = name.ends_with(".png") || name.ends_with(".png.part");
+    if let Some(dir) = draw.filter(|_| drawn_name) {
         let parent = out
             .parent()
             .filter(|p| !p.as_os_str().is_empty())
@@ -367,8 +376,8 @@ fn check_out(out: &Path, inputs: &[InputFile<'_>], draw: Option<&Path>) -> Resul
         };
         if same {
             return Err(format!(
-                "--out {} is in the --draw folder {}, where the drawn frames go: a drawn frame \
-                 could replace it; write the boxes elsewhere",
+                "--out {} is a PNG file in the --draw folder {}, where the drawn frames go: a \
+                 drawn frame could replace it; write the boxes elsewhere",
                 out.display(),
                 dir.display()
             ));

@@ -821,6 +821,19 @@ fn out_inside_the_draw_folder_is_refused() {
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(err.contains("--draw"), "{err}");
     assert!(!out.exists());
+    // a box file of another kind beside the drawn frames is fine
+    let txt = dd.join("boxes.txt");
+    let o = bayestrack(&[
+        "track",
+        "--seq",
+        dir.to_str().unwrap(),
+        "--out",
+        txt.to_str().unwrap(),
+        "--draw",
+        dd.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(lines(&txt), 4);
 }
 
 #[cfg(unix)]
