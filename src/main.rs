@@ -259,10 +259,7 @@ fn open_input(args: &TrackArgs) -> Result<Input, String> {
     }
     if !seq.exists() && seq.extension().is_some() {
         // `clip.mp4`: a missing file, not a missing folder
-        return Err(format!(
-            "--seq {}: no such file",
-            seq.display()
-        ));
+        return Err(format!("--seq {}: no such file", seq.display()));
     }
     let folder = match &args.groundtruth {
         Some(gt) => Sequence::open_with_ground_truth(seq, gt),

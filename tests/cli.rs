@@ -1085,7 +1085,10 @@ fn unclear_errors_name_the_real_cause() {
     let o = bayestrack(&["track", "--seq", seq, "--tracker", "mad"]);
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(err.contains("0004.png") && err.contains("not a PNG"), "{err}");
+    assert!(
+        err.contains("0004.png") && err.contains("not a PNG"),
+        "{err}"
+    );
     assert!(!err.contains("truncated"), "{err}");
     // a huge box is printed in short form
     let dir = tmpdir("unclear-huge");

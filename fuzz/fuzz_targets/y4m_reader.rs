@@ -23,7 +23,10 @@ fuzz_target!(|data: &[u8]| {
         assert!(header.width * header.height <= Y4M_MAX_PIXELS);
         for frame in source.take(1024) {
             if let Ok(f) = frame {
-                assert_eq!((f.image.width(), f.image.height()), (header.width, header.height));
+                assert_eq!(
+                    (f.image.width(), f.image.height()),
+                    (header.width, header.height)
+                );
             }
         }
     }

@@ -15,7 +15,10 @@ fn reproduce_table_list_refuses_run_options() {
     let o = xtask(&["reproduce-table", "list", "--set", "runs=3"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(err.contains("--set runs=3") && err.contains("runs nothing"), "{err}");
+    assert!(
+        err.contains("--set runs=3") && err.contains("runs nothing"),
+        "{err}"
+    );
     let o = xtask(&["reproduce-table", "list"]);
     assert!(o.status.success());
 }

@@ -512,15 +512,12 @@ impl<P: Paper> Experiment for P {
                 // every file of the finished run replaces the previous
                 // run's only once all are written (`publish`)
                 let jobs: Vec<usize> = (0..P::jobs(&config)).collect();
-                let (done, partial) = run_jobs_partial::<P>(
-                    &config,
-                    &jobs,
-                    Some(&dir.join(P::LOG)),
-                    opts.progress,
-                )?;
+                let (done, partial) =
+                    run_jobs_partial::<P>(&config, &jobs, Some(&dir.join(P::LOG)), opts.progress)?;
                 let rows = log_rows::<P>(&config, &jobs, &done);
-                let tables =
-                    publish(&dir, P::LOG, &rows, |staging| report::<P>(&config, done, staging))?;
+                let tables = publish(&dir, P::LOG, &rows, |staging| {
+                    report::<P>(&config, done, staging)
+                })?;
                 if let Some(partial) = partial {
                     partial.discard()?;
                 }

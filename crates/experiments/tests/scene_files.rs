@@ -104,7 +104,11 @@ fn a_scene_replaces_the_previous_one_whole_and_is_bounded() {
     // A run that fails part-way (here: before its first frame, the
     // staging folder cannot be created) leaves the previous scene whole.
     let before = fs::read(out.join("groundtruth_rect.txt")).unwrap();
-    fs::write(d.join("road.partial"), b"a file where the staging folder goes").unwrap();
+    fs::write(
+        d.join("road.partial"),
+        b"a file where the staging folder goes",
+    )
+    .unwrap();
     assert!(write_named_scene("road", 2, Some(2), &out).is_err());
     assert_eq!(fs::read(out.join("groundtruth_rect.txt")).unwrap(), before);
     fs::remove_file(d.join("road.partial")).unwrap();

@@ -134,7 +134,8 @@ impl Sequence {
         });
         if let Some(entry) = chosen {
             let layout_ok = |first: &Path| {
-                first.is_file() && (gt_file.is_some() || dir.join(entry.groundtruth_file()).is_file())
+                first.is_file()
+                    && (gt_file.is_some() || dir.join(entry.groundtruth_file()).is_file())
             };
             let first = dir
                 .join(entry.frame_subdir())
@@ -163,11 +164,7 @@ impl Sequence {
                 return Err(OtbError::NotOtbLayout {
                     target: target.name.clone(),
                     dir,
-                    expected: format!(
-                        "{} with {}",
-                        first.display(),
-                        entry.groundtruth_file()
-                    ),
+                    expected: format!("{} with {}", first.display(), entry.groundtruth_file()),
                 });
             }
             notes.push(format!(

@@ -302,11 +302,7 @@ where
             source: Box::new(source),
         }
     };
-    let capacity = if keep_boxes {
-        frames.size_hint().0
-    } else {
-        0
-    };
+    let capacity = if keep_boxes { frames.size_hint().0 } else { 0 };
     let first = frames.next().ok_or(OtbError::NoFramesToTrack)??;
     let channels = first.image.channels();
     let init = clip_initial_box(init, first.image.width(), first.image.height()).unwrap_or(init);
@@ -619,6 +615,9 @@ mod tests {
         )
         .unwrap();
         assert_eq!(run.frames_run, 300);
-        assert_eq!((run.skipped.len(), run.skipped_count), (SKIPPED_LISTED, 150));
+        assert_eq!(
+            (run.skipped.len(), run.skipped_count),
+            (SKIPPED_LISTED, 150)
+        );
     }
 }

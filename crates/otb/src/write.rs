@@ -364,8 +364,8 @@ impl BoxFile {
         use std::io::Write;
         let row = format!("{}\n", box_row(b));
         if matches!(self.out, BoxOut::Pending) {
-            let file = std::fs::File::create(&self.path)
-                .map_err(|e| WriteError::new(&self.path, e))?;
+            let file =
+                std::fs::File::create(&self.path).map_err(|e| WriteError::new(&self.path, e))?;
             self.out = BoxOut::File { file, len: 0 };
         }
         let done = match &mut self.out {

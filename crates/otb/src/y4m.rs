@@ -397,7 +397,10 @@ impl<R: Read> Y4mReader<R> {
             let mut line = magic;
             line.extend_from_slice(&rest);
             let start = String::from_utf8_lossy(&line[..line.len().min(20)]).into_owned();
-            let skipped = std::io::copy(&mut self.input.by_ref().take(need as u64), &mut std::io::sink());
+            let skipped = std::io::copy(
+                &mut self.input.by_ref().take(need as u64),
+                &mut std::io::sink(),
+            );
             self.frames_read = number;
             return Err(match skipped {
                 Ok(n) if n == need as u64 => y4m_error(
@@ -407,7 +410,9 @@ impl<R: Read> Y4mReader<R> {
                 ),
                 Ok(n) => fail(
                     &mut self.done,
-                    format!("expected a FRAME line, found {start:?}; then cut short: {n} of its {need} bytes"),
+                    format!(
+                        "expected a FRAME line, found {start:?}; then cut short: {n} of its {need} bytes"
+                    ),
                 ),
                 Err(e) => fail(&mut self.done, format!("reading failed: {e}")),
             });

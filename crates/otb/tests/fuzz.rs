@@ -95,9 +95,22 @@ proptest! {
 /// then FRAME lines (some broken) and plane data of any length.
 fn y4m_bytes() -> impl Strategy<Value = Vec<u8>> {
     (
-        prop_oneof![1usize..24, Just(32768), Just(1 << 14), any::<u16>().prop_map(usize::from)],
+        prop_oneof![
+            1usize..24,
+            Just(32768),
+            Just(1 << 14),
+            any::<u16>().prop_map(usize::from)
+        ],
         prop_oneof![1usize..24, Just(32768), Just(1 << 14)],
-        prop::sample::select(vec!["", " C420jpeg", " C444", " Cmono", " C422", " C444alpha", " C411"]),
+        prop::sample::select(vec![
+            "",
+            " C420jpeg",
+            " C444",
+            " Cmono",
+            " C422",
+            " C444alpha",
+            " C411",
+        ]),
         prop::sample::select(vec!["\n", "\r\n", ""]),
         prop::collection::vec(
             (

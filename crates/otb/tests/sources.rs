@@ -361,7 +361,10 @@ fn a_cut_or_malformed_y4m_stream_names_the_frame() {
     let got: Vec<_> = Y4mSource::new(&bad[..], "stdin").unwrap().collect();
     assert_eq!(got.len(), 3);
     let e = got[2].as_ref().unwrap_err().to_string();
-    assert!(e.contains("Y4M frame 3") && e.contains("colour space"), "{e}");
+    assert!(
+        e.contains("Y4M frame 3") && e.contains("colour space"),
+        "{e}"
+    );
     for (input, says) in [
         (&b""[..], "empty"),
         (&b"P6 4 4 255\n"[..], "not a YUV4MPEG2"),

@@ -239,7 +239,11 @@ fn a_gray_frame_in_a_colour_sequence_is_converted_as_the_cli_does() {
         } else {
             image::RgbImage::from_fn(48, 48, |x, y| {
                 image::Rgb(if inside(x, y) {
-                    if (x / 3 + y / 3) % 2 == 0 { [230, 200, 40] } else { [20, 20, 160] }
+                    if (x / 3 + y / 3) % 2 == 0 {
+                        [230, 200, 40]
+                    } else {
+                        [20, 20, 160]
+                    }
                 } else {
                     [30, 60 + ((x * 7 + y * 3) % 20) as u8, 90]
                 })
@@ -263,7 +267,12 @@ fn a_gray_frame_in_a_colour_sequence_is_converted_as_the_cli_does() {
     let failures: Vec<String> = report
         .cells
         .iter()
-        .filter_map(|c| c.outcome.as_ref().err().map(|e| format!("{}: {e}", c.tracker)))
+        .filter_map(|c| {
+            c.outcome
+                .as_ref()
+                .err()
+                .map(|e| format!("{}: {e}", c.tracker))
+        })
         .collect();
     assert!(failures.is_empty(), "{failures:?}");
     std::fs::remove_dir_all(&root).unwrap();

@@ -119,8 +119,10 @@ pub(super) fn check(c: &HikpfConfig) -> Result<(), String> {
         ));
     }
     let cells = if c.sweep { 1 + SWEEP_CELLS } else { 1 };
-    let work =
-        c.runs as f64 * c.steps as f64 * c.particles as f64 * (FilterKind::ALL.len() * cells) as f64;
+    let work = c.runs as f64
+        * c.steps as f64
+        * c.particles as f64
+        * (FilterKind::ALL.len() * cells) as f64;
     if work > MAX_PARTICLE_STEPS {
         return Err(format!(
             "runs x steps x particles x {} filter runs = {work:.1e} particle steps, more than \
