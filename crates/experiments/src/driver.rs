@@ -197,6 +197,12 @@ fn log_rows<P: Paper>(config: &P::Config, jobs: &[usize], done: &[P::Done]) -> V
         .collect()
 }
 
+/// Every job's result, with the partial log still to be replaced.
+type JobsDone<P> = (
+    Vec<<P as Paper>::Done>,
+    Option<PartialCsv<<P as Paper>::Row>>,
+);
+
 /// [`run_jobs`] without writing the whole log: the partial log (with every
 /// job's rows) is handed back for the caller to replace once every other
 /// file is written too.
@@ -205,7 +211,7 @@ fn run_jobs_partial<P: Paper>(
     jobs: &[usize],
     log: Option<&Path>,
     progress: bool,
-) -> Result<(Vec<P::Done>, Option<PartialCsv<P::Row>>), ExperimentError> {
+) -> Result<JobsDone<P>, ExperimentError> {
     let shared = P::prepare(config, jobs)?;
     let partial = log.map(PartialCsv::<P::Row>::create).transpose()?;
     let bar = progress_bar(jobs.len(), progress, P::JOBS);
