@@ -373,6 +373,12 @@ impl<R: Read> Y4mReader<R> {
                 self.done = true;
                 return Ok(false);
             }
+            Ok(n) if n < 5 => {
+                return Err(fail(
+                    &mut self.done,
+                    "the stream ends inside a FRAME line".to_string(),
+                ));
+            }
             Ok(_) => {}
             Err(e) => return Err(fail(&mut self.done, format!("reading failed: {e}"))),
         }
@@ -586,6 +592,31 @@ mod tests {
             let e = header(line).unwrap_err();
             assert!(e.contains(says), "{line}: {e}");
         }
+    }
+
+    #[test]
+    fn crlf_lines_and_frames_past_the_limit() {
+        // a CR before the LF is not part of the last field
+        let h = header("YUV4MPEG2 W4 H2 C444\r").unwrap();
+        assert_eq!(h.chroma, Chroma::C444);
+        let mut stream = b"YUV4MPEG2 W4 H2 Cmono\r\nFRAME\r\n".to_vec();
+        stream.extend([16u8; 8]);
+        stream.extend(b"FRA");
+        let mut r = Y4mReader::new(&stream[..], "s").unwrap();
+        assert!(r.next_image().unwrap().is_ok());
+        let e = r.next_image().unwrap().unwrap_err().to_string();
+        assert!(
+            e.contains("Y4M frame 2") && e.contains("inside a FRAME line"),
+            "{e}"
+        );
+        assert!(r.next_image().is_none());
+        // a header asking for more pixels than the limit: refused before
+        // any frame is read, naming the header and the override
+        let e = Y4mReader::new(&b"YUV4MPEG2 W32768 H32768 C444\nFRAME\n"[..], "big")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("W32768 H32768 C444"), "{e}");
+        assert!(e.contains(Y4M_MAX_PIXELS_ENV), "{e}");
     }
 
     #[test]
