@@ -901,6 +901,33 @@ fn frame_folders_with_a_gap_a_duplicate_or_an_odd_name_are_refused() {
     }
 }
 
+/// Found by the frame-folder fuzz target: a multi-byte character before
+/// the number (`ť1.png`) panicked the frame listing (exit 101).
+#[test]
+fn frame_names_with_a_multibyte_character_before_the_number_run() {
+    let dir = tmpdir("multibyte");
+    write_sequence(&dir, 3, 3);
+    for k in 1..=3 {
+        fs::rename(
+            dir.join(format!("img/{k:04}.png")),
+            dir.join(format!("img/\u{165}{k}.png")),
+        )
+        .unwrap();
+    }
+    fs::remove_file(dir.join("groundtruth_rect.txt")).unwrap();
+    let o = bayestrack(&[
+        "track",
+        "--seq",
+        dir.to_str().unwrap(),
+        "--tracker",
+        "mad",
+        "--init",
+        "11,21,12,12",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(String::from_utf8_lossy(&o.stdout).lines().count(), 3);
+}
+
 /// A gray 4:2:0 stream of `n` frames whose frame `bad` (1-based) has a
 /// broken FRAME marker.
 fn y4m_with_bad_marker(n: usize, bad: usize) -> Vec<u8> {

@@ -24,9 +24,13 @@ fn is_frame_file(p: &Path) -> bool {
 fn frame_number(p: &Path) -> Option<u64> {
     let stem = p.file_stem()?.to_str()?;
     let end = stem.rfind(|c: char| c.is_ascii_digit())? + 1;
+    // just past the last character that is not a digit (which may take
+    // more than one byte: `ť8.png`)
     let start = stem[..end]
-        .rfind(|c: char| !c.is_ascii_digit())
-        .map_or(0, |i| i + 1);
+        .char_indices()
+        .rev()
+        .find(|(_, c)| !c.is_ascii_digit())
+        .map_or(0, |(i, c)| i + c.len_utf8());
     stem[start..end].parse().ok()
 }
 
@@ -412,6 +416,13 @@ mod tests {
             Err(ImageError::Truncated { .. })
         ));
         let _ = fs::remove_dir_all(&d);
+    }
+
+    #[test]
+    fn a_multibyte_character_before_the_number_does_not_panic() {
+        // found by the otb frame-folder fuzz target (`*ť8ť` panicked)
+        assert_eq!(frame_number(Path::new("\u{165}8.png")), Some(8));
+        assert_eq!(frame_number(Path::new("*\u{165}8\u{165}")), Some(8));
     }
 
     #[test]

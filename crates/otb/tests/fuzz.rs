@@ -194,6 +194,20 @@ proptest! {
     }
 }
 
+/// Found by the `frame_folder` fuzz target: a multi-byte character before
+/// the number (`*ť8ť`) panicked the number reader.
+#[test]
+fn a_multibyte_character_before_the_number_is_read() {
+    assert_eq!(frame_number("*\u{165}8\u{165}"), Some(8));
+    assert_eq!(frame_number("\u{e9}t\u{e9}0012.png"), Some(12));
+    let ordered = order_frames(vec![
+        PathBuf::from("s/\u{165}2.png"),
+        PathBuf::from("s/\u{165}1.png"),
+    ])
+    .unwrap();
+    assert_eq!(ordered[0], PathBuf::from("s/\u{165}1.png"));
+}
+
 #[cfg(unix)]
 #[test]
 fn a_non_utf8_frame_name_is_refused_naming_it() {
