@@ -12,7 +12,11 @@
 //!
 //! Layouts accepted: `<seq>/img/0001.jpg ...` or `<seq>/img/img00001.png ...`
 //! with `<seq>/groundtruth_rect.txt` or `<seq>/*_gt.txt` (comma, tab or space
-//! separated `x y w h`, OTB box convention).
+//! separated `x y w h`, OTB box convention). A plain folder's frames must
+//! number the frames one to one ([`order_frames`]: no gap, no number twice,
+//! every name UTF-8 with a number), and a folder named as one target of an
+//! OTB-100 sequence (`Jogging_2`) must have the benchmark's layout: either
+//! would otherwise score frames against another frame's or target's row.
 
 use std::path::{Path, PathBuf};
 
