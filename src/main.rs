@@ -13,11 +13,11 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use bayestrack::image::{BBox, Rgb, write_frame_with_boxes};
-use bayestrack::otb::ground_truth::read_ground_truth;
+use bayestrack::otb::ground_truth::{check_box, read_ground_truth, short_number};
 use bayestrack::otb::metrics::score_otb;
 use bayestrack::otb::sequence::Sequence;
 use bayestrack::otb::source::{FrameSelection, FrameSource, Select, VideoSource, Y4mSource};
-use bayestrack::otb::track::{OnBadFrame, track_source};
+use bayestrack::otb::track::{OnBadFrame, SKIPPED_LISTED, track_stream};
 use bayestrack::otb::write::{BoxFile, box_row};
 use bayestrack::otb::{OtbError, WriteError};
 use bayestrack::trackers::{REGISTRY, tracker_info};
@@ -65,7 +65,10 @@ any decoder can pipe Y4M instead:
 Boxes use the OTB convention: x,y is the 1-based top-left pixel, w,h the size.
 The first frame's box is the initial box; one box per frame run is written as
 soon as it is known (a row whole or not at all), so an interrupted or failed
-run keeps every box written so far. Scores (with ground truth): success AUC
+run keeps every box written so far. The --out file is created with the first
+box: a run that fails before it leaves the previous file as it was. An --out
+that is an input (by any name or link), or a .png in the --draw folder, is
+refused. Scores (with ground truth): success AUC
 (mean of the success curve at IoU thresholds 0, 0.05, ..., 1), precision at
 20 px centre error, mean IoU; unlabelled rows (0,0,0,0) and frames past the
 last ground-truth row are not scored. fps counts only the tracker's own time
@@ -145,16 +148,8 @@ fn parse_box(s: &str) -> Result<BBox, String> {
         .collect::<Result<_, _>>()
         .map_err(|e| format!("`{s}`: {e} (expected x,y,w,h)"))?;
     match v[..] {
-        // the far edges must be numbers too (1e308 + 1e308 is not)
-        [x, y, w, h]
-            if v.iter().all(|c| c.is_finite())
-                && w > 0.0
-                && h > 0.0
-                && (x + w).is_finite()
-                && (y + h).is_finite() =>
-        {
-            Ok(BBox::new(x, y, w, h))
-        }
+        // the rule every labelled ground-truth row follows too
+        [x, y, w, h] => check_box(x, y, w, h).map_err(|why| format!("`{s}`: {why}")),
         _ => Err(format!(
             "`{s}`: expected four finite numbers x,y,w,h with w, h > 0"
         )),
@@ -162,6 +157,9 @@ fn parse_box(s: &str) -> Result<BBox, String> {
 }
 
 fn main() -> ExitCode {
+    // before anything opens a file: a closed standard output is reopened on
+    // /dev/null by the Rust runtime, and would swallow the boxes
+    let stdout_closed = stdout_was_closed();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Trackers { options: None } => {
@@ -171,15 +169,47 @@ fn main() -> ExitCode {
         Command::Trackers {
             options: Some(name),
         } => list_options(&name),
-        Command::Track(args) => track(&args),
+        Command::Track(args) => track(&args, stdout_closed),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(msg) => {
-            eprintln!("error: {msg}");
+            eprintln!("error: {}", shorten_numbers(&msg));
             ExitCode::FAILURE
         }
     }
+}
+
+/// `text` with every number written out in more than 20 characters (Rust
+/// prints `1e300` as a 301-digit decimal) in its short form (`1e300`),
+/// whichever crate formatted it.
+fn shorten_numbers(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(start) = rest.find(|c: char| c.is_ascii_digit()) {
+        out.push_str(&rest[..start]);
+        let tail = &rest[start..];
+        let mut end = tail
+            .find(|c: char| !c.is_ascii_digit())
+            .unwrap_or(tail.len());
+        if tail[end..].starts_with('.') {
+            let frac = &tail[end + 1..];
+            let digits = frac
+                .find(|c: char| !c.is_ascii_digit())
+                .unwrap_or(frac.len());
+            if digits > 0 {
+                end += 1 + digits;
+            }
+        }
+        let number = &tail[..end];
+        match number.parse::<f64>() {
+            Ok(v) if number.len() > 20 => out.push_str(&short_number(v)),
+            _ => out.push_str(number),
+        }
+        rest = &tail[end..];
+    }
+    out.push_str(rest);
+    out
 }
 
 fn list_trackers() {
@@ -227,6 +257,10 @@ fn open_input(args: &TrackArgs) -> Result<Input, String> {
         };
         return Ok(Input::Stream(source));
     }
+    if !seq.exists() && seq.extension().is_some() {
+        // `clip.mp4`: a missing file, not a missing folder
+        return Err(format!("--seq {}: no such file", seq.display()));
+    }
     let folder = match &args.groundtruth {
         Some(gt) => Sequence::open_with_ground_truth(seq, gt),
         None => Sequence::open_frames(seq),
@@ -239,22 +273,126 @@ fn canonical(path: &Path) -> Option<PathBuf> {
     std::fs::canonicalize(path).ok()
 }
 
-/// Refuses an `--out` that is one of the inputs, before anything is
-/// written.
-fn check_out(out: &Path, inputs: &[&Path]) -> Result<(), String> {
+/// What a file is, whatever names it: device and inode on Unix (a hard
+/// link, a symlink and the file itself are one), the canonical path
+/// elsewhere. `None` when it does not exist or is not a regular file.
+#[derive(PartialEq, Eq)]
+enum FileId {
+    #[cfg(unix)]
+    Inode(u64, u64),
+    #[cfg(not(unix))]
+    Path(PathBuf),
+}
+
+fn id_of(meta: &std::fs::Metadata, _path: Option<&Path>) -> Option<FileId> {
+    if !meta.is_file() {
+        return None;
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        Some(FileId::Inode(meta.dev(), meta.ino()))
+    }
+    #[cfg(not(unix))]
+    {
+        _path.and_then(canonical).map(FileId::Path)
+    }
+}
+
+fn file_id(path: &Path) -> Option<FileId> {
+    id_of(&std::fs::metadata(path).ok()?, Some(path))
+}
+
+/// The file standard input reads (`bayestrack track --seq - < clip.y4m`).
+fn stdin_id() -> Option<FileId> {
+    #[cfg(unix)]
+    {
+        use std::os::fd::AsFd;
+        let fd = std::io::stdin().as_fd().try_clone_to_owned().ok()?;
+        id_of(&std::fs::File::from(fd).metadata().ok()?, None)
+    }
+    #[cfg(not(unix))]
+    {
+        None
+    }
+}
+
+/// Whether standard output was closed when the program started
+/// (`bayestrack track ... >&-`): the Rust runtime then opens /dev/null
+/// read-write in its place, which a shell redirection (`> /dev/null`, write
+/// only) does not. Linux only; elsewhere `false`.
+fn stdout_was_closed() -> bool {
+    #[cfg(target_os = "linux")]
+    {
+        let target = std::fs::read_link("/proc/self/fd/1").ok();
+        if target.as_deref() != Some(Path::new("/dev/null")) {
+            return false;
+        }
+        let info = std::fs::read_to_string("/proc/self/fdinfo/1").unwrap_or_default();
+        info.lines()
+            .find_map(|l| l.strip_prefix("flags:"))
+            .and_then(|f| u32::from_str_radix(f.trim(), 8).ok())
+            .is_some_and(|flags| flags & 3 == 2)
+    }
+    #[cfg(not(target_os = "linux"))]
+    {
+        false
+    }
+}
+
+/// An input of the run, for [`check_out`]: a file by its name, or
+/// standard input.
+enum InputFile<'a> {
+    Path(&'a Path),
+    Stdin,
+}
+
+/// Refuses an `--out` that is one of the inputs (the same file, by
+/// whatever name: a hard link, a symlink's target, standard input), or a
+/// `.png` in the `--draw` folder (a name a drawn frame takes), before
+/// anything is written.
+fn check_out(out: &Path, inputs: &[InputFile<'_>], draw: Option<&Path>) -> Result<(), String> {
     if out == Path::new("-") {
         return Ok(());
     }
-    let Some(out_c) = canonical(out) else {
-        return Ok(()); // it does not exist, so it is no input
+    let name = out
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    // the names drawn frames take (`0003.png`, and `0003.png.part` while
+    // one is written)
+    let drawn_name = name.ends_with(".png") || name.ends_with(".png.part");
+    if let Some(dir) = draw.filter(|_| drawn_name) {
+        let parent = out
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        let same = match (canonical(parent), canonical(dir)) {
+            (Some(a), Some(b)) => a == b,
+            _ => parent == dir,
+        };
+        if same {
+            return Err(format!(
+                "--out {} is a PNG file in the --draw folder {}, where the drawn frames go: a \
+                 drawn frame could replace it; write the boxes elsewhere",
+                out.display(),
+                dir.display()
+            ));
+        }
+    }
+    let Some(out_id) = file_id(out) else {
+        return Ok(()); // it does not exist (or is no regular file), so it is no input
     };
     for input in inputs {
-        if input.file_name() == out_c.file_name() && canonical(input).as_ref() == Some(&out_c) {
+        let (id, name) = match input {
+            InputFile::Path(p) => (file_id(p), p.display().to_string()),
+            InputFile::Stdin => (stdin_id(), "standard input".to_string()),
+        };
+        if id.as_ref() == Some(&out_id) {
             return Err(format!(
-                "--out {} is an input of this run ({}): it would be overwritten; write the \
-                 boxes elsewhere",
-                out.display(),
-                input.display()
+                "--out {} is an input of this run ({name}, the same file by another name or \
+                 link): it would be overwritten; write the boxes elsewhere",
+                out.display()
             ));
         }
     }
@@ -327,7 +465,14 @@ impl Progress {
     }
 }
 
-fn track(args: &TrackArgs) -> Result<(), String> {
+fn track(args: &TrackArgs, stdout_closed: bool) -> Result<(), String> {
+    if args.out == Path::new("-") && stdout_closed {
+        return Err(
+            "standard output is closed (`>&-`): the boxes would be lost; give --out FILE or \
+             redirect standard output to a file"
+                .to_string(),
+        );
+    }
     let info = tracker_info(&args.tracker).map_err(|e| e.to_string())?;
     // options are checked before anything is read or written
     let mut tracker = info
@@ -335,6 +480,17 @@ fn track(args: &TrackArgs) -> Result<(), String> {
         .map_err(|e| e.to_string())?;
     let selection = FrameSelection::parse(args.frames.as_deref(), args.every)?;
     let input = open_input(args)?;
+    if let Input::Folder(seq) = &input
+        && selection.first > seq.len()
+    {
+        return Err(format!(
+            "--frames {}: {} has {} frames, so there is no frame {} to start from",
+            args.frames.as_deref().unwrap_or_default(),
+            seq.name,
+            seq.len(),
+            selection.first
+        ));
+    }
     // The ground truth, one entry per source position.
     let (truth, truth_rows, notes): (Vec<Option<BBox>>, usize, Vec<String>) = match &input {
         Input::Folder(seq) => (
@@ -352,17 +508,19 @@ fn track(args: &TrackArgs) -> Result<(), String> {
         },
     };
     for note in &notes {
-        eprintln!("note: {note}");
+        eprintln!("note: {}", shorten_numbers(note));
     }
-    let mut inputs: Vec<&Path> = Vec::new();
+    let mut inputs: Vec<InputFile<'_>> = Vec::new();
     if let Input::Folder(seq) = &input {
-        inputs.extend(seq.frames.iter().map(PathBuf::as_path));
-        inputs.extend(seq.ground_truth_path.as_deref());
+        inputs.extend(seq.frames.iter().map(|f| InputFile::Path(f)));
+        inputs.extend(seq.ground_truth_path.as_deref().map(InputFile::Path));
+    } else if args.seq == Path::new("-") {
+        inputs.push(InputFile::Stdin);
     } else {
-        inputs.push(&args.seq);
+        inputs.push(InputFile::Path(&args.seq));
     }
-    inputs.extend(args.groundtruth.as_deref());
-    check_out(&args.out, &inputs)?;
+    inputs.extend(args.groundtruth.as_deref().map(InputFile::Path));
+    check_out(&args.out, &inputs, args.draw.as_deref())?;
     if let (Some(dir), Input::Folder(seq)) = (&args.draw, &input) {
         let frame_dir = seq.frames.first().and_then(|f| f.parent());
         if frame_dir
@@ -403,11 +561,13 @@ fn track(args: &TrackArgs) -> Result<(), String> {
                 )
             })?,
     };
+    // checks the folder; the file is created (a previous one replaced) with
+    // the first box, so a run that fails before it leaves the old file
+    let mut writer = BoxFile::create(&args.out).map_err(|e| e.to_string())?;
     if let Some(dir) = &args.draw {
         std::fs::create_dir_all(dir)
             .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     }
-    let mut writer = BoxFile::create(&args.out).map_err(|e| e.to_string())?;
     let on_bad_frame = match args.on_bad_frame {
         BadFrame::Stop => OnBadFrame::Stop,
         BadFrame::Skip => OnBadFrame::Skip,
@@ -416,10 +576,24 @@ fn track(args: &TrackArgs) -> Result<(), String> {
     let red = Rgb::new(230, 0, 0);
     let mut written = 0usize;
     let mut progress = Progress::new(source.remaining());
-    let result = track_source(tracker.as_mut(), source.as_mut(), init, on_bad_frame, |f| {
+    // Only what scoring needs is kept: the boxes of frames that have a
+    // ground-truth row (as many as the file has rows), so memory does not
+    // grow with a long stream.
+    let (mut scored_boxes, mut scored_truth) = (Vec::new(), Vec::new());
+    let (mut unscored, mut skipped_numbers) = (0usize, Vec::new());
+    let result = track_stream(tracker.as_mut(), source.as_mut(), init, on_bad_frame, |f| {
         writer.write(&f.bbox)?;
         written += 1;
         progress.update(written);
+        if f.number <= truth_rows {
+            scored_boxes.push(f.bbox);
+            scored_truth.push(truth.get(f.number - 1).copied().flatten());
+        } else {
+            unscored += 1;
+        }
+        if f.frame.is_none() && skipped_numbers.len() < SKIPPED_LISTED {
+            skipped_numbers.push(f.number);
+        }
         if let (Some(dir), Some(frame)) = (&args.draw, f.frame) {
             let mut boxes = vec![(f.bbox, green)];
             if let Some(t) = truth.get(f.number - 1).copied().flatten() {
@@ -445,13 +619,22 @@ fn track(args: &TrackArgs) -> Result<(), String> {
     let run = result.map_err(|e| {
         let kept = if args.out == Path::new("-") {
             String::new()
+        } else if written == 0 {
+            format!("; nothing was written, {} is as it was", args.out.display())
         } else {
             format!(
                 "; the {written} boxes before it are in {}",
                 args.out.display()
             )
         };
-        format!("{e}{kept}")
+        match e {
+            OtbError::NoFramesToTrack if selection.first > 1 => format!(
+                "--frames {}: {name} ends before frame {}{kept}",
+                args.frames.as_deref().unwrap_or_default(),
+                selection.first
+            ),
+            e => format!("{e}{kept}"),
+        }
     })?;
     drop(source);
     if run.init != init {
@@ -461,11 +644,18 @@ fn track(args: &TrackArgs) -> Result<(), String> {
             box_row(&run.init)
         );
     }
-    for (index, why) in &run.skipped {
-        eprintln!("skipped frame {}: {why}", run.numbers[*index]);
+    for ((_, why), number) in run.skipped.iter().zip(&skipped_numbers) {
+        eprintln!("skipped frame {number}: {why}");
+    }
+    if run.skipped_count > run.skipped.len() {
+        eprintln!(
+            "... and {} more skipped frames ({} in all)",
+            run.skipped_count - run.skipped.len(),
+            run.skipped_count
+        );
     }
     if let Some(first) = run.converted.first() {
-        let n = run.converted.len();
+        let n = run.converted_count;
         eprintln!(
             "note: {n} frames (the first: frame {first}) had another channel count than the \
              first frame and were converted to it"
@@ -474,25 +664,19 @@ fn track(args: &TrackArgs) -> Result<(), String> {
     eprintln!(
         "{name}: {} on {} frames, {:.0} fps (tracker time only), target lost on {} frames",
         info.name,
-        run.boxes.len(),
+        run.frames_run,
         run.fps(),
         run.lost_frames
     );
-    let scored: Vec<Option<BBox>> = run
-        .numbers
-        .iter()
-        .map(|&n| truth.get(n - 1).copied().flatten())
-        .collect();
-    let unscored = run.numbers.iter().filter(|&&n| n > truth_rows).count();
     if truth_rows > 0 && unscored > 0 {
         eprintln!(
             "note: {unscored} of the {} frames run have no ground-truth row: tracked, written, \
              not scored",
-            run.numbers.len()
+            run.frames_run
         );
     }
-    if scored.iter().any(Option::is_some) {
-        let score = score_otb(&run.boxes, &scored).map_err(|e| e.to_string())?;
+    if scored_truth.iter().any(Option::is_some) {
+        let score = score_otb(&scored_boxes, &scored_truth).map_err(|e| e.to_string())?;
         eprintln!(
             "success AUC {:.3}, precision@20px {:.3}, mean IoU {:.3} over {} labelled frames",
             score.auc, score.precision_20, score.mean_overlap, score.frames_scored
@@ -554,6 +738,16 @@ mod tests {
         .unwrap();
         assert_eq!(std::fs::read(&target).unwrap(), b"whole");
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn long_numbers_are_printed_short() {
+        let long = format!("box {},1,5,5 is outside", 1e300);
+        assert_eq!(super::shorten_numbers(&long), "box 1e300,1,5,5 is outside");
+        let tiny = format!("alpha {} too small", 1e-300);
+        assert_eq!(super::shorten_numbers(&tiny), "alpha 1e-300 too small");
+        let plain = "frame 12 of 0300.jpg at 1.5, 2026";
+        assert_eq!(super::shorten_numbers(plain), plain);
     }
 
     #[test]

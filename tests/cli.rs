@@ -691,3 +691,456 @@ fn tracker_options_reach_the_tracker_and_bad_ones_write_nothing() {
         "{listing}"
     );
 }
+
+// ---- issue 28: never destroy an input, never score against the wrong
+// truth, bounded memory, errors that name the cause ----
+
+/// Runs the binary with `stdin` from a file.
+fn bayestrack_with_stdin_file(args: &[&str], stdin: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_bayestrack"))
+        .args(args)
+        .stdin(fs::File::open(stdin).unwrap())
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn out_that_is_standard_input_is_refused_and_the_stream_kept() {
+    let dir = tmpdir("out-stdin");
+    let clip = dir.join("clip.y4m");
+    let bytes = y4m_sequence(4);
+    fs::write(&clip, &bytes).unwrap();
+    let o = bayestrack_with_stdin_file(
+        &[
+            "track",
+            "--seq",
+            "-",
+            "--init",
+            "11,21,12,12",
+            "--out",
+            clip.to_str().unwrap(),
+        ],
+        &clip,
+    );
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("is an input of this run"), "{err}");
+    assert!(err.contains("standard input"), "{err}");
+    assert_eq!(fs::read(&clip).unwrap(), bytes);
+}
+
+#[cfg(unix)]
+#[test]
+fn out_that_is_a_hard_link_or_a_symlink_target_of_an_input_is_refused() {
+    let dir = tmpdir("out-links");
+    write_sequence(&dir, 3, 3);
+    let seq = dir.to_str().unwrap();
+    // A hard link to frame 2.
+    let frame = dir.join("img/0002.png");
+    let before = fs::read(&frame).unwrap();
+    // Ground truth and frame 3 that are symlinks to files elsewhere.
+    let elsewhere = dir.join("elsewhere");
+    fs::create_dir_all(&elsewhere).unwrap();
+    let link = elsewhere.join("hard.png");
+    fs::hard_link(&frame, &link).unwrap();
+    let gt_real = elsewhere.join("truth.txt");
+    fs::rename(dir.join("groundtruth_rect.txt"), &gt_real).unwrap();
+    std::os::unix::fs::symlink(&gt_real, dir.join("groundtruth_rect.txt")).unwrap();
+    let gt_before = fs::read(&gt_real).unwrap();
+    let f3_real = elsewhere.join("third.png");
+    fs::rename(dir.join("img/0003.png"), &f3_real).unwrap();
+    std::os::unix::fs::symlink(&f3_real, dir.join("img/0003.png")).unwrap();
+    let f3_before = fs::read(&f3_real).unwrap();
+    for target in [&link, &gt_real, &f3_real] {
+        let o = bayestrack(&["track", "--seq", seq, "--out", target.to_str().unwrap()]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{}: {err}", target.display());
+        assert!(err.contains("is an input of this run"), "{err}");
+    }
+    // --groundtruth given as a symlink whose target is --out.
+    let gt_link = dir.join("gt-link.txt");
+    std::os::unix::fs::symlink(&gt_real, &gt_link).unwrap();
+    let o = bayestrack(&[
+        "track",
+        "--seq",
+        seq,
+        "--groundtruth",
+        gt_link.to_str().unwrap(),
+        "--out",
+        gt_real.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert_eq!(fs::read(&frame).unwrap(), before);
+    assert_eq!(fs::read(&gt_real).unwrap(), gt_before);
+    assert_eq!(fs::read(&f3_real).unwrap(), f3_before);
+}
+
+#[test]
+fn a_run_that_fails_before_its_first_box_keeps_the_previous_out() {
+    let dir = tmpdir("keep-out");
+    write_sequence(&dir, 3, 3);
+    let out = dir.join("boxes.txt");
+    let seq = dir.to_str().unwrap();
+    fs::write(&out, "previous\n").unwrap();
+    // A box wholly outside the frame.
+    let o = bayestrack(&[
+        "track",
+        "--seq",
+        seq,
+        "--init",
+        "95,10,12,12",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert_eq!(fs::read_to_string(&out).unwrap(), "previous\n");
+    // A first frame that does not decode.
+    fs::write(dir.join("img/0001.png"), b"\x89PNG\r\n\x1a\n cut").unwrap();
+    let o = bayestrack(&["track", "--seq", seq, "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert_eq!(fs::read_to_string(&out).unwrap(), "previous\n");
+}
+
+#[test]
+fn out_inside_the_draw_folder_is_refused() {
+    let dir = tmpdir("out-draw");
+    write_sequence(&dir, 4, 4);
+    let dd = dir.join("dd");
+    fs::create_dir_all(&dd).unwrap();
+    let out = dd.join("0003.png");
+    let o = bayestrack(&[
+        "track",
+        "--seq",
+        dir.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--draw",
+        dd.to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("--draw"), "{err}");
+    assert!(!out.exists());
+    // a box file of another kind beside the drawn frames is fine
+    let txt = dd.join("boxes.txt");
+    let o = bayestrack(&[
+        "track",
+        "--seq",
+        dir.to_str().unwrap(),
+        "--out",
+        txt.to_str().unwrap(),
+        "--draw",
+        dd.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(lines(&txt), 4);
+}
+
+#[cfg(unix)]
+#[test]
+fn a_closed_standard_output_is_an_error() {
+    let dir = tmpdir("closed-stdout");
+    write_sequence(&dir, 3, 3);
+    let o = Command::new("sh")
+        .arg("-c")
+        .arg("exec \"$0\" track --seq \"$1\" >&-")
+        .arg(env!("CARGO_BIN_EXE_bayestrack"))
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("standard output"), "{err}");
+    assert!(!err.contains("write -:"), "{err}");
+}
+
+#[test]
+fn a_standard_output_that_stops_reading_is_named_so() {
+    let dir = tmpdir("broken-pipe");
+    write_sequence(&dir, 3, 3);
+    // A pipe whose reader is gone before the first row: every write fails.
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    let o = Command::new(env!("CARGO_BIN_EXE_bayestrack"))
+        .args(["track", "--seq", dir.to_str().unwrap(), "--tracker", "mad"])
+        .stdout(writer)
+        .stderr(std::process::Stdio::piped())
+        .output()
+        .unwrap();
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("cannot write standard output"), "{err}");
+    assert!(!err.contains("write -:"), "{err}");
+}
+
+#[test]
+fn frame_folders_with_a_gap_a_duplicate_or_an_odd_name_are_refused() {
+    let gap = tmpdir("gap");
+    write_sequence(&gap, 5, 5);
+    fs::remove_file(gap.join("img/0003.png")).unwrap();
+    let dup = tmpdir("dup");
+    write_sequence(&dup, 4, 4);
+    fs::copy(dup.join("img/0002.png"), dup.join("img/002.png")).unwrap();
+    for (dir, says) in [(&gap, "frame 3 is missing"), (&dup, "002.png")] {
+        let o = bayestrack(&["track", "--seq", dir.to_str().unwrap(), "--tracker", "mad"]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(err.contains(says), "{err}");
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::ffi::OsStrExt;
+        let odd = tmpdir("odd-name");
+        write_sequence(&odd, 3, 3);
+        let name = std::ffi::OsStr::from_bytes(b"\xff0002.png");
+        fs::rename(odd.join("img/0002.png"), odd.join("img").join(name)).unwrap();
+        let o = bayestrack(&["track", "--seq", odd.to_str().unwrap(), "--tracker", "mad"]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(err.contains("UTF-8"), "{err}");
+    }
+}
+
+/// Found by the frame-folder fuzz target: a multi-byte character before
+/// the number (`ť1.png`) panicked the frame listing (exit 101).
+#[test]
+fn frame_names_with_a_multibyte_character_before_the_number_run() {
+    let dir = tmpdir("multibyte");
+    write_sequence(&dir, 3, 3);
+    for k in 1..=3 {
+        fs::rename(
+            dir.join(format!("img/{k:04}.png")),
+            dir.join(format!("img/\u{165}{k}.png")),
+        )
+        .unwrap();
+    }
+    fs::remove_file(dir.join("groundtruth_rect.txt")).unwrap();
+    let o = bayestrack(&[
+        "track",
+        "--seq",
+        dir.to_str().unwrap(),
+        "--tracker",
+        "mad",
+        "--init",
+        "11,21,12,12",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(String::from_utf8_lossy(&o.stdout).lines().count(), 3);
+}
+
+/// A gray 4:2:0 stream of `n` frames whose frame `bad` (1-based) has a
+/// broken FRAME marker.
+fn y4m_with_bad_marker(n: usize, bad: usize) -> Vec<u8> {
+    let good = y4m_sequence(n);
+    let header_end = good.iter().position(|&b| b == b'\n').unwrap() + 1;
+    let frame_len = (good.len() - header_end) / n;
+    let mut out = good.clone();
+    let at = header_end + (bad - 1) * frame_len;
+    out[at..at + 5].copy_from_slice(b"FRAMX");
+    out
+}
+
+#[test]
+fn skip_continues_past_a_bad_y4m_frame_marker() {
+    let args = [
+        "track",
+        "--seq",
+        "-",
+        "--tracker",
+        "mad",
+        "--init",
+        "11,21,12,12",
+        "--on-bad-frame",
+        "skip",
+    ];
+    let o = bayestrack_stdin(&args, &y4m_with_bad_marker(10, 3), &[]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("skipped frame 3"), "{err}");
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(out.lines().count(), 10, "{out}");
+    assert_eq!(out.lines().last(), Some("29,21,12,12"));
+}
+
+#[test]
+fn a_named_otb_target_without_the_otb_layout_is_refused() {
+    let root = std::env::temp_dir().join(format!("bayestrack-cli-otbname-{}", std::process::id()));
+    let _ = fs::remove_dir_all(&root);
+    let dir = root.join("Jogging");
+    fs::create_dir_all(dir.join("img")).unwrap();
+    write_sequence(&dir, 4, 4);
+    let o = bayestrack(&[
+        "track",
+        "--seq",
+        root.join("Jogging_2").to_str().unwrap(),
+        "--tracker",
+        "mad",
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("Jogging_2") && err.contains("layout"), "{err}");
+    assert!(!err.contains("success AUC"), "{err}");
+}
+
+#[test]
+fn ground_truth_rows_the_init_option_refuses_are_refused() {
+    for (row, says) in [
+        ("1e308,1e308,1e308,1e308", "finite"),
+        ("20,13,0,12", "width"),
+    ] {
+        let dir = tmpdir("gt-rows");
+        write_sequence(&dir, 4, 4);
+        let gt = dir.join("groundtruth_rect.txt");
+        let text = fs::read_to_string(&gt).unwrap();
+        let mut rows: Vec<&str> = text.lines().collect();
+        rows[2] = row;
+        fs::write(&gt, rows.join("\n") + "\n").unwrap();
+        let o = bayestrack(&["track", "--seq", dir.to_str().unwrap(), "--tracker", "mad"]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{row}: {err}");
+        assert!(err.contains("groundtruth_rect.txt:3"), "{row}: {err}");
+        assert!(err.contains(says), "{row}: {err}");
+        // the --init option refuses it too
+        let o = bayestrack(&["track", "--seq", dir.to_str().unwrap(), "--init", row]);
+        assert_eq!(o.status.code(), Some(2), "{row}: {}", stderr(&o));
+    }
+}
+
+#[test]
+fn a_huge_y4m_header_is_refused_naming_the_override() {
+    let mut input = b"YUV4MPEG2 W32768 H32768 C444\nFRAME\n".to_vec();
+    input.extend(vec![16u8; 1 << 20]);
+    let args = ["track", "--seq", "-", "--init", "1,1,5,5"];
+    let o = bayestrack_stdin(&args, &input, &[]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("W32768 H32768"), "{err}");
+    assert!(err.contains("BAYESTRACK_Y4M_MAX_PIXELS"), "{err}");
+}
+
+#[cfg(unix)]
+#[test]
+fn ground_truth_from_an_endless_file_is_refused() {
+    let dir = tmpdir("gt-zero");
+    write_sequence(&dir, 3, 3);
+    let o = bayestrack(&[
+        "track",
+        "--seq",
+        dir.to_str().unwrap(),
+        "--groundtruth",
+        "/dev/zero",
+        "--init",
+        "11,21,12,12",
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("/dev/zero"), "{err}");
+}
+
+#[test]
+fn y4m_with_crlf_header_and_wrong_colour_space_say_what_is_wrong() {
+    let args = [
+        "track",
+        "--seq",
+        "-",
+        "--tracker",
+        "mad",
+        "--init",
+        "11,21,12,12",
+    ];
+    // A CRLF header line is read (the CR is not part of the last field).
+    let crlf = {
+        let s = y4m_sequence(3);
+        let nl = s.iter().position(|&b| b == b'\n').unwrap();
+        let mut out = s[..nl].to_vec();
+        out.extend(b" C444\r");
+        let mut rest = Vec::new();
+        // the frames as 4:4:4: Y then two full-size neutral chroma planes
+        for k in 0..3 {
+            rest.extend(b"FRAME\n");
+            rest.extend(frame(80, 60, 10 + 2 * k, 20).as_slice());
+            rest.extend(vec![128u8; 2 * 80 * 60]);
+        }
+        out.push(b'\n');
+        // drop the original C420jpeg field
+        let text = String::from_utf8(out).unwrap().replace(" C420jpeg", "");
+        let mut out = text.into_bytes();
+        out.extend(rest);
+        out
+    };
+    let o = bayestrack_stdin(&args, &crlf, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(String::from_utf8_lossy(&o.stdout).lines().count(), 3);
+    // 4:4:4 data under a 4:2:0 header.
+    let mut mislabelled = b"YUV4MPEG2 W80 H60 C420jpeg\n".to_vec();
+    for k in 0..3 {
+        mislabelled.extend(b"FRAME\n");
+        mislabelled.extend(frame(80, 60, 10 + 2 * k, 20).as_slice());
+        mislabelled.extend(vec![128u8; 2 * 80 * 60]);
+    }
+    let o = bayestrack_stdin(&args, &mislabelled, &[]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("colour space"), "{err}");
+    assert!(!err.contains("longer than 4096"), "{err}");
+}
+
+#[test]
+fn unclear_errors_name_the_real_cause() {
+    let dir = tmpdir("unclear");
+    write_sequence(&dir, 10, 10);
+    let seq = dir.to_str().unwrap();
+    // --frames past the end
+    let o = bayestrack(&["track", "--seq", seq, "--frames", "11.."]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("10 frames"), "{err}");
+    // a missing video file
+    let o = bayestrack(&[
+        "track",
+        "--seq",
+        dir.join("clip.mp4").to_str().unwrap(),
+        "--init",
+        "1,1,5,5",
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("no such file"), "{err}");
+    assert!(!err.contains("folder"), "{err}");
+    // a text file named .png
+    fs::write(dir.join("img/0004.png"), b"just some text\n").unwrap();
+    let o = bayestrack(&["track", "--seq", seq, "--tracker", "mad"]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("0004.png") && err.contains("not a PNG"),
+        "{err}"
+    );
+    assert!(!err.contains("truncated"), "{err}");
+    // a huge box is printed in short form
+    let dir = tmpdir("unclear-huge");
+    write_sequence(&dir, 3, 3);
+    let o = bayestrack(&[
+        "track",
+        "--seq",
+        dir.to_str().unwrap(),
+        "--tracker",
+        "mad",
+        "--init",
+        "1,1,1e300,5",
+    ]);
+    let err = stderr(&o);
+    assert!(!err.contains("0000000000"), "{err}");
+    // a box far outside the frame: the tracker's refusal prints it short
+    let o = bayestrack(&[
+        "track",
+        "--seq",
+        dir.to_str().unwrap(),
+        "--init",
+        "1e300,1,5,5",
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("1e300"), "{err}");
+    assert!(!err.contains("0000000000"), "{err}");
+}

@@ -287,6 +287,19 @@ fn suite_bar() -> indicatif::ProgressBar {
     indicatif::ProgressBar::new(0).with_style(style)
 }
 
+/// The run option given to `reproduce-table list`, which runs nothing.
+fn list_refuses(opts: &RunOptions, full: bool) -> Option<String> {
+    if let Some((k, v)) = opts.set.first() {
+        Some(format!("--set {k}={v}"))
+    } else if let Some(shard) = opts.shard {
+        Some(format!("--shard {shard}"))
+    } else if full {
+        Some("--full".to_string())
+    } else {
+        None
+    }
+}
+
 /// `--shard K/N`: shard K of N.
 fn parse_shard(spec: &str) -> Result<Shard, String> {
     Shard::parse(spec).map_err(|e| e.to_string())
@@ -523,6 +536,15 @@ fn main() -> ExitCode {
             }
             match target.as_str() {
                 "list" => {
+                    // `list` runs nothing: an option for a run is a mistake
+                    // to say, not to drop silently
+                    if let Some(what) = list_refuses(&opts, full) {
+                        eprintln!(
+                            "error: `reproduce-table list` runs nothing, so {what} has no \
+                             effect; give an experiment id (or `all`) to run with it"
+                        );
+                        return ExitCode::from(2);
+                    }
                     print_registry(EXPERIMENTS);
                     ExitCode::SUCCESS
                 }
@@ -558,6 +580,22 @@ fn main() -> ExitCode {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn list_refuses_options_that_only_a_run_uses() {
+        let mut opts = super::RunOptions {
+            mode: super::Mode::Quick,
+            out: std::path::PathBuf::from("out"),
+            progress: false,
+            set: Vec::new(),
+            shard: None,
+        };
+        assert_eq!(super::list_refuses(&opts, false), None);
+        assert!(super::list_refuses(&opts, true).is_some());
+        opts.set.push(("runs".into(), "3".into()));
+        let said = super::list_refuses(&opts, false).unwrap();
+        assert!(said.contains("--set runs=3"), "{said}");
+    }
+
     use super::*;
 
     #[test]

@@ -182,6 +182,36 @@ pub fn run_jobs<P: Paper>(
     log: Option<&Path>,
     progress: bool,
 ) -> Result<Vec<P::Done>, ExperimentError> {
+    let (done, partial) = run_jobs_partial::<P>(config, jobs, log, progress)?;
+    if let Some(partial) = partial {
+        partial.finish(&log_rows::<P>(config, jobs, &done))?;
+    }
+    Ok(done)
+}
+
+/// The rows of `P::LOG` for `jobs` and their results, in job order.
+fn log_rows<P: Paper>(config: &P::Config, jobs: &[usize], done: &[P::Done]) -> Vec<P::Row> {
+    jobs.iter()
+        .zip(done)
+        .flat_map(|(&j, d)| P::rows(config, j, d))
+        .collect()
+}
+
+/// Every job's result, with the partial log still to be replaced.
+type JobsDone<P> = (
+    Vec<<P as Paper>::Done>,
+    Option<PartialCsv<<P as Paper>::Row>>,
+);
+
+/// [`run_jobs`] without writing the whole log: the partial log (with every
+/// job's rows) is handed back for the caller to replace once every other
+/// file is written too.
+fn run_jobs_partial<P: Paper>(
+    config: &P::Config,
+    jobs: &[usize],
+    log: Option<&Path>,
+    progress: bool,
+) -> Result<JobsDone<P>, ExperimentError> {
     let shared = P::prepare(config, jobs)?;
     let partial = log.map(PartialCsv::<P::Row>::create).transpose()?;
     let bar = progress_bar(jobs.len(), progress, P::JOBS);
@@ -197,15 +227,56 @@ pub fn run_jobs<P: Paper>(
         })
         .collect::<Result<_, ExperimentError>>()?;
     bar.finish_and_clear();
-    if let Some(partial) = partial {
-        let rows: Vec<P::Row> = jobs
-            .iter()
-            .zip(&done)
-            .flat_map(|(&j, d)| P::rows(config, j, d))
-            .collect();
-        partial.finish(&rows)?;
+    Ok((done, partial))
+}
+
+/// The folder (inside an experiment's output folder) where a finished run
+/// writes its files before they replace the previous run's.
+pub const STAGING_DIR: &str = "finished.partial";
+
+/// Writes a finished run's files (the log `rows` as the file `log`, and
+/// whatever `write` writes into the folder it is given) so that the output folder `dir` never mixes two runs: they go to
+/// `dir/finished.partial/` first, and only when every one is written do they
+/// replace the previous run's, file by file. A run killed before then leaves
+/// every earlier file as it was (the `PARTIAL.txt` marker of
+/// [`crate::experiment::run_marked`] says so, and the `*.partial.*` files
+/// hold what it finished). The one mechanism behind every experiment's
+/// whole run and `cargo xtask merge`.
+///
+/// # Errors
+/// [`ExperimentError::Io`] naming the file; those of `write`.
+pub fn publish<R: Serialize, T>(
+    dir: &Path,
+    log: &str,
+    rows: &[R],
+    write: impl FnOnce(&Path) -> Result<T, ExperimentError>,
+) -> Result<T, ExperimentError> {
+    let staging = dir.join(STAGING_DIR);
+    if staging.exists() {
+        std::fs::remove_dir_all(&staging).map_err(io(&staging))?;
     }
-    Ok(done)
+    std::fs::create_dir_all(&staging).map_err(io(&staging))?;
+    bayestrack_otb::write::write_csv(&staging.join(log), rows)?;
+    let out = write(&staging)?;
+    move_into(&staging, dir)?;
+    std::fs::remove_dir_all(&staging).map_err(io(&staging))?;
+    Ok(out)
+}
+
+/// Moves every file under `from` to the same place under `to` (renames in
+/// one file system), creating folders as needed.
+fn move_into(from: &Path, to: &Path) -> Result<(), ExperimentError> {
+    for entry in std::fs::read_dir(from).map_err(io(from))? {
+        let entry = entry.map_err(io(from))?;
+        let (src, dst) = (entry.path(), to.join(entry.file_name()));
+        if entry.file_type().map_err(io(&src))?.is_dir() {
+            std::fs::create_dir_all(&dst).map_err(io(&dst))?;
+            move_into(&src, &dst)?;
+        } else {
+            std::fs::rename(&src, &dst).map_err(io(&dst))?;
+        }
+    }
+    Ok(())
 }
 
 /// Every job of `config`, in order (see [`run_jobs`]), after checking
@@ -414,8 +485,9 @@ pub fn merge<P: Paper>(
         .enumerate()
         .flat_map(|(j, d)| P::rows(&config, j, d))
         .collect();
-    bayestrack_otb::write::write_csv(&dir.join(P::LOG), &rows)?;
-    let tables = report::<P>(&config, done, &dir)?;
+    let tables = publish(&dir, P::LOG, &rows, |staging| {
+        report::<P>(&config, done, staging)
+    })?;
     bayestrack_otb::write::clear_partial(&dir)?;
     Ok(Some(tables))
 }
@@ -443,8 +515,19 @@ impl<P: Paper> Experiment for P {
                 for stale in [SHARD_FILE, SHARD_NOTE] {
                     let _ = std::fs::remove_file(dir.join(stale));
                 }
-                let done = run_all::<P>(&config, Some(&dir.join(P::LOG)), opts.progress)?;
-                report::<P>(&config, done, &dir)
+                // every file of the finished run replaces the previous
+                // run's only once all are written (`publish`)
+                let jobs: Vec<usize> = (0..P::jobs(&config)).collect();
+                let (done, partial) =
+                    run_jobs_partial::<P>(&config, &jobs, Some(&dir.join(P::LOG)), opts.progress)?;
+                let rows = log_rows::<P>(&config, &jobs, &done);
+                let tables = publish(&dir, P::LOG, &rows, |staging| {
+                    report::<P>(&config, done, staging)
+                })?;
+                if let Some(partial) = partial {
+                    partial.discard()?;
+                }
+                Ok(tables)
             }
         }
     }
@@ -459,6 +542,122 @@ impl<P: Paper> Experiment for P {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    bayestrack_options::options! {
+        /// A two-file experiment whose report can fail part-way.
+        #[derive(Debug, Clone, PartialEq)]
+        pub struct TinyConfig {
+            /// Jobs.
+            pub jobs: usize = 3, in 1..=10;
+            /// Added to every job's result.
+            pub offset: usize = 0, in 0..=100;
+            /// Fail after writing the first of the report's files.
+            pub fail_report: bool = false;
+        }
+    }
+
+    #[derive(serde::Serialize)]
+    struct TinyRow {
+        job: usize,
+        value: usize,
+    }
+
+    struct Tiny;
+
+    impl Paper for Tiny {
+        type Config = TinyConfig;
+        type Done = usize;
+        type Row = TinyRow;
+        type Shared = ();
+        const ID: &'static str = "tiny";
+        const SOURCE: &'static str = "a test";
+        const SUMMARY: &'static str = "a test";
+        const LOG: &'static str = "runs.csv";
+        const JOBS: &'static str = "tiny jobs";
+        fn quick() -> TinyConfig {
+            TinyConfig::default()
+        }
+        fn full() -> TinyConfig {
+            TinyConfig::default()
+        }
+        fn jobs(c: &TinyConfig) -> usize {
+            c.jobs
+        }
+        fn prepare(_: &TinyConfig, _: &[usize]) -> Result<(), ExperimentError> {
+            Ok(())
+        }
+        fn run_job(c: &TinyConfig, _: &(), j: usize) -> Result<usize, ExperimentError> {
+            Ok(j + c.offset)
+        }
+        fn rows(_: &TinyConfig, j: usize, done: &usize) -> Vec<TinyRow> {
+            vec![TinyRow {
+                job: j,
+                value: *done,
+            }]
+        }
+        fn report(
+            c: &TinyConfig,
+            done: Vec<usize>,
+            dir: &Path,
+        ) -> Result<Vec<Table>, ExperimentError> {
+            write_text(&dir.join("table.csv"), &format!("{done:?}\n"))?;
+            if c.fail_report {
+                return Err(ExperimentError::Failed {
+                    id: "tiny",
+                    message: "killed part-way through the report".into(),
+                });
+            }
+            write_text(&dir.join("errors.svg"), &format!("<svg>{done:?}</svg>\n"))?;
+            Ok(Vec::new())
+        }
+    }
+
+    /// A run that stops part-way through writing its files (killed, or
+    /// failed) leaves every file of the last finished run as it was, and
+    /// what it finished in `*.partial*` files (issue 28: hikpf --full
+    /// replaced runs.csv, table.csv and errors.svg before that).
+    #[test]
+    fn a_run_stopped_while_writing_its_files_keeps_the_last_finished_run() {
+        let out = std::env::temp_dir().join(format!("bayestrack-driver-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&out);
+        let opts = |set: &[(&str, &str)]| RunOptions {
+            mode: Mode::Quick,
+            out: out.clone(),
+            progress: false,
+            set: set
+                .iter()
+                .map(|(k, v)| (k.to_string(), v.to_string()))
+                .collect(),
+            shard: None,
+        };
+        let dir = out.join("tiny");
+        Tiny.run(&opts(&[])).unwrap();
+        let files = ["runs.csv", "table.csv", "errors.svg"];
+        let before: Vec<String> = files
+            .iter()
+            .map(|f| std::fs::read_to_string(dir.join(f)).unwrap())
+            .collect();
+        assert_eq!(before[1], "[0, 1, 2]\n");
+        let e = Tiny
+            .run(&opts(&[("offset", "10"), ("fail_report", "true")]))
+            .unwrap_err();
+        assert!(e.to_string().contains("part-way"), "{e}");
+        for (f, old) in files.iter().zip(&before) {
+            assert_eq!(&std::fs::read_to_string(dir.join(f)).unwrap(), old, "{f}");
+        }
+        // the finished part is kept, under names that say it is partial
+        let partial = std::fs::read_to_string(dir.join("runs.partial.csv")).unwrap();
+        assert_eq!(partial.lines().count(), 4, "{partial}");
+        // a finished run replaces every file and leaves no partial one
+        Tiny.run(&opts(&[("offset", "10")])).unwrap();
+        assert_eq!(
+            std::fs::read_to_string(dir.join("table.csv")).unwrap(),
+            "[10, 11, 12]\n"
+        );
+        assert!(!dir.join("runs.partial.csv").exists());
+        assert!(!dir.join(STAGING_DIR).exists());
+        let _ = std::fs::remove_dir_all(&out);
+    }
 
     #[test]
     fn shards_parse_and_partition_the_jobs() {

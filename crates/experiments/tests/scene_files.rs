@@ -96,6 +96,41 @@ fn named_scenes_write_and_unknown_names_fail() {
 }
 
 #[test]
+fn a_scene_replaces_the_previous_one_whole_and_is_bounded() {
+    let d = tmpdir("replace");
+    let out = d.join("road");
+    write_named_scene("road", 1, Some(3), &out).unwrap();
+    fs::write(out.join("img/0009.png"), b"from an older, longer scene").unwrap();
+    // A run that fails part-way (here: before its first frame, the
+    // staging folder cannot be created) leaves the previous scene whole.
+    let before = fs::read(out.join("groundtruth_rect.txt")).unwrap();
+    fs::write(
+        d.join("road.partial"),
+        b"a file where the staging folder goes",
+    )
+    .unwrap();
+    assert!(write_named_scene("road", 2, Some(2), &out).is_err());
+    assert_eq!(fs::read(out.join("groundtruth_rect.txt")).unwrap(), before);
+    fs::remove_file(d.join("road.partial")).unwrap();
+    // A finished run replaces the whole folder: no frame of the old one.
+    let w = write_named_scene("road", 2, Some(2), &out).unwrap();
+    assert_eq!(w.dir, out);
+    assert!(!out.join("img/0009.png").exists());
+    assert!(!out.join("img/0003.png").exists());
+    assert!(!out.join("PARTIAL.txt").exists());
+    assert!(!d.join("road.partial").exists());
+    assert!(w.ground_truth_files[0].starts_with(&out));
+    match write_named_scene("road", 1, Some(100_000_000), &d.join("huge")) {
+        Err(e @ SceneError::InvalidParameter { .. }) => {
+            assert!(e.to_string().contains("100000"), "{e}")
+        }
+        other => panic!("expected a refusal, got {other:?}"),
+    }
+    assert!(!d.join("huge").exists() && !d.join("huge.partial").exists());
+    let _ = fs::remove_dir_all(&d);
+}
+
+#[test]
 fn unwritable_output_names_the_path() {
     let d = tmpdir("unwritable");
     let file = d.join("a-file");

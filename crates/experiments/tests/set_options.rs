@@ -186,6 +186,39 @@ fn a_bad_key_lists_the_valid_keys() {
     assert!(msg.contains("for condensation; valid keys: runs"), "{msg}");
 }
 
+/// Values each option's domain admits but the run would refuse later (or
+/// run without bound on) are refused when they are set (issue 28).
+#[test]
+fn values_the_run_would_refuse_are_refused_when_set() {
+    let refused = |r: Result<(), ExperimentError>, says: &str| match r {
+        Err(e @ ExperimentError::BadOption { .. }) => {
+            let msg = e.to_string();
+            assert!(msg.contains(says), "{msg}");
+            assert!(!msg.contains("000000000"), "a 300-digit number: {msg}");
+        }
+        other => panic!("expected a refusal saying {says:?}, got {other:?}"),
+    };
+    refused(
+        HikpfConfig::quick().apply("iekf_tolerance", "-1"),
+        "iekf_tolerance",
+    );
+    let mut big = HikpfConfig::quick();
+    big.apply("runs", "100000").unwrap();
+    refused(big.apply("steps", "1000000"), "particle steps");
+    refused(BallOptions::quick().apply("seconds", "1e-300"), "seconds");
+    refused(
+        BallOptions::quick().apply("sweep_seconds", "0.01"),
+        "sweep_seconds",
+    );
+    refused(BallOptions::quick().apply("ukf_kappa", "-4"), "kappa");
+    refused(BallOptions::quick().apply("ukf_alpha", "1e-300"), "alpha");
+    refused(BallOptions::quick().apply("ukf_alpha", "1e-160"), "alpha");
+    // what a run accepts stays accepted
+    BallOptions::quick().apply("ukf_kappa", "-3").unwrap();
+    BallOptions::quick().apply("ukf_alpha", "1e-3").unwrap();
+    HikpfConfig::quick().apply("iekf_tolerance", "0").unwrap();
+}
+
 #[test]
 fn absurd_values_are_refused_not_run() {
     let refused =

@@ -24,9 +24,13 @@ fn is_frame_file(p: &Path) -> bool {
 fn frame_number(p: &Path) -> Option<u64> {
     let stem = p.file_stem()?.to_str()?;
     let end = stem.rfind(|c: char| c.is_ascii_digit())? + 1;
+    // just past the last character that is not a digit (which may take
+    // more than one byte: `ť8.png`)
     let start = stem[..end]
-        .rfind(|c: char| !c.is_ascii_digit())
-        .map_or(0, |i| i + 1);
+        .char_indices()
+        .rev()
+        .find(|(_, c)| !c.is_ascii_digit())
+        .map_or(0, |(i, c)| i + c.len_utf8());
     stem[start..end].parse().ok()
 }
 
@@ -164,12 +168,37 @@ fn decode(path: &Path) -> Result<image::DynamicImage> {
 /// Decodes a PNG/JPEG file's `bytes`; `path` names it in errors (and
 /// gives the format when the bytes do not).
 fn decode_bytes(bytes: &[u8], path: &Path) -> Result<image::DynamicImage> {
-    let format = image::guess_format(bytes)
-        .or_else(|_| image::ImageFormat::from_path(path))
-        .map_err(|source| ImageError::Decode {
-            path: path.to_path_buf(),
-            source,
-        })?;
+    let format = match image::guess_format(bytes) {
+        Ok(format) => format,
+        Err(guess) => {
+            // The bytes start with no image signature: a file named .png
+            // that is not one (text, another format) is not "truncated".
+            let source = match image::ImageFormat::from_path(path) {
+                Ok(named) => {
+                    let ext = path
+                        .extension()
+                        .map_or(String::new(), |e| e.to_string_lossy().into_owned());
+                    let kind = match named {
+                        image::ImageFormat::Jpeg => "JPEG",
+                        image::ImageFormat::Png => "PNG",
+                        _ => "image",
+                    };
+                    image::ImageError::Decoding(image::error::DecodingError::new(
+                        image::error::ImageFormatHint::Exact(named),
+                        format!(
+                            "not a {kind} file: its bytes do not start with the {kind} \
+                             signature (another format, or text, named .{ext})"
+                        ),
+                    ))
+                }
+                Err(_) => guess,
+            };
+            return Err(ImageError::Decode {
+                path: path.to_path_buf(),
+                source,
+            });
+        }
+    };
     if !has_end_marker(bytes, format) {
         return Err(ImageError::Truncated {
             path: path.to_path_buf(),
@@ -390,6 +419,13 @@ mod tests {
     }
 
     #[test]
+    fn a_multibyte_character_before_the_number_does_not_panic() {
+        // found by the otb frame-folder fuzz target (`*ť8ť` panicked)
+        assert_eq!(frame_number(Path::new("\u{165}8.png")), Some(8));
+        assert_eq!(frame_number(Path::new("*\u{165}8\u{165}")), Some(8));
+    }
+
+    #[test]
     fn png_round_trip_and_numeric_order() {
         let d = tmpdir("roundtrip");
         let img = Image::from_fn(7, 5, |x, y| (x * 30 + y) as u8).unwrap();
@@ -444,6 +480,11 @@ mod tests {
         fs::write(&trunc, &bytes[..bytes.len() / 2]).unwrap();
         let text = d.join("text.jpg");
         fs::write(&text, "hello, I am not a JPEG").unwrap();
+        let named = d.join("text.png");
+        fs::write(&named, "a text file named .png\n").unwrap();
+        let e = read_frame(&named).unwrap_err();
+        assert!(matches!(e, ImageError::Decode { .. }), "{e:?}");
+        assert!(e.to_string().contains("not a PNG file"), "{e}");
         for p in [&trunc, &text] {
             match read_frame(p) {
                 Err(e @ (ImageError::Decode { .. } | ImageError::Truncated { .. })) => {

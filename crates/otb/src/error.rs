@@ -82,6 +82,42 @@ pub enum OtbError {
         /// What is wrong with it.
         reason: String,
     },
+    /// A plain folder's frame files that do not number the frames one to
+    /// one (a gap, a number twice, a name without a number or not UTF-8).
+    #[error("{path}: {reason}")]
+    FrameNames {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
+    /// An OTB-100 target named by `--seq` (`Jogging_2`) whose folder has
+    /// not the benchmark's layout.
+    #[error(
+        "{target}: {dir} has not the OTB-100 layout (no {expected}), so the target's frames and \
+         ground truth cannot be found; give the folder itself and the target's ground truth \
+         with --groundtruth"
+    )]
+    NotOtbLayout {
+        /// The target asked for.
+        target: String,
+        /// Its folder.
+        dir: PathBuf,
+        /// What the layout needs.
+        expected: String,
+    },
+    /// A ground-truth file larger than the reader's limit (or endless).
+    #[error(
+        "{path}: more than {limit} bytes of ground truth (an endless file such as /dev/zero, \
+         or not a ground-truth file); set {env}=<bytes> to read a larger one",
+        env = crate::ground_truth::GROUND_TRUTH_MAX_BYTES_ENV
+    )]
+    GroundTruthTooLarge {
+        /// The file.
+        path: PathBuf,
+        /// The limit in bytes.
+        limit: u64,
+    },
     /// A YUV4MPEG2 stream that cannot be read: a bad header, a frame cut
     /// short, a failed read.
     #[error("{source_name}: {}{reason}", .frame.map(|f| format!("Y4M frame {f}: ")).unwrap_or_else(|| "Y4M header: ".to_string()))]
@@ -92,6 +128,26 @@ pub enum OtbError {
         frame: Option<usize>,
         /// What is wrong.
         reason: String,
+    },
+    /// A Y4M header that asks for frames larger than the reader's limit.
+    #[error(
+        "{source_name}: Y4M header {header}: frames of {pixels} pixels ({bytes} bytes each) are \
+         more than the {limit} pixels read by default (a corrupt header, or a larger video \
+         than trackers are meant for); scale it down with ffmpeg's -vf scale=1920:-2, or set \
+         {env}=<pixels> to read it as it is",
+        env = crate::y4m::Y4M_MAX_PIXELS_ENV
+    )]
+    Y4mFrameTooLarge {
+        /// The stream (`stdin`, a file).
+        source_name: String,
+        /// The header's size fields (`W32768 H32768 C444`).
+        header: String,
+        /// Pixels per frame.
+        pixels: usize,
+        /// Bytes per frame.
+        bytes: usize,
+        /// The limit in pixels.
+        limit: usize,
     },
     /// A video file needs an `ffmpeg` executable to decode it, and there is
     /// none.

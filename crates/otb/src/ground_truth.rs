@@ -8,6 +8,53 @@ use bayestrack_image::BBox;
 
 use crate::error::OtbError;
 
+/// Largest ground-truth file read, in bytes (64 MiB: over a million rows,
+/// a hundred times OTB-100's longest sequence). A larger file, or an endless
+/// one (`/dev/zero`), is refused with [`OtbError::GroundTruthTooLarge`]
+/// instead of being read without bound; [`GROUND_TRUTH_MAX_BYTES_ENV`]
+/// raises the limit.
+pub const GROUND_TRUTH_MAX_BYTES: u64 = 64 << 20;
+
+/// The environment variable that overrides [`GROUND_TRUTH_MAX_BYTES`]
+/// (a whole number of bytes) for a user whose ground truth really is larger.
+pub const GROUND_TRUTH_MAX_BYTES_ENV: &str = "BAYESTRACK_GT_MAX_BYTES";
+
+/// The box `x,y,w,h` (OTB convention) when it is one a tracker can be
+/// given: four finite numbers, width and height above 0, and far edges
+/// `x + w`, `y + h` that are finite too (`1e308 + 1e308` is not). The same
+/// rule holds for `bayestrack track --init` and for every labelled
+/// ground-truth row, so a box refused as an initial box is never scored
+/// against either.
+///
+/// # Errors
+/// A sentence saying which rule the box breaks.
+pub fn check_box(x: f64, y: f64, w: f64, h: f64) -> Result<BBox, String> {
+    if ![x, y, w, h].iter().all(|v| v.is_finite()) {
+        return Err("every number must be finite".to_string());
+    }
+    if w <= 0.0 || h <= 0.0 {
+        return Err(format!(
+            "width and height must be above 0 (width {}, height {})",
+            short_number(w),
+            short_number(h)
+        ));
+    }
+    if !(x + w).is_finite() || !(y + h).is_finite() {
+        return Err("the far edges x + w, y + h must be finite".to_string());
+    }
+    Ok(BBox::new(x, y, w, h))
+}
+
+/// `v` as a short text: the shortest form that reads back to `v`, in
+/// exponent form from 1e15 up and below 1e-5 (never a 300-digit decimal).
+pub fn short_number(v: f64) -> String {
+    if v.is_finite() && v != 0.0 && !(1e-5..1e15).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
 /// Parses OTB ground truth: one `x y w h` row per frame, numbers separated
 /// by commas, tabs and/or spaces, mixed even within one row as OTB ships
 /// them (BlurCar1's row 496: `1 2,3\t4`). A comma with spaces or tabs
@@ -15,15 +62,16 @@ use crate::error::OtbError;
 /// commas with nothing between them (`1,,2,3,4`) are an empty field, an
 /// error rather than a silently shifted row. A UTF-8 byte-order mark at the
 /// start and CRLF line ends are accepted. A row of four zeros means
-/// "unlabelled" and becomes `None`. Blank lines are skipped (they number no
-/// frame).
+/// "unlabelled" and becomes `None`; every other row must be a box
+/// [`check_box`] accepts (the rule of `--init`). Blank lines are skipped
+/// (they number no frame).
 ///
 /// `path` only names the source in errors.
 ///
 /// # Errors
 /// [`OtbError::GroundTruth`] naming the 1-based line for a row that is not
-/// four finite numbers with non-negative width and height, or that has an
-/// empty field.
+/// four numbers, has an empty field, or is a box [`check_box`] refuses
+/// (not finite, no area, far edges not finite).
 pub fn parse_ground_truth(
     text: &str,
     path: impl AsRef<Path>,
@@ -38,7 +86,7 @@ pub fn parse_ground_truth(
         let bad = |reason: String| OtbError::GroundTruth {
             path: path.as_ref().to_path_buf(),
             line: i + 1,
-            text: line.to_string(),
+            text: line.chars().take(80).collect(),
             reason,
         };
         let mut fields: Vec<&str> = Vec::with_capacity(4);
@@ -51,38 +99,79 @@ pub fn parse_ground_truth(
                 )));
             }
             fields.extend(part.split_whitespace());
+            if fields.len() > 4 {
+                break;
+            }
         }
         if fields.len() != 4 {
-            return Err(bad(format!("expected 4 numbers, found {}", fields.len())));
+            let found = if fields.len() > 4 {
+                "more".to_string()
+            } else {
+                fields.len().to_string()
+            };
+            return Err(bad(format!("expected 4 numbers, found {found}")));
         }
         let mut v = [0f64; 4];
         for (slot, f) in v.iter_mut().zip(&fields) {
-            *slot = f
-                .parse::<f64>()
-                .map_err(|e| bad(format!("{f:?} is not a number ({e})")))?;
+            *slot = f.parse::<f64>().map_err(|e| {
+                let shown: String = f.chars().take(24).collect();
+                bad(format!("{shown:?} is not a number ({e})"))
+            })?;
             if !slot.is_finite() {
                 return Err(bad(format!("{f:?} is not finite")));
             }
         }
-        if v[2] < 0.0 || v[3] < 0.0 {
-            return Err(bad("negative width or height".to_string()));
+        if v == [0.0; 4] {
+            out.push(None);
+            continue;
         }
-        out.push((v != [0.0; 4]).then(|| BBox::new(v[0], v[1], v[2], v[3])));
+        let b = check_box(v[0], v[1], v[2], v[3]).map_err(|why| {
+            bad(format!(
+                "{why}; a box an initial box could not be (0,0,0,0 marks an unlabelled frame)"
+            ))
+        })?;
+        out.push(Some(b));
     }
     Ok(out)
 }
 
-/// Reads an OTB ground-truth file; see [`parse_ground_truth`].
+/// The byte limit of [`read_ground_truth`]: [`GROUND_TRUTH_MAX_BYTES`], or
+/// the whole number [`GROUND_TRUTH_MAX_BYTES_ENV`] holds.
+pub fn ground_truth_max_bytes() -> u64 {
+    std::env::var(GROUND_TRUTH_MAX_BYTES_ENV)
+        .ok()
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or(GROUND_TRUTH_MAX_BYTES)
+}
+
+/// Reads an OTB ground-truth file; see [`parse_ground_truth`]. At most
+/// [`ground_truth_max_bytes`] bytes are read: a larger or endless file
+/// (`/dev/zero`, a FIFO that never ends) is refused, not read without
+/// bound.
 ///
 /// # Errors
-/// [`OtbError::Read`] if the file cannot be read; [`OtbError::GroundTruth`]
-/// naming the file and line of a bad row.
+/// [`OtbError::Read`] if the file cannot be read;
+/// [`OtbError::GroundTruthTooLarge`] past the limit;
+/// [`OtbError::GroundTruth`] naming the file and line of a bad row.
 pub fn read_ground_truth(path: impl AsRef<Path>) -> Result<Vec<Option<BBox>>, OtbError> {
+    use std::io::Read;
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|source| OtbError::Read {
+    let read_err = |source| OtbError::Read {
         path: path.to_path_buf(),
         source,
-    })?;
+    };
+    let limit = ground_truth_max_bytes();
+    let file = std::fs::File::open(path).map_err(read_err)?;
+    let mut bytes = Vec::new();
+    file.take(limit.saturating_add(1))
+        .read_to_end(&mut bytes)
+        .map_err(read_err)?;
+    if bytes.len() as u64 > limit {
+        return Err(OtbError::GroundTruthTooLarge {
+            path: path.to_path_buf(),
+            limit,
+        });
+    }
     let text = String::from_utf8_lossy(&bytes);
     parse_ground_truth(&text, path)
 }
@@ -184,6 +273,10 @@ mod tests {
             ("1,2,3,4\n\n1,2,3,4,5\n", 3),
             ("1,2,-3,4\n", 1),
             ("1,2,NaN,4\n", 1),
+            // what --init refuses: no area, far edges past f64
+            ("1,2,3,4\n20,13,0,12\n", 2),
+            ("1e308,1e308,1e308,1e308\n", 1),
+            ("0,0,0,5\n", 1),
         ] {
             match parse_ground_truth(text, "seq/gt.txt") {
                 Err(OtbError::GroundTruth { line: l, path, .. }) => {
@@ -195,6 +288,30 @@ mod tests {
         }
         let e = parse_ground_truth("1;2;3;4", "a.txt").unwrap_err();
         assert!(e.to_string().contains("a.txt:1"), "{e}");
+    }
+
+    #[test]
+    fn an_endless_or_huge_file_is_refused_not_read_without_bound() {
+        if Path::new("/dev/zero").exists() {
+            match read_ground_truth("/dev/zero") {
+                Err(e @ OtbError::GroundTruthTooLarge { .. }) => {
+                    let msg = e.to_string();
+                    assert!(msg.contains("/dev/zero"), "{msg}");
+                    assert!(msg.contains(GROUND_TRUTH_MAX_BYTES_ENV), "{msg}");
+                }
+                other => panic!("expected a size error, got {other:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn huge_numbers_are_printed_short() {
+        assert_eq!(short_number(1e300), "1e300");
+        assert_eq!(short_number(12.5), "12.5");
+        assert_eq!(short_number(1e-300), "1e-300");
+        assert_eq!(short_number(0.0), "0");
+        let e = parse_ground_truth("1,2,3,4\n1e300,1,0,4\n", "gt.txt").unwrap_err();
+        assert!(!e.to_string().contains("000000000"), "{e}");
     }
 
     #[test]

@@ -25,4 +25,4 @@ pub use sequence::Sequence;
 pub use source::{Frame, FrameSelection, FrameSource, Select};
 pub use table::Table;
 #[cfg(feature = "track")]
-pub use track::{OnBadFrame, TrackRun, track_frames, track_source};
+pub use track::{OnBadFrame, TrackRun, track_frames, track_source, track_stream};

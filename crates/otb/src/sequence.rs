@@ -12,7 +12,11 @@
 //!
 //! Layouts accepted: `<seq>/img/0001.jpg ...` or `<seq>/img/img00001.png ...`
 //! with `<seq>/groundtruth_rect.txt` or `<seq>/*_gt.txt` (comma, tab or space
-//! separated `x y w h`, OTB box convention).
+//! separated `x y w h`, OTB box convention). A plain folder's frames must
+//! number the frames one to one ([`order_frames`]: no gap, no number twice,
+//! every name UTF-8 with a number), and a folder named as one target of an
+//! OTB-100 sequence (`Jogging_2`) must have the benchmark's layout: either
+//! would otherwise score frames against another frame's or target's row.
 
 use std::path::{Path, PathBuf};
 
@@ -133,12 +137,14 @@ impl Sequence {
                 .copied()
         });
         if let Some(entry) = chosen {
+            let layout_ok = |first: &Path| {
+                first.is_file()
+                    && (gt_file.is_some() || dir.join(entry.groundtruth_file()).is_file())
+            };
             let first = dir
                 .join(entry.frame_subdir())
                 .join(entry.frame_file(*entry.frames().start()));
-            if first.is_file()
-                && (gt_file.is_some() || dir.join(entry.groundtruth_file()).is_file())
-            {
+            if layout_ok(&first) {
                 if target.is_none() && gt_file.is_none() && candidates.len() > 1 {
                     let others: Vec<String> = candidates
                         .iter()
@@ -155,6 +161,16 @@ impl Sequence {
                 }
                 return Self::load_otb(&dir, entry, gt_file, notes);
             }
+            if let Some(target) = target {
+                // `Jogging_2` names one target of the folder: read as a
+                // plain folder, it would be scored against the folder's own
+                // (the other target's) ground truth.
+                return Err(OtbError::NotOtbLayout {
+                    target: target.name.clone(),
+                    dir,
+                    expected: format!("{} with {}", first.display(), entry.groundtruth_file()),
+                });
+            }
             notes.push(format!(
                 "{folder} is named like the OTB-100 sequence {} but has not its layout (no {} \
                  with {}): read as a plain folder of frames",
@@ -163,7 +179,7 @@ impl Sequence {
                 entry.groundtruth_file()
             ));
         }
-        let frames = list_frames(&dir)?;
+        let frames = order_frames(list_frames(&dir)?)?;
         let gt_path = match gt_file {
             Some(g) => Some(g.to_path_buf()),
             None => match find_ground_truth_files(&dir) {
@@ -393,6 +409,89 @@ fn pad_rows(
         rows.resize(frames, None);
     }
     rows
+}
+
+/// The number a frame file is known by: the last run of ASCII digits in
+/// its stem (`0001.jpg` is 1, `img00042.png` is 42); `None` when the stem
+/// has no digits or the number does not fit in 64 bits.
+pub fn frame_number(name: &str) -> Option<u64> {
+    let stem = name.rsplit_once('.').map_or(name, |(stem, _)| stem);
+    let end = stem.rfind(|c: char| c.is_ascii_digit())? + 1;
+    // just past the last character that is not a digit (which may take
+    // more than one byte: `ť8.png`)
+    let start = stem[..end]
+        .char_indices()
+        .rev()
+        .find(|(_, c)| !c.is_ascii_digit())
+        .map_or(0, |(i, c)| i + c.len_utf8());
+    stem[start..end].parse().ok()
+}
+
+/// Puts the frame files of a plain folder in frame order and checks that
+/// they number the frames one to one: every name UTF-8 with a number
+/// ([`frame_number`]), no number twice, none missing between the first and
+/// the last. A folder that breaks one of these would shift every later
+/// frame against its ground-truth row, so it is refused, naming the file.
+///
+/// # Errors
+/// [`OtbError::FrameNames`] naming the file: a name that is not UTF-8 or
+/// has no number, a number two files share, a number missing (naming the
+/// files before and after the gap).
+pub fn order_frames(frames: Vec<PathBuf>) -> Result<Vec<PathBuf>, OtbError> {
+    let bad = |path: &Path, reason: String| OtbError::FrameNames {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let mut numbered = Vec::with_capacity(frames.len());
+    for path in frames {
+        let Some(name) = path.file_name().and_then(|n| n.to_str()) else {
+            return Err(bad(
+                &path,
+                "the file name is not UTF-8, so its frame number cannot be read; rename it"
+                    .to_string(),
+            ));
+        };
+        let Some(number) = frame_number(name) else {
+            return Err(bad(
+                &path,
+                "the file name has no frame number (frames are numbered files: 0001.jpg, \
+                 img00001.png); move it out of the frame folder"
+                    .to_string(),
+            ));
+        };
+        numbered.push((number, path));
+    }
+    numbered.sort();
+    for pair in numbered.windows(2) {
+        let ((a, pa), (b, pb)) = (&pair[0], &pair[1]);
+        if a == b {
+            return Err(bad(
+                pb,
+                format!(
+                    "frame number {b} twice: {} and {}; keep one",
+                    file_name(pa),
+                    file_name(pb)
+                ),
+            ));
+        }
+        if *b != a + 1 {
+            let missing = if *b == a + 2 {
+                format!("frame {} is missing", a + 1)
+            } else {
+                format!("frames {}-{} are missing", a + 1, b - 1)
+            };
+            return Err(bad(
+                pb,
+                format!(
+                    "{missing} ({} is followed by {}): every later frame would be scored \
+                     against another frame's ground-truth row",
+                    file_name(pa),
+                    file_name(pb)
+                ),
+            ));
+        }
+    }
+    Ok(numbered.into_iter().map(|(_, p)| p).collect())
 }
 
 fn folder_name(dir: &Path) -> String {

@@ -2,8 +2,10 @@
 //! every sequence of a folder, initialised from frame 1's ground truth,
 //! scored on the labelled frames.
 //!
-//! Each sequence is decoded once and shared by the trackers (fps counts only
-//! the tracker's calls). Under the output folder the run writes, as it goes:
+//! Each tracker streams a sequence's frames, decoding one at a time (memory
+//! does not grow with the sequence's length; fps counts only the tracker's
+//! calls), and every frame is given the first frame's channel count, as
+//! `bayestrack track` does. Under the output folder the run writes, as it goes:
 //! `boxes/<tracker>/<sequence>.txt` (one `x,y,w,h` row per frame, flushed
 //! per frame), then `results.csv`, `results.md` and, per sequence and over
 //! all of them, the success plot (fraction of frames with IoU above each
@@ -38,10 +40,9 @@
 //! single run writes, byte for byte ([`Timing::PerCall`] makes two runs'
 //! fps, and so every byte, comparable in tests).
 
-use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
-use bayestrack_image::{BBox, Image};
+use bayestrack_image::BBox;
 use bayestrack_trackers::{TrackerError, TrackerInfo};
 
 use crate::error::{OtbError, WriteError};
@@ -55,7 +56,7 @@ use crate::shard::{
     SHARD_FILE, Shard, ShardRow, read_scores, read_shard, scores_path, write_scores,
 };
 use crate::table::Table;
-use crate::track::{OnBadFrame, track_frames};
+use crate::track::{OnBadFrame, track_source};
 use crate::write::{
     BoxFile, PartialCsv, clear_partial, copy_file, create_dir, mark_partial, partial_path,
     write_csv, write_text,
@@ -352,13 +353,10 @@ pub fn run_suite_with(
         if shard.is_some() && cells_of(s) == 0 {
             continue;
         }
+        // Frames are decoded one at a time inside each cell (streamed, as
+        // the CLI does): memory does not grow with the sequence's length.
         observe(SuiteEvent::Decoding { sequence: &name });
-        let loaded = opened.and_then(|seq| {
-            let frames = (0..seq.len())
-                .map(|i| seq.frame(i))
-                .collect::<Result<Vec<_>, OtbError>>()?;
-            Ok((seq, frames))
-        });
+        let loaded = opened;
         for (t, info) in options.trackers.iter().enumerate() {
             let index = s * n_trackers + t;
             if !mine(index) {
@@ -370,7 +368,7 @@ pub fn run_suite_with(
                 frames: len,
             });
             let outcome = match &loaded {
-                Ok((seq, frames)) => run_cell(info, seq, frames, options, &mut |k| {
+                Ok(seq) => run_cell(info, seq, options, &mut |k| {
                     observe(SuiteEvent::Frame {
                         done: done + k as u64,
                     })
@@ -392,7 +390,7 @@ pub fn run_suite_with(
                 cells.append(&[ResultRow::of(&cell)])?;
             }
             if let (Some(shard_cells), Some(shard)) = (&shard_cells, shard) {
-                if let (Some(boxes), Ok((seq, _))) = (&boxes, &loaded) {
+                if let (Some(boxes), Ok(seq)) = (&boxes, &loaded) {
                     write_scores(
                         &scores_path(out, info.name, &name),
                         boxes,
@@ -771,13 +769,13 @@ impl ResultRow {
     }
 }
 
-/// Runs one tracker on one decoded sequence; `on_frame(k)` after the
-/// `k`-th frame's box (1-based) is written. The scores come with the boxes
-/// they were computed from.
+/// Runs one tracker on one sequence, its frames decoded one at a time
+/// (and given the first frame's channel count, as `bayestrack track` does);
+/// `on_frame(k)` after the `k`-th frame's box (1-based) is written. The
+/// scores come with the boxes they were computed from.
 fn run_cell(
     info: &TrackerInfo,
     seq: &Sequence,
-    frames: &[Image<u8>],
     options: &SuiteOptions,
     on_frame: &mut dyn FnMut(usize),
 ) -> Result<(CellScore, Vec<BBox>), CellError> {
@@ -795,11 +793,9 @@ fn run_cell(
     let mut tracker = info
         .build(options.seed)
         .map_err(|e| CellError::Failed(e.to_string()))?;
-    let mut run = track_frames(
+    let mut run = track_source(
         tracker.as_mut(),
-        frames.len(),
-        |i| Ok(Cow::Borrowed(&frames[i])),
-        |i| seq.frames[i].clone(),
+        &mut seq.source(),
         init,
         OnBadFrame::Stop,
         |f| {
@@ -827,7 +823,7 @@ fn run_cell(
     let score =
         score_otb(&run.boxes, &seq.ground_truth).map_err(|e| CellError::Failed(e.to_string()))?;
     if let Timing::PerCall(seconds) = options.timing {
-        run.tracker_seconds = (run.boxes.len() - run.skipped.len()) as f64 * seconds;
+        run.tracker_seconds = (run.frames_run - run.skipped_count) as f64 * seconds;
     }
     let score = CellScore {
         score,

@@ -58,8 +58,12 @@ pub struct TrackRun {
     /// Seconds spent inside the tracker's `init` and `step` calls.
     pub tracker_seconds: f64,
     /// 0-based indices of frames skipped because they did not decode, with
-    /// the reason.
+    /// the reason: the first [`SKIPPED_LISTED`] of them
+    /// ([`TrackRun::skipped_count`] counts them all), so the list does not
+    /// grow with a long stream of bad frames.
     pub skipped: Vec<(usize, String)>,
+    /// Frames skipped because they did not decode, all of them.
+    pub skipped_count: usize,
     /// Frames on which the tracker reported the target lost.
     pub lost_frames: usize,
     /// Particles summed over frames (0 for deterministic trackers).
@@ -70,14 +74,27 @@ pub struct TrackRun {
     /// 1-based source positions of the frames run, one per box.
     pub numbers: Vec<usize>,
     /// Source positions of frames whose channel count differed from the
-    /// first frame's and which were converted to it ([`track_source`]).
+    /// first frame's and which were converted to it ([`track_source`]):
+    /// the first [`CONVERTED_LISTED`] of them ([`TrackRun::converted_count`]
+    /// counts them all), so the list does not grow with a long stream.
     pub converted: Vec<usize>,
+    /// Frames converted to the first frame's channel count, all of them.
+    pub converted_count: usize,
+    /// Frames run (one box each), also where [`track_stream`] keeps no
+    /// boxes.
+    pub frames_run: usize,
 }
+
+/// How many skipped frames [`TrackRun::skipped`] lists.
+pub const SKIPPED_LISTED: usize = 100;
+
+/// How many converted frames [`TrackRun::converted`] lists.
+pub const CONVERTED_LISTED: usize = 16;
 
 impl TrackRun {
     /// Frames the tracker processed per second of its own time.
     pub fn fps(&self) -> f64 {
-        let seen = self.boxes.len() - self.skipped.len();
+        let seen = self.frames_run - self.skipped_count;
         if self.tracker_seconds > 0.0 {
             seen as f64 / self.tracker_seconds
         } else {
@@ -123,6 +140,7 @@ where
         |index, _| path(index),
         |index, _| path(index).display().to_string(),
         false,
+        true,
         init,
         on_bad_frame,
         &mut sink,
@@ -184,6 +202,41 @@ pub fn track_source<S>(
     source: &mut dyn FrameSource,
     init: BBox,
     on_bad_frame: OnBadFrame,
+    sink: S,
+) -> Result<TrackRun, OtbError>
+where
+    S: FnMut(FrameBox<'_>) -> Result<(), OtbError>,
+{
+    source_loop(tracker, source, init, on_bad_frame, true, sink)
+}
+
+/// [`track_source`] for a source of any length (a camera, a Y4M stream of
+/// millions of frames): the boxes go to `sink` only, and the returned
+/// [`TrackRun`] keeps none ([`TrackRun::boxes`] and [`TrackRun::numbers`]
+/// are empty, [`TrackRun::frames_run`] counts them), so memory stays the
+/// same however long the source runs.
+///
+/// # Errors
+/// As [`track_source`].
+pub fn track_stream<S>(
+    tracker: &mut dyn Tracker,
+    source: &mut dyn FrameSource,
+    init: BBox,
+    on_bad_frame: OnBadFrame,
+    sink: S,
+) -> Result<TrackRun, OtbError>
+where
+    S: FnMut(FrameBox<'_>) -> Result<(), OtbError>,
+{
+    source_loop(tracker, source, init, on_bad_frame, false, sink)
+}
+
+fn source_loop<S>(
+    tracker: &mut dyn Tracker,
+    source: &mut dyn FrameSource,
+    init: BBox,
+    on_bad_frame: OnBadFrame,
+    keep_boxes: bool,
     mut sink: S,
 ) -> Result<TrackRun, OtbError>
 where
@@ -203,6 +256,7 @@ where
         |_, name| PathBuf::from(format!("{describe}: {name}")),
         |_, number| format!("frame {number}"),
         true,
+        keep_boxes,
         init,
         on_bad_frame,
         &mut sink,
@@ -230,6 +284,7 @@ fn run_frames<'f, S>(
     error_path: impl Fn(usize, &str) -> PathBuf,
     skipped_name: impl Fn(usize, usize) -> String,
     convert_channels: bool,
+    keep_boxes: bool,
     init: BBox,
     on_bad_frame: OnBadFrame,
     sink: &mut S,
@@ -247,7 +302,7 @@ where
             source: Box::new(source),
         }
     };
-    let capacity = frames.size_hint().0;
+    let capacity = if keep_boxes { frames.size_hint().0 } else { 0 };
     let first = frames.next().ok_or(OtbError::NoFramesToTrack)??;
     let channels = first.image.channels();
     let init = clip_initial_box(init, first.image.width(), first.image.height()).unwrap_or(init);
@@ -255,19 +310,28 @@ where
         boxes: Vec::with_capacity(capacity + 1),
         tracker_seconds: 0.0,
         skipped: Vec::new(),
+        skipped_count: 0,
         lost_frames: 0,
         particles: 0,
         init,
         numbers: Vec::with_capacity(capacity + 1),
         converted: Vec::new(),
+        converted_count: 0,
+        frames_run: 0,
+    };
+    let record = |run: &mut TrackRun, bbox: BBox, number: usize| {
+        run.frames_run += 1;
+        if keep_boxes {
+            run.boxes.push(bbox);
+            run.numbers.push(number);
+        }
     };
     let start = Instant::now();
     tracker
         .init(first.image.view(), init)
         .map_err(refused(&first, 0))?;
     run.tracker_seconds += start.elapsed().as_secs_f64();
-    run.boxes.push(init);
-    run.numbers.push(first.number);
+    record(&mut run, init, first.number);
     sink(FrameBox {
         index: 0,
         number: first.number,
@@ -286,9 +350,11 @@ where
             Err(e) if on_bad_frame == OnBadFrame::Skip => {
                 let number = previous + 1;
                 previous = number;
-                run.skipped.push((index, e.to_string()));
-                run.boxes.push(last);
-                run.numbers.push(number);
+                if run.skipped.len() < SKIPPED_LISTED {
+                    run.skipped.push((index, e.to_string()));
+                }
+                run.skipped_count += 1;
+                record(&mut run, last, number);
                 sink(FrameBox {
                     index,
                     number,
@@ -304,7 +370,10 @@ where
         previous = frame.number;
         if convert_channels && let Some(converted) = match_channels(&frame.image, channels) {
             frame.image = Cow::Owned(converted);
-            run.converted.push(frame.number);
+            if run.converted.len() < CONVERTED_LISTED {
+                run.converted.push(frame.number);
+            }
+            run.converted_count += 1;
         }
         let start = Instant::now();
         let estimate = tracker
@@ -314,8 +383,7 @@ where
         last = estimate.bbox;
         run.lost_frames += usize::from(estimate.lost);
         run.particles += estimate.particles;
-        run.boxes.push(last);
-        run.numbers.push(frame.number);
+        record(&mut run, last, frame.number);
         sink(FrameBox {
             index,
             number: frame.number,
@@ -437,7 +505,7 @@ mod tests {
         .unwrap();
         let xs: Vec<f64> = run.boxes.iter().map(|b| b.x).collect();
         assert_eq!(xs, vec![1.0, 2.0, 2.0, 3.0]);
-        assert_eq!(run.skipped.len(), 1);
+        assert_eq!((run.skipped.len(), run.skipped_count), (1, 1));
         assert_eq!(run.skipped[0].0, 2);
         // A bad first frame cannot be skipped.
         let first_bad = track_frames(
@@ -450,5 +518,106 @@ mod tests {
             |_| Ok(()),
         );
         assert!(matches!(first_bad, Err(OtbError::IndexOutOfRange { .. })));
+    }
+
+    /// A Y4M stream of `n` 8x4 gray frames.
+    fn gray_stream(n: usize) -> Vec<u8> {
+        let mut out = b"YUV4MPEG2 W8 H4 Cmono\n".to_vec();
+        for k in 0..n {
+            out.extend(b"FRAME\n");
+            out.extend(std::iter::repeat_n((k % 200) as u8, 32));
+        }
+        out
+    }
+
+    /// What a run keeps per frame stays bounded on a long stream: no box,
+    /// no number, at most [`CONVERTED_LISTED`] converted frames (issue 28:
+    /// about 80 bytes a frame over millions of frames).
+    #[test]
+    fn a_streamed_run_keeps_nothing_per_frame() {
+        let bytes = gray_stream(5000);
+        let mut source = crate::source::Y4mSource::new(&bytes[..], "long").unwrap();
+        let mut sunk = 0;
+        let run = track_stream(
+            &mut Drift {
+                bbox: BBox::new(1.0, 1.0, 2.0, 2.0),
+                width: 0,
+            },
+            &mut source,
+            BBox::new(1.0, 1.0, 2.0, 2.0),
+            OnBadFrame::Stop,
+            |_| {
+                sunk += 1;
+                Ok(())
+            },
+        )
+        .unwrap();
+        assert_eq!((run.frames_run, sunk), (5000, 5000));
+        assert!(run.boxes.is_empty() && run.numbers.is_empty());
+        assert!(run.boxes.capacity() <= 1 && run.numbers.capacity() <= 1);
+        assert!(run.fps() > 0.0);
+        // a source of colour frames after a gray one lists only the first
+        // converted frames, and counts them all
+        let mut colour = b"YUV4MPEG2 W8 H4 C444\n".to_vec();
+        for _ in 0..100 {
+            colour.extend(b"FRAME\n");
+            colour.extend([128u8; 96]);
+        }
+        let mut frames = crate::source::Y4mSource::new(&bytes[..32 + 6 + 22], "g")
+            .unwrap()
+            .chain(crate::source::Y4mSource::new(&colour[..], "c").unwrap());
+        struct Chain<I>(I);
+        impl<I: Iterator<Item = Result<crate::source::Frame, OtbError>>> Iterator for Chain<I> {
+            type Item = I::Item;
+            fn next(&mut self) -> Option<Self::Item> {
+                self.0.next()
+            }
+        }
+        impl<I: Iterator<Item = Result<crate::source::Frame, OtbError>>> FrameSource for Chain<I> {
+            fn describe(&self) -> String {
+                "chain".into()
+            }
+            fn remaining(&self) -> Option<usize> {
+                None
+            }
+        }
+        let mut chain = Chain(frames.by_ref());
+        let run = track_stream(
+            &mut Drift {
+                bbox: BBox::new(1.0, 1.0, 2.0, 2.0),
+                width: 0,
+            },
+            &mut chain,
+            BBox::new(1.0, 1.0, 2.0, 2.0),
+            OnBadFrame::Stop,
+            |_| Ok(()),
+        )
+        .unwrap();
+        assert_eq!(run.converted_count, 100);
+        assert_eq!(run.converted.len(), CONVERTED_LISTED);
+        // every other frame with a broken FRAME line, skipped: the reasons
+        // are listed for the first SKIPPED_LISTED, counted for all
+        let mut broken = gray_stream(300);
+        for k in (1..300).step_by(2) {
+            let at = 22 + k * 38;
+            broken[at..at + 5].copy_from_slice(b"FRAMX");
+        }
+        let mut source = crate::source::Y4mSource::new(&broken[..], "broken").unwrap();
+        let run = track_stream(
+            &mut Drift {
+                bbox: BBox::new(1.0, 1.0, 2.0, 2.0),
+                width: 0,
+            },
+            &mut source,
+            BBox::new(1.0, 1.0, 2.0, 2.0),
+            OnBadFrame::Skip,
+            |_| Ok(()),
+        )
+        .unwrap();
+        assert_eq!(run.frames_run, 300);
+        assert_eq!(
+            (run.skipped.len(), run.skipped_count),
+            (SKIPPED_LISTED, 150)
+        );
     }
 }

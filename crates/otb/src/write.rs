@@ -167,6 +167,17 @@ impl<R: serde::Serialize> PartialCsv<R> {
         Ok(())
     }
 
+    /// Removes the partial file, once the complete rows are written
+    /// elsewhere (a caller that stages every file of a run before they
+    /// replace the previous run's).
+    ///
+    /// # Errors
+    /// [`WriteError`] naming the partial file.
+    pub fn discard(self) -> Result<(), WriteError> {
+        drop(self.file);
+        std::fs::remove_file(&self.partial).map_err(|e| WriteError::new(&self.partial, e))
+    }
+
     /// Writes the complete `rows` over the final path and removes the
     /// partial file.
     ///
@@ -240,10 +251,12 @@ pub fn create_dir(dir: &Path) -> Result<(), WriteError> {
     std::fs::create_dir_all(dir).map_err(|e| WriteError::new(dir, e))
 }
 
-/// Where a [`BoxFile`] writes: standard output or a file whose length
-/// before each row is known, so a row that fails part-way is cut off.
+/// Where a [`BoxFile`] writes: standard output, a file not created yet
+/// (created with the first row), or a file whose length before each row is
+/// known, so a row that fails part-way is cut off.
 enum BoxOut {
     Stdout(std::io::Stdout),
+    Pending,
     File { file: std::fs::File, len: u64 },
 }
 
@@ -280,18 +293,34 @@ impl Rewind for std::fs::File {
     }
 }
 
+/// How messages name the path `-`: standard output.
+pub const STDOUT_NAME: &str = "standard output";
+
+/// `path` for messages: `standard output` for `-`, the path otherwise.
+pub fn display_out(path: &Path) -> String {
+    if path == Path::new("-") {
+        STDOUT_NAME.to_string()
+    } else {
+        path.display().to_string()
+    }
+}
+
 /// An OTB result file, one `x,y,w,h` row per frame, written through row
 /// by row so that an interrupted run keeps every box it wrote. A row is
 /// written whole or not at all: when the disk fills part-way through one,
-/// the file is cut back to the rows before it. The path `-` is standard
-/// output.
+/// the file is cut back to the rows before it. The file is created (and a
+/// previous one replaced) only when the first row is written: a run that
+/// fails before its first box leaves the previous file as it was. The path
+/// `-` is standard output (named so in errors).
 pub struct BoxFile {
     path: PathBuf,
     out: BoxOut,
 }
 
 impl BoxFile {
-    /// Creates (truncates) the file.
+    /// A box file at `path`, created with the first row. Checks now what
+    /// can be checked without touching a previous file: that `path` is not
+    /// a folder and that its folder exists.
     ///
     /// # Errors
     /// [`WriteError`] naming the file.
@@ -299,8 +328,26 @@ impl BoxFile {
         let out = if path == Path::new("-") {
             BoxOut::Stdout(std::io::stdout())
         } else {
-            let file = std::fs::File::create(path).map_err(|e| WriteError::new(path, e))?;
-            BoxOut::File { file, len: 0 }
+            if path.is_dir() {
+                return Err(WriteError::new(
+                    path,
+                    std::io::Error::new(std::io::ErrorKind::IsADirectory, "it is a folder"),
+                ));
+            }
+            let parent = path
+                .parent()
+                .filter(|p| !p.as_os_str().is_empty())
+                .unwrap_or(Path::new("."));
+            if !parent.is_dir() {
+                return Err(WriteError::new(
+                    path,
+                    std::io::Error::new(
+                        std::io::ErrorKind::NotFound,
+                        format!("its folder {} does not exist", parent.display()),
+                    ),
+                ));
+            }
+            BoxOut::Pending
         };
         Ok(Self {
             path: path.to_path_buf(),
@@ -308,25 +355,42 @@ impl BoxFile {
         })
     }
 
-    /// Appends one row, whole or not at all, and flushes it.
+    /// Appends one row, whole or not at all, and flushes it (creating the
+    /// file with the first row).
     ///
     /// # Errors
-    /// [`WriteError`] naming the file.
+    /// [`WriteError`] naming the file (`standard output` for `-`).
     pub fn write(&mut self, b: &BBox) -> Result<(), WriteError> {
         use std::io::Write;
         let row = format!("{}\n", box_row(b));
+        if matches!(self.out, BoxOut::Pending) {
+            let file =
+                std::fs::File::create(&self.path).map_err(|e| WriteError::new(&self.path, e))?;
+            self.out = BoxOut::File { file, len: 0 };
+        }
         let done = match &mut self.out {
             BoxOut::Stdout(out) => out.write_all(row.as_bytes()).and_then(|()| out.flush()),
             BoxOut::File { file, len } => write_whole(file, len, row.as_bytes()),
+            BoxOut::Pending => Ok(()),
         };
-        done.map_err(|e| WriteError::new(&self.path, e))
+        done.map_err(|e| {
+            if self.path == Path::new("-") {
+                WriteError::new(Path::new(STDOUT_NAME), e)
+            } else {
+                WriteError::new(&self.path, e)
+            }
+        })
     }
 }
 
 /// Formats a box as an OTB result row `x,y,w,h` (at most 2 decimals,
-/// trailing zeros dropped).
+/// trailing zeros dropped; numbers from 1e15 up in exponent form, `1e300`).
 pub fn box_row(b: &BBox) -> String {
     let f = |v: f64| {
+        if !v.is_finite() || v.abs() >= 1e15 {
+            // never a 300-digit decimal
+            return format!("{v:e}");
+        }
         let s = format!("{v:.2}");
         let s = s.trim_end_matches('0').trim_end_matches('.');
         if s == "-0" {
@@ -514,5 +578,22 @@ mod tests {
     #[test]
     fn box_rows_are_short() {
         assert_eq!(box_row(&BBox::new(1.0, 2.5, 10.126, 3.0)), "1,2.5,10.13,3");
+        assert_eq!(box_row(&BBox::new(1.0, 2.0, 1e300, 3.0)), "1,2,1e300,3");
+    }
+
+    #[test]
+    fn a_box_file_is_created_with_its_first_row() {
+        let dir = scratch("lazy");
+        let path = dir.join("boxes.txt");
+        std::fs::write(&path, "previous\n").unwrap();
+        let mut file = BoxFile::create(&path).unwrap();
+        // nothing written yet: the previous file is as it was
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "previous\n");
+        file.write(&BBox::new(1.0, 2.0, 3.0, 4.0)).unwrap();
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "1,2,3,4\n");
+        drop(file);
+        assert!(BoxFile::create(&dir).is_err());
+        assert!(BoxFile::create(&dir.join("no/such/folder.txt")).is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -36,6 +36,27 @@ const MAX_LINE: usize = 4096;
 /// gigabytes).
 const MAX_SIDE: usize = 1 << 15;
 
+/// Largest frame read by default, in pixels (`W x H`): 2^25, a little over
+/// 8K UHD (7680 x 4320). A 4:4:4 frame this size holds 100 MB of samples
+/// and as much again once converted to RGB; a header that asks for more
+/// (`W32768 H32768`, 3 GB a frame) is refused with
+/// [`OtbError::Y4mFrameTooLarge`] before any frame is read, unless
+/// [`Y4M_MAX_PIXELS_ENV`] raises the limit.
+pub const Y4M_MAX_PIXELS: usize = 1 << 25;
+
+/// The environment variable that overrides [`Y4M_MAX_PIXELS`] (a whole
+/// number of pixels) for a user who does mean to track on larger frames.
+pub const Y4M_MAX_PIXELS_ENV: &str = "BAYESTRACK_Y4M_MAX_PIXELS";
+
+/// The pixel limit of [`Y4mReader::new`]: [`Y4M_MAX_PIXELS`], or the whole
+/// number [`Y4M_MAX_PIXELS_ENV`] holds.
+pub fn y4m_max_pixels() -> usize {
+    std::env::var(Y4M_MAX_PIXELS_ENV)
+        .ok()
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or(Y4M_MAX_PIXELS)
+}
+
 /// The layout of a Y4M stream's chroma planes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[non_exhaustive]
@@ -85,6 +106,9 @@ impl Y4mHeader {
     /// A message saying what is wrong: no `YUV4MPEG2` magic, a missing or
     /// zero width or height, a malformed field, an unsupported colour space.
     pub fn parse(line: &str) -> Result<Self, String> {
+        // A CRLF line end (a stream written on Windows, or by hand) is read
+        // as LF: the CR is not part of the last field.
+        let line = line.strip_suffix('\r').unwrap_or(line);
         let mut fields = line.split(' ').filter(|f| !f.is_empty());
         if fields.next() != Some("YUV4MPEG2") {
             return Err(format!(
@@ -190,7 +214,14 @@ impl Y4mHeader {
         }
     }
 
-    /// Bytes of one frame's planes.
+    /// The header as its size fields read (`W1920 H1080 C420jpeg`), for
+    /// messages.
+    pub fn describe(&self) -> String {
+        format!("W{} H{} C{}", self.width, self.height, self.colour_space)
+    }
+
+    /// Bytes of one frame's planes. The sides are at most 2^15, so this
+    /// does not overflow on 64-bit targets (at most 4 x 2^30).
     pub fn frame_bytes(&self) -> usize {
         let luma = self.width * self.height;
         let (cw, ch) = self.chroma_size();
@@ -211,6 +242,9 @@ pub struct Y4mReader<R: Read> {
     buf: Vec<u8>,
     frames_read: usize,
     done: bool,
+    /// Whether the last frame had a bad `FRAME` line (a second in a row
+    /// ends the stream: the data is not frames of the header's size).
+    bad_marker: bool,
 }
 
 impl<R: Read> std::fmt::Debug for Y4mReader<R> {
@@ -251,6 +285,9 @@ fn read_line<R: Read>(input: &mut BufReader<R>) -> Result<Option<Vec<u8>>, Strin
         });
     }
     line.pop();
+    if line.last() == Some(&b'\r') {
+        line.pop();
+    }
     Ok(Some(line))
 }
 
@@ -269,6 +306,16 @@ impl<R: Read> Y4mReader<R> {
             .ok_or_else(|| y4m_error(&name, None, "the stream is empty (no Y4M header)"))?;
         let header = Y4mHeader::parse(&String::from_utf8_lossy(&line))
             .map_err(|e| y4m_error(&name, None, e))?;
+        let limit = y4m_max_pixels();
+        if header.width * header.height > limit {
+            return Err(OtbError::Y4mFrameTooLarge {
+                source_name: name,
+                header: header.describe(),
+                pixels: header.width * header.height,
+                bytes: header.frame_bytes(),
+                limit,
+            });
+        }
         Ok(Self {
             input,
             name,
@@ -276,6 +323,7 @@ impl<R: Read> Y4mReader<R> {
             buf: Vec::new(),
             frames_read: 0,
             done: false,
+            bad_marker: false,
         })
     }
 
@@ -305,25 +353,80 @@ impl<R: Read> Y4mReader<R> {
             *done = true;
             y4m_error(&self.name, Some(number), reason)
         };
-        let line = match read_line(&mut self.input) {
-            Ok(Some(line)) => line,
-            Ok(None) => {
+        let need = self.header.frame_bytes();
+        let mismatch = || {
+            format!(
+                "no FRAME line where frame {number} should start (after {} frames of {need} \
+                 bytes): the frames hold more or fewer bytes than the header's {} says (is \
+                 the colour space right? 4:4:4 data labelled 420 reads this way), or the \
+                 stream is corrupt",
+                number - 1,
+                self.header.describe()
+            )
+        };
+        // The marker is checked before the rest of its line is read: frame
+        // data where a FRAME line should be is a size mismatch, not "a
+        // header line longer than 4096 bytes".
+        let mut magic = Vec::with_capacity(5);
+        match self.input.by_ref().take(5).read_to_end(&mut magic) {
+            Ok(0) => {
                 self.done = true;
                 return Ok(false);
             }
+            Ok(n) if n < 5 => {
+                return Err(fail(
+                    &mut self.done,
+                    "the stream ends inside a FRAME line".to_string(),
+                ));
+            }
+            Ok(_) => {}
+            Err(e) => return Err(fail(&mut self.done, format!("reading failed: {e}"))),
+        }
+        let marked = magic == b"FRAME";
+        let rest = match read_line(&mut self.input) {
+            Ok(Some(rest)) => rest,
+            Ok(None) if marked => Vec::new(),
+            Ok(None) => return Err(fail(&mut self.done, mismatch())),
+            Err(_) if !marked || self.bad_marker => {
+                return Err(fail(&mut self.done, mismatch()));
+            }
             Err(e) => return Err(fail(&mut self.done, e)),
         };
-        if !line.starts_with(b"FRAME") || !matches!(line.get(5), None | Some(b' ')) {
+        if !marked || !matches!(rest.first(), None | Some(b' ')) {
+            if self.bad_marker {
+                return Err(fail(&mut self.done, mismatch()));
+            }
+            // One bad marker line: its frame is passed over (the stream
+            // goes on, so `--on-bad-frame skip` reaches the frames after
+            // it); a second in a row ends the stream.
+            self.bad_marker = true;
+            let mut line = magic;
+            line.extend_from_slice(&rest);
             let start = String::from_utf8_lossy(&line[..line.len().min(20)]).into_owned();
-            return Err(fail(
-                &mut self.done,
-                format!("expected a FRAME line, found {start:?}"),
-            ));
+            let skipped = std::io::copy(
+                &mut self.input.by_ref().take(need as u64),
+                &mut std::io::sink(),
+            );
+            self.frames_read = number;
+            return Err(match skipped {
+                Ok(n) if n == need as u64 => y4m_error(
+                    &self.name,
+                    Some(number),
+                    format!("expected a FRAME line, found {start:?}; the frame is passed over"),
+                ),
+                Ok(n) => fail(
+                    &mut self.done,
+                    format!(
+                        "expected a FRAME line, found {start:?}; then cut short: {n} of its {need} bytes"
+                    ),
+                ),
+                Err(e) => fail(&mut self.done, format!("reading failed: {e}")),
+            });
         }
+        self.bad_marker = false;
         // Read as the bytes arrive (the buffer keeps its capacity from frame
         // to frame): a header that promises a huge frame allocates only
         // what the stream holds.
-        let need = self.header.frame_bytes();
         self.buf.clear();
         let got = self
             .input
@@ -489,6 +592,31 @@ mod tests {
             let e = header(line).unwrap_err();
             assert!(e.contains(says), "{line}: {e}");
         }
+    }
+
+    #[test]
+    fn crlf_lines_and_frames_past_the_limit() {
+        // a CR before the LF is not part of the last field
+        let h = header("YUV4MPEG2 W4 H2 C444\r").unwrap();
+        assert_eq!(h.chroma, Chroma::C444);
+        let mut stream = b"YUV4MPEG2 W4 H2 Cmono\r\nFRAME\r\n".to_vec();
+        stream.extend([16u8; 8]);
+        stream.extend(b"FRA");
+        let mut r = Y4mReader::new(&stream[..], "s").unwrap();
+        assert!(r.next_image().unwrap().is_ok());
+        let e = r.next_image().unwrap().unwrap_err().to_string();
+        assert!(
+            e.contains("Y4M frame 2") && e.contains("inside a FRAME line"),
+            "{e}"
+        );
+        assert!(r.next_image().is_none());
+        // a header asking for more pixels than the limit: refused before
+        // any frame is read, naming the header and the override
+        let e = Y4mReader::new(&b"YUV4MPEG2 W32768 H32768 C444\nFRAME\n"[..], "big")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("W32768 H32768 C444"), "{e}");
+        assert!(e.contains(Y4M_MAX_PIXELS_ENV), "{e}");
     }
 
     #[test]

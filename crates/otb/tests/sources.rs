@@ -347,9 +347,24 @@ fn a_cut_or_malformed_y4m_stream_names_the_frame() {
     let mut bad = bytes.clone();
     let second = 4 * 4 * 3 / 2 + 6 + bad.iter().position(|&b| b == b'\n').unwrap() + 1;
     bad[second..second + 5].copy_from_slice(b"FRAMX");
+    // One bad FRAME line: its frame is an error, and the stream goes on
+    // (numbered as before) so `--on-bad-frame skip` reaches frame 3.
     let got: Vec<_> = Y4mSource::new(&bad[..], "stdin").unwrap().collect();
-    let e = got.last().unwrap().as_ref().unwrap_err().to_string();
+    assert_eq!(got.len(), 3);
+    let e = got[1].as_ref().unwrap_err().to_string();
     assert!(e.contains("Y4M frame 2") && e.contains("FRAMX"), "{e}");
+    assert_eq!(got[2].as_ref().unwrap().number, 3);
+    // Two in a row: the data is not frames of the header's size; the
+    // stream ends with an error naming the colour space.
+    let third = second + 4 * 4 * 3 / 2 + 6;
+    bad[third..third + 5].copy_from_slice(b"FRAMY");
+    let got: Vec<_> = Y4mSource::new(&bad[..], "stdin").unwrap().collect();
+    assert_eq!(got.len(), 3);
+    let e = got[2].as_ref().unwrap_err().to_string();
+    assert!(
+        e.contains("Y4M frame 3") && e.contains("colour space"),
+        "{e}"
+    );
     for (input, says) in [
         (&b""[..], "empty"),
         (&b"P6 4 4 255\n"[..], "not a YUV4MPEG2"),

@@ -212,3 +212,68 @@ fn the_shipped_published_results_read_whole() {
     std::fs::remove_dir_all(&alone).unwrap();
     assert_eq!((q.results, q.ranges), (p.results, p.ranges));
 }
+
+/// A colour sequence with one gray frame: every tracker gets the frame
+/// converted to colour, as `bayestrack track` gives it (issue 28: two
+/// trackers' cells failed on it in `cargo xtask otb`).
+#[test]
+fn a_gray_frame_in_a_colour_sequence_is_converted_as_the_cli_does() {
+    let root = std::env::temp_dir().join(format!("bayestrack-suite-mixed-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&root);
+    let dir = root.join("seqs").join("mixed");
+    std::fs::create_dir_all(dir.join("img")).unwrap();
+    let mut gt = String::new();
+    for k in 0..4u32 {
+        let inside = |x: u32, y: u32| (14 + k..26 + k).contains(&x) && (16..28).contains(&y);
+        let path = dir.join("img").join(format!("{:04}.png", k + 1));
+        if k == 2 {
+            image::GrayImage::from_fn(48, 48, |x, y| {
+                image::Luma([if inside(x, y) {
+                    if (x / 3 + y / 3) % 2 == 0 { 230 } else { 20 }
+                } else {
+                    40 + ((x + y) % 9) as u8
+                }])
+            })
+            .save(path)
+            .unwrap();
+        } else {
+            image::RgbImage::from_fn(48, 48, |x, y| {
+                image::Rgb(if inside(x, y) {
+                    if (x / 3 + y / 3) % 2 == 0 {
+                        [230, 200, 40]
+                    } else {
+                        [20, 20, 160]
+                    }
+                } else {
+                    [30, 60 + ((x * 7 + y * 3) % 20) as u8, 90]
+                })
+            })
+            .save(path)
+            .unwrap();
+        }
+        gt.push_str(&format!("{},17,12,12\n", 15 + k));
+    }
+    std::fs::write(dir.join("groundtruth_rect.txt"), gt).unwrap();
+    let options = SuiteOptions {
+        trackers: bayestrack_trackers::REGISTRY.iter().collect(),
+        seed: 0,
+        out: root.join("out"),
+        progress: false,
+        published: None,
+        shard: None,
+        timing: Timing::PerCall(1e-3),
+    };
+    let report = run_suite(&root.join("seqs"), &options).unwrap();
+    let failures: Vec<String> = report
+        .cells
+        .iter()
+        .filter_map(|c| {
+            c.outcome
+                .as_ref()
+                .err()
+                .map(|e| format!("{}: {e}", c.tracker))
+        })
+        .collect();
+    assert!(failures.is_empty(), "{failures:?}");
+    std::fs::remove_dir_all(&root).unwrap();
+}

@@ -75,7 +75,7 @@ use bayestrack_trackers::{BallConfig, BallFilter, BallTracker, MotionModel, Trac
 use crate::driver::Paper;
 use crate::experiment::{ExperimentError, MAX_RUNS, write_text};
 use crate::scenes::{BallMotion, BallScene, SceneStream};
-use bayestrack_options::{Each, OptionValue, Options, above, above_to, choice, options};
+use bayestrack_options::{Each, OptionValue, Options, above, choice, options};
 use bayestrack_otb::Table;
 use bayestrack_otb::metrics::center_error;
 use bayestrack_otb::plot::{Series, line_chart};

@@ -91,12 +91,43 @@ choice! { ModelChoice { Matched = "matched", Linear = "linear" } }
 /// Longest run an option may ask for, seconds of video (a day).
 pub const MAX_SECONDS: f64 = 86_400.0;
 
+/// Shortest run an option may ask for, seconds of video (22 camera
+/// frames): a run of a few frames leaves a slow filter in real time
+/// without a frame to score.
+pub const MIN_SECONDS: f64 = 1.0;
+
 /// Widest search margin an option may ask for, px (wider than any frame).
 pub const MAX_SEARCH_MARGIN: usize = 4096;
 
 /// The cross-option rules: a ball is found only inside the radius where it
 /// is lost, and the trackers' settings must be ones they accept.
 pub(super) fn check(o: &BallOptions) -> Result<(), String> {
+    // the UKF's weights for the ball's 4-dimensional state (x, y, vx, vy):
+    // what the tracker computes on its first frame, checked now, each
+    // refusal naming the option at fault
+    let short = bayestrack_otb::ground_truth::short_number;
+    let (alpha, kappa) = (o.ukf_alpha, o.ukf_kappa);
+    if 4.0 + kappa <= 0.0 {
+        return Err(format!(
+            "ukf_kappa must be above -4 (it is {}): the ball's state has 4 dimensions and the \
+             UKF needs alpha^2 (4 + kappa) > 0",
+            short(kappa)
+        ));
+    }
+    let spread = alpha * alpha * (4.0 + kappa);
+    let weights = bayestrack_kalman::Ukf::new(alpha, o.ukf_beta, kappa)
+        .and_then(|u| u.weights(4))
+        .ok()
+        .filter(|(wm0, wc0, wi)| [wm0, wc0, wi].iter().all(|w| w.is_finite()));
+    if !spread.is_normal() || weights.is_none() {
+        return Err(format!(
+            "ukf_alpha {} is too small for kappa {}: alpha^2 (4 + kappa) = {} and the UKF's \
+             sigma-point weights 1 / (2 alpha^2 (4 + kappa)) overflow",
+            short(alpha),
+            short(kappa),
+            short(spread)
+        ));
+    }
     if o.found_radius > o.lost_radius {
         return Err("found_radius must be at most lost_radius".into());
     }
@@ -118,7 +149,7 @@ options! {
         pub runs: usize = 10, in 1..=MAX_RUNS;
         /// Length of a run in seconds of video (600: the paper's 10
         /// minutes).
-        pub seconds: f64 = 600.0, in above_to(0.0, MAX_SECONDS);
+        pub seconds: f64 = 600.0, in MIN_SECONDS..=MAX_SECONDS;
         /// Seed of the whole experiment.
         pub seed: u64 = 1;
         /// Motion noise of the noisy linear condition, px/frame per axis
@@ -204,7 +235,7 @@ options! {
         /// Runs per sweep cell (2), each [`BallOptions::sweep_seconds`] long.
         pub sweep_runs: usize = 2, in 1..=MAX_RUNS;
         /// Length of a sweep run, s (60).
-        pub sweep_seconds: f64 = 60.0, in above_to(0.0, MAX_SECONDS);
+        pub sweep_seconds: f64 = 60.0, in MIN_SECONDS..=MAX_SECONDS;
         /// Measure the trackers' wall-clock time (the `ours wall fps`
         /// column); `false` records 0 s, so that two runs write
         /// byte-identical files.

@@ -71,8 +71,13 @@ pub(super) fn summarize<'a>(
         view,
         runs: n,
         frames_per_second: frames as f64 / f64::max(seconds, 1e-12),
-        evaluations: evaluations as f64 / nf,
-        error: err / nf,
+        // a filter that saw no frame has no error (not 0.0)
+        evaluations: if frames == 0 {
+            f64::NAN
+        } else {
+            evaluations as f64 / nf
+        },
+        error: if frames == 0 { f64::NAN } else { err / nf },
         lost_per_10min: losses as f64 * 600.0 / f64::max(seconds, 1e-12),
         losses,
         found: if found.is_empty() {

@@ -99,6 +99,38 @@ options! {
         /// Resampling scheme, every step (the demo's residual resampling).
         pub resampling: Resampling = Resampling::Residual, via ResamplingName;
     }
+    check check;
+}
+
+/// Most particle steps a run of the experiment may ask for in all (runs x
+/// steps x particles x the filters, sweep included): 1e11, about a thousand
+/// times the paper's scale. More is a typo (`runs=100000 steps=1000000
+/// particles=1000000`, 1e19, would run for millennia), refused before
+/// anything runs.
+pub const MAX_PARTICLE_STEPS: f64 = 1e11;
+
+/// The cross-option rules, checked before the run starts: a tolerance the
+/// IEKF accepts, and a bounded amount of work.
+pub(super) fn check(c: &HikpfConfig) -> Result<(), String> {
+    if !(c.iekf_tolerance.is_finite() && c.iekf_tolerance >= 0.0) {
+        return Err(format!(
+            "iekf_tolerance must be a finite number >= 0 (it is {})",
+            bayestrack_otb::ground_truth::short_number(c.iekf_tolerance)
+        ));
+    }
+    let cells = if c.sweep { 1 + SWEEP_CELLS } else { 1 };
+    let work = c.runs as f64
+        * c.steps as f64
+        * c.particles as f64
+        * (FilterKind::ALL.len() * cells) as f64;
+    if work > MAX_PARTICLE_STEPS {
+        return Err(format!(
+            "runs x steps x particles x {} filter runs = {work:.1e} particle steps, more than \
+             the {MAX_PARTICLE_STEPS:.0e} a run may ask for; lower runs, steps or particles",
+            FilterKind::ALL.len() * cells
+        ));
+    }
+    Ok(())
 }
 
 impl HikpfConfig {

@@ -67,7 +67,7 @@ pub use ball_screen::{BallMotion, BallScene, BallStream};
 pub use registry::{BALL_PREVIEW_FRAMES, NamedScene, SCENES, named_stream};
 pub use road::{Car, RoadGeometry, RoadScene, RoadStream};
 pub use webcam::{SKIN, SecondObject, SkinShape, WebcamScene, WebcamStream};
-pub use write::{WriteSummary, write_named_scene, write_scene};
+pub use write::{MAX_SCENE_FRAMES, WriteSummary, write_named_scene, write_scene};
 
 /// What can go wrong when building or writing a scene.
 #[derive(Debug, thiserror::Error)]

@@ -203,19 +203,79 @@ fn write_truth(
     Ok(())
 }
 
+/// Most frames [`write_named_scene`] writes (a scene to look at, not a
+/// data set: 100,000 PNG frames is over an hour of video at 22 fps).
+pub const MAX_SCENE_FRAMES: usize = 100_000;
+
+/// `path` with `suffix` appended to its last component (`out.partial`).
+fn sibling(path: &Path, suffix: &str) -> PathBuf {
+    let mut s = path.as_os_str().to_owned();
+    s.push(suffix);
+    PathBuf::from(s)
+}
+
 /// Writes the named scene `name` (see [`super::SCENES`]) with `seed` into
 /// `out`; what `cargo xtask scenes <name> --out <dir>` runs.
 ///
+/// The scene is written to `<out>.partial/` first (with a `PARTIAL.txt`
+/// that says so) and replaces `out` only when every file is written: a run
+/// that is killed or fails leaves the previous `out` whole, never its ground
+/// truth beside new frames.
+///
 /// # Errors
-/// Those of [`named_stream`] and [`write_scene`].
+/// [`SceneError::InvalidParameter`] for more than [`MAX_SCENE_FRAMES`]
+/// frames; those of [`named_stream`] and [`write_scene`].
 pub fn write_named_scene(
     name: &str,
     seed: u64,
     frames: Option<usize>,
     out: &Path,
 ) -> Result<WriteSummary> {
+    if let Some(n) = frames.filter(|&n| n > MAX_SCENE_FRAMES) {
+        return Err(SceneError::InvalidParameter {
+            scene: "scenes",
+            name: "frames",
+            reason: format!(
+                "{n} frames is more than the {MAX_SCENE_FRAMES} a written scene may have"
+            ),
+        });
+    }
     let mut s = named_stream(name, seed, frames)?;
-    write_scene(s.as_mut(), out)
+    let staging = sibling(out, ".partial");
+    if staging.exists() {
+        fs::remove_dir_all(&staging).map_err(io_err(&staging))?;
+    }
+    fs::create_dir_all(&staging).map_err(io_err(&staging))?;
+    let marker = staging.join("PARTIAL.txt");
+    fs::write(
+        &marker,
+        format!(
+            "PARTIAL: `cargo xtask scenes {name}` is writing this folder and has not finished \
+             (it is running, was killed, or failed).\n{} keeps the last scene that finished.\n",
+            out.display()
+        ),
+    )
+    .map_err(io_err(&marker))?;
+    let mut summary = write_scene(s.as_mut(), &staging)?;
+    fs::remove_file(&marker).map_err(io_err(&marker))?;
+    if out.exists() {
+        let old = sibling(out, ".old");
+        if old.exists() {
+            fs::remove_dir_all(&old).map_err(io_err(&old))?;
+        }
+        fs::rename(out, &old).map_err(io_err(out))?;
+        fs::rename(&staging, out).map_err(io_err(out))?;
+        fs::remove_dir_all(&old).map_err(io_err(&old))?;
+    } else {
+        fs::rename(&staging, out).map_err(io_err(out))?;
+    }
+    summary.dir = out.to_path_buf();
+    for p in &mut summary.ground_truth_files {
+        if let Ok(rest) = p.strip_prefix(&staging) {
+            *p = out.join(rest);
+        }
+    }
+    Ok(summary)
 }
 
 #[cfg(test)]
