@@ -40,7 +40,7 @@ impl TrackerCore for Walker {
         "walker"
     }
     fn channels(&self) -> ChannelPolicy {
-        ChannelPolicy::Rgb
+        ChannelPolicy::Rgb("3 (RGB: the histogram is of colour)")
     }
     fn start(&mut self, frame: &Planes<'_>, target: InitialBox) -> Result<()> {
         let b = target.bbox;

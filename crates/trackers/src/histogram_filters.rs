@@ -828,7 +828,9 @@ impl TrackerCore for BallCore {
     }
 
     fn channels(&self) -> ChannelPolicy {
-        ChannelPolicy::Rgb
+        ChannelPolicy::Rgb(
+            "3 (RGB: the RGB-histogram cue of paper 001 needs colour; for gray video use hist-pf-scale)",
+        )
     }
 
     fn needs(&self) -> Needs {

@@ -32,18 +32,17 @@ pub enum ChannelPolicy {
     /// 1-channel gray or 3-channel RGB.
     GrayOrRgb,
     /// 3-channel RGB only: the tracker's model is colour, which a gray
-    /// frame (or gray replicated into three channels) does not have.
-    Rgb,
+    /// frame (or gray replicated into three channels) does not have. The
+    /// text says what needs colour and what to use on gray video, as the
+    /// error's `expected` (`"3 (RGB: ...)"`).
+    Rgb(&'static str),
 }
 
 impl ChannelPolicy {
     pub(crate) fn check(self, tracker: &'static str, channels: usize) -> Result<()> {
         let (ok, expected) = match self {
             Self::GrayOrRgb => (channels == 1 || channels == 3, "1 or 3"),
-            Self::Rgb => (
-                channels == 3,
-                "3 (RGB: its model is colour; `bayestrack trackers` lists those that take gray)",
-            ),
+            Self::Rgb(why) => (channels == 3, why),
         };
         if ok {
             Ok(())
@@ -527,7 +526,7 @@ mod tests {
     #[test]
     fn applies_the_channel_policy_and_checks_the_box() {
         let mut t = Shell::wrap(Probe {
-            policy: Some(ChannelPolicy::Rgb),
+            policy: Some(ChannelPolicy::Rgb("3 (RGB: the probe is colour)")),
             ..Probe::default()
         });
         assert!(matches!(

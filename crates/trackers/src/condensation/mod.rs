@@ -323,7 +323,7 @@ const NEEDS: Needs = Needs {
 /// The frames a cue set accepts: the skin cue needs colour.
 fn channel_policy(cues: CueSet) -> ChannelPolicy {
     if cues.uses_skin() {
-        ChannelPolicy::Rgb
+        ChannelPolicy::Rgb("3 (RGB: the skin cue needs colour; use CueSet::Ifd for gray video)")
     } else {
         ChannelPolicy::GrayOrRgb
     }
