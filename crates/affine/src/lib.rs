@@ -1,9 +1,9 @@
 #![doc = include_str!("../README.md")]
 
-pub mod displacement;
-pub mod dynamics;
-pub mod error;
-pub mod group;
+mod displacement;
+mod dynamics;
+mod error;
+mod group;
 
 /// The workspace's one affine map type (from `bayestrack-image`; the group
 /// operations are [`AffineGroup`]'s).
@@ -12,15 +12,15 @@ pub use displacement::DisplacementPredictor;
 pub use dynamics::BrownianDynamics;
 pub use error::{AffineError, Result};
 pub use group::{AffineGroup, AffineParams, AlgebraVector, basis, hat, vee};
-pub mod lwpr;
+mod lwpr;
 
 pub use lwpr::{Kernel, Lwpr, LwprConfig, Prediction};
-pub mod pose;
+mod pose;
 
 pub use pose::{FeatureKind, PoseConfig, PoseEstimator, pose_error};
-pub mod shape_space;
+mod shape_space;
 
 pub use shape_space::{ShapeSpace, ShapeVector};
-pub mod bspline;
+mod bspline;
 
 pub use bspline::{BSplineDegree, ClosedBSpline, shape_affine};
