@@ -4,7 +4,7 @@
 
 use bayestrack::appearance::{Candidate, HistogramCue, HistogramDistance, RgbHistogram};
 use bayestrack::image::BBox;
-use bayestrack::otb::{OnBadFrame, Sequence, score_otb, track_source};
+use bayestrack::otb::{OnBadFrame, Sequence, metrics::score_otb, track_source};
 use bayestrack::rand_distr::{Distribution, StandardNormal};
 use bayestrack::trackers::{ChannelPolicy, CueFilter, Estimate, InitialBox, Planes, Result};
 use bayestrack::trackers::{Shell, StateModel, TrackerCore, TrackerError, select_predict_measure};

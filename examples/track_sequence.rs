@@ -4,7 +4,7 @@
 //!
 //! `cargo run --release --example track_sequence -- ../shared/data/sequences/Crossing ncc-scale`
 
-use bayestrack::otb::{OnBadFrame, Sequence, score_otb, track_source};
+use bayestrack::otb::{OnBadFrame, Sequence, metrics::score_otb, track_source};
 use bayestrack::trackers::build_tracker;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

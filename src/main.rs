@@ -13,12 +13,12 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use bayestrack::image::{BBox, Rgb, write_frame_with_boxes};
+use bayestrack::otb::Sequence;
 use bayestrack::otb::ground_truth::{check_box, read_ground_truth, short_number};
 use bayestrack::otb::metrics::score_otb;
-use bayestrack::otb::sequence::Sequence;
-use bayestrack::otb::source::{FrameSelection, FrameSource, Select, VideoSource, Y4mSource};
-use bayestrack::otb::track::{OnBadFrame, SKIPPED_LISTED, track_stream};
 use bayestrack::otb::write::{BoxFile, box_row};
+use bayestrack::otb::{FrameSelection, FrameSource, Select, VideoSource, Y4mSource};
+use bayestrack::otb::{OnBadFrame, SKIPPED_LISTED, track_stream};
 use bayestrack::otb::{OtbError, WriteError};
 use bayestrack::trackers::{REGISTRY, tracker_info};
 use clap::{Parser, Subcommand, ValueEnum};

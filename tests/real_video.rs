@@ -5,9 +5,9 @@
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
+use bayestrack::otb::Sequence;
 use bayestrack::otb::metrics::score_otb;
-use bayestrack::otb::sequence::Sequence;
-use bayestrack::otb::track::{OnBadFrame, track_frames, track_source};
+use bayestrack::otb::{OnBadFrame, track_frames, track_source};
 use bayestrack::trackers::tracker_info;
 
 fn sequence(name: &str) -> Option<Sequence> {

@@ -6,7 +6,7 @@
 
 use std::path::PathBuf;
 
-use bayestrack_otb::sequence::{frame_number, order_frames};
+use bayestrack_otb::{frame_number, order_frames};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

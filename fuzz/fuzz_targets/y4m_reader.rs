@@ -4,7 +4,7 @@
 //! decodes has its header's size.
 #![no_main]
 
-use bayestrack_otb::source::Y4mSource;
+use bayestrack_otb::Y4mSource;
 use bayestrack_otb::y4m::Y4M_MAX_PIXELS;
 use libfuzzer_sys::fuzz_target;
 

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use bayestrack_experiments::scenes::{
     BallScene, RoadScene, SCENES, SceneError, named_stream, write_named_scene, write_scene,
 };
-use bayestrack_otb::sequence::Sequence;
+use bayestrack_otb::Sequence;
 
 fn tmpdir(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!(

@@ -8,10 +8,10 @@
 
 use std::path::PathBuf;
 
+use bayestrack_otb::Y4mSource;
 use bayestrack_otb::ground_truth::{check_box, parse_ground_truth, read_ground_truth};
-use bayestrack_otb::sequence::{frame_number, order_frames};
-use bayestrack_otb::source::Y4mSource;
 use bayestrack_otb::y4m::Y4M_MAX_PIXELS;
+use bayestrack_otb::{frame_number, order_frames};
 use proptest::prelude::*;
 
 /// The case count: `n`, or `PROPTEST_CASES` when set (a longer hunt).

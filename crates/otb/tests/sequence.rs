@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use bayestrack_image::{BBox, Image, ImageError, write_png};
 use bayestrack_otb::OtbError;
 use bayestrack_otb::metrics::score_otb;
-use bayestrack_otb::sequence::{Sequence, list_sequences};
+use bayestrack_otb::{Sequence, list_sequences};
 
 fn sequences_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/sequences")

@@ -13,11 +13,11 @@ use std::rc::Rc;
 
 use bayestrack_image::{BBox, Image, write_png};
 use bayestrack_otb::OtbError;
+use bayestrack_otb::Sequence;
 use bayestrack_otb::metrics::score_otb;
-use bayestrack_otb::sequence::Sequence;
-use bayestrack_otb::source::{Frame, FrameSelection, FrameSource, Select, Y4mSource};
-use bayestrack_otb::track::{OnBadFrame, clip_initial_box, track_source};
 use bayestrack_otb::y4m::rgb_to_yuv;
+use bayestrack_otb::{Frame, FrameSelection, FrameSource, Select, Y4mSource};
+use bayestrack_otb::{OnBadFrame, clip_initial_box, track_source};
 use bayestrack_trackers::{Estimate, Result as TrackerResult, Tracker};
 
 fn tmpdir(name: &str) -> PathBuf {
