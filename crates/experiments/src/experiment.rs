@@ -32,7 +32,7 @@ pub struct RunOptions {
     pub set: Vec<(String, String)>,
     /// Run one slice of the jobs (`--shard K/N`) and save it for
     /// `cargo xtask merge` instead of the whole experiment.
-    pub shard: Option<crate::driver::Shard>,
+    pub shard: Option<bayestrack_otb::shard::Shard>,
 }
 
 impl RunOptions {

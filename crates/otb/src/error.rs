@@ -109,8 +109,7 @@ pub enum OtbError {
     /// A ground-truth file larger than the reader's limit (or endless).
     #[error(
         "{path}: more than {limit} bytes of ground truth (an endless file such as /dev/zero, \
-         or not a ground-truth file); set {env}=<bytes> to read a larger one",
-        env = crate::ground_truth::GROUND_TRUTH_MAX_BYTES_ENV
+         or not a ground-truth file); set BAYESTRACK_GT_MAX_BYTES=<bytes> to read a larger one"
     )]
     GroundTruthTooLarge {
         /// The file.
@@ -134,8 +133,7 @@ pub enum OtbError {
         "{source_name}: Y4M header {header}: frames of {pixels} pixels ({bytes} bytes each) are \
          more than the {limit} pixels read by default (a corrupt header, or a larger video \
          than trackers are meant for); scale it down with ffmpeg's -vf scale=1920:-2, or set \
-         {env}=<pixels> to read it as it is",
-        env = crate::y4m::Y4M_MAX_PIXELS_ENV
+         BAYESTRACK_Y4M_MAX_PIXELS=<pixels> to read it as it is"
     )]
     Y4mFrameTooLarge {
         /// The stream (`stdin`, a file).

@@ -12,13 +12,13 @@
 //!
 //! - `success_rate_iou_0.5`: the fraction of the sequence's frames with
 //!   IoU at least 0.5 (`1 - errorNum / 10` of the benchmark's files, which
-//!   count IoU `< 0.5` as an error). Ours, [`crate::OtbScore::success_rate_50`],
+//!   count IoU `< 0.5` as an error). Ours, [`crate::metrics::OtbScore::success_rate_50`],
 //!   counts IoU `> 0.5` as the success plot does; the two differ only on a
 //!   frame whose IoU is exactly 0.5.
 //! - `mean_overlap_of_frames_with_overlap`: the mean IoU over the frames
 //!   with IoU `> 0` only (the benchmark's `overlapScores`), higher than AUC
 //!   and than the mean IoU: compare it with
-//!   [`crate::OtbScore::mean_overlap_of_frames_with_overlap`], never with
+//!   [`crate::metrics::OtbScore::mean_overlap_of_frames_with_overlap`], never with
 //!   AUC.
 //!
 //! The frames each published number covers are the benchmark's sequence

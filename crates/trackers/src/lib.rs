@@ -17,26 +17,28 @@ mod shell;
 mod tracker;
 
 pub use affine_pf::{
-    AffineTracker, AppearanceConfig, FrameStats, HkpfConfig, HkpfTracker, IspfConfig, IspfTracker,
-    RegionConfig, ScoredPose, StopRule, StpfConfig, StpfTracker, UpdateRule,
+    AffineTracker, AppearanceConfig, FrameStats, HkpfConfig, HkpfCore, HkpfTracker, IspfConfig,
+    IspfCore, IspfTracker, RegionConfig, ScoredPose, StopRule, StpfConfig, StpfCore, StpfTracker,
+    UpdateRule,
 };
 pub use condensation::{
-    CAvq, CAvqConfig, Condensation, CondensationReport, ContourConfig, ContourTracker, CueSet,
-    CurveCue, CurveCueKind, LOST_LOG_LIKELIHOOD, MultiCondensation, MultiConfig, ObjectConfig,
-    ObjectEstimate, PointCloudConfig, PointCloudTracker,
+    CAvq, CAvqConfig, Condensation, CondensationReport, ContourConfig, ContourCore, ContourTracker,
+    CueSet, CurveCue, CurveCueKind, LOST_LOG_LIKELIHOOD, MultiCondensation, MultiConfig,
+    ObjectConfig, ObjectEstimate, PointCloudConfig, PointCloudCore, PointCloudTracker,
 };
 pub use engine::{CueFilter, CueProposal, StateModel, select_predict_measure};
 pub use error::{Result, TrackerError};
-pub use hist_pf_scale::{HistPfConfig, HistPfTracker};
-pub use histogram_filters::{BallConfig, BallFilter, BallTracker, MotionModel};
+pub use hist_pf_scale::{HistPfConfig, HistPfCore, HistPfTracker};
+pub use histogram_filters::{BallConfig, BallCore, BallFilter, BallTracker, MotionModel};
 pub use mad_correlation::{
-    ArpMotion, MadTracker, MadTrackerConfig, PfCorrelationConfig, PfCorrelationTracker, SearchArea,
+    ArpCodec, ArpMotion, MadCore, MadTracker, MadTrackerConfig, PairCodec, PfCorrelationConfig,
+    PfCorrelationCore, PfCorrelationTracker, ResamplingCodec, SearchArea, SearchAreaCodec,
 };
 pub use multi_target::{
     Association, Detection, Feature, MultiTargetConfig, MultiTargetTracker, Track,
     measurement_matrix, transition_matrix,
 };
-pub use ncc_scale::{NccScaleConfig, NccScaleTracker};
+pub use ncc_scale::{NccScaleConfig, NccScaleCore, NccScaleTracker};
 pub use registry::{REGISTRY, TrackerInfo, build_tracker, tracker_info};
-pub use shell::{ChannelPolicy, InitialBox, Needs, Planes, Shell, TrackerCore};
+pub use shell::{ChannelPolicy, InitialBox, Needs, PlaneBuffers, Planes, Shell, TrackerCore};
 pub use tracker::{Estimate, FrameGuard, Tracker, check_initial_box};

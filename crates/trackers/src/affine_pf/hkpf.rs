@@ -4,7 +4,9 @@
 
 use bayestrack_affine::{Affine2, AffineGroup, BrownianDynamics};
 
-use super::{AffineTracker, AppearanceConfig, Core, FrameStats, Region, RegionConfig, ScoredPose};
+use super::common::{
+    AffineTracker, AppearanceConfig, Core, FrameStats, Region, RegionConfig, ScoredPose,
+};
 use crate::error::{Result, TrackerError};
 use crate::shell::{ChannelPolicy, InitialBox, Planes, Shell, TrackerCore};
 use crate::tracker::Estimate;
@@ -46,9 +48,9 @@ impl HkpfConfig {
     /// # Errors
     /// [`TrackerError::InvalidParameter`] naming the first bad one.
     pub fn validate(&self) -> Result<()> {
-        super::check_particles("particles", self.particles)?;
+        super::common::check_particles("particles", self.particles)?;
         self.region.validate()?;
-        super::check_pose_sigma("pose_sigma", &self.pose_sigma)?;
+        super::common::check_pose_sigma("pose_sigma", &self.pose_sigma)?;
         self.appearance.validate()
     }
 }

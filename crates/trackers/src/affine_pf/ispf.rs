@@ -5,7 +5,7 @@
 use bayestrack_affine::{Affine2, AffineGroup, AlgebraVector, BrownianDynamics};
 use nalgebra::Vector2;
 
-use super::{AffineTracker, AppearanceConfig, Core, FrameStats, ScoredPose, StopRule};
+use super::common::{AffineTracker, AppearanceConfig, Core, FrameStats, ScoredPose, StopRule};
 use crate::error::{Result, TrackerError};
 use crate::shell::{ChannelPolicy, InitialBox, Planes, Shell, TrackerCore};
 use crate::tracker::Estimate;
@@ -67,7 +67,7 @@ impl IspfConfig {
     /// # Errors
     /// [`TrackerError::InvalidParameter`] naming the first bad one.
     pub fn validate(&self) -> Result<()> {
-        super::check_particles("max_particles", self.max_particles)?;
+        super::common::check_particles("max_particles", self.max_particles)?;
         if self.batch == 0 || self.batch > self.max_particles {
             return Err(TrackerError::InvalidParameter {
                 name: "batch",
@@ -83,9 +83,9 @@ impl IspfConfig {
             });
         }
         for v in self.spread.iter() {
-            super::check_non_negative("spread", *v)?;
+            super::common::check_non_negative("spread", *v)?;
         }
-        super::check_non_negative("weight_lambda", self.weight_lambda)?;
+        super::common::check_non_negative("weight_lambda", self.weight_lambda)?;
         self.appearance.validate()
     }
 }

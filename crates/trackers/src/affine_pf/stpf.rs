@@ -4,7 +4,7 @@
 use bayestrack_affine::{Affine2, AffineGroup, BrownianDynamics};
 use nalgebra::Vector2;
 
-use super::{
+use super::common::{
     AffineTracker, AppearanceConfig, Core, FrameStats, Region, RegionConfig, ScoredPose, StopRule,
 };
 use crate::error::{Result, TrackerError};
@@ -65,7 +65,7 @@ impl StpfConfig {
     /// # Errors
     /// [`TrackerError::InvalidParameter`] naming the first bad one.
     pub fn validate(&self) -> Result<()> {
-        super::check_particles("max_particles", self.max_particles)?;
+        super::common::check_particles("max_particles", self.max_particles)?;
         if self.initial_particles == 0 || self.initial_particles > self.max_particles {
             return Err(TrackerError::InvalidParameter {
                 name: "initial_particles",
@@ -80,9 +80,9 @@ impl StpfConfig {
                 reason: "must be in [1, 64]",
             });
         }
-        super::check_non_negative("weight_lambda", self.weight_lambda)?;
+        super::common::check_non_negative("weight_lambda", self.weight_lambda)?;
         self.region.validate()?;
-        super::check_pose_sigma("pose_sigma", &self.pose_sigma)?;
+        super::common::check_pose_sigma("pose_sigma", &self.pose_sigma)?;
         self.appearance.validate()
     }
 }

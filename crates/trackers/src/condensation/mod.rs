@@ -65,9 +65,9 @@ mod multi;
 mod points;
 
 pub use avq::{CAvq, CAvqConfig};
-pub use contour::{ContourConfig, ContourTracker, CurveCue, CurveCueKind};
+pub use contour::{ContourConfig, ContourCore, ContourTracker, CurveCue, CurveCueKind};
 pub use multi::{MultiCondensation, MultiConfig, ObjectConfig, ObjectEstimate};
-pub use points::{PointCloudConfig, PointCloudTracker};
+pub use points::{PointCloudConfig, PointCloudCore, PointCloudTracker};
 
 use bayestrack_appearance::{Cue, DEFAULT_FLOOR, Frame, Fusion, FusionRule};
 use bayestrack_image::{Affine2, BBox};
