@@ -445,7 +445,10 @@ impl AffineGroup for Affine2 {
             lo = lo.inf(&p);
             hi = hi.sup(&p);
         }
-        Ok(BBox::from_edges(lo[0], lo[1], hi[0], hi[1]))
+        // a pose at scale 1e308 maps the corners (or their spread) beyond f64
+        let b = BBox::from_edges(lo[0], lo[1], hi[0], hi[1]);
+        check_finite("bounding box", &[b.x, b.y, b.width, b.height])?;
+        Ok(b)
     }
 }
 

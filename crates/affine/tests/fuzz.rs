@@ -74,6 +74,43 @@ proptest! {
             if let Ok(p) = model.predict(x, *cutoff) {
                 prop_assert!(p.iter().all(|v| v.is_finite()), "predict({x:?}, {cutoff}) -> {p:?}");
             }
+            if let Ok(p) = model.predict_conf(x, *cutoff) {
+                // +inf confidence is "no trustworthy field", never NaN
+                prop_assert!(p.y.iter().all(|v| v.is_finite()), "predict_conf({x:?}) -> {p:?}");
+                prop_assert!(p.conf.iter().all(|v| !v.is_nan() && *v >= 0.0), "{p:?}");
+            }
         }
+    }
+
+    #[test]
+    fn bounding_boxes_are_finite_or_errors(
+        a in prop::array::uniform6(wide()),
+        size in prop::array::uniform2(prop_oneof![3 => 1.0f64..100.0, 1 => wide()]),
+    ) {
+        if let Ok(m) = Affine2::from_rows([[a[0], a[1], a[2]], [a[3], a[4], a[5]]]) {
+            if let Ok(b) = m.bounding_box(size[0], size[1]) {
+                prop_assert!([b.x, b.y, b.width, b.height].iter().all(|v| v.is_finite()), "{b:?}");
+            }
+        }
+    }
+}
+
+/// Issue 28's examples: a pose at scale 1e308, and LWPR asked with
+/// confidence after inputs of 1e99.
+#[test]
+fn issue_examples_are_errors_or_finite() {
+    let huge = Affine2::from_rows([[1e308, 0.0, 0.0], [0.0, 1e308, 0.0]]).unwrap();
+    assert!(huge.bounding_box(10.0, 10.0).is_err());
+    let mut model = Lwpr::new(LwprConfig::new(2, 1).init_d_spherical(25.0)).unwrap();
+    for k in 0..20 {
+        let x = [1e99 * (k as f64 - 10.0), 1e99];
+        let _ = model.update(&x, &[1e99]);
+    }
+    for _ in 0..200 {
+        let _ = model.update(&[1e99, 1e99], &[1e99]);
+    }
+    if let Ok(p) = model.predict_conf(&[1e99, 1e99], 0.0) {
+        assert!(p.y.iter().all(|v| v.is_finite()), "{p:?}");
+        assert!(p.conf.iter().all(|v| !v.is_nan() && *v >= 0.0), "{p:?}");
     }
 }

@@ -459,6 +459,7 @@ impl Lwpr {
             }
             *yd = yp * norm;
         }
+        check_finite("LWPR prediction (inputs or model beyond its range)", y)?;
         Ok(())
     }
 
@@ -498,6 +499,10 @@ impl Lwpr {
                 let yp = sum_wy / sum_w;
                 out.y[dim] = yp * norm;
                 out.conf[dim] = norm * (sum_conf + sum_wyy - sum_wy * yp).abs().sqrt() / sum_w;
+                check_finite(
+                    "LWPR prediction and confidence (inputs or model beyond its range)",
+                    &[out.y[dim], out.conf[dim]],
+                )?;
             } else {
                 out.conf[dim] = f64::INFINITY;
             }
