@@ -87,10 +87,10 @@ proptest! {
         a in prop::array::uniform6(wide()),
         size in prop::array::uniform2(prop_oneof![3 => 1.0f64..100.0, 1 => wide()]),
     ) {
-        if let Ok(m) = Affine2::from_rows([[a[0], a[1], a[2]], [a[3], a[4], a[5]]]) {
-            if let Ok(b) = m.bounding_box(size[0], size[1]) {
-                prop_assert!([b.x, b.y, b.width, b.height].iter().all(|v| v.is_finite()), "{b:?}");
-            }
+        if let Ok(m) = Affine2::from_rows([[a[0], a[1], a[2]], [a[3], a[4], a[5]]])
+            && let Ok(b) = m.bounding_box(size[0], size[1])
+        {
+            prop_assert!([b.x, b.y, b.width, b.height].iter().all(|v| v.is_finite()), "{b:?}");
         }
     }
 }
