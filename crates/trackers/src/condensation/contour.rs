@@ -39,9 +39,10 @@ use nalgebra::{SVector, Vector2};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 
-use super::{
-    CAvq, CAvqConfig, Condensation, CondensationReport, CueSet, FLOOR, NEEDS, Object, ObjectFilter,
-    ObjectStep, channel_policy, check_damping, check_particles, check_positive, second_order,
+use super::avq::{CAvq, CAvqConfig};
+use super::common::{
+    Condensation, CondensationReport, CueSet, FLOOR, NEEDS, Object, ObjectStep, channel_policy,
+    check_damping, check_particles, check_positive, second_order,
 };
 use crate::engine::StateModel;
 use crate::error::{Result, TrackerError};
@@ -358,7 +359,7 @@ impl ContourModel {
         outline: Option<&[Vector2<f64>]>,
         rng: &mut R,
         seed: u64,
-    ) -> Result<ObjectFilter> {
+    ) -> Result<Box<Object<ContourModel, 8>>> {
         let rect =
             target
                 .to_rect(frame.width(), frame.height())
@@ -422,13 +423,13 @@ impl ContourModel {
             frame: (frame.width(), frame.height()),
             samples,
         };
-        Ok(ObjectFilter::Contour(Box::new(Object::new(
+        Ok(Box::new(Object::new(
             model,
             cue,
             &config.condensation,
             particles,
             seed,
-        )?)))
+        )?))
     }
 
     /// The pose a state is scored as, `None` when impossible.
@@ -532,7 +533,7 @@ pub struct ContourCore {
     config: ContourConfig,
     outline: Option<Vec<Vector2<f64>>>,
     seed: u64,
-    object: Option<ObjectFilter>,
+    object: Option<Box<Object<ContourModel, 8>>>,
     avq: Option<CAvq>,
     reinitialised: bool,
 }
@@ -610,35 +611,25 @@ impl ContourCore {
     /// The particles `[x, y, theta, alpha, x_prev, y_prev, theta_prev,
     /// alpha_prev]`, once initialised.
     pub fn particles(&self) -> Option<&[SVector<f64, 8>]> {
-        match &self.object {
-            Some(ObjectFilter::Contour(o)) => Some(o.filter.set().particles()),
-            _ => None,
-        }
+        self.object.as_ref().map(|o| o.filter.set().particles())
     }
 
     /// The normalised weights `pi_i`, once initialised.
     pub fn weights(&self) -> Option<Vec<f64>> {
-        match &self.object {
-            Some(ObjectFilter::Contour(o)) => Some(o.filter.set().weights()),
-            _ => None,
-        }
+        self.object.as_ref().map(|o| o.filter.set().weights())
     }
 
     /// The measurement points of a state's curve, in 0-based pixels (to
     /// draw particles or score the mean contour); empty before `init`.
     pub fn curve(&self, state: &SVector<f64, 8>) -> Vec<Vector2<f64>> {
-        match &self.object {
-            Some(ObjectFilter::Contour(o)) => o.model.curve(state),
-            _ => Vec::new(),
-        }
+        self.object
+            .as_ref()
+            .map_or(Vec::new(), |o| o.model.curve(state))
     }
 
     /// The weighted-mean state (eq. 4), once initialised.
     pub fn mean_state(&self) -> Option<SVector<f64, 8>> {
-        match &self.object {
-            Some(ObjectFilter::Contour(o)) => Some(o.mean()),
-            _ => None,
-        }
+        self.object.as_ref().map(|o| o.mean())
     }
 
     /// Whether c-AVQ moved the set in the last step.
@@ -689,7 +680,8 @@ impl TrackerCore for ContourCore {
             object.shift(dx, dy);
             self.reinitialised = true;
         }
-        let s = object.step(planes.cues())?;
+        let report = object.step(planes.cues())?;
+        let s = object.model.estimate(&object.mean(), report)?;
         Ok(Estimate {
             bbox: s.bbox,
             pose: s.pose,

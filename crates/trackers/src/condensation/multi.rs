@@ -28,9 +28,11 @@ use bayestrack_appearance::{PriorityIfd, Suppression};
 use bayestrack_image::{BBox, ImageView};
 use bayestrack_particle::{stream_rng, stream_seed};
 
+use super::common::{CueSet, NEEDS, Object, ObjectStep, channel_policy};
+use super::contour::ContourConfig;
 use super::contour::ContourModel;
+use super::points::PointCloudConfig;
 use super::points::PointModel;
-use super::{ContourConfig, CueSet, NEEDS, ObjectFilter, PointCloudConfig, channel_policy};
 use crate::error::{Result, TrackerError};
 use crate::shell::PlaneBuffers;
 use crate::tracker::{FrameGuard, check_initial_box};
@@ -184,10 +186,12 @@ impl MultiCondensation {
         // one filter, and so one family of random streams, per object
         let seed = stream_seed(&[KEY, self.seed, id]);
         let object = match &self.config.object {
-            ObjectConfig::Points(c) => PointModel::object(c, frame, target, &mut rng, seed)?,
-            ObjectConfig::Contour(c) => {
-                ContourModel::object(c, frame, target, None, &mut rng, seed)?
+            ObjectConfig::Points(c) => {
+                ObjectFilter::Points(PointModel::object(c, frame, target, &mut rng, seed)?)
             }
+            ObjectConfig::Contour(c) => ObjectFilter::Contour(ContourModel::object(
+                c, frame, target, None, &mut rng, seed,
+            )?),
         };
         if first {
             self.planes.build(NEEDS, frame, 0)?;
@@ -253,6 +257,35 @@ impl MultiCondensation {
             });
         }
         Ok(out)
+    }
+}
+
+/// One tracked object in either representation.
+#[derive(Debug)]
+enum ObjectFilter {
+    Points(Box<Object<PointModel, 4>>),
+    Contour(Box<Object<ContourModel, 8>>),
+}
+
+impl ObjectFilter {
+    fn step(&mut self, frame: &bayestrack_appearance::Frame<'_>) -> Result<ObjectStep> {
+        match self {
+            ObjectFilter::Points(o) => {
+                let report = o.step(frame)?;
+                Ok(o.model.estimate(&o.mean(), report))
+            }
+            ObjectFilter::Contour(o) => {
+                let report = o.step(frame)?;
+                o.model.estimate(&o.mean(), report)
+            }
+        }
+    }
+
+    fn len(&self) -> usize {
+        match self {
+            ObjectFilter::Points(o) => o.len(),
+            ObjectFilter::Contour(o) => o.len(),
+        }
     }
 }
 

@@ -22,9 +22,10 @@ use bayestrack_particle::{stream_rng, stream_seed};
 use nalgebra::{SVector, Vector4};
 use rand::{Rng, RngExt};
 
-use super::{
-    CAvq, CAvqConfig, Condensation, CondensationReport, CueSet, FLOOR, NEEDS, Object, ObjectFilter,
-    ObjectStep, channel_policy, check_damping, check_particles, check_positive, second_order,
+use super::avq::{CAvq, CAvqConfig};
+use super::common::{
+    Condensation, CondensationReport, CueSet, FLOOR, NEEDS, Object, ObjectStep, channel_policy,
+    check_damping, check_particles, check_positive, second_order,
 };
 use crate::engine::StateModel;
 use crate::error::{Result, TrackerError};
@@ -119,7 +120,7 @@ impl PointModel {
         target: BBox,
         rng: &mut R,
         seed: u64,
-    ) -> Result<ObjectFilter> {
+    ) -> Result<Box<Object<PointModel, 4>>> {
         let rect =
             target
                 .to_rect(frame.width(), frame.height())
@@ -150,13 +151,13 @@ impl PointModel {
             frame: (frame.width(), frame.height()),
             size: (target.width, target.height),
         };
-        Ok(ObjectFilter::Points(Box::new(Object::new(
+        Ok(Box::new(Object::new(
             model,
             cue,
             &config.condensation,
             particles,
             seed,
-        )?)))
+        )?))
     }
 
     /// The support window of a particle, `None` when its centre is off the
@@ -225,7 +226,7 @@ pub type PointCloudTracker = Shell<PointCloudCore>;
 pub struct PointCloudCore {
     config: PointCloudConfig,
     seed: u64,
-    object: Option<ObjectFilter>,
+    object: Option<Box<Object<PointModel, 4>>>,
     avq: Option<CAvq>,
     reinitialised: bool,
 }
@@ -264,18 +265,12 @@ impl PointCloudCore {
     /// The particles `[x, y, x_prev, y_prev]` (0-based pixels), once
     /// initialised.
     pub fn particles(&self) -> Option<&[Vector4<f64>]> {
-        match &self.object {
-            Some(ObjectFilter::Points(o)) => Some(o.filter.set().particles()),
-            _ => None,
-        }
+        self.object.as_ref().map(|o| o.filter.set().particles())
     }
 
     /// The normalised weights `pi_i`, once initialised.
     pub fn weights(&self) -> Option<Vec<f64>> {
-        match &self.object {
-            Some(ObjectFilter::Points(o)) => Some(o.filter.set().weights()),
-            _ => None,
-        }
+        self.object.as_ref().map(|o| o.filter.set().weights())
     }
 
     /// Whether c-AVQ moved the set in the last step.
@@ -325,7 +320,8 @@ impl TrackerCore for PointCloudCore {
             object.shift(dx, dy);
             self.reinitialised = true;
         }
-        let s = object.step(planes.cues())?;
+        let report = object.step(planes.cues())?;
+        let s = object.model.estimate(&object.mean(), report);
         Ok(Estimate {
             bbox: s.bbox,
             pose: None,

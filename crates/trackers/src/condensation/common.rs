@@ -1,0 +1,446 @@
+//! What the CONDENSATION trackers share: the cue sets, the filter's
+//! configuration, one object's particle filter and the checks.
+
+use bayestrack_appearance::{Cue, DEFAULT_FLOOR, Frame, Fusion, FusionRule};
+use bayestrack_image::{Affine2, BBox};
+use bayestrack_particle::{
+    Degenerate, ParticleFilter, ResamplePolicy, ResampleTiming, Resampling, StepReport,
+};
+use nalgebra::SVector;
+use rand::Rng;
+use rand_distr::{Distribution, StandardNormal};
+
+use crate::engine::{CueFilter, StateModel};
+use crate::error::{Result, TrackerError};
+use crate::shell::{ChannelPolicy, Needs};
+
+/// A particle whose best log-likelihood is below this saw no evidence at
+/// all: every cue score under it is at the log floor (`ln 1e-12`, about
+/// -27.6) or within `e^-20` (2e-9) of zero. The tracker then reports the
+/// target lost.
+pub const LOST_LOG_LIKELIHOOD: f64 = -20.0;
+
+/// Which cues weight the particles and how they are fused (Lee, Jo and
+/// Kang 2005, sec. 2.4).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub enum CueSet {
+    /// The interframe difference alone (eq. 7; eq. 9 with `lambda = 0`, the
+    /// hand tracker of sec. 3.2). Works on gray frames.
+    Ifd,
+    /// The HSV skin colour alone (eq. 8). Needs RGB frames.
+    Skin,
+    /// Disjunctive fusion (OR, eq. 9): `w = IFD + lambda skin`.
+    Or {
+        /// The balancing coefficient `lambda` (the paper: `1/N`).
+        lambda: f64,
+    },
+    /// Conjunctive fusion (AND, eq. 11): `w = IFD x lambda skin`. A
+    /// constant `lambda` scales every weight alike, so it cancels in the
+    /// normalisation; it is kept for the formula's sake.
+    And {
+        /// The balancing coefficient `lambda` (the paper: `1/N`).
+        lambda: f64,
+    },
+}
+
+impl CueSet {
+    /// Whether the skin cue takes part (then frames must be RGB).
+    pub fn uses_skin(self) -> bool {
+        !matches!(self, CueSet::Ifd)
+    }
+
+    /// Short label: `ifd`, `skin`, `or`, `and`.
+    pub fn label(self) -> &'static str {
+        match self {
+            CueSet::Ifd => "ifd",
+            CueSet::Skin => "skin",
+            CueSet::Or { .. } => "or",
+            CueSet::And { .. } => "and",
+        }
+    }
+
+    pub(super) fn check(self) -> Result<()> {
+        if let CueSet::Or { lambda } | CueSet::And { lambda } = self
+            && !(lambda.is_finite() && lambda > 0.0)
+        {
+            return Err(TrackerError::InvalidParameter {
+                name: "lambda",
+                value: lambda,
+                reason: "must be finite and positive (use CueSet::Ifd for lambda = 0)",
+            });
+        }
+        Ok(())
+    }
+
+    /// The fused cue: `ifd` and `skin` combined by this rule.
+    pub(super) fn build(
+        self,
+        ifd: impl Cue + Send + Sync + 'static,
+        skin: Option<impl Cue + Send + Sync + 'static>,
+    ) -> Result<Box<dyn Cue + Send + Sync>> {
+        let need = || TrackerError::InvalidParameter {
+            name: "skin model",
+            value: f64::NAN,
+            reason: "the skin cue needs a skin model",
+        };
+        Ok(match self {
+            CueSet::Ifd => Box::new(ifd),
+            CueSet::Skin => Box::new(skin.ok_or_else(need)?),
+            CueSet::Or { lambda } => Box::new(
+                Fusion::new(FusionRule::Or)
+                    .with(1.0, ifd)?
+                    .with(lambda, skin.ok_or_else(need)?)?,
+            ),
+            CueSet::And { lambda } => Box::new(
+                Fusion::new(FusionRule::And)
+                    .with(1.0, ifd)?
+                    .with(lambda, skin.ok_or_else(need)?)?,
+            ),
+        })
+    }
+}
+
+/// CONDENSATION's selection rule (Lee, Jo and Kang 2005, sec. 2.1, eq. 12
+/// and 16).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Condensation {
+    /// `c`: select when `sum pi_i^2 > c / N`, i.e. `N_eff < N / c` (2 for
+    /// the point cloud, 1.5 for contours). `c = 1` selects only when the
+    /// weights are unequal; a large `c` almost never selects.
+    pub pi_threshold: f64,
+    /// The selection scheme; the paper's roulette wheel is
+    /// [`Resampling::Multinomial`].
+    pub resampling: Resampling,
+}
+
+impl Condensation {
+    /// Sec. 3.1: `2/N`, roulette wheel.
+    pub const POINT_CLOUD: Self = Self {
+        pi_threshold: 2.0,
+        resampling: Resampling::Multinomial,
+    };
+    /// Sec. 3.2-3.3: `1.5/N`, roulette wheel.
+    pub const CONTOURS: Self = Self {
+        pi_threshold: 1.5,
+        resampling: Resampling::Multinomial,
+    };
+
+    /// Checks the threshold.
+    ///
+    /// # Errors
+    /// [`TrackerError::InvalidParameter`] unless `pi_threshold >= 1` and finite.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.pi_threshold.is_finite() && self.pi_threshold >= 1.0) {
+            return Err(TrackerError::InvalidParameter {
+                name: "pi_threshold",
+                value: self.pi_threshold,
+                reason: "must be finite and >= 1 (sum pi^2 is never below 1/N)",
+            });
+        }
+        Ok(())
+    }
+
+    /// The particle filter this is: the engine of `bayestrack-particle`
+    /// selecting at the start of a step ([`ResampleTiming::BeforeProposal`])
+    /// when `N_eff < N / c` ([`ResamplePolicy::Ess`] with `1 / c`), with
+    /// [`Condensation::resampling`], and ignoring a measurement in which
+    /// every particle has zero likelihood ([`Degenerate::IgnoreMeasurement`]:
+    /// the weights stay those after selection).
+    pub fn filter(&self) -> ParticleFilter {
+        ParticleFilter {
+            resampling: self.resampling,
+            policy: ResamplePolicy::Ess(1.0 / self.pi_threshold),
+            timing: ResampleTiming::BeforeProposal,
+            degenerate: Degenerate::IgnoreMeasurement,
+            ..ParticleFilter::default()
+        }
+    }
+}
+
+/// What one CONDENSATION step of an object did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CondensationReport {
+    /// Effective particle size (eq. 16) after the measurement.
+    pub ess: f64,
+    /// Whether the set was selected (resampled) before predicting.
+    pub resampled: bool,
+    /// Likelihood evaluations (one per particle).
+    pub evaluations: usize,
+    /// Whether every particle got zero likelihood (measurement ignored).
+    pub degenerate: bool,
+    /// The largest log-likelihood of the step.
+    pub best_log_likelihood: f64,
+}
+
+impl CondensationReport {
+    /// The report of an engine step over `n` particles.
+    pub(super) fn new(step: &StepReport, n: usize) -> Self {
+        Self {
+            ess: step.ess,
+            resampled: step.resampled,
+            evaluations: n,
+            degenerate: step.degenerate,
+            best_log_likelihood: step.max_log_increment,
+        }
+    }
+
+    /// Whether the step saw no evidence for the target anywhere
+    /// ([`LOST_LOG_LIKELIHOOD`]).
+    pub fn lost(&self) -> bool {
+        self.best_log_likelihood < LOST_LOG_LIKELIHOOD
+    }
+}
+
+/// One coordinate of eq. 10: `(q_t, q_{t-1})` from `(q_{t-1}, q_{t-2})`.
+#[inline(always)]
+pub(super) fn second_order<R: Rng + ?Sized>(
+    q: f64,
+    q_prev: f64,
+    rho: f64,
+    sigma: f64,
+    rng: &mut R,
+) -> (f64, f64) {
+    let v: f64 = StandardNormal.sample(rng);
+    (q + rho * (q - q_prev) + sigma * v, q)
+}
+
+pub(super) fn check_positive(name: &'static str, v: f64) -> Result<f64> {
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(TrackerError::InvalidParameter {
+            name,
+            value: v,
+            reason: "must be finite and positive",
+        })
+    }
+}
+
+pub(super) fn check_damping(rho: f64) -> Result<()> {
+    if !(0.0..=1.0).contains(&rho) {
+        return Err(TrackerError::InvalidParameter {
+            name: "velocity_damping",
+            value: rho,
+            reason: "must be in [0, 1]",
+        });
+    }
+    Ok(())
+}
+
+pub(super) fn check_particles(n: usize) -> Result<()> {
+    if n == 0 {
+        return Err(TrackerError::InvalidParameter {
+            name: "particles",
+            value: 0.0,
+            reason: "must be at least 1",
+        });
+    }
+    Ok(())
+}
+
+/// The planes CONDENSATION reads, built by the shell once per frame: the
+/// input (RGB for the skin cue) and the IFD map (eq. 7), computed over the
+/// whole image on BT.601 luma rounded to 8 bits (half the work of
+/// differencing two RGB frames, and within 1/255 of the float-luma
+/// difference). The c-AVQ stripes and the priority field of eq. 15 need the
+/// whole map; the skin cue, which costs an HSV conversion per pixel, is
+/// only evaluated at the particles' pixels.
+pub(super) const NEEDS: Needs = Needs {
+    gray: false,
+    hsv: false,
+    ifd: true,
+};
+
+/// The frames a cue set accepts: the skin cue needs colour.
+pub(super) fn channel_policy(cues: CueSet) -> ChannelPolicy {
+    if cues.uses_skin() {
+        ChannelPolicy::Rgb("3 (RGB: the skin cue needs colour; use CueSet::Ifd for gray video)")
+    } else {
+        ChannelPolicy::GrayOrRgb
+    }
+}
+
+/// The outcome of one object's step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct ObjectStep {
+    /// The weighted-mean centre (eq. 4), 0-based pixels.
+    pub(super) centre: (f64, f64),
+    /// The box (OTB convention).
+    pub(super) bbox: BBox,
+    /// The mean pose (contours).
+    pub(super) pose: Option<Affine2>,
+    /// The filter step.
+    pub(super) report: CondensationReport,
+}
+
+/// One object: its model (dynamics and candidates), its cue and the
+/// engine's filter ([`CueFilter`]: the particle set, the keyed random
+/// streams and the cue's scratch).
+pub(super) struct Object<M, const D: usize> {
+    pub(super) model: M,
+    pub(super) cue: Box<dyn Cue + Send + Sync>,
+    pub(super) filter: CueFilter<D>,
+}
+
+impl<M, const D: usize> std::fmt::Debug for Object<M, D> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Object")
+            .field("particles", &self.filter.len())
+            .field("cue", &self.cue.name())
+            .field("k", &self.filter.set().k())
+            .finish()
+    }
+}
+
+impl<M: StateModel<D>, const D: usize> Object<M, D> {
+    /// The weighted-mean position `(x, y)` (the state's first two
+    /// components).
+    pub(super) fn centre(&self) -> (f64, f64) {
+        let m = self.mean();
+        (m[0], m[1])
+    }
+
+    /// Particles in the set.
+    pub(super) fn len(&self) -> usize {
+        self.filter.len()
+    }
+
+    /// An object of `particles` (equally weighted) filtered by
+    /// `condensation`, its random streams keyed by `seed`.
+    pub(super) fn new(
+        model: M,
+        cue: Box<dyn Cue + Send + Sync>,
+        condensation: &Condensation,
+        particles: Vec<SVector<f64, D>>,
+        seed: u64,
+    ) -> Result<Self> {
+        Ok(Self {
+            model,
+            cue,
+            filter: CueFilter::new(condensation.filter(), particles, seed)?,
+        })
+    }
+
+    /// One select / predict / measure step of the engine.
+    pub(super) fn step(&mut self, frame: &Frame<'_>) -> Result<CondensationReport> {
+        let report = self.filter.step(&self.model, &*self.cue, frame)?;
+        Ok(CondensationReport::new(&report, self.filter.len()))
+    }
+
+    /// The weighted mean (eq. 4).
+    pub(super) fn mean(&self) -> SVector<f64, D> {
+        self.filter.mean()
+    }
+
+    /// Moves every particle (and its previous position) by `(dx, dy)`:
+    /// the c-AVQ shift of the set's mean.
+    pub(super) fn shift(&mut self, dx: f64, dy: f64) {
+        let half = D / 2;
+        self.filter.move_states(|p| {
+            p[0] += dx;
+            p[1] += dy;
+            p[half] += dx;
+            p[half + 1] += dy;
+        });
+    }
+}
+
+/// The default log floor of the cues.
+pub(super) const FLOOR: f64 = DEFAULT_FLOOR;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use bayestrack_particle::{ParticleSet, stream_rng};
+
+    /// A proposal that keeps the particle and weighs it by `f`.
+    struct Stay<F>(F);
+
+    impl<F: Fn(f64) -> f64 + Sync> bayestrack_particle::Proposal<SVector<f64, 1>, ()> for Stay<F> {
+        type Error = std::convert::Infallible;
+        type Scratch = ();
+        fn propose<R: Rng + ?Sized>(
+            &self,
+            _k: usize,
+            x: &SVector<f64, 1>,
+            _z: &(),
+            _scratch: &mut (),
+            _rng: &mut R,
+        ) -> std::result::Result<(SVector<f64, 1>, f64), Self::Error> {
+            Ok((*x, (self.0)(x[0])))
+        }
+    }
+
+    #[test]
+    fn condensation_selects_on_the_pi_threshold_and_weights_by_the_likelihood() {
+        // Four particles on a line, the likelihood peaks at 2.
+        let particles = [0.0, 1.0, 2.0, 3.0].map(SVector::<f64, 1>::new);
+        let mut set = ParticleSet::new(particles.to_vec()).unwrap();
+        let c = Condensation::POINT_CLOUD;
+        let f = c.filter();
+        let r = f
+            .step(
+                &mut set,
+                &Stay(|x: f64| -2.0 * (x - 2.0).powi(2)),
+                &(),
+                &[1],
+            )
+            .unwrap();
+        assert!(!r.resampled, "equal weights are not selected");
+        let w = set.weights();
+        let z: f64 = [8.0f64, 2.0, 0.0, 2.0].iter().map(|d| (-d).exp()).sum();
+        assert!((w[2] - 1.0 / z).abs() < 1e-12);
+        assert!((r.ess - 1.0 / w.iter().map(|v| v * v).sum::<f64>()).abs() < 1e-9);
+        assert_eq!(r.max_log_increment, 0.0);
+        // N_eff = 1.56 < 4 / 2: the next step selects, before it measures.
+        assert!(r.ess < 2.0);
+        let r2 = f.step(&mut set, &Stay(|_| 0.0), &(), &[2]).unwrap();
+        assert!(r2.resampled);
+        assert!((r2.ess - 4.0).abs() < 1e-9);
+        // N_eff = 4 is not below 4 / 1.5: no selection.
+        let r2b = CondensationReport::new(
+            &Condensation::CONTOURS
+                .filter()
+                .step(&mut set, &Stay(|_| 0.0), &(), &[3])
+                .unwrap(),
+            4,
+        );
+        assert!(!r2b.resampled && !r2b.lost() && r2b.evaluations == 4);
+        // Zero likelihood everywhere: the measurement is ignored.
+        let before = set.weights();
+        let r3 = CondensationReport::new(
+            &f.step(&mut set, &Stay(|_| f64::NEG_INFINITY), &(), &[4])
+                .unwrap(),
+            4,
+        );
+        assert!(r3.degenerate && r3.lost());
+        for (a, b) in set.weights().iter().zip(&before) {
+            assert!((a - b).abs() < 1e-15, "{a} {b}");
+        }
+        assert!(f.step(&mut set, &Stay(|_| f64::NAN), &(), &[5]).is_err());
+        assert!(
+            Condensation {
+                pi_threshold: 0.5,
+                ..c
+            }
+            .validate()
+            .is_err()
+        );
+    }
+
+    #[test]
+    fn second_order_dynamics_is_eq_10() {
+        // With sigma = 0 the drift is q + rho (q - q_prev).
+        let mut rng = stream_rng(&[2]);
+        assert_eq!(second_order(10.0, 6.0, 0.5, 0.0, &mut rng), (12.0, 10.0));
+        assert_eq!(second_order(10.0, 6.0, 1.0, 0.0, &mut rng), (14.0, 10.0));
+        // The diffusion has the given spread.
+        let n = 20_000;
+        let s: f64 = (0..n)
+            .map(|_| second_order(0.0, 0.0, 0.5, 30.0, &mut rng).0.powi(2))
+            .sum::<f64>()
+            / n as f64;
+        assert!((s.sqrt() - 30.0).abs() < 0.6, "{}", s.sqrt());
+    }
+}
