@@ -117,6 +117,15 @@ impl<'a> Planes<'a> {
         self.cues.gray.ok_or(undeclared("gray"))
     }
 
+    /// The interframe difference (zero on the first frame).
+    ///
+    /// # Errors
+    /// [`TrackerError::InvalidParameter`] when the core did not declare
+    /// [`Needs::ifd`].
+    pub fn ifd(&self) -> Result<ImageView<'a, f32>> {
+        self.cues.ifd.ok_or(undeclared("ifd"))
+    }
+
     /// Frame width.
     pub fn width(&self) -> usize {
         self.input.width()

@@ -2,7 +2,7 @@
 //! configuration, one object's particle filter and the checks.
 
 use bayestrack_appearance::{Cue, DEFAULT_FLOOR, Frame, Fusion, FusionRule};
-use bayestrack_image::{Affine2, BBox};
+use bayestrack_image::{Affine2, BBox, ImageView};
 use bayestrack_particle::{
     Degenerate, ParticleFilter, ResamplePolicy, ResampleTiming, Resampling, StepReport,
 };
@@ -10,9 +10,11 @@ use nalgebra::SVector;
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 
+use super::avq::CAvq;
 use crate::engine::{CueFilter, StateModel};
 use crate::error::{Result, TrackerError};
 use crate::shell::{ChannelPolicy, Needs};
+use crate::tracker::Estimate;
 
 /// A particle whose best log-likelihood is below this saw no evidence at
 /// all: every cue score under it is at the log floor (`ln 1e-12`, about
@@ -274,6 +276,19 @@ pub(super) struct ObjectStep {
     pub(super) report: CondensationReport,
 }
 
+impl ObjectStep {
+    /// The tracker's estimate of a set of `particles`.
+    pub(super) fn estimate(&self, particles: usize) -> Estimate {
+        Estimate {
+            bbox: self.bbox,
+            pose: self.pose,
+            particles,
+            evaluations: self.report.evaluations,
+            lost: self.report.lost(),
+        }
+    }
+}
+
 /// One object: its model (dynamics and candidates), its cue and the
 /// engine's filter ([`CueFilter`]: the particle set, the keyed random
 /// streams and the cue's scratch).
@@ -331,6 +346,19 @@ impl<M: StateModel<D>, const D: usize> Object<M, D> {
     /// The weighted mean (eq. 4).
     pub(super) fn mean(&self) -> SVector<f64, D> {
         self.filter.mean()
+    }
+
+    /// c-AVQ (sec. 4): when `avq` finds a stripe of motion away from the
+    /// set on this frame's `ifd`, moves the set there; returns whether it
+    /// did.
+    pub(super) fn reinitialise(&mut self, avq: Option<&mut CAvq>, ifd: ImageView<'_, f32>) -> bool {
+        match avq.and_then(|a| a.reinitialise(ifd, self.centre())) {
+            Some((dx, dy)) => {
+                self.shift(dx, dy);
+                true
+            }
+            None => false,
+        }
     }
 
     /// Moves every particle (and its previous position) by `(dx, dy)`:

@@ -672,23 +672,10 @@ impl TrackerCore for ContourCore {
 
     fn track(&mut self, planes: &Planes<'_>) -> Result<Estimate> {
         let object = self.object.as_mut().ok_or(TrackerError::NotInitialised)?;
-        let ifd = planes.cues().ifd.ok_or(TrackerError::NotInitialised)?;
-        self.reinitialised = false;
-        if let Some(avq) = &mut self.avq
-            && let Some((dx, dy)) = avq.reinitialise(ifd, object.centre())
-        {
-            object.shift(dx, dy);
-            self.reinitialised = true;
-        }
+        self.reinitialised = object.reinitialise(self.avq.as_mut(), planes.ifd()?);
         let report = object.step(planes.cues())?;
         let s = object.model.estimate(&object.mean(), report)?;
-        Ok(Estimate {
-            bbox: s.bbox,
-            pose: s.pose,
-            particles: object.len(),
-            evaluations: s.report.evaluations,
-            lost: s.report.lost(),
-        })
+        Ok(s.estimate(object.len()))
     }
 }
 

@@ -221,7 +221,7 @@ impl MultiCondensation {
         self.guard.check(&frame)?;
         self.k += 1;
         let planes = self.planes.build(NEEDS, frame, self.k)?;
-        let ifd = planes.cues().ifd.ok_or(TrackerError::NotInitialised)?;
+        let ifd = planes.ifd()?;
         let field = match &mut self.field {
             Some(f) => {
                 f.reset(ifd)?;
