@@ -14,7 +14,7 @@
 //! mean (eq. 8) and resamples.
 
 use bayestrack_appearance::{AppearanceError, MadLikelihood, MadSearch, mad};
-use bayestrack_image::{BBox, Image, ImageView, Rect, rgb_to_gray_into};
+use bayestrack_image::{BBox, Image, ImageView, Rect};
 use bayestrack_options::{Codec, above, choice, options};
 use bayestrack_particle::{
     Degenerate, ParticleFilter, ParticleSet, Proposal, ResampleTiming, Resampling, stream_rng,
@@ -25,36 +25,6 @@ use rand::{Rng, RngExt};
 use crate::error::{Result, TrackerError};
 use crate::shell::{ChannelPolicy, InitialBox, Needs, Planes, Shell, TrackerCore};
 use crate::tracker::Estimate;
-
-/// Copies a 1-channel frame, or converts a 3-channel (RGB) one, into `gray`.
-pub(crate) fn to_gray(
-    tracker: &'static str,
-    frame: ImageView<'_, u8>,
-    gray: &mut Image<u8>,
-) -> Result<()> {
-    let (w, h) = (frame.width(), frame.height());
-    match frame.channels() {
-        1 | 3 => {}
-        got => {
-            return Err(TrackerError::Channels {
-                tracker,
-                expected: "1 or 3",
-                got,
-            });
-        }
-    }
-    if (gray.width(), gray.height(), gray.channels()) != (w, h, 1) {
-        gray.reshape(w, h, 1, 0)?;
-    }
-    if frame.channels() == 3 {
-        rgb_to_gray_into(frame, &mut gray.view_mut())?;
-    } else {
-        for y in 0..h {
-            gray.row_mut(y).copy_from_slice(&frame.row(y)[..w]);
-        }
-    }
-    Ok(())
-}
 
 /// Where [`MadTracker`] searches for the template.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -28,7 +28,10 @@ use bayestrack_kalman::{Gaussian, Kf, LinearDynamics, LinearMeasurement};
 use nalgebra::{SMatrix, SVector, Vector4};
 
 use crate::error::{Result, TrackerError};
-use crate::mad_correlation::to_gray;
+use crate::shell::{ChannelPolicy, Needs, PlaneBuffers};
+
+/// The name in error messages.
+const NAME: &str = "multi-target";
 
 /// Centroid and window size of a target: the measurement of eq. 19 and
 /// what eq. 20-21 compare.
@@ -300,7 +303,7 @@ pub struct MultiTargetTracker {
     dynamics: LinearDynamics<8>,
     sensor: LinearMeasurement<8, 4>,
     background: Image<u8>,
-    gray: Image<u8>,
+    planes: PlaneBuffers,
     diff: Image<u8>,
     mask: Image<bool>,
     tracks: Vec<TrackState>,
@@ -371,8 +374,9 @@ impl MultiTargetTracker {
         let (cs, ss) = (config.centroid_std.powi(2), config.size_std.powi(2));
         let r = SMatrix::<f64, 4, 4>::from_diagonal(&Vector4::new(cs, cs, ss, ss));
         let sensor = LinearMeasurement::new(measurement_matrix(), r)?;
-        let mut bg = Image::new(1, 1, 1, 0)?;
-        to_gray("multi-target", background, &mut bg)?;
+        ChannelPolicy::GrayOrRgb.check(NAME, background.channels())?;
+        let mut planes = PlaneBuffers::default();
+        let bg = planes.build(Needs::GRAY, background, 0)?.gray()?.to_image();
         let (w, h) = (background.width(), background.height());
         Ok(Self {
             config,
@@ -380,7 +384,7 @@ impl MultiTargetTracker {
             dynamics,
             sensor,
             background: bg,
-            gray: Image::new(w, h, 1, 0)?,
+            planes,
             diff: Image::new(w, h, 1, 0)?,
             mask: Image::new(w, h, 1, false)?,
             tracks: Vec::new(),
@@ -409,12 +413,9 @@ impl MultiTargetTracker {
                 got_height: frame.height(),
             });
         }
-        to_gray("multi-target", frame, &mut self.gray)?;
-        abs_diff_into(
-            self.gray.view(),
-            self.background.view(),
-            &mut self.diff.view_mut(),
-        )?;
+        ChannelPolicy::GrayOrRgb.check(NAME, frame.channels())?;
+        let gray = self.planes.build(Needs::GRAY, frame, 0)?.gray()?;
+        abs_diff_into(gray, self.background.view(), &mut self.diff.view_mut())?;
         threshold_into(
             self.diff.view(),
             self.config.foreground_threshold,
