@@ -1,6 +1,7 @@
 //! The experiment's declared options.
 
 use super::*;
+use bayestrack_trackers::ResamplingCodec;
 
 /// How the per-run error is computed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -42,16 +43,6 @@ choice! {
     pub codec HybridPriorName for HybridPrior {
         UkfPredicted = "predicted",
         UkfPosterior = "posterior",
-    }
-}
-
-choice! {
-    /// Reads [`Resampling`] by its [`Resampling::name`].
-    pub codec ResamplingName for Resampling {
-        Multinomial = "multinomial",
-        Residual = "residual",
-        Systematic = "systematic",
-        Stratified = "stratified",
     }
 }
 
@@ -97,7 +88,7 @@ options! {
         /// more runs of the table).
         pub sweep: bool = true;
         /// Resampling scheme, every step (the demo's residual resampling).
-        pub resampling: Resampling = Resampling::Residual, via ResamplingName;
+        pub resampling: Resampling = Resampling::Residual, via ResamplingCodec;
     }
     check check;
 }
