@@ -213,10 +213,22 @@ fn values_the_run_would_refuse_are_refused_when_set() {
     refused(BallOptions::quick().apply("ukf_kappa", "-4"), "kappa");
     refused(BallOptions::quick().apply("ukf_alpha", "1e-300"), "alpha");
     refused(BallOptions::quick().apply("ukf_alpha", "1e-160"), "alpha");
+    refused(AffineConfig::quick().apply("max_particles", "1"), "batch");
+    refused(
+        AffineConfig::quick().apply("hkpf_particles", "1000000"),
+        "HKPF: invalid parameter particles",
+    );
+    let mut big = AffineConfig::quick();
+    big.apply("frames", "300").unwrap();
+    refused(big.apply("runs", "100000"), "particle-frames");
     // what a run accepts stays accepted
     BallOptions::quick().apply("ukf_kappa", "-3").unwrap();
     BallOptions::quick().apply("ukf_alpha", "1e-3").unwrap();
     HikpfConfig::quick().apply("iekf_tolerance", "0").unwrap();
+    AffineConfig::quick().apply("max_particles", "5").unwrap();
+    AffineConfig::quick()
+        .apply("hkpf_particles", "65536")
+        .unwrap();
 }
 
 #[test]

@@ -28,6 +28,42 @@ options! {
         /// records 0 s, so that two runs write byte-identical files.
         pub timing: bool = true;
     }
+    check check;
+}
+
+/// Most particle-frames a run may ask for in all (runs x frames x the
+/// particles of the three filters over the three settings): 1e10, about
+/// ten thousand times the paper's scale. More is a typo, refused before
+/// anything runs.
+pub const MAX_PARTICLE_FRAMES: f64 = 1e10;
+
+/// The cross-option rules, checked before the run starts: every filter's
+/// configuration is one its tracker accepts (HKPF's particle cap, the
+/// self-tuning filters' batch within `max_particles`), and the amount of
+/// work is bounded.
+pub(super) fn check(c: &AffineConfig) -> Result<(), String> {
+    for setting in Setting::ALL {
+        c.hkpf(setting)
+            .validate()
+            .map_err(|e| format!("HKPF: {e}"))?;
+    }
+    c.ispf().validate().map_err(|e| format!("ISPF: {e}"))?;
+    c.stpf()
+        .validate()
+        .map_err(|e| format!("self-tuning HKPF: {e}"))?;
+    let particles: f64 = Setting::ALL
+        .iter()
+        .map(|&s| (c.hkpf(s).particles + 2 * c.max_particles) as f64)
+        .sum();
+    let work = c.runs as f64 * c.frames() as f64 * particles;
+    if work > MAX_PARTICLE_FRAMES {
+        return Err(format!(
+            "runs x frames x particles (all filters and settings) = {work:.1e} particle-frames, \
+             more than the {MAX_PARTICLE_FRAMES:.0e} a run may ask for; lower runs, frames, \
+             hkpf_particles or max_particles"
+        ));
+    }
+    Ok(())
 }
 
 impl AffineConfig {
@@ -62,6 +98,17 @@ impl AffineConfig {
     /// Frames per sequence as run (at least 2: one to start, one to score).
     pub fn frames(&self) -> usize {
         self.frames.max(2)
+    }
+
+    /// HKPF's settings on `setting` (its particles: `hkpf_particles` or the
+    /// paper's for that video).
+    pub fn hkpf(&self, setting: Setting) -> HkpfConfig {
+        HkpfConfig {
+            particles: self
+                .hkpf_particles
+                .unwrap_or_else(|| setting.hkpf_particles()),
+            ..HkpfConfig::default()
+        }
     }
 
     /// The self-tuning filter's settings (Algorithm 1's defaults).

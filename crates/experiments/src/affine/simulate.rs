@@ -10,15 +10,7 @@ pub(super) fn new_tracker(
     seed: u64,
 ) -> bayestrack_trackers::Result<Box<dyn AffineTracker>> {
     Ok(match filter {
-        Filter::Hkpf => Box::new(HkpfTracker::new(
-            HkpfConfig {
-                particles: config
-                    .hkpf_particles
-                    .unwrap_or_else(|| setting.hkpf_particles()),
-                ..HkpfConfig::default()
-            },
-            seed,
-        )?),
+        Filter::Hkpf => Box::new(HkpfTracker::new(config.hkpf(setting), seed)?),
         Filter::Ispf => Box::new(IspfTracker::new(config.ispf(), seed)?),
         Filter::Stpf => Box::new(StpfTracker::new(config.stpf(), seed)?),
     })
