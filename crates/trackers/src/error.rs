@@ -9,9 +9,15 @@ pub enum TrackerError {
     /// `step` was called before `init`.
     #[error("the tracker was not initialised")]
     NotInitialised,
-    /// The initial box has zero (or negative, or non-finite) size.
+    /// The initial box has zero or negative size.
     #[error("box {bbox} (x,y,width,height) has no area")]
     EmptyBox {
+        /// The box.
+        bbox: BBox,
+    },
+    /// A coordinate of the initial box is NaN or infinite.
+    #[error("box {bbox} (x,y,width,height) has a coordinate that is not a finite number")]
+    NonFiniteBox {
         /// The box.
         bbox: BBox,
     },

@@ -1158,7 +1158,7 @@ mod tests {
             ));
             assert!(matches!(
                 t.init(frame.view(), BBox::new(f64::NAN, 10.0, 5.0, 5.0)),
-                Err(TrackerError::EmptyBox { .. })
+                Err(TrackerError::NonFiniteBox { .. })
             ));
             let gray = Image::new(200, 160, 1, 0u8).unwrap();
             assert!(matches!(

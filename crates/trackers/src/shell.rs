@@ -552,7 +552,7 @@ mod tests {
         ));
         assert!(matches!(
             t.init(frame(3, 6).view(), BBox::new(1.0, 1.0, f64::NAN, 2.0)),
-            Err(TrackerError::EmptyBox { .. })
+            Err(TrackerError::NonFiniteBox { .. })
         ));
         assert!(t.started.is_none());
     }

@@ -32,8 +32,9 @@ pub trait Tracker: Send {
     /// Starts tracking `target` in `frame`.
     ///
     /// # Errors
-    /// [`TrackerError::EmptyBox`], [`TrackerError::BoxOutsideFrame`],
-    /// [`TrackerError::Channels`], and model errors.
+    /// [`TrackerError::NonFiniteBox`], [`TrackerError::EmptyBox`],
+    /// [`TrackerError::BoxOutsideFrame`], [`TrackerError::Channels`], and
+    /// model errors.
     fn init(&mut self, frame: ImageView<'_, u8>, target: BBox) -> Result<()>;
 
     /// Tracks into the next frame.
@@ -51,12 +52,16 @@ pub trait Tracker: Send {
 /// outside the frame).
 ///
 /// # Errors
-/// [`TrackerError::EmptyBox`] or [`TrackerError::BoxOutsideFrame`].
+/// [`TrackerError::NonFiniteBox`], [`TrackerError::EmptyBox`] or
+/// [`TrackerError::BoxOutsideFrame`].
 pub fn check_initial_box(bbox: BBox, width: usize, height: usize) -> Result<()> {
     let finite = [bbox.x, bbox.y, bbox.width, bbox.height]
         .iter()
         .all(|v| v.is_finite());
-    if !finite || bbox.width < 1.0 || bbox.height < 1.0 {
+    if !finite {
+        return Err(TrackerError::NonFiniteBox { bbox });
+    }
+    if bbox.width < 1.0 || bbox.height < 1.0 {
         return Err(TrackerError::EmptyBox { bbox });
     }
     let (x0, y0) = (bbox.x - 1.0, bbox.y - 1.0);
@@ -154,7 +159,7 @@ mod tests {
         ));
         assert!(matches!(
             check_initial_box(BBox::new(f64::NAN, 1.0, 3.0, 3.0), 10, 10),
-            Err(TrackerError::EmptyBox { .. })
+            Err(TrackerError::NonFiniteBox { .. })
         ));
     }
 

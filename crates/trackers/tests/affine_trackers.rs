@@ -380,7 +380,7 @@ fn bad_input_is_a_typed_error() {
         ));
         assert!(matches!(
             t.init(gray.view(), BBox::new(f64::NAN, 10.0, 20.0, 20.0)),
-            Err(TrackerError::EmptyBox { .. })
+            Err(TrackerError::NonFiniteBox { .. })
         ));
         // A flat frame and a box touching the border initialise.
         t.init(gray.view(), BBox::new(1.0, 1.0, 20.0, 20.0))
