@@ -2,8 +2,8 @@
 //! ground truth that matches what is rendered.
 
 use bayestrack_experiments::scenes::{
-    AffineScene, BallMotion, BallScene, Car, RoadScene, Scene, SceneError, SceneStream, SkinShape,
-    TEMPLATE_POINTS, Visibility, WebcamScene, otb_box,
+    AffineScene, BallMotion, BallScene, Car, JumpKind, RoadScene, Scene, SceneError, SceneStream,
+    SkinShape, TEMPLATE_POINTS, Visibility, WebcamScene, otb_box,
 };
 use bayestrack_image::{Affine2, Border, Image, Rgb, warp};
 
@@ -520,6 +520,61 @@ fn affine_points_are_the_pose_applied_to_the_template() {
         step(20),
         step(21)
     );
+}
+
+/// A shake offsets the view from the smooth path by at most `jump_size`
+/// and is replaced, not accumulated; a teleport accumulates. Both blur in
+/// proportion to the move.
+#[test]
+fn affine_shakes_stay_near_the_path_and_teleports_accumulate() {
+    let base = AffineScene {
+        frames: 60,
+        jump_every: 0,
+        ..AffineScene::default()
+    };
+    let with = |kind: JumpKind| AffineScene {
+        jump_every: 1,
+        jump_size: 12.0,
+        jump_blur: 4.0,
+        jump_kind: kind,
+        ..base.clone()
+    };
+    let centres = |p: &AffineScene| -> Vec<[f64; 2]> {
+        let s = p.generate(5).unwrap();
+        s.truth
+            .iter()
+            .map(|t| t.affine.unwrap().points.center)
+            .collect()
+    };
+    let path = centres(&base);
+    let shake = with(JumpKind::Shake).generate(5).unwrap();
+    let mut farthest = 0.0f64;
+    for (k, t) in shake.truth.iter().enumerate() {
+        let a = t.affine.unwrap();
+        let off = (a.points.center[0] - path[k][0]).hypot(a.points.center[1] - path[k][1]);
+        assert!(off <= 12.0 + 1e-9, "frame {k}: {off} px from the path");
+        farthest = farthest.max(off);
+        if k > 0 {
+            let prev = shake.truth[k - 1].affine.unwrap().points.center;
+            let own = (path[k][0] - path[k - 1][0]).hypot(path[k][1] - path[k - 1][1]);
+            let moved = (a.points.center[0] - prev[0]).hypot(a.points.center[1] - prev[1]);
+            assert!(a.jump, "frame {k} shakes");
+            // the blur is 4/12 of the shake's own move (within the drift)
+            assert!(
+                (a.blur - moved / 3.0).abs() <= own / 3.0 + 1e-9,
+                "frame {k}: blur {} for a {moved} px move",
+                a.blur
+            );
+        }
+    }
+    assert!(farthest > 9.0, "offsets fill the disc: {farthest}");
+    let tele = centres(&with(JumpKind::Teleport));
+    let far = tele
+        .iter()
+        .zip(&path)
+        .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
+        .fold(0.0f64, f64::max);
+    assert!(far > 24.0, "teleports accumulate: {far} px at most");
 }
 
 #[test]

@@ -37,18 +37,19 @@ use bayestrack_otb::Table;
 use bayestrack_otb::metrics::{FeaturePoints, rms_error_eq6};
 use bayestrack_otb::plot::{Series, line_chart};
 use bayestrack_trackers::{
-    AffineTracker, HkpfConfig, HkpfTracker, IspfConfig, IspfTracker, StpfConfig, StpfTracker,
+    AffineTracker, HkpfConfig, HkpfTracker, IspfConfig, IspfTracker, RegionConfig, StpfConfig,
+    StpfTracker,
 };
 use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
 
 use crate::driver::Paper;
 use crate::experiment::{ExperimentError, MAX_FRAMES, MAX_PARTICLES, MAX_RUNS, write_text};
-use bayestrack_options::{IfSome, Options, above, options};
+use bayestrack_options::{IfSome, Options, above, choice, inside, options};
 
 /// The experiment's id.
 const ID: &str = "affine";
-use crate::scenes::{AffineScene, TEMPLATE_POINTS};
+use crate::scenes::{AffineScene, JumpKind, TEMPLATE_POINTS};
 
 mod options;
 mod paper;
@@ -159,7 +160,11 @@ mod tests {
     /// the points through the initial poses is exact.
     #[test]
     fn the_true_pose_scores_zero() {
-        let scene = Setting::Sylvester.scene(3).generate(1).unwrap();
+        let config = AffineConfig {
+            frames: 3,
+            ..AffineConfig::quick()
+        };
+        let scene = Setting::Sylvester.scene(&config).generate(1).unwrap();
         let a0 = scene.truth[0].affine.unwrap();
         let a2 = scene.truth[2].affine.unwrap();
         // Any initial pose of the tracker: the box centre, no rotation.

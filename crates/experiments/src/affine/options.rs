@@ -24,6 +24,31 @@ options! {
         /// `N_max` of both self-tuning filters (ISPF and ours; Algorithm 1's
         /// default, 50).
         pub max_particles: usize = 50, in 1..=MAX_PARTICLES;
+        /// How Cock's "abrupt and erratic motion" and "severe camera
+        /// vibration" (paper 002 sec. 3.2) are read: `teleport` (jumps the
+        /// target keeps), `shake` (the view offset anew at each shake) or
+        /// `drift` (smooth fast motion). Default `teleport`, the first
+        /// reading; see docs/reproduction.md.
+        pub cock_motion: Motion = Motion::Teleport;
+        /// Size of Cock's jumps or shakes, px (15).
+        pub cock_jump: f64 = 15.0, in inside(0.0, 200.0);
+        /// Frames between Cock's jumps or shakes (8; 1 = every frame).
+        pub cock_every: usize = 8, in 1..=MAX_FRAMES;
+        /// How Dudek's "fast motion and pose change" (sec. 3.3) is read,
+        /// as `cock_motion`. Default `teleport`, the first reading.
+        pub dudek_motion: Motion = Motion::Teleport;
+        /// Size of Dudek's jumps or shakes, px (20).
+        pub dudek_jump: f64 = 20.0, in inside(0.0, 200.0);
+        /// Frames between Dudek's jumps or shakes (15).
+        pub dudek_every: usize = 15, in 1..=MAX_FRAMES;
+        /// Peak speed of the `drift` reading, px a frame (8; the default
+        /// drift peaks at 3.5).
+        pub drift_speed: f64 = 8.0, in inside(0.0, 100.0);
+        /// Measurement noise `r` of the Kalman filter that places the
+        /// region of HKPF and the self-tuning HKPF, px (1.5). The papers
+        /// do not give it, and it sets the region's size (`S = P + r^2
+        /// I`): 1.5 px gives a 3-sigma reach of 6.8 px in steady state.
+        pub region_r: f64 = 1.5, in inside(0.0, 1000.0);
         /// Measure the trackers' wall-clock time (the fps column); `false`
         /// records 0 s, so that two runs write byte-identical files.
         pub timing: bool = true;
@@ -103,19 +128,29 @@ impl AffineConfig {
     /// HKPF's settings on `setting` (its particles: `hkpf_particles` or the
     /// paper's for that video).
     pub fn hkpf(&self, setting: Setting) -> HkpfConfig {
+        let d = HkpfConfig::default();
         HkpfConfig {
             particles: self
                 .hkpf_particles
                 .unwrap_or_else(|| setting.hkpf_particles()),
-            ..HkpfConfig::default()
+            region: RegionConfig {
+                r: self.region_r,
+                ..d.region
+            },
+            ..d
         }
     }
 
     /// The self-tuning filter's settings (Algorithm 1's defaults).
     pub fn stpf(&self) -> StpfConfig {
+        let d = StpfConfig::default();
         StpfConfig {
             max_particles: self.max_particles,
-            ..StpfConfig::default()
+            region: RegionConfig {
+                r: self.region_r,
+                ..d.region
+            },
+            ..d
         }
     }
 

@@ -2,13 +2,34 @@
 
 use super::*;
 
+/// How a setting's fast motion is read (paper 002 sec. 3.2 and 3.3 say
+/// only "abrupt and erratic motion" with "blur resulting from severe
+/// camera vibration" for Cock and "fast motion and pose change" for
+/// Dudek).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Motion {
+    /// Jumps that the target keeps: every `*_every` frames a jump of
+    /// `*_jump` px in a random direction ([`JumpKind::Teleport`]).
+    Teleport,
+    /// Camera vibration: every `*_every` frames the view is offset from
+    /// the smooth path by a new random offset of up to `*_jump` px
+    /// ([`JumpKind::Shake`]).
+    Shake,
+    /// Smooth fast motion: no jumps, the drift's peak speed set to
+    /// `drift_speed` px a frame.
+    Drift,
+}
+
+choice! { Motion { Teleport = "teleport", Shake = "shake", Drift = "drift" } }
+
 /// The three synthetic settings, each mirroring one of the paper's videos.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Setting {
     /// "Cock": abrupt, erratic motion with motion blur and little pose
-    /// change: a 15 px jump (random direction) every 8 frames, blurred over
-    /// 6 px (0.4 of the jump, as if the shutter were open for 0.4 of the
-    /// frame interval).
+    /// change. By default a 15 px jump (random direction) every 8 frames,
+    /// blurred over 6 px (0.4 of the jump, as if the shutter were open for
+    /// 0.4 of the frame interval); `cock_motion`, `cock_jump` and
+    /// `cock_every` choose other readings.
     ///
     /// Why 15 px: the paper says only "abrupt and erratic motion" and
     /// "blur resulting from severe camera vibration", and reports that its
@@ -37,8 +58,9 @@ pub enum Setting {
     /// (rotation up to 0.9 rad, scale 0.7-1.3, aspect 0.85-1.15, gain
     /// 0.55-1.45), smooth motion, no jumps.
     Sylvester,
-    /// "Dudek": a face with fast motion and pose change: 20 px jumps every
-    /// 15 frames with 6 px blur, rotation up to 0.5 rad, scale 0.8-1.2.
+    /// "Dudek": a face with fast motion and pose change: by default 20 px
+    /// jumps every 15 frames with 6 px blur (0.3 of the move; `dudek_motion`, `dudek_jump`,
+    /// `dudek_every` choose others), rotation up to 0.5 rad, scale 0.8-1.2.
     Dudek,
 }
 
@@ -55,23 +77,55 @@ impl Setting {
         }
     }
 
-    /// The scene of this setting with `frames` frames.
-    pub fn scene(self, frames: usize) -> AffineScene {
+    /// The scene of this setting as `config` reads it (frames, and the
+    /// motion of Cock and Dudek: [`AffineConfig::cock_motion`],
+    /// [`AffineConfig::dudek_motion`]).
+    pub fn scene(self, config: &AffineConfig) -> AffineScene {
         let base = AffineScene {
-            frames,
+            frames: config.frames(),
             ..AffineScene::default()
         };
+        // `blur`: the fraction of the move blurred (the fraction of the
+        // frame interval the shutter is open), as (numerator, denominator)
+        // so that the default blurs are exactly 6 px
+        let moving =
+            |scene: AffineScene, motion: Motion, jump: f64, every: usize, blur: (f64, f64)| {
+                let blur = jump * blur.0 / blur.1;
+                match motion {
+                    Motion::Teleport | Motion::Shake => AffineScene {
+                        jump_every: every,
+                        jump_size: jump,
+                        jump_blur: blur,
+                        jump_kind: if motion == Motion::Teleport {
+                            JumpKind::Teleport
+                        } else {
+                            JumpKind::Shake
+                        },
+                        ..scene
+                    },
+                    Motion::Drift => AffineScene {
+                        jump_every: 0,
+                        // peak speed of the wider (x) drift component
+                        drift_period: std::f64::consts::TAU * scene.drift_amplitude[0]
+                            / config.drift_speed,
+                        ..scene
+                    },
+                }
+            };
         match self {
-            Setting::Cock => AffineScene {
-                jump_every: 8,
-                jump_size: 15.0,
-                jump_blur: 6.0,
-                rotation_amplitude: 0.2,
-                scale_amplitude: 0.1,
-                aspect_amplitude: 0.05,
-                illumination_amplitude: 0.1,
-                ..base
-            },
+            Setting::Cock => moving(
+                AffineScene {
+                    rotation_amplitude: 0.2,
+                    scale_amplitude: 0.1,
+                    aspect_amplitude: 0.05,
+                    illumination_amplitude: 0.1,
+                    ..base
+                },
+                config.cock_motion,
+                config.cock_jump,
+                config.cock_every,
+                (2.0, 5.0),
+            ),
             Setting::Sylvester => AffineScene {
                 jump_every: 0,
                 rotation_amplitude: 0.9,
@@ -81,16 +135,19 @@ impl Setting {
                 illumination_amplitude: 0.45,
                 ..base
             },
-            Setting::Dudek => AffineScene {
-                jump_every: 15,
-                jump_size: 20.0,
-                jump_blur: 6.0,
-                rotation_amplitude: 0.5,
-                scale_amplitude: 0.2,
-                aspect_amplitude: 0.1,
-                illumination_amplitude: 0.2,
-                ..base
-            },
+            Setting::Dudek => moving(
+                AffineScene {
+                    rotation_amplitude: 0.5,
+                    scale_amplitude: 0.2,
+                    aspect_amplitude: 0.1,
+                    illumination_amplitude: 0.2,
+                    ..base
+                },
+                config.dudek_motion,
+                config.dudek_jump,
+                config.dudek_every,
+                (3.0, 10.0),
+            ),
         }
     }
 

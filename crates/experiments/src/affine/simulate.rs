@@ -132,7 +132,7 @@ pub(super) fn run_job(
     r: usize,
 ) -> Result<Vec<TrackRun>, ExperimentError> {
     let scene = s
-        .scene(config.frames())
+        .scene(config)
         .generate(config.scene_seed + r as u64)
         .map_err(|e| ExperimentError::Failed {
             id: "affine",

@@ -11,10 +11,13 @@
 //! `M_k = [R(theta_k) diag(s_k, s_k a_k) | c_k]`,
 //!
 //! with smooth sinusoidal rotation `theta_k`, scale `s_k` and aspect `a_k`,
-//! a smooth drift of the centre `c_k` plus abrupt jumps every `jump_every`
-//! frames (random direction, `jump_size` px), motion blur of `jump_blur` px
-//! along the jump on jump frames, a global illumination gain, and sensor
-//! noise. `M_k` maps template coordinates (origin at the template centre)
+//! a smooth drift of the centre `c_k` plus abrupt displacements every
+//! `jump_every` frames ([`JumpKind`]: a teleport of `jump_size` px in a
+//! random direction that the target keeps, or a camera shake that moves
+//! the whole view by a random offset of up to `jump_size` px from the
+//! smooth path, drawn anew at each shake), motion blur along the
+//! displacement on those frames (`jump_blur` px for a `jump_size` move), a
+//! global illumination gain, and sensor noise. `M_k` maps template coordinates (origin at the template centre)
 //! to 0-based image coordinates, as `bayestrack-affine` poses do. The seven
 //! feature points (eye corners, nose tip, mouth corners: [`TEMPLATE_POINTS`])
 //! and the centre are mapped through `M_k`.
@@ -46,6 +49,23 @@ pub const TEMPLATE_POINTS: [[f64; 2]; 7] = [
     [0.19, 0.25],
 ];
 
+/// How the scene's abrupt displacements move the target (paper 002 sec.
+/// 3.2 describes "abrupt and erratic motion" and "severe camera vibration"
+/// on Cock without saying more; the two readings differ in whether a
+/// displacement stays).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum JumpKind {
+    /// Every `jump_every` frames the target jumps `jump_size` px in a
+    /// random direction and stays there (its path is shifted for good).
+    #[default]
+    Teleport,
+    /// Every `jump_every` frames the camera shakes: the view is offset from
+    /// the smooth path by a new random offset, uniform in the disc of
+    /// radius `jump_size` (so a frame-to-frame move of up to twice that),
+    /// and the offset is replaced, not accumulated, at the next shake.
+    Shake,
+}
+
 /// Parameters of the affine scene. `Default`: 320x240 gray, 30 fps, 120
 /// frames, a 48x56 patch, jumps of 30 px every 20 frames with 10 px motion
 /// blur, rotation up to 0.6 rad, scale 0.75-1.25, aspect 0.9-1.1,
@@ -66,11 +86,14 @@ pub struct AffineScene {
     pub drift_amplitude: [f64; 2],
     /// Period of the drift in frames (90).
     pub drift_period: f64,
-    /// Frames between abrupt jumps (20); 0 for none.
+    /// Frames between abrupt displacements (20); 0 for none.
     pub jump_every: usize,
+    /// What a displacement is ([`JumpKind::Teleport`]).
+    pub jump_kind: JumpKind,
     /// Length of a jump in pixels (30).
     pub jump_size: f64,
-    /// Length in pixels of the motion blur on jump frames (10; 0: sharp).
+    /// Length in pixels of the motion blur on a frame that moves by
+    /// `jump_size` (10; 0: sharp); proportional to the move on a shake.
     pub jump_blur: f64,
     /// Rotation amplitude in radians (0.6).
     pub rotation_amplitude: f64,
@@ -103,6 +126,7 @@ impl Default for AffineScene {
             drift_amplitude: [50.0, 30.0],
             drift_period: 90.0,
             jump_every: 20,
+            jump_kind: JumpKind::Teleport,
             jump_size: 30.0,
             jump_blur: 10.0,
             rotation_amplitude: 0.6,
@@ -308,9 +332,10 @@ impl AffineStream {
         (std::f64::consts::TAU * k as f64 / period + self.phases[i]).sin()
     }
 
-    /// Advances the motion: returns the pose, whether a jump happened, the
-    /// jump direction, and the illumination gain.
-    fn pose(&mut self, k: usize) -> (Affine2, bool, [f64; 2], f64) {
+    /// Advances the motion: returns the pose, the blur length when the
+    /// frame is displaced (`None` otherwise), the direction of the
+    /// displacement, and the illumination gain.
+    fn pose(&mut self, k: usize) -> (Affine2, Option<f64>, [f64; 2], f64) {
         let p = self.params.clone();
         let (w, h) = (p.width as f64, p.height as f64);
         let m = p.margin();
@@ -320,9 +345,10 @@ impl AffineStream {
                 h / 2.0 + p.drift_amplitude[1] * s.wave(1, k, p.drift_period) + s.jumps[1],
             ]
         };
-        let mut jumped = false;
+        let mut jumped = None;
         let mut dir = [0.0, 0.0];
-        if p.jump_every > 0 && k > 0 && k.is_multiple_of(p.jump_every) && p.jump_size > 0.0 {
+        let due = p.jump_every > 0 && k > 0 && k.is_multiple_of(p.jump_every) && p.jump_size > 0.0;
+        if due && p.jump_kind == JumpKind::Teleport {
             let a = self.motion.random_range(0.0..std::f64::consts::TAU);
             let mut d = [p.jump_size * a.cos(), p.jump_size * a.sin()];
             let c = base(self);
@@ -333,8 +359,20 @@ impl AffineStream {
                 }
             }
             self.jumps = [self.jumps[0] + d[0], self.jumps[1] + d[1]];
-            jumped = true;
+            jumped = Some(p.jump_blur);
             dir = [d[0] / p.jump_size, d[1] / p.jump_size];
+        } else if due {
+            // A shake: a new offset, uniform in the disc, replacing the old.
+            let a = self.motion.random_range(0.0..std::f64::consts::TAU);
+            let r = p.jump_size * self.motion.random_range(0.0..1.0f64).sqrt();
+            let o = [r * a.cos(), r * a.sin()];
+            let d = [o[0] - self.jumps[0], o[1] - self.jumps[1]];
+            self.jumps = o;
+            let len = d[0].hypot(d[1]);
+            jumped = Some(p.jump_blur * len / p.jump_size);
+            if len > 0.0 {
+                dir = [d[0] / len, d[1] / len];
+            }
         }
         let c = base(self);
         let cx = c[0].clamp(m, w - 1.0 - m);
@@ -351,7 +389,7 @@ impl AffineStream {
         (pose, jumped, dir, gain)
     }
 
-    fn truth(&self, k: usize, pose: &Affine2, jumped: bool, gain: f64) -> FrameTruth {
+    fn truth(&self, k: usize, pose: &Affine2, jumped: Option<f64>, gain: f64) -> FrameTruth {
         let p = &self.params;
         let [tw, th] = p.template_size;
         let corners = [
@@ -390,8 +428,8 @@ impl AffineStream {
                     points,
                     center: [cx, cy],
                 },
-                jump: jumped,
-                blur: if jumped { p.jump_blur } else { 0.0 },
+                jump: jumped.is_some(),
+                blur: jumped.unwrap_or(0.0),
             }),
         }
     }

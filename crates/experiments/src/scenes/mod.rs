@@ -62,7 +62,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 
 use bayestrack_otb::metrics::FeaturePoints;
 
-pub use affine_patch::{AffineScene, AffineStream, TEMPLATE_POINTS};
+pub use affine_patch::{AffineScene, AffineStream, JumpKind, TEMPLATE_POINTS};
 pub use ball_screen::{BallMotion, BallScene, BallStream};
 pub use registry::{BALL_PREVIEW_FRAMES, NamedScene, SCENES, named_stream};
 pub use road::{Car, RoadGeometry, RoadScene, RoadStream};
