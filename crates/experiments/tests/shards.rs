@@ -107,6 +107,21 @@ fn check(e: &dyn Experiment, root: &Path) {
             path.display()
         );
     }
+    // an untimed run prints no fps, not frames / 0 (a 15-digit number),
+    // in its summary tables
+    for (path, bytes) in &a {
+        let text = String::from_utf8_lossy(bytes);
+        let longest = text
+            .split(|c: char| !c.is_ascii_digit())
+            .map(str::len)
+            .max()
+            .unwrap_or(0);
+        assert!(
+            longest < 13 || !path.ends_with("summary.csv"),
+            "{id}: {} has a {longest}-digit number",
+            path.display()
+        );
+    }
     // a missing shard is refused, naming it
     let err = e
         .merge(&shards[..2], &root.join(id).join("bad"))

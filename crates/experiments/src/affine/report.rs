@@ -31,7 +31,12 @@ impl AffineResult {
                     particles: mean_usize(&cat(|t| &t.particles)),
                     evaluations: mean_usize(&cat(|t| &t.evaluations)),
                     pose_estimator_calls: mean_usize(&cat(|t| &t.pose_estimator_calls)),
-                    fps: frames as f64 / seconds.max(1e-12),
+                    // no time recorded (`timing=false`): no fps, not frames / 0
+                    fps: if seconds > 0.0 {
+                        frames as f64 / seconds
+                    } else {
+                        f64::NAN
+                    },
                 });
             }
         }
@@ -84,7 +89,11 @@ impl AffineResult {
                 format!("{:.1}", s.lost_frames),
                 format!("{:.1}", s.evaluations),
                 format!("{:.1}", s.pose_estimator_calls),
-                format!("{:.0}", s.fps),
+                if s.fps.is_finite() {
+                    format!("{:.0}", s.fps)
+                } else {
+                    "-".to_string()
+                },
             ]);
         }
         t

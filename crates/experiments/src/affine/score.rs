@@ -57,7 +57,8 @@ pub struct Summary {
     pub evaluations: f64,
     /// Pose-estimator calls per frame.
     pub pose_estimator_calls: f64,
-    /// Frames per second (tracker calls only; runs share the cores).
+    /// Frames per second (tracker calls only; runs share the cores); NaN
+    /// (printed `-`) when the run was not timed (`timing=false`).
     pub fps: f64,
 }
 

@@ -22,7 +22,12 @@ impl CondensationResult {
                     centre: mean(&all(|r| &r.centre)),
                     outline: mean(&all(|r| &r.outline)),
                     loss: mean(&lost),
-                    fps: frames as f64 / seconds.max(1e-12),
+                    // no time recorded (`timing=false`): no fps, not frames / 0
+                    fps: if seconds > 0.0 {
+                        frames as f64 / seconds
+                    } else {
+                        f64::NAN
+                    },
                 }
             })
             .collect()
@@ -143,7 +148,11 @@ impl CondensationResult {
                     format!("{:.2}", s.outline)
                 },
                 format!("{:.0}%", 100.0 * s.loss),
-                format!("{:.0}", s.fps),
+                if s.fps.is_finite() {
+                    format!("{:.0}", s.fps)
+                } else {
+                    "-".to_string()
+                },
             ]);
         }
         t

@@ -14,7 +14,7 @@ pub struct GridSummary {
     /// Share of frames lost.
     pub loss: f64,
     /// Frames per second (step only; one thread, measured while the other
-    /// jobs run).
+    /// jobs run); NaN (printed `-`) when the run was not timed.
     pub fps: f64,
 }
 
