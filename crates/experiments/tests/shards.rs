@@ -33,6 +33,7 @@ fn reduced(id: &str) -> Vec<(&'static str, &'static str)> {
             ("frames", "6"),
             ("hkpf_particles", "10"),
             ("max_particles", "10"),
+            ("readings", "true"),
             ("timing", "false"),
         ],
         "condensation" => vec![

@@ -53,11 +53,13 @@ use crate::scenes::{AffineScene, JumpKind, TEMPLATE_POINTS};
 
 mod options;
 mod paper;
+mod readings;
 mod report;
 mod score;
 mod simulate;
 pub use options::*;
 pub use paper::*;
+pub use readings::*;
 use report::*;
 pub use score::*;
 pub use simulate::*;
@@ -83,16 +85,25 @@ impl Paper for AffineExperiment {
         AffineConfig::paper()
     }
     fn jobs(c: &AffineConfig) -> usize {
-        Setting::ALL.len() * c.runs
+        Setting::ALL.len() * c.runs + reading_jobs(c).len()
     }
     fn prepare(_: &AffineConfig, _: &[usize]) -> Result<(), ExperimentError> {
         Ok(())
     }
     fn run_job(c: &AffineConfig, _: &(), j: usize) -> Result<Vec<TrackRun>, ExperimentError> {
-        let (s, r) = job(c, j);
-        run_job(c, s, r)
+        let base = Setting::ALL.len() * c.runs;
+        if j < base {
+            let (s, r) = job(c, j);
+            return run_job(c, s, r);
+        }
+        let (i, s, r) = reading_jobs(c)[j - base];
+        run_job(&READINGS[i].config(c)?, s, r)
     }
     fn rows(c: &AffineConfig, j: usize, done: &Vec<TrackRun>) -> Vec<FrameRow> {
+        // frames.csv logs the run's own readings only
+        if j >= Setting::ALL.len() * c.runs {
+            return Vec::new();
+        }
         let (s, r) = job(c, j);
         frame_rows(s, r, done)
     }
@@ -103,7 +114,11 @@ impl Paper for AffineExperiment {
     ) -> Result<Vec<Table>, ExperimentError> {
         let result = assemble(config, done);
         write_outputs(&result, dir)?;
-        Ok(vec![result.table(), result.claims_table()])
+        let mut tables = vec![result.table(), result.claims_table()];
+        if !result.readings.is_empty() {
+            tables.push(readings_table(&result));
+        }
+        Ok(tables)
     }
 
     fn golden() -> Result<Option<String>, ExperimentError> {

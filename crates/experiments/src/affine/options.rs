@@ -49,6 +49,13 @@ options! {
         /// do not give it, and it sets the region's size (`S = P + r^2
         /// I`): 1.5 px gives a 3-sigma reach of 6.8 px in steady state.
         pub region_r: f64 = 1.5, in inside(0.0, 1000.0);
+        /// ISPF checks its stopping threshold after every tuned particle
+        /// instead of after every batch (false: paper 002 sec. 3.2 counts
+        /// stopping inside a batch among its own filter's advantages).
+        pub ispf_stop_inside_batch: bool = false;
+        /// Also run each reading of [`READINGS`] and print under which the
+        /// paper's claims hold (true in `--full`).
+        pub readings: bool = false;
         /// Measure the trackers' wall-clock time (the fps column); `false`
         /// records 0 s, so that two runs write byte-identical files.
         pub timing: bool = true;
@@ -80,7 +87,20 @@ pub(super) fn check(c: &AffineConfig) -> Result<(), String> {
         .iter()
         .map(|&s| (c.hkpf(s).particles + 2 * c.max_particles) as f64)
         .sum();
-    let work = c.runs as f64 * c.frames() as f64 * particles;
+    // (a reading's own options have `readings` off: no recursion)
+    for reading in READINGS.iter().filter(|_| c.readings) {
+        let r = reading
+            .config(c)
+            .map_err(|e| format!("reading {}: {e}", reading.name))?;
+        for setting in reading.settings {
+            r.hkpf(*setting)
+                .validate()
+                .map_err(|e| format!("reading {}: HKPF: {e}", reading.name))?;
+        }
+    }
+    // the readings rerun some settings: at most every setting once more each
+    let passes = 1 + if c.readings { READINGS.len() } else { 0 };
+    let work = c.runs as f64 * c.frames() as f64 * particles * passes as f64;
     if work > MAX_PARTICLE_FRAMES {
         return Err(format!(
             "runs x frames x particles (all filters and settings) = {work:.1e} particle-frames, \
@@ -92,9 +112,12 @@ pub(super) fn check(c: &AffineConfig) -> Result<(), String> {
 }
 
 impl AffineConfig {
-    /// Paper scale: 300 frames, 5 runs.
+    /// Paper scale: 300 frames, 5 runs, with the readings.
     pub fn paper() -> Self {
-        Self::default()
+        Self {
+            readings: true,
+            ..Self::default()
+        }
     }
 
     /// The CI scale: 80 frames, 1 run.
@@ -102,6 +125,7 @@ impl AffineConfig {
         Self {
             frames: 80,
             runs: 1,
+            readings: false,
             ..Self::paper()
         }
     }
@@ -158,6 +182,7 @@ impl AffineConfig {
     pub fn ispf(&self) -> IspfConfig {
         IspfConfig {
             max_particles: self.max_particles,
+            stop_inside_batch: self.ispf_stop_inside_batch,
             ..IspfConfig::default()
         }
     }

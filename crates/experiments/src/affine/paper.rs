@@ -68,6 +68,11 @@ impl Setting {
     /// Every setting, in table order.
     pub const ALL: [Setting; 3] = [Setting::Cock, Setting::Sylvester, Setting::Dudek];
 
+    /// Position in [`Setting::ALL`].
+    pub(super) fn index(self) -> usize {
+        self as usize
+    }
+
     /// Row label.
     pub fn name(self) -> &'static str {
         match self {

@@ -161,6 +161,9 @@ impl AffineResult {
 pub(super) fn write_outputs(result: &AffineResult, dir: &Path) -> Result<(), ExperimentError> {
     write_text(&dir.join("summary.csv"), &result.table().to_csv())?;
     write_text(&dir.join("claims.csv"), &result.claims_table().to_csv())?;
+    if !result.readings.is_empty() {
+        write_text(&dir.join("readings.csv"), &readings_table(result).to_csv())?;
+    }
     for (s, setting) in Setting::ALL.iter().enumerate() {
         let run0 = &result.runs[s][0];
         let series = |f: &dyn Fn(&TrackRun, usize) -> f64| -> Vec<Series> {

@@ -69,4 +69,6 @@ pub struct AffineResult {
     pub config: AffineConfig,
     /// `runs[setting][run][filter]`, settings in [`Setting::ALL`] order.
     pub runs: Vec<Vec<Vec<TrackRun>>>,
+    /// The runs of the readings (`readings=true`; empty otherwise).
+    pub readings: Vec<ReadingResult>,
 }

@@ -146,13 +146,41 @@ pub(super) fn run_job(
 
 /// The result from every job's, in job order.
 pub(super) fn assemble(config: &AffineConfig, done: Vec<Vec<TrackRun>>) -> AffineResult {
+    let base = Setting::ALL.len() * config.runs;
+    let mut done = done.into_iter();
     let mut runs = vec![Vec::new(); Setting::ALL.len()];
-    for (j, r) in done.into_iter().enumerate() {
+    for (j, r) in done.by_ref().take(base).enumerate() {
         runs[j / config.runs].push(r);
+    }
+    let mut readings: Vec<ReadingResult> = READINGS
+        .iter()
+        .map(|reading| ReadingResult {
+            reading,
+            result: AffineResult {
+                // the run's own options where the overrides are refused
+                // (`check` refuses such a run before it starts)
+                config: reading.config(config).unwrap_or_else(|_| config.clone()),
+                runs: runs.clone(),
+                readings: Vec::new(),
+            },
+        })
+        .collect();
+    let mut fresh = vec![vec![false; Setting::ALL.len()]; READINGS.len()];
+    for ((i, s, _), r) in reading_jobs(config).into_iter().zip(done) {
+        let slot = &mut readings[i].result.runs[s.index()];
+        if !fresh[i][s.index()] {
+            slot.clear();
+            fresh[i][s.index()] = true;
+        }
+        slot.push(r);
+    }
+    if !config.readings {
+        readings.clear();
     }
     AffineResult {
         config: config.clone(),
         runs,
+        readings,
     }
 }
 
