@@ -24,25 +24,29 @@ options! {
         /// `N_max` of both self-tuning filters (ISPF and ours; Algorithm 1's
         /// default, 50).
         pub max_particles: usize = 50, in 1..=MAX_PARTICLES;
-        /// How Cock's "abrupt and erratic motion" and "severe camera
-        /// vibration" (paper 002 sec. 3.2) are read: `teleport` (jumps the
-        /// target keeps), `shake` (the view offset anew at each shake) or
-        /// `drift` (smooth fast motion). Default `teleport`, the first
-        /// reading; see docs/reproduction.md.
-        pub cock_motion: Motion = Motion::Teleport;
-        /// Size of Cock's jumps or shakes, px (15).
-        pub cock_jump: f64 = 15.0, in inside(0.0, 200.0);
-        /// Frames between Cock's jumps or shakes (8; 1 = every frame).
-        pub cock_every: usize = 8, in 1..=MAX_FRAMES;
-        /// How Dudek's "fast motion and pose change" (sec. 3.3) is read,
-        /// as `cock_motion`. Default `teleport`, the first reading.
-        pub dudek_motion: Motion = Motion::Teleport;
-        /// Size of Dudek's jumps or shakes, px (20).
+        /// How Cock's "abrupt and erratic motion" and "blur ... resulting
+        /// from severe camera vibration" (paper 002 sec. 3.2) are read:
+        /// `shake` (default: the view shakes, offset anew every
+        /// `cock_every` frames), `teleport` (jumps the target keeps) or
+        /// `drift` (smooth fast motion). See [`Setting::Cock`].
+        pub cock_motion: Motion = Motion::Shake;
+        /// Radius of Cock's shakes or length of its jumps, px (7.5: a shake
+        /// moves the view by up to 15 px from one frame to the next).
+        pub cock_jump: f64 = 7.5, in inside(0.0, 200.0);
+        /// Frames between Cock's shakes or jumps (1: vibration
+        /// throughout).
+        pub cock_every: usize = 1, in 1..=MAX_FRAMES;
+        /// How Dudek's "fast motion and pose change" (sec. 3) is read, as
+        /// `cock_motion`; default `drift` (see [`Setting::Dudek`]).
+        pub dudek_motion: Motion = Motion::Drift;
+        /// Radius of Dudek's shakes or length of its jumps, px (20; the
+        /// `teleport` and `shake` readings).
         pub dudek_jump: f64 = 20.0, in inside(0.0, 200.0);
-        /// Frames between Dudek's jumps or shakes (15).
+        /// Frames between Dudek's shakes or jumps (15).
         pub dudek_every: usize = 15, in 1..=MAX_FRAMES;
-        /// Peak speed of the `drift` reading, px a frame (8; the default
-        /// drift peaks at 3.5).
+        /// Peak speed of the `drift` reading, px a frame (8: the 48 px face
+        /// crosses its own width in 6 frames, a fifth of a second at 30
+        /// fps; the slow drift of every setting peaks at 3.5).
         pub drift_speed: f64 = 8.0, in inside(0.0, 100.0);
         /// Measurement noise `r` of the Kalman filter that places the
         /// region of HKPF and the self-tuning HKPF, px (1.5). The papers

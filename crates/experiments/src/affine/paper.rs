@@ -26,41 +26,34 @@ choice! { Motion { Teleport = "teleport", Shake = "shake", Drift = "drift" } }
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Setting {
     /// "Cock": abrupt, erratic motion with motion blur and little pose
-    /// change. By default a 15 px jump (random direction) every 8 frames,
-    /// blurred over 6 px (0.4 of the jump, as if the shutter were open for
-    /// 0.4 of the frame interval); `cock_motion`, `cock_jump` and
-    /// `cock_every` choose other readings.
+    /// change. The paper says the toy moves with "abrupt and erratic
+    /// motion" and that the frames are blurred by "severe camera
+    /// vibration" (sec. 3.2), which we read as the view shaking
+    /// throughout: every frame a new random offset from the smooth path,
+    /// uniform in a disc of radius 7.5 px, blurred over 0.4 of the move
+    /// (as if the shutter were open for 0.4 of the frame interval).
     ///
-    /// Why 15 px: the paper says only "abrupt and erratic motion" and
-    /// "blur resulting from severe camera vibration", and reports that its
-    /// filter follows it. A jump must then land inside a region the
-    /// filters search in the jump frame itself. The widest first-frame
-    /// region of the three is ISPF's shift spread (5 px, so 3 sigma =
-    /// 15 px); the Kalman region of HKPF and the self-tuning filter is
-    /// narrower (`S = P_xy + r^2 I` is 5.1 px^2 in steady state, 2.25 px
-    /// per axis, so 3 sigma = 6.8 px; 3x wider after a detected
-    /// manoeuvre, but a manoeuvre is detected from the innovation of the
-    /// jump frame's own estimate, so only from the next frame on), and the
-    /// pose estimator corrects shifts of a few pixels (trained at 2 px).
-    /// The first version jumped 30 px (0.6 of the target's width in one
-    /// frame), twice any region: all three filters lost the target at the
-    /// first or second jump and never recovered (RMS 46-52 px, 64-68 of 79
-    /// frames lost), which says nothing about the filters. The size is
-    /// this reach; a sweep (80 frames, 2 seeds) agrees with it: at 6-10 px
-    /// no filter loses a frame, at 15 px HKPF loses some on one seed, at
-    /// 20 px HKPF loses frames on both seeds and all three lose the target
-    /// on one, at 30 px all three on both. Cock
-    /// stays the most abrupt setting by frequency: a jump every 8 frames
-    /// against Dudek's 20 px every 15 (beyond the 15 px reach, so Dudek's
-    /// jump frames test recovery rather than following).
+    /// Why 7.5 px: a shake moves the view by up to twice the radius from
+    /// one frame to the next, and the paper reports that its filter
+    /// follows it, so a move must land inside a region the filters search
+    /// in that frame. The widest first-frame region of the three is
+    /// ISPF's shift spread (5 px, so 3 sigma = 15 px); the Kalman region
+    /// of HKPF and the self-tuning filter is narrower (`S = P_xy + r^2 I`
+    /// is 5.1 px^2 in steady state, 2.25 px per axis, so 3 sigma = 6.8
+    /// px). Moves of up to 15 px are that reach. The first reading (15 px
+    /// jumps that the target keeps, every 8 frames) and shakes of 15 px
+    /// are readings of the `--full` sweep ([`READINGS`]).
     Cock,
     /// "Sylvester": strong illumination change and severe pose change
     /// (rotation up to 0.9 rad, scale 0.7-1.3, aspect 0.85-1.15, gain
     /// 0.55-1.45), smooth motion, no jumps.
     Sylvester,
-    /// "Dudek": a face with fast motion and pose change: by default 20 px
-    /// jumps every 15 frames with 6 px blur (0.3 of the move; `dudek_motion`, `dudek_jump`,
-    /// `dudek_every` choose others), rotation up to 0.5 rad, scale 0.8-1.2.
+    /// "Dudek": a face with "fast motion and pose change" (sec. 3), which
+    /// the paper does not call abrupt (it calls Cock so): by default a
+    /// smooth fast drift (`dudek_motion=drift`, peak `drift_speed` = 8 px
+    /// a frame), rotation up to 0.5 rad, scale 0.8-1.2. The first reading
+    /// (20 px jumps every 15 frames, 6 px blur, `dudek_motion=teleport`)
+    /// is a reading of the `--full` sweep.
     Dudek,
 }
 
