@@ -92,7 +92,7 @@ enum Command {
         frames: Option<usize>,
     },
     /// Run every tracker on every sequence of a folder (OTB one-pass
-    /// evaluation); print AUC / P@20 / fps per sequence and their means,
+    /// evaluation); print SR@0.5 / AUC / P@20 / fps per sequence and their means,
     /// then ours beside the published OTB trackers (success rate at IoU
     /// 0.5); write boxes, results.csv, results.md and success/precision
     /// plots. `--shard K/N` runs one slice of the cells (on one of N
@@ -385,6 +385,7 @@ fn run_otb(
     let options = SuiteOptions {
         trackers,
         seed,
+        set: Vec::new(),
         out,
         progress: true,
         published,

@@ -58,6 +58,7 @@ fn a_finished_suite_replaces_the_previous_results_and_leaves_nothing_partial() {
     let options = SuiteOptions {
         trackers: vec![tracker_info("mad").unwrap()],
         seed: 0,
+        set: Vec::new(),
         out: out.clone(),
         progress: false,
         published: None,
@@ -104,6 +105,7 @@ fn published_results_sit_beside_ours_in_the_table_and_the_plot() {
     let options = SuiteOptions {
         trackers: vec![tracker_info("mad").unwrap()],
         seed: 0,
+        set: Vec::new(),
         out: root.join("out"),
         progress: false,
         published: Some(published),
@@ -257,6 +259,7 @@ fn a_gray_frame_in_a_colour_sequence_is_converted_as_the_cli_does() {
     let options = SuiteOptions {
         trackers: bayestrack_trackers::REGISTRY.iter().collect(),
         seed: 0,
+        set: Vec::new(),
         out: root.join("out"),
         progress: false,
         published: None,
