@@ -83,6 +83,21 @@ fn a_finished_suite_replaces_the_previous_results_and_leaves_nothing_partial() {
     );
     let boxes = std::fs::read_to_string(out.join("boxes/mad/square.txt")).unwrap();
     assert_eq!(boxes.lines().count(), 3);
+    // our own table: SR@0.5 / AUC / P@20 / fps per sequence and the mean
+    let c = report.cells[0].outcome.as_ref().unwrap();
+    let cell = format!(
+        "{:.3} / {:.3} / {:.3} / {:.0}",
+        c.score.success_rate_50, c.score.auc, c.score.precision_20, c.fps
+    );
+    let md = std::fs::read_to_string(out.join("results.md")).unwrap();
+    assert!(
+        md.contains("OTB one-pass evaluation: SR@0.5 / AUC / P@20 / fps"),
+        "{md}"
+    );
+    assert!(md.contains(&format!("| mad | {cell} | {cell} |")), "{md}");
+    let mean = report.mean("mad").unwrap();
+    assert_eq!(mean.success_rate_50, c.score.success_rate_50);
+    assert_eq!((mean.auc, mean.sequences), (c.score.auc, 1));
     std::fs::remove_dir_all(&root).unwrap();
 }
 

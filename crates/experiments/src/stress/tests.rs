@@ -182,8 +182,8 @@ fn scale_reaches_half_and_double_smoothly() {
         s.iter().copied().fold(f64::INFINITY, f64::min),
         s.iter().copied().fold(0.0, f64::max),
     );
-    assert!(lo <= 0.501 && lo >= 0.5, "{lo}");
-    assert!(hi >= 1.998 && hi <= 2.0, "{hi}");
+    assert!((0.5..=0.501).contains(&lo), "{lo}");
+    assert!((1.998..=2.0).contains(&hi), "{hi}");
     assert_eq!(s[0], 1.0);
     let step = s
         .windows(2)
@@ -350,7 +350,7 @@ fn the_set_is_written_once_rewritten_when_changed_and_foreign_folders_refused() 
     ];
     let first = write_set(&set, 1, &dir).unwrap();
     assert_eq!(first.written, ["scale", "clutter-gray"]);
-    let seq = bayestrack_otb::Sequence::open(&dir.join("scale")).unwrap();
+    let seq = bayestrack_otb::Sequence::open(dir.join("scale")).unwrap();
     assert_eq!(seq.len(), 12);
     let again = write_set(&set, 1, &dir).unwrap();
     assert_eq!(again.kept, ["scale", "clutter-gray"]);
