@@ -1277,6 +1277,58 @@ mod tests {
         }
     }
 
+    /// The table's cells are SR@0.5 / AUC / P@20 / fps, and the mean row
+    /// averages each over the sequences (each sequence once).
+    #[test]
+    fn the_table_gives_sr_auc_precision_and_fps_and_their_means() {
+        let gt = BBox::new(1.0, 1.0, 10.0, 10.0);
+        let cell = |sequence: &str, boxes: &[BBox], fps: f64| Cell {
+            sequence: sequence.into(),
+            tracker: "t",
+            outcome: Ok(CellScore {
+                score: score_otb(boxes, &vec![Some(gt); boxes.len()]).unwrap(),
+                fps,
+                lost_frames: 0,
+            }),
+        };
+        // a: IoUs 1 and 1/3 (SR 0.5); b: IoU 1 / 0.5 / 0 (SR 1/3)
+        let a = cell("a", &[gt, BBox::new(6.0, 1.0, 10.0, 10.0)], 100.0);
+        let b = cell(
+            "b",
+            &[
+                gt,
+                BBox::new(1.0, 1.0, 20.0, 10.0),
+                BBox::new(40.0, 1.0, 10.0, 10.0),
+            ],
+            300.0,
+        );
+        let report = SuiteReport {
+            sequences: vec!["a".into(), "b".into()],
+            frames: vec![2, 3],
+            published: None,
+            trackers: vec!["t"],
+            cells: vec![a, b],
+        };
+        let t = report.table();
+        assert_eq!(
+            t.title,
+            "OTB one-pass evaluation: SR@0.5 / AUC / P@20 / fps"
+        );
+        let (sa, sb) = (1.0 / 2.0, 1.0 / 3.0);
+        let auc_a = (20.0 + 7.0) / 42.0; // 1 passes 20 of the 21, 1/3 passes 7
+        let auc_b = (20.0 + 10.0) / 63.0;
+        assert_eq!(t.rows[0][1], format!("0.500 / {auc_a:.3} / 1.000 / 100"));
+        assert_eq!(t.rows[0][2], format!("0.333 / {auc_b:.3} / 0.667 / 300"));
+        let m = report.mean("t").unwrap();
+        assert_eq!(m.success_rate_50, (sa + sb) / 2.0);
+        assert!((m.auc - (auc_a + auc_b) / 2.0).abs() < 1e-12);
+        assert_eq!((m.fps, m.sequences), (200.0, 2));
+        assert_eq!(
+            t.rows[0][3],
+            format!("0.417 / {:.3} / 0.833 / 200", (auc_a + auc_b) / 2.0)
+        );
+    }
+
     #[test]
     fn a_colour_tracker_on_a_gray_sequence_is_not_a_failure() {
         let channels = || TrackerError::Channels {
