@@ -47,7 +47,7 @@
 //! use bayestrack_experiments::stress::{Stress, StressScene};
 //! use bayestrack_experiments::scenes::SceneStream;
 //!
-//! let scene = StressScene { frames: 5, ..StressScene::new(Stress::Scale, true) };
+//! let scene = StressScene { frames: 10, ..StressScene::new(Stress::Scale, true) };
 //! let mut stream = scene.stream(1).unwrap();
 //! let frame = stream.next_frame().unwrap();
 //! assert_eq!((frame.image.width(), frame.image.channels()), (320, 3));
