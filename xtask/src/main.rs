@@ -806,6 +806,46 @@ mod tests {
     }
 
     #[test]
+    fn stress_writes_the_set_scores_it_and_refuses_bad_options_first() {
+        let dir = std::env::temp_dir().join(format!("xtask-stress-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let run = |trackers: &[&str], set: &[(&str, &str)], sweep: Option<(&str, &[&str])>| {
+            stress(StressRun {
+                trackers: trackers.iter().map(|t| t.to_string()).collect(),
+                set: set
+                    .iter()
+                    .map(|(k, v)| (k.to_string(), v.to_string()))
+                    .collect(),
+                sweep: sweep
+                    .map(|(k, v)| (k.to_string(), v.iter().map(|s| s.to_string()).collect())),
+                seed: 1,
+                tracker_seed: 0,
+                frames: Some(10),
+                out: dir.clone(),
+            })
+        };
+        // an option no tracker takes, a sweep over two trackers: refused
+        // before anything is written
+        let err = run(&["mad"], &[("no_such_key", "1")], None).unwrap_err();
+        assert!(err.contains("no_such_key"), "{err}");
+        let err = run(&["mad", "ncc-scale"], &[], Some(("scale_step", &["1.02"]))).unwrap_err();
+        assert!(err.contains("runs one tracker"), "{err}");
+        assert!(!dir.exists());
+        run(&["mad"], &[], None).unwrap();
+        let csv = std::fs::read_to_string(dir.join("results/results.csv")).unwrap();
+        assert_eq!(csv.lines().count(), 1 + 14, "{csv}");
+        assert!(csv.contains("\nfull-occlusion-gray,mad,"), "{csv}");
+        run(&["ncc-scale"], &[], Some(("scale_step", &["1.02", "1.05"]))).unwrap();
+        for v in ["1.02", "1.05"] {
+            assert!(
+                dir.join(format!("sweep/scale_step={v}/results.csv"))
+                    .is_file()
+            );
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
     fn defaults_resolve_from_the_project_root_and_given_paths_stay_as_given() {
         let golden = resolve(None, "tests/golden");
         assert!(golden.is_absolute(), "{}", golden.display());
