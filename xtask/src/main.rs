@@ -9,6 +9,8 @@
 //! cargo xtask reproduce-table ball --full --shard 2/8 --out shards/2  # one slice
 //! cargo xtask merge shards/* --out target/reproduce  # the slices as one run
 //! cargo xtask otb --root ../shared/data/sequences  # every tracker, every sequence
+//! cargo xtask stress                       # every tracker on the synthetic stress set
+//! cargo xtask stress --trackers ncc-scale --sweep key=v1,v2  # choose a parameter
 //! ```
 //!
 //! `cargo xtask otb` sets our trackers beside the published OTB results
@@ -92,7 +94,7 @@ enum Command {
         frames: Option<usize>,
     },
     /// Run every tracker on every sequence of a folder (OTB one-pass
-    /// evaluation); print AUC / P@20 / fps per sequence and their means,
+    /// evaluation); print SR@0.5 / AUC / P@20 / fps per sequence and their means,
     /// then ours beside the published OTB trackers (success rate at IoU
     /// 0.5); write boxes, results.csv, results.md and success/precision
     /// plots. `--shard K/N` runs one slice of the cells (on one of N
@@ -135,6 +137,40 @@ enum Command {
         )]
         merge: Vec<PathBuf>,
     },
+    /// Write the synthetic stress set (partial and full occlusion, scale
+    /// 0.5x-2x, fast motion, illumination, same-colour clutter, mixed; colour
+    /// and gray) to `--out/sequences` (only what is missing or differs),
+    /// run the OTB suite on it (results in `--out/results`) and print the
+    /// table per sequence and per stress with the means. `--sweep
+    /// key=v1,v2,...` runs one tracker once per value and prints the mean
+    /// SR@0.5 / AUC of each: choose parameters here, report them on the
+    /// real sequences (see docs/stress.md).
+    Stress {
+        /// Comma-separated tracker names (default: every tracker).
+        #[arg(long, value_delimiter = ',')]
+        trackers: Vec<String>,
+        /// A tracker option, `key=value`, given to every tracker run
+        /// (repeatable; see `bayestrack options <tracker>`).
+        #[arg(long = "set", value_parser = parse_key_value)]
+        set: Vec<(String, String)>,
+        /// Run the one tracker of `--trackers` once per value of an option,
+        /// `key=v1,v2,...`, and print its means over the set per value.
+        #[arg(long, value_parser = parse_sweep)]
+        sweep: Option<(String, Vec<String>)>,
+        /// Seed of the stress set's rendering.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Seed given to every tracker.
+        #[arg(long, default_value_t = 0)]
+        tracker_seed: u64,
+        /// Frames of each sequence (default 120).
+        #[arg(long)]
+        frames: Option<usize>,
+        /// Output folder: `sequences/`, `results/` and `sweep/` under it
+        /// (default: `<project root>/target/stress`).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Rewrite `tests/golden/<id>.csv` from fresh quick runs and print what
     /// changed.
     Bless {
@@ -154,6 +190,16 @@ fn project_root() -> PathBuf {
 /// in, and a default must not depend on that.
 fn resolve(explicit: Option<PathBuf>, default: &str) -> PathBuf {
     explicit.unwrap_or_else(|| project_root().join(default))
+}
+
+/// `key=v1,v2,...`: an option and the values a sweep gives it.
+fn parse_sweep(s: &str) -> Result<(String, Vec<String>), String> {
+    let (key, values) = parse_key_value(s)?;
+    let values: Vec<String> = values.split(',').map(|v| v.trim().to_string()).collect();
+    if values.iter().any(String::is_empty) {
+        return Err(format!("`{s}`: an empty value (expected key=v1,v2,...)"));
+    }
+    Ok((key, values))
 }
 
 fn parse_key_value(s: &str) -> Result<(String, String), String> {
@@ -316,21 +362,14 @@ fn otb(
     shard: Option<Shard>,
     merge_dirs: &[PathBuf],
 ) -> Result<(), String> {
-    let trackers = if names.is_empty() {
-        REGISTRY.iter().collect()
-    } else {
-        names
-            .iter()
-            .map(|n| tracker_info(n).map_err(|e| e.to_string()))
-            .collect::<Result<Vec<_>, _>>()?
-    };
+    let trackers = trackers_named(names)?;
     // a broken published file is reported after our results, not instead
     let (published, published_error) = match read_published(otb_data) {
         Ok(p) => (p, None),
         Err(e) => (None, Some(e)),
     };
     let report = if merge_dirs.is_empty() {
-        run_otb(root, trackers, seed, out.clone(), published, shard)?
+        run_otb(root, trackers, seed, &[], out.clone(), published, shard)?
     } else {
         bayestrack_otb::suite::merge(merge_dirs, &out, published).map_err(|e| e.to_string())?
     };
@@ -346,26 +385,141 @@ fn otb(
     }
     println!("\nfiles: {}", out.display());
     let mut errors: Vec<String> = published_error.into_iter().collect();
-    // cells marked n/a (a tracker that cannot run on the input by design,
-    // see `CellError`) are not failures; every other error fails the run
-    let failed = report.failures();
-    if !failed.is_empty() {
-        let cells: Vec<String> = failed
-            .iter()
-            .map(|c| format!("{} x {}", c.tracker, c.sequence))
-            .collect();
-        let table = if shard.is_some() {
-            bayestrack_otb::shard::SHARD_FILE
-        } else {
-            "results.csv"
-        };
-        errors.push(format!(
-            "{} tracker x sequence cell(s) failed: {} (reasons in the `error` column of {})",
-            failed.len(),
-            cells.join(", "),
-            out.join(table).display()
-        ));
+    let table = if shard.is_some() {
+        bayestrack_otb::shard::SHARD_FILE
+    } else {
+        "results.csv"
+    };
+    errors.extend(failures(&report, &out.join(table)));
+    if errors.is_empty() {
+        Ok(())
+    } else {
+        Err(errors.join("\nerror: "))
     }
+}
+
+/// The registry entries `names` (every tracker when empty).
+fn trackers_named(names: &[String]) -> Result<Vec<&'static TrackerInfo>, String> {
+    if names.is_empty() {
+        return Ok(REGISTRY.iter().collect());
+    }
+    names
+        .iter()
+        .map(|n| tracker_info(n).map_err(|e| e.to_string()))
+        .collect()
+}
+
+/// The error for the cells of `report` that failed, if any: cells marked
+/// n/a (a tracker that cannot run on the input by design, see
+/// `CellError`) are not failures; every other error fails the run.
+fn failures(report: &SuiteReport, table: &Path) -> Option<String> {
+    let failed = report.failures();
+    if failed.is_empty() {
+        return None;
+    }
+    let cells: Vec<String> = failed
+        .iter()
+        .map(|c| format!("{} x {}", c.tracker, c.sequence))
+        .collect();
+    Some(format!(
+        "{} tracker x sequence cell(s) failed: {} (reasons in the `error` column of {})",
+        failed.len(),
+        cells.join(", "),
+        table.display()
+    ))
+}
+
+/// What `cargo xtask stress` runs.
+struct StressRun {
+    trackers: Vec<String>,
+    set: Vec<(String, String)>,
+    sweep: Option<(String, Vec<String>)>,
+    seed: u64,
+    tracker_seed: u64,
+    frames: Option<usize>,
+    out: PathBuf,
+}
+
+/// `cargo xtask stress`: writes the set where it is missing or differs,
+/// then runs the suite on it once, or once per value of a sweep.
+fn stress(run: StressRun) -> Result<(), String> {
+    use bayestrack_experiments::stress::{
+        SweepRow, default_set, stress_table, sweep_table, write_set,
+    };
+    let started = std::time::Instant::now();
+    let trackers = trackers_named(&run.trackers)?;
+    // every option must mean something to every tracker before anything runs
+    let mut sets = vec![(String::new(), run.set.clone())];
+    if let Some((key, values)) = &run.sweep {
+        if trackers.len() != 1 {
+            return Err(format!(
+                "--sweep {key}=... runs one tracker: give it with --trackers NAME ({} given)",
+                trackers.len()
+            ));
+        }
+        sets = values
+            .iter()
+            .map(|v| {
+                let mut set = run.set.clone();
+                set.push((key.clone(), v.clone()));
+                (v.clone(), set)
+            })
+            .collect();
+    }
+    for (_, set) in &sets {
+        for t in &trackers {
+            t.build_with(run.tracker_seed, set)
+                .map_err(|e| format!("{}: {e}", t.name))?;
+        }
+    }
+    let dir = run.out.join("sequences");
+    let summary = write_set(&default_set(run.frames), run.seed, &dir).map_err(|e| e.to_string())?;
+    println!(
+        "stress set (seed {}) in {}: {} written, {} rewritten, {} kept, {} old removed ({:.1} s)",
+        run.seed,
+        dir.display(),
+        summary.written.len(),
+        summary.rewritten.len(),
+        summary.kept.len(),
+        summary.removed.len(),
+        started.elapsed().as_secs_f64()
+    );
+    let mut errors = Vec::new();
+    let mut rows = Vec::new();
+    for (value, set) in &sets {
+        let out = match &run.sweep {
+            Some((key, _)) => run.out.join("sweep").join(format!("{key}={value}")),
+            None => run.out.join("results"),
+        };
+        let report = run_otb(
+            &dir,
+            trackers.clone(),
+            run.tracker_seed,
+            set,
+            out.clone(),
+            None,
+            None,
+        )?;
+        if run.sweep.is_none() {
+            println!("{}", report.table());
+            println!("{}", stress_table(&report));
+        } else {
+            rows.push(SweepRow {
+                value: value.clone(),
+                mean: report.mean(trackers[0].name),
+                sequences: report.sequences.len(),
+            });
+        }
+        errors.extend(failures(&report, &out.join("results.csv")));
+    }
+    if let Some((key, _)) = &run.sweep {
+        println!("{}", sweep_table(trackers[0].name, key, &rows));
+    }
+    println!(
+        "files: {}\nstress run: {:.1} s",
+        run.out.display(),
+        started.elapsed().as_secs_f64()
+    );
     if errors.is_empty() {
         Ok(())
     } else {
@@ -378,6 +532,7 @@ fn run_otb(
     root: &Path,
     trackers: Vec<&'static TrackerInfo>,
     seed: u64,
+    set: &[(String, String)],
     out: PathBuf,
     published: Option<Published>,
     shard: Option<Shard>,
@@ -385,6 +540,7 @@ fn run_otb(
     let options = SuiteOptions {
         trackers,
         seed,
+        set: set.to_vec(),
         out,
         progress: true,
         published,
@@ -477,6 +633,29 @@ fn main() -> ExitCode {
                 }
             }
         }
+        Command::Stress {
+            trackers,
+            set,
+            sweep,
+            seed,
+            tracker_seed,
+            frames,
+            out,
+        } => match stress(StressRun {
+            trackers,
+            set,
+            sweep,
+            seed,
+            tracker_seed,
+            frames,
+            out: resolve(out, "target/stress"),
+        }) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(err) => {
+                eprintln!("error: {err}");
+                ExitCode::FAILURE
+            }
+        },
         Command::Bless { ids } => {
             let mut failed = false;
             for e in EXPERIMENTS.iter().filter(|e| e.implemented()) {
@@ -610,6 +789,59 @@ mod tests {
             err.starts_with("published OTB results: ") && err.contains("published_ope.csv:1:"),
             "{err}"
         );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_sweep_is_a_key_and_its_values() {
+        assert_eq!(
+            parse_sweep("lambda=0.1, 0.2,0.3"),
+            Ok((
+                "lambda".to_string(),
+                vec!["0.1".to_string(), "0.2".to_string(), "0.3".to_string()]
+            ))
+        );
+        assert!(parse_sweep("lambda").is_err());
+        assert!(parse_sweep("lambda=0.1,,0.3").is_err());
+    }
+
+    #[test]
+    fn stress_writes_the_set_scores_it_and_refuses_bad_options_first() {
+        let dir = std::env::temp_dir().join(format!("xtask-stress-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let run = |trackers: &[&str], set: &[(&str, &str)], sweep: Option<(&str, &[&str])>| {
+            stress(StressRun {
+                trackers: trackers.iter().map(|t| t.to_string()).collect(),
+                set: set
+                    .iter()
+                    .map(|(k, v)| (k.to_string(), v.to_string()))
+                    .collect(),
+                sweep: sweep
+                    .map(|(k, v)| (k.to_string(), v.iter().map(|s| s.to_string()).collect())),
+                seed: 1,
+                tracker_seed: 0,
+                frames: Some(10),
+                out: dir.clone(),
+            })
+        };
+        // an option no tracker takes, a sweep over two trackers: refused
+        // before anything is written
+        let err = run(&["mad"], &[("no_such_key", "1")], None).unwrap_err();
+        assert!(err.contains("no_such_key"), "{err}");
+        let err = run(&["mad", "ncc-scale"], &[], Some(("scale_step", &["1.02"]))).unwrap_err();
+        assert!(err.contains("runs one tracker"), "{err}");
+        assert!(!dir.exists());
+        run(&["mad"], &[], None).unwrap();
+        let csv = std::fs::read_to_string(dir.join("results/results.csv")).unwrap();
+        assert_eq!(csv.lines().count(), 1 + 14, "{csv}");
+        assert!(csv.contains("\nfull-occlusion-gray,mad,"), "{csv}");
+        run(&["ncc-scale"], &[], Some(("scale_step", &["1.02", "1.05"]))).unwrap();
+        for v in ["1.02", "1.05"] {
+            assert!(
+                dir.join(format!("sweep/scale_step={v}/results.csv"))
+                    .is_file()
+            );
+        }
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -12,7 +12,9 @@
 //! - one module per experiment: [`hikpf`] (paper 000), [`ball`] (paper
 //!   001), [`affine`] (paper 002), [`condensation`] (paper 003),
 //!   [`correlation`] (paper 004);
-//! - [`scenes`]: the seeded synthetic scenes and their registry.
+//! - [`scenes`]: the seeded synthetic scenes and their registry;
+//! - [`stress`]: the synthetic stress set (occlusion, scale, fast motion,
+//!   illumination, clutter) on which tracker parameters are chosen.
 //!
 //! Sequences, metrics and the tracking loop come from `bayestrack-otb`.
 
@@ -25,6 +27,7 @@ pub mod experiment;
 pub mod hikpf;
 mod registry;
 pub mod scenes;
+pub mod stress;
 
 pub use driver::{Paper, Shard};
 pub use experiment::{Experiment, ExperimentError, Mode, RunOptions};

@@ -72,6 +72,10 @@ pub struct SuiteOptions {
     pub trackers: Vec<&'static TrackerInfo>,
     /// Seed given to every tracker.
     pub seed: u64,
+    /// `key=value` options given to every tracker (applied in order over
+    /// its defaults, as `bayestrack track --set` gives them; empty: the
+    /// defaults). A key a tracker does not take fails its cells.
+    pub set: Vec<(String, String)>,
     /// Output folder.
     pub out: PathBuf,
     /// Print one line per tracker and sequence on stderr ([`run_suite`];
@@ -247,6 +251,33 @@ impl Cell {
             Err(e @ CellError::Failed(_)) => format!("{seq:<12} {tracker:<20} failed: {e}"),
             Err(e) => format!("{seq:<12} {tracker:<20} {e}"),
         }
+    }
+}
+
+/// A tracker's mean scores over the sequences it finished
+/// ([`SuiteReport::mean`]): each sequence counts once, whatever its length.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MeanScore {
+    /// Mean success rate at IoU 0.5.
+    pub success_rate_50: f64,
+    /// Mean area under the success curve.
+    pub auc: f64,
+    /// Mean precision at 20 px.
+    pub precision_20: f64,
+    /// Mean fps.
+    pub fps: f64,
+    /// Number of sequences finished.
+    pub sequences: usize,
+}
+
+impl std::fmt::Display for MeanScore {
+    /// `SR@0.5 / AUC / P@20 / fps`, as the suite's table prints a cell.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{:.3} / {:.3} / {:.3} / {:.0}",
+            self.success_rate_50, self.auc, self.precision_20, self.fps
+        )
     }
 }
 
@@ -791,7 +822,7 @@ fn run_cell(
     let partial = crate::write::partial_path(&boxes);
     let mut file = BoxFile::create(&partial).map_err(|e| CellError::Failed(e.to_string()))?;
     let mut tracker = info
-        .build(options.seed)
+        .build_with(options.seed, &options.set)
         .map_err(|e| CellError::Failed(e.to_string()))?;
     let mut run = track_source(
         tracker.as_mut(),
@@ -850,9 +881,9 @@ impl SuiteReport {
             .collect()
     }
 
-    /// Mean AUC, P@20 and fps of `tracker` over the sequences it finished
-    /// (`None` if it finished none), with the number finished.
-    pub fn mean(&self, tracker: &str) -> Option<(f64, f64, f64, usize)> {
+    /// Mean scores of `tracker` over the sequences it finished (`None` if
+    /// it finished none).
+    pub fn mean(&self, tracker: &str) -> Option<MeanScore> {
         let done: Vec<&CellScore> = self
             .cells
             .iter()
@@ -864,38 +895,40 @@ impl SuiteReport {
         }
         let n = done.len() as f64;
         let avg = |f: fn(&CellScore) -> f64| done.iter().map(|c| f(c)).sum::<f64>() / n;
-        Some((
-            avg(|c| c.score.auc),
-            avg(|c| c.score.precision_20),
-            avg(|c| c.fps),
-            done.len(),
-        ))
+        Some(MeanScore {
+            success_rate_50: avg(|c| c.score.success_rate_50),
+            auc: avg(|c| c.score.auc),
+            precision_20: avg(|c| c.score.precision_20),
+            fps: avg(|c| c.fps),
+            sequences: done.len(),
+        })
     }
 
-    /// One row per tracker: `AUC / P@20 / fps` per sequence, then the mean
-    /// over sequences.
+    /// One row per tracker: `SR@0.5 / AUC / P@20 / fps` per sequence, then
+    /// the mean over sequences.
     pub fn table(&self) -> Table {
         let mut header = vec!["tracker"];
         header.extend(self.sequences.iter().map(String::as_str));
         header.push("mean");
-        let mut t = Table::new("OTB one-pass evaluation: AUC / P@20 / fps", &header);
+        let mut t = Table::new(
+            "OTB one-pass evaluation: SR@0.5 / AUC / P@20 / fps",
+            &header,
+        );
         for &tracker in &self.trackers {
             let mut row = vec![tracker.to_string()];
             for seq in &self.sequences {
                 row.push(match self.cell(seq, tracker).map(|c| &c.outcome) {
                     Some(Ok(c)) => format!(
-                        "{:.3} / {:.3} / {:.0}",
-                        c.score.auc, c.score.precision_20, c.fps
+                        "{:.3} / {:.3} / {:.3} / {:.0}",
+                        c.score.success_rate_50, c.score.auc, c.score.precision_20, c.fps
                     ),
                     Some(Err(e)) => e.label(),
                     None => "failed".into(),
                 });
             }
             row.push(match self.mean(tracker) {
-                Some((auc, p, fps, n)) if n == self.sequences.len() => {
-                    format!("{auc:.3} / {p:.3} / {fps:.0}")
-                }
-                Some((auc, p, fps, n)) => format!("{auc:.3} / {p:.3} / {fps:.0} ({n} seq.)"),
+                Some(m) if m.sequences == self.sequences.len() => m.to_string(),
+                Some(m) => format!("{m} ({} seq.)", m.sequences),
                 None if self.failures().iter().any(|c| c.tracker == tracker) => "failed".into(),
                 // every cell of the tracker is n/a
                 None => "n/a".into(),
@@ -1242,6 +1275,58 @@ mod tests {
             path: PathBuf::from("0001.jpg"),
             source: Box::new(source),
         }
+    }
+
+    /// The table's cells are SR@0.5 / AUC / P@20 / fps, and the mean row
+    /// averages each over the sequences (each sequence once).
+    #[test]
+    fn the_table_gives_sr_auc_precision_and_fps_and_their_means() {
+        let gt = BBox::new(1.0, 1.0, 10.0, 10.0);
+        let cell = |sequence: &str, boxes: &[BBox], fps: f64| Cell {
+            sequence: sequence.into(),
+            tracker: "t",
+            outcome: Ok(CellScore {
+                score: score_otb(boxes, &vec![Some(gt); boxes.len()]).unwrap(),
+                fps,
+                lost_frames: 0,
+            }),
+        };
+        // a: IoUs 1 and 1/3 (SR 0.5); b: IoU 1 / 0.5 / 0 (SR 1/3)
+        let a = cell("a", &[gt, BBox::new(6.0, 1.0, 10.0, 10.0)], 100.0);
+        let b = cell(
+            "b",
+            &[
+                gt,
+                BBox::new(1.0, 1.0, 20.0, 10.0),
+                BBox::new(40.0, 1.0, 10.0, 10.0),
+            ],
+            300.0,
+        );
+        let report = SuiteReport {
+            sequences: vec!["a".into(), "b".into()],
+            frames: vec![2, 3],
+            published: None,
+            trackers: vec!["t"],
+            cells: vec![a, b],
+        };
+        let t = report.table();
+        assert_eq!(
+            t.title,
+            "OTB one-pass evaluation: SR@0.5 / AUC / P@20 / fps"
+        );
+        let (sa, sb) = (1.0 / 2.0, 1.0 / 3.0);
+        let auc_a = (20.0 + 7.0) / 42.0; // 1 passes 20 of the 21, 1/3 passes 7
+        let auc_b = (20.0 + 10.0) / 63.0;
+        assert_eq!(t.rows[0][1], format!("0.500 / {auc_a:.3} / 1.000 / 100"));
+        assert_eq!(t.rows[0][2], format!("0.333 / {auc_b:.3} / 0.667 / 300"));
+        let m = report.mean("t").unwrap();
+        assert_eq!(m.success_rate_50, (sa + sb) / 2.0);
+        assert!((m.auc - (auc_a + auc_b) / 2.0).abs() < 1e-12);
+        assert_eq!((m.fps, m.sequences), (200.0, 2));
+        assert_eq!(
+            t.rows[0][3],
+            format!("0.417 / {:.3} / 0.833 / 200", (auc_a + auc_b) / 2.0)
+        );
     }
 
     #[test]

@@ -88,6 +88,7 @@ fn options(out: PathBuf, shard: Option<Shard>) -> SuiteOptions {
             .map(|n| tracker_info(n).unwrap())
             .collect(),
         seed: 7,
+        set: Vec::new(),
         out,
         progress: false,
         published: Some(published),

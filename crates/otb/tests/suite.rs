@@ -58,6 +58,7 @@ fn a_finished_suite_replaces_the_previous_results_and_leaves_nothing_partial() {
     let options = SuiteOptions {
         trackers: vec![tracker_info("mad").unwrap()],
         seed: 0,
+        set: Vec::new(),
         out: out.clone(),
         progress: false,
         published: None,
@@ -82,6 +83,21 @@ fn a_finished_suite_replaces_the_previous_results_and_leaves_nothing_partial() {
     );
     let boxes = std::fs::read_to_string(out.join("boxes/mad/square.txt")).unwrap();
     assert_eq!(boxes.lines().count(), 3);
+    // our own table: SR@0.5 / AUC / P@20 / fps per sequence and the mean
+    let c = report.cells[0].outcome.as_ref().unwrap();
+    let cell = format!(
+        "{:.3} / {:.3} / {:.3} / {:.0}",
+        c.score.success_rate_50, c.score.auc, c.score.precision_20, c.fps
+    );
+    let md = std::fs::read_to_string(out.join("results.md")).unwrap();
+    assert!(
+        md.contains("OTB one-pass evaluation: SR@0.5 / AUC / P@20 / fps"),
+        "{md}"
+    );
+    assert!(md.contains(&format!("| mad | {cell} | {cell} |")), "{md}");
+    let mean = report.mean("mad").unwrap();
+    assert_eq!(mean.success_rate_50, c.score.success_rate_50);
+    assert_eq!((mean.auc, mean.sequences), (c.score.auc, 1));
     std::fs::remove_dir_all(&root).unwrap();
 }
 
@@ -104,6 +120,7 @@ fn published_results_sit_beside_ours_in_the_table_and_the_plot() {
     let options = SuiteOptions {
         trackers: vec![tracker_info("mad").unwrap()],
         seed: 0,
+        set: Vec::new(),
         out: root.join("out"),
         progress: false,
         published: Some(published),
@@ -257,6 +274,7 @@ fn a_gray_frame_in_a_colour_sequence_is_converted_as_the_cli_does() {
     let options = SuiteOptions {
         trackers: bayestrack_trackers::REGISTRY.iter().collect(),
         seed: 0,
+        set: Vec::new(),
         out: root.join("out"),
         progress: false,
         published: None,

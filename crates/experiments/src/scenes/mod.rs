@@ -49,7 +49,7 @@
 mod affine_patch;
 mod ball_screen;
 mod registry;
-mod render;
+pub(crate) mod render;
 mod road;
 mod webcam;
 mod write;
