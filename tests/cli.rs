@@ -1144,3 +1144,107 @@ fn unclear_errors_name_the_real_cause() {
     assert!(err.contains("1e300"), "{err}");
     assert!(!err.contains("0000000000"), "{err}");
 }
+
+#[test]
+fn decoding_ahead_or_in_turn_writes_the_same_boxes() {
+    let dir = tmpdir("ahead");
+    write_sequence(&dir, 24, 24);
+    fs::write(dir.join("img/0009.png"), b"not a png at all").unwrap();
+    let seq = dir.to_str().unwrap();
+    for tracker in ["mad", "ncc-scale", "pf-correlation"] {
+        let mut first: Option<(String, String)> = None;
+        for depth in ["0", "1", "4", "64"] {
+            let out = dir.join(format!("{tracker}-{depth}.txt"));
+            let o = bayestrack(&[
+                "track",
+                "--seq",
+                seq,
+                "--tracker",
+                tracker,
+                "--seed",
+                "7",
+                "--on-bad-frame",
+                "skip",
+                "--decode-ahead",
+                depth,
+                "--out",
+                out.to_str().unwrap(),
+            ]);
+            let err = stderr(&o);
+            assert!(o.status.success(), "{tracker} {depth}: {err}");
+            assert!(err.contains("skipped frame 9"), "{err}");
+            assert!(err.contains("fps whole run"), "{err}");
+            let boxes = fs::read_to_string(&out).unwrap();
+            assert_eq!(boxes.lines().count(), 24);
+            // the summary without its fps figures
+            let score = err
+                .lines()
+                .filter(|l| !l.contains("fps"))
+                .collect::<Vec<_>>()
+                .join("\n");
+            match &first {
+                None => first = Some((boxes, score)),
+                Some((b, s)) => {
+                    assert_eq!(&boxes, b, "{tracker}: boxes with --decode-ahead {depth}");
+                    assert_eq!(&score, s, "{tracker}: messages with --decode-ahead {depth}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn a_bad_frame_stops_at_the_same_box_whether_decoded_ahead_or_not() {
+    let dir = tmpdir("ahead-bad");
+    write_sequence(&dir, 40, 40);
+    fs::write(dir.join("img/0017.png"), b"not a png at all").unwrap();
+    let seq = dir.to_str().unwrap();
+    for depth in ["0", "1", "4"] {
+        let out = dir.join(format!("boxes-{depth}.txt"));
+        let o = bayestrack(&[
+            "track",
+            "--seq",
+            seq,
+            "--decode-ahead",
+            depth,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(err.contains("0017.png"), "{err}");
+        assert!(err.contains("the 16 boxes before it are in"), "{err}");
+        assert_eq!(lines(&out), 16, "--decode-ahead {depth}");
+    }
+}
+
+#[test]
+fn a_tracker_that_fails_early_ends_the_run_while_frames_are_decoded_ahead() {
+    // The tracker refuses frame 3 (another size); 400 frames follow, which
+    // the decoding thread must not go on decoding, nor hang on.
+    let dir = tmpdir("ahead-fail");
+    write_sequence(&dir, 3, 3);
+    write_png(dir.join("img/0003.png"), frame(90, 60, 14, 20).view()).unwrap();
+    let later = frame(80, 60, 30, 20);
+    for k in 4..=403 {
+        write_png(dir.join(format!("img/{k:04}.png")), later.view()).unwrap();
+    }
+    let out = dir.join("boxes.txt");
+    for depth in ["1", "4"] {
+        let o = bayestrack(&[
+            "track",
+            "--seq",
+            dir.to_str().unwrap(),
+            "--init",
+            "11,21,12,12",
+            "--decode-ahead",
+            depth,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(err.contains("frame 3") && err.contains("90x60"), "{err}");
+        assert_eq!(lines(&out), 2);
+    }
+}

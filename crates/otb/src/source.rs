@@ -11,12 +11,15 @@
 //! [`Y4mSource`] (YUV4MPEG2 from standard input or a file) and
 //! [`VideoSource`] (any video file, decoded by piping it through an
 //! `ffmpeg` executable). [`Select`] runs any of them on a range of frames
-//! and on every Nth frame.
+//! and on every Nth frame. [`DecodeAhead`] runs any of them on a second
+//! thread a few frames ahead of the loop, so that decoding overlaps
+//! tracking (same frames, same order, same errors).
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStdout, Command, Stdio};
-use std::thread::JoinHandle;
+use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
+use std::thread::{JoinHandle, Scope};
 
 use bayestrack_image::{Image, ImageError};
 
@@ -560,5 +563,273 @@ impl<S: FrameSource + ?Sized> FrameSource for Box<S> {
 
     fn skip_frame(&mut self) -> Option<Result<(), OtbError>> {
         (**self).skip_frame()
+    }
+}
+
+/// One item a [`DecodeAhead`] thread hands over: what the source's `next`
+/// returned, and what its `remaining` said right after.
+struct Ahead {
+    item: Option<Result<Frame, OtbError>>,
+    remaining: Option<usize>,
+}
+
+/// A source decoded on a second thread, up to `depth` frames ahead of the
+/// loop that pulls them (a bounded queue: memory stays at `depth + 2`
+/// frames whatever the length of the source).
+///
+/// The frames, their order, their errors and the end of the stream are
+/// those of the wrapped source, item for item: a frame that does not
+/// decode comes out as the same error at the same place, after the frames
+/// before it. Only the time moves: the next frames are decoded while the
+/// caller tracks this one, so on a machine with two cores decoding no
+/// longer adds to the time of a run.
+///
+/// The thread is scoped ([`std::thread::scope`]), so the source may borrow
+/// (a [`FolderSource`] borrows its sequence). When the `DecodeAhead` is
+/// dropped (the run ended, failed or stopped early) the thread stops at
+/// its next hand-over: after the frame it is decoding, with at most
+/// `depth + 1` frames decoded for nothing. A source that blocks (standard
+/// input with no writer) holds the end of the scope until it delivers or
+/// ends.
+///
+/// ```
+/// use bayestrack_otb::{DecodeAhead, Frame, FrameSource, OtbError};
+/// # use bayestrack_image::Image;
+/// # struct Numbers(usize);
+/// # impl Iterator for Numbers {
+/// #     type Item = Result<Frame, OtbError>;
+/// #     fn next(&mut self) -> Option<Self::Item> {
+/// #         (self.0 < 5).then(|| {
+/// #             self.0 += 1;
+/// #             Ok(Frame { number: self.0, name: format!("frame {}", self.0),
+/// #                        image: Image::new(4, 4, 1, 0u8).unwrap() })
+/// #         })
+/// #     }
+/// # }
+/// # impl FrameSource for Numbers {
+/// #     fn describe(&self) -> String { "numbers".into() }
+/// #     fn remaining(&self) -> Option<usize> { Some(5 - self.0) }
+/// # }
+/// let numbers: Vec<usize> = std::thread::scope(|scope| {
+///     let ahead = DecodeAhead::new(scope, Numbers(0), 2);
+///     ahead.map(|f| f.unwrap().number).collect()
+/// });
+/// assert_eq!(numbers, [1, 2, 3, 4, 5]);
+/// ```
+pub struct DecodeAhead {
+    frames: Receiver<Ahead>,
+    describe: String,
+    remaining: Option<usize>,
+    ended: bool,
+}
+
+impl std::fmt::Debug for DecodeAhead {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("DecodeAhead")
+            .field("source", &self.describe)
+            .field("remaining", &self.remaining)
+            .finish_non_exhaustive()
+    }
+}
+
+impl DecodeAhead {
+    /// Starts decoding `source` on a thread of `scope`, at most `depth`
+    /// frames ahead (a `depth` of 0 counts as 1: the thread decodes the
+    /// next frame while the caller works on this one).
+    pub fn new<'scope, 'env, S>(
+        scope: &'scope Scope<'scope, 'env>,
+        mut source: S,
+        depth: usize,
+    ) -> Self
+    where
+        S: FrameSource + Send + 'scope,
+    {
+        let describe = source.describe();
+        let remaining = source.remaining();
+        let (tx, rx) = sync_channel(depth.max(1));
+        scope.spawn(move || decode_into(&mut source, &tx));
+        Self {
+            frames: rx,
+            describe,
+            remaining,
+            ended: false,
+        }
+    }
+}
+
+/// The decoding thread's loop: every item of `source` into `tx`, up to
+/// the end of the source or until the receiver is gone.
+fn decode_into(source: &mut dyn FrameSource, tx: &SyncSender<Ahead>) {
+    loop {
+        let item = source.next();
+        let end = item.is_none();
+        let remaining = source.remaining();
+        if tx.send(Ahead { item, remaining }).is_err() || end {
+            return;
+        }
+    }
+}
+
+impl Iterator for DecodeAhead {
+    type Item = Result<Frame, OtbError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.ended {
+            return None;
+        }
+        // The thread ends only after handing over the end of the source,
+        // or by panicking (which the scope passes on when it joins).
+        let Ok(Ahead { item, remaining }) = self.frames.recv() else {
+            self.ended = true;
+            return None;
+        };
+        self.remaining = remaining;
+        self.ended = item.is_none();
+        item
+    }
+}
+
+impl FrameSource for DecodeAhead {
+    fn describe(&self) -> String {
+        self.describe.clone()
+    }
+
+    fn remaining(&self) -> Option<usize> {
+        self.remaining
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+
+    use super::*;
+
+    /// Frames `1..=len` (4x3 gray, every pixel its number), a decode error
+    /// at the numbers in `bad`; counts the items it produced.
+    struct Counted {
+        len: usize,
+        bad: Vec<usize>,
+        next: usize,
+        made: Arc<AtomicUsize>,
+    }
+
+    impl Counted {
+        fn new(len: usize, bad: &[usize]) -> Self {
+            Self {
+                len,
+                bad: bad.to_vec(),
+                next: 0,
+                made: Arc::new(AtomicUsize::new(0)),
+            }
+        }
+    }
+
+    impl Iterator for Counted {
+        type Item = Result<Frame, OtbError>;
+
+        fn next(&mut self) -> Option<Self::Item> {
+            if self.next == self.len {
+                return None;
+            }
+            self.next += 1;
+            self.made.fetch_add(1, Ordering::SeqCst);
+            let n = self.next;
+            let path = PathBuf::from(format!("{n:04}.png"));
+            Some(if self.bad.contains(&n) {
+                Err(OtbError::Frame {
+                    index: n - 1,
+                    path,
+                    source: Box::new(ImageError::Truncated {
+                        path: format!("{n:04}.png").into(),
+                        format: "PNG".to_string(),
+                    }),
+                })
+            } else {
+                Ok(Frame {
+                    number: n,
+                    name: format!("{n:04}.png"),
+                    image: Image::new(4, 3, 1, n as u8).unwrap(),
+                })
+            })
+        }
+    }
+
+    impl FrameSource for Counted {
+        fn describe(&self) -> String {
+            "counted".to_string()
+        }
+
+        fn remaining(&self) -> Option<usize> {
+            Some(self.len - self.next)
+        }
+    }
+
+    /// Each item as text (frame or error) with the source's `remaining`
+    /// after it, then the end.
+    fn drain(source: &mut dyn FrameSource) -> Vec<String> {
+        let mut seen = vec![format!("{} {:?}", source.describe(), source.remaining())];
+        loop {
+            let item = source.next();
+            let end = item.is_none();
+            let text = match item {
+                None => "end".to_string(),
+                Some(Ok(f)) => format!("{} {} {:?}", f.number, f.name, f.image),
+                Some(Err(e)) => format!("error: {e}"),
+            };
+            seen.push(format!("{text}, remaining {:?}", source.remaining()));
+            if end {
+                return seen;
+            }
+        }
+    }
+
+    #[test]
+    fn decoding_ahead_gives_the_same_items_in_the_same_order() {
+        for (len, bad) in [
+            (0, vec![]),
+            (1, vec![]),
+            (7, vec![3]),
+            (40, vec![1, 2, 20, 40]),
+        ] {
+            let want = drain(&mut Counted::new(len, &bad));
+            assert_eq!(want.len(), len + 2);
+            for depth in [0, 1, 2, 8, 100] {
+                let got = std::thread::scope(|scope| {
+                    drain(&mut DecodeAhead::new(scope, Counted::new(len, &bad), depth))
+                });
+                assert_eq!(got, want, "{len} frames, bad {bad:?}, depth {depth}");
+            }
+        }
+        // Through a selection, as the CLI runs it.
+        let pick = FrameSelection::parse(Some("3..20"), 4).unwrap();
+        let want = drain(&mut Select::new(Counted::new(30, &[7, 11]), pick));
+        let got = std::thread::scope(|scope| {
+            let inner = Select::new(Counted::new(30, &[7, 11]), pick);
+            drain(&mut DecodeAhead::new(scope, inner, 2))
+        });
+        assert_eq!(got, want);
+    }
+
+    #[test]
+    fn a_loop_that_stops_early_stops_the_decoding_thread() {
+        for depth in [1, 3] {
+            let source = Counted::new(10_000, &[]);
+            let made = Arc::clone(&source.made);
+            std::thread::scope(|scope| {
+                let mut ahead = DecodeAhead::new(scope, source, depth);
+                for n in 1..=3 {
+                    assert_eq!(ahead.next().unwrap().unwrap().number, n);
+                }
+                // dropped here: the scope joins the thread, which must end
+            });
+            // three taken, `depth` queued, one decoded and refused
+            let made = made.load(Ordering::SeqCst);
+            assert!(
+                made <= 3 + depth + 1,
+                "depth {depth}: {made} frames decoded"
+            );
+        }
     }
 }
