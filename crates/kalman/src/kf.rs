@@ -7,10 +7,13 @@ use nalgebra::{SMatrix, SVector};
 use crate::error::{KalmanError, Result, Step};
 use crate::gaussian::Gaussian;
 use crate::linalg;
-use crate::model::{DynamicsJacobian, LinearDynamics, LinearMeasurement, MeasurementJacobian};
+use crate::model::{
+    self, DynamicsJacobian, LinearDynamics, LinearMeasurement, MeasurementJacobian,
+};
 use crate::update::{CovarianceUpdate, Update, gain_step};
 
-/// `F x, F P F^T + Q`, symmetrised and checked.
+/// `F x, F P F^T + Q` for a symmetric `Q` (only its lower triangle is
+/// read), exactly symmetric and checked.
 #[inline]
 fn linear_predict<const N: usize>(
     mean: SVector<f64, N>,
@@ -18,12 +21,7 @@ fn linear_predict<const N: usize>(
     p: &SMatrix<f64, N, N>,
     q: &SMatrix<f64, N, N>,
 ) -> Result<Gaussian<N>> {
-    let cov = linalg::mirror_lower(linalg::lower_mul_t_add(
-        &linalg::symmetrize(q),
-        1.0,
-        &linalg::mul(f, p),
-        f,
-    ));
+    let cov = linalg::mirror_lower(linalg::lower_mul_t_add(q, 1.0, &linalg::mul(f, p), f));
     linalg::check_finite_belief(
         &mean,
         "predicted mean",
@@ -109,7 +107,7 @@ impl Kf {
         model: &LinearMeasurement<N, M>,
         z: Option<&SVector<f64, M>>,
     ) -> Result<Update<N, M>> {
-        // R was checked when the model was built
+        // R was checked and symmetrised when the model was built
         Ekf::new(self.covariance_update).update_with(prior, model, model.noise(), z)
     }
 
@@ -182,8 +180,7 @@ impl Ekf {
     ) -> Result<Gaussian<N>> {
         let f = dynamics.jacobian(prior.mean());
         linalg::check_finite_mat(&f, "Jacobian F", Step::Predict)?;
-        let q = dynamics.process_noise();
-        linalg::check_noise(&q, "process noise Q", Step::Predict)?;
+        let q = model::process_noise(dynamics, Step::Predict)?;
         linear_predict(dynamics.propagate(prior.mean()), &f, prior.cov(), &q)
     }
 
@@ -205,12 +202,12 @@ impl Ekf {
         if z.is_none() {
             return Ok(Update::missing(prior));
         }
-        let r = measurement.measurement_noise();
-        linalg::check_noise(&r, "measurement noise R", Step::Update)?;
+        let r = model::measurement_noise(measurement)?;
         self.update_with(prior, measurement, &r, z)
     }
 
-    /// [`Ekf::update`] with the measurement noise `r` already checked.
+    /// [`Ekf::update`] with the measurement noise `r` already checked and
+    /// symmetrised.
     #[inline(always)]
     fn update_with<const N: usize, const M: usize, H: MeasurementJacobian<N, M>>(
         &self,
@@ -345,8 +342,7 @@ impl Iekf {
         check_measurement(z)?;
         linalg::check_finite_vec(x0, "linearisation point", Step::Update)?;
         let xf = prior.mean();
-        let r = measurement.measurement_noise();
-        linalg::check_noise(&r, "measurement noise R", Step::Update)?;
+        let r = model::measurement_noise(measurement)?;
         let mut xi = *x0;
         let mut iterations = 0;
         loop {

@@ -21,7 +21,7 @@ pub use hybrid::{HybridPrior, HybridStep, HybridUkfIekf};
 pub use kf::{Ekf, Iekf, Kf};
 pub use model::{
     Additive, Dynamics, DynamicsJacobian, LinearDynamics, LinearMeasurement, Measurement,
-    MeasurementJacobian, NoisyDynamics, NoisyMeasurement,
+    MeasurementJacobian, NoiseCovariance, NoisyDynamics, NoisyMeasurement,
 };
 pub use motion::{NoiseModel, white_noise};
 pub use ukf::{Ukf, UkfStep};

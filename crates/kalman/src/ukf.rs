@@ -19,7 +19,7 @@ use nalgebra::{SMatrix, SVector};
 use crate::error::{KalmanError, Result, Step};
 use crate::gaussian::Gaussian;
 use crate::linalg;
-use crate::model::{Dynamics, Measurement, NoisyDynamics, NoisyMeasurement};
+use crate::model::{self, Dynamics, Measurement, NoisyDynamics, NoisyMeasurement};
 use crate::update::{Innovation, Update};
 
 /// Scaled unscented transform parameters and the filter built on them.
@@ -564,8 +564,7 @@ impl Ukf {
         prior: &Gaussian<N>,
         dynamics: &D,
     ) -> Result<Gaussian<N>> {
-        let q = dynamics.process_noise();
-        linalg::check_noise(&q, "process noise Q", Step::Predict)?;
+        let q = model::process_noise(dynamics, Step::Predict)?;
         let mo = self.transform(
             prior,
             &none::<0>(),
@@ -596,8 +595,7 @@ impl Ukf {
         let Some(z) = z else {
             return Ok(Update::missing(prior));
         };
-        let r = measurement.measurement_noise();
-        linalg::check_noise(&r, "measurement noise R", Step::Update)?;
+        let r = model::measurement_noise(measurement)?;
         let mo = self.transform(
             prior,
             &none::<0>(),
@@ -643,9 +641,8 @@ impl Ukf {
                 update: Update::missing(&predicted),
             });
         };
-        let (q, r) = (dynamics.process_noise(), measurement.measurement_noise());
-        linalg::check_noise(&q, "process noise Q", Step::Predict)?;
-        linalg::check_noise(&r, "measurement noise R", Step::Update)?;
+        let q = model::process_noise(dynamics, Step::Predict)?;
+        let r = model::measurement_noise(measurement)?;
         self.joint(
             prior,
             &none::<0>(),
@@ -771,8 +768,7 @@ impl Ukf {
         filtered: &[Gaussian<N>],
         dynamics: &D,
     ) -> Result<Vec<Gaussian<N>>> {
-        let q = dynamics.process_noise();
-        linalg::check_noise(&q, "process noise Q", Step::Smooth)?;
+        let q = model::process_noise(dynamics, Step::Smooth)?;
         let space = StateSpace(dynamics);
         let residual = |a: &SVector<f64, N>, b: &SVector<f64, N>| space.residual(a, b);
         crate::smoother::rts_backward(filtered, residual, |_, g| {
