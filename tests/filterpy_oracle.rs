@@ -196,7 +196,7 @@ fn kf_and_rts_smoother_match_filterpy() {
     let mut belief = Gaussian::<4>::new(vector(&c.params["x0"]), matrix(&c.params["P0"])).unwrap();
     let mut filtered = vec![];
     for (k, rec) in c.steps.iter().enumerate() {
-        let prior = kf.predict(&belief, &dynamics, None).unwrap();
+        let prior = kf.predict(&belief, &dynamics).unwrap();
         let upd = kf
             .update(&prior, &sensor, measurement::<2>(rec).as_ref())
             .unwrap();

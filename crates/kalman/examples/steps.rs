@@ -123,7 +123,7 @@ fn main() {
             let mut belief =
                 Gaussian::new(Vector4::new(0.0, 0.0, 1.0, 0.5), Matrix4::identity()).unwrap();
             for k in 0..n {
-                let prior = kf.predict(&belief, &dynamics, None).unwrap();
+                let prior = kf.predict(&belief, &dynamics).unwrap();
                 let u = black_box(kf.update(&prior, &sensor, Some(&zs[k & 63])).unwrap());
                 belief = u.posterior;
             }

@@ -54,7 +54,7 @@ fn check_measurement<const M: usize>(z: &SVector<f64, M>) -> Result<()> {
 /// let kf = Kf::default();
 /// let mut belief = Gaussian::new(Vector2::zeros(), Matrix2::identity())?;
 /// for z in [0.1, 0.22, 0.29] {
-///     let prior = kf.predict(&belief, &dynamics, None)?;
+///     let prior = kf.predict(&belief, &dynamics)?;
 ///     let update = kf.update(&prior, &sensor, Some(&Vector1::new(z)))?;
 ///     assert!(update.innovation.unwrap().nis >= 0.0);
 ///     belief = update.posterior;
@@ -73,23 +73,36 @@ impl Kf {
         Self { covariance_update }
     }
 
-    /// Time update `x = F x + B u`, `P = F P F^T + Q`.
+    /// Time update `x = F x`, `P = F P F^T + Q` (no control input; see
+    /// [`Kf::predict_with_control`]).
     ///
     /// # Errors
-    /// [`KalmanError::NonFinite`] for a non-finite control or result.
+    /// [`KalmanError::NonFinite`] for a non-finite result.
     #[inline]
     pub fn predict<const N: usize, const U: usize>(
         &self,
         prior: &Gaussian<N>,
         model: &LinearDynamics<N, U>,
-        control: Option<&SVector<f64, U>>,
     ) -> Result<Gaussian<N>> {
         let f = model.transition();
-        let mut mean = linalg::mul(f, prior.mean());
-        if let Some(u) = control {
-            linalg::check_finite_vec(u, "control input u", Step::Predict)?;
-            mean += model.control() * u;
-        }
+        linear_predict(linalg::mul(f, prior.mean()), f, prior.cov(), model.noise())
+    }
+
+    /// Time update with a control input: `x = F x + B u`,
+    /// `P = F P F^T + Q`.
+    ///
+    /// # Errors
+    /// [`KalmanError::NonFinite`] for a non-finite control or result.
+    #[inline]
+    pub fn predict_with_control<const N: usize, const U: usize>(
+        &self,
+        prior: &Gaussian<N>,
+        model: &LinearDynamics<N, U>,
+        control: &SVector<f64, U>,
+    ) -> Result<Gaussian<N>> {
+        linalg::check_finite_vec(control, "control input u", Step::Predict)?;
+        let f = model.transition();
+        let mean = linalg::mul(f, prior.mean()) + model.control() * control;
         linear_predict(mean, f, prior.cov(), model.noise())
     }
 

@@ -15,7 +15,7 @@ mod update;
 
 pub use consistency::{ChiSquareBand, chi_square_cdf, chi_square_quantile, nees};
 pub use error::{KalmanError, Result, Step};
-pub use filter::KalmanFilter;
+pub use filter::{KalmanFilter, KalmanPredict, KalmanUpdate};
 pub use gaussian::{FactoredGaussian, Gaussian};
 pub use hybrid::{HybridPrior, HybridStep, HybridUkfIekf};
 pub use kf::{Ekf, Iekf, Kf};

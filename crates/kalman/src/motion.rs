@@ -21,7 +21,7 @@
 //! let kf = Kf::default();
 //! let mut belief = Gaussian::new(Vector4::zeros(), nalgebra::Matrix4::identity())?;
 //! for z in [Vector2::new(0.1, 0.0), Vector2::new(0.19, 0.02)] {
-//!     let prior = kf.predict(&belief, &dynamics, None)?;
+//!     let prior = kf.predict(&belief, &dynamics)?;
 //!     belief = kf.update(&prior, &sensor, Some(&z))?.posterior;
 //! }
 //! assert!(belief.mean()[1] > 0.0); // some velocity along x

@@ -71,11 +71,7 @@ fn a_nan_measurement_is_rejected_by_every_filter() {
     assert!(Gaussian::new(Vector2::new(f64::NAN, 0.0), Matrix2::identity()).is_err());
     assert!(
         Kf::default()
-            .predict(
-                &prior,
-                &dynamics,
-                Some(&nalgebra::SVector::<f64, 0>::zeros())
-            )
+            .predict_with_control(&prior, &dynamics, &nalgebra::SVector::<f64, 0>::zeros())
             .is_ok()
     );
 }

@@ -748,7 +748,11 @@ impl BallCore {
             (BallFilter::Kf | BallFilter::Ukf, Belief::Gaussian(g)) => {
                 let predicted = if self.filter == BallFilter::Kf {
                     let dynamics = LinearDynamics::with_control(f, b, q)?;
-                    Kf::default().predict(g, &dynamics, Some(&SVector::<f64, 1>::new(gravity)))?
+                    Kf::default().predict_with_control(
+                        g,
+                        &dynamics,
+                        &SVector::<f64, 1>::new(gravity),
+                    )?
                 } else {
                     let dynamics = Reflecting {
                         target,
