@@ -1,5 +1,7 @@
 #![doc = include_str!("../README.md")]
 
+mod batch;
+mod closure;
 mod consistency;
 mod error;
 mod filter;
@@ -13,6 +15,8 @@ mod smoother;
 mod ukf;
 mod update;
 
+pub use batch::{Batch, batch_filter};
+pub use closure::{FnDynamics, FnMeasurement, NoJacobian};
 pub use consistency::{ChiSquareBand, chi_square_cdf, chi_square_quantile, nees};
 pub use error::{KalmanError, Result, Step};
 pub use filter::{KalmanFilter, KalmanPredict, KalmanUpdate};
