@@ -8,7 +8,7 @@ shift || true
 filters=${*:-joseph standard ukf ukf_one_set ukf_runtime ukf_runtime_checked}
 cd "$(dirname "$0")/../../.."
 cargo build --release -q -p bayestrack-kalman --example steps
-bin=target/release/examples/steps
+bin=${CARGO_TARGET_DIR:-target}/release/examples/steps
 total() {
     valgrind --tool=callgrind --callgrind-out-file=/dev/null "$bin" "$1" "$2" 2>&1 |
         sed -n 's/.*Collected : \([0-9]*\).*/\1/p'

@@ -22,7 +22,7 @@ fn linear_predict<const N: usize>(
     q: &SMatrix<f64, N, N>,
 ) -> Result<Gaussian<N>> {
     let cov = linalg::mirror_lower(linalg::lower_mul_t_add(q, 1.0, &linalg::mul(f, p), f));
-    linalg::check_finite_belief(
+    linalg::check_finite_sym_belief(
         &mean,
         "predicted mean",
         &cov,
@@ -120,8 +120,8 @@ impl Kf {
         model: &LinearMeasurement<N, M>,
         z: Option<&SVector<f64, M>>,
     ) -> Result<Update<N, M>> {
-        // R was checked and symmetrised when the model was built
-        Ekf::new(self.covariance_update).update_with(prior, model, model.noise(), z)
+        // H and R were checked (R symmetrised) when the model was built
+        Ekf::new(self.covariance_update).update_with(prior, model, model.noise(), z, false)
     }
 
     /// Rauch-Tung-Striebel smoothing of filtered beliefs `x_{k|k}`, k = 0..T-1,
@@ -216,11 +216,12 @@ impl Ekf {
             return Ok(Update::missing(prior));
         }
         let r = model::measurement_noise(measurement)?;
-        self.update_with(prior, measurement, &r, z)
+        self.update_with(prior, measurement, &r, z, true)
     }
 
     /// [`Ekf::update`] with the measurement noise `r` already checked and
-    /// symmetrised.
+    /// symmetrised; `check_jacobian: false` for a constant `H` checked when
+    /// its model was built.
     #[inline(always)]
     fn update_with<const N: usize, const M: usize, H: MeasurementJacobian<N, M>>(
         &self,
@@ -228,6 +229,7 @@ impl Ekf {
         measurement: &H,
         r: &SMatrix<f64, M, M>,
         z: Option<&SVector<f64, M>>,
+        check_jacobian: bool,
     ) -> Result<Update<N, M>> {
         let Some(z) = z else {
             return Ok(Update::missing(prior));
@@ -235,7 +237,9 @@ impl Ekf {
         check_measurement(z)?;
         let x = prior.mean();
         let h = measurement.jacobian(x);
-        linalg::check_finite_mat(&h, "Jacobian H", Step::Update)?;
+        if check_jacobian {
+            linalg::check_finite_mat(&h, "Jacobian H", Step::Update)?;
+        }
         let step = gain_step(
             x,
             prior.cov(),

@@ -69,17 +69,39 @@ pub(crate) fn check_finite_mat<const R: usize, const C: usize>(
     }
 }
 
-/// [`check_finite_vec`] then [`check_finite_mat`], with one fast test for
-/// both (a filter output: mean and covariance).
+/// The sum of the entries of `mean` and of the lower triangle of `cov`, in
+/// two interleaved partial sums: finite exactly when all of them are
+/// (unless the sum overflows), so for an exactly symmetric `cov` a test
+/// that the whole belief is finite.
 #[inline(always)]
-pub(crate) fn check_finite_belief<const D: usize>(
+pub(crate) fn sym_sum<const D: usize>(mean: &SVector<f64, D>, cov: &SMatrix<f64, D, D>) -> f64 {
+    let mut s = lane_sum(mean.as_slice());
+    let mut t = -0.0;
+    for j in 0..D {
+        for i in j..D {
+            if (i + j) % 2 == 0 {
+                s += cov[(i, j)];
+            } else {
+                t += cov[(i, j)];
+            }
+        }
+    }
+    s + t
+}
+
+/// Checks a filter output: [`check_finite_vec`] then [`check_finite_mat`],
+/// with one fast test for both, for a covariance that is exactly symmetric
+/// (the output of [`mirror_lower`]): the mean and the lower triangle are
+/// summed, since the upper triangle is a copy of it.
+#[inline(always)]
+pub(crate) fn check_finite_sym_belief<const D: usize>(
     mean: &SVector<f64, D>,
     mean_what: &'static str,
     cov: &SMatrix<f64, D, D>,
     cov_what: &'static str,
     step: Step,
 ) -> Result<()> {
-    if sum_is_finite(mean.as_slice(), cov.as_slice()) {
+    if sym_sum(mean, cov).is_finite() {
         return Ok(());
     }
     check_finite_vec(mean, mean_what, step)?;
@@ -291,16 +313,6 @@ pub(crate) fn min_diagonal<const D: usize>(a: &SMatrix<f64, D, D>) -> f64 {
         smallest = if x < smallest { x } else { smallest };
     }
     smallest
-}
-
-/// The sum of the entries of `v` and `m` (lane-wise partial sums): finite
-/// exactly when every entry is, unless the sum overflows.
-#[inline(always)]
-pub(crate) fn sum2<const R: usize, const C: usize, const D: usize>(
-    v: &SVector<f64, D>,
-    m: &SMatrix<f64, R, C>,
-) -> f64 {
-    lane_sum(v.as_slice()) + lane_sum(m.as_slice())
 }
 
 /// Checks a noise covariance a model hands a filter at the point of use:

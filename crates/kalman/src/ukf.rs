@@ -514,10 +514,19 @@ impl Ukf {
         let y = ldl.forward(&residual);
         let mean = predicted.mean() + linalg::mul(&v, &y);
         let cov = linalg::mirror_lower(linalg::lower_mul_t_add(predicted.cov(), -1.0, &v, &u));
-        linalg::check_variances(&cov, predicted.cov(), "posterior covariance", Step::Update)?;
+        let innovation = Innovation::unchecked(residual, &y, s, &ldl);
+        // the checks of the outputs in one test (as the KF's gain step):
+        // the exact checks, in order, name a failure
+        let fast_ok = linalg::min_diagonal(&cov) >= linalg::variance_floor(predicted.cov())
+            && (linalg::sym_sum(&mean, &cov) + innovation.log_likelihood).is_finite();
+        if !fast_ok {
+            linalg::check_variances(&cov, predicted.cov(), "posterior covariance", Step::Update)?;
+            Gaussian::checked(mean, cov, Step::Update)?;
+            innovation.check()?;
+        }
         Ok(Update {
-            posterior: Gaussian::checked(mean, cov, Step::Update)?,
-            innovation: Some(Innovation::new(residual, &y, s, &ldl)?),
+            posterior: Gaussian::from_parts(mean, cov),
+            innovation: Some(innovation),
             iterations: 1,
         })
     }

@@ -38,22 +38,9 @@ pub struct Innovation<const M: usize> {
 impl<const M: usize> Innovation<M> {
     /// Derives NIS and log-likelihood from the residual, the factorisation
     /// `S = L D L^T` and the whitened residual `y = L^{-1} nu`
-    /// (`nu^T S^{-1} nu = sum y_j^2 / D_jj`).
-    #[inline(always)]
-    pub(crate) fn new(
-        residual: SVector<f64, M>,
-        whitened: &SVector<f64, M>,
-        covariance: SMatrix<f64, M, M>,
-        ldl: &linalg::Ldl<M>,
-    ) -> Result<Self> {
-        let innovation = Self::unchecked(residual, whitened, covariance, ldl);
-        innovation.check()?;
-        Ok(innovation)
-    }
-
-    /// [`Innovation::new`] without the check; the caller runs
-    /// [`Innovation::check`] (or folds `log_likelihood` into its own test:
-    /// it is finite exactly when both statistics are).
+    /// (`nu^T S^{-1} nu = sum y_j^2 / D_jj`), unchecked: the caller runs [`Innovation::check`] (or
+    /// folds `log_likelihood` into its own test: it is finite exactly when
+    /// both statistics are).
     #[inline(always)]
     pub(crate) fn unchecked(
         residual: SVector<f64, M>,
@@ -176,10 +163,10 @@ pub(crate) fn gain_step<const N: usize, const M: usize>(
     // and the log-likelihood are (the latter only when the NIS is); the
     // exact checks, in order, name the failure
     let fast_ok = linalg::min_diagonal(&new_cov) >= linalg::variance_floor(p)
-        && (linalg::sum2(&new_mean, &new_cov) + innovation.log_likelihood).is_finite();
+        && (linalg::sym_sum(&new_mean, &new_cov) + innovation.log_likelihood).is_finite();
     if !fast_ok {
         linalg::check_variances(&new_cov, p, "posterior covariance", Step::Update)?;
-        linalg::check_finite_belief(
+        linalg::check_finite_sym_belief(
             &new_mean,
             "posterior mean",
             &new_cov,

@@ -1051,10 +1051,10 @@ mod tests {
         )
         .unwrap();
         let lin = Kf::default()
-            .predict(
+            .predict_with_control(
                 &prior,
                 &LinearDynamics::with_control(f, b, q).unwrap(),
-                Some(&SVector::<f64, 1>::new(0.0)),
+                &SVector::<f64, 1>::new(0.0),
             )
             .unwrap();
         let refl = ukf
