@@ -1,6 +1,7 @@
 #![doc = include_str!("../README.md")]
 
 mod batch;
+mod ckf;
 mod closure;
 mod consistency;
 mod error;
@@ -16,6 +17,7 @@ mod ukf;
 mod update;
 
 pub use batch::{Batch, batch_filter};
+pub use ckf::Ckf;
 pub use closure::{FnDynamics, FnMeasurement, NoJacobian};
 pub use consistency::{ChiSquareBand, chi_square_cdf, chi_square_quantile, nees};
 pub use error::{KalmanError, Result, Step};

@@ -265,6 +265,17 @@ impl Ukf {
         Ok(Self { alpha, beta, kappa })
     }
 
+    /// The unscented transform that is the third-degree spherical-radial
+    /// cubature rule: `alpha = 1`, `beta = 0`, `kappa = 0` (see
+    /// [`Ckf`](crate::Ckf)).
+    pub(crate) const fn cubature() -> Self {
+        Self {
+            alpha: 1.0,
+            beta: 0.0,
+            kappa: 0.0,
+        }
+    }
+
     /// `alpha`.
     pub fn alpha(&self) -> f64 {
         self.alpha
