@@ -24,7 +24,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let t = k as f64 * dt;
         let truth = Vector2::new(2.0 * t, 1.0 - 0.5 * t); // 2 m/s right, 0.5 m/s down
         let z = truth + Vector2::new(noise.sample(&mut rng), noise.sample(&mut rng));
-        let prior = kf.predict(&belief, &dynamics, None)?;
+        let prior = kf.predict(&belief, &dynamics)?;
         let update = kf.update(&prior, &sensor, Some(&z))?;
         nis_sum += update.innovation.map_or(0.0, |i| i.nis);
         belief = update.posterior;

@@ -196,7 +196,7 @@ fn kf_and_rts_smoother_match_filterpy() {
     let mut belief = Gaussian::<4>::new(vector(&c.params["x0"]), matrix(&c.params["P0"])).unwrap();
     let mut filtered = vec![];
     for (k, rec) in c.steps.iter().enumerate() {
-        let prior = kf.predict(&belief, &dynamics, None).unwrap();
+        let prior = kf.predict(&belief, &dynamics).unwrap();
         let upd = kf
             .update(&prior, &sensor, measurement::<2>(rec).as_ref())
             .unwrap();
@@ -227,7 +227,7 @@ fn kf_with_control_input_matches_filterpy() {
     let mut belief = Gaussian::<2>::new(vector(&c.params["x0"]), matrix(&c.params["P0"])).unwrap();
     for (k, rec) in c.steps.iter().enumerate() {
         let u = vector::<1>(get(rec, "u"));
-        let prior = kf.predict(&belief, &dynamics, Some(&u)).unwrap();
+        let prior = kf.predict_with_control(&belief, &dynamics, &u).unwrap();
         let upd = kf
             .update(&prior, &sensor, measurement::<1>(rec).as_ref())
             .unwrap();

@@ -90,7 +90,7 @@ impl DisplacementPredictor {
     /// position.
     pub fn predict(&mut self) -> Result<Vector2<f64>> {
         let before = Vector2::new(self.belief.mean()[0], self.belief.mean()[1]);
-        self.belief = self.kf.predict(&self.belief, &self.dynamics, None)?;
+        self.belief = self.kf.predict(&self.belief, &self.dynamics)?;
         Ok(Vector2::new(self.belief.mean()[0], self.belief.mean()[1]) - before)
     }
 

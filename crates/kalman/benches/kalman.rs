@@ -126,7 +126,7 @@ fn bench_kf(c: &mut Criterion) {
             let mut belief = Gaussian::new(x0, p0).unwrap();
             let mut k = 0;
             b.iter(|| {
-                let prior = kf.predict(&belief, &dynamics, None).unwrap();
+                let prior = kf.predict(&belief, &dynamics).unwrap();
                 // the whole Update is kept: innovation, S, NIS and
                 // log-likelihood are not optimised away
                 let u = black_box(kf.update(&prior, &sensor, Some(&zs[k & 63])).unwrap());

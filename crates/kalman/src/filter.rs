@@ -1,5 +1,6 @@
-//! [`KalmanFilter`]: the predict and update steps every filter of the crate
-//! shares, so that user code can be generic over the KF, EKF, IEKF and UKF.
+//! [`KalmanPredict`], [`KalmanUpdate`] and [`KalmanFilter`] (both): the
+//! predict and update steps every filter of the crate shares, so that user
+//! code can be generic over the KF, EKF, IEKF and UKF.
 
 use nalgebra::SVector;
 
@@ -12,18 +13,73 @@ use crate::model::{
 use crate::ukf::Ukf;
 use crate::update::Update;
 
+/// The time update of a Gaussian filter for dynamics `D` on a state of
+/// dimension `N` (the first half of [`KalmanFilter`]).
+///
+/// Separate from the measurement update so that a call names only what it
+/// uses: `KalmanPredict::predict(&kf, &belief, &dynamics)` infers `N` and
+/// `D` from its arguments. The filters' inherent methods have the same
+/// arguments, so method syntax (`kf.predict(&belief, &dynamics)`) gives the
+/// same answer with or without these traits in scope.
+///
+/// ```
+/// use bayestrack_kalman::{
+///     Gaussian, KalmanPredict, KalmanUpdate, Kf, LinearDynamics, LinearMeasurement, Ukf,
+/// };
+/// use nalgebra::{Matrix1, Matrix1x2, Matrix2, Vector1, Vector2};
+///
+/// let dynamics = LinearDynamics::new(Matrix2::new(1.0, 0.1, 0.0, 1.0), Matrix2::identity() * 1e-3)?;
+/// let sensor = LinearMeasurement::new(Matrix1x2::new(1.0, 0.0), Matrix1::new(0.25))?;
+/// let belief = Gaussian::new(Vector2::zeros(), Matrix2::identity())?;
+/// let z = Vector1::new(0.1);
+/// let kf = Kf::default();
+/// // method syntax, with the traits in scope
+/// let prior = kf.predict(&belief, &dynamics)?;
+/// let posterior = kf.update(&prior, &sensor, Some(&z))?.posterior;
+/// // the trait functions, as generic code calls them
+/// assert_eq!(KalmanPredict::predict(&kf, &belief, &dynamics)?, prior);
+/// assert_eq!(KalmanUpdate::update(&kf, &prior, &sensor, Some(&z))?.posterior, posterior);
+/// // every filter the same way
+/// let ukf = Ukf::new(1.0, 2.0, 0.0)?;
+/// let u = ukf.update(&ukf.predict(&belief, &dynamics)?, &sensor, Some(&z))?;
+/// assert!((u.posterior.mean() - posterior.mean()).amax() < 1e-12);
+/// # Ok::<(), bayestrack_kalman::KalmanError>(())
+/// ```
+pub trait KalmanPredict<const N: usize, D> {
+    /// Time update: the belief at `k-1` to the prediction at `k`.
+    ///
+    /// # Errors
+    /// As the filter's inherent `predict`.
+    fn predict(&self, prior: &Gaussian<N>, dynamics: &D) -> Result<Gaussian<N>>;
+}
+
+/// The measurement update of a Gaussian filter for measurements `H` of
+/// dimension `M` on a state of dimension `N` (the second half of
+/// [`KalmanFilter`]).
+pub trait KalmanUpdate<const N: usize, const M: usize, H> {
+    /// Measurement update with `z` (`None` = missing: the prior is returned).
+    ///
+    /// # Errors
+    /// As the filter's inherent `update`.
+    fn update(
+        &self,
+        prior: &Gaussian<N>,
+        measurement: &H,
+        z: Option<&SVector<f64, M>>,
+    ) -> Result<Update<N, M>>;
+}
+
 /// A Gaussian filter for dynamics `D` and measurements `H` on a state of
 /// dimension `N` and measurements of dimension `M`: the stateless
 /// `predict` / `update` pair that [`Kf`], [`Ekf`], [`Iekf`] and [`Ukf`]
 /// implement (the UKF in its additive-noise form, redrawing sigma points
 /// after the prediction).
 ///
-/// Each filter keeps its inherent methods; the trait methods call them.
-/// [`Kf`]'s trait `predict` has no control input (its inherent
-/// [`Kf::predict`] takes one). Where an inherent method of the same name
-/// exists, method-call syntax on the concrete filter picks the inherent one;
-/// generic code bounded by this trait, or `KalmanFilter::predict(&kf, ..)`,
-/// gets the trait's.
+/// Implemented for every filter that implements [`KalmanPredict`] for `D`
+/// and [`KalmanUpdate`] for `H`; its methods are theirs. Each filter keeps
+/// its inherent methods, with the same arguments, and the trait methods
+/// call them: method syntax on a concrete filter and generic code bounded
+/// by this trait give the same answer.
 ///
 /// ```
 /// use bayestrack_kalman::{
@@ -57,34 +113,24 @@ use crate::update::Update;
 /// assert!((kf.mean() - iekf.mean()).amax() < 1e-12);
 /// # Ok::<(), bayestrack_kalman::KalmanError>(())
 /// ```
-pub trait KalmanFilter<const N: usize, const M: usize, D, H> {
-    /// Time update: the belief at `k-1` to the prediction at `k`.
-    ///
-    /// # Errors
-    /// As the filter's inherent `predict`.
-    fn predict(&self, prior: &Gaussian<N>, dynamics: &D) -> Result<Gaussian<N>>;
-
-    /// Measurement update with `z` (`None` = missing: the prior is returned).
-    ///
-    /// # Errors
-    /// As the filter's inherent `update`.
-    fn update(
-        &self,
-        prior: &Gaussian<N>,
-        measurement: &H,
-        z: Option<&SVector<f64, M>>,
-    ) -> Result<Update<N, M>>;
+pub trait KalmanFilter<const N: usize, const M: usize, D, H>:
+    KalmanPredict<N, D> + KalmanUpdate<N, M, H>
+{
 }
 
-impl<const N: usize, const M: usize, const U: usize>
-    KalmanFilter<N, M, LinearDynamics<N, U>, LinearMeasurement<N, M>> for Kf
+impl<const N: usize, const M: usize, D, H, F> KalmanFilter<N, M, D, H> for F where
+    F: KalmanPredict<N, D> + KalmanUpdate<N, M, H>
 {
-    /// [`Kf::predict`] without a control input.
+}
+
+impl<const N: usize, const U: usize> KalmanPredict<N, LinearDynamics<N, U>> for Kf {
     #[inline]
     fn predict(&self, prior: &Gaussian<N>, dynamics: &LinearDynamics<N, U>) -> Result<Gaussian<N>> {
-        Kf::predict(self, prior, dynamics, None)
+        Kf::predict(self, prior, dynamics)
     }
+}
 
+impl<const N: usize, const M: usize> KalmanUpdate<N, M, LinearMeasurement<N, M>> for Kf {
     #[inline]
     fn update(
         &self,
@@ -96,14 +142,14 @@ impl<const N: usize, const M: usize, const U: usize>
     }
 }
 
-impl<const N: usize, const M: usize, D: DynamicsJacobian<N>, H: MeasurementJacobian<N, M>>
-    KalmanFilter<N, M, D, H> for Ekf
-{
+impl<const N: usize, D: DynamicsJacobian<N>> KalmanPredict<N, D> for Ekf {
     #[inline]
     fn predict(&self, prior: &Gaussian<N>, dynamics: &D) -> Result<Gaussian<N>> {
         Ekf::predict(self, prior, dynamics)
     }
+}
 
+impl<const N: usize, const M: usize, H: MeasurementJacobian<N, M>> KalmanUpdate<N, M, H> for Ekf {
     #[inline]
     fn update(
         &self,
@@ -115,14 +161,14 @@ impl<const N: usize, const M: usize, D: DynamicsJacobian<N>, H: MeasurementJacob
     }
 }
 
-impl<const N: usize, const M: usize, D: DynamicsJacobian<N>, H: MeasurementJacobian<N, M>>
-    KalmanFilter<N, M, D, H> for Iekf
-{
+impl<const N: usize, D: DynamicsJacobian<N>> KalmanPredict<N, D> for Iekf {
     #[inline]
     fn predict(&self, prior: &Gaussian<N>, dynamics: &D) -> Result<Gaussian<N>> {
         Iekf::predict(self, prior, dynamics)
     }
+}
 
+impl<const N: usize, const M: usize, H: MeasurementJacobian<N, M>> KalmanUpdate<N, M, H> for Iekf {
     #[inline]
     fn update(
         &self,
@@ -134,14 +180,14 @@ impl<const N: usize, const M: usize, D: DynamicsJacobian<N>, H: MeasurementJacob
     }
 }
 
-impl<const N: usize, const M: usize, D: Dynamics<N>, H: Measurement<N, M>> KalmanFilter<N, M, D, H>
-    for Ukf
-{
+impl<const N: usize, D: Dynamics<N>> KalmanPredict<N, D> for Ukf {
     #[inline]
     fn predict(&self, prior: &Gaussian<N>, dynamics: &D) -> Result<Gaussian<N>> {
         Ukf::predict(self, prior, dynamics)
     }
+}
 
+impl<const N: usize, const M: usize, H: Measurement<N, M>> KalmanUpdate<N, M, H> for Ukf {
     #[inline]
     fn update(
         &self,

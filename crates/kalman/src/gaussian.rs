@@ -43,14 +43,20 @@ impl<const N: usize> Gaussian<N> {
         Self { mean, cov }
     }
 
-    /// Builds a filter output, checking that it is finite.
+    /// Builds a filter output, checking that it is finite; `cov` is
+    /// exactly symmetric (every filter forms one triangle and mirrors it),
+    /// so its lower triangle is what is checked.
     #[inline]
     pub(crate) fn checked(
         mean: SVector<f64, N>,
         cov: SMatrix<f64, N, N>,
         step: Step,
     ) -> Result<Self> {
-        linalg::check_finite_belief(&mean, "mean", &cov, "covariance", step)?;
+        debug_assert!(
+            cov == cov.transpose(),
+            "filter output not exactly symmetric"
+        );
+        linalg::check_finite_sym_belief(&mean, "mean", &cov, "covariance", step)?;
         Ok(Self { mean, cov })
     }
 

@@ -7,10 +7,13 @@ use nalgebra::{SMatrix, SVector};
 use crate::error::{KalmanError, Result, Step};
 use crate::gaussian::Gaussian;
 use crate::linalg;
-use crate::model::{DynamicsJacobian, LinearDynamics, LinearMeasurement, MeasurementJacobian};
+use crate::model::{
+    self, DynamicsJacobian, LinearDynamics, LinearMeasurement, MeasurementJacobian,
+};
 use crate::update::{CovarianceUpdate, Update, gain_step};
 
-/// `F x, F P F^T + Q`, symmetrised and checked.
+/// `F x, F P F^T + Q` for a symmetric `Q` (only its lower triangle is
+/// read), exactly symmetric and checked.
 #[inline]
 fn linear_predict<const N: usize>(
     mean: SVector<f64, N>,
@@ -18,13 +21,8 @@ fn linear_predict<const N: usize>(
     p: &SMatrix<f64, N, N>,
     q: &SMatrix<f64, N, N>,
 ) -> Result<Gaussian<N>> {
-    let cov = linalg::mirror_lower(linalg::lower_mul_t_add(
-        &linalg::symmetrize(q),
-        1.0,
-        &linalg::mul(f, p),
-        f,
-    ));
-    linalg::check_finite_belief(
+    let cov = linalg::mirror_lower(linalg::lower_mul_t_add(q, 1.0, &linalg::mul(f, p), f));
+    linalg::check_finite_sym_belief(
         &mean,
         "predicted mean",
         &cov,
@@ -56,7 +54,7 @@ fn check_measurement<const M: usize>(z: &SVector<f64, M>) -> Result<()> {
 /// let kf = Kf::default();
 /// let mut belief = Gaussian::new(Vector2::zeros(), Matrix2::identity())?;
 /// for z in [0.1, 0.22, 0.29] {
-///     let prior = kf.predict(&belief, &dynamics, None)?;
+///     let prior = kf.predict(&belief, &dynamics)?;
 ///     let update = kf.update(&prior, &sensor, Some(&Vector1::new(z)))?;
 ///     assert!(update.innovation.unwrap().nis >= 0.0);
 ///     belief = update.posterior;
@@ -75,23 +73,36 @@ impl Kf {
         Self { covariance_update }
     }
 
-    /// Time update `x = F x + B u`, `P = F P F^T + Q`.
+    /// Time update `x = F x`, `P = F P F^T + Q` (no control input; see
+    /// [`Kf::predict_with_control`]).
     ///
     /// # Errors
-    /// [`KalmanError::NonFinite`] for a non-finite control or result.
+    /// [`KalmanError::NonFinite`] for a non-finite result.
     #[inline]
     pub fn predict<const N: usize, const U: usize>(
         &self,
         prior: &Gaussian<N>,
         model: &LinearDynamics<N, U>,
-        control: Option<&SVector<f64, U>>,
     ) -> Result<Gaussian<N>> {
         let f = model.transition();
-        let mut mean = linalg::mul(f, prior.mean());
-        if let Some(u) = control {
-            linalg::check_finite_vec(u, "control input u", Step::Predict)?;
-            mean += model.control() * u;
-        }
+        linear_predict(linalg::mul(f, prior.mean()), f, prior.cov(), model.noise())
+    }
+
+    /// Time update with a control input: `x = F x + B u`,
+    /// `P = F P F^T + Q`.
+    ///
+    /// # Errors
+    /// [`KalmanError::NonFinite`] for a non-finite control or result.
+    #[inline]
+    pub fn predict_with_control<const N: usize, const U: usize>(
+        &self,
+        prior: &Gaussian<N>,
+        model: &LinearDynamics<N, U>,
+        control: &SVector<f64, U>,
+    ) -> Result<Gaussian<N>> {
+        linalg::check_finite_vec(control, "control input u", Step::Predict)?;
+        let f = model.transition();
+        let mean = linalg::mul(f, prior.mean()) + model.control() * control;
         linear_predict(mean, f, prior.cov(), model.noise())
     }
 
@@ -109,8 +120,8 @@ impl Kf {
         model: &LinearMeasurement<N, M>,
         z: Option<&SVector<f64, M>>,
     ) -> Result<Update<N, M>> {
-        // R was checked when the model was built
-        Ekf::new(self.covariance_update).update_with(prior, model, model.noise(), z)
+        // H and R were checked (R symmetrised) when the model was built
+        Ekf::new(self.covariance_update).update_with(prior, model, model.noise(), z, false)
     }
 
     /// Rauch-Tung-Striebel smoothing of filtered beliefs `x_{k|k}`, k = 0..T-1,
@@ -182,8 +193,7 @@ impl Ekf {
     ) -> Result<Gaussian<N>> {
         let f = dynamics.jacobian(prior.mean());
         linalg::check_finite_mat(&f, "Jacobian F", Step::Predict)?;
-        let q = dynamics.process_noise();
-        linalg::check_noise(&q, "process noise Q", Step::Predict)?;
+        let q = model::process_noise(dynamics, Step::Predict)?;
         linear_predict(dynamics.propagate(prior.mean()), &f, prior.cov(), &q)
     }
 
@@ -205,12 +215,13 @@ impl Ekf {
         if z.is_none() {
             return Ok(Update::missing(prior));
         }
-        let r = measurement.measurement_noise();
-        linalg::check_noise(&r, "measurement noise R", Step::Update)?;
-        self.update_with(prior, measurement, &r, z)
+        let r = model::measurement_noise(measurement)?;
+        self.update_with(prior, measurement, &r, z, true)
     }
 
-    /// [`Ekf::update`] with the measurement noise `r` already checked.
+    /// [`Ekf::update`] with the measurement noise `r` already checked and
+    /// symmetrised; `check_jacobian: false` for a constant `H` checked when
+    /// its model was built.
     #[inline(always)]
     fn update_with<const N: usize, const M: usize, H: MeasurementJacobian<N, M>>(
         &self,
@@ -218,6 +229,7 @@ impl Ekf {
         measurement: &H,
         r: &SMatrix<f64, M, M>,
         z: Option<&SVector<f64, M>>,
+        check_jacobian: bool,
     ) -> Result<Update<N, M>> {
         let Some(z) = z else {
             return Ok(Update::missing(prior));
@@ -225,7 +237,9 @@ impl Ekf {
         check_measurement(z)?;
         let x = prior.mean();
         let h = measurement.jacobian(x);
-        linalg::check_finite_mat(&h, "Jacobian H", Step::Update)?;
+        if check_jacobian {
+            linalg::check_finite_mat(&h, "Jacobian H", Step::Update)?;
+        }
         let step = gain_step(
             x,
             prior.cov(),
@@ -345,8 +359,7 @@ impl Iekf {
         check_measurement(z)?;
         linalg::check_finite_vec(x0, "linearisation point", Step::Update)?;
         let xf = prior.mean();
-        let r = measurement.measurement_noise();
-        linalg::check_noise(&r, "measurement noise R", Step::Update)?;
+        let r = model::measurement_noise(measurement)?;
         let mut xi = *x0;
         let mut iterations = 0;
         loop {

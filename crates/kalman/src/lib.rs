@@ -1,5 +1,8 @@
 #![doc = include_str!("../README.md")]
 
+mod batch;
+mod ckf;
+mod closure;
 mod consistency;
 mod error;
 mod filter;
@@ -13,15 +16,18 @@ mod smoother;
 mod ukf;
 mod update;
 
+pub use batch::{Batch, batch_filter};
+pub use ckf::Ckf;
+pub use closure::{FnDynamics, FnMeasurement, NoJacobian};
 pub use consistency::{ChiSquareBand, chi_square_cdf, chi_square_quantile, nees};
 pub use error::{KalmanError, Result, Step};
-pub use filter::KalmanFilter;
+pub use filter::{KalmanFilter, KalmanPredict, KalmanUpdate};
 pub use gaussian::{FactoredGaussian, Gaussian};
 pub use hybrid::{HybridPrior, HybridStep, HybridUkfIekf};
 pub use kf::{Ekf, Iekf, Kf};
 pub use model::{
     Additive, Dynamics, DynamicsJacobian, LinearDynamics, LinearMeasurement, Measurement,
-    MeasurementJacobian, NoisyDynamics, NoisyMeasurement,
+    MeasurementJacobian, NoiseCovariance, NoisyDynamics, NoisyMeasurement,
 };
 pub use motion::{NoiseModel, white_noise};
 pub use ukf::{Ukf, UkfStep};

@@ -69,17 +69,39 @@ pub(crate) fn check_finite_mat<const R: usize, const C: usize>(
     }
 }
 
-/// [`check_finite_vec`] then [`check_finite_mat`], with one fast test for
-/// both (a filter output: mean and covariance).
+/// The sum of the entries of `mean` and of the lower triangle of `cov`, in
+/// two interleaved partial sums: finite exactly when all of them are
+/// (unless the sum overflows), so for an exactly symmetric `cov` a test
+/// that the whole belief is finite.
 #[inline(always)]
-pub(crate) fn check_finite_belief<const D: usize>(
+pub(crate) fn sym_sum<const D: usize>(mean: &SVector<f64, D>, cov: &SMatrix<f64, D, D>) -> f64 {
+    let mut s = lane_sum(mean.as_slice());
+    let mut t = -0.0;
+    for j in 0..D {
+        for i in j..D {
+            if (i + j) % 2 == 0 {
+                s += cov[(i, j)];
+            } else {
+                t += cov[(i, j)];
+            }
+        }
+    }
+    s + t
+}
+
+/// Checks a filter output: [`check_finite_vec`] then [`check_finite_mat`],
+/// with one fast test for both, for a covariance that is exactly symmetric
+/// (the output of [`mirror_lower`]): the mean and the lower triangle are
+/// summed, since the upper triangle is a copy of it.
+#[inline(always)]
+pub(crate) fn check_finite_sym_belief<const D: usize>(
     mean: &SVector<f64, D>,
     mean_what: &'static str,
     cov: &SMatrix<f64, D, D>,
     cov_what: &'static str,
     step: Step,
 ) -> Result<()> {
-    if sum_is_finite(mean.as_slice(), cov.as_slice()) {
+    if sym_sum(mean, cov).is_finite() {
         return Ok(());
     }
     check_finite_vec(mean, mean_what, step)?;
@@ -214,6 +236,7 @@ pub(crate) fn symmetrize<const D: usize>(m: &SMatrix<f64, D, D>) -> SMatrix<f64,
 }
 
 /// Checks a user covariance: finite and symmetric to a relative tolerance.
+#[inline(always)]
 pub(crate) fn check_covariance<const D: usize>(
     m: &SMatrix<f64, D, D>,
     matrix: &'static str,
@@ -237,9 +260,18 @@ pub(crate) fn check_covariance<const D: usize>(
     Ok(())
 }
 
-/// Checks that the posterior covariance `cov` of an update from a prior
-/// covariance `prior` has no variance below the round-off of the prior
-/// (`-1e-9 max |prior|`): a larger negative variance is a wrong number (the
+/// The smallest variance [`check_variances`] accepts after an update from
+/// `prior`: `-1e-9 max |prior|`, taken as `-1e-9 max_i prior_ii` (equal for
+/// a positive semi-definite prior; D comparisons, not D^2).
+#[inline(always)]
+pub(crate) fn variance_floor<const D: usize>(prior: &SMatrix<f64, D, D>) -> f64 {
+    -1e-9 * max_diagonal(prior)
+}
+
+/// Checks that the posterior covariance `cov` of an update from a positive
+/// semi-definite prior covariance `prior` has no variance below the
+/// round-off of the prior (`-1e-9 max |prior|`, which is `-1e-9 max_i
+/// prior_ii` for such a matrix): a larger negative variance is a wrong number (the
 /// UKF's `P - K S K^T` when the sigma points cannot resolve `P` at the
 /// mean's magnitude, or a model's noise below its round-off), and is
 /// reported as a covariance that is not positive semi-definite.
@@ -250,11 +282,37 @@ pub(crate) fn check_variances<const D: usize>(
     matrix: &'static str,
     step: Step,
 ) -> Result<()> {
-    let floor = -1e-9 * prior.amax();
-    if (0..D).any(|i| cov[(i, i)] < floor) {
+    // NaN variances pass here (`min` skips them): the finiteness checks
+    // that follow report them
+    if min_diagonal(cov) < variance_floor(prior) {
         return Err(KalmanError::NotPositiveDefinite { matrix, step });
     }
     Ok(())
+}
+
+/// The largest diagonal entry (0 for `D = 0`): `max |A_ij|` for a positive
+/// semi-definite `A`, since `|A_ij| <= sqrt(A_ii A_jj)`.
+#[inline(always)]
+pub(crate) fn max_diagonal<const D: usize>(a: &SMatrix<f64, D, D>) -> f64 {
+    let mut largest = 0.0f64;
+    for i in 0..D {
+        // a compare and select (one `maxsd`), not `f64::max`'s NaN handling
+        let x = a[(i, i)];
+        largest = if x > largest { x } else { largest };
+    }
+    largest
+}
+
+/// The smallest diagonal entry (`inf` for `D = 0`; NaN entries are
+/// skipped, so test finiteness separately).
+#[inline(always)]
+pub(crate) fn min_diagonal<const D: usize>(a: &SMatrix<f64, D, D>) -> f64 {
+    let mut smallest = f64::INFINITY;
+    for i in 0..D {
+        let x = a[(i, i)];
+        smallest = if x < smallest { x } else { smallest };
+    }
+    smallest
 }
 
 /// Checks a noise covariance a model hands a filter at the point of use:
@@ -262,7 +320,7 @@ pub(crate) fn check_variances<const D: usize>(
 /// passes on the square-root-free Cholesky factorisation; a singular one
 /// such as a rank-2 `Q_discrete_white_noise` block falls back to the
 /// eigen-decomposition of [`psd_sqrt`]).
-#[inline]
+#[inline(always)]
 pub(crate) fn check_noise<const D: usize>(
     m: &SMatrix<f64, D, D>,
     matrix: &'static str,

@@ -12,12 +12,97 @@ use crate::error::{Result, Step};
 use crate::gaussian::Gaussian;
 use crate::linalg;
 
+/// A noise covariance checked once: finite, symmetric (to a relative 1e-9,
+/// then stored as `(A + A^T) / 2`) and positive semi-definite (singular is
+/// accepted). A model whose `Q` or `R` does not change returns one from
+/// [`Dynamics::checked_process_noise`] or
+/// [`Measurement::checked_measurement_noise`], and the filters skip the
+/// per-step check of the matrix.
+///
+/// ```
+/// use bayestrack_kalman::{KalmanError, NoiseCovariance};
+/// use nalgebra::Matrix2;
+///
+/// let q = NoiseCovariance::new(Matrix2::new(1e-8, 0.0, 0.0, 1e-6))?;
+/// assert_eq!(q.matrix()[(1, 1)], 1e-6);
+/// assert!(NoiseCovariance::new(Matrix2::new(-1.0, 0.0, 0.0, 1.0)).is_err());
+/// # Ok::<(), KalmanError>(())
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NoiseCovariance<const D: usize>(SMatrix<f64, D, D>);
+
+impl<const D: usize> NoiseCovariance<D> {
+    /// Checks `m`.
+    ///
+    /// # Errors
+    /// [`KalmanError::NonFinite`](crate::KalmanError::NonFinite),
+    /// [`KalmanError::NotSymmetric`](crate::KalmanError::NotSymmetric) or
+    /// [`KalmanError::NotPositiveDefinite`](crate::KalmanError::NotPositiveDefinite)
+    /// naming "noise covariance" in the construction step.
+    pub fn new(m: SMatrix<f64, D, D>) -> Result<Self> {
+        Self::named(m, "noise covariance", Step::Construction)
+    }
+
+    /// [`NoiseCovariance::new`] with the matrix and step named in errors.
+    #[inline(always)]
+    pub(crate) fn named(m: SMatrix<f64, D, D>, matrix: &'static str, step: Step) -> Result<Self> {
+        linalg::check_noise(&m, matrix, step)?;
+        Ok(Self(linalg::symmetrize(&m)))
+    }
+
+    /// The matrix (exactly symmetric).
+    #[inline]
+    pub fn matrix(&self) -> &SMatrix<f64, D, D> {
+        &self.0
+    }
+}
+
+/// `Q` of `dynamics` for a filter step: the model's checked matrix, or
+/// [`Dynamics::process_noise`] checked now (named "process noise Q" in
+/// `step`); exactly symmetric either way.
+#[inline(always)]
+pub(crate) fn process_noise<const N: usize, D: Dynamics<N> + ?Sized>(
+    dynamics: &D,
+    step: Step,
+) -> Result<SMatrix<f64, N, N>> {
+    match dynamics.checked_process_noise() {
+        Some(q) => Ok(q.0),
+        None => Ok(NoiseCovariance::named(dynamics.process_noise(), "process noise Q", step)?.0),
+    }
+}
+
+/// `R` of `measurement` for a filter step, as [`process_noise`]
+/// ("measurement noise R", update step).
+#[inline(always)]
+pub(crate) fn measurement_noise<const N: usize, const M: usize, H: Measurement<N, M> + ?Sized>(
+    measurement: &H,
+) -> Result<SMatrix<f64, M, M>> {
+    match measurement.checked_measurement_noise() {
+        Some(r) => Ok(r.0),
+        None => Ok(NoiseCovariance::named(
+            measurement.measurement_noise(),
+            "measurement noise R",
+            Step::Update,
+        )?
+        .0),
+    }
+}
+
 /// State transition with additive noise: `x_k = f(x_{k-1}) + v`, `v ~ N(0, Q)`.
 pub trait Dynamics<const N: usize> {
     /// `f(x)`.
     fn propagate(&self, x: &SVector<f64, N>) -> SVector<f64, N>;
     /// `Q`, the covariance of the additive process noise.
     fn process_noise(&self) -> SMatrix<f64, N, N>;
+
+    /// `Q` checked once, for a model whose `Q` does not change: the filters
+    /// then use it and skip checking [`Dynamics::process_noise`] (finite,
+    /// symmetric, positive semi-definite) on every step. It must be the
+    /// same matrix. The default, `None`, has every step check `Q`.
+    #[inline(always)]
+    fn checked_process_noise(&self) -> Option<NoiseCovariance<N>> {
+        None
+    }
 
     /// The difference `a - b` of two states (filterpy's `residual_x`), used
     /// by the UKF wherever it differences propagated sigma points. Override
@@ -54,6 +139,12 @@ pub trait Measurement<const N: usize, const M: usize> {
     fn observe(&self, x: &SVector<f64, N>) -> SVector<f64, M>;
     /// `R`, the covariance of the additive measurement noise.
     fn measurement_noise(&self) -> SMatrix<f64, M, M>;
+
+    /// `R` checked once, as [`Dynamics::checked_process_noise`].
+    #[inline(always)]
+    fn checked_measurement_noise(&self) -> Option<NoiseCovariance<M>> {
+        None
+    }
 
     /// The difference `a - b` of two measurements (filterpy's `residual_z`):
     /// the innovation `z - z_hat` of every filter, and the differences of
@@ -200,7 +291,13 @@ impl<const N: usize, const U: usize> LinearDynamics<N, U> {
         linalg::check_finite_mat(&b, "control matrix B", Step::Construction)?;
         linalg::check_covariance(&q, "process noise Q", Step::Construction)?;
         linalg::psd_sqrt(&q, "process noise Q", Step::Construction)?;
-        Ok(Self { f, b, q })
+        // symmetrised once here instead of on every step (the same bits:
+        // `(Q + Q^T) / 2` is what each step formed)
+        Ok(Self {
+            f,
+            b,
+            q: linalg::symmetrize(&q),
+        })
     }
 
     /// `F`.
@@ -213,7 +310,8 @@ impl<const N: usize, const U: usize> LinearDynamics<N, U> {
         &self.b
     }
 
-    /// `Q`.
+    /// `Q`, symmetrised (`(Q + Q^T) / 2` of the matrix given, which passed
+    /// the symmetry check to a relative 1e-9).
     pub fn noise(&self) -> &SMatrix<f64, N, N> {
         &self.q
     }
@@ -227,6 +325,11 @@ impl<const N: usize, const U: usize> Dynamics<N> for LinearDynamics<N, U> {
     #[inline]
     fn process_noise(&self) -> SMatrix<f64, N, N> {
         self.q
+    }
+    #[inline(always)]
+    fn checked_process_noise(&self) -> Option<NoiseCovariance<N>> {
+        // checked and symmetrised by the constructor
+        Some(NoiseCovariance(self.q))
     }
 }
 
@@ -253,7 +356,10 @@ impl<const N: usize, const M: usize> LinearMeasurement<N, M> {
         linalg::check_finite_mat(&h, "measurement matrix H", Step::Construction)?;
         linalg::check_covariance(&r, "measurement noise R", Step::Construction)?;
         linalg::psd_sqrt(&r, "measurement noise R", Step::Construction)?;
-        Ok(Self { h, r })
+        Ok(Self {
+            h,
+            r: linalg::symmetrize(&r),
+        })
     }
 
     /// `H`.
@@ -261,7 +367,7 @@ impl<const N: usize, const M: usize> LinearMeasurement<N, M> {
         &self.h
     }
 
-    /// `R`.
+    /// `R`, symmetrised (`(R + R^T) / 2` of the matrix given).
     pub fn noise(&self) -> &SMatrix<f64, M, M> {
         &self.r
     }
@@ -275,6 +381,10 @@ impl<const N: usize, const M: usize> Measurement<N, M> for LinearMeasurement<N, 
     #[inline]
     fn measurement_noise(&self) -> SMatrix<f64, M, M> {
         self.r
+    }
+    #[inline(always)]
+    fn checked_measurement_noise(&self) -> Option<NoiseCovariance<M>> {
+        Some(NoiseCovariance(self.r))
     }
 }
 

@@ -21,7 +21,7 @@
 //! let kf = Kf::default();
 //! let mut belief = Gaussian::new(Vector4::zeros(), nalgebra::Matrix4::identity())?;
 //! for z in [Vector2::new(0.1, 0.0), Vector2::new(0.19, 0.02)] {
-//!     let prior = kf.predict(&belief, &dynamics, None)?;
+//!     let prior = kf.predict(&belief, &dynamics)?;
 //!     belief = kf.update(&prior, &sensor, Some(&z))?.posterior;
 //! }
 //! assert!(belief.mean()[1] > 0.0); // some velocity along x
@@ -200,9 +200,26 @@ impl<const N: usize, const M: usize> LinearMeasurement<N, M> {
                 reason: "must be finite and >= 0",
             });
         }
+        Self::position_with_noise(SMatrix::<f64, M, M>::identity() * var)
+    }
+
+    /// [`LinearMeasurement::position`] with a full measurement noise
+    /// covariance `r` (correlated axes, a different variance per axis).
+    ///
+    /// # Errors
+    /// [`KalmanError::DimensionMismatch`] when `N` is not a multiple of `M`;
+    /// the errors of [`LinearMeasurement::new`] for a bad `r`.
+    pub fn position_with_noise(r: SMatrix<f64, M, M>) -> Result<Self> {
+        if M == 0 || !N.is_multiple_of(M) {
+            return Err(KalmanError::DimensionMismatch {
+                what: "state dimension (a whole number of blocks per measured axis)",
+                expected: M * N.div_ceil(M.max(1)).max(1),
+                got: N,
+            });
+        }
         let k = N / M;
         let h = SMatrix::<f64, M, N>::from_fn(|i, j| if j == i * k { 1.0 } else { 0.0 });
-        Self::new(h, SMatrix::<f64, M, M>::identity() * var)
+        Self::new(h, r)
     }
 }
 

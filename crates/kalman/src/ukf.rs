@@ -19,7 +19,7 @@ use nalgebra::{SMatrix, SVector};
 use crate::error::{KalmanError, Result, Step};
 use crate::gaussian::Gaussian;
 use crate::linalg;
-use crate::model::{Dynamics, Measurement, NoisyDynamics, NoisyMeasurement};
+use crate::model::{self, Dynamics, Measurement, NoisyDynamics, NoisyMeasurement};
 use crate::update::{Innovation, Update};
 
 /// Scaled unscented transform parameters and the filter built on them.
@@ -263,6 +263,17 @@ impl Ukf {
             }
         }
         Ok(Self { alpha, beta, kappa })
+    }
+
+    /// The unscented transform that is the third-degree spherical-radial
+    /// cubature rule: `alpha = 1`, `beta = 0`, `kappa = 0` (see
+    /// [`Ckf`](crate::Ckf)).
+    pub(crate) const fn cubature() -> Self {
+        Self {
+            alpha: 1.0,
+            beta: 0.0,
+            kappa: 0.0,
+        }
     }
 
     /// `alpha`.
@@ -514,10 +525,19 @@ impl Ukf {
         let y = ldl.forward(&residual);
         let mean = predicted.mean() + linalg::mul(&v, &y);
         let cov = linalg::mirror_lower(linalg::lower_mul_t_add(predicted.cov(), -1.0, &v, &u));
-        linalg::check_variances(&cov, predicted.cov(), "posterior covariance", Step::Update)?;
+        let innovation = Innovation::unchecked(residual, &y, s, &ldl);
+        // the checks of the outputs in one test (as the KF's gain step):
+        // the exact checks, in order, name a failure
+        let fast_ok = linalg::min_diagonal(&cov) >= linalg::variance_floor(predicted.cov())
+            && (linalg::sym_sum(&mean, &cov) + innovation.log_likelihood).is_finite();
+        if !fast_ok {
+            linalg::check_variances(&cov, predicted.cov(), "posterior covariance", Step::Update)?;
+            Gaussian::checked(mean, cov, Step::Update)?;
+            innovation.check()?;
+        }
         Ok(Update {
-            posterior: Gaussian::checked(mean, cov, Step::Update)?,
-            innovation: Some(Innovation::new(residual, &y, s, &ldl)?),
+            posterior: Gaussian::from_parts(mean, cov),
+            innovation: Some(innovation),
             iterations: 1,
         })
     }
@@ -564,8 +584,7 @@ impl Ukf {
         prior: &Gaussian<N>,
         dynamics: &D,
     ) -> Result<Gaussian<N>> {
-        let q = dynamics.process_noise();
-        linalg::check_noise(&q, "process noise Q", Step::Predict)?;
+        let q = model::process_noise(dynamics, Step::Predict)?;
         let mo = self.transform(
             prior,
             &none::<0>(),
@@ -596,8 +615,7 @@ impl Ukf {
         let Some(z) = z else {
             return Ok(Update::missing(prior));
         };
-        let r = measurement.measurement_noise();
-        linalg::check_noise(&r, "measurement noise R", Step::Update)?;
+        let r = model::measurement_noise(measurement)?;
         let mo = self.transform(
             prior,
             &none::<0>(),
@@ -643,9 +661,8 @@ impl Ukf {
                 update: Update::missing(&predicted),
             });
         };
-        let (q, r) = (dynamics.process_noise(), measurement.measurement_noise());
-        linalg::check_noise(&q, "process noise Q", Step::Predict)?;
-        linalg::check_noise(&r, "measurement noise R", Step::Update)?;
+        let q = model::process_noise(dynamics, Step::Predict)?;
+        let r = model::measurement_noise(measurement)?;
         self.joint(
             prior,
             &none::<0>(),
@@ -771,8 +788,7 @@ impl Ukf {
         filtered: &[Gaussian<N>],
         dynamics: &D,
     ) -> Result<Vec<Gaussian<N>>> {
-        let q = dynamics.process_noise();
-        linalg::check_noise(&q, "process noise Q", Step::Smooth)?;
+        let q = model::process_noise(dynamics, Step::Smooth)?;
         let space = StateSpace(dynamics);
         let residual = |a: &SVector<f64, N>, b: &SVector<f64, N>| space.residual(a, b);
         crate::smoother::rts_backward(filtered, residual, |_, g| {

@@ -38,30 +38,42 @@ pub struct Innovation<const M: usize> {
 impl<const M: usize> Innovation<M> {
     /// Derives NIS and log-likelihood from the residual, the factorisation
     /// `S = L D L^T` and the whitened residual `y = L^{-1} nu`
-    /// (`nu^T S^{-1} nu = sum y_j^2 / D_jj`).
+    /// (`nu^T S^{-1} nu = sum y_j^2 / D_jj`), unchecked: the caller runs [`Innovation::check`] (or
+    /// folds `log_likelihood` into its own test: it is finite exactly when
+    /// both statistics are).
     #[inline(always)]
-    pub(crate) fn new(
+    pub(crate) fn unchecked(
         residual: SVector<f64, M>,
         whitened: &SVector<f64, M>,
         covariance: SMatrix<f64, M, M>,
         ldl: &linalg::Ldl<M>,
-    ) -> Result<Self> {
-        let nis = whitened.component_mul(whitened).dot(ldl.inv_d());
+    ) -> Self {
+        let mut nis = 0.0;
+        for j in 0..M {
+            nis += whitened[j] * whitened[j] * ldl.inv_d()[j];
+        }
         let log_likelihood = -0.5 * (nis + ldl.log_det() + M as f64 * LN_2PI);
-        // a residual of 1e155 or more squares past the largest f64: the
-        // statistics would be inf and -inf, not numbers
-        if !(nis.is_finite() && log_likelihood.is_finite()) {
+        Self {
+            residual,
+            covariance,
+            log_likelihood,
+            nis,
+        }
+    }
+
+    /// A residual of 1e155 or more squares past the largest f64: the
+    /// statistics would be inf and -inf, not numbers. `log_likelihood` is
+    /// `-(nis + ..) / 2`, finite only when the NIS is, so one test covers
+    /// both.
+    #[inline(always)]
+    pub(crate) fn check(&self) -> Result<()> {
+        if !self.log_likelihood.is_finite() {
             return Err(KalmanError::NonFinite {
                 what: "normalised innovation squared (NIS) and log-likelihood",
                 step: Step::Update,
             });
         }
-        Ok(Self {
-            residual,
-            covariance,
-            log_likelihood,
-            nis,
-        })
+        Ok(())
     }
 }
 
@@ -97,7 +109,9 @@ pub(crate) struct GainStep<const N: usize, const M: usize> {
 
 /// Gain step about a linearisation `H`: `S = H P H^T + R`,
 /// `K = P H^T S^{-1}` (Cholesky solve), `x + K nu`, and the covariance in
-/// the requested form. `residual` is the (linearised) innovation.
+/// the requested form. `residual` is the (linearised) innovation; `r` is
+/// symmetric (only its lower triangle is read; the Joseph form reads all
+/// of it).
 ///
 /// With the square-root-free Cholesky factorisation `S = L D L^T`,
 /// `U = P H^T L^{-T}` and `V = U D^{-1}` (triangular solves), the gain is
@@ -116,12 +130,7 @@ pub(crate) fn gain_step<const N: usize, const M: usize>(
 ) -> Result<GainStep<N, M>> {
     // P H^T = (H P)^T for symmetric P
     let pht = linalg::mul_t(p, h);
-    let s = linalg::mirror_lower(linalg::lower_mul_t_add(
-        &linalg::symmetrize(r),
-        1.0,
-        h,
-        &pht.transpose(),
-    ));
+    let s = linalg::mirror_lower(linalg::lower_mul_t_add(r, 1.0, h, &pht.transpose()));
     let ldl = linalg::Ldl::new(&s, "innovation covariance S", Step::Update)?;
     let u = ldl.right_solve_lt(&pht);
     let v = ldl.scale_columns(&u);
@@ -148,17 +157,27 @@ pub(crate) fn gain_step<const N: usize, const M: usize>(
         CovarianceUpdate::Standard => linalg::lower_mul_t_add(p, -1.0, &v, &u),
     };
     let new_cov = linalg::mirror_lower(new_cov);
-    linalg::check_variances(&new_cov, p, "posterior covariance", Step::Update)?;
-    linalg::check_finite_belief(
-        &new_mean,
-        "posterior mean",
-        &new_cov,
-        "posterior covariance",
-        Step::Update,
-    )?;
+    let innovation = Innovation::unchecked(residual, &y, s, &ldl);
+    // every check of the outputs in one test: the variances against their
+    // floor, and one sum that is finite only when the mean, the covariance
+    // and the log-likelihood are (the latter only when the NIS is); the
+    // exact checks, in order, name the failure
+    let fast_ok = linalg::min_diagonal(&new_cov) >= linalg::variance_floor(p)
+        && (linalg::sym_sum(&new_mean, &new_cov) + innovation.log_likelihood).is_finite();
+    if !fast_ok {
+        linalg::check_variances(&new_cov, p, "posterior covariance", Step::Update)?;
+        linalg::check_finite_sym_belief(
+            &new_mean,
+            "posterior mean",
+            &new_cov,
+            "posterior covariance",
+            Step::Update,
+        )?;
+        innovation.check()?;
+    }
     Ok(GainStep {
         mean: new_mean,
         cov: new_cov,
-        innovation: Innovation::new(residual, &y, s, &ldl)?,
+        innovation,
     })
 }

@@ -3,7 +3,8 @@
 mod common;
 
 use bayestrack_kalman::{
-    Ekf, Gaussian, Iekf, KalmanError, Kf, LinearDynamics, LinearMeasurement, Step, Ukf,
+    Ekf, Gaussian, Iekf, KalmanError, Kf, LinearDynamics, LinearMeasurement, NoiseCovariance, Step,
+    Ukf,
 };
 use common::{Turn, constant_velocity};
 use nalgebra::{Matrix1, Matrix1x2, Matrix2, Vector1, Vector2, Vector4};
@@ -70,11 +71,7 @@ fn a_nan_measurement_is_rejected_by_every_filter() {
     assert!(Gaussian::new(Vector2::new(f64::NAN, 0.0), Matrix2::identity()).is_err());
     assert!(
         Kf::default()
-            .predict(
-                &prior,
-                &dynamics,
-                Some(&nalgebra::SVector::<f64, 0>::zeros())
-            )
+            .predict_with_control(&prior, &dynamics, &nalgebra::SVector::<f64, 0>::zeros())
             .is_ok()
     );
 }
@@ -476,4 +473,112 @@ fn densities_and_chi_square_statistics_that_overflow_are_errors() {
     // with 2 degrees of freedom the quantile is -2 ln(1 - p) = 2e-300
     let q = chi_square_quantile(1e-300, 2.0).unwrap();
     assert!((q / 2e-300 - 1.0).abs() < 1e-9, "{q}");
+}
+
+/// A model whose `Q` and `R` are checked once ([`NoiseCovariance`]).
+struct Once {
+    q: NoiseCovariance<2>,
+    r: NoiseCovariance<1>,
+}
+
+impl bayestrack_kalman::Dynamics<2> for Once {
+    fn propagate(&self, x: &Vector2<f64>) -> Vector2<f64> {
+        Vector2::new(x[0] + 0.1 * x[1], x[1])
+    }
+    fn process_noise(&self) -> Matrix2<f64> {
+        *self.q.matrix()
+    }
+    fn checked_process_noise(&self) -> Option<NoiseCovariance<2>> {
+        Some(self.q)
+    }
+}
+
+impl bayestrack_kalman::Measurement<2, 1> for Once {
+    fn observe(&self, x: &Vector2<f64>) -> Vector1<f64> {
+        Vector1::new(x[0])
+    }
+    fn measurement_noise(&self) -> Matrix1<f64> {
+        *self.r.matrix()
+    }
+    fn checked_measurement_noise(&self) -> Option<NoiseCovariance<1>> {
+        Some(self.r)
+    }
+}
+
+#[test]
+fn noise_checked_once_is_refused_when_bad_and_used_unchanged_when_good() {
+    // issue 30: the checks of a constant Q and R moved to construction;
+    // they still refuse what the per-step checks refused
+    assert_eq!(
+        NoiseCovariance::new(Matrix2::new(-4.0, 0.0, 0.0, 0.1)),
+        Err(KalmanError::NotPositiveDefinite {
+            matrix: "noise covariance",
+            step: Step::Construction
+        })
+    );
+    assert!(matches!(
+        NoiseCovariance::new(Matrix2::new(1.0, 0.5, -0.5, 1.0)),
+        Err(KalmanError::NotSymmetric { .. })
+    ));
+    assert!(matches!(
+        NoiseCovariance::new(Matrix1::new(f64::NAN)),
+        Err(KalmanError::NonFinite { .. })
+    ));
+    // singular is accepted, as by the per-step check
+    assert!(NoiseCovariance::new(white_noise_q(0.1, 2.0)).is_ok());
+    // a checked model gives the same numbers as the same model checked on
+    // every step
+    let once = Once {
+        q: NoiseCovariance::new(white_noise_q(0.1, 2.0)).unwrap(),
+        r: NoiseCovariance::new(Matrix1::new(0.5)).unwrap(),
+    };
+    let every = Handed {
+        q: white_noise_q(0.1, 2.0),
+        r: Matrix1::new(0.5),
+    };
+    let prior = Gaussian::new(Vector2::new(0.2, -0.1), Matrix2::identity()).unwrap();
+    let z = Vector1::new(0.3);
+    let ukf = Ukf::new(0.5, 2.0, 0.0).unwrap();
+    assert_eq!(
+        ukf.predict(&prior, &once).unwrap(),
+        ukf.predict(&prior, &every).unwrap()
+    );
+    assert_eq!(
+        ukf.update(&prior, &once, Some(&z)).unwrap(),
+        ukf.update(&prior, &every, Some(&z)).unwrap()
+    );
+}
+
+#[test]
+fn a_posterior_variance_below_the_priors_round_off_is_an_error() {
+    // the floor is -1e-9 times the prior's largest variance (its largest
+    // entry, for a positive semi-definite prior): a UKF whose points do
+    // not resolve a variance of 1 at a mean of 1e12 gives a wrong negative
+    // variance, refused
+    let prior = Gaussian::new(Vector2::new(1e12, 0.0), Matrix2::new(1.0, 0.0, 0.0, 1e-30)).unwrap();
+    let sensor = SquareSensor;
+    let ukf = Ukf::new(1e-3, 2.0, 0.0).unwrap();
+    let got = ukf.update(&prior, &sensor, Some(&Vector1::new(1e24)));
+    assert!(
+        matches!(
+            got,
+            Err(KalmanError::NotPositiveDefinite {
+                matrix: "posterior covariance",
+                step: Step::Update
+            })
+        ),
+        "{got:?}"
+    );
+}
+
+/// `z = x_0^2`, tiny noise.
+struct SquareSensor;
+
+impl bayestrack_kalman::Measurement<2, 1> for SquareSensor {
+    fn observe(&self, x: &Vector2<f64>) -> Vector1<f64> {
+        Vector1::new(x[0] * x[0])
+    }
+    fn measurement_noise(&self) -> Matrix1<f64> {
+        Matrix1::new(1e-6)
+    }
 }

@@ -183,7 +183,7 @@ proptest! {
         let f = Matrix3::new(1.0, 0.1, 0.0, 0.0, 1.0, 0.1, 0.0, 0.0, 1.0);
         let linear = LinearDynamics::new(f, q).and_then(|d| {
             let m = LinearMeasurement::new(model.h, model.r)?;
-            Ok((Kf::default().predict(&prior, &d, None)?, m))
+            Ok((Kf::default().predict(&prior, &d)?, m))
         });
         if let Ok((pr, m)) = linear {
             prop_assert!(finite_gaussian(&pr, scale), "{pr:?}");

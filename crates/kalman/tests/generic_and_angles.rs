@@ -5,8 +5,8 @@
 use std::f64::consts::PI;
 
 use bayestrack_kalman::{
-    Additive, Dynamics, Ekf, Gaussian, Iekf, KalmanFilter, Kf, LinearDynamics, LinearMeasurement,
-    Measurement, Result, Ukf, Update,
+    Additive, Dynamics, Ekf, Gaussian, Iekf, KalmanFilter, KalmanPredict, Kf, LinearDynamics,
+    LinearMeasurement, Measurement, Result, Ukf, Update,
 };
 use nalgebra::{Matrix2, Matrix2x4, Matrix4, SMatrix, SVector, Vector2, Vector4};
 
@@ -56,14 +56,9 @@ fn one_generic_function_runs_every_filter_with_the_same_answers() {
 
     let kf = track(&Kf::default(), &dynamics, &sensor, start, &zs).unwrap();
     // the trait's `predict` is the inherent one without a control input
-    let direct = Kf::default().predict(&start, &dynamics, None).unwrap();
+    let direct = Kf::default().predict(&start, &dynamics).unwrap();
     assert_eq!(
-        KalmanFilter::<4, 2, _, LinearMeasurement<4, 2>>::predict(
-            &Kf::default(),
-            &start,
-            &dynamics
-        )
-        .unwrap(),
+        KalmanPredict::predict(&Kf::default(), &start, &dynamics).unwrap(),
         direct
     );
     let others = [

@@ -52,7 +52,7 @@ fn ukf_equals_kf_on_a_linear_gaussian_model() {
         let (mut a, mut b) = (prior4(), prior4());
         for (k, z) in measurements(40, 1).iter().enumerate() {
             let z = if k % 7 == 3 { None } else { Some(z) };
-            let pa = kf.predict(&a, &dynamics, None).unwrap();
+            let pa = kf.predict(&a, &dynamics).unwrap();
             let pb = ukf.predict(&b, &dynamics).unwrap();
             assert_close(pb.mean(), pa.mean(), 1e-9, "predicted mean");
             assert_close(pb.cov(), pa.cov(), 1e-9, "predicted covariance");
@@ -90,7 +90,7 @@ fn joint_augmented_ukf_step_equals_kf_on_a_linear_model() {
     let ukf = Ukf::new(1.0, 0.0, 2.0).unwrap();
     let (mut a, mut b) = (prior4(), prior4());
     for z in measurements(30, 2).iter() {
-        let pa = kf.predict(&a, &dynamics, None).unwrap();
+        let pa = kf.predict(&a, &dynamics).unwrap();
         let ua = kf.update(&pa, &sensor, Some(z)).unwrap();
         let s = ukf
             .step_augmented(&b, &Additive(&dynamics), &Additive(&sensor), Some(z))
@@ -211,7 +211,7 @@ fn joseph_and_standard_forms_agree_for_the_optimal_gain() {
     let standard = Kf::new(CovarianceUpdate::Standard);
     let mut a = prior4();
     for z in measurements(20, 3).iter() {
-        let p = joseph.predict(&a, &dynamics, None).unwrap();
+        let p = joseph.predict(&a, &dynamics).unwrap();
         let ua = joseph.update(&p, &sensor, Some(z)).unwrap();
         let ub = standard.update(&p, &sensor, Some(z)).unwrap();
         assert_close(ua.posterior.cov(), ub.posterior.cov(), 1e-12, "covariance");
@@ -230,7 +230,7 @@ fn hybrid_step_equals_kf_on_a_linear_model() {
     assert_eq!(hybrid.prior, HybridPrior::UkfPredicted);
     let (mut a, mut b) = (prior4(), prior4());
     for z in measurements(20, 4).iter() {
-        let pa = kf.predict(&a, &dynamics, None).unwrap();
+        let pa = kf.predict(&a, &dynamics).unwrap();
         let ua = kf.update(&pa, &sensor, Some(z)).unwrap();
         let s = hybrid
             .step(&b, &Additive(&dynamics), &sensor, Some(z))
@@ -255,7 +255,7 @@ fn hybrid_step_equals_kf_on_a_linear_model() {
     let s = twice
         .step(&prior4(), &Additive(&dynamics), &sensor, Some(&z))
         .unwrap();
-    let pa = kf.predict(&prior4(), &dynamics, None).unwrap();
+    let pa = kf.predict(&prior4(), &dynamics).unwrap();
     let ua = kf.update(&pa, &sensor, Some(&z)).unwrap();
     assert!(s.update.posterior.cov().trace() < ua.posterior.cov().trace() * 0.9);
 }
@@ -287,7 +287,7 @@ fn rts_smoother_equals_batch_least_squares() {
     let mut filtered = vec![prior];
     let mut belief = prior;
     for z in &zs {
-        let p = kf.predict(&belief, &dynamics, None).unwrap();
+        let p = kf.predict(&belief, &dynamics).unwrap();
         belief = kf.update(&p, &sensor, Some(z)).unwrap().posterior;
         filtered.push(belief);
     }
@@ -336,7 +336,7 @@ fn urts_smoother_equals_rts_on_a_linear_model() {
     let mut filtered = vec![];
     let mut belief = prior4();
     for z in measurements(15, 7).iter() {
-        let p = kf.predict(&belief, &dynamics, None).unwrap();
+        let p = kf.predict(&belief, &dynamics).unwrap();
         belief = kf.update(&p, &sensor, Some(z)).unwrap().posterior;
         filtered.push(belief);
     }

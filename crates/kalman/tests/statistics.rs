@@ -37,7 +37,7 @@ fn monte_carlo(
         for _ in 0..STEPS {
             x = truth.0.transition() * x + lq * normal::<4>(&mut rng);
             let z = truth.1.matrix() * x + lr * normal::<2>(&mut rng);
-            let prior = kf.predict(&belief, &filter.0, None).unwrap();
+            let prior = kf.predict(&belief, &filter.0).unwrap();
             let u = kf.update(&prior, &filter.1, Some(&z)).unwrap();
             nis_sum += u.innovation.unwrap().nis;
             belief = u.posterior;

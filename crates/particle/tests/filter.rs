@@ -107,7 +107,7 @@ fn kalman(model: &Lin, zs: &[Vector1<f64>], p0: &Gaussian<2>) -> Vec<Gaussian<2>
     let mut g = *p0;
     zs.iter()
         .map(|z| {
-            let p = kf.predict(&g, &dyn_, None).unwrap();
+            let p = kf.predict(&g, &dyn_).unwrap();
             g = kf.update(&p, &sensor, Some(z)).unwrap().posterior;
             g
         })

@@ -748,7 +748,11 @@ impl BallCore {
             (BallFilter::Kf | BallFilter::Ukf, Belief::Gaussian(g)) => {
                 let predicted = if self.filter == BallFilter::Kf {
                     let dynamics = LinearDynamics::with_control(f, b, q)?;
-                    Kf::default().predict(g, &dynamics, Some(&SVector::<f64, 1>::new(gravity)))?
+                    Kf::default().predict_with_control(
+                        g,
+                        &dynamics,
+                        &SVector::<f64, 1>::new(gravity),
+                    )?
                 } else {
                     let dynamics = Reflecting {
                         target,
@@ -1047,10 +1051,10 @@ mod tests {
         )
         .unwrap();
         let lin = Kf::default()
-            .predict(
+            .predict_with_control(
                 &prior,
                 &LinearDynamics::with_control(f, b, q).unwrap(),
-                Some(&SVector::<f64, 1>::new(0.0)),
+                &SVector::<f64, 1>::new(0.0),
             )
             .unwrap();
         let refl = ukf

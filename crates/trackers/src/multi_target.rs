@@ -475,7 +475,7 @@ impl MultiTargetTracker {
     pub fn step(&mut self, frame: ImageView<'_, u8>) -> Result<Vec<Track>> {
         let detections = self.detect(frame)?;
         for t in &mut self.tracks {
-            t.belief = self.kf.predict(&t.belief, &self.dynamics, None)?;
+            t.belief = self.kf.predict(&t.belief, &self.dynamics)?;
             t.detection = None;
         }
         let predicted: Vec<Feature> = self.tracks.iter().map(TrackState::feature).collect();
