@@ -937,6 +937,127 @@ mod tests {
         (best.1, best.2)
     }
 
+    /// The floating-point sliding L2 search that the exact one replaced
+    /// (a running sum of per-bin term changes, row by row).
+    fn float_l2_search(
+        img: &Image<u8>,
+        reference: &RgbHistogram,
+        w: usize,
+        h: usize,
+        region: Rect,
+    ) -> (usize, usize) {
+        let bins = reference.bins;
+        let q: Vec<f64> = (0..3 * bins)
+            .map(|k| f64::from(reference.counts[k]) / f64::from(reference.pixels))
+            .collect();
+        let mut hist = RgbHistogram::new(bins).unwrap();
+        let mut run = Running {
+            q: &q,
+            n: (w * h) as f64,
+            kind: HistogramDistance::L2,
+            acc: 0.0,
+        };
+        let mut best = (f64::INFINITY, region.x, region.y);
+        let bin = |v: u8| (usize::from(v) * bins) >> 8;
+        for y in region.y..=region.bottom() - h {
+            hist.compute(img.view(), Rect::new(region.x, y, w, h))
+                .unwrap();
+            run.reset(&hist.counts);
+            for x in region.x..=region.right() - w {
+                let d = run.distance();
+                if d < best.0 {
+                    best = (d, x, y);
+                }
+                if x + w >= region.right() {
+                    break;
+                }
+                for yy in y..y + h {
+                    let row = img.row(yy);
+                    for c in 0..3 {
+                        run.bump(&mut hist.counts, c * bins + bin(row[x * 3 + c]), false);
+                        run.bump(&mut hist.counts, c * bins + bin(row[(x + w) * 3 + c]), true);
+                    }
+                }
+            }
+        }
+        (best.1, best.2)
+    }
+
+    /// Where the exact search and the floating-point one it replaced pick
+    /// different windows (on the ball experiment's kind of frame: a dark
+    /// disc on a light screen, a few grey levels of noise, so that many
+    /// windows tie), the exact pick is never worse: a smaller exact sum,
+    /// or the same sum earlier in raster order. The float search's running
+    /// sum drifts by rounding along a row, which reorders ties and near
+    /// ties.
+    #[test]
+    fn exact_l2_search_is_never_worse_than_the_float_search() {
+        // The ball experiment's screen: colours (20, 20, 24) and
+        // (245, 245, 240), sensor noise of about 3 grey levels (a sum of
+        // three uniforms), a 21x21 window, a margin of 20 px.
+        let (fw, fh, r, side) = (200usize, 160usize, 10.0f64, 21usize);
+        let render = |frame: u32, bx: f64, by: f64| {
+            let noise = bayestrack_testkit::noise(fw, fh, 9, 100 + frame);
+            rgb(fw, fh, |x, y| {
+                let inside = (x as f64 - bx).hypot(y as f64 - by) <= r;
+                let base: [i32; 3] = if inside {
+                    [20, 20, 24]
+                } else {
+                    [245, 245, 240]
+                };
+                let n = |c: usize| {
+                    (0..3)
+                        .map(|k| i32::from(noise.get(x, y, 3 * k + c).unwrap() % 7) - 3)
+                        .sum::<i32>()
+                };
+                [0, 1, 2].map(|c| (base[c] + n(c)).clamp(0, 255) as u8)
+            })
+        };
+        let exact_sum = |img: &Image<u8>, reference: &RgbHistogram, x: usize, y: usize| {
+            let hist = by_pixel(img, Rect::new(x, y, side, side), reference.bins());
+            let (n, rr) = ((side * side) as i128, i128::from(reference.pixels()));
+            hist.counts()
+                .iter()
+                .zip(reference.counts())
+                .map(|(&c, &q)| (i128::from(c) * rr - i128::from(q) * n).pow(2))
+                .sum::<i128>()
+        };
+        let first = render(0, 60.0, 50.0);
+        let reference =
+            RgbHistogram::from_window(first.view(), Rect::new(50, 40, side, side), 256).unwrap();
+        let (mut differ, mut ties) = (0, 0);
+        for frame in 1..60u32 {
+            let (bx, by) = (60.0 + 2.4 * f64::from(frame), 50.0 + 1.3 * f64::from(frame));
+            let img = render(frame, bx, by);
+            let x0 = (bx as usize - 10).saturating_sub(20);
+            let y0 = (by as usize - 10).saturating_sub(20);
+            let region = Rect::new(x0, y0, (side + 40).min(fw - x0), (side + 40).min(fh - y0));
+            let m = histogram_search(
+                img.view(),
+                &reference,
+                side,
+                side,
+                region,
+                HistogramDistance::L2,
+            )
+            .unwrap();
+            let old = float_l2_search(&img, &reference, side, side, region);
+            if (m.x, m.y) != old {
+                differ += 1;
+                let (s_new, s_old) = (
+                    exact_sum(&img, &reference, m.x, m.y),
+                    exact_sum(&img, &reference, old.0, old.1),
+                );
+                assert!(s_new <= s_old, "frame {frame}: {s_new} > {s_old}");
+                if s_new == s_old {
+                    ties += 1;
+                    assert!((m.y, m.x) < (old.1, old.0), "frame {frame}");
+                }
+            }
+        }
+        eprintln!("float and exact searches differ on {differ} of 59 frames ({ties} exact ties)");
+    }
+
     proptest::proptest! {
         #![proptest_config(proptest::prelude::ProptestConfig::with_cases(256))]
         /// The exact sliding L2 search finds the brute-force window (ties
