@@ -1,6 +1,8 @@
 //! Rendering the scenes and running the trackers: grid, re-initialisation, crossing and snapshot jobs, the per-frame log.
 
 use super::*;
+use crate::scenes::WebcamStream;
+use bayestrack_image::ImageView;
 
 pub(super) fn failed(what: &str, e: impl std::fmt::Display) -> ExperimentError {
     ExperimentError::Failed {
@@ -101,10 +103,11 @@ pub(super) fn track(
     key: GridKey,
     config: &CondensationConfig,
     run: usize,
-    frames: &[Image<u8>],
-    truth: &[FrameTruth],
-    outlines: &[Outline],
+    scene: &Rendered,
 ) -> Result<TrackRun, ExperimentError> {
+    let (truth, outlines) = (&scene.truth, &scene.outlines);
+    let mut frames = scene.frames()?;
+    let (_, first) = frames.next().ok_or_else(|| failed("scene", "no frames"))?;
     let what = format!("{} run {run}", key.label());
     let mut t = Single::new(key.representation, key.cue, key.particles, None, run as u64)?;
     let target = |k: usize| {
@@ -113,14 +116,14 @@ pub(super) fn track(
             .ok_or_else(|| failed(&what, format!("frame {k} has no target")))
     };
     t.tracker()
-        .init(frames[0].view(), target(0)?.bbox)
+        .init(first, target(0)?.bbox)
         .map_err(|e| failed(&what, e))?;
     let mut out = TrackRun::default();
-    for (k, frame) in frames.iter().enumerate().skip(1) {
+    while let Some((k, frame)) = frames.next() {
         let start = Instant::now();
         let e = t
             .tracker()
-            .step(frame.view())
+            .step(frame)
             .map_err(|e| failed(&what, format!("frame {k}: {e}")))?;
         if config.timing {
             out.seconds += start.elapsed().as_secs_f64();
@@ -140,26 +143,67 @@ pub(super) fn track(
     Ok(out)
 }
 
-/// A tracking scene in memory: frames, truth and the target's outline.
+/// A tracking scene: its truth and the target's outline per frame in
+/// memory, its frames rendered again, one at a time, by each job that
+/// tracks it ([`Rendered::frames`]). Keeping every run's frames instead
+/// took 855 MB at paper scale.
 pub(super) struct Rendered {
-    frames: Vec<Image<u8>>,
+    scene: WebcamScene,
+    seed: u64,
     truth: Vec<FrameTruth>,
     /// Outline of object 0 per frame.
     outlines: Vec<Outline>,
 }
 
+/// The frames of a [`Rendered`] scene in order, each rendered into one
+/// buffer (a lending iterator: a frame lives until the next call).
+pub(super) struct Frames {
+    stream: WebcamStream,
+    buffer: Image<u8>,
+    next: usize,
+}
+
+impl Frames {
+    /// The next frame and its index.
+    pub(super) fn next(&mut self) -> Option<(usize, ImageView<'_, u8>)> {
+        self.stream.next_into(&mut self.buffer)?;
+        self.next += 1;
+        Some((self.next - 1, self.buffer.view()))
+    }
+}
+
+impl Rendered {
+    /// Frames in the scene.
+    pub(super) fn len(&self) -> usize {
+        self.truth.len()
+    }
+
+    /// The scene's frames from the first, rendered afresh (the same
+    /// images every time: the stream is a function of the seed).
+    pub(super) fn frames(&self) -> Result<Frames, ExperimentError> {
+        Ok(Frames {
+            stream: self
+                .scene
+                .stream(self.seed)
+                .map_err(|e| failed("scene", e))?,
+            buffer: Image::new(1, 1, 3, 0u8).map_err(|e| failed("scene", e))?,
+            next: 0,
+        })
+    }
+}
+
 pub(super) fn render(scene: &WebcamScene, seed: u64) -> Result<Rendered, ExperimentError> {
     let mut stream = scene.stream(seed).map_err(|e| failed("scene", e))?;
     let mut out = Rendered {
-        frames: Vec::new(),
+        scene: scene.clone(),
+        seed,
         truth: Vec::new(),
         outlines: Vec::new(),
     };
-    while let Some(f) = stream.next_frame() {
-        let mut o = stream.outlines(f.truth.index);
+    while let Some(t) = stream.skip_frame() {
+        let mut o = stream.outlines(t.index);
         out.outlines.push(o.swap_remove(0));
-        out.frames.push(f.image);
-        out.truth.push(f.truth);
+        out.truth.push(t);
     }
     Ok(out)
 }
@@ -223,8 +267,10 @@ pub(super) fn reinit_run(
     let face = scene.truth[0]
         .target()
         .ok_or_else(|| failed(&what, "no face"))?;
+    let mut frames = scene.frames()?;
+    let (_, first) = frames.next().ok_or_else(|| failed(&what, "no frames"))?;
     t.tracker()
-        .init(scene.frames[0].view(), face.bbox)
+        .init(first, face.bbox)
         .map_err(|e| failed(&what, e))?;
     let mut out = ReinitRun {
         key,
@@ -234,10 +280,10 @@ pub(super) fn reinit_run(
         distance: Vec::new(),
     };
     let mut streak = 0;
-    for (k, frame) in scene.frames.iter().enumerate().skip(1) {
+    while let Some((k, frame)) = frames.next() {
         let e = t
             .tracker()
-            .step(frame.view())
+            .step(frame)
             .map_err(|e| failed(&what, format!("frame {k}: {e}")))?;
         if k < entry {
             continue;
@@ -324,11 +370,10 @@ pub(super) fn crossing_run(
     )
     .map_err(|e| failed(&what, e))?;
     let mut ids = Vec::new();
+    let mut frames = scene.frames()?;
+    let (_, first) = frames.next().ok_or_else(|| failed(&what, "no frames"))?;
     for o in &scene.truth[0].objects {
-        ids.push(
-            m.add_object(scene.frames[0].view(), o.bbox)
-                .map_err(|e| failed(&what, e))?,
-        );
+        ids.push(m.add_object(first, o.bbox).map_err(|e| failed(&what, e))?);
     }
     let mut out = CrossingRun {
         key,
@@ -336,9 +381,9 @@ pub(super) fn crossing_run(
         count: CrossingCount::default(),
         kept_at_end: false,
     };
-    for (k, frame) in scene.frames.iter().enumerate().skip(1) {
+    while let Some((k, frame)) = frames.next() {
         let est = m
-            .step(frame.view())
+            .step(frame)
             .map_err(|e| failed(&what, format!("frame {k}: {e}")))?;
         let truth: Vec<[f64; 2]> = scene.truth[k].objects.iter().map(|o| o.center0()).collect();
         if k <= aligned || (truth[0][0] - truth[1][0]).abs() <= config.separation {
@@ -393,12 +438,19 @@ pub(super) fn snapshot(
     let face = scene.truth[0]
         .target()
         .ok_or_else(|| failed(what, "no face"))?;
-    t.init(scene.frames[0].view(), face.bbox)
-        .map_err(|e| failed(what, e))?;
-    let frame = frame.clamp(1, scene.frames.len() - 1);
-    for f in &scene.frames[1..=frame] {
-        t.step(f.view()).map_err(|e| failed(what, e))?;
+    let mut frames = scene.frames()?;
+    let (_, first) = frames.next().ok_or_else(|| failed(what, "no frames"))?;
+    t.init(first, face.bbox).map_err(|e| failed(what, e))?;
+    let frame = frame.clamp(1, scene.len() - 1);
+    let mut image = None;
+    while let Some((k, f)) = frames.next() {
+        t.step(f).map_err(|e| failed(what, e))?;
+        if k == frame {
+            image = Some(f.to_image());
+            break;
+        }
     }
+    let image = image.ok_or_else(|| failed(what, format!("no frame {frame}")))?;
     let pts = |v: Vec<nalgebra::Vector2<f64>>| v.iter().map(|p| [p.x, p.y]).collect::<Vec<_>>();
     let particles = t.particles().ok_or_else(|| failed(what, "no particles"))?;
     let weights = t.weights().ok_or_else(|| failed(what, "no weights"))?;
@@ -410,7 +462,7 @@ pub(super) fn snapshot(
     let m = t.mean_state().ok_or_else(|| failed(what, "no mean"))?;
     Ok(ParticleSnapshot {
         frame,
-        image: scene.frames[frame].clone(),
+        image,
         curves,
         mean: pts(t.curve(&m)),
         truth: scene.outlines[frame].clone(),
@@ -563,7 +615,7 @@ pub(super) fn run_job(
     Ok(match job {
         Job::Grid(key, r) => {
             let s = &scenes[0];
-            Done::Grid(track(key, config, r, &s.frames, &s.truth, &s.outlines)?)
+            Done::Grid(track(key, config, r, s)?)
         }
         Job::Reinit(key, avq, r) => {
             Done::Reinit(reinit_run(key, avq, config, r, &scenes[1], entry)?)
