@@ -159,6 +159,7 @@ fn kernels<'a>(data: &'a Data) -> Vec<Kernel<'a>> {
     binning
         .bin_map_into(data.smooth.view(), Rect::new(0, 0, 320, 240), &mut map)
         .unwrap();
+    let ring_map = map.clone();
     let mut h = KernelHistogram::new(binning.len());
     let mut reference = KernelHistogram::new(binning.len());
     reference
@@ -180,7 +181,7 @@ fn kernels<'a>(data: &'a Data) -> Vec<Kernel<'a>> {
         "KernelHistogram ring 40x60 x1.5 (110 bins)".to_string(),
         60 * 90 - 40 * 60,
         Box::new(move || {
-            ring.ring(&map, black_box(152.0), 101.0, 20.0, 30.0, 1.5, 1)
+            ring.ring(&ring_map, black_box(152.0), 101.0, 20.0, 30.0, 1.5, 1)
                 .unwrap();
             black_box(ring.total());
         }),
