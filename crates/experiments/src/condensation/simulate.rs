@@ -1,8 +1,6 @@
 //! Rendering the scenes and running the trackers: grid, re-initialisation, crossing and snapshot jobs, the per-frame log.
 
 use super::*;
-use crate::scenes::WebcamStream;
-use bayestrack_image::ImageView;
 
 pub(super) fn failed(what: &str, e: impl std::fmt::Display) -> ExperimentError {
     ExperimentError::Failed {
@@ -103,11 +101,10 @@ pub(super) fn track(
     key: GridKey,
     config: &CondensationConfig,
     run: usize,
-    scene: &Rendered,
+    frames: &[Image<u8>],
+    truth: &[FrameTruth],
+    outlines: &[Outline],
 ) -> Result<TrackRun, ExperimentError> {
-    let (truth, outlines) = (&scene.truth, &scene.outlines);
-    let mut frames = scene.frames()?;
-    let (_, first) = frames.next().ok_or_else(|| failed("scene", "no frames"))?;
     let what = format!("{} run {run}", key.label());
     let mut t = Single::new(key.representation, key.cue, key.particles, None, run as u64)?;
     let target = |k: usize| {
@@ -116,14 +113,14 @@ pub(super) fn track(
             .ok_or_else(|| failed(&what, format!("frame {k} has no target")))
     };
     t.tracker()
-        .init(first, target(0)?.bbox)
+        .init(frames[0].view(), target(0)?.bbox)
         .map_err(|e| failed(&what, e))?;
     let mut out = TrackRun::default();
-    while let Some((k, frame)) = frames.next() {
+    for (k, frame) in frames.iter().enumerate().skip(1) {
         let start = Instant::now();
         let e = t
             .tracker()
-            .step(frame)
+            .step(frame.view())
             .map_err(|e| failed(&what, format!("frame {k}: {e}")))?;
         if config.timing {
             out.seconds += start.elapsed().as_secs_f64();
@@ -143,67 +140,26 @@ pub(super) fn track(
     Ok(out)
 }
 
-/// A tracking scene: its truth and the target's outline per frame in
-/// memory, its frames rendered again, one at a time, by each job that
-/// tracks it ([`Rendered::frames`]). Keeping every run's frames instead
-/// took 855 MB at paper scale.
+/// A tracking scene in memory: frames, truth and the target's outline.
 pub(super) struct Rendered {
-    scene: WebcamScene,
-    seed: u64,
+    frames: Vec<Image<u8>>,
     truth: Vec<FrameTruth>,
     /// Outline of object 0 per frame.
     outlines: Vec<Outline>,
 }
 
-/// The frames of a [`Rendered`] scene in order, each rendered into one
-/// buffer (a lending iterator: a frame lives until the next call).
-pub(super) struct Frames {
-    stream: WebcamStream,
-    buffer: Image<u8>,
-    next: usize,
-}
-
-impl Frames {
-    /// The next frame and its index.
-    pub(super) fn next(&mut self) -> Option<(usize, ImageView<'_, u8>)> {
-        self.stream.next_into(&mut self.buffer)?;
-        self.next += 1;
-        Some((self.next - 1, self.buffer.view()))
-    }
-}
-
-impl Rendered {
-    /// Frames in the scene.
-    pub(super) fn len(&self) -> usize {
-        self.truth.len()
-    }
-
-    /// The scene's frames from the first, rendered afresh (the same
-    /// images every time: the stream is a function of the seed).
-    pub(super) fn frames(&self) -> Result<Frames, ExperimentError> {
-        Ok(Frames {
-            stream: self
-                .scene
-                .stream(self.seed)
-                .map_err(|e| failed("scene", e))?,
-            buffer: Image::new(1, 1, 3, 0u8).map_err(|e| failed("scene", e))?,
-            next: 0,
-        })
-    }
-}
-
 pub(super) fn render(scene: &WebcamScene, seed: u64) -> Result<Rendered, ExperimentError> {
     let mut stream = scene.stream(seed).map_err(|e| failed("scene", e))?;
     let mut out = Rendered {
-        scene: scene.clone(),
-        seed,
+        frames: Vec::new(),
         truth: Vec::new(),
         outlines: Vec::new(),
     };
-    while let Some(t) = stream.skip_frame() {
-        let mut o = stream.outlines(t.index);
+    while let Some(f) = stream.next_frame() {
+        let mut o = stream.outlines(f.truth.index);
         out.outlines.push(o.swap_remove(0));
-        out.truth.push(t);
+        out.frames.push(f.image);
+        out.truth.push(f.truth);
     }
     Ok(out)
 }
@@ -267,10 +223,8 @@ pub(super) fn reinit_run(
     let face = scene.truth[0]
         .target()
         .ok_or_else(|| failed(&what, "no face"))?;
-    let mut frames = scene.frames()?;
-    let (_, first) = frames.next().ok_or_else(|| failed(&what, "no frames"))?;
     t.tracker()
-        .init(first, face.bbox)
+        .init(scene.frames[0].view(), face.bbox)
         .map_err(|e| failed(&what, e))?;
     let mut out = ReinitRun {
         key,
@@ -280,10 +234,10 @@ pub(super) fn reinit_run(
         distance: Vec::new(),
     };
     let mut streak = 0;
-    while let Some((k, frame)) = frames.next() {
+    for (k, frame) in scene.frames.iter().enumerate().skip(1) {
         let e = t
             .tracker()
-            .step(frame)
+            .step(frame.view())
             .map_err(|e| failed(&what, format!("frame {k}: {e}")))?;
         if k < entry {
             continue;
@@ -370,10 +324,11 @@ pub(super) fn crossing_run(
     )
     .map_err(|e| failed(&what, e))?;
     let mut ids = Vec::new();
-    let mut frames = scene.frames()?;
-    let (_, first) = frames.next().ok_or_else(|| failed(&what, "no frames"))?;
     for o in &scene.truth[0].objects {
-        ids.push(m.add_object(first, o.bbox).map_err(|e| failed(&what, e))?);
+        ids.push(
+            m.add_object(scene.frames[0].view(), o.bbox)
+                .map_err(|e| failed(&what, e))?,
+        );
     }
     let mut out = CrossingRun {
         key,
@@ -381,9 +336,9 @@ pub(super) fn crossing_run(
         count: CrossingCount::default(),
         kept_at_end: false,
     };
-    while let Some((k, frame)) = frames.next() {
+    for (k, frame) in scene.frames.iter().enumerate().skip(1) {
         let est = m
-            .step(frame)
+            .step(frame.view())
             .map_err(|e| failed(&what, format!("frame {k}: {e}")))?;
         let truth: Vec<[f64; 2]> = scene.truth[k].objects.iter().map(|o| o.center0()).collect();
         if k <= aligned || (truth[0][0] - truth[1][0]).abs() <= config.separation {
@@ -438,19 +393,12 @@ pub(super) fn snapshot(
     let face = scene.truth[0]
         .target()
         .ok_or_else(|| failed(what, "no face"))?;
-    let mut frames = scene.frames()?;
-    let (_, first) = frames.next().ok_or_else(|| failed(what, "no frames"))?;
-    t.init(first, face.bbox).map_err(|e| failed(what, e))?;
-    let frame = frame.clamp(1, scene.len() - 1);
-    let mut image = None;
-    while let Some((k, f)) = frames.next() {
-        t.step(f).map_err(|e| failed(what, e))?;
-        if k == frame {
-            image = Some(f.to_image());
-            break;
-        }
+    t.init(scene.frames[0].view(), face.bbox)
+        .map_err(|e| failed(what, e))?;
+    let frame = frame.clamp(1, scene.frames.len() - 1);
+    for f in &scene.frames[1..=frame] {
+        t.step(f.view()).map_err(|e| failed(what, e))?;
     }
-    let image = image.ok_or_else(|| failed(what, format!("no frame {frame}")))?;
     let pts = |v: Vec<nalgebra::Vector2<f64>>| v.iter().map(|p| [p.x, p.y]).collect::<Vec<_>>();
     let particles = t.particles().ok_or_else(|| failed(what, "no particles"))?;
     let weights = t.weights().ok_or_else(|| failed(what, "no weights"))?;
@@ -462,7 +410,7 @@ pub(super) fn snapshot(
     let m = t.mean_state().ok_or_else(|| failed(what, "no mean"))?;
     Ok(ParticleSnapshot {
         frame,
-        image,
+        image: scene.frames[frame].clone(),
         curves,
         mean: pts(t.curve(&m)),
         truth: scene.outlines[frame].clone(),
@@ -581,14 +529,31 @@ pub(super) fn prepare(
                 return Ok(None);
             }
             let s = config.scene_seed + r as u64;
-            Ok(Some([
-                render(&tracking_scene(config), s)?,
-                render(&enter, s)?,
-                render(&cross, s)?,
-            ]))
+            // one run per group: its three scenes in parallel
+            let (tracking, (entering, crossing)) = rayon::join(
+                || render(&tracking_scene(config), s),
+                || rayon::join(|| render(&enter, s), || render(&cross, s)),
+            );
+            Ok(Some([tracking?, entering?, crossing?]))
         })
         .collect::<Result<_, _>>()
         .map(RenderedRuns)
+}
+
+/// The jobs of one run per group (the snapshot with run 0), so that one
+/// run's scenes are in memory at a time: keeping every run's frames took
+/// 855 MB at paper scale.
+pub(super) fn groups(config: &CondensationConfig, jobs: &[usize]) -> Vec<Vec<usize>> {
+    let mut groups = vec![Vec::new(); config.runs];
+    for &j in jobs {
+        let r = match job(config, j) {
+            Job::Grid(_, r) | Job::Reinit(_, _, r) | Job::Crossing(_, _, r) => r,
+            Job::Snapshot => 0,
+        };
+        groups[r].push(j);
+    }
+    groups.retain(|g| !g.is_empty());
+    groups
 }
 
 /// Runs job `j` on the rendered scenes.
@@ -615,7 +580,7 @@ pub(super) fn run_job(
     Ok(match job {
         Job::Grid(key, r) => {
             let s = &scenes[0];
-            Done::Grid(track(key, config, r, s)?)
+            Done::Grid(track(key, config, r, &s.frames, &s.truth, &s.outlines)?)
         }
         Job::Reinit(key, avq, r) => {
             Done::Reinit(reinit_run(key, avq, config, r, &scenes[1], entry)?)
