@@ -437,16 +437,28 @@ impl KernelHistogram {
                 if span.0 >= span.1 {
                     continue;
                 }
-                for &bin in row[span.0 * step..]
-                    .iter()
-                    .step_by(step)
-                    .take(span.1 - span.0)
-                {
+                let weights = &mut self.weights;
+                let mut add = |bin: u16| {
                     let bin = usize::from(bin);
                     if bin >= nbins {
                         return Err(incompatible(bin, nbins));
                     }
-                    self.weights[bin] += 1.0;
+                    weights[bin] += 1.0;
+                    Ok(())
+                };
+                if step == 1 {
+                    // contiguous: a plain slice loop
+                    for &bin in &row[span.0..span.1] {
+                        add(bin)?;
+                    }
+                } else {
+                    for &bin in row[span.0 * step..]
+                        .iter()
+                        .step_by(step)
+                        .take(span.1 - span.0)
+                    {
+                        add(bin)?;
+                    }
                 }
                 count += span.1 - span.0;
             }
