@@ -3,7 +3,8 @@
 //! frame (runs of equal pixels, where increments of one counter serialise),
 //! their L2 and Bhattacharyya distances, the HSV skin map of eq. 8 (Lee, Jo
 //! and Kang (paper 003)), the interframe difference of eq. 7, and the HSV bin
-//! map with a kernel histogram.
+//! map with a kernel histogram and a ring, and the exhaustive L2
+//! `histogram_search` of the ball trackers (tall and wide windows).
 //!
 //! `CUES_COUNT=<iterations> cargo bench --bench cues -- <substring>` skips
 //! criterion and runs each kernel whose name contains the substring that
@@ -14,7 +15,8 @@
 use std::hint::black_box;
 
 use bayestrack_appearance::{
-    BinMap, HsvBinning, KernelHistogram, RgbHistogram, SkinModel, interframe_difference_into,
+    BinMap, HistogramDistance, HsvBinning, KernelHistogram, RgbHistogram, SkinModel,
+    histogram_search, interframe_difference_into,
 };
 use bayestrack_image::{Image, Rect, rgb_to_gray};
 use criterion::{Criterion, Throughput};
@@ -157,6 +159,7 @@ fn kernels<'a>(data: &'a Data) -> Vec<Kernel<'a>> {
     binning
         .bin_map_into(data.smooth.view(), Rect::new(0, 0, 320, 240), &mut map)
         .unwrap();
+    let ring_map = map.clone();
     let mut h = KernelHistogram::new(binning.len());
     let mut reference = KernelHistogram::new(binning.len());
     reference
@@ -171,6 +174,43 @@ fn kernels<'a>(data: &'a Data) -> Vec<Kernel<'a>> {
             black_box(h.bhattacharyya(&reference).unwrap());
         }),
     ));
+    // hist-pf-scale's background: the ring between a 40x60 box and the
+    // box grown 1.5 times (its default), every pixel.
+    let mut ring = KernelHistogram::new(binning.len());
+    v.push((
+        "KernelHistogram ring 40x60 x1.5 (110 bins)".to_string(),
+        60 * 90 - 40 * 60,
+        Box::new(move || {
+            ring.ring(&ring_map, black_box(152.0), 101.0, 20.0, 30.0, 1.5, 1)
+                .unwrap();
+            black_box(ring.total());
+        }),
+    ));
+    // The ball trackers' exhaustive search: a tall 20x48 window (as on
+    // Crossing) over a region with 41x41 positions, and a wide 48x20 one.
+    for (w, h, label) in [(20, 48, "tall"), (48, 20, "wide")] {
+        let frame = &data.smooth;
+        let reference =
+            RgbHistogram::from_window(frame.view(), Rect::new(150, 90, w, h), 256).unwrap();
+        let region = Rect::new(130, 70, w + 40, h + 40);
+        v.push((
+            format!("histogram_search L2 {w}x{h} ({label}), 41x41 positions, 3x256 (smooth)"),
+            41 * 41,
+            Box::new(move || {
+                black_box(
+                    histogram_search(
+                        black_box(frame.view()),
+                        &reference,
+                        w,
+                        h,
+                        region,
+                        HistogramDistance::L2,
+                    )
+                    .unwrap(),
+                );
+            }),
+        ));
+    }
     v
 }
 

@@ -481,10 +481,19 @@ impl Running<'_> {
 }
 
 /// Exhaustive search for the `width x height` window inside `region` whose
-/// histogram is closest to `reference`. Sliding: moving one column right
-/// removes one column and adds one, and the distance is updated per changed
-/// bin, so a step costs O(height) instead of O(width x height + bins).
-/// Ties go to the first window in raster order.
+/// histogram is closest to `reference`. Ties go to the first window in
+/// raster order.
+///
+/// L2 is searched exactly in integers: with window counts `c_k` of `n`
+/// pixels and reference counts `r_k` of `R` pixels, `e_k = c_k R - r_k n`
+/// and `S = sum_k e_k^2 = (n R)^2 d^2`, so windows compare by `S` without
+/// rounding. The window snakes through the region one pixel at a time
+/// (down one column of positions, one step right, up the next; or along
+/// rows for a wide window), always moving across its shorter side, and a
+/// pixel leaving bin `a` while one enters bin `b` changes `S` by the closed
+/// form `2R (e_b - e_a + R [a != b])`; a step costs O(min(width, height)).
+/// The distance returned is the best window's [`RgbHistogram::distance`].
+/// Bhattacharyya slides along rows with a running floating-point sum.
 ///
 /// # Errors
 /// [`ImageError::Channels`] unless the frame has 3 channels;
@@ -523,6 +532,30 @@ pub fn histogram_search(
         });
     }
     let bins = reference.bins;
+    if kind == HistogramDistance::L2 {
+        // |e_k| <= n R and S <= 2 (n R)^2 per channel: a type holds every
+        // intermediate while it holds 8 (n R)^2.
+        let bound = (width as u128)
+            .checked_mul(height as u128)
+            .and_then(|n| n.checked_mul(u128::from(reference.pixels)))
+            .and_then(|nr| nr.checked_mul(nr))
+            .and_then(|nr2| nr2.checked_mul(8));
+        let best = match bound {
+            Some(b) if b <= i64::MAX as u128 => {
+                Some(l2_search::<i64>(frame, reference, width, height, region))
+            }
+            Some(b) if b <= i128::MAX as u128 => {
+                Some(l2_search::<i128>(frame, reference, width, height, region))
+            }
+            _ => None,
+        };
+        if let Some((x, y)) = best {
+            let mut hist = RgbHistogram::new(bins)?;
+            hist.compute(frame, Rect::new(x, y, width, height))?;
+            let distance = hist.distance(reference, kind)?;
+            return Ok(HistogramMatch { x, y, distance });
+        }
+    }
     let q: Vec<f64> = (0..3 * bins)
         .map(|k| f64::from(reference.counts[k]) / f64::from(reference.pixels))
         .collect();
@@ -564,6 +597,172 @@ pub fn histogram_search(
         }
     }
     Ok(best)
+}
+
+/// The integer type of [`l2_search`]'s sum: `i64`, or `i128` for windows
+/// and references so large that `8 (n R)^2` overflows `i64`.
+trait ExactSum:
+    Copy
+    + Ord
+    + From<i64>
+    + std::ops::Add<Output = Self>
+    + std::ops::Sub<Output = Self>
+    + std::ops::Mul<Output = Self>
+    + std::ops::AddAssign
+    + std::ops::SubAssign
+{
+}
+
+impl ExactSum for i64 {}
+impl ExactSum for i128 {}
+
+/// The exact L2 state of [`histogram_search`]'s sliding window:
+/// `e[k] = c_k R - r_k n` per channel-major bin `k`, and `s = sum_k e_k^2`.
+struct ExactL2<'a, A> {
+    e: Vec<A>,
+    s: A,
+    /// `R`, the reference's pixel count.
+    r: A,
+    /// `2 R^2`, the change of `s` from a moved pixel beyond the `e` terms.
+    two_r2: A,
+    /// `offset[c][v]`: the channel-major bin of value `v` in channel `c`.
+    offset: [[u16; 256]; 3],
+    frame: ImageView<'a, u8>,
+}
+
+impl<A: ExactSum> ExactL2<'_, A> {
+    /// A pixel `out` leaves the window and `inn` enters it:
+    /// `s += 2R (e_b - e_a) + 2R^2 [a != b]` (zero when the bins agree),
+    /// then `e_a -= R`, `e_b += R`.
+    #[inline(always)]
+    fn swap(&mut self, out: &[u8], inn: &[u8]) {
+        for c in 0..3 {
+            let a = usize::from(self.offset[c][usize::from(out[c])]);
+            let b = usize::from(self.offset[c][usize::from(inn[c])]);
+            if a != b {
+                let (ea, eb) = (self.e[a], self.e[b]);
+                self.s += (eb - ea + eb - ea) * self.r + self.two_r2;
+                self.e[a] = ea - self.r;
+                self.e[b] = eb + self.r;
+            }
+        }
+    }
+
+    /// The window at `(x, y)` moves one column: `out` leaves and `inn`
+    /// enters on rows `y..y + height`.
+    fn move_column(&mut self, out: usize, inn: usize, y: usize, height: usize) {
+        for yy in y..y + height {
+            let row = self.frame.row(yy);
+            self.swap(&row[out * 3..out * 3 + 3], &row[inn * 3..inn * 3 + 3]);
+        }
+    }
+
+    /// The window at `(x, y)` moves one row: row `out` leaves and `inn`
+    /// enters on columns `x..x + width`.
+    fn move_row(&mut self, out: usize, inn: usize, x: usize, width: usize) {
+        let frame = self.frame;
+        let po = &frame.row(out)[x * 3..(x + width) * 3];
+        let pi = &frame.row(inn)[x * 3..(x + width) * 3];
+        for (o, i) in po.chunks_exact(3).zip(pi.chunks_exact(3)) {
+            self.swap(o, i);
+        }
+    }
+}
+
+/// The best L2 window of [`histogram_search`] (arguments checked there), by
+/// the exact sum of [`ExactL2`]: the smallest `s`, ties to the first window
+/// in raster order.
+fn l2_search<A: ExactSum>(
+    frame: ImageView<'_, u8>,
+    reference: &RgbHistogram,
+    width: usize,
+    height: usize,
+    region: Rect,
+) -> (usize, usize) {
+    let bins = reference.bins;
+    let n = (width * height) as i64;
+    let r = i64::from(reference.pixels);
+    let mut offset = [[0u16; 256]; 3];
+    for (c, o) in offset.iter_mut().enumerate() {
+        for (v, slot) in o.iter_mut().enumerate() {
+            *slot = (c * bins + ((v * bins) >> 8)) as u16;
+        }
+    }
+    // The first window's counts.
+    let mut counts = vec![0i64; 3 * bins];
+    for yy in region.y..region.y + height {
+        let row = &frame.row(yy)[region.x * 3..(region.x + width) * 3];
+        for p in row.chunks_exact(3) {
+            for c in 0..3 {
+                counts[usize::from(offset[c][usize::from(p[c])])] += 1;
+            }
+        }
+    }
+    let e: Vec<A> = counts
+        .iter()
+        .zip(&reference.counts)
+        .map(|(&c, &q)| A::from(c * r) - A::from(i64::from(q)) * A::from(n))
+        .collect();
+    let s = e.iter().fold(A::from(0), |acc, &v| acc + v * v);
+    let ra = A::from(r);
+    let mut st = ExactL2 {
+        e,
+        s,
+        r: ra,
+        two_r2: A::from(2) * ra * ra,
+        offset,
+        frame,
+    };
+    let (nx, ny) = (region.width - width + 1, region.height - height + 1);
+    let mut best = (st.s, region.y, region.x);
+    let mut consider = |s: A, x: usize, y: usize| {
+        if (s, y, x) < best {
+            best = (s, y, x);
+        }
+    };
+    let (mut x, mut y) = (region.x, region.y);
+    if height > width {
+        // Down and up columns of positions; a vertical step moves a row
+        // of `width` pixels, a step right a column of `height`.
+        for ix in 0..nx {
+            if ix > 0 {
+                st.move_column(x, x + width, y, height);
+                x += 1;
+            }
+            for iy in 0..ny {
+                if iy > 0 {
+                    if ix % 2 == 0 {
+                        st.move_row(y, y + height, x, width);
+                        y += 1;
+                    } else {
+                        st.move_row(y + height - 1, y - 1, x, width);
+                        y -= 1;
+                    }
+                }
+                consider(st.s, x, y);
+            }
+        }
+    } else {
+        for iy in 0..ny {
+            if iy > 0 {
+                st.move_row(y, y + height, x, width);
+                y += 1;
+            }
+            for ix in 0..nx {
+                if ix > 0 {
+                    if iy % 2 == 0 {
+                        st.move_column(x, x + width, y, height);
+                        x += 1;
+                    } else {
+                        st.move_column(x + width - 1, x - 1, y, height);
+                        x -= 1;
+                    }
+                }
+                consider(st.s, x, y);
+            }
+        }
+    }
+    (best.2, best.1)
 }
 
 #[cfg(test)]
@@ -707,6 +906,190 @@ mod tests {
             }
         }
         h
+    }
+
+    /// The L2 search by brute force: every window's histogram counted
+    /// afresh, `S = sum_k (c_k R - r_k n)^2` in `i128`, the smallest `S`
+    /// first in raster order.
+    fn l2_reference(
+        img: &Image<u8>,
+        reference: &RgbHistogram,
+        w: usize,
+        h: usize,
+        region: Rect,
+    ) -> (usize, usize) {
+        let (n, r) = ((w * h) as i128, i128::from(reference.pixels()));
+        let mut best = (i128::MAX, 0, 0);
+        for y in region.y..=region.bottom() - h {
+            for x in region.x..=region.right() - w {
+                let hist = by_pixel(img, Rect::new(x, y, w, h), reference.bins());
+                let s: i128 = hist
+                    .counts()
+                    .iter()
+                    .zip(reference.counts())
+                    .map(|(&c, &q)| (i128::from(c) * r - i128::from(q) * n).pow(2))
+                    .sum();
+                if s < best.0 {
+                    best = (s, x, y);
+                }
+            }
+        }
+        (best.1, best.2)
+    }
+
+    /// The floating-point sliding L2 search that the exact one replaced
+    /// (a running sum of per-bin term changes, row by row).
+    fn float_l2_search(
+        img: &Image<u8>,
+        reference: &RgbHistogram,
+        w: usize,
+        h: usize,
+        region: Rect,
+    ) -> (usize, usize) {
+        let bins = reference.bins;
+        let q: Vec<f64> = (0..3 * bins)
+            .map(|k| f64::from(reference.counts[k]) / f64::from(reference.pixels))
+            .collect();
+        let mut hist = RgbHistogram::new(bins).unwrap();
+        let mut run = Running {
+            q: &q,
+            n: (w * h) as f64,
+            kind: HistogramDistance::L2,
+            acc: 0.0,
+        };
+        let mut best = (f64::INFINITY, region.x, region.y);
+        let bin = |v: u8| (usize::from(v) * bins) >> 8;
+        for y in region.y..=region.bottom() - h {
+            hist.compute(img.view(), Rect::new(region.x, y, w, h))
+                .unwrap();
+            run.reset(&hist.counts);
+            for x in region.x..=region.right() - w {
+                let d = run.distance();
+                if d < best.0 {
+                    best = (d, x, y);
+                }
+                if x + w >= region.right() {
+                    break;
+                }
+                for yy in y..y + h {
+                    let row = img.row(yy);
+                    for c in 0..3 {
+                        run.bump(&mut hist.counts, c * bins + bin(row[x * 3 + c]), false);
+                        run.bump(&mut hist.counts, c * bins + bin(row[(x + w) * 3 + c]), true);
+                    }
+                }
+            }
+        }
+        (best.1, best.2)
+    }
+
+    /// Where the exact search and the floating-point one it replaced pick
+    /// different windows (on the ball experiment's kind of frame: a dark
+    /// disc on a light screen, a few grey levels of noise, so that many
+    /// windows tie), the exact pick is never worse: a smaller exact sum,
+    /// or the same sum earlier in raster order. The float search's running
+    /// sum drifts by rounding along a row, which reorders ties and near
+    /// ties.
+    #[test]
+    fn exact_l2_search_is_never_worse_than_the_float_search() {
+        // The ball experiment's screen: colours (20, 20, 24) and
+        // (245, 245, 240), sensor noise of about 3 grey levels (a sum of
+        // three uniforms), a 21x21 window, a margin of 20 px.
+        let (fw, fh, r, side) = (200usize, 160usize, 10.0f64, 21usize);
+        let render = |frame: u32, bx: f64, by: f64| {
+            let noise = bayestrack_testkit::noise(fw, fh, 9, 100 + frame);
+            rgb(fw, fh, |x, y| {
+                let inside = (x as f64 - bx).hypot(y as f64 - by) <= r;
+                let base: [i32; 3] = if inside {
+                    [20, 20, 24]
+                } else {
+                    [245, 245, 240]
+                };
+                let n = |c: usize| {
+                    (0..3)
+                        .map(|k| i32::from(noise.get(x, y, 3 * k + c).unwrap() % 7) - 3)
+                        .sum::<i32>()
+                };
+                [0, 1, 2].map(|c| (base[c] + n(c)).clamp(0, 255) as u8)
+            })
+        };
+        let exact_sum = |img: &Image<u8>, reference: &RgbHistogram, x: usize, y: usize| {
+            let hist = by_pixel(img, Rect::new(x, y, side, side), reference.bins());
+            let (n, rr) = ((side * side) as i128, i128::from(reference.pixels()));
+            hist.counts()
+                .iter()
+                .zip(reference.counts())
+                .map(|(&c, &q)| (i128::from(c) * rr - i128::from(q) * n).pow(2))
+                .sum::<i128>()
+        };
+        let first = render(0, 60.0, 50.0);
+        let reference =
+            RgbHistogram::from_window(first.view(), Rect::new(50, 40, side, side), 256).unwrap();
+        let (mut differ, mut ties) = (0, 0);
+        for frame in 1..60u32 {
+            let (bx, by) = (60.0 + 2.4 * f64::from(frame), 50.0 + 1.3 * f64::from(frame));
+            let img = render(frame, bx, by);
+            let x0 = (bx as usize - 10).saturating_sub(20);
+            let y0 = (by as usize - 10).saturating_sub(20);
+            let region = Rect::new(x0, y0, (side + 40).min(fw - x0), (side + 40).min(fh - y0));
+            let m = histogram_search(
+                img.view(),
+                &reference,
+                side,
+                side,
+                region,
+                HistogramDistance::L2,
+            )
+            .unwrap();
+            let old = float_l2_search(&img, &reference, side, side, region);
+            if (m.x, m.y) != old {
+                differ += 1;
+                let (s_new, s_old) = (
+                    exact_sum(&img, &reference, m.x, m.y),
+                    exact_sum(&img, &reference, old.0, old.1),
+                );
+                assert!(s_new <= s_old, "frame {frame}: {s_new} > {s_old}");
+                if s_new == s_old {
+                    ties += 1;
+                    assert!((m.y, m.x) < (old.1, old.0), "frame {frame}");
+                }
+            }
+        }
+        eprintln!("float and exact searches differ on {differ} of 59 frames ({ties} exact ties)");
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(256))]
+        /// The exact sliding L2 search finds the brute-force window (ties
+        /// included: few levels make many equal windows), tall and wide
+        /// windows alike, and reports that window's own distance.
+        #[test]
+        fn exact_l2_search_matches_brute_force(
+            seed in 0u32..1000,
+            levels in proptest::sample::select(vec![2u32, 3, 256]),
+            bins in proptest::sample::select(vec![1usize, 4, 16, 256]),
+            w in 1usize..9,
+            h in 1usize..9,
+            rw in 0usize..9,
+            rh in 0usize..9,
+            rx in 0usize..4,
+            ry in 0usize..4,
+            refw in 1usize..6,
+        ) {
+            let img = random_rgb(24, 24, seed, levels);
+            let reference =
+                RgbHistogram::from_window(img.view(), Rect::new(7, 3, refw, refw + 1), bins)
+                    .unwrap();
+            let region = Rect::new(rx, ry, w + rw, h + rh);
+            let m = histogram_search(img.view(), &reference, w, h, region, HistogramDistance::L2)
+                .unwrap();
+            proptest::prop_assert_eq!((m.x, m.y), l2_reference(&img, &reference, w, h, region));
+            let own = RgbHistogram::from_window(img.view(), Rect::new(m.x, m.y, w, h), bins)
+                .unwrap()
+                .l2_distance(&reference)
+                .unwrap();
+            proptest::prop_assert_eq!(m.distance.to_bits(), own.to_bits());
+        }
     }
 
     #[test]

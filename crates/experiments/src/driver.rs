@@ -68,6 +68,14 @@ pub trait Paper: Sync + Send + 'static {
     /// # Errors
     /// [`ExperimentError::Failed`] naming what failed.
     fn prepare(config: &Self::Config, jobs: &[usize]) -> Result<Self::Shared, ExperimentError>;
+    /// The jobs `jobs` in the groups that run one after another, each with
+    /// its own [`Paper::prepare`] (dropped before the next group's): an
+    /// experiment whose shared data is large per run keeps one run's at a
+    /// time. The results are the same in any grouping (every job has its
+    /// own seeds); the default is one group.
+    fn groups(_config: &Self::Config, jobs: &[usize]) -> Vec<Vec<usize>> {
+        vec![jobs.to_vec()]
+    }
     /// Runs job `job` (keyed by its index alone).
     ///
     /// # Errors
@@ -212,21 +220,42 @@ fn run_jobs_partial<P: Paper>(
     log: Option<&Path>,
     progress: bool,
 ) -> Result<JobsDone<P>, ExperimentError> {
-    let shared = P::prepare(config, jobs)?;
     let partial = log.map(PartialCsv::<P::Row>::create).transpose()?;
     let bar = progress_bar(jobs.len(), progress, P::JOBS);
-    let done: Vec<P::Done> = jobs
-        .par_iter()
-        .map(|&j| {
-            let done = P::run_job(config, &shared, j)?;
-            if let Some(partial) = &partial {
-                partial.append(&P::rows(config, j, &done))?;
+    let position: std::collections::HashMap<usize, usize> =
+        jobs.iter().enumerate().map(|(i, &j)| (j, i)).collect();
+    let mut slots: Vec<Option<P::Done>> =
+        std::iter::repeat_with(|| None).take(jobs.len()).collect();
+    for group in P::groups(config, jobs) {
+        let shared = P::prepare(config, &group)?;
+        let done: Vec<P::Done> = group
+            .par_iter()
+            .map(|&j| {
+                let done = P::run_job(config, &shared, j)?;
+                if let Some(partial) = &partial {
+                    partial.append(&P::rows(config, j, &done))?;
+                }
+                bar.inc(1);
+                Ok(done)
+            })
+            .collect::<Result<_, ExperimentError>>()?;
+        for (j, d) in group.into_iter().zip(done) {
+            if let Some(&i) = position.get(&j) {
+                slots[i] = Some(d);
             }
-            bar.inc(1);
-            Ok(done)
-        })
-        .collect::<Result<_, ExperimentError>>()?;
+        }
+    }
     bar.finish_and_clear();
+    let done = slots
+        .into_iter()
+        .zip(jobs)
+        .map(|(d, &j)| {
+            d.ok_or_else(|| ExperimentError::Failed {
+                id: P::ID,
+                message: format!("job {j} in no group"),
+            })
+        })
+        .collect::<Result<Vec<_>, _>>()?;
     Ok((done, partial))
 }
 
@@ -657,6 +686,64 @@ mod tests {
         assert!(!dir.join("runs.partial.csv").exists());
         assert!(!dir.join(STAGING_DIR).exists());
         let _ = std::fs::remove_dir_all(&out);
+    }
+
+    /// Jobs run in groups (odd jobs first, then even), each group with its
+    /// own shared data that holds only its jobs.
+    struct Grouped;
+
+    impl Paper for Grouped {
+        type Config = TinyConfig;
+        type Done = usize;
+        type Row = TinyRow;
+        type Shared = Vec<usize>;
+        const ID: &'static str = "grouped";
+        const SOURCE: &'static str = "a test";
+        const SUMMARY: &'static str = "a test";
+        const LOG: &'static str = "runs.csv";
+        const JOBS: &'static str = "grouped jobs";
+        fn quick() -> TinyConfig {
+            TinyConfig::default()
+        }
+        fn full() -> TinyConfig {
+            TinyConfig::default()
+        }
+        fn jobs(_: &TinyConfig) -> usize {
+            7
+        }
+        fn prepare(_: &TinyConfig, jobs: &[usize]) -> Result<Vec<usize>, ExperimentError> {
+            Ok(jobs.to_vec())
+        }
+        fn groups(_: &TinyConfig, jobs: &[usize]) -> Vec<Vec<usize>> {
+            let (even, odd): (Vec<usize>, Vec<usize>) = jobs.iter().partition(|&&j| j % 2 == 0);
+            vec![odd, even]
+        }
+        fn run_job(
+            _: &TinyConfig,
+            shared: &Vec<usize>,
+            j: usize,
+        ) -> Result<usize, ExperimentError> {
+            assert!(shared.contains(&j), "job {j} ran with another group's data");
+            Ok(10 * j)
+        }
+        fn rows(_: &TinyConfig, j: usize, done: &usize) -> Vec<TinyRow> {
+            vec![TinyRow {
+                job: j,
+                value: *done,
+            }]
+        }
+        fn report(_: &TinyConfig, _: Vec<usize>, _: &Path) -> Result<Vec<Table>, ExperimentError> {
+            Ok(Vec::new())
+        }
+    }
+
+    #[test]
+    fn grouped_jobs_come_back_in_job_order() {
+        let c = TinyConfig::default();
+        let done = run_all::<Grouped>(&c, None, false).unwrap();
+        assert_eq!(done, vec![0, 10, 20, 30, 40, 50, 60]);
+        let done = run_jobs::<Grouped>(&c, &[1, 4, 5], None, false).unwrap();
+        assert_eq!(done, vec![10, 40, 50]);
     }
 
     #[test]

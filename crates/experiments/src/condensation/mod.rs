@@ -85,6 +85,9 @@ impl Paper for CondensationExperiment {
     fn prepare(c: &CondensationConfig, jobs: &[usize]) -> Result<Self::Shared, ExperimentError> {
         prepare(c, jobs)
     }
+    fn groups(c: &CondensationConfig, jobs: &[usize]) -> Vec<Vec<usize>> {
+        groups(c, jobs)
+    }
     fn run_job(
         c: &CondensationConfig,
         scenes: &Self::Shared,

@@ -441,13 +441,22 @@ pub struct ScoredPose {
     pub similarity: f64,
 }
 
+/// Rows per band of [`Core`]'s lazily converted gray frame.
+const BAND: usize = 16;
+
 /// State shared by the three trackers.
 #[derive(Debug, Clone)]
 pub(crate) struct Core {
     key: u64,
     seed: u64,
     cfg: AppearanceConfig,
+    /// The frame as gray `f32`, converted lazily in bands of [`BAND`]
+    /// rows: only the rows the frame's warps read ([`Core::ready_for`]).
     gray: Image<f32>,
+    /// A copy of the frame the gray bands are converted from.
+    source: Image<u8>,
+    /// Which bands of `gray` hold the current frame.
+    converted: Vec<bool>,
     size: (f64, f64),
     pe: Option<PoseEstimator>,
     model: Option<TargetModel>,
@@ -471,6 +480,8 @@ impl Core {
             key,
             seed,
             gray: Image::new(1, 1, 1, 0f32)?,
+            source: Image::new(1, 1, 1, 0u8)?,
+            converted: Vec::new(),
             size: (0.0, 0.0),
             pe: None,
             model: None,
@@ -498,15 +509,78 @@ impl Core {
         rng
     }
 
-    /// Converts the frame (1 or 3 channels, checked by the shell) to gray
-    /// `f32` in `[0, 1]`.
+    /// Takes the frame (1 or 3 channels, checked by the shell): a copy to
+    /// convert to gray `f32` in `[0, 1]` band by band, as the warps need
+    /// rows ([`Core::ready_for`], [`Core::ready_all`]). The affine
+    /// trackers' warps read a few boxes' worth of rows, so most of the
+    /// frame is never converted; a converted row holds the same values as
+    /// converting the whole frame.
     fn load(&mut self, frame: &ImageView<'_, u8>) -> Result<()> {
-        if (self.gray.width(), self.gray.height()) != (frame.width(), frame.height()) {
-            self.gray = Image::new(frame.width(), frame.height(), 1, 0f32)?;
+        let (w, h, ch) = (frame.width(), frame.height(), frame.channels());
+        if (self.gray.width(), self.gray.height()) != (w, h) {
+            self.gray = Image::new(w, h, 1, 0f32)?;
         }
-        let mut out = self.gray.view_mut();
-        bayestrack_image::to_gray_unit_into(*frame, &mut out)?;
+        if (
+            self.source.width(),
+            self.source.height(),
+            self.source.channels(),
+        ) != (w, h, ch)
+        {
+            self.source = Image::new(w, h, ch, 0u8)?;
+        }
+        for y in 0..h {
+            self.source.row_mut(y).copy_from_slice(frame.row(y));
+        }
+        self.converted.clear();
+        self.converted.resize(h.div_ceil(BAND), false);
         Ok(())
+    }
+
+    /// Converts the bands of rows `y0..=y1` (clamped to the frame) that
+    /// are not converted yet.
+    fn ready_rows(&mut self, y0: usize, y1: usize) -> Result<()> {
+        let (w, h) = (self.gray.width(), self.gray.height());
+        let last = y1.min(h.saturating_sub(1));
+        for band in y0 / BAND..=last / BAND {
+            if self.converted.get(band) != Some(&false) {
+                continue;
+            }
+            let rect = bayestrack_image::Rect::new(0, band * BAND, w, BAND.min(h - band * BAND));
+            let src = self.source.view();
+            let src = src.crop(rect)?;
+            let mut gray = self.gray.view_mut();
+            let mut out = gray.crop_mut(rect)?;
+            bayestrack_image::to_gray_unit_into(src, &mut out)?;
+            self.converted[band] = true;
+        }
+        Ok(())
+    }
+
+    /// Converts every band (before the pose estimator trains: its random
+    /// perturbations may read anywhere).
+    fn ready_all(&mut self) -> Result<()> {
+        self.ready_rows(0, self.gray.height())
+    }
+
+    /// Converts the rows a `ps x ps` warp through `map` reads: the
+    /// corners' rows (an affine map's extremes), widened by two rows for
+    /// the bilinear neighbour and rounding; everything when a corner is
+    /// not finite (the warp then fails on its own).
+    fn ready_for(&mut self, map: &Affine2, ps: usize) -> Result<()> {
+        let far = (ps.max(1) - 1) as f64;
+        let ys = [(0.0, 0.0), (far, 0.0), (0.0, far), (far, far)].map(|(u, v)| map.apply(u, v).1);
+        let (lo, hi) = ys
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &y| {
+                (lo.min(y), hi.max(y))
+            });
+        if !(lo.is_finite() && hi.is_finite()) {
+            return self.ready_all();
+        }
+        let h = self.gray.height() as f64;
+        let y0 = (lo.floor() - 2.0).clamp(0.0, h) as usize;
+        let y1 = (hi.floor() + 2.0).clamp(0.0, h) as usize;
+        self.ready_rows(y0, y1)
     }
 
     /// Starts on a frame (checked, with a checked box, by the shell):
@@ -520,6 +594,7 @@ impl Core {
         train: bool,
     ) -> Result<Vector2<f64>> {
         self.load(frame)?;
+        self.ready_all()?;
         let (w, h) = (target.width, target.height);
         let (cx, cy) = target.center();
         let centre = Vector2::new(cx - 1.0, cy - 1.0);
@@ -623,12 +698,15 @@ impl Core {
         if !self.valid(m) {
             return Ok(None);
         }
-        let (pe, model) = match (&self.pe, &self.model) {
-            (Some(p), Some(m)) => (p, m),
-            _ => return Err(TrackerError::NotInitialised),
+        let map = match &self.pe {
+            Some(pe) => pe.patch_map(m)?,
+            None => return Err(TrackerError::NotInitialised),
         };
-        let map = pe.patch_map(m)?;
         let ps = self.cfg.pose.patch_size;
+        self.ready_for(&map, ps)?;
+        let Some(model) = &self.model else {
+            return Err(TrackerError::NotInitialised);
+        };
         {
             let mut out = ImageViewMut::from_slice(&mut self.patch, ps, ps, 1, ps)?;
             match warp_into(self.gray.view(), &map, Border::Error, &mut out) {
@@ -648,6 +726,11 @@ impl Core {
         if !self.valid(m) {
             return Ok(None);
         }
+        let map = match &self.pe {
+            Some(pe) => pe.patch_map(m)?,
+            None => return Err(TrackerError::NotInitialised),
+        };
+        self.ready_for(&map, self.cfg.pose.patch_size)?;
         let (pe, model) = match (&mut self.pe, &self.model) {
             (Some(p), Some(m)) => (p, m),
             _ => return Err(TrackerError::NotInitialised),
@@ -786,6 +869,7 @@ impl Core {
                 self.stats.updated = model.update_above(view, score, &self.bg, update_threshold)?;
             }
             if self.stats.updated && train && self.cfg.training_per_update > 0 {
+                self.ready_all()?;
                 let pe = self.pe.as_mut().ok_or(TrackerError::NotInitialised)?;
                 pe.train(self.gray.view(), &pose, self.cfg.training_per_update, rng)?;
             }
