@@ -36,7 +36,7 @@ pub fn is_smooth(mut n: usize) -> bool {
         return false;
     }
     for p in [2, 3, 5] {
-        while n % p == 0 {
+        while n.is_multiple_of(p) {
             n /= p;
         }
     }

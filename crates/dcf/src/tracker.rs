@@ -330,9 +330,8 @@ impl Dcf {
         size: (f64, f64),
     ) -> Result<()> {
         let (w, h) = size;
-        if !(w.is_finite() && h.is_finite() && w >= 1.0 && h >= 1.0)
-            || !(centre.0.is_finite() && centre.1.is_finite())
-        {
+        let finite = centre.0.is_finite() && centre.1.is_finite();
+        if !(finite && w.is_finite() && h.is_finite() && w >= 1.0 && h >= 1.0) {
             return Err(DcfError::InvalidParameter {
                 name: "target",
                 value: w.min(h),
