@@ -138,7 +138,15 @@ impl Fhog {
 
     fn gradients(&mut self, p: &[f32]) {
         let (w, h) = (self.w, self.h);
-        let bins_per_radian = SENSITIVE as f32 / std::f32::consts::TAU;
+        // The nearest of the 18 directions o * 20 degrees maximises
+        // cos(theta - theta_o): the largest |g . u_o| over the 9
+        // directions of the first half circle, its sign telling the half.
+        // This is `round(18 theta / 2 pi) mod 18` without the arc tangent
+        // (the profile's largest cost); exact ties go to the lower bin.
+        let dirs: [(f32, f32); INSENSITIVE] = std::array::from_fn(|o| {
+            let a = std::f64::consts::PI * o as f64 / INSENSITIVE as f64;
+            (a.cos() as f32, a.sin() as f32)
+        });
         for y in 0..h {
             let (ya, yb, ky) = if h == 1 {
                 (0, 0, 0.0)
@@ -149,6 +157,9 @@ impl Fhog {
             } else {
                 (y - 1, y + 1, 0.5)
             };
+            let (ra, rb, row) = (&p[ya * w..][..w], &p[yb * w..][..w], &p[y * w..][..w]);
+            let mag = &mut self.mag[y * w..][..w];
+            let bins = &mut self.bin[y * w..][..w];
             for x in 0..w {
                 let (xa, xb, kx) = if w == 1 {
                     (0, 0, 0.0)
@@ -159,16 +170,17 @@ impl Fhog {
                 } else {
                     (x - 1, x + 1, 0.5)
                 };
-                let gx = kx * (p[y * w + xb] - p[y * w + xa]);
-                let gy = ky * (p[yb * w + x] - p[ya * w + x]);
-                let m = (gx * gx + gy * gy).sqrt();
-                let mut theta = gy.atan2(gx);
-                if theta < 0.0 {
-                    theta += std::f32::consts::TAU;
+                let gx = kx * (row[xb] - row[xa]);
+                let gy = ky * (rb[x] - ra[x]);
+                mag[x] = (gx * gx + gy * gy).sqrt();
+                let (mut best, mut bd) = (0usize, gx);
+                for (o, &(c, s)) in dirs.iter().enumerate().skip(1) {
+                    let d = gx * c + gy * s;
+                    if d.abs() > bd.abs() {
+                        (best, bd) = (o, d);
+                    }
                 }
-                let b = (theta * bins_per_radian).round() as usize % SENSITIVE;
-                self.mag[y * w + x] = m;
-                self.bin[y * w + x] = b as u8;
+                bins[x] = if bd >= 0.0 { best } else { best + INSENSITIVE } as u8;
             }
         }
     }
@@ -355,9 +367,16 @@ mod tests {
         let (_, out) = hog(16, 16, |x, _| if x < 8 { 1.0 } else { 0.0 });
         assert_eq!(strongest(&out, nb, 0..18), 9);
         assert_eq!(strongest(&out, nb, 18..27), 18);
-        // a horizontal edge, bright below: theta = pi/2 -> bin 4.5 rounds to... 18 * 0.25 = 4.5 -> 5 (round half away)
+        // a horizontal edge, bright below: theta = pi/2, halfway between
+        // bins 4 and 5 (80 and 100 degrees): either
         let (_, out) = hog(16, 16, |_, y| if y < 8 { 0.0 } else { 1.0 });
-        assert_eq!(strongest(&out, nb, 0..18), 5);
+        assert!([4, 5].contains(&strongest(&out, nb, 0..18)));
+        // a diagonal ramp, theta = 45 degrees -> 18 / 8 = 2.25 -> bin 2
+        let (_, out) = hog(16, 16, |x, y| (x + y) as f32 / 32.0);
+        assert_eq!(strongest(&out, nb, 0..18), 2);
+        // theta = 225 degrees -> 11.25 -> bin 11
+        let (_, out) = hog(16, 16, |x, y| (32 - x - y) as f32 / 32.0);
+        assert_eq!(strongest(&out, nb, 0..18), 11);
     }
 
     #[test]

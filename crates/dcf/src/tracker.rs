@@ -43,9 +43,11 @@ pub struct DcfConfig {
     pub learning_rate: f64,
     /// fHOG cell, pixels (KCF: 4).
     pub cell: usize,
-    /// Area the search window is resampled to, model pixels (Staple's
-    /// fixed area 150^2; KCF works at the frame's resolution and halves
-    /// large targets: a fixed area keeps the cost per frame fixed).
+    /// Largest area of the search window, model pixels (Staple's fixed
+    /// area, 150^2): a larger window is resampled down to it, a smaller one
+    /// stays at the frame's resolution as in KCF (which also works at the
+    /// frame's resolution and halves large targets). Bounds the cost per
+    /// frame.
     pub model_area: f64,
     /// The scale filter (DSST's parameters); `None` tracks translation only.
     pub scale: Option<ScaleConfig>,
@@ -343,7 +345,9 @@ impl Dcf {
             Padding::Relative(p) => (w * (1.0 + p), h * (1.0 + p)),
             Padding::MeanSide(p) => (w + p * (w + h) / 2.0, h + p * (w + h) / 2.0),
         };
-        let k = (c.model_area / (ww * wh)).sqrt();
+        // larger windows are shrunk to the model area, smaller ones kept at
+        // the frame's resolution (KCF), which bounds the cost per frame
+        let k = (c.model_area / (ww * wh)).sqrt().min(1.0);
         let cell = c.cell;
         let nx = next_smooth(((ww * k / cell as f64).round() as usize).max(4));
         let ny = next_smooth(((wh * k / cell as f64).round() as usize).max(4));

@@ -46,8 +46,9 @@ options! {
         pub learning_rate: f64 = 0.02;
         /// fHOG cell, pixels (KCF: 4).
         pub cell: usize = 4;
-        /// Area the search window is resampled to, model pixels (Staple's
-        /// fixed area, 150^2): a fixed cost per frame whatever the target size.
+        /// Largest area of the search window, model pixels (Staple's fixed
+        /// area, 150^2): larger windows are shrunk to it, smaller ones stay at
+        /// the frame's resolution (KCF); bounds the cost per frame.
         pub model_area: f64 = 22500.0;
         /// Estimate the scale with DSST's filter (false: translation only).
         pub scale: bool = true;
@@ -125,7 +126,8 @@ options! {
         pub learning_rate: f64 = 0.01;
         /// fHOG cell, pixels (Staple: 4).
         pub cell: usize = 4;
-        /// Area the search window is resampled to, model pixels (Staple: 150^2).
+        /// Largest area of the search window, model pixels (Staple's fixed
+        /// area 150^2; smaller windows stay at the frame's resolution).
         pub model_area: f64 = 22500.0;
         /// Weight of the colour response in the merge (Staple: 0.3).
         pub merge_factor: f64 = 0.3;
@@ -390,9 +392,9 @@ mod tests {
 
     /// Both trackers on a textured target moving on a curve while it
     /// grows by 40 % or shrinks by 30 % over 60 frames, gray and RGB, on a
-    /// textured background. Measured (this build): mean IoU 0.954 to 0.973,
-    /// worst centre error 0.16 to 0.61 px, final scale within 2.5 % of the
-    /// truth. The bounds leave room: IoU 0.9, centre 2 px, scale 5 %.
+    /// textured background. Measured (this build): mean IoU 0.940 to 0.951,
+    /// worst centre error 0.72 to 0.86 px, final size within 3.1 % of the
+    /// truth. The bounds leave room: IoU 0.9, centre 2 px, size 5 %.
     #[test]
     fn hold_growing_and_shrinking_targets() {
         for (rgb, grow) in [(false, 1.4), (true, 1.4), (false, 0.7), (true, 1.0)] {
@@ -405,6 +407,9 @@ mod tests {
                 let (centre, _) = errors(&got, &truth);
                 let iou = mean_iou(&got, &truth);
                 let last = got.last().unwrap().width / truth.last().unwrap().width;
+                eprintln!(
+                    "{name} rgb {rgb} grow {grow}: IoU {iou:.3}, centre {centre:.2}, size ratio {last:.3}"
+                );
                 assert!(
                     iou >= 0.9,
                     "{name} rgb {rgb} grow {grow}: mean IoU {iou:.3}"
@@ -454,7 +459,8 @@ mod tests {
     /// collapses, the gate refuses those frames (reported lost), and the
     /// uncorrupted model finds the target when it comes back. Measured:
     /// every occluded frame refused, none of the 15 frames before;
-    /// centre error after the occlusion 0.6 px (dcf), 0.3 px (staple).
+    /// worst centre error after the occlusion 0.81 px (dcf), 0.47 px
+    /// (dcf-staple).
     #[test]
     fn the_gate_refuses_an_occluded_target_and_finds_it_again() {
         let path = |k: usize| (60.0 + 0.5 * k as f64, 60.0, 24.0, 30.0);
@@ -481,6 +487,7 @@ mod tests {
             assert!(lost[..14].iter().all(|l| !l), "{name}: {lost:?}");
             assert!(lost[14..24].iter().all(|&l| l), "{name}: {lost:?}");
             let (centre, _) = errors(&boxes[30..], &truth[30..]);
+            eprintln!("{name}: centre error after the occlusion {centre:.2} px");
             assert!(
                 centre < 2.0,
                 "{name}: centre error {centre:.2} after the occlusion"
