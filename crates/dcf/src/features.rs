@@ -56,6 +56,8 @@ pub struct Fhog {
     mag: Vec<f32>,
     bin: Vec<u8>,
     sensitive: Vec<f32>,
+    padded: Vec<f32>,
+    cols: Vec<(usize, f32)>,
     insensitive: Vec<f32>,
     block: Vec<f32>,
 }
@@ -85,6 +87,8 @@ impl Fhog {
             mag: vec![0.0; w * h],
             bin: vec![0; w * h],
             sensitive: vec![0.0; SENSITIVE * nb],
+            padded: vec![0.0; SENSITIVE * (wb + 2) * (hb + 2)],
+            cols: Vec::with_capacity(wb * cell),
             insensitive: vec![0.0; INSENSITIVE * nb],
             block: vec![0.0; wb.saturating_sub(1).max(1) * hb.saturating_sub(1).max(1)],
         })
@@ -188,35 +192,43 @@ impl Fhog {
     fn histograms(&mut self) {
         let (w, wb, hb, b) = (self.w, self.wb, self.hb, self.cell);
         let nb = wb * hb;
-        self.sensitive.fill(0.0);
+        // binned on a grid padded by one cell on each side (the shares
+        // that fall off the grid land there and are dropped), so the inner
+        // loop has no bounds tests
+        let (pw, ph) = (wb + 2, hb + 2);
+        let np = pw * ph;
+        self.padded.fill(0.0);
         let inv = 1.0 / b as f32;
         let norm = inv * inv;
-        // per axis: lower cell (or -1) and the weight of the upper one
-        let split = |i: usize| -> (isize, f32) {
-            let c = (i as f32 + 0.5) * inv - 0.5;
-            let c0 = c.floor();
-            (c0 as isize, c - c0)
+        // per axis: the lower cell (+1 for the padding) and the upper one's
+        // weight; pixel i sits at (i + 0.5) / b - 0.5 in cell units
+        let split = |i: usize| -> (usize, f32) {
+            let c = (i as f32 + 0.5) * inv - 0.5 + 1.0;
+            let c0 = c as usize; // c >= 0.5 > 0: truncation is floor
+            (c0, c - c0 as f32)
         };
+        self.cols.clear();
+        self.cols.extend((0..wb * b).map(split));
         for y in 0..hb * b {
             let (y0, fy) = split(y);
-            for x in 0..wb * b {
-                let (x0, fx) = split(x);
-                let m = self.mag[y * w + x] * norm;
-                if m == 0.0 {
-                    continue;
-                }
-                let hist = &mut self.sensitive[self.bin[y * w + x] as usize * nb..][..nb];
-                for (cy, wy) in [(y0, 1.0 - fy), (y0 + 1, fy)] {
-                    if cy < 0 || cy >= hb as isize {
-                        continue;
-                    }
-                    for (cx, wx) in [(x0, 1.0 - fx), (x0 + 1, fx)] {
-                        if cx < 0 || cx >= wb as isize {
-                            continue;
-                        }
-                        hist[cy as usize * wb + cx as usize] += wx * wy * m;
-                    }
-                }
+            let mag = &self.mag[y * w..][..wb * b];
+            let bins = &self.bin[y * w..][..wb * b];
+            for ((&m, &o), &(x0, fx)) in mag.iter().zip(bins).zip(&self.cols) {
+                let m = m * norm;
+                let hist = &mut self.padded[o as usize * np..][..np];
+                let top = y0 * pw + x0;
+                let (wy1, wy0) = (fy * m, (1.0 - fy) * m);
+                hist[top] += (1.0 - fx) * wy0;
+                hist[top + 1] += fx * wy0;
+                hist[top + pw] += (1.0 - fx) * wy1;
+                hist[top + pw + 1] += fx * wy1;
+            }
+        }
+        for o in 0..SENSITIVE {
+            let src = &self.padded[o * np..][..np];
+            let dst = &mut self.sensitive[o * nb..][..nb];
+            for cy in 0..hb {
+                dst[cy * wb..][..wb].copy_from_slice(&src[(cy + 1) * pw + 1..][..wb]);
             }
         }
         for o in 0..INSENSITIVE {

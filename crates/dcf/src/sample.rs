@@ -3,7 +3,7 @@
 //! bilinear interpolation when enlarging; edge pixels replicated outside
 //! the frame (as KCF's and DSST's patch extraction does).
 
-use bayestrack_image::{AreaSampler, ImageView, ImageViewMut};
+use bayestrack_image::ImageView;
 
 use crate::error::{DcfError, Result};
 
@@ -13,7 +13,13 @@ pub struct PatchSampler {
     w: usize,
     h: usize,
     planes: Vec<Vec<f32>>,
-    area: Vec<AreaSampler>,
+    /// Summed-area table of each plane, `(w + 1) x (h + 1)`.
+    sums: Vec<Vec<f64>>,
+    /// Scratch: per output column, the clipped edges `[a, b)`.
+    cols: Vec<(f64, f64)>,
+    /// Scratch: the table interpolated at the column edges of two rows.
+    top: Vec<f64>,
+    bottom: Vec<f64>,
 }
 
 impl PatchSampler {
@@ -37,7 +43,7 @@ impl PatchSampler {
         }
         (self.w, self.h) = (w, h);
         self.planes.resize_with(c, Vec::new);
-        self.area.resize_with(c, AreaSampler::default);
+        self.sums.resize_with(c, Vec::new);
         for (ch, plane) in self.planes.iter_mut().enumerate() {
             plane.clear();
             for y in 0..h {
@@ -45,8 +51,17 @@ impl PatchSampler {
                 plane.extend(row.chunks_exact(c).map(|p| p[ch] as f32));
             }
         }
-        for (plane, area) in self.planes.iter().zip(self.area.iter_mut()) {
-            area.compute(ImageView::from_slice(plane, w, h, 1, w)?)?;
+        let cols = w + 1;
+        for (plane, sum) in self.planes.iter().zip(self.sums.iter_mut()) {
+            sum.clear();
+            sum.resize(cols * (h + 1), 0.0);
+            for y in 0..h {
+                let mut run = 0.0f64;
+                for x in 0..w {
+                    run += plane[y * w + x] as f64;
+                    sum[(y + 1) * cols + x + 1] = sum[y * cols + x + 1] + run;
+                }
+            }
         }
         Ok(())
     }
@@ -92,11 +107,6 @@ impl PatchSampler {
                 reason: "not loaded",
             });
         }
-        if sx >= 1.0 && sy >= 1.0 {
-            let mut view = ImageViewMut::from_slice(out, ow, oh, 1, ow)?;
-            self.area[ch].sample_into(x0, y0, sx, sy, &mut view)?;
-            return Ok(());
-        }
         if ![x0, y0, sx, sy].iter().all(|v| v.is_finite()) || sx <= 0.0 || sy <= 0.0 {
             return Err(DcfError::NonFinite {
                 what: "sampling origin or steps",
@@ -108,6 +118,10 @@ impl PatchSampler {
                 expected: ow * oh,
                 got: out.len(),
             });
+        }
+        if sx >= 1.0 && sy >= 1.0 {
+            self.area(ch, x0, y0, sx, sy, out, ow);
+            return Ok(());
         }
         let (w, h) = (self.w, self.h);
         let plane = &self.planes[ch];
@@ -128,6 +142,66 @@ impl PatchSampler {
             }
         }
         Ok(())
+    }
+}
+
+impl PatchSampler {
+    /// Area averaging: each output pixel the mean of the plane over its
+    /// rectangle clipped to the frame (the summed-area table interpolated
+    /// bilinearly at the rectangle's corners); a rectangle left with no
+    /// area reads the nearest pixel (edge replication).
+    #[allow(clippy::too_many_arguments)]
+    fn area(&mut self, ch: usize, x0: f64, y0: f64, sx: f64, sy: f64, out: &mut [f32], ow: usize) {
+        let (w, h) = (self.w, self.h);
+        let cols = w + 1;
+        let sum = &self.sums[ch];
+        let edges = |a: f64, b: f64, n: usize| -> (f64, f64) {
+            let (lo, hi) = (a.clamp(0.0, n as f64), b.clamp(0.0, n as f64));
+            if hi - lo > 1e-9 {
+                (lo, hi)
+            } else {
+                let p = (lo.min(n as f64 - 0.5)).floor().max(0.0);
+                (p, p + 1.0)
+            }
+        };
+        self.cols.clear();
+        self.cols
+            .extend((0..ow).map(|u| edges(x0 + u as f64 * sx, x0 + (u + 1) as f64 * sx, w)));
+        // the table at row coordinate y, at both edges of every column
+        let row_at = |y: f64, out: &mut Vec<f64>, colsx: &[(f64, f64)]| {
+            let j = (y as usize).min(h - 1);
+            let f = y - j as f64;
+            let (ra, rb) = (&sum[j * cols..][..cols], &sum[(j + 1) * cols..][..cols]);
+            let at = |x: f64| {
+                let i = (x as usize).min(w - 1);
+                let g = x - i as f64;
+                let a = ra[i] + g * (ra[i + 1] - ra[i]);
+                let b = rb[i] + g * (rb[i + 1] - rb[i]);
+                a + f * (b - a)
+            };
+            out.clear();
+            for &(a, b) in colsx {
+                out.push(at(a));
+                out.push(at(b));
+            }
+        };
+        let (mut top, mut bottom) = (
+            std::mem::take(&mut self.top),
+            std::mem::take(&mut self.bottom),
+        );
+        for (v, row) in out.chunks_exact_mut(ow).enumerate() {
+            let (a, b) = edges(y0 + v as f64 * sy, y0 + (v + 1) as f64 * sy, h);
+            row_at(a, &mut top, &self.cols);
+            row_at(b, &mut bottom, &self.cols);
+            let inv_h = 1.0 / (b - a);
+            for (u, o) in row.iter_mut().enumerate() {
+                let (ca, cb) = self.cols[u];
+                let s = bottom[2 * u + 1] - bottom[2 * u] - top[2 * u + 1] + top[2 * u];
+                *o = (s * inv_h / (cb - ca)) as f32;
+            }
+        }
+        self.top = top;
+        self.bottom = bottom;
     }
 }
 
