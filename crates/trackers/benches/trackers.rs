@@ -9,6 +9,7 @@ use bayestrack_trackers::{
     MultiTargetConfig, MultiTargetTracker, NccScaleConfig, NccScaleTracker, PfCorrelationConfig,
     PfCorrelationTracker, SearchArea, Tracker,
 };
+use bayestrack_trackers::{DcfTracker, DcfTrackerConfig, StapleTracker, StapleTrackerConfig};
 use bayestrack_trackers::{
     HkpfConfig, HkpfTracker, IspfConfig, IspfTracker, StpfConfig, StpfTracker,
 };
@@ -453,8 +454,69 @@ fn bench_condensation(c: &mut Criterion) {
     group.finish();
 }
 
+/// The first frame box and frames of a shared real sequence
+/// (`../shared/data/sequences/NAME`, see its README), or `None` (with a
+/// note) when the folder is missing.
+fn real_sequence(name: &str) -> Option<(Vec<Image<u8>>, BBox)> {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/sequences")
+        .join(name);
+    if !dir.is_dir() {
+        eprintln!(
+            "SKIPPED: {} is missing (the shared real sequences); no {name} bench",
+            dir.display()
+        );
+        return None;
+    }
+    let gt = std::fs::read_to_string(dir.join("groundtruth_rect.txt")).ok()?;
+    let v: Vec<f64> = gt
+        .lines()
+        .next()?
+        .split([',', '\t', ' '])
+        .filter(|s| !s.is_empty())
+        .map(|s| s.trim().parse().unwrap())
+        .collect();
+    let frames = bayestrack_image::list_frames(&dir)
+        .ok()?
+        .iter()
+        .map(|p| bayestrack_image::read_frame(p).unwrap())
+        .collect();
+    Some((frames, BBox::new(v[0], v[1], v[2], v[3])))
+}
+
+/// The correlation-filter trackers per frame on the real OTB sequences
+/// Crossing (360x240) and Couple (320x240), RGB.
+fn bench_dcf(c: &mut Criterion) {
+    for name in ["Crossing", "Couple"] {
+        let Some((frames, first)) = real_sequence(name) else {
+            continue;
+        };
+        let mut group = c.benchmark_group(format!("{name} real RGB (correlation filters)"));
+        group.throughput(Throughput::Elements(1));
+        let trackers: Vec<(&str, Box<dyn Tracker>)> = vec![
+            (
+                "dcf step",
+                Box::new(DcfTracker::new(DcfTrackerConfig::default()).unwrap()),
+            ),
+            (
+                "dcf-staple step",
+                Box::new(StapleTracker::new(StapleTrackerConfig::default()).unwrap()),
+            ),
+            (
+                "ncc-scale step",
+                Box::new(NccScaleTracker::new(NccScaleConfig::default()).unwrap()),
+            ),
+        ];
+        for (tname, mut tracker) in trackers {
+            bench_steps(&mut group, tname, tracker.as_mut(), &frames, first);
+        }
+        group.finish();
+    }
+}
+
 criterion_group!(
     benches,
+    bench_dcf,
     bench_ball,
     bench_road,
     bench_street,

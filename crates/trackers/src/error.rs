@@ -92,6 +92,9 @@ pub enum TrackerError {
         /// Which key, which value, and the valid keys.
         source: bayestrack_options::OptionError,
     },
+    /// From a correlation filter.
+    #[error(transparent)]
+    Dcf(#[from] bayestrack_dcf::DcfError),
     /// From the affine group, its dynamics or the pose estimator.
     #[error(transparent)]
     Affine(#[from] bayestrack_affine::AffineError),

@@ -5,6 +5,7 @@
 
 mod affine_pf;
 mod condensation;
+mod dcf;
 mod engine;
 mod error;
 mod hist_pf_scale;
@@ -25,6 +26,9 @@ pub use condensation::{
     CAvq, CAvqConfig, Condensation, CondensationReport, ContourConfig, ContourCore, ContourTracker,
     CueSet, CurveCue, CurveCueKind, LOST_LOG_LIKELIHOOD, MultiCondensation, MultiConfig,
     ObjectConfig, ObjectEstimate, PointCloudConfig, PointCloudCore, PointCloudTracker,
+};
+pub use dcf::{
+    DcfCore, DcfTracker, DcfTrackerConfig, StapleCore, StapleTracker, StapleTrackerConfig,
 };
 pub use engine::{CueFilter, CueProposal, StateModel, select_predict_measure};
 pub use error::{Result, TrackerError};

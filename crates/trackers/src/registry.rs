@@ -4,6 +4,7 @@
 
 use crate::affine_pf::{HkpfConfig, HkpfTracker, IspfConfig, IspfTracker, StpfConfig, StpfTracker};
 use crate::condensation::{ContourConfig, ContourTracker, PointCloudConfig, PointCloudTracker};
+use crate::dcf::{DcfTracker, DcfTrackerConfig, StapleTracker, StapleTrackerConfig};
 use crate::error::{Result, TrackerError};
 use crate::hist_pf_scale::{HistPfConfig, HistPfTracker};
 use crate::histogram_filters::{BallConfig, BallParticles, BallTracker};
@@ -195,6 +196,20 @@ pub const REGISTRY: &[TrackerInfo] = &[
         handles_scale: true,
         options: NccScaleConfig::specs,
         build: |_, set| boxed(NccScaleTracker::new(options_of("ncc-scale", &[], set)?)),
+    },
+    TrackerInfo {
+        name: "dcf",
+        summary: "real video: KCF (Henriques et al. 2015) Gaussian-kernel correlation filter on 31-channel fHOG, window 2.5x the target, DSST 33-scale filter (Danelljan et al. 2014), updates gated by LMCF's APCE rule (Wang et al. 2017); published defaults, deterministic",
+        handles_scale: true,
+        options: DcfTrackerConfig::specs,
+        build: |_, set| boxed(DcfTracker::new(options_of("dcf", &[], set)?)),
+    },
+    TrackerInfo {
+        name: "dcf-staple",
+        summary: "real video: Staple (Bertinetto et al. 2016): linear fHOG correlation filter merged 0.7/0.3 with a colour-histogram (32^3 RGB or 32 gray bins) box score, DSST scale filter, LMCF-gated updates; published defaults, deterministic",
+        handles_scale: true,
+        options: StapleTrackerConfig::specs,
+        build: |_, set| boxed(StapleTracker::new(options_of("dcf-staple", &[], set)?)),
     },
     TrackerInfo {
         name: "hist-pf-scale",

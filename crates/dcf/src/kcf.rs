@@ -1,0 +1,622 @@
+//! The kernelized correlation filter of Henriques et al. 2015 (KCF): the
+//! cosine window, the Gaussian label map, linear and Gaussian kernel
+//! correlation of multi-channel features in the Fourier domain, the
+//! closed-form ridge regression and its detection response.
+//!
+//! With `x` the (windowed) training features, `y` the label map and `k`
+//! a kernel, KCF learns `alpha_hat = y_hat / (k_hat^{xx} + lambda)` and
+//! scores new features `z` at every cyclic shift by
+//! `f(z) = F^-1(k_hat^{xz} . alpha_hat)`; the model is interpolated from
+//! frame to frame with a learning rate.
+
+use crate::error::{DcfError, Result};
+use crate::fft::{C32, Fft2};
+
+/// The Hann window of length `n` as KCF builds it (`hann(n)` of MATLAB:
+/// `0.5 (1 - cos(2 pi k / (n - 1)))`, zero at both ends); 1 for `n = 1`.
+pub fn hann(n: usize) -> Vec<f32> {
+    if n == 1 {
+        return vec![1.0];
+    }
+    (0..n)
+        .map(|k| {
+            let t = std::f64::consts::TAU * k as f64 / (n - 1) as f64;
+            (0.5 * (1.0 - t.cos())) as f32
+        })
+        .collect()
+}
+
+/// The `w x h` cosine window (outer product of Hann windows), row-major.
+pub fn cosine_window(w: usize, h: usize) -> Vec<f32> {
+    let (hx, hy) = (hann(w), hann(h));
+    hy.iter()
+        .flat_map(|&a| hx.iter().map(move |&b| a * b))
+        .collect()
+}
+
+/// The signed cyclic offset of index `i` in `0..n` from 0: `i` for
+/// `i <= n / 2`, else `i - n`.
+pub fn wrapped(i: usize, n: usize) -> isize {
+    if i <= n / 2 {
+        i as isize
+    } else {
+        i as isize - n as isize
+    }
+}
+
+/// KCF's regression target: a Gaussian of standard deviation `sigma`
+/// (cells) with its peak (1) at the origin and wrapping around the edges,
+/// `w x h` row-major.
+pub fn gaussian_labels(w: usize, h: usize, sigma: f64) -> Vec<f32> {
+    let k = -0.5 / (sigma * sigma);
+    let mut out = Vec::with_capacity(w * h);
+    for y in 0..h {
+        let dy = wrapped(y, h) as f64;
+        for x in 0..w {
+            let dx = wrapped(x, w) as f64;
+            out.push((k * (dx * dx + dy * dy)).exp() as f32);
+        }
+    }
+    out
+}
+
+/// The kernel of the correlation filter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Kernel {
+    /// `k(x, z) = x . z / (n c)`: the linear kernel, i.e. a multi-channel
+    /// MOSSE/DCF in the dual.
+    Linear,
+    /// `k(x, z) = exp(-|x - z|^2 / (sigma^2 n c))` (KCF's normalisation by
+    /// the number of samples `n c`); KCF's HOG default `sigma = 0.5`.
+    Gaussian {
+        /// Bandwidth.
+        sigma: f64,
+    },
+}
+
+/// Kernel correlation of multi-channel spectra: the Fourier transform of
+/// `k(x, P^d z)` for every cyclic shift `d`, with its scratch buffers.
+#[derive(Debug, Clone)]
+pub struct Correlator {
+    fft: Fft2,
+    channels: usize,
+    spatial: Vec<f32>,
+    accum: Vec<C32>,
+}
+
+impl Correlator {
+    /// For `channels` channels of `w x h` features.
+    ///
+    /// # Errors
+    /// As [`Fft2::new`]; zero channels.
+    pub fn new(w: usize, h: usize, channels: usize) -> Result<Self> {
+        if channels == 0 {
+            return Err(DcfError::InvalidParameter {
+                name: "channels",
+                value: 0.0,
+                reason: "must be positive",
+            });
+        }
+        let fft = Fft2::new(w, h)?;
+        let s = fft.spectrum_len();
+        Ok(Self {
+            spatial: vec![0.0; w * h],
+            accum: vec![C32::default(); s],
+            fft,
+            channels,
+        })
+    }
+
+    /// The FFT plans (to transform features).
+    pub fn fft(&mut self) -> &mut Fft2 {
+        &mut self.fft
+    }
+
+    /// Bins per channel spectrum.
+    pub fn spectrum_len(&self) -> usize {
+        self.fft.spectrum_len()
+    }
+
+    /// Transforms every channel of `features` (`channels` planes of
+    /// `w x h`) into `spectra` (`channels` half spectra), returning the
+    /// total energy `sum x^2`.
+    ///
+    /// # Errors
+    /// [`DcfError::Size`] for buffers of another size.
+    pub fn transform(&mut self, features: &[f32], spectra: &mut [C32]) -> Result<f64> {
+        let (n, s) = (self.fft.real_len(), self.fft.spectrum_len());
+        if features.len() != n * self.channels || spectra.len() != s * self.channels {
+            return Err(DcfError::Size {
+                what: "feature channels",
+                expected: n * self.channels,
+                got: features.len(),
+            });
+        }
+        for (f, out) in features.chunks_exact(n).zip(spectra.chunks_exact_mut(s)) {
+            self.fft.forward(f, out)?;
+        }
+        Ok(features.iter().map(|&v| v as f64 * v as f64).sum())
+    }
+
+    /// `k_hat^{xz}` into `out`: `xf`, `zf` the channels' spectra,
+    /// `xx`, `zz` their energies.
+    ///
+    /// # Errors
+    /// [`DcfError::Size`] for buffers of another size.
+    pub fn correlate(
+        &mut self,
+        kernel: Kernel,
+        xf: &[C32],
+        xx: f64,
+        zf: &[C32],
+        zz: f64,
+        out: &mut [C32],
+    ) -> Result<()> {
+        let s = self.fft.spectrum_len();
+        if xf.len() != s * self.channels || zf.len() != xf.len() || out.len() != s {
+            return Err(DcfError::Size {
+                what: "kernel correlation",
+                expected: s * self.channels,
+                got: xf.len(),
+            });
+        }
+        let numel = (self.fft.real_len() * self.channels) as f64;
+        // sum over channels of z_hat . conj(x_hat): the cross-correlation
+        // whose value at d is sum_p z(p + d) x(p)
+        self.accum.fill(C32::default());
+        for (xc, zc) in xf.chunks_exact(s).zip(zf.chunks_exact(s)) {
+            for ((a, x), z) in self.accum.iter_mut().zip(xc).zip(zc) {
+                *a += z * x.conj();
+            }
+        }
+        match kernel {
+            Kernel::Linear => {
+                let k = (1.0 / numel) as f32;
+                for (o, a) in out.iter_mut().zip(&self.accum) {
+                    *o = a * k;
+                }
+            }
+            Kernel::Gaussian { sigma } => {
+                self.fft.inverse(&mut self.accum, &mut self.spatial)?;
+                let inv = 1.0 / (sigma * sigma * numel);
+                for v in self.spatial.iter_mut() {
+                    let d = (xx + zz - 2.0 * *v as f64).max(0.0);
+                    *v = (-d * inv).exp() as f32;
+                }
+                self.fft.forward(&self.spatial, out)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The real response `F^-1(kf . alphaf)` into `out` (`w x h`).
+    ///
+    /// # Errors
+    /// [`DcfError::Size`] for buffers of another size.
+    pub fn respond(&mut self, kf: &[C32], alphaf: &[C32], out: &mut [f32]) -> Result<()> {
+        if kf.len() != self.accum.len() || alphaf.len() != kf.len() {
+            return Err(DcfError::Size {
+                what: "response spectra",
+                expected: self.accum.len(),
+                got: kf.len(),
+            });
+        }
+        for ((a, k), al) in self.accum.iter_mut().zip(kf).zip(alphaf) {
+            *a = k * al;
+        }
+        self.fft.inverse(&mut self.accum, out)
+    }
+}
+
+/// Sub-cell offset of a peak from its two neighbours, in `[-0.5, 0.5]`:
+/// the vertex of the parabola through `(-1, ln a)`, `(0, ln b)`,
+/// `(1, ln c)` when all three are positive (exact for a Gaussian peak,
+/// which is what the filter is trained to produce), else through the
+/// values themselves; 0 when they are not concave.
+pub fn parabola_offset(a: f32, b: f32, c: f32) -> f64 {
+    let (a, b, c) = (a as f64, b as f64, c as f64);
+    let (a, b, c) = if a > 0.0 && b > 0.0 && c > 0.0 {
+        (a.ln(), b.ln(), c.ln())
+    } else {
+        (a, b, c)
+    };
+    let d = a - 2.0 * b + c;
+    if d < 0.0 {
+        (0.5 * (a - c) / d).clamp(-0.5, 0.5)
+    } else {
+        0.0
+    }
+}
+
+/// The peak of a `w x h` cyclic response: its value and its displacement
+/// from the origin in cells, sub-cell by a parabola along each axis.
+pub fn subcell_peak(response: &[f32], w: usize, h: usize) -> (f32, f64, f64) {
+    let (max, i) = crate::confidence::peak(response);
+    let (px, py) = (i % w, i / w);
+    let at = |x: usize, y: usize| response[y * w + x];
+    let dx = if w >= 3 {
+        parabola_offset(at((px + w - 1) % w, py), max, at((px + 1) % w, py))
+    } else {
+        0.0
+    };
+    let dy = if h >= 3 {
+        parabola_offset(at(px, (py + h - 1) % h), max, at(px, (py + 1) % h))
+    } else {
+        0.0
+    };
+    (max, wrapped(px, w) as f64 + dx, wrapped(py, h) as f64 + dy)
+}
+
+/// KCF's closed-form model: the features' spectra `x_hat` and the dual
+/// coefficients `alpha_hat`, interpolated with a learning rate.
+#[derive(Debug, Clone)]
+pub struct KcfModel {
+    /// The kernel.
+    pub kernel: Kernel,
+    /// Ridge regularisation `lambda` (KCF: 1e-4).
+    pub lambda: f64,
+    w: usize,
+    h: usize,
+    channels: usize,
+    corr: Correlator,
+    yf: Vec<C32>,
+    xf: Vec<C32>,
+    xx: f64,
+    alphaf: Vec<C32>,
+    // scratch
+    zf: Vec<C32>,
+    kf: Vec<C32>,
+    trained: bool,
+}
+
+impl KcfModel {
+    /// A model for `channels` channels of `w x h` cells with labels of
+    /// standard deviation `sigma` cells.
+    ///
+    /// # Errors
+    /// As [`Correlator::new`]; a non-positive `sigma` or negative `lambda`.
+    pub fn new(
+        w: usize,
+        h: usize,
+        channels: usize,
+        sigma: f64,
+        kernel: Kernel,
+        lambda: f64,
+    ) -> Result<Self> {
+        if !(sigma.is_finite() && sigma > 0.0) {
+            return Err(DcfError::InvalidParameter {
+                name: "label sigma",
+                value: sigma,
+                reason: "must be positive",
+            });
+        }
+        if !(lambda.is_finite() && lambda >= 0.0) {
+            return Err(DcfError::InvalidParameter {
+                name: "lambda",
+                value: lambda,
+                reason: "must be finite and >= 0",
+            });
+        }
+        if let Kernel::Gaussian { sigma } = kernel
+            && !(sigma.is_finite() && sigma > 0.0)
+        {
+            return Err(DcfError::InvalidParameter {
+                name: "kernel sigma",
+                value: sigma,
+                reason: "must be positive",
+            });
+        }
+        let mut corr = Correlator::new(w, h, channels)?;
+        let s = corr.spectrum_len();
+        let y = gaussian_labels(w, h, sigma);
+        let mut yf = vec![C32::default(); s];
+        corr.fft().forward(&y, &mut yf)?;
+        Ok(Self {
+            kernel,
+            lambda,
+            w,
+            h,
+            channels,
+            corr,
+            yf,
+            xf: vec![C32::default(); s * channels],
+            xx: 0.0,
+            alphaf: vec![C32::default(); s],
+            zf: vec![C32::default(); s * channels],
+            kf: vec![C32::default(); s],
+            trained: false,
+        })
+    }
+
+    /// Cells across.
+    pub fn width(&self) -> usize {
+        self.w
+    }
+
+    /// Cells down.
+    pub fn height(&self) -> usize {
+        self.h
+    }
+
+    /// Channels.
+    pub fn channels(&self) -> usize {
+        self.channels
+    }
+
+    /// Whether the model has been trained at least once.
+    pub fn is_trained(&self) -> bool {
+        self.trained
+    }
+
+    /// Trains on `features` (already windowed) and moves the model towards
+    /// the result by `rate` (the first training takes it whole).
+    ///
+    /// # Errors
+    /// [`DcfError::Size`] for features of another size;
+    /// [`DcfError::InvalidParameter`] for a rate outside `[0, 1]`.
+    pub fn train(&mut self, features: &[f32], rate: f64) -> Result<()> {
+        if !(0.0..=1.0).contains(&rate) {
+            return Err(DcfError::InvalidParameter {
+                name: "learning rate",
+                value: rate,
+                reason: "must be in [0, 1]",
+            });
+        }
+        let zz = self.corr.transform(features, &mut self.zf)?;
+        self.corr
+            .correlate(self.kernel, &self.zf, zz, &self.zf, zz, &mut self.kf)?;
+        let lambda = self.lambda as f32;
+        let r = if self.trained { rate as f32 } else { 1.0 };
+        for ((a, y), k) in self.alphaf.iter_mut().zip(&self.yf).zip(&self.kf) {
+            let new = y / (k + lambda);
+            *a = *a * (1.0 - r) + new * r;
+        }
+        for (m, z) in self.xf.iter_mut().zip(&self.zf) {
+            *m = *m * (1.0 - r) + z * r;
+        }
+        // the model's energy is that of the interpolated features, not the
+        // interpolated energies: recompute it from the spectrum (Parseval)
+        self.xx = self.energy_of_model();
+        self.trained = true;
+        Ok(())
+    }
+
+    fn energy_of_model(&self) -> f64 {
+        let (w, h) = (self.w, self.h);
+        let wc = w / 2 + 1;
+        let s = wc * h;
+        let mut e = 0.0f64;
+        for c in self.xf.chunks_exact(s) {
+            for u in 0..wc {
+                let twice = u != 0 && !(w % 2 == 0 && u == wc - 1);
+                let k = if twice { 2.0 } else { 1.0 };
+                for v in &c[u * h..(u + 1) * h] {
+                    e += k * v.norm_sqr() as f64;
+                }
+            }
+        }
+        e / (w * h) as f64
+    }
+
+    /// The response to `features` (already windowed) at every cyclic
+    /// shift, into `out` (`w x h` cells): its peak is at the features'
+    /// displacement from the training patch.
+    ///
+    /// # Errors
+    /// [`DcfError::NotInitialised`] before any training; [`DcfError::Size`].
+    pub fn detect(&mut self, features: &[f32], out: &mut [f32]) -> Result<()> {
+        if !self.trained {
+            return Err(DcfError::NotInitialised);
+        }
+        let zz = self.corr.transform(features, &mut self.zf)?;
+        self.corr
+            .correlate(self.kernel, &self.xf, self.xx, &self.zf, zz, &mut self.kf)?;
+        self.corr.respond(&self.kf, &self.alphaf, out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn texture(w: usize, h: usize, c: usize, seed: u64) -> Vec<f32> {
+        // smooth random multi-channel texture: sums of sinusoids
+        let mut s = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+        let mut next = || {
+            s = s
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            ((s >> 33) as f64 / (1u64 << 31) as f64) * 2.0 - 1.0
+        };
+        let waves: Vec<(f64, f64, f64)> = (0..6 * c)
+            .map(|_| (next() * 0.9, next() * 0.9, next() * 3.0))
+            .collect();
+        let mut out = vec![0.0; w * h * c];
+        for ch in 0..c {
+            for y in 0..h {
+                for x in 0..w {
+                    let v: f64 = waves[ch * 6..ch * 6 + 6]
+                        .iter()
+                        .map(|(a, b, p)| (a * x as f64 + b * y as f64 + p).sin())
+                        .sum();
+                    out[ch * w * h + y * w + x] = v as f32;
+                }
+            }
+        }
+        out
+    }
+
+    /// Cyclically shifts every channel by (dx, dy): out(p) = in(p - d).
+    fn shift(x: &[f32], w: usize, h: usize, dx: isize, dy: isize) -> Vec<f32> {
+        let mut out = vec![0.0; x.len()];
+        for (ci, co) in x.chunks_exact(w * h).zip(out.chunks_exact_mut(w * h)) {
+            for y in 0..h {
+                for xx in 0..w {
+                    let sx = (xx as isize - dx).rem_euclid(w as isize) as usize;
+                    let sy = (y as isize - dy).rem_euclid(h as isize) as usize;
+                    co[y * w + xx] = ci[sy * w + sx];
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn labels_peak_at_the_origin_and_wrap() {
+        let y = gaussian_labels(8, 6, 1.0);
+        assert_eq!(y[0], 1.0);
+        assert!((y[1] - y[7]).abs() < 1e-7 && (y[8] - y[5 * 8]).abs() < 1e-7);
+        assert!((y[1] as f64 - (-0.5f64).exp()).abs() < 1e-6);
+        let hw = hann(5);
+        assert_eq!(hw[0], 0.0);
+        assert!((hw[2] - 1.0).abs() < 1e-7 && (hw[1] - 0.5).abs() < 1e-7);
+        assert_eq!(cosine_window(5, 3)[5 + 2], 1.0);
+    }
+
+    #[test]
+    fn finds_integer_shifts_with_both_kernels() {
+        let (w, h, c) = (24, 20, 3);
+        let x = texture(w, h, c, 1);
+        for kernel in [Kernel::Linear, Kernel::Gaussian { sigma: 0.5 }] {
+            let mut m = KcfModel::new(w, h, c, 1.5, kernel, 1e-4).unwrap();
+            m.train(&x, 0.02).unwrap();
+            let mut r = vec![0.0; w * h];
+            for (dx, dy) in [(0, 0), (3, -2), (-5, 4), (7, 6)] {
+                let z = shift(&x, w, h, dx, dy);
+                m.detect(&z, &mut r).unwrap();
+                let (_, px, py) = subcell_peak(&r, w, h);
+                assert!(
+                    (px - dx as f64).abs() < 0.2 && (py - dy as f64).abs() < 0.2,
+                    "{kernel:?} ({dx},{dy}): found ({px:.2},{py:.2})"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn finds_sub_cell_shifts() {
+        // a smooth texture shifted by fractions of a cell: the sub-cell
+        // peak lands within 0.2 cells (the integer peak alone is off by
+        // 0.25 to 0.5 on these shifts; the fixed cosine window pulls the
+        // estimate slightly towards 0, a known bias of windowed filters)
+        let (w, h) = (32, 28);
+        let f = |x: f64, y: f64, ch: usize| {
+            let k = ch as f64;
+            ((0.31 + 0.1 * k) * x + 0.17 * y).sin() + (0.23 * x - (0.29 - 0.05 * k) * y + k).cos()
+        };
+        let sample = |ox: f64, oy: f64| -> Vec<f32> {
+            let mut out = vec![0.0; w * h * 2];
+            let win = cosine_window(w, h);
+            for ch in 0..2 {
+                for y in 0..h {
+                    for x in 0..w {
+                        out[ch * w * h + y * w + x] =
+                            (f(x as f64 - ox, y as f64 - oy, ch) * win[y * w + x] as f64) as f32;
+                    }
+                }
+            }
+            out
+        };
+        let mut m = KcfModel::new(w, h, 2, 2.0, Kernel::Gaussian { sigma: 0.5 }, 1e-4).unwrap();
+        m.train(&sample(0.0, 0.0), 1.0).unwrap();
+        let mut r = vec![0.0; w * h];
+        for (ox, oy) in [(0.4, -0.3), (-0.6, 0.45), (-1.3, 0.5)] {
+            m.detect(&sample(ox, oy), &mut r).unwrap();
+            let (_, px, py) = subcell_peak(&r, w, h);
+            assert!(
+                (px - ox).abs() < 0.2 && (py - oy).abs() < 0.2,
+                "({ox},{oy}): ({px:.3},{py:.3})"
+            );
+        }
+    }
+
+    #[test]
+    fn linear_kernel_is_multichannel_correlation() {
+        // k^{xz}(d) = sum_c sum_p z_c(p + d) x_c(p) / (n c), computed directly
+        let (w, h, c) = (9, 7, 2);
+        let x = texture(w, h, c, 2);
+        let z = texture(w, h, c, 3);
+        let mut corr = Correlator::new(w, h, c).unwrap();
+        let s = corr.spectrum_len();
+        let (mut xf, mut zf) = (vec![C32::default(); s * c], vec![C32::default(); s * c]);
+        let xx = corr.transform(&x, &mut xf).unwrap();
+        let zz = corr.transform(&z, &mut zf).unwrap();
+        let mut kf = vec![C32::default(); s];
+        corr.correlate(Kernel::Linear, &xf, xx, &zf, zz, &mut kf)
+            .unwrap();
+        let mut k = vec![0.0; w * h];
+        corr.fft().inverse(&mut kf, &mut k).unwrap();
+        // and the Gaussian kernel is exp(-(|x|^2 + |z|^2 - 2 k_lin n c) / (s^2 n c))
+        let mut kg = vec![C32::default(); s];
+        corr.correlate(Kernel::Gaussian { sigma: 2.0 }, &xf, xx, &zf, zz, &mut kg)
+            .unwrap();
+        let mut g = vec![0.0; w * h];
+        corr.fft().inverse(&mut kg, &mut g).unwrap();
+        let nc = (w * h * c) as f64;
+        for dy in 0..h {
+            for dx in 0..w {
+                let mut sum = 0.0f64;
+                let mut dist = 0.0f64;
+                for ch in 0..c {
+                    for y in 0..h {
+                        for xx_ in 0..w {
+                            let zv = z[ch * w * h + ((y + dy) % h) * w + (xx_ + dx) % w] as f64;
+                            let xv = x[ch * w * h + y * w + xx_] as f64;
+                            sum += zv * xv;
+                            dist += (zv - xv) * (zv - xv);
+                        }
+                    }
+                }
+                let got = k[dy * w + dx] as f64;
+                assert!(
+                    (got - sum / nc).abs() < 1e-5,
+                    "linear ({dx},{dy}): {got} vs {}",
+                    sum / nc
+                );
+                let want = (-dist / (4.0 * nc)).exp();
+                let got = g[dy * w + dx] as f64;
+                assert!(
+                    (got - want).abs() < 1e-4,
+                    "gaussian ({dx},{dy}): {got} vs {want}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn response_on_the_training_patch_is_the_label() {
+        // lambda -> 0: f(x) = F^-1(k_xx . y / k_xx) = y, peak 1 at the origin
+        let (w, h, c) = (16, 12, 2);
+        let x = texture(w, h, c, 4);
+        let mut m = KcfModel::new(w, h, c, 1.0, Kernel::Gaussian { sigma: 0.5 }, 1e-9).unwrap();
+        m.train(&x, 1.0).unwrap();
+        let mut r = vec![0.0; w * h];
+        m.detect(&x, &mut r).unwrap();
+        let y = gaussian_labels(w, h, 1.0);
+        assert!((r[0] - 1.0).abs() < 1e-3, "peak {}", r[0]);
+        for (a, b) in r.iter().zip(&y) {
+            assert!((a - b).abs() < 1e-3, "{a} vs {b}");
+        }
+    }
+
+    #[test]
+    fn interpolation_and_errors() {
+        let (w, h) = (8, 8);
+        let mut m = KcfModel::new(w, h, 1, 1.0, Kernel::Linear, 1e-4).unwrap();
+        let mut r = vec![0.0; w * h];
+        assert!(matches!(
+            m.detect(&[0.0; 64], &mut r),
+            Err(DcfError::NotInitialised)
+        ));
+        assert!(m.train(&[0.0; 64], 1.5).is_err());
+        assert!(m.train(&[0.0; 63], 0.5).is_err());
+        assert!(KcfModel::new(w, h, 1, 0.0, Kernel::Linear, 1e-4).is_err());
+        assert!(KcfModel::new(w, h, 1, 1.0, Kernel::Gaussian { sigma: f64::NAN }, 1e-4).is_err());
+        // rate 0 after the first training keeps the model
+        let x = texture(w, h, 1, 5);
+        m.train(&x, 0.5).unwrap();
+        let before = m.alphaf.clone();
+        m.train(&texture(w, h, 1, 6), 0.0).unwrap();
+        assert_eq!(before, m.alphaf);
+    }
+}

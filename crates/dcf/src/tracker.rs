@@ -1,0 +1,780 @@
+//! The models a tracker drives: [`Dcf`] (KCF translation filter on fHOG
+//! plus DSST's scale filter, updates gated by LMCF's APCE rule) and
+//! [`Staple`] (the same with Staple's colour model merged in).
+
+use bayestrack_image::ImageView;
+
+use crate::colour::ColourModel;
+use crate::confidence::{ApceGate, PSR_EXCLUDE, apce, psr};
+use crate::error::{DcfError, Result};
+use crate::features::{Fhog, HOG_CHANNELS};
+use crate::fft::next_smooth;
+use crate::kcf::{KcfModel, Kernel, cosine_window, subcell_peak};
+use crate::sample::PatchSampler;
+use crate::scale::{ScaleConfig, ScaleFilter};
+
+/// How much context the search window adds around the target.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Padding {
+    /// KCF: the window is `(1 + p)` times the target in each dimension
+    /// (KCF: `p = 1.5`).
+    Relative(f64),
+    /// Staple: the window adds `p (w + h) / 2` to each dimension (Staple:
+    /// `p = 1`).
+    MeanSide(f64),
+}
+
+/// Every parameter of [`Dcf`]; the defaults are KCF's published HOG
+/// parameters (Henriques et al. 2015, table 2 and sec. 6.1) with DSST's
+/// scale filter (Danelljan et al. 2014) and LMCF's update gate (Wang et
+/// al. 2017).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DcfConfig {
+    /// Search window around the target (KCF: relative 1.5).
+    pub padding: Padding,
+    /// Ridge regularisation (KCF: 1e-4).
+    pub lambda: f64,
+    /// Label standard deviation as a fraction of `sqrt(w h)` of the target
+    /// (KCF: 0.1), divided by the cell.
+    pub output_sigma_factor: f64,
+    /// Kernel (KCF with HOG: Gaussian, sigma 0.5).
+    pub kernel: Kernel,
+    /// Learning rate of the translation model (KCF with HOG: 0.02).
+    pub learning_rate: f64,
+    /// fHOG cell, pixels (KCF: 4).
+    pub cell: usize,
+    /// Largest area of the search window, model pixels (Staple's fixed
+    /// area, 150^2): a larger window is resampled down to it, a smaller one
+    /// stays at the frame's resolution as in KCF (which also works at the
+    /// frame's resolution and halves large targets). Bounds the cost per
+    /// frame.
+    pub model_area: f64,
+    /// The scale filter (DSST's parameters); `None` tracks translation only.
+    pub scale: Option<ScaleConfig>,
+    /// LMCF's update gate `(beta_1, beta_2)` on the peak and the APCE
+    /// (0.7, 0.45); `None` learns every frame (KCF, DSST).
+    pub gate: Option<(f64, f64)>,
+}
+
+impl Default for DcfConfig {
+    fn default() -> Self {
+        Self {
+            padding: Padding::Relative(1.5),
+            lambda: 1e-4,
+            output_sigma_factor: 0.1,
+            kernel: Kernel::Gaussian { sigma: 0.5 },
+            learning_rate: 0.02,
+            cell: 4,
+            model_area: 150.0 * 150.0,
+            scale: Some(ScaleConfig::default()),
+            gate: Some((0.7, 0.45)),
+        }
+    }
+}
+
+impl DcfConfig {
+    /// Checks every parameter.
+    ///
+    /// # Errors
+    /// [`DcfError::InvalidParameter`] naming the first bad one.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |name, value: f64, reason| {
+            Err(DcfError::InvalidParameter {
+                name,
+                value,
+                reason,
+            })
+        };
+        let p = match self.padding {
+            Padding::Relative(p) | Padding::MeanSide(p) => p,
+        };
+        if !(p.is_finite() && (0.0..=10.0).contains(&p)) {
+            return bad("padding", p, "must be in [0, 10]");
+        }
+        if !(self.lambda.is_finite() && self.lambda > 0.0) {
+            return bad("lambda", self.lambda, "must be positive");
+        }
+        if !(self.output_sigma_factor.is_finite() && self.output_sigma_factor > 0.0) {
+            return bad(
+                "output_sigma_factor",
+                self.output_sigma_factor,
+                "must be positive",
+            );
+        }
+        if let Kernel::Gaussian { sigma } = self.kernel
+            && !(sigma.is_finite() && sigma > 0.0)
+        {
+            return bad("kernel_sigma", sigma, "must be positive");
+        }
+        if !(0.0..=1.0).contains(&self.learning_rate) {
+            return bad("learning_rate", self.learning_rate, "must be in [0, 1]");
+        }
+        if !(1..=16).contains(&self.cell) {
+            return bad("cell", self.cell as f64, "must be in 1..=16");
+        }
+        if !(self.model_area.is_finite() && (256.0..=1e6).contains(&self.model_area)) {
+            return bad("model_area", self.model_area, "must be in [256, 1e6]");
+        }
+        if let Some(s) = &self.scale {
+            s.validate()?;
+        }
+        if let Some((a, b)) = self.gate
+            && !((0.0..=1.0).contains(&a) && (0.0..=1.0).contains(&b))
+        {
+            return bad("gate", a.max(b), "ratios must be in [0, 1]");
+        }
+        Ok(())
+    }
+}
+
+/// A correlation response over the search window, in cells, and what it
+/// says: the peak's displacement (frame pixels), value and confidence.
+#[derive(Debug, Clone, Default)]
+pub struct Response {
+    w: usize,
+    h: usize,
+    data: Vec<f32>,
+    px: (f64, f64),
+    /// Peak value.
+    pub max: f32,
+    /// Displacement of the peak from the window's centre, frame pixels
+    /// (sub-cell by parabolas).
+    pub dx: f64,
+    /// Vertical displacement of the peak, frame pixels.
+    pub dy: f64,
+    /// Peak-to-sidelobe ratio (MOSSE's 11x11 exclusion).
+    pub psr: f64,
+    /// Average peak-to-correlation energy.
+    pub apce: f64,
+}
+
+impl Response {
+    /// Cells across.
+    pub fn width(&self) -> usize {
+        self.w
+    }
+
+    /// Cells down.
+    pub fn height(&self) -> usize {
+        self.h
+    }
+
+    /// The map, row-major; cell `(i, j)` is the displacement
+    /// `(wrapped(i), wrapped(j))` cells (index 0 = no displacement).
+    pub fn data(&self) -> &[f32] {
+        &self.data
+    }
+
+    /// Frame pixels per cell along x and y.
+    pub fn pixels_per_cell(&self) -> (f64, f64) {
+        self.px
+    }
+
+    /// The response at a displacement `(dx, dy)` frame pixels from the
+    /// window's centre, bilinear between cells (cyclic). A cheap score for
+    /// any candidate centre once the response of a frame is computed (the
+    /// particle filter's likelihood). 0 for an empty response or a
+    /// non-finite displacement.
+    pub fn at(&self, dx: f64, dy: f64) -> f32 {
+        if self.data.is_empty() || !dx.is_finite() || !dy.is_finite() {
+            return 0.0;
+        }
+        let (u, v) = (dx / self.px.0, dy / self.px.1);
+        let (w, h) = (self.w as f64, self.h as f64);
+        let (u, v) = (u.rem_euclid(w), v.rem_euclid(h));
+        let (i0, j0) = (u.floor() as usize % self.w, v.floor() as usize % self.h);
+        let (i1, j1) = ((i0 + 1) % self.w, (j0 + 1) % self.h);
+        let (fx, fy) = ((u - u.floor()) as f32, (v - v.floor()) as f32);
+        let g = |i: usize, j: usize| self.data[j * self.w + i];
+        let top = g(i0, j0) + fx * (g(i1, j0) - g(i0, j0));
+        let bot = g(i0, j1) + fx * (g(i1, j1) - g(i0, j1));
+        top + fy * (bot - top)
+    }
+
+    fn finish(&mut self) -> Result<()> {
+        let (max, dx, dy) = subcell_peak(&self.data, self.w, self.h);
+        if !max.is_finite() {
+            return Err(DcfError::NonFinite { what: "response" });
+        }
+        self.max = max;
+        self.dx = dx * self.px.0;
+        self.dy = dy * self.px.1;
+        self.psr = psr(&self.data, self.w, self.h, PSR_EXCLUDE);
+        self.apce = apce(&self.data);
+        Ok(())
+    }
+}
+
+/// One tracked frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Step {
+    /// New centre (0-based pixel coordinates).
+    pub centre: (f64, f64),
+    /// New scale relative to the initial box.
+    pub scale: f64,
+    /// Box size, frame pixels.
+    pub size: (f64, f64),
+    /// Peak of the response that placed it.
+    pub peak: f32,
+    /// Its PSR.
+    pub psr: f64,
+    /// Its APCE.
+    pub apce: f64,
+    /// Whether the model learnt from this frame.
+    pub updated: bool,
+}
+
+/// The geometry fixed at `init`.
+#[derive(Debug, Clone, Copy)]
+struct Geometry {
+    /// Target size at scale 1, frame pixels.
+    base: (f64, f64),
+    /// Cells of the window.
+    nx: usize,
+    ny: usize,
+    /// Model pixels of the window.
+    pw: usize,
+    ph: usize,
+    /// Frame pixels per model pixel at scale 1.
+    rx: f64,
+    ry: f64,
+    /// Scale bounds.
+    min_scale: f64,
+    max_scale: f64,
+}
+
+/// KCF translation filter on fHOG with DSST's scale filter; see
+/// [`DcfConfig`]. Feed it gray frames.
+#[derive(Debug, Clone)]
+pub struct Dcf {
+    config: DcfConfig,
+    sampler: PatchSampler,
+    geometry: Option<Geometry>,
+    model: Option<KcfModel>,
+    scale_filter: Option<ScaleFilter>,
+    hog: Option<Fhog>,
+    window: Vec<f32>,
+    patch: Vec<f32>,
+    features: Vec<f32>,
+    response: Response,
+    gate: ApceGate,
+    centre: (f64, f64),
+    scale: f64,
+}
+
+impl Dcf {
+    /// A filter with `config`.
+    ///
+    /// # Errors
+    /// [`DcfError::InvalidParameter`] for a bad parameter.
+    pub fn new(config: DcfConfig) -> Result<Self> {
+        config.validate()?;
+        let (a, b) = config.gate.unwrap_or((0.0, 0.0));
+        Ok(Self {
+            config,
+            sampler: PatchSampler::new(),
+            geometry: None,
+            model: None,
+            scale_filter: None,
+            hog: None,
+            window: Vec::new(),
+            patch: Vec::new(),
+            features: Vec::new(),
+            response: Response::default(),
+            gate: ApceGate::new(a, b),
+            centre: (0.0, 0.0),
+            scale: 1.0,
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &DcfConfig {
+        &self.config
+    }
+
+    /// Current centre (0-based pixels).
+    pub fn centre(&self) -> (f64, f64) {
+        self.centre
+    }
+
+    /// Current scale relative to the initial box.
+    pub fn scale(&self) -> f64 {
+        self.scale
+    }
+
+    /// Current box size, frame pixels (0 before `init`).
+    pub fn size(&self) -> (f64, f64) {
+        self.geometry
+            .map(|g| (g.base.0 * self.scale, g.base.1 * self.scale))
+            .unwrap_or((0.0, 0.0))
+    }
+
+    /// Cells of the search window (0 before `init`).
+    pub fn cells(&self) -> (usize, usize) {
+        self.geometry.map(|g| (g.nx, g.ny)).unwrap_or((0, 0))
+    }
+
+    /// The last response computed.
+    pub fn response(&self) -> &Response {
+        &self.response
+    }
+
+    /// Starts on a gray frame with a target of `size` frame pixels centred
+    /// at `centre` (0-based pixel coordinates).
+    ///
+    /// # Errors
+    /// [`DcfError::InvalidParameter`] for a non-finite or empty target or a
+    /// frame that is not 1-channel.
+    pub fn init(
+        &mut self,
+        frame: ImageView<'_, u8>,
+        centre: (f64, f64),
+        size: (f64, f64),
+    ) -> Result<()> {
+        let (w, h) = size;
+        let finite = centre.0.is_finite() && centre.1.is_finite();
+        if !(finite && w.is_finite() && h.is_finite() && w >= 1.0 && h >= 1.0) {
+            return Err(DcfError::InvalidParameter {
+                name: "target",
+                value: w.min(h),
+                reason: "must be finite, at least 1x1 pixel",
+            });
+        }
+        let c = self.config;
+        let (ww, wh) = match c.padding {
+            Padding::Relative(p) => (w * (1.0 + p), h * (1.0 + p)),
+            Padding::MeanSide(p) => (w + p * (w + h) / 2.0, h + p * (w + h) / 2.0),
+        };
+        // larger windows are shrunk to the model area, smaller ones kept at
+        // the frame's resolution (KCF), which bounds the cost per frame
+        let k = (c.model_area / (ww * wh)).sqrt().min(1.0);
+        let cell = c.cell;
+        let nx = next_smooth(((ww * k / cell as f64).round() as usize).max(4));
+        let ny = next_smooth(((wh * k / cell as f64).round() as usize).max(4));
+        let (pw, ph) = (nx * cell, ny * cell);
+        let (rx, ry) = (ww / pw as f64, wh / ph as f64);
+        // target in model pixels, label width in cells (KCF)
+        let sigma = (w / rx * h / ry).sqrt() * c.output_sigma_factor / cell as f64;
+        let model = KcfModel::new(nx, ny, HOG_CHANNELS, sigma, c.kernel, c.lambda)?;
+        let hog = Fhog::new(pw, ph, cell)?;
+        let (fw, fh) = (frame.width() as f64, frame.height() as f64);
+        // DSST's bounds: the window at least 5 pixels, the target at most
+        // the frame
+        let min_scale = (5.0 / ww.min(wh)).min(1.0);
+        let max_scale = (fw / w).min(fh / h).max(1.0);
+        self.geometry = Some(Geometry {
+            base: (w, h),
+            nx,
+            ny,
+            pw,
+            ph,
+            rx,
+            ry,
+            min_scale,
+            max_scale,
+        });
+        self.window = cosine_window(nx, ny);
+        self.patch = vec![0.0; pw * ph];
+        self.features = vec![0.0; HOG_CHANNELS * nx * ny];
+        self.response = Response {
+            w: nx,
+            h: ny,
+            data: vec![0.0; nx * ny],
+            ..Response::default()
+        };
+        self.model = Some(model);
+        self.hog = Some(hog);
+        self.scale_filter = match c.scale {
+            Some(sc) => Some(ScaleFilter::new(sc, w, h)?),
+            None => None,
+        };
+        self.gate.reset();
+        self.centre = centre;
+        self.scale = 1.0;
+        self.load(frame)?;
+        self.update(centre, 1.0, 1.0)
+    }
+
+    /// Loads a gray frame for the following `detect`, `scale_change` and
+    /// `update` calls.
+    ///
+    /// # Errors
+    /// [`DcfError::InvalidParameter`] for a frame that is not 1-channel or
+    /// is empty.
+    pub fn load(&mut self, frame: ImageView<'_, u8>) -> Result<()> {
+        if frame.channels() != 1 {
+            return Err(DcfError::InvalidParameter {
+                name: "frame channels",
+                value: frame.channels() as f64,
+                reason: "the correlation filter reads gray (1-channel) frames",
+            });
+        }
+        self.sampler.load(frame)
+    }
+
+    /// The windowed fHOG of the loaded frame around `centre` at `scale`.
+    fn extract(&mut self, centre: (f64, f64), scale: f64) -> Result<Geometry> {
+        let g = self.geometry.ok_or(DcfError::NotInitialised)?;
+        let hog = self.hog.as_mut().ok_or(DcfError::NotInitialised)?;
+        let (sx, sy) = (g.rx * scale, g.ry * scale);
+        let x0 = centre.0 + 0.5 - g.pw as f64 * sx / 2.0;
+        let y0 = centre.1 + 0.5 - g.ph as f64 * sy / 2.0;
+        self.sampler
+            .sample(0, x0, y0, sx, sy, &mut self.patch, g.pw, g.ph)?;
+        for v in self.patch.iter_mut() {
+            *v *= 1.0 / 255.0;
+        }
+        hog.compute(&self.patch, &mut self.features)?;
+        let n = g.nx * g.ny;
+        for ch in self.features.chunks_exact_mut(n) {
+            for (v, w) in ch.iter_mut().zip(&self.window) {
+                *v *= w;
+            }
+        }
+        Ok(g)
+    }
+
+    /// The translation response of the loaded frame in the window centred
+    /// at `centre`, at `scale`.
+    ///
+    /// # Errors
+    /// [`DcfError::NotInitialised`]; [`DcfError::NonFinite`] for a NaN
+    /// response.
+    pub fn detect(&mut self, centre: (f64, f64), scale: f64) -> Result<&Response> {
+        let g = self.extract(centre, scale)?;
+        let model = self.model.as_mut().ok_or(DcfError::NotInitialised)?;
+        model.detect(&self.features, &mut self.response.data)?;
+        let k = g.pw as f64 / g.nx as f64;
+        self.response.px = (k * g.rx * scale, k * g.ry * scale);
+        self.response.finish()?;
+        Ok(&self.response)
+    }
+
+    /// DSST's estimate of the scale at `centre` in the loaded frame, from
+    /// `scale`: the new scale (clamped to the frame), or `scale` when the
+    /// filter has no scale model.
+    ///
+    /// # Errors
+    /// [`DcfError::NotInitialised`]; sampler errors.
+    pub fn scale_change(&mut self, centre: (f64, f64), scale: f64) -> Result<f64> {
+        let g = self.geometry.ok_or(DcfError::NotInitialised)?;
+        let Some(f) = self.scale_filter.as_mut() else {
+            return Ok(scale);
+        };
+        let (factor, _) = f.detect(&mut self.sampler, centre.0, centre.1, scale)?;
+        Ok((scale * factor).clamp(g.min_scale, g.max_scale))
+    }
+
+    /// Learns the loaded frame's target at `centre` and `scale`, the
+    /// learning rates times `rate` (1: the configured rates).
+    ///
+    /// # Errors
+    /// [`DcfError::NotInitialised`]; [`DcfError::InvalidParameter`] for a
+    /// rate outside `[0, 1]`.
+    pub fn update(&mut self, centre: (f64, f64), scale: f64, rate: f64) -> Result<()> {
+        if !(0.0..=1.0).contains(&rate) {
+            return Err(DcfError::InvalidParameter {
+                name: "rate",
+                value: rate,
+                reason: "must be in [0, 1]",
+            });
+        }
+        self.extract(centre, scale)?;
+        let lr = self.config.learning_rate * rate;
+        self.model
+            .as_mut()
+            .ok_or(DcfError::NotInitialised)?
+            .train(&self.features, lr)?;
+        if let (Some(f), Some(sc)) = (self.scale_filter.as_mut(), self.config.scale) {
+            f.train(
+                &mut self.sampler,
+                centre.0,
+                centre.1,
+                scale,
+                sc.learning_rate * rate,
+            )?;
+        }
+        Ok(())
+    }
+
+    /// Whether the update gate admits a response (recording it when it
+    /// does); always true without a gate.
+    pub fn admit(&mut self, peak: f64, apce: f64) -> bool {
+        self.config.gate.is_none() || self.gate.admit(peak, apce)
+    }
+
+    /// Moves the tracker's state to `centre`, `scale` (after an external
+    /// estimate, e.g. a particle filter's).
+    pub fn set_state(&mut self, centre: (f64, f64), scale: f64) {
+        self.centre = centre;
+        if let Some(g) = self.geometry {
+            self.scale = scale.clamp(g.min_scale, g.max_scale);
+        }
+    }
+
+    /// One frame of the classical tracker: translation at the current
+    /// scale, then scale at the new centre, then a gated update.
+    ///
+    /// # Errors
+    /// As [`Dcf::load`], [`Dcf::detect`], [`Dcf::update`].
+    pub fn step(&mut self, frame: ImageView<'_, u8>) -> Result<Step> {
+        self.load(frame)?;
+        let (c, s) = (self.centre, self.scale);
+        let r = self.detect(c, s)?;
+        let (peak, dx, dy, p, a) = (r.max, r.dx, r.dy, r.psr, r.apce);
+        let centre = self.clamp_centre((c.0 + dx, c.1 + dy));
+        let scale = self.scale_change(centre, s)?;
+        let updated = self.admit(peak as f64, a);
+        if updated {
+            self.update(centre, scale, 1.0)?;
+        }
+        self.centre = centre;
+        self.scale = scale;
+        Ok(Step {
+            centre,
+            scale,
+            size: self.size(),
+            peak,
+            psr: p,
+            apce: a,
+            updated,
+        })
+    }
+
+    fn clamp_centre(&self, (x, y): (f64, f64)) -> (f64, f64) {
+        let (w, h) = (self.sampler.width(), self.sampler.height());
+        (
+            x.clamp(0.0, w.saturating_sub(1) as f64),
+            y.clamp(0.0, h.saturating_sub(1) as f64),
+        )
+    }
+}
+
+/// Every parameter of [`Staple`]: its correlation filter (Staple's HOG
+/// DCF: window of the target plus its mean side, linear kernel, lambda
+/// 1e-3, label sigma factor 1/16, learning rate 0.01, DSST's scale filter)
+/// and its colour model.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StapleConfig {
+    /// The correlation filter.
+    pub dcf: DcfConfig,
+    /// Weight of the colour response in the merge (Staple: 0.3).
+    pub merge_factor: f64,
+    /// Learning rate of the colour histograms (Staple: 0.04).
+    pub colour_rate: f64,
+    /// Foreground shrink as a fraction of the mean side (Staple: 0.2).
+    pub inner_padding: f64,
+}
+
+impl Default for StapleConfig {
+    fn default() -> Self {
+        Self {
+            dcf: DcfConfig {
+                padding: Padding::MeanSide(1.0),
+                lambda: 1e-3,
+                output_sigma_factor: 1.0 / 16.0,
+                kernel: Kernel::Linear,
+                learning_rate: 0.01,
+                cell: 4,
+                model_area: 150.0 * 150.0,
+                scale: Some(ScaleConfig {
+                    lambda: 1e-3,
+                    ..ScaleConfig::default()
+                }),
+                gate: Some((0.7, 0.45)),
+            },
+            merge_factor: 0.3,
+            colour_rate: 0.04,
+            inner_padding: 0.2,
+        }
+    }
+}
+
+impl StapleConfig {
+    /// Checks every parameter.
+    ///
+    /// # Errors
+    /// [`DcfError::InvalidParameter`] naming the first bad one.
+    pub fn validate(&self) -> Result<()> {
+        self.dcf.validate()?;
+        for (name, v) in [
+            ("merge_factor", self.merge_factor),
+            ("colour_rate", self.colour_rate),
+            ("inner_padding", self.inner_padding),
+        ] {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(DcfError::InvalidParameter {
+                    name,
+                    value: v,
+                    reason: "must be in [0, 1]",
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Staple (Bertinetto et al. 2016): [`Dcf`] with a colour-histogram
+/// response merged into the correlation response.
+#[derive(Debug, Clone)]
+pub struct Staple {
+    config: StapleConfig,
+    dcf: Dcf,
+    colour: Option<ColourModel>,
+    sampler: PatchSampler,
+    planes: Vec<f32>,
+    map: Vec<f32>,
+    scores: Vec<f32>,
+    merged: Response,
+}
+
+impl Staple {
+    /// A tracker model with `config`.
+    ///
+    /// # Errors
+    /// [`DcfError::InvalidParameter`] for a bad parameter.
+    pub fn new(config: StapleConfig) -> Result<Self> {
+        config.validate()?;
+        Ok(Self {
+            dcf: Dcf::new(config.dcf)?,
+            config,
+            colour: None,
+            sampler: PatchSampler::new(),
+            planes: Vec::new(),
+            map: Vec::new(),
+            scores: Vec::new(),
+            merged: Response::default(),
+        })
+    }
+
+    /// The correlation filter.
+    pub fn dcf(&self) -> &Dcf {
+        &self.dcf
+    }
+
+    /// The last merged response.
+    pub fn response(&self) -> &Response {
+        &self.merged
+    }
+
+    /// Starts on `frame` (gray or RGB: the colour model's input) and its
+    /// gray plane `gray` (the correlation filter's).
+    ///
+    /// # Errors
+    /// As [`Dcf::init`]; a frame of another channel count than 1 or 3.
+    pub fn init(
+        &mut self,
+        frame: ImageView<'_, u8>,
+        gray: ImageView<'_, u8>,
+        centre: (f64, f64),
+        size: (f64, f64),
+    ) -> Result<()> {
+        self.dcf.init(gray, centre, size)?;
+        self.colour = Some(ColourModel::new(frame.channels())?);
+        let g = self.dcf.geometry.ok_or(DcfError::NotInitialised)?;
+        self.planes = vec![0.0; frame.channels() * g.pw * g.ph];
+        self.map = vec![0.0; g.pw * g.ph];
+        self.scores = vec![0.0; g.nx * g.ny];
+        self.merged = Response {
+            w: g.nx,
+            h: g.ny,
+            data: vec![0.0; g.nx * g.ny],
+            ..Response::default()
+        };
+        self.sampler.load(frame)?;
+        self.learn_colour(centre, 1.0, 1.0)
+    }
+
+    /// Samples the colour patch around `centre` at `scale`.
+    fn colour_patch(&mut self, centre: (f64, f64), scale: f64) -> Result<Geometry> {
+        let g = self.dcf.geometry.ok_or(DcfError::NotInitialised)?;
+        let (sx, sy) = (g.rx * scale, g.ry * scale);
+        let x0 = centre.0 + 0.5 - g.pw as f64 * sx / 2.0;
+        let y0 = centre.1 + 0.5 - g.ph as f64 * sy / 2.0;
+        let n = g.pw * g.ph;
+        for (ch, plane) in self.planes.chunks_exact_mut(n).enumerate() {
+            self.sampler.sample(ch, x0, y0, sx, sy, plane, g.pw, g.ph)?;
+        }
+        Ok(g)
+    }
+
+    /// The target box in model pixels.
+    fn target_box(g: &Geometry) -> (usize, usize) {
+        (
+            ((g.base.0 / g.rx).round() as usize).clamp(1, g.pw),
+            ((g.base.1 / g.ry).round() as usize).clamp(1, g.ph),
+        )
+    }
+
+    fn learn_colour(&mut self, centre: (f64, f64), scale: f64, rate: f64) -> Result<()> {
+        let g = self.colour_patch(centre, scale)?;
+        let (bw, bh) = Self::target_box(&g);
+        let (x0, y0) = ((g.pw - bw) / 2, (g.ph - bh) / 2);
+        let shrink = (self.config.inner_padding * (bw + bh) as f64 / 2.0).round() as usize;
+        let colour = self.colour.as_mut().ok_or(DcfError::NotInitialised)?;
+        colour.learn(
+            &self.planes,
+            g.pw,
+            g.ph,
+            (x0, y0, x0 + bw, y0 + bh),
+            shrink.min(bw.min(bh).saturating_sub(1) / 2),
+            self.config.colour_rate * rate,
+        )
+    }
+
+    /// One frame: the merged response gives the centre, DSST the scale;
+    /// both models learn when the correlation response passes the gate.
+    ///
+    /// # Errors
+    /// As [`Staple::init`].
+    pub fn step(&mut self, frame: ImageView<'_, u8>, gray: ImageView<'_, u8>) -> Result<Step> {
+        self.dcf.load(gray)?;
+        self.sampler.load(frame)?;
+        let (c, s) = (self.dcf.centre, self.dcf.scale);
+        let r = self.dcf.detect(c, s)?;
+        let (cf_peak, cf_apce) = (r.max as f64, r.apce);
+        let g = self.colour_patch(c, s)?;
+        let colour = self.colour.as_mut().ok_or(DcfError::NotInitialised)?;
+        colour.likelihood(&self.planes[..], g.pw, g.ph, &mut self.map)?;
+        let (bw, bh) = Self::target_box(&g);
+        colour.box_scores(
+            &self.map,
+            g.pw,
+            g.ph,
+            (bw, bh),
+            (g.nx, g.ny, self.dcf.config.cell),
+            &mut self.scores,
+        )?;
+        let m = self.config.merge_factor as f32;
+        for ((o, &cf), &p) in self
+            .merged
+            .data
+            .iter_mut()
+            .zip(&self.dcf.response.data)
+            .zip(&self.scores)
+        {
+            *o = (1.0 - m) * cf + m * p;
+        }
+        self.merged.px = self.dcf.response.px;
+        self.merged.finish()?;
+        let (dx, dy) = (self.merged.dx, self.merged.dy);
+        let centre = self.dcf.clamp_centre((c.0 + dx, c.1 + dy));
+        let scale = self.dcf.scale_change(centre, s)?;
+        let updated = self.dcf.admit(cf_peak, cf_apce);
+        if updated {
+            self.dcf.update(centre, scale, 1.0)?;
+            self.learn_colour(centre, scale, 1.0)?;
+        }
+        self.dcf.centre = centre;
+        self.dcf.scale = scale;
+        Ok(Step {
+            centre,
+            scale,
+            size: self.dcf.size(),
+            peak: self.merged.max,
+            psr: self.merged.psr,
+            apce: self.merged.apce,
+            updated,
+        })
+    }
+}
