@@ -2,6 +2,7 @@
 
 pub use bayestrack_affine as affine;
 pub use bayestrack_appearance as appearance;
+pub use bayestrack_dcf as dcf;
 pub use bayestrack_image as image;
 pub use bayestrack_kalman as kalman;
 pub use bayestrack_otb as otb;
