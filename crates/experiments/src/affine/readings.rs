@@ -33,7 +33,7 @@ pub enum Claim {
     /// accurately with as much as 150 particles": HKPF loses at most 5 %
     /// of Cock's frames.
     HkpfTracksCock,
-    /// Sec. 3.2: on Sylvester "ISPF solve[s] the problem easily": ISPF
+    /// Sec. 3.2: on Sylvester "ISPF solve(s) the problem easily": ISPF
     /// loses at most 5 % of the frames.
     IspfTracksSylvester,
     /// Sec. 3.2: on Sylvester HKPF "tracks the target with a big error on
