@@ -628,7 +628,8 @@ pub(crate) fn chol_downdate<const D: usize>(
         // `L_kk^2 - x_k^2` without squaring the difference away
         let r2 = (lkk - ak) * (lkk + ak);
         // rejects r2 <= 0 and NaN
-        if !(r2 > 0.0) {
+        let positive = r2 > 0.0;
+        if !positive {
             return Err(KalmanError::NotPositiveDefinite { matrix, step });
         }
         let r = r2.sqrt();
@@ -661,6 +662,108 @@ pub(crate) fn tria_into<const D: usize, const K: usize>(
     }
 }
 
+/// A lower-triangular factor `[[C, 0], [B, A]]` of a joint `(M + N) x (M +
+/// N)` matrix `[[C C^T, C B^T], [B C^T, B B^T + A A^T]]` held as its blocks
+/// (the size `M + N` cannot be a const generic on stable Rust). With the
+/// joint covariance of a measurement `y` (first) and a state `x`, `C` is the
+/// factor of `S = Cov(y)`, `B = P_xy C^{-T}` and `A A^T = P - B B^T` the
+/// factor of the conditional covariance: the array form of the measurement
+/// update, which forms the posterior factor by rotations alone (no
+/// subtraction of `U U^T` from `P`).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct JointFactor<const M: usize, const N: usize> {
+    pub(crate) c: SMatrix<f64, M, M>,
+    pub(crate) b: SMatrix<f64, N, M>,
+    pub(crate) a: SMatrix<f64, N, N>,
+}
+
+impl<const M: usize, const N: usize> JointFactor<M, N> {
+    /// `[[C, 0], [0, 0]]`.
+    #[inline(always)]
+    pub(crate) fn new(c: SMatrix<f64, M, M>) -> Self {
+        Self {
+            c,
+            b: SMatrix::zeros(),
+            a: SMatrix::zeros(),
+        }
+    }
+
+    /// Rank-1 update with `[vy; vx]`, as [`chol_update`].
+    #[inline(always)]
+    pub(crate) fn update(&mut self, mut vy: SVector<f64, M>, mut vx: SVector<f64, N>) {
+        for k in 0..M {
+            let xk = vy[k];
+            if xk == 0.0 {
+                continue;
+            }
+            let lkk = self.c[(k, k)];
+            let r = (lkk * lkk + xk * xk).sqrt();
+            let inv = 1.0 / r;
+            let (c, s) = (lkk * inv, xk * inv);
+            self.c[(k, k)] = r;
+            for i in (k + 1)..M {
+                let (a, b) = (self.c[(i, k)], vy[i]);
+                self.c[(i, k)] = c * a + s * b;
+                vy[i] = c * b - s * a;
+            }
+            for i in 0..N {
+                let (a, b) = (self.b[(i, k)], vx[i]);
+                self.b[(i, k)] = c * a + s * b;
+                vx[i] = c * b - s * a;
+            }
+        }
+        chol_update(&mut self.a, vx);
+    }
+
+    /// Rank-1 downdate with `[vy; vx]`, as [`chol_downdate`].
+    ///
+    /// # Errors
+    /// As [`chol_downdate`], naming `matrix_y` for a pivot of `C` and
+    /// `matrix_x` for one of `A`.
+    #[inline(always)]
+    pub(crate) fn downdate(
+        &mut self,
+        mut vy: SVector<f64, M>,
+        mut vx: SVector<f64, N>,
+        matrix_y: &'static str,
+        matrix_x: &'static str,
+        step: Step,
+    ) -> Result<()> {
+        for k in 0..M {
+            let xk = vy[k];
+            if xk == 0.0 {
+                continue;
+            }
+            let lkk = self.c[(k, k)];
+            let ak = xk.abs();
+            let r2 = (lkk - ak) * (lkk + ak);
+            let positive = r2 > 0.0;
+            if !positive {
+                return Err(KalmanError::NotPositiveDefinite {
+                    matrix: matrix_y,
+                    step,
+                });
+            }
+            let r = r2.sqrt();
+            let inv_l = 1.0 / lkk;
+            let (c, s) = (r * inv_l, xk * inv_l);
+            let inv_c = lkk / r;
+            self.c[(k, k)] = r;
+            for i in (k + 1)..M {
+                let a = (self.c[(i, k)] - s * vy[i]) * inv_c;
+                self.c[(i, k)] = a;
+                vy[i] = c * vy[i] - s * a;
+            }
+            for i in 0..N {
+                let a = (self.b[(i, k)] - s * vx[i]) * inv_c;
+                self.b[(i, k)] = a;
+                vx[i] = c * vx[i] - s * a;
+            }
+        }
+        chol_downdate(&mut self.a, vx, matrix_x, step)
+    }
+}
+
 /// `L^{-1} B` for a lower-triangular `L` with a non-zero diagonal.
 #[inline(always)]
 pub(crate) fn lower_solve<const D: usize, const C: usize>(
@@ -675,29 +778,6 @@ pub(crate) fn lower_solve<const D: usize, const C: usize>(
                 s -= l[(i, k)] * x[(k, c)];
             }
             x[(i, c)] = s / l[(i, i)];
-        }
-    }
-    x
-}
-
-/// `B L^{-T}` for a lower-triangular `L` with a non-zero diagonal (the
-/// solve of `X L^T = B`, column by column of `X`).
-#[inline(always)]
-pub(crate) fn right_solve_lower_t<const R: usize, const D: usize>(
-    l: &SMatrix<f64, D, D>,
-    b: &SMatrix<f64, R, D>,
-) -> SMatrix<f64, R, D> {
-    let mut x = *b;
-    for c in 0..D {
-        for k in 0..c {
-            let lck = l[(c, k)];
-            for i in 0..R {
-                x[(i, c)] -= x[(i, k)] * lck;
-            }
-        }
-        let inv = 1.0 / l[(c, c)];
-        for i in 0..R {
-            x[(i, c)] *= inv;
         }
     }
     x
@@ -906,8 +986,41 @@ mod tests {
         let l = chol4(&spd4(2));
         let b = nalgebra::Matrix4x2::new(1.0, 2.0, -1.0, 0.5, 3.0, 0.0, 0.25, -2.0);
         assert!((l * lower_solve(&l, &b) - b).amax() < 1e-12);
-        let bt = b.transpose();
-        assert!((right_solve_lower_t(&l, &bt) * l.transpose() - bt).amax() < 1e-12);
+    }
+
+    #[test]
+    fn joint_factor_is_the_conditional_factor() {
+        // joint covariance of [y (2); x (4)]
+        let w = nalgebra::SMatrix::<f64, 6, 9>::from_fn(|i, j| {
+            ((i * 7 + j * 3) % 5) as f64 - 1.7 + 0.1 * i as f64
+        });
+        let joint = w * w.transpose();
+        let mut jf = JointFactor::<2, 4>::new(nalgebra::Matrix2::identity() * 0.5);
+        for j in 0..9 {
+            let col = w.column(j);
+            jf.update(
+                col.fixed_rows::<2>(0).into_owned(),
+                col.fixed_rows::<4>(2).into_owned(),
+            );
+        }
+        let s = joint.fixed_view::<2, 2>(0, 0) + nalgebra::Matrix2::identity() * 0.25;
+        let pxy = joint.fixed_view::<4, 2>(2, 0).into_owned();
+        let p = joint.fixed_view::<4, 4>(2, 2).into_owned();
+        assert!((jf.c * jf.c.transpose() - s).amax() < 1e-12);
+        assert!((jf.b * jf.c.transpose() - pxy).amax() < 1e-12);
+        let post = p - pxy * s.try_inverse().unwrap() * pxy.transpose();
+        assert!((jf.a * jf.a.transpose() - post).amax() < 1e-11);
+        // a downdate undoes an update
+        let before = jf;
+        let (vy, vx) = (
+            nalgebra::Vector2::new(0.3, -0.2),
+            nalgebra::Vector4::new(1.0, 0.0, -0.5, 2.0),
+        );
+        jf.update(vy, vx);
+        jf.downdate(vy, vx, "S", "P", Step::Update).unwrap();
+        assert!((jf.c - before.c).amax() < 1e-12);
+        assert!((jf.b - before.b).amax() < 1e-12);
+        assert!((jf.a - before.a).amax() < 1e-12);
     }
 
     #[test]

@@ -19,12 +19,22 @@
 //! way), so the zeroth point's term, whose weight `Wc_0` is about
 //! `-1 / alpha^2` for a small `alpha`, becomes the small `g d d^T` and the
 //! update-or-downdate decision is the sign of `g` (`Wc_0`'s sign when
-//! `alpha^2 >= 1`). The measurement update forms the factor `S_y` of the
-//! innovation covariance the same way (with `sqrt(R)`), the gain's factor
-//! `U = P_xy S_y^{-T}` by one triangular solve (`K = U S_y^{-1}`,
-//! `K S_y = U`), the mean `x + U (S_y^{-1} nu)`, and the posterior factor
-//! by `M` rank-1 downdates of `L` with the columns of `U`
-//! (`P - K S K^T = P - U U^T`).
+//! `alpha^2 >= 1`).
+//!
+//! The measurement update triangularises the JOINT deviations of `[y; x]`
+//! (the array form of square-root filtering, Morf and Kailath 1975):
+//! `tria([[sqrt(R), sqrt(W_i) dY_i], [0, sqrt(W_i) dX_i]])` (then the rank-1
+//! term `g [e; d][e; d]^T`) is `[[S_y, 0], [U, L+]]` with `S_y S_y^T = S`,
+//! `U = P_xy S_y^{-T}` (so the gain is `K = U S_y^{-1}` and `K S_y = U`)
+//! and `L+ L+^T = P - U U^T`, the posterior. The mean is
+//! `x + U (S_y^{-1} nu)`. This is the matrix van der Merwe and Wan's update
+//! forms by `M` rank-1 downdates of `L` with the columns of `U`, by
+//! rotations alone: the downdates subtract `U U^T` from `P`, and with a
+//! large dynamic range (a variance of 1e8 measured with variance 1e-10)
+//! they cancel below round-off exactly where the UKF's `P - K S K^T` does
+//! (measured: they fail with a pivot `<= 0` on the test of
+//! `tests/srukf.rs` at the first update, where the array form keeps a
+//! valid factor whose variances stay within the test's bounds).
 
 use nalgebra::{SMatrix, SVector};
 
@@ -112,7 +122,8 @@ impl<const N: usize> SqrtGaussian<N> {
     /// (evaluation step) when the covariance is singular (a zero on the
     /// diagonal of `L`).
     pub fn factor(&self) -> Result<FactoredGaussian<N>> {
-        if linalg::min_diagonal(&self.l) > 0.0 {
+        let positive = (0..N).all(|i| self.l[(i, i)] > 0.0);
+        if positive {
             Ok(FactoredGaussian::from_factor(self.mean, self.l))
         } else {
             Err(KalmanError::NotPositiveDefinite {
@@ -291,9 +302,10 @@ impl SrUkf {
     }
 
     /// Measurement update with sigma points drawn from `prior`'s factor:
-    /// `S_y` from the QR of the weighted measurement deviations and
-    /// `sqrt(R)`, the gain by triangular solves, and the posterior factor
-    /// by one rank-1 downdate per measurement dimension.
+    /// `S_y`, the gain's factor `U = P_xy S_y^{-T}` and the posterior factor
+    /// from one triangularisation (QR by Givens rotations) of the weighted
+    /// joint deviations of measurement and state and `sqrt(R)` (see the
+    /// module documentation), the mean by one triangular solve.
     ///
     /// # Errors
     /// As [`SrUkf::predict`] for the weights; the checks of `Q` applied to
@@ -301,8 +313,10 @@ impl SrUkf {
     /// [`KalmanError::NonFinite`] for a non-finite `z`, sigma-point mean of
     /// `h`, posterior or NIS and log-likelihood;
     /// [`KalmanError::NotPositiveDefinite`] naming "innovation covariance
-    /// S" when it is singular, or "posterior covariance" when a downdate
-    /// would lose definiteness (never a NaN factor).
+    /// S" when it is singular, or (`beta < alpha^2` only, where the
+    /// sigma-point term `(beta - alpha^2) [e; d][e; d]^T` is a downdate)
+    /// "innovation covariance S" or "posterior covariance" when that
+    /// downdate would lose definiteness (never a NaN factor).
     #[inline]
     pub fn update<const N: usize, const M: usize, H: Measurement<N, M>>(
         &self,
@@ -325,11 +339,13 @@ impl SrUkf {
         let m = prior.mean();
         let sl = Self::spread_factor(&prior.l, wt.c)?;
         let y0 = measurement.observe(m);
+        let sw = wt.wi.sqrt();
+        // the joint factor of [y; x], from sqrt(R) and the weighted
+        // deviation columns; the x deviations of the points about the
+        // central one are +-sqrt(c) L_j (formed as the UKF forms them)
+        let mut joint = linalg::JointFactor::<M, N>::new(sr);
         let mut sdx = SVector::<f64, N>::repeat(-0.0);
         let mut sdy = SVector::<f64, M>::repeat(-0.0);
-        let mut sxy = SMatrix::<f64, N, M>::zeros();
-        let mut plus = SMatrix::<f64, M, N>::zeros();
-        let mut minus = SMatrix::<f64, M, N>::zeros();
         for j in 0..N {
             let (xp, xm) = linalg::spread(m, &sl, j);
             let (dxp, dxm) = (xp - m, xm - m);
@@ -339,41 +355,40 @@ impl SrUkf {
             sdx += dxm;
             sdy += dyp;
             sdy += dym;
-            sxy += dxp * dyp.transpose() + dxm * dym.transpose();
-            plus.set_column(j, &dyp);
-            minus.set_column(j, &dym);
+            joint.update(dyp * sw, dxp * sw);
+            joint.update(dym * sw, dxm * sw);
         }
         let d = sdx * wt.wi;
         let e = sdy * wt.wi;
         let y_mean = measurement.mean_z(&y0, &e);
         linalg::check_finite_vec(&y_mean, "sigma-point mean of h", step)?;
-        let p_xy = sxy * wt.wi + linalg::mul_t(&(d * wt.g), &e);
-        let sw = wt.wi.sqrt();
-        let mut sy = sr;
-        linalg::tria_into(&mut sy, &(plus * sw));
-        linalg::tria_into(&mut sy, &(minus * sw));
-        Self::mean_shift_term(&mut sy, wt.g, &e, "innovation covariance S", step)?;
-        // rejects a zero pivot and NaN
-        if !(linalg::min_diagonal(&sy) > 0.0) {
+        let gs = wt.g.abs().sqrt();
+        if wt.g >= 0.0 {
+            joint.update(e * gs, d * gs);
+        } else {
+            joint.downdate(
+                e * gs,
+                d * gs,
+                "innovation covariance S",
+                "posterior covariance",
+                step,
+            )?;
+        }
+        let sy = joint.c;
+        // a zero pivot (a NaN one gives a NaN mean, reported below)
+        let positive = linalg::min_diagonal(&sy) > 0.0;
+        if !positive {
             return Err(KalmanError::NotPositiveDefinite {
                 matrix: "innovation covariance S",
                 step,
             });
         }
-        // K = P_xy S^{-1} = U S_y^{-1} with U = P_xy S_y^{-T}
-        let u = linalg::right_solve_lower_t(&sy, &p_xy);
+        // K = P_xy S^{-1} = U S_y^{-1}, U = P_xy S_y^{-T} = B; the posterior
+        // factor is A (A A^T = P - U U^T)
         let residual = measurement.residual_z(z, &y_mean);
         let w = linalg::lower_solve(&sy, &residual);
-        let mean = m + linalg::mul(&u, &w);
-        let mut l = prior.l;
-        for j in 0..M {
-            linalg::chol_downdate(
-                &mut l,
-                u.column(j).into_owned(),
-                "posterior covariance",
-                step,
-            )?;
-        }
+        let mean = m + linalg::mul(&joint.b, &w);
+        let l = joint.a;
         let nis = w.norm_squared();
         let prod: f64 = (0..M).map(|i| sy[(i, i)]).product();
         let log_det = if prod.is_normal() {
