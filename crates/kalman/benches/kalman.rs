@@ -25,6 +25,10 @@
 //!   smelly UKF: redraws sigma points from the prediction (as our
 //!   `predict` + `update` does), no symmetrisation, returns the innovation.
 //!
+//! `bayestrack_srukf_predict_update` is the square-root UKF
+//! ([`SrUkf`]) on the same sigma points (equal to `bayestrack_predict_update`
+//! to 1e-9), its belief a Cholesky factor.
+//!
 //! `bayestrack_one_sigma_set` is a different, cheaper algorithm (one
 //! sigma-point set through `f` then `h`, [`Ukf::step`]); the like-for-like
 //! comparison with smelly is `bayestrack_predict_update`.
@@ -37,7 +41,8 @@ use adskalman::{
     TransitionModelLinearNoControl,
 };
 use bayestrack_kalman::{
-    CovarianceUpdate, Dynamics, Gaussian, Kf, LinearDynamics, LinearMeasurement, Measurement, Ukf,
+    CovarianceUpdate, Dynamics, Gaussian, Kf, LinearDynamics, LinearMeasurement, Measurement,
+    SqrtGaussian, SrUkf, Ukf,
 };
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::{
@@ -235,6 +240,20 @@ fn bench_ukf(c: &mut Criterion) {
         b.iter(|| {
             let prior = ukf.predict(&belief, &Pendulum).unwrap();
             let u = black_box(ukf.update(&prior, &Pendulum, Some(&zs[k & 63])).unwrap());
+            belief = u.posterior;
+            k += 1;
+        })
+    });
+
+    // the square-root UKF on the same points: the belief is the Cholesky
+    // factor, kept between steps
+    let srukf = SrUkf::new(1e-3, 2.0, 0.0).unwrap();
+    group.bench_function("bayestrack_srukf_predict_update", |b| {
+        let mut belief = SqrtGaussian::from_gaussian(&Gaussian::new(x0, p0).unwrap()).unwrap();
+        let mut k = 0;
+        b.iter(|| {
+            let prior = srukf.predict(&belief, &Pendulum).unwrap();
+            let u = black_box(srukf.update(&prior, &Pendulum, Some(&zs[k & 63])).unwrap());
             belief = u.posterior;
             k += 1;
         })

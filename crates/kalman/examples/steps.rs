@@ -4,7 +4,8 @@
 //! difference by `N` to get instructions per step.
 //!
 //! `cargo run --release -p bayestrack-kalman --example steps -- joseph 1000`
-//! (filters: `joseph`, `standard`, `ukf`, `ukf_one_set`, and `ukf_runtime` /
+//! (filters: `joseph`, `standard`, `ukf`, `ukf_one_set`, `srukf` (the
+//! square-root UKF on the pendulum), and `ukf_runtime` /
 //! `ukf_runtime_checked`: the pendulum with `Q` and `R` read at run time,
 //! checked on every step or once).
 #![allow(missing_docs)]
@@ -13,7 +14,7 @@ use std::hint::black_box;
 
 use bayestrack_kalman::{
     CovarianceUpdate, Dynamics, Gaussian, Kf, LinearDynamics, LinearMeasurement, Measurement,
-    NoiseCovariance, Ukf,
+    NoiseCovariance, SqrtGaussian, SrUkf, Ukf,
 };
 use nalgebra::{Matrix1, Matrix2, Matrix2x4, Matrix4, SMatrix, SVector, Vector1, Vector2, Vector4};
 
@@ -151,6 +152,25 @@ fn main() {
             for k in 0..n {
                 let prior = ukf.predict(&belief, &model).unwrap();
                 let u = black_box(ukf.update(&prior, &model, Some(&zs[k & 63])).unwrap());
+                belief = u.posterior;
+            }
+            black_box(belief);
+        }
+        "srukf" => {
+            let mut x = Vector2::new(0.6, 0.0);
+            let zs: Vec<Vector1<f64>> = (0..64)
+                .map(|k| {
+                    x = pendulum_f(&x);
+                    Vector1::new(x[0].sin() + 0.05 * ((k * 7919 % 101) as f64 / 50.0 - 1.0))
+                })
+                .collect();
+            let srukf = black_box(SrUkf::new(1e-3, 2.0, 0.0).unwrap());
+            let mut belief =
+                SqrtGaussian::new(Vector2::new(0.5, 0.0), Matrix2::identity() * 0.1f64.sqrt())
+                    .unwrap();
+            for k in 0..n {
+                let prior = srukf.predict(&belief, &Pendulum).unwrap();
+                let u = black_box(srukf.update(&prior, &Pendulum, Some(&zs[k & 63])).unwrap());
                 belief = u.posterior;
             }
             black_box(belief);

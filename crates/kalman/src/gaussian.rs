@@ -139,6 +139,23 @@ pub struct FactoredGaussian<const N: usize> {
 }
 
 impl<const N: usize> FactoredGaussian<N> {
+    /// From a mean and a lower-triangular factor with a positive diagonal
+    /// (the caller has checked it).
+    #[inline]
+    pub(crate) fn from_factor(mean: SVector<f64, N>, l: SMatrix<f64, N, N>) -> Self {
+        let prod: f64 = (0..N).map(|i| l[(i, i)]).product();
+        let log_det = if prod.is_normal() {
+            2.0 * prod.ln()
+        } else {
+            2.0 * (0..N).map(|i| l[(i, i)].ln()).sum::<f64>()
+        };
+        Self {
+            mean,
+            l,
+            log_norm: -0.5 * (log_det + N as f64 * LN_2PI),
+        }
+    }
+
     /// The mean.
     #[inline]
     pub fn mean(&self) -> &SVector<f64, N> {

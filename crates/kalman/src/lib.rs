@@ -13,6 +13,7 @@ mod linalg;
 mod model;
 mod motion;
 mod smoother;
+mod srukf;
 mod ukf;
 mod update;
 
@@ -30,6 +31,7 @@ pub use model::{
     MeasurementJacobian, NoiseCovariance, NoisyDynamics, NoisyMeasurement,
 };
 pub use motion::{NoiseModel, white_noise};
+pub use srukf::{SqrtGaussian, SqrtUpdate, SrUkf};
 pub use ukf::{Ukf, UkfStep};
 pub use update::{CovarianceUpdate, Innovation, Update};
 

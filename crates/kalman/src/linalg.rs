@@ -579,6 +579,210 @@ impl<const D: usize> Ldl<D> {
     }
 }
 
+/// Rank-1 update of a lower-triangular factor in place: `L' L'^T = L L^T +
+/// x x^T`, by Givens rotations (`x` is consumed). Keeps a non-negative
+/// diagonal and works on a singular factor (a zero pivot with a non-zero
+/// `x_k` becomes `|x_k|`); a zero `x_k` leaves column `k` as it is.
+#[inline(always)]
+pub(crate) fn chol_update<const D: usize>(l: &mut SMatrix<f64, D, D>, mut x: SVector<f64, D>) {
+    for k in 0..D {
+        let xk = x[k];
+        if xk == 0.0 {
+            continue;
+        }
+        let lkk = l[(k, k)];
+        let r = (lkk * lkk + xk * xk).sqrt();
+        let inv = 1.0 / r;
+        let (c, s) = (lkk * inv, xk * inv);
+        l[(k, k)] = r;
+        for i in (k + 1)..D {
+            let (a, b) = (l[(i, k)], x[i]);
+            l[(i, k)] = c * a + s * b;
+            x[i] = c * b - s * a;
+        }
+    }
+}
+
+/// Rank-1 downdate of a lower-triangular factor in place: `L' L'^T = L L^T -
+/// x x^T`, by hyperbolic rotations (`x` is consumed).
+///
+/// # Errors
+/// [`KalmanError::NotPositiveDefinite`] naming `matrix` when `L L^T - x x^T`
+/// is not positive definite on the span the downdate touches (a pivot
+/// `L_kk^2 - x_k^2` that is not positive, or NaN); `l` is then partly
+/// rotated and must be discarded.
+#[inline(always)]
+pub(crate) fn chol_downdate<const D: usize>(
+    l: &mut SMatrix<f64, D, D>,
+    mut x: SVector<f64, D>,
+    matrix: &'static str,
+    step: Step,
+) -> Result<()> {
+    for k in 0..D {
+        let xk = x[k];
+        if xk == 0.0 {
+            continue;
+        }
+        let lkk = l[(k, k)];
+        let ak = xk.abs();
+        // `L_kk^2 - x_k^2` without squaring the difference away
+        let r2 = (lkk - ak) * (lkk + ak);
+        // rejects r2 <= 0 and NaN
+        let positive = r2 > 0.0;
+        if !positive {
+            return Err(KalmanError::NotPositiveDefinite { matrix, step });
+        }
+        let r = r2.sqrt();
+        let inv_l = 1.0 / lkk;
+        let (c, s) = (r * inv_l, xk * inv_l);
+        let inv_c = lkk / r;
+        l[(k, k)] = r;
+        for i in (k + 1)..D {
+            let a = (l[(i, k)] - s * x[i]) * inv_c;
+            l[(i, k)] = a;
+            x[i] = c * x[i] - s * a;
+        }
+    }
+    Ok(())
+}
+
+/// `L' = tria([L, A])`: the lower-triangular factor of `L L^T + A A^T`, the
+/// `R^T` of a QR factorisation of `[L, A]^T`, formed column by column of `A`
+/// with Givens rotations ([`chol_update`]): `K` rank-1 updates of `D^2 / 2`
+/// rotations each, the operation count of a Householder QR of the `(D + K)
+/// x D` stack, with no stacked matrix (whose size `D + K` a const generic
+/// cannot name on stable Rust) and no allocation.
+#[inline(always)]
+pub(crate) fn tria_into<const D: usize, const K: usize>(
+    l: &mut SMatrix<f64, D, D>,
+    a: &SMatrix<f64, D, K>,
+) {
+    for j in 0..K {
+        chol_update(l, a.column(j).into_owned());
+    }
+}
+
+/// A lower-triangular factor `[[C, 0], [B, A]]` of a joint `(M + N) x (M +
+/// N)` matrix `[[C C^T, C B^T], [B C^T, B B^T + A A^T]]` held as its blocks
+/// (the size `M + N` cannot be a const generic on stable Rust). With the
+/// joint covariance of a measurement `y` (first) and a state `x`, `C` is the
+/// factor of `S = Cov(y)`, `B = P_xy C^{-T}` and `A A^T = P - B B^T` the
+/// factor of the conditional covariance: the array form of the measurement
+/// update, which forms the posterior factor by rotations alone (no
+/// subtraction of `U U^T` from `P`).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct JointFactor<const M: usize, const N: usize> {
+    pub(crate) c: SMatrix<f64, M, M>,
+    pub(crate) b: SMatrix<f64, N, M>,
+    pub(crate) a: SMatrix<f64, N, N>,
+}
+
+impl<const M: usize, const N: usize> JointFactor<M, N> {
+    /// `[[C, 0], [0, 0]]`.
+    #[inline(always)]
+    pub(crate) fn new(c: SMatrix<f64, M, M>) -> Self {
+        Self {
+            c,
+            b: SMatrix::zeros(),
+            a: SMatrix::zeros(),
+        }
+    }
+
+    /// Rank-1 update with `[vy; vx]`, as [`chol_update`].
+    #[inline(always)]
+    pub(crate) fn update(&mut self, mut vy: SVector<f64, M>, mut vx: SVector<f64, N>) {
+        for k in 0..M {
+            let xk = vy[k];
+            if xk == 0.0 {
+                continue;
+            }
+            let lkk = self.c[(k, k)];
+            let r = (lkk * lkk + xk * xk).sqrt();
+            let inv = 1.0 / r;
+            let (c, s) = (lkk * inv, xk * inv);
+            self.c[(k, k)] = r;
+            for i in (k + 1)..M {
+                let (a, b) = (self.c[(i, k)], vy[i]);
+                self.c[(i, k)] = c * a + s * b;
+                vy[i] = c * b - s * a;
+            }
+            for i in 0..N {
+                let (a, b) = (self.b[(i, k)], vx[i]);
+                self.b[(i, k)] = c * a + s * b;
+                vx[i] = c * b - s * a;
+            }
+        }
+        chol_update(&mut self.a, vx);
+    }
+
+    /// Rank-1 downdate with `[vy; vx]`, as [`chol_downdate`].
+    ///
+    /// # Errors
+    /// As [`chol_downdate`], naming `matrix_y` for a pivot of `C` and
+    /// `matrix_x` for one of `A`.
+    #[inline(always)]
+    pub(crate) fn downdate(
+        &mut self,
+        mut vy: SVector<f64, M>,
+        mut vx: SVector<f64, N>,
+        matrix_y: &'static str,
+        matrix_x: &'static str,
+        step: Step,
+    ) -> Result<()> {
+        for k in 0..M {
+            let xk = vy[k];
+            if xk == 0.0 {
+                continue;
+            }
+            let lkk = self.c[(k, k)];
+            let ak = xk.abs();
+            let r2 = (lkk - ak) * (lkk + ak);
+            let positive = r2 > 0.0;
+            if !positive {
+                return Err(KalmanError::NotPositiveDefinite {
+                    matrix: matrix_y,
+                    step,
+                });
+            }
+            let r = r2.sqrt();
+            let inv_l = 1.0 / lkk;
+            let (c, s) = (r * inv_l, xk * inv_l);
+            let inv_c = lkk / r;
+            self.c[(k, k)] = r;
+            for i in (k + 1)..M {
+                let a = (self.c[(i, k)] - s * vy[i]) * inv_c;
+                self.c[(i, k)] = a;
+                vy[i] = c * vy[i] - s * a;
+            }
+            for i in 0..N {
+                let a = (self.b[(i, k)] - s * vx[i]) * inv_c;
+                self.b[(i, k)] = a;
+                vx[i] = c * vx[i] - s * a;
+            }
+        }
+        chol_downdate(&mut self.a, vx, matrix_x, step)
+    }
+}
+
+/// `L^{-1} B` for a lower-triangular `L` with a non-zero diagonal.
+#[inline(always)]
+pub(crate) fn lower_solve<const D: usize, const C: usize>(
+    l: &SMatrix<f64, D, D>,
+    b: &SMatrix<f64, D, C>,
+) -> SMatrix<f64, D, C> {
+    let mut x = *b;
+    for c in 0..C {
+        for i in 0..D {
+            let mut s = x[(i, c)];
+            for k in 0..i {
+                s -= l[(i, k)] * x[(k, c)];
+            }
+            x[(i, c)] = s / l[(i, i)];
+        }
+    }
+    x
+}
+
 /// The sigma-point pair `m + L_j`, `m - L_j` for column `j` of a lower
 /// triangular `L`: rows above `j` are copies of `m` (not `m + 0`, which is
 /// not `m` for `-0`), so the points of a column agree exactly with `m` in
@@ -668,6 +872,156 @@ fn semidefinite_sqrt_t(
 mod tests {
     use super::*;
     use nalgebra::Matrix2;
+
+    fn spd4(seed: u64) -> nalgebra::Matrix4<f64> {
+        // a deterministic, well-spread SPD matrix
+        let mut a = nalgebra::Matrix4::<f64>::zeros();
+        let mut v = seed as f64 * 0.7 + 0.3;
+        for x in a.iter_mut() {
+            v = (v * 9.13 + 0.41).fract();
+            *x = v - 0.5;
+        }
+        a * a.transpose() + nalgebra::Matrix4::identity() * 0.5
+    }
+
+    fn chol4(a: &nalgebra::Matrix4<f64>) -> nalgebra::Matrix4<f64> {
+        a.cholesky().unwrap().l()
+    }
+
+    #[test]
+    fn chol_update_matches_the_factor_recomputed() {
+        for seed in 0..20 {
+            let a = spd4(seed);
+            let v = nalgebra::Vector4::new(0.3, -1.2, 0.7, 2.0) * (1.0 + seed as f64 * 0.1);
+            let mut l = chol4(&a);
+            chol_update(&mut l, v);
+            let expected = chol4(&(a + v * v.transpose()));
+            assert!((l - expected).amax() < 1e-12, "{seed}: {l} {expected}");
+            assert_eq!(
+                l.upper_triangle(),
+                nalgebra::Matrix4::from_diagonal(&l.diagonal())
+            );
+        }
+        // a singular factor: zero pivots are filled
+        let mut l = nalgebra::Matrix2::zeros();
+        chol_update(&mut l, nalgebra::Vector2::new(0.0, 3.0));
+        chol_update(&mut l, nalgebra::Vector2::new(4.0, 0.0));
+        assert!((l * l.transpose() - Matrix2::new(16.0, 0.0, 0.0, 9.0)).amax() < 1e-14);
+        assert!(l.diagonal().iter().all(|&d| d > 0.0));
+    }
+
+    #[test]
+    fn chol_downdate_matches_the_factor_recomputed() {
+        for seed in 0..20 {
+            let a = spd4(seed);
+            // a v v^T that leaves A - v v^T positive definite: v = 0.9 L e
+            let l0 = chol4(&a);
+            let e = nalgebra::Vector4::new(0.5, -0.5, 0.5, 0.5);
+            let v = l0 * e * 0.9;
+            let mut l = l0;
+            chol_downdate(&mut l, v, "m", Step::Update).unwrap();
+            let expected = chol4(&(a - v * v.transpose()));
+            assert!((l - expected).amax() < 1e-12, "{seed}: {l} {expected}");
+            // update then downdate by the same vector is the identity
+            let w = nalgebra::Vector4::new(1.0, 2.0, -3.0, 0.5);
+            let mut l2 = l0;
+            chol_update(&mut l2, w);
+            chol_downdate(&mut l2, w, "m", Step::Update).unwrap();
+            assert!((l2 - l0).amax() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn chol_downdate_that_loses_definiteness_is_an_error() {
+        let a = spd4(3);
+        let l0 = chol4(&a);
+        let e = nalgebra::Vector4::new(0.5, -0.5, 0.5, 0.5);
+        for (scale, what) in [(1.01, "just indefinite"), (1.5, "indefinite")] {
+            let mut l = l0;
+            let r = chol_downdate(&mut l, l0 * e * scale, "posterior covariance", Step::Update);
+            assert_eq!(
+                r,
+                Err(KalmanError::NotPositiveDefinite {
+                    matrix: "posterior covariance",
+                    step: Step::Update
+                }),
+                "{what}"
+            );
+        }
+        // exactly singular: I - e_0 e_0^T
+        let mut l = Matrix2::identity();
+        assert!(
+            chol_downdate(&mut l, nalgebra::Vector2::new(1.0, 0.0), "m", Step::Update).is_err()
+        );
+        let mut l = l0;
+        let nan = nalgebra::Vector4::new(f64::NAN, 0.0, 0.0, 0.0);
+        assert!(chol_downdate(&mut l, nan, "m", Step::Update).is_err());
+    }
+
+    #[test]
+    fn tria_matches_the_qr_of_the_stack() {
+        let a = spd4(5);
+        let l0 = chol4(&a);
+        let w = nalgebra::Matrix4x3::new(
+            1.0, 0.2, -0.3, 0.5, -1.0, 0.0, 0.0, 2.0, 1.5, -0.7, 0.1, 0.9,
+        );
+        let mut l = l0;
+        tria_into(&mut l, &w);
+        // R of the QR of [L0, W]^T, rows signed to a positive diagonal
+        let stack =
+            nalgebra::DMatrix::from_fn(7, 4, |i, j| if i < 4 { l0[(j, i)] } else { w[(j, i - 4)] });
+        let mut r = stack.qr().r();
+        for i in 0..4 {
+            if r[(i, i)] < 0.0 {
+                r.row_mut(i).neg_mut();
+            }
+        }
+        let rt = r.transpose();
+        assert!((l - nalgebra::Matrix4::from_fn(|i, j| rt[(i, j)])).amax() < 1e-12);
+        assert!((l * l.transpose() - (a + w * w.transpose())).amax() < 1e-12);
+    }
+
+    #[test]
+    fn triangular_solves() {
+        let l = chol4(&spd4(2));
+        let b = nalgebra::Matrix4x2::new(1.0, 2.0, -1.0, 0.5, 3.0, 0.0, 0.25, -2.0);
+        assert!((l * lower_solve(&l, &b) - b).amax() < 1e-12);
+    }
+
+    #[test]
+    fn joint_factor_is_the_conditional_factor() {
+        // joint covariance of [y (2); x (4)]
+        let w = nalgebra::SMatrix::<f64, 6, 9>::from_fn(|i, j| {
+            ((i * 7 + j * 3) % 5) as f64 - 1.7 + 0.1 * i as f64
+        });
+        let joint = w * w.transpose();
+        let mut jf = JointFactor::<2, 4>::new(nalgebra::Matrix2::identity() * 0.5);
+        for j in 0..9 {
+            let col = w.column(j);
+            jf.update(
+                col.fixed_rows::<2>(0).into_owned(),
+                col.fixed_rows::<4>(2).into_owned(),
+            );
+        }
+        let s = joint.fixed_view::<2, 2>(0, 0) + nalgebra::Matrix2::identity() * 0.25;
+        let pxy = joint.fixed_view::<4, 2>(2, 0).into_owned();
+        let p = joint.fixed_view::<4, 4>(2, 2).into_owned();
+        assert!((jf.c * jf.c.transpose() - s).amax() < 1e-12);
+        assert!((jf.b * jf.c.transpose() - pxy).amax() < 1e-12);
+        let post = p - pxy * s.try_inverse().unwrap() * pxy.transpose();
+        assert!((jf.a * jf.a.transpose() - post).amax() < 1e-11);
+        // a downdate undoes an update
+        let before = jf;
+        let (vy, vx) = (
+            nalgebra::Vector2::new(0.3, -0.2),
+            nalgebra::Vector4::new(1.0, 0.0, -0.5, 2.0),
+        );
+        jf.update(vy, vx);
+        jf.downdate(vy, vx, "S", "P", Step::Update).unwrap();
+        assert!((jf.c - before.c).amax() < 1e-12);
+        assert!((jf.b - before.b).amax() < 1e-12);
+        assert!((jf.a - before.a).amax() < 1e-12);
+    }
 
     #[test]
     fn products_match_nalgebra() {

@@ -90,14 +90,14 @@ const MIN_SPREAD: f64 = 1e-8;
 
 /// Weights of a sigma-point set of dimension `L`.
 #[derive(Debug, Clone, Copy)]
-struct Weights {
+pub(crate) struct Weights {
     wm0: f64,
     wc0: f64,
-    wi: f64,
+    pub(crate) wi: f64,
     /// `c = alpha^2 (L + kappa)`, the squared spread of the points.
-    c: f64,
+    pub(crate) c: f64,
     /// `beta - alpha^2`: the weight of the mean shift in the covariances.
-    g: f64,
+    pub(crate) g: f64,
 }
 
 /// Statistics of a sigma-point set pushed through `f` then `h`.
@@ -313,7 +313,7 @@ impl Ukf {
     }
 
     #[inline(always)]
-    fn weights_for(&self, l: usize) -> Result<Weights> {
+    pub(crate) fn weights_for(&self, l: usize) -> Result<Weights> {
         let a2 = self.alpha * self.alpha;
         let lf = l as f64;
         let c = a2 * (lf + self.kappa);

@@ -5,7 +5,8 @@
 
 use bayestrack_kalman::{
     Dynamics, DynamicsJacobian, Ekf, Gaussian, Iekf, Kf, LinearDynamics, LinearMeasurement,
-    Measurement, MeasurementJacobian, Ukf, Update, chi_square_cdf, chi_square_quantile,
+    Measurement, MeasurementJacobian, SqrtGaussian, SrUkf, Ukf, Update, chi_square_cdf,
+    chi_square_quantile,
 };
 use nalgebra::{Matrix2, Matrix2x3, Matrix3, Vector2, Vector3};
 use proptest::prelude::*;
@@ -61,6 +62,13 @@ fn finite_update<const N: usize, const M: usize>(u: &Update<N, M>, scale: f64) -
                 && i.log_likelihood.is_finite()
                 && i.residual.iter().all(|v| v.is_finite())
         })
+}
+
+fn finite_factor<const N: usize>(g: &SqrtGaussian<N>) -> bool {
+    let l = g.cholesky_l();
+    g.mean().iter().all(|v| v.is_finite())
+        && l.iter().all(|v| v.is_finite())
+        && (0..N).all(|i| l[(i, i)] >= 0.0 && (i + 1..N).all(|j| l[(i, j)] == 0.0))
 }
 
 /// A nonlinear model that hands over whatever noise it holds.
@@ -178,6 +186,23 @@ proptest! {
         }
         if let Ok(s) = ukf.step(&prior, &model, &model, Some(&z)) {
             prop_assert!(finite_gaussian(&s.predicted, scale) && finite_update(&s.update, scale), "{s:?}");
+        }
+        // the square-root UKF: a finite lower-triangular factor with a
+        // non-negative diagonal, or an error
+        if let Ok(sqrt_prior) = SqrtGaussian::from_gaussian(&prior) {
+            let sr = SrUkf::new(0.5, 2.0, 0.0).unwrap();
+            if let Ok(g) = sr.predict(&sqrt_prior, &model) {
+                prop_assert!(finite_factor(&g), "{g:?}");
+            }
+            if let Ok(u) = sr.update(&sqrt_prior, &model, Some(&z)) {
+                prop_assert!(finite_factor(&u.posterior), "{u:?}");
+                let i = u.innovation.unwrap();
+                prop_assert!(
+                    i.nis.is_finite() && i.nis >= 0.0 && i.log_likelihood.is_finite()
+                        && i.residual.iter().all(|v| v.is_finite()),
+                    "{u:?}"
+                );
+            }
         }
         // the linear filter, when the constructors accept the matrices
         let f = Matrix3::new(1.0, 0.1, 0.0, 0.0, 1.0, 0.1, 0.0, 0.0, 1.0);
