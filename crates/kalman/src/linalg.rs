@@ -337,6 +337,19 @@ pub(crate) fn check_noise<const D: usize>(
 /// definite matrix, written out with fixed-size loops: for the 1..6
 /// dimensional matrices of filtering these unroll completely, where the
 /// general routines of nalgebra stay out-of-line calls.
+/// The error of a factorisation whose pivot `d` is not positive: an
+/// infinite or NaN pivot comes from entries that overflowed (the inputs
+/// were checked finite), which is [`KalmanError::NonFinite`], not a
+/// matrix that lost definiteness.
+#[cold]
+fn pivot_error(d: f64, matrix: &'static str, step: Step) -> KalmanError {
+    if d.is_finite() {
+        KalmanError::NotPositiveDefinite { matrix, step }
+    } else {
+        KalmanError::NonFinite { what: matrix, step }
+    }
+}
+
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Llt<const D: usize> {
     l: SMatrix<f64, D, D>,
@@ -363,7 +376,7 @@ impl<const D: usize> Llt<D> {
             // tests on the pivot.
             let positive = d * inv > 0.0;
             if !positive {
-                return Err(KalmanError::NotPositiveDefinite { matrix, step });
+                return Err(pivot_error(d, matrix, step));
             }
             l[(j, j)] = ljj;
             inv_diag[j] = inv;
@@ -463,7 +476,7 @@ impl<const D: usize> Ldl<D> {
             // rejects dj <= 0, NaN and inf (1 / inf = 0)
             let positive = dj > 0.0 && inv > 0.0;
             if !positive {
-                return Err(KalmanError::NotPositiveDefinite { matrix, step });
+                return Err(pivot_error(dj, matrix, step));
             }
             d[j] = dj;
             inv_d[j] = inv;

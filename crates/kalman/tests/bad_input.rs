@@ -422,6 +422,31 @@ fn a_tiny_alpha_is_blamed_on_alpha() {
     );
 }
 
+/// A prior so large that `S = H P H^T + R` overflows is named as not
+/// finite, not as a matrix that lost definiteness (issue 28: "Kalman
+/// overflow reported as S not PD").
+#[test]
+fn an_innovation_covariance_that_overflows_is_not_finite_not_indefinite() {
+    // S = H P H^T + R = 4 x 1e308 + 1: past the largest f64
+    let sensor = LinearMeasurement::new(Matrix1x2::new(2.0, 0.0), Matrix1::new(1.0)).unwrap();
+    let z = Vector1::new(1.0);
+    let prior = Gaussian::new(Vector2::zeros(), Matrix2::new(1e308, 0.0, 0.0, 1.0)).unwrap();
+    let err = Kf::default().update(&prior, &sensor, Some(&z)).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            KalmanError::NonFinite {
+                step: Step::Update,
+                ..
+            }
+        ),
+        "{err}"
+    );
+    // large but representable: a finite answer
+    let prior = Gaussian::new(Vector2::zeros(), Matrix2::new(1e307, 0.0, 0.0, 1.0)).unwrap();
+    assert!(Kf::default().update(&prior, &sensor, Some(&z)).is_ok());
+}
+
 #[test]
 fn a_spread_that_overflows_the_covariance_names_the_sigma_point_scale() {
     // alpha^2 (L + kappa) = 1e300 times a covariance of 1e10 is not a number
