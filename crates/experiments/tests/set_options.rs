@@ -221,6 +221,19 @@ fn values_the_run_would_refuse_are_refused_when_set() {
     let mut big = AffineConfig::quick();
     big.apply("frames", "300").unwrap();
     refused(big.apply("runs", "100000"), "particle-frames");
+    // the entering scene has 90 frames after the entry: more were cut
+    // silently; a lock-on longer than the window could never be counted
+    refused(
+        CondensationConfig::quick().apply("reinit_frames", "91"),
+        "reinit_frames = 91",
+    );
+    refused(
+        CondensationConfig::quick().apply("lock_frames", "46"),
+        "lock_frames = 46",
+    );
+    let mut big = CondensationConfig::quick();
+    big.apply("frames", "1000").unwrap();
+    refused(big.apply("runs", "100000"), "frames (all scenes)");
     // what a run accepts stays accepted
     BallOptions::quick().apply("ukf_kappa", "-3").unwrap();
     BallOptions::quick().apply("ukf_alpha", "1e-3").unwrap();

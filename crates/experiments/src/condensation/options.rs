@@ -42,9 +42,44 @@ options! {
     check check;
 }
 
-/// The cross-option rule: c-AVQ's constants must be ones it accepts.
+/// Most frames a run may track in all (runs x the frames of its scenes):
+/// 1e7, several thousand times the paper's scale. More is a typo, refused
+/// before anything runs.
+pub const MAX_RUN_FRAMES: f64 = 1e7;
+
+/// The cross-option rules, checked before the run starts: c-AVQ's
+/// constants must be ones it accepts; `reinit_frames` must fit the entering
+/// scene (it was cut silently) and hold `lock_frames` (a lock-on could
+/// never be counted); the amount of work is bounded.
 pub(super) fn check(c: &CondensationConfig) -> Result<(), String> {
-    c.avq().validate().map_err(|e| e.to_string())
+    c.avq().validate().map_err(|e| e.to_string())?;
+    let (scene, entry) = entering_scene(&CondensationConfig {
+        reinit_frames: usize::MAX / 2,
+        ..*c
+    });
+    let after_entry = scene.frames - entry;
+    if c.reinit_frames > after_entry {
+        return Err(format!(
+            "reinit_frames = {} is more than the {after_entry} frames of the entering scene \
+             after the entry",
+            c.reinit_frames
+        ));
+    }
+    if c.lock_frames > c.reinit_frames {
+        return Err(format!(
+            "lock_frames = {} is more than reinit_frames = {}: a lock-on could never be counted",
+            c.lock_frames, c.reinit_frames
+        ));
+    }
+    // the tracking scene, the crossing and the entering scene, per run
+    let work = c.runs as f64 * (2 * c.frames + c.reinit_frames) as f64;
+    if work > MAX_RUN_FRAMES {
+        return Err(format!(
+            "runs x frames (all scenes) = {work:.1e} frames, more than the {MAX_RUN_FRAMES:.0e} \
+             a run may ask for; lower runs, frames or reinit_frames"
+        ));
+    }
+    Ok(())
 }
 
 impl CondensationConfig {
