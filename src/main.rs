@@ -502,6 +502,20 @@ fn track(args: &TrackArgs, stdout_closed: bool) -> Result<(), String> {
             selection.first
         ));
     }
+    if let Input::Folder(seq) = &input
+        && let Some(last) = selection.last.filter(|&b| b > seq.len())
+    {
+        eprintln!(
+            "note: --frames {}: {} has {} frames, so frames {}-{last} do not exist; running \
+             frames {}-{}",
+            args.frames.as_deref().unwrap_or_default(),
+            seq.name,
+            seq.len(),
+            seq.len() + 1,
+            selection.first,
+            seq.len()
+        );
+    }
     // The ground truth, one entry per source position.
     let (truth, truth_rows, notes): (Vec<Option<BBox>>, usize, Vec<String>) = match &input {
         Input::Folder(seq) => (

@@ -1095,6 +1095,12 @@ fn unclear_errors_name_the_real_cause() {
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(err.contains("10 frames"), "{err}");
+    // a range that ends past the last frame runs to the end and says so
+    let o = bayestrack(&["track", "--seq", seq, "--tracker", "mad", "--frames", "9..15"]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert_eq!(String::from_utf8_lossy(&o.stdout).lines().count(), 2);
+    assert!(err.contains("frames 11-15 do not exist; running frames 9-10"), "{err}");
     // a missing video file
     let o = bayestrack(&[
         "track",
