@@ -102,7 +102,7 @@ impl BrownianDynamics {
 pub fn step(m_prev: &Affine2, d: Vector2<f64>, omega: &AlgebraVector) -> Result<Affine2> {
     check_finite("displacement", d.as_slice())?;
     let t = Affine2::translation(d[0], d[1]);
-    Ok(t.compose(&m_prev.compose(&Affine2::exp(omega)?)))
+    Ok(t.checked_compose(&m_prev.checked_compose(&Affine2::exp(omega)?)?)?)
 }
 
 #[cfg(test)]
@@ -110,6 +110,21 @@ mod tests {
     use super::*;
     use rand::SeedableRng;
     use rand_xoshiro::Xoshiro256PlusPlus;
+
+    #[test]
+    fn a_step_whose_product_overflows_is_an_error_not_an_infinite_map() {
+        // Finite entries near the largest f64: the translation part of
+        // T(d) M overflows.
+        let m_prev = Affine2::from_rows([[1.0, 0.0, f64::MAX], [0.0, 1.0, 0.0]]).unwrap();
+        let e = step(&m_prev, Vector2::new(f64::MAX, 0.0), &AlgebraVector::zeros());
+        assert!(
+            matches!(e, Err(AffineError::Image(bayestrack_image::ImageError::NonFinite { .. }))),
+            "{e:?}"
+        );
+        // one notch below, the same step is fine
+        let ok = step(&m_prev, Vector2::new(-1.0, 0.0), &AlgebraVector::zeros()).unwrap();
+        assert!(ok.as_array().iter().all(|v| v.is_finite()));
+    }
 
     #[test]
     fn brownian_samples_have_the_requested_covariance() {

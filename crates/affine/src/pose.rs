@@ -310,7 +310,7 @@ impl PoseEstimator {
     /// One tuning step: `m exp(Delta)`.
     pub fn tune_step<T: Pixel>(&mut self, frame: ImageView<'_, T>, m: &Affine2) -> Result<Affine2> {
         let d = self.predict_increment(frame, m)?;
-        Ok(m.compose(&Affine2::exp(&d)?))
+        Ok(m.checked_compose(&Affine2::exp(&d)?)?)
     }
 
     /// Tunes `m` to its best neighbour: up to `max_steps` tuning steps,

@@ -153,6 +153,11 @@ impl Affine2 {
     }
 
     /// `self * other`: first `other`, then `self`.
+    ///
+    /// Plain arithmetic: for maps whose entries are near the largest `f64`
+    /// the product can overflow to an infinite entry (every warp refuses
+    /// such a map with [`ImageError::NonFinite`]);
+    /// [`Affine2::checked_compose`] refuses it where it is made.
     pub fn compose(&self, other: &Self) -> Self {
         let a = &self.m;
         let b = &other.m;
@@ -165,6 +170,23 @@ impl Affine2 {
                 a[3] * b[1] + a[4] * b[4],
                 a[3] * b[2] + a[4] * b[5] + a[5],
             ],
+        }
+    }
+
+    /// `self * other` as [`Affine2::compose`], refused when an entry of the
+    /// product overflows.
+    ///
+    /// # Errors
+    /// [`ImageError::NonFinite`] (`"composed affine map"`) when an entry of
+    /// the product is infinite or NaN.
+    pub fn checked_compose(&self, other: &Self) -> Result<Self> {
+        let p = self.compose(other);
+        if p.m.iter().all(|v| v.is_finite()) {
+            Ok(p)
+        } else {
+            Err(ImageError::NonFinite {
+                what: "composed affine map",
+            })
         }
     }
 
