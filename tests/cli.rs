@@ -681,7 +681,10 @@ fn tracker_options_reach_the_tracker_and_bad_ones_write_nothing() {
     ]);
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(err.contains("particles (1..=1000000)"), "{err}");
+    assert!(
+        err.contains("bad value `0` for `particles`: expected 1..=1000000"),
+        "{err}"
+    );
     assert_eq!(fs::read_to_string(&out).unwrap(), "previous run\n");
     let o = bayestrack(&["trackers", "--options", "ball-pf70"]);
     let listing = String::from_utf8_lossy(&o.stdout).to_string();
@@ -1096,11 +1099,22 @@ fn unclear_errors_name_the_real_cause() {
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(err.contains("10 frames"), "{err}");
     // a range that ends past the last frame runs to the end and says so
-    let o = bayestrack(&["track", "--seq", seq, "--tracker", "mad", "--frames", "9..15"]);
+    let o = bayestrack(&[
+        "track",
+        "--seq",
+        seq,
+        "--tracker",
+        "mad",
+        "--frames",
+        "9..15",
+    ]);
     let err = stderr(&o);
     assert!(o.status.success(), "{err}");
     assert_eq!(String::from_utf8_lossy(&o.stdout).lines().count(), 2);
-    assert!(err.contains("frames 11-15 do not exist; running frames 9-10"), "{err}");
+    assert!(
+        err.contains("frames 11-15 do not exist; running frames 9-10"),
+        "{err}"
+    );
     // a missing video file
     let o = bayestrack(&[
         "track",

@@ -116,9 +116,18 @@ mod tests {
         // Finite entries near the largest f64: the translation part of
         // T(d) M overflows.
         let m_prev = Affine2::from_rows([[1.0, 0.0, f64::MAX], [0.0, 1.0, 0.0]]).unwrap();
-        let e = step(&m_prev, Vector2::new(f64::MAX, 0.0), &AlgebraVector::zeros());
+        let e = step(
+            &m_prev,
+            Vector2::new(f64::MAX, 0.0),
+            &AlgebraVector::zeros(),
+        );
         assert!(
-            matches!(e, Err(AffineError::Image(bayestrack_image::ImageError::NonFinite { .. }))),
+            matches!(
+                e,
+                Err(AffineError::Image(
+                    bayestrack_image::ImageError::NonFinite { .. }
+                ))
+            ),
             "{e:?}"
         );
         // one notch below, the same step is fine

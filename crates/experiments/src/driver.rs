@@ -117,10 +117,7 @@ pub fn bad_option(id: &'static str, e: bayestrack_options::OptionError) -> Exper
             value,
             expected,
             valid,
-        } => {
-            let expected = format!("; `{key}` takes {expected}");
-            (key, value, valid, expected)
-        }
+        } => (key, value, valid, expected),
         E::NotKeyValue { item } => (item, String::new(), String::new(), String::new()),
         _ => (String::new(), String::new(), String::new(), String::new()),
     };

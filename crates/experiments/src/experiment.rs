@@ -134,9 +134,7 @@ pub enum ExperimentError {
     NotImplemented(&'static str),
     /// An option override that the experiment does not know, or a value
     /// outside the option's domain; the message lists the valid keys.
-    #[error(
-        "unknown option or value `{key}={value}` for {experiment}; valid keys: {valid}{expected}"
-    )]
+    #[error("{}", bad_option_text(.key, .value, .experiment, .valid, .expected))]
     BadOption {
         /// The option name.
         key: String,
@@ -147,8 +145,8 @@ pub enum ExperimentError {
         /// The experiment's keys with their domains
         /// ([`bayestrack_options::Options::keys`]).
         valid: String,
-        /// What the key takes (`; `runs` takes 1..=100000`), or empty for
-        /// an unknown key.
+        /// Why the value is refused (`expected 1..=100000`, or the
+        /// cross-option check's reason), or empty for an unknown key.
         expected: String,
     },
     /// Shard outputs that cannot be merged: missing, duplicated, of
@@ -163,6 +161,24 @@ pub enum ExperimentError {
         /// What failed.
         message: String,
     },
+}
+
+/// An unknown key lists every key; a bad value of a known key says only
+/// why that value is refused.
+fn bad_option_text(
+    key: &str,
+    value: &str,
+    experiment: &str,
+    valid: &str,
+    expected: &str,
+) -> String {
+    if valid.is_empty() && expected.is_empty() {
+        format!("expected key=value for {experiment}, got `{key}`")
+    } else if expected.is_empty() {
+        format!("unknown option `{key}={value}` for {experiment}; valid keys: {valid}")
+    } else {
+        format!("bad value `{key}={value}` for {experiment}: {expected}")
+    }
 }
 
 impl ExperimentError {

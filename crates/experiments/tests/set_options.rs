@@ -150,7 +150,7 @@ proptest! {
 }
 
 #[test]
-fn a_bad_key_lists_the_valid_keys() {
+fn a_bad_key_lists_the_valid_keys_and_a_bad_value_names_its_domain() {
     let e = HikpfConfig::quick().apply("foo", "1").unwrap_err();
     let msg = e.to_string();
     assert!(
@@ -166,14 +166,18 @@ fn a_bad_key_lists_the_valid_keys() {
         .unwrap_err()
         .to_string();
     assert!(
-        msg.contains("for ball; valid keys:") && msg.contains("matched|linear"),
+        msg.contains("bad value `model=curved` for ball: expected matched|linear"),
         "{msg}"
     );
     let msg = CorrelationConfig::quick()
         .apply("runs", "x")
         .unwrap_err()
         .to_string();
-    assert!(msg.contains("for correlation; valid keys:"), "{msg}");
+    assert!(
+        msg.contains("bad value `runs=x` for correlation: expected 1..=100000"),
+        "{msg}"
+    );
+    assert!(!msg.contains("valid keys"), "{msg}");
     let msg = AffineConfig::quick()
         .apply("fames", "3")
         .unwrap_err()
@@ -183,7 +187,10 @@ fn a_bad_key_lists_the_valid_keys() {
         .apply("frames", "1")
         .unwrap_err()
         .to_string();
-    assert!(msg.contains("for condensation; valid keys: runs"), "{msg}");
+    assert!(
+        msg.contains("bad value `frames=1` for condensation: expected"),
+        "{msg}"
+    );
 }
 
 /// Values each option's domain admits but the run would refuse later (or

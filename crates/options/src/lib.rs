@@ -51,9 +51,12 @@
 //! c.set("runs", "20").unwrap();
 //! c.set("metric", "mae").unwrap();
 //! assert_eq!(c.describe(), "runs=20 metric=mae noise=0.1 seed=1");
-//! // a refused value names the key and lists the valid ones
+//! // a refused value names the key and its domain; an unknown key lists
+//! // the valid ones
 //! let e = c.set("runs", "0").unwrap_err();
 //! assert!(matches!(e, OptionError::BadValue { .. }));
+//! assert_eq!(e.to_string(), "bad value `0` for `runs`: expected 1..=10000");
+//! let e = c.set("rnus", "5").unwrap_err();
 //! assert!(e.to_string().contains("runs (1..=10000), metric (rmse|mae)"));
 //! assert_eq!(c.runs, 20);
 //! // describe -> set gives the same options
@@ -79,15 +82,17 @@ pub enum OptionError {
     },
     /// The value does not parse as the option's type or is outside its
     /// domain, or the options it would give fail their cross-field check.
-    #[error("bad value `{value}` for `{key}` ({expected}); valid keys: {valid}")]
+    #[error("bad value `{value}` for `{key}`: {expected}")]
     BadValue {
         /// The option.
         key: String,
         /// The value given.
         value: String,
-        /// What was expected (the domain, or why the options are refused).
+        /// What was expected (`expected` and the domain, or why the
+        /// options are refused).
         expected: String,
-        /// Every key with its domain ([`Options::keys`]).
+        /// Every key with its domain ([`Options::keys`]); not in the
+        /// message, which names the key's own domain.
         valid: String,
     },
     /// A `key=value` item of a list without `=`.
@@ -544,7 +549,10 @@ macro_rules! options {
                 $(
                     if key == stringify!($field) {
                         known = true;
-                        let domain = $crate::options!(@domain $ty $(, $codec)?; $($dom)?);
+                        let domain = ::std::format!(
+                            "expected {}",
+                            $crate::options!(@domain $ty $(, $codec)?; $($dom)?)
+                        );
                         let v = <$crate::options!(@codec $ty $(, $codec)?) as $crate::Codec<$ty>>::parse(value)
                             .ok_or_else(|| bad(domain.clone()))?;
                         $(
@@ -575,7 +583,10 @@ macro_rules! options {
                 };
                 $($(
                     if !$crate::Domain::admits(&$dom, &self.$field) {
-                        return Err(bad(stringify!($field), $crate::Domain::describe(&$dom)));
+                        return Err(bad(
+                            stringify!($field),
+                            ::std::format!("expected {}", $crate::Domain::describe(&$dom)),
+                        ));
                     }
                 )?)*
                 $( $check(self).map_err(|e| bad("", e))?; )?
@@ -865,14 +876,26 @@ mod tests {
         p.set("particles", "70").unwrap();
         p.set("runs", "5").unwrap();
         assert_eq!((p.0.particles, p.1.runs), (70, 5));
-        // an error in either group lists the keys of both
+        // an error in either group carries the keys of both; an unknown
+        // key's message lists them, a bad value's names its own domain
         for (k, v) in [("particles", "0"), ("runs", "0"), ("typo", "1")] {
-            let e = p.set(k, v).unwrap_err().to_string();
+            let e = p.set(k, v).unwrap_err();
+            let (OptionError::UnknownKey { valid, .. } | OptionError::BadValue { valid, .. }) = &e
+            else {
+                panic!("{e:?}")
+            };
             assert!(
-                e.contains("particles (1..=100)") && e.contains("runs (1..=1000)"),
-                "{e}"
+                valid.contains("particles (1..=100)") && valid.contains("runs (1..=1000)"),
+                "{valid}"
             );
         }
+        let e = p.set("typo", "1").unwrap_err().to_string();
+        assert!(
+            e.contains("particles (1..=100)") && e.contains("runs (1..=1000)"),
+            "{e}"
+        );
+        let e = p.set("runs", "0").unwrap_err().to_string();
+        assert_eq!(e, "bad value `0` for `runs`: expected 1..=1000");
         assert_eq!(p.0.particles, 70, "a refused value changes nothing");
         let mut q = (Count::default(), All::default());
         q.set_all(&p.describe()).unwrap();

@@ -369,18 +369,18 @@ mod tests {
     }
 
     #[test]
-    fn a_bad_option_names_the_tracker_and_lists_the_keys() {
+    fn a_bad_option_names_the_tracker_and_the_domain_or_lists_the_keys() {
         let info = tracker_info("ball-pf").unwrap();
-        for pairs in [
-            [("particles", "0")],
-            [("particle", "7")],
-            [("motion", "wobbly")],
+        for (pairs, says) in [
+            (
+                [("particles", "0")],
+                "bad value `0` for `particles`: expected 1..=1000000",
+            ),
+            ([("particle", "7")], "particles (1..=1000000)"),
+            ([("motion", "wobbly")], "bad value `wobbly` for `motion`"),
         ] {
             let err = info.build_with(0, &set(&pairs)).err().unwrap().to_string();
-            assert!(
-                err.contains("ball-pf") && err.contains("particles (1..=1000000)"),
-                "{err}"
-            );
+            assert!(err.contains("ball-pf") && err.contains(says), "{err}");
         }
         // a tracker without options refuses every key
         let err = tracker_info("hkpf")
