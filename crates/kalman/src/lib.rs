@@ -12,6 +12,7 @@ mod kf;
 mod linalg;
 mod model;
 mod motion;
+mod sigma;
 mod smoother;
 mod srukf;
 mod ukf;

@@ -272,7 +272,7 @@ impl SrUkf {
     ) -> Result<SqrtGaussian<N>> {
         let step = Step::Predict;
         let q = model::process_noise(dynamics, step)?;
-        let wt = self.ukf.weights_for(N)?;
+        let wt = self.ukf.points().weights_for(N)?;
         let sq = linalg::psd_sqrt(&q, "process noise Q", step)?;
         let m = prior.mean();
         let sl = Self::spread_factor(&prior.l, wt.c)?;
@@ -334,7 +334,7 @@ impl SrUkf {
         let step = Step::Update;
         let r = model::measurement_noise(measurement)?;
         linalg::check_finite_vec(z, "measurement z", step)?;
-        let wt = self.ukf.weights_for(N)?;
+        let wt = self.ukf.points().weights_for(N)?;
         let sr = linalg::psd_sqrt(&r, "measurement noise R", step)?;
         let m = prior.mean();
         let sl = Self::spread_factor(&prior.l, wt.c)?;
