@@ -1,6 +1,7 @@
 #![doc = include_str!("../README.md")]
 
 mod batch;
+mod belief;
 mod ckf;
 mod closure;
 mod consistency;
@@ -19,6 +20,7 @@ mod ukf;
 mod update;
 
 pub use batch::{Batch, batch_filter};
+pub use belief::{Belief, FilterBelief, ModeBelief};
 pub use ckf::Ckf;
 pub use closure::{FnDynamics, FnMeasurement, NoJacobian};
 pub use consistency::{ChiSquareBand, chi_square_cdf, chi_square_quantile, nees};

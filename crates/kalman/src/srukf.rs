@@ -92,6 +92,13 @@ impl<const N: usize> SqrtGaussian<N> {
         Ok(Self { mean: *g.mean(), l })
     }
 
+    /// From a mean and a lower-triangular factor with a non-negative
+    /// diagonal (the caller has checked them).
+    #[inline]
+    pub(crate) fn from_parts(mean: SVector<f64, N>, l: SMatrix<f64, N, N>) -> Self {
+        Self { mean, l }
+    }
+
     /// The mean.
     #[inline]
     pub fn mean(&self) -> &SVector<f64, N> {
@@ -140,18 +147,10 @@ impl<const N: usize> From<SqrtGaussian<N>> for Gaussian<N> {
     }
 }
 
-/// The result of a square-root measurement update: as
-/// [`Update`](crate::Update), with the posterior kept factored.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SqrtUpdate<const N: usize, const M: usize> {
-    /// The posterior belief (the prior itself when the measurement is missing).
-    pub posterior: SqrtGaussian<N>,
-    /// Innovation, its covariance `S = S_y S_y^T`, log-likelihood and NIS;
-    /// `None` when the measurement was missing.
-    pub innovation: Option<Innovation<M>>,
-    /// 1, or 0 when the measurement was missing.
-    pub iterations: usize,
-}
+/// The result of a square-root measurement update: an
+/// [`Update`](crate::Update) with the posterior kept factored (the
+/// innovation's `S = S_y S_y^T`).
+pub type SqrtUpdate<const N: usize, const M: usize> = crate::update::Update<N, M, SqrtGaussian<N>>;
 
 /// The square-root UKF of van der Merwe and Wan (2001), additive noise: the
 /// scaled sigma points and weights of [`Ukf`] (same `alpha`, `beta`,
