@@ -9,12 +9,14 @@ mod error;
 mod filter;
 mod gaussian;
 mod hybrid;
+mod imm;
 mod kf;
 mod linalg;
 mod model;
 mod motion;
 mod sigma;
 mod smoother;
+mod srkf;
 mod srukf;
 mod ukf;
 mod update;
@@ -28,12 +30,14 @@ pub use error::{KalmanError, Result, Step};
 pub use filter::{KalmanFilter, KalmanPredict, KalmanUpdate};
 pub use gaussian::{FactoredGaussian, Gaussian};
 pub use hybrid::{HybridPrior, HybridStep, HybridUkfIekf};
+pub use imm::{Imm, ImmBelief, ImmModel, ImmStep, Mode};
 pub use kf::{Ekf, Iekf, Kf};
 pub use model::{
     Additive, Dynamics, DynamicsJacobian, LinearDynamics, LinearMeasurement, Measurement,
     MeasurementJacobian, NoiseCovariance, NoisyDynamics, NoisyMeasurement,
 };
 pub use motion::{NoiseModel, white_noise};
+pub use srkf::SrKf;
 pub use srukf::{SqrtGaussian, SqrtUpdate, SrUkf};
 pub use ukf::{Ukf, UkfStep};
 pub use update::{CovarianceUpdate, Innovation, Update};

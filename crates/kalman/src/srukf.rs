@@ -373,44 +373,58 @@ impl SrUkf {
                 step,
             )?;
         }
-        let sy = joint.c;
-        // a zero pivot (a NaN one gives a NaN mean, reported below)
-        let positive = linalg::min_diagonal(&sy) > 0.0;
-        if !positive {
-            return Err(KalmanError::NotPositiveDefinite {
-                matrix: "innovation covariance S",
-                step,
-            });
-        }
-        // K = P_xy S^{-1} = U S_y^{-1}, U = P_xy S_y^{-T} = B; the posterior
-        // factor is A (A A^T = P - U U^T)
         let residual = measurement.residual_z(z, &y_mean);
-        let w = linalg::lower_solve(&sy, &residual);
-        let mean = m + linalg::mul(&joint.b, &w);
-        let l = joint.a;
-        let nis = w.norm_squared();
-        let prod: f64 = (0..M).map(|i| sy[(i, i)]).product();
-        let log_det = if prod.is_normal() {
-            2.0 * prod.ln()
-        } else {
-            2.0 * (0..M).map(|i| sy[(i, i)].ln()).sum::<f64>()
-        };
-        let log_likelihood = -0.5 * (nis + log_det + M as f64 * LN_2PI);
-        let zero = SMatrix::<f64, M, M>::zeros();
-        let covariance = linalg::mirror_lower(linalg::lower_mul_t_add(&zero, 1.0, &sy, &sy));
-        linalg::check_finite_vec(&mean, "posterior mean", step)?;
-        linalg::check_finite_mat(&l, "posterior covariance factor", step)?;
-        let innovation = Innovation {
-            residual,
-            covariance,
-            log_likelihood,
-            nis,
-        };
-        innovation.check()?;
-        Ok(SqrtUpdate {
-            posterior: SqrtGaussian { mean, l },
-            innovation: Some(innovation),
-            iterations: 1,
-        })
+        joint_posterior(&joint, m, residual, step)
     }
+}
+
+/// The posterior of an array-form measurement update from the joint factor
+/// `[[S_y, 0], [U, L+]]` of `[y; x]` and the innovation `residual`:
+/// `x + U S_y^{-1} nu`, `L+`, and the innovation statistics from `S_y`.
+/// Shared by [`SrUkf`] and [`SrKf`].
+#[inline(always)]
+pub(crate) fn joint_posterior<const N: usize, const M: usize>(
+    joint: &linalg::JointFactor<M, N>,
+    m: &SVector<f64, N>,
+    residual: SVector<f64, M>,
+    step: Step,
+) -> Result<SqrtUpdate<N, M>> {
+    let sy = joint.c;
+    // a zero pivot (a NaN one gives a NaN mean, reported below)
+    let positive = linalg::min_diagonal(&sy) > 0.0;
+    if !positive {
+        return Err(KalmanError::NotPositiveDefinite {
+            matrix: "innovation covariance S",
+            step,
+        });
+    }
+    // K = P_xy S^{-1} = U S_y^{-1}, U = P_xy S_y^{-T} = B; the posterior
+    // factor is A (A A^T = P - U U^T)
+    let w = linalg::lower_solve(&sy, &residual);
+    let mean = m + linalg::mul(&joint.b, &w);
+    let l = joint.a;
+    let nis = w.norm_squared();
+    let prod: f64 = (0..M).map(|i| sy[(i, i)]).product();
+    let log_det = if prod.is_normal() {
+        2.0 * prod.ln()
+    } else {
+        2.0 * (0..M).map(|i| sy[(i, i)].ln()).sum::<f64>()
+    };
+    let log_likelihood = -0.5 * (nis + log_det + M as f64 * LN_2PI);
+    let zero = SMatrix::<f64, M, M>::zeros();
+    let covariance = linalg::mirror_lower(linalg::lower_mul_t_add(&zero, 1.0, &sy, &sy));
+    linalg::check_finite_vec(&mean, "posterior mean", step)?;
+    linalg::check_finite_mat(&l, "posterior covariance factor", step)?;
+    let innovation = Innovation {
+        residual,
+        covariance,
+        log_likelihood,
+        nis,
+    };
+    innovation.check()?;
+    Ok(SqrtUpdate {
+        posterior: SqrtGaussian { mean, l },
+        innovation: Some(innovation),
+        iterations: 1,
+    })
 }
