@@ -37,6 +37,7 @@ pub use model::{
     MeasurementJacobian, NoiseCovariance, NoisyDynamics, NoisyMeasurement,
 };
 pub use motion::{NoiseModel, white_noise};
+pub use smoother::{RtsSmoother, batch_smooth, fixed_lag_smooth};
 pub use srkf::SrKf;
 pub use srukf::{SqrtGaussian, SqrtUpdate, SrUkf};
 pub use ukf::{Ukf, UkfStep};

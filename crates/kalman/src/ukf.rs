@@ -410,19 +410,31 @@ impl Ukf {
         let space = StateSpace(dynamics);
         let residual = |a: &SVector<f64, N>, b: &SVector<f64, N>| space.residual(a, b);
         crate::smoother::rts_backward(filtered, residual, |_, g| {
-            let mo = self.points.transform(
-                g,
-                &none::<0>(),
-                &none::<0>(),
-                |x, _| dynamics.propagate(x),
-                no_output,
-                &space,
-                &Plain,
-                Step::Smooth,
-            )?;
-            let predicted =
-                Gaussian::checked(mo.x_mean, linalg::add_sym(&mo.p_xx, &q), Step::Smooth)?;
-            Ok((predicted, mo.p_in_x))
+            self.smoothing_prediction(g, dynamics, &q)
         })
+    }
+
+    /// The prediction `x_{k+1|k}` from `x_{k|k}` and the sigma-point
+    /// cross-covariance `Cov(x_k, x_{k+1})` (Sarkka 2008), for the
+    /// smoothers; `q` is the model's checked process noise.
+    #[inline]
+    pub(crate) fn smoothing_prediction<const N: usize, D: Dynamics<N>>(
+        &self,
+        g: &Gaussian<N>,
+        dynamics: &D,
+        q: &SMatrix<f64, N, N>,
+    ) -> Result<(Gaussian<N>, SMatrix<f64, N, N>)> {
+        let mo = self.points.transform(
+            g,
+            &none::<0>(),
+            &none::<0>(),
+            |x, _| dynamics.propagate(x),
+            no_output,
+            &StateSpace(dynamics),
+            &Plain,
+            Step::Smooth,
+        )?;
+        let predicted = Gaussian::checked(mo.x_mean, linalg::add_sym(&mo.p_xx, q), Step::Smooth)?;
+        Ok((predicted, mo.p_in_x))
     }
 }
