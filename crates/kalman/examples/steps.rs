@@ -4,7 +4,8 @@
 //! difference by `N` to get instructions per step.
 //!
 //! `cargo run --release -p bayestrack-kalman --example steps -- joseph 1000`
-//! (filters: `joseph`, `standard`, `ukf`, `ukf_one_set`, `srukf` (the
+//! (filters: `joseph`, `standard`, `srkf` (the square-root KF) and `imm`
+//! (an IMM over two KFs) on the CV model, `ukf`, `ukf_one_set`, `srukf` (the
 //! square-root UKF on the pendulum), and `ukf_runtime` /
 //! `ukf_runtime_checked`: the pendulum with `Q` and `R` read at run time,
 //! checked on every step or once).
@@ -13,8 +14,8 @@
 use std::hint::black_box;
 
 use bayestrack_kalman::{
-    CovarianceUpdate, Dynamics, Gaussian, Kf, LinearDynamics, LinearMeasurement, Measurement,
-    NoiseCovariance, SqrtGaussian, SrUkf, Ukf,
+    CovarianceUpdate, Dynamics, Gaussian, Imm, Kf, LinearDynamics, LinearMeasurement, Measurement,
+    Mode, NoiseCovariance, SqrtGaussian, SrKf, SrUkf, Ukf,
 };
 use nalgebra::{Matrix1, Matrix2, Matrix2x4, Matrix4, SMatrix, SVector, Vector1, Vector2, Vector4};
 
@@ -93,7 +94,7 @@ fn main() {
     let which = args.next().unwrap_or_else(|| "joseph".into());
     let n: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(1000);
     match which.as_str() {
-        "joseph" | "standard" => {
+        "joseph" | "standard" | "srkf" | "imm" => {
             let mut f = Matrix4::identity();
             f[(0, 2)] = DT;
             f[(1, 3)] = DT;
@@ -115,6 +116,36 @@ fn main() {
                 .collect();
             let dynamics = LinearDynamics::new(f, q).unwrap();
             let sensor = LinearMeasurement::new(h, r).unwrap();
+            if which == "srkf" {
+                let start = Gaussian::new(Vector4::new(0.0, 0.0, 1.0, 0.5), Matrix4::identity());
+                let mut belief = SqrtGaussian::from_gaussian(&start.unwrap()).unwrap();
+                let srkf = black_box(SrKf);
+                for k in 0..n {
+                    let prior = srkf.predict(&belief, &dynamics).unwrap();
+                    let u = black_box(srkf.update(&prior, &sensor, Some(&zs[k & 63])).unwrap());
+                    belief = u.posterior;
+                }
+                black_box(belief);
+                return;
+            }
+            if which == "imm" {
+                let agile = LinearDynamics::new(f, q * 100.0).unwrap();
+                let imm = Imm::new(
+                    vec![
+                        Box::new(Mode::new(Kf::default(), dynamics, sensor)),
+                        Box::new(Mode::new(Kf::default(), agile, sensor)),
+                    ],
+                    &[0.95, 0.05, 0.05, 0.95],
+                )
+                .unwrap();
+                let start = Gaussian::new(Vector4::new(0.0, 0.0, 1.0, 0.5), Matrix4::identity());
+                let mut belief = imm.start(&[0.5, 0.5], &start.unwrap()).unwrap();
+                for k in 0..n {
+                    belief = black_box(imm.step(&belief, Some(&zs[k & 63])).unwrap()).belief;
+                }
+                black_box(belief);
+                return;
+            }
             let form = if which == "joseph" {
                 CovarianceUpdate::Joseph
             } else {
