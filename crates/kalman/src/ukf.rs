@@ -16,6 +16,8 @@
 
 use nalgebra::{SMatrix, SVector};
 
+#[cfg(doc)]
+use crate::error::KalmanError;
 use crate::error::{Result, Step};
 use crate::gaussian::Gaussian;
 use crate::linalg;
