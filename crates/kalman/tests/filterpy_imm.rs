@@ -175,7 +175,7 @@ fn ckf_matches_filterpy_cubature_kalman_filter() {
         // filterpy's CKF updates with the predicted cubature points (one
         // point set through f then h): Ckf::step
         let step = Ckf.step(&belief, &dynamics, &sensor, Some(&z)).unwrap();
-        check_update(s, &step.predicted, &step.update, 1e-9, k);
+        check_update(s, &step.predicted, &step.update, 1e-10, k);
         belief = step.update.posterior;
     }
 }
