@@ -25,6 +25,10 @@
 //!   smelly UKF: redraws sigma points from the prediction (as our
 //!   `predict` + `update` does), no symmetrisation, returns the innovation.
 //!
+//! `bayestrack_srkf` is the linear square-root KF ([`SrKf`]) and
+//! `bayestrack_imm_two_kfs` one IMM step over two KFs ([`Imm`]) on the CV
+//! model: the reference cost is our KF in the same group.
+//!
 //! `bayestrack_srukf_predict_update` is the square-root UKF
 //! ([`SrUkf`]) on the same sigma points (equal to `bayestrack_predict_update`
 //! to 1e-9), its belief a Cholesky factor.
@@ -41,8 +45,8 @@ use adskalman::{
     TransitionModelLinearNoControl,
 };
 use bayestrack_kalman::{
-    CovarianceUpdate, Dynamics, Gaussian, Kf, LinearDynamics, LinearMeasurement, Measurement,
-    SqrtGaussian, SrUkf, Ukf,
+    CovarianceUpdate, Dynamics, Gaussian, Imm, Kf, LinearDynamics, LinearMeasurement, Measurement,
+    Mode, SqrtGaussian, SrKf, SrUkf, Ukf,
 };
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::{
@@ -140,6 +144,41 @@ fn bench_kf(c: &mut Criterion) {
             })
         });
     }
+
+    // the square-root KF on the same model and data, its belief a factor
+    group.bench_function("bayestrack_srkf", |b| {
+        let start = Gaussian::new(x0, p0).unwrap();
+        let mut belief = SqrtGaussian::from_gaussian(&start).unwrap();
+        let mut k = 0;
+        b.iter(|| {
+            let prior = SrKf.predict(&belief, &dynamics).unwrap();
+            let u = black_box(SrKf.update(&prior, &sensor, Some(&zs[k & 63])).unwrap());
+            belief = u.posterior;
+            k += 1;
+        })
+    });
+    // an IMM step over two KFs (this model and one with 100x the process
+    // noise): the cost of an IMM against the single KF above
+    group.bench_function("bayestrack_imm_two_kfs", |b| {
+        let agile = LinearDynamics::new(f, q * 100.0).unwrap();
+        let imm = Imm::new(
+            vec![
+                Box::new(Mode::new(Kf::default(), dynamics, sensor)),
+                Box::new(Mode::new(Kf::default(), agile, sensor)),
+            ],
+            &[0.95, 0.05, 0.05, 0.95],
+        )
+        .unwrap();
+        let mut belief = imm
+            .start(&[0.5, 0.5], &Gaussian::new(x0, p0).unwrap())
+            .unwrap();
+        let mut k = 0;
+        b.iter(|| {
+            let step = black_box(imm.step(&belief, Some(&zs[k & 63])).unwrap());
+            belief = step.belief;
+            k += 1;
+        })
+    });
 
     let motion = AdsMotion {
         f,

@@ -4,7 +4,8 @@
 //! difference by `N` to get instructions per step.
 //!
 //! `cargo run --release -p bayestrack-kalman --example steps -- joseph 1000`
-//! (filters: `joseph`, `standard`, `ukf`, `ukf_one_set`, `srukf` (the
+//! (filters: `joseph`, `standard`, `srkf` (the square-root KF) and `imm`
+//! (an IMM over two KFs) on the CV model, `ukf`, `ukf_one_set`, `srukf` (the
 //! square-root UKF on the pendulum), and `ukf_runtime` /
 //! `ukf_runtime_checked`: the pendulum with `Q` and `R` read at run time,
 //! checked on every step or once).
@@ -13,8 +14,8 @@
 use std::hint::black_box;
 
 use bayestrack_kalman::{
-    CovarianceUpdate, Dynamics, Gaussian, Kf, LinearDynamics, LinearMeasurement, Measurement,
-    NoiseCovariance, SqrtGaussian, SrUkf, Ukf,
+    CovarianceUpdate, Dynamics, Gaussian, Imm, Kf, LinearDynamics, LinearMeasurement, Measurement,
+    Mode, NoiseCovariance, SqrtGaussian, SrKf, SrUkf, Ukf,
 };
 use nalgebra::{Matrix1, Matrix2, Matrix2x4, Matrix4, SMatrix, SVector, Vector1, Vector2, Vector4};
 
@@ -88,33 +89,43 @@ impl Measurement<2, 1> for RuntimePendulum {
     }
 }
 
+/// The CV model and measurements of the `joseph` arm, for `srkf` and `imm`.
+fn cv_model() -> (
+    LinearDynamics<4>,
+    LinearMeasurement<4, 2>,
+    Vec<Vector2<f64>>,
+) {
+    let mut f = Matrix4::identity();
+    f[(0, 2)] = DT;
+    f[(1, 3)] = DT;
+    let (a, b, c) = (DT.powi(3) / 3.0, DT.powi(2) / 2.0, DT);
+    #[rustfmt::skip]
+    let q = Matrix4::new(
+        a, 0.0, b, 0.0,
+        0.0, a, 0.0, b,
+        b, 0.0, c, 0.0,
+        0.0, b, 0.0, c,
+    ) * 0.1;
+    let h = Matrix2x4::new(1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0);
+    let (f, q, h, r) = black_box((f, q, h, Matrix2::identity() * 0.25));
+    let zs: Vec<Vector2<f64>> = (0..64)
+        .map(|k| {
+            let t = k as f64 * DT;
+            Vector2::new(t + 0.3 * (7.0 * t).sin(), 0.5 * t + 0.3 * (5.0 * t).cos())
+        })
+        .collect();
+    let dynamics = LinearDynamics::new(f, q).unwrap();
+    let sensor = LinearMeasurement::new(h, r).unwrap();
+    (dynamics, sensor, zs)
+}
+
 fn main() {
     let mut args = std::env::args().skip(1);
     let which = args.next().unwrap_or_else(|| "joseph".into());
     let n: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(1000);
     match which.as_str() {
         "joseph" | "standard" => {
-            let mut f = Matrix4::identity();
-            f[(0, 2)] = DT;
-            f[(1, 3)] = DT;
-            let (a, b, c) = (DT.powi(3) / 3.0, DT.powi(2) / 2.0, DT);
-            #[rustfmt::skip]
-            let q = Matrix4::new(
-                a, 0.0, b, 0.0,
-                0.0, a, 0.0, b,
-                b, 0.0, c, 0.0,
-                0.0, b, 0.0, c,
-            ) * 0.1;
-            let h = Matrix2x4::new(1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0);
-            let (f, q, h, r) = black_box((f, q, h, Matrix2::identity() * 0.25));
-            let zs: Vec<Vector2<f64>> = (0..64)
-                .map(|k| {
-                    let t = k as f64 * DT;
-                    Vector2::new(t + 0.3 * (7.0 * t).sin(), 0.5 * t + 0.3 * (5.0 * t).cos())
-                })
-                .collect();
-            let dynamics = LinearDynamics::new(f, q).unwrap();
-            let sensor = LinearMeasurement::new(h, r).unwrap();
+            let (dynamics, sensor, zs) = cv_model();
             let form = if which == "joseph" {
                 CovarianceUpdate::Joseph
             } else {
@@ -127,6 +138,37 @@ fn main() {
                 let prior = kf.predict(&belief, &dynamics).unwrap();
                 let u = black_box(kf.update(&prior, &sensor, Some(&zs[k & 63])).unwrap());
                 belief = u.posterior;
+            }
+            black_box(belief);
+        }
+        "srkf" => {
+            let (dynamics, sensor, zs) = cv_model();
+            let start = Gaussian::new(Vector4::new(0.0, 0.0, 1.0, 0.5), Matrix4::identity());
+            let mut belief = SqrtGaussian::from_gaussian(&start.unwrap()).unwrap();
+            let srkf = black_box(SrKf);
+            for k in 0..n {
+                let prior = srkf.predict(&belief, &dynamics).unwrap();
+                let u = black_box(srkf.update(&prior, &sensor, Some(&zs[k & 63])).unwrap());
+                belief = u.posterior;
+            }
+            black_box(belief);
+        }
+        "imm" => {
+            let (dynamics, sensor, zs) = cv_model();
+            let agile =
+                LinearDynamics::new(*dynamics.transition(), dynamics.noise() * 100.0).unwrap();
+            let imm = Imm::new(
+                vec![
+                    Box::new(Mode::new(Kf::default(), dynamics, sensor)),
+                    Box::new(Mode::new(Kf::default(), agile, sensor)),
+                ],
+                &[0.95, 0.05, 0.05, 0.95],
+            )
+            .unwrap();
+            let start = Gaussian::new(Vector4::new(0.0, 0.0, 1.0, 0.5), Matrix4::identity());
+            let mut belief = imm.start(&[0.5, 0.5], &start.unwrap()).unwrap();
+            for k in 0..n {
+                belief = black_box(imm.step(&belief, Some(&zs[k & 63])).unwrap()).belief;
             }
             black_box(belief);
         }

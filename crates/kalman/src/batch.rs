@@ -3,6 +3,7 @@
 
 use nalgebra::{SMatrix, SVector};
 
+use crate::belief::Belief;
 use crate::error::Result;
 use crate::filter::KalmanFilter;
 use crate::gaussian::Gaussian;
@@ -10,18 +11,19 @@ use crate::update::Innovation;
 
 /// What [`batch_filter`] returns: per step `k`, the prediction
 /// `x_{k|k-1}`, the posterior `x_{k|k}` and the innovation statistics
-/// (`None` where the measurement was missing).
+/// (`None` where the measurement was missing), the beliefs in the filter's
+/// form `B` ([`Gaussian`] but for the square-root filters).
 #[derive(Debug, Clone, PartialEq)]
-pub struct Batch<const N: usize, const M: usize> {
+pub struct Batch<const N: usize, const M: usize, B = Gaussian<N>> {
     /// `x_{k|k-1}`.
-    pub predicted: Vec<Gaussian<N>>,
+    pub predicted: Vec<B>,
     /// `x_{k|k}` (the prediction where the measurement is missing).
-    pub posterior: Vec<Gaussian<N>>,
+    pub posterior: Vec<B>,
     /// Residual, `S`, NIS and log-likelihood of each update.
     pub innovations: Vec<Option<Innovation<M>>>,
 }
 
-impl<const N: usize, const M: usize> Batch<N, M> {
+impl<const N: usize, const M: usize, B: Belief<N>> Batch<N, M, B> {
     /// The posterior means (filterpy's `means`).
     pub fn means(&self) -> Vec<SVector<f64, N>> {
         self.posterior.iter().map(|g| *g.mean()).collect()
@@ -29,7 +31,7 @@ impl<const N: usize, const M: usize> Batch<N, M> {
 
     /// The posterior covariances (filterpy's `covariances`).
     pub fn covariances(&self) -> Vec<SMatrix<f64, N, N>> {
-        self.posterior.iter().map(|g| *g.cov()).collect()
+        self.posterior.iter().map(|g| g.covariance()).collect()
     }
 
     /// The sum of the log-likelihoods of the measurements that were there.
@@ -46,7 +48,8 @@ impl<const N: usize, const M: usize> Batch<N, M> {
 /// for each `z_k`, predict with `dynamics`, then update with `measurement`
 /// (`None`: missing, the posterior is the prediction). Works with every
 /// filter ([`Kf`](crate::Kf), [`Ekf`](crate::Ekf), [`Iekf`](crate::Iekf),
-/// [`Ukf`](crate::Ukf)); smooth the result with the filter's `rts_smooth`
+/// [`Ukf`](crate::Ukf), [`Ckf`](crate::Ckf), and in its own belief form
+/// [`SrUkf`](crate::SrUkf)); smooth the result with the filter's `rts_smooth`
 /// on [`Batch::posterior`].
 ///
 /// ```
@@ -70,11 +73,11 @@ impl<const N: usize, const M: usize> Batch<N, M> {
 /// The first error of a step, as the filter's `predict` and `update`.
 pub fn batch_filter<const N: usize, const M: usize, F, D, H>(
     filter: &F,
-    initial: &Gaussian<N>,
+    initial: &F::Belief,
     dynamics: &D,
     measurement: &H,
     zs: &[Option<SVector<f64, M>>],
-) -> Result<Batch<N, M>>
+) -> Result<Batch<N, M, F::Belief>>
 where
     F: KalmanFilter<N, M, D, H>,
 {
@@ -83,13 +86,13 @@ where
         posterior: Vec::with_capacity(zs.len()),
         innovations: Vec::with_capacity(zs.len()),
     };
-    let mut belief = *initial;
+    let mut belief = initial.clone();
     for z in zs {
         let predicted = filter.predict(&belief, dynamics)?;
         let update = filter.update(&predicted, measurement, z.as_ref())?;
         belief = update.posterior;
         batch.predicted.push(predicted);
-        batch.posterior.push(belief);
+        batch.posterior.push(belief.clone());
         batch.innovations.push(update.innovation);
     }
     Ok(batch)

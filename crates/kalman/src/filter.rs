@@ -1,15 +1,19 @@
 //! [`KalmanPredict`], [`KalmanUpdate`] and [`KalmanFilter`] (both): the
 //! predict and update steps every filter of the crate shares, so that user
-//! code can be generic over the KF, EKF, IEKF and UKF.
+//! code can be generic over the KF, EKF, IEKF, UKF, CKF and SR-UKF, each
+//! in its own belief form ([`FilterBelief`]).
 
 use nalgebra::SVector;
 
+use crate::belief::FilterBelief;
+use crate::ckf::Ckf;
 use crate::error::Result;
 use crate::gaussian::Gaussian;
 use crate::kf::{Ekf, Iekf, Kf};
 use crate::model::{
     Dynamics, DynamicsJacobian, LinearDynamics, LinearMeasurement, Measurement, MeasurementJacobian,
 };
+use crate::srukf::{SqrtGaussian, SqrtUpdate, SrUkf};
 use crate::ukf::Ukf;
 use crate::update::Update;
 
@@ -45,35 +49,43 @@ use crate::update::Update;
 /// assert!((u.posterior.mean() - posterior.mean()).amax() < 1e-12);
 /// # Ok::<(), bayestrack_kalman::KalmanError>(())
 /// ```
-pub trait KalmanPredict<const N: usize, D> {
+pub trait KalmanPredict<const N: usize, D>: FilterBelief<N> {
     /// Time update: the belief at `k-1` to the prediction at `k`.
     ///
     /// # Errors
     /// As the filter's inherent `predict`.
-    fn predict(&self, prior: &Gaussian<N>, dynamics: &D) -> Result<Gaussian<N>>;
+    fn predict(&self, prior: &Self::Belief, dynamics: &D) -> Result<Self::Belief>;
 }
 
 /// The measurement update of a Gaussian filter for measurements `H` of
 /// dimension `M` on a state of dimension `N` (the second half of
 /// [`KalmanFilter`]).
-pub trait KalmanUpdate<const N: usize, const M: usize, H> {
+pub trait KalmanUpdate<const N: usize, const M: usize, H>: FilterBelief<N> {
     /// Measurement update with `z` (`None` = missing: the prior is returned).
     ///
     /// # Errors
     /// As the filter's inherent `update`.
     fn update(
         &self,
-        prior: &Gaussian<N>,
+        prior: &Self::Belief,
         measurement: &H,
         z: Option<&SVector<f64, M>>,
-    ) -> Result<Update<N, M>>;
+    ) -> Result<Update<N, M, Self::Belief>>;
 }
 
 /// A Gaussian filter for dynamics `D` and measurements `H` on a state of
 /// dimension `N` and measurements of dimension `M`: the stateless
-/// `predict` / `update` pair that [`Kf`], [`Ekf`], [`Iekf`] and [`Ukf`]
-/// implement (the UKF in its additive-noise form, redrawing sigma points
-/// after the prediction).
+/// `predict` / `update` pair that [`Kf`], [`Ekf`], [`Iekf`], [`Ukf`],
+/// [`Ckf`] and [`SrUkf`] implement (the sigma-point filters in their
+/// additive-noise form, redrawing sigma points after the prediction).
+///
+/// Each filter takes and returns its own belief form, `F::Belief`
+/// ([`FilterBelief`]): [`Gaussian`] for all but the square-root filters,
+/// which keep a [`SqrtGaussian`] (the Cholesky factor) between steps.
+/// Generic code over every filter starts from a [`Gaussian`] with
+/// [`Belief::from_gaussian`](crate::Belief::from_gaussian) and reads the
+/// result with [`Belief::to_gaussian`](crate::Belief::to_gaussian); code
+/// for the covariance filters only binds `Belief = Gaussian<N>`.
 ///
 /// Implemented for every filter that implements [`KalmanPredict`] for `D`
 /// and [`KalmanUpdate`] for `H`; its methods are theirs. Each filter keeps
@@ -83,11 +95,12 @@ pub trait KalmanUpdate<const N: usize, const M: usize, H> {
 ///
 /// ```
 /// use bayestrack_kalman::{
-///     Gaussian, Iekf, KalmanFilter, Kf, LinearDynamics, LinearMeasurement, Result, Ukf,
+///     Belief, Gaussian, Iekf, KalmanFilter, Kf, LinearDynamics, LinearMeasurement, Result,
+///     SrUkf, Ukf,
 /// };
 /// use nalgebra::{Matrix1, Matrix1x2, Matrix2, Vector1, Vector2};
 ///
-/// /// Filters `zs` with any of the filters.
+/// /// Filters `zs` with any of the filters, in its own belief form.
 /// fn run<F>(filter: &F, zs: &[f64]) -> Result<Gaussian<2>>
 /// where
 ///     F: KalmanFilter<2, 1, LinearDynamics<2>, LinearMeasurement<2, 1>>,
@@ -97,20 +110,33 @@ pub trait KalmanUpdate<const N: usize, const M: usize, H> {
 ///         Matrix2::identity() * 1e-3,
 ///     )?;
 ///     let sensor = LinearMeasurement::new(Matrix1x2::new(1.0, 0.0), Matrix1::new(0.25))?;
-///     let mut belief = Gaussian::new(Vector2::zeros(), Matrix2::identity())?;
+///     let start = Gaussian::new(Vector2::zeros(), Matrix2::identity())?;
+///     let mut belief = F::Belief::from_gaussian(&start)?;
 ///     for z in zs {
 ///         let prior = filter.predict(&belief, &dynamics)?;
 ///         belief = filter.update(&prior, &sensor, Some(&Vector1::new(*z)))?.posterior;
 ///     }
-///     Ok(belief)
+///     Ok(belief.to_gaussian())
+/// }
+///
+/// /// Only the covariance filters: the belief is a `Gaussian`.
+/// fn last_mean<F>(filter: &F, start: Gaussian<2>) -> Result<Vector2<f64>>
+/// where
+///     F: KalmanFilter<2, 1, LinearDynamics<2>, LinearMeasurement<2, 1>, Belief = Gaussian<2>>,
+/// {
+///     let dynamics = LinearDynamics::new(Matrix2::identity(), Matrix2::identity() * 1e-3)?;
+///     Ok(*filter.predict(&start, &dynamics)?.mean())
 /// }
 ///
 /// let zs = [0.1, 0.22, 0.29];
 /// let kf = run(&Kf::default(), &zs)?;
 /// let ukf = run(&Ukf::new(1.0, 2.0, 0.0)?, &zs)?;
 /// let iekf = run(&Iekf::new(5, 1e-12)?, &zs)?;
+/// let srukf = run(&SrUkf::new(1.0, 2.0, 0.0)?, &zs)?;
 /// assert!((kf.mean() - ukf.mean()).amax() < 1e-12);
 /// assert!((kf.mean() - iekf.mean()).amax() < 1e-12);
+/// assert!((kf.cov() - srukf.cov()).amax() < 1e-12);
+/// assert_eq!(last_mean(&Kf::default(), kf)?, *kf.mean());
 /// # Ok::<(), bayestrack_kalman::KalmanError>(())
 /// ```
 pub trait KalmanFilter<const N: usize, const M: usize, D, H>:
@@ -121,6 +147,20 @@ pub trait KalmanFilter<const N: usize, const M: usize, D, H>:
 impl<const N: usize, const M: usize, D, H, F> KalmanFilter<N, M, D, H> for F where
     F: KalmanPredict<N, D> + KalmanUpdate<N, M, H>
 {
+}
+
+macro_rules! gaussian_belief {
+    ($($filter:ty),*) => {$(
+        impl<const N: usize> FilterBelief<N> for $filter {
+            type Belief = Gaussian<N>;
+        }
+    )*};
+}
+
+gaussian_belief!(Kf, Ekf, Iekf, Ukf, Ckf);
+
+impl<const N: usize> FilterBelief<N> for SrUkf {
+    type Belief = SqrtGaussian<N>;
 }
 
 impl<const N: usize, const U: usize> KalmanPredict<N, LinearDynamics<N, U>> for Kf {
@@ -196,5 +236,24 @@ impl<const N: usize, const M: usize, H: Measurement<N, M>> KalmanUpdate<N, M, H>
         z: Option<&SVector<f64, M>>,
     ) -> Result<Update<N, M>> {
         Ukf::update(self, prior, measurement, z)
+    }
+}
+
+impl<const N: usize, D: Dynamics<N>> KalmanPredict<N, D> for SrUkf {
+    #[inline]
+    fn predict(&self, prior: &SqrtGaussian<N>, dynamics: &D) -> Result<SqrtGaussian<N>> {
+        SrUkf::predict(self, prior, dynamics)
+    }
+}
+
+impl<const N: usize, const M: usize, H: Measurement<N, M>> KalmanUpdate<N, M, H> for SrUkf {
+    #[inline]
+    fn update(
+        &self,
+        prior: &SqrtGaussian<N>,
+        measurement: &H,
+        z: Option<&SVector<f64, M>>,
+    ) -> Result<SqrtUpdate<N, M>> {
+        SrUkf::update(self, prior, measurement, z)
     }
 }

@@ -1,6 +1,7 @@
 #![doc = include_str!("../README.md")]
 
 mod batch;
+mod belief;
 mod ckf;
 mod closure;
 mod consistency;
@@ -8,16 +9,20 @@ mod error;
 mod filter;
 mod gaussian;
 mod hybrid;
+mod imm;
 mod kf;
 mod linalg;
 mod model;
 mod motion;
+mod sigma;
 mod smoother;
+mod srkf;
 mod srukf;
 mod ukf;
 mod update;
 
 pub use batch::{Batch, batch_filter};
+pub use belief::{Belief, FilterBelief, ModeBelief};
 pub use ckf::Ckf;
 pub use closure::{FnDynamics, FnMeasurement, NoJacobian};
 pub use consistency::{ChiSquareBand, chi_square_cdf, chi_square_quantile, nees};
@@ -25,12 +30,15 @@ pub use error::{KalmanError, Result, Step};
 pub use filter::{KalmanFilter, KalmanPredict, KalmanUpdate};
 pub use gaussian::{FactoredGaussian, Gaussian};
 pub use hybrid::{HybridPrior, HybridStep, HybridUkfIekf};
+pub use imm::{Imm, ImmBelief, ImmModel, ImmStep, Mode};
 pub use kf::{Ekf, Iekf, Kf};
 pub use model::{
     Additive, Dynamics, DynamicsJacobian, LinearDynamics, LinearMeasurement, Measurement,
     MeasurementJacobian, NoiseCovariance, NoisyDynamics, NoisyMeasurement,
 };
 pub use motion::{NoiseModel, white_noise};
+pub use smoother::{RtsSmoother, batch_smooth, fixed_lag_smooth};
+pub use srkf::SrKf;
 pub use srukf::{SqrtGaussian, SqrtUpdate, SrUkf};
 pub use ukf::{Ukf, UkfStep};
 pub use update::{CovarianceUpdate, Innovation, Update};

@@ -92,6 +92,13 @@ impl<const N: usize> SqrtGaussian<N> {
         Ok(Self { mean: *g.mean(), l })
     }
 
+    /// From a mean and a lower-triangular factor with a non-negative
+    /// diagonal (the caller has checked them).
+    #[inline]
+    pub(crate) fn from_parts(mean: SVector<f64, N>, l: SMatrix<f64, N, N>) -> Self {
+        Self { mean, l }
+    }
+
     /// The mean.
     #[inline]
     pub fn mean(&self) -> &SVector<f64, N> {
@@ -140,18 +147,10 @@ impl<const N: usize> From<SqrtGaussian<N>> for Gaussian<N> {
     }
 }
 
-/// The result of a square-root measurement update: as
-/// [`Update`](crate::Update), with the posterior kept factored.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SqrtUpdate<const N: usize, const M: usize> {
-    /// The posterior belief (the prior itself when the measurement is missing).
-    pub posterior: SqrtGaussian<N>,
-    /// Innovation, its covariance `S = S_y S_y^T`, log-likelihood and NIS;
-    /// `None` when the measurement was missing.
-    pub innovation: Option<Innovation<M>>,
-    /// 1, or 0 when the measurement was missing.
-    pub iterations: usize,
-}
+/// The result of a square-root measurement update: an
+/// [`Update`](crate::Update) with the posterior kept factored (the
+/// innovation's `S = S_y S_y^T`).
+pub type SqrtUpdate<const N: usize, const M: usize> = crate::update::Update<N, M, SqrtGaussian<N>>;
 
 /// The square-root UKF of van der Merwe and Wan (2001), additive noise: the
 /// scaled sigma points and weights of [`Ukf`] (same `alpha`, `beta`,
@@ -272,7 +271,7 @@ impl SrUkf {
     ) -> Result<SqrtGaussian<N>> {
         let step = Step::Predict;
         let q = model::process_noise(dynamics, step)?;
-        let wt = self.ukf.weights_for(N)?;
+        let wt = self.ukf.points().weights_for(N)?;
         let sq = linalg::psd_sqrt(&q, "process noise Q", step)?;
         let m = prior.mean();
         let sl = Self::spread_factor(&prior.l, wt.c)?;
@@ -334,7 +333,7 @@ impl SrUkf {
         let step = Step::Update;
         let r = model::measurement_noise(measurement)?;
         linalg::check_finite_vec(z, "measurement z", step)?;
-        let wt = self.ukf.weights_for(N)?;
+        let wt = self.ukf.points().weights_for(N)?;
         let sr = linalg::psd_sqrt(&r, "measurement noise R", step)?;
         let m = prior.mean();
         let sl = Self::spread_factor(&prior.l, wt.c)?;
@@ -374,44 +373,58 @@ impl SrUkf {
                 step,
             )?;
         }
-        let sy = joint.c;
-        // a zero pivot (a NaN one gives a NaN mean, reported below)
-        let positive = linalg::min_diagonal(&sy) > 0.0;
-        if !positive {
-            return Err(KalmanError::NotPositiveDefinite {
-                matrix: "innovation covariance S",
-                step,
-            });
-        }
-        // K = P_xy S^{-1} = U S_y^{-1}, U = P_xy S_y^{-T} = B; the posterior
-        // factor is A (A A^T = P - U U^T)
         let residual = measurement.residual_z(z, &y_mean);
-        let w = linalg::lower_solve(&sy, &residual);
-        let mean = m + linalg::mul(&joint.b, &w);
-        let l = joint.a;
-        let nis = w.norm_squared();
-        let prod: f64 = (0..M).map(|i| sy[(i, i)]).product();
-        let log_det = if prod.is_normal() {
-            2.0 * prod.ln()
-        } else {
-            2.0 * (0..M).map(|i| sy[(i, i)].ln()).sum::<f64>()
-        };
-        let log_likelihood = -0.5 * (nis + log_det + M as f64 * LN_2PI);
-        let zero = SMatrix::<f64, M, M>::zeros();
-        let covariance = linalg::mirror_lower(linalg::lower_mul_t_add(&zero, 1.0, &sy, &sy));
-        linalg::check_finite_vec(&mean, "posterior mean", step)?;
-        linalg::check_finite_mat(&l, "posterior covariance factor", step)?;
-        let innovation = Innovation {
-            residual,
-            covariance,
-            log_likelihood,
-            nis,
-        };
-        innovation.check()?;
-        Ok(SqrtUpdate {
-            posterior: SqrtGaussian { mean, l },
-            innovation: Some(innovation),
-            iterations: 1,
-        })
+        joint_posterior(&joint, m, residual, step)
     }
+}
+
+/// The posterior of an array-form measurement update from the joint factor
+/// `[[S_y, 0], [U, L+]]` of `[y; x]` and the innovation `residual`:
+/// `x + U S_y^{-1} nu`, `L+`, and the innovation statistics from `S_y`.
+/// Shared by [`SrUkf`] and [`SrKf`].
+#[inline(always)]
+pub(crate) fn joint_posterior<const N: usize, const M: usize>(
+    joint: &linalg::JointFactor<M, N>,
+    m: &SVector<f64, N>,
+    residual: SVector<f64, M>,
+    step: Step,
+) -> Result<SqrtUpdate<N, M>> {
+    let sy = joint.c;
+    // a zero pivot (a NaN one gives a NaN mean, reported below)
+    let positive = linalg::min_diagonal(&sy) > 0.0;
+    if !positive {
+        return Err(KalmanError::NotPositiveDefinite {
+            matrix: "innovation covariance S",
+            step,
+        });
+    }
+    // K = P_xy S^{-1} = U S_y^{-1}, U = P_xy S_y^{-T} = B; the posterior
+    // factor is A (A A^T = P - U U^T)
+    let w = linalg::lower_solve(&sy, &residual);
+    let mean = m + linalg::mul(&joint.b, &w);
+    let l = joint.a;
+    let nis = w.norm_squared();
+    let prod: f64 = (0..M).map(|i| sy[(i, i)]).product();
+    let log_det = if prod.is_normal() {
+        2.0 * prod.ln()
+    } else {
+        2.0 * (0..M).map(|i| sy[(i, i)].ln()).sum::<f64>()
+    };
+    let log_likelihood = -0.5 * (nis + log_det + M as f64 * LN_2PI);
+    let zero = SMatrix::<f64, M, M>::zeros();
+    let covariance = linalg::mirror_lower(linalg::lower_mul_t_add(&zero, 1.0, &sy, &sy));
+    linalg::check_finite_vec(&mean, "posterior mean", step)?;
+    linalg::check_finite_mat(&l, "posterior covariance factor", step)?;
+    let innovation = Innovation {
+        residual,
+        covariance,
+        log_likelihood,
+        nis,
+    };
+    innovation.check()?;
+    Ok(SqrtUpdate {
+        posterior: SqrtGaussian { mean, l },
+        innovation: Some(innovation),
+        iterations: 1,
+    })
 }

@@ -77,11 +77,13 @@ impl<const M: usize> Innovation<M> {
     }
 }
 
-/// The result of a measurement update.
+/// The result of a measurement update, with the posterior in the filter's
+/// belief form `B` ([`Gaussian`] but for the square-root filters, whose
+/// [`SqrtUpdate`](crate::SqrtUpdate) is `Update<N, M, SqrtGaussian<N>>`).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Update<const N: usize, const M: usize> {
+pub struct Update<const N: usize, const M: usize, B = Gaussian<N>> {
     /// The posterior belief (the prior itself when the measurement is missing).
-    pub posterior: Gaussian<N>,
+    pub posterior: B,
     /// Innovation statistics; `None` when the measurement was missing.
     pub innovation: Option<Innovation<M>>,
     /// Relinearisations performed (IEKF); 1 for the other filters, 0 when the
@@ -89,11 +91,11 @@ pub struct Update<const N: usize, const M: usize> {
     pub iterations: usize,
 }
 
-impl<const N: usize, const M: usize> Update<N, M> {
+impl<const N: usize, const M: usize, B: Clone> Update<N, M, B> {
     /// The update for a missing measurement: the posterior is the prior.
-    pub(crate) fn missing(prior: &Gaussian<N>) -> Self {
+    pub(crate) fn missing(prior: &B) -> Self {
         Self {
-            posterior: *prior,
+            posterior: prior.clone(),
             innovation: None,
             iterations: 0,
         }

@@ -20,7 +20,7 @@ fn track<F, D, H>(
     zs: &[Vector2<f64>],
 ) -> Result<Vec<(Gaussian<4>, Option<f64>)>>
 where
-    F: KalmanFilter<4, 2, D, H>,
+    F: KalmanFilter<4, 2, D, H, Belief = Gaussian<4>>,
 {
     let mut belief = start;
     let mut out = Vec::new();

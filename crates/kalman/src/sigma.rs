@@ -1,0 +1,451 @@
+//! The sigma-point machinery shared by [`Ukf`](crate::Ukf), [`SrUkf`](crate::SrUkf) and
+//! [`Ckf`](crate::Ckf): the scaled points and their weights, the transform of a
+//! point set through `f` then `h` with the models' residual and mean
+//! hooks, and the measurement correction from the transformed moments.
+//!
+//!
+//! For an `L`-dimensional (possibly augmented) state with mean `m` and
+//! covariance `P = S S^T`:
+//!
+//! `c = alpha^2 (L + kappa)`, `lambda = c - L`,
+//! `X_0 = m`, `X_{i} = m + sqrt(c) S_i`, `X_{L+i} = m - sqrt(c) S_i`,
+//! `Wm_0 = lambda / c`, `Wc_0 = Wm_0 + 1 - alpha^2 + beta`,
+//! `Wm_i = Wc_i = 1 / (2c)`.
+//!
+//! `Wm_0` may be negative (small `alpha`); only `c > 0` is required. The
+//! augmented covariance `diag(P, Q_v, R_n)` is block diagonal, so its square
+//! root is taken block by block and no `L x L` matrix is ever formed.
+
+use nalgebra::{SMatrix, SVector};
+
+use crate::error::{KalmanError, Result, Step};
+use crate::gaussian::Gaussian;
+use crate::linalg;
+use crate::model::{Dynamics, Measurement, NoisyDynamics, NoisyMeasurement};
+use crate::update::{Innovation, Update};
+
+/// The smallest `alpha` accepted: van der Merwe's lower end (see [`Ukf::new`](crate::Ukf::new)).
+const MIN_ALPHA: f64 = 1e-4;
+
+/// The largest `alpha` accepted: `alpha^2` stays finite.
+const MAX_ALPHA: f64 = 1e150;
+
+/// The smallest `c = alpha^2 (L + kappa)`: points 1e-4 standard deviations
+/// from the mean.
+const MIN_SPREAD: f64 = 1e-8;
+
+/// Weights of a sigma-point set of dimension `L`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Weights {
+    pub(crate) wm0: f64,
+    pub(crate) wc0: f64,
+    pub(crate) wi: f64,
+    /// `c = alpha^2 (L + kappa)`, the squared spread of the points.
+    pub(crate) c: f64,
+    /// `beta - alpha^2`: the weight of the mean shift in the covariances.
+    pub(crate) g: f64,
+}
+
+/// Statistics of a sigma-point set pushed through `f` then `h`.
+pub(crate) struct Moments<const N: usize, const K: usize, const M: usize> {
+    pub(crate) x_mean: SVector<f64, K>,
+    pub(crate) p_xx: SMatrix<f64, K, K>,
+    pub(crate) y_mean: SVector<f64, M>,
+    pub(crate) p_yy: SMatrix<f64, M, M>,
+    pub(crate) p_xy: SMatrix<f64, K, M>,
+    /// Cov(input state, propagated state), for the smoother.
+    pub(crate) p_in_x: SMatrix<f64, N, K>,
+}
+
+/// The scaled sigma-point parameters `alpha`, `beta`, `kappa`, checked.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct SigmaPoints {
+    pub(crate) alpha: f64,
+    pub(crate) beta: f64,
+    pub(crate) kappa: f64,
+}
+
+/// The zero-dimensional Gaussian: "no noise block".
+pub(crate) fn none<const D: usize>() -> Gaussian<D> {
+    Gaussian::from_parts(SVector::zeros(), SMatrix::zeros())
+}
+
+/// Differences and means in one space (state or measurement) of the
+/// sigma points: the hooks of [`Dynamics`] and [`Measurement`], or plain
+/// arithmetic.
+pub(crate) trait Space<const D: usize> {
+    fn residual(&self, a: &SVector<f64, D>, b: &SVector<f64, D>) -> SVector<f64, D>;
+    fn mean(&self, center: &SVector<f64, D>, offset: &SVector<f64, D>) -> SVector<f64, D>;
+}
+
+/// Plain subtraction and addition.
+pub(crate) struct Plain;
+
+impl<const D: usize> Space<D> for Plain {
+    #[inline(always)]
+    fn residual(&self, a: &SVector<f64, D>, b: &SVector<f64, D>) -> SVector<f64, D> {
+        a - b
+    }
+    #[inline(always)]
+    fn mean(&self, center: &SVector<f64, D>, offset: &SVector<f64, D>) -> SVector<f64, D> {
+        center + offset
+    }
+}
+
+/// The state-space hooks of a [`Dynamics`].
+pub(crate) struct StateSpace<'a, T>(pub(crate) &'a T);
+
+impl<const N: usize, T: Dynamics<N>> Space<N> for StateSpace<'_, T> {
+    #[inline(always)]
+    fn residual(&self, a: &SVector<f64, N>, b: &SVector<f64, N>) -> SVector<f64, N> {
+        self.0.residual_x(a, b)
+    }
+    #[inline(always)]
+    fn mean(&self, center: &SVector<f64, N>, offset: &SVector<f64, N>) -> SVector<f64, N> {
+        self.0.mean_x(center, offset)
+    }
+}
+
+/// The measurement-space hooks of a [`Measurement`].
+pub(crate) struct MeasurementSpace<'a, T, const N: usize>(pub(crate) &'a T);
+
+impl<const N: usize, const M: usize, T: Measurement<N, M>> Space<M> for MeasurementSpace<'_, T, N> {
+    #[inline(always)]
+    fn residual(&self, a: &SVector<f64, M>, b: &SVector<f64, M>) -> SVector<f64, M> {
+        self.0.residual_z(a, b)
+    }
+    #[inline(always)]
+    fn mean(&self, center: &SVector<f64, M>, offset: &SVector<f64, M>) -> SVector<f64, M> {
+        self.0.mean_z(center, offset)
+    }
+}
+
+/// The state-space hooks of a [`NoisyDynamics`].
+pub(crate) struct NoisyStateSpace<'a, T, const V: usize>(pub(crate) &'a T);
+
+impl<const N: usize, const V: usize, T: NoisyDynamics<N, V>> Space<N>
+    for NoisyStateSpace<'_, T, V>
+{
+    #[inline(always)]
+    fn residual(&self, a: &SVector<f64, N>, b: &SVector<f64, N>) -> SVector<f64, N> {
+        self.0.residual_x(a, b)
+    }
+    #[inline(always)]
+    fn mean(&self, center: &SVector<f64, N>, offset: &SVector<f64, N>) -> SVector<f64, N> {
+        self.0.mean_x(center, offset)
+    }
+}
+
+/// The measurement-space hooks of a [`NoisyMeasurement`].
+pub(crate) struct NoisyMeasurementSpace<'a, T, const N: usize, const W: usize>(pub(crate) &'a T);
+
+impl<const N: usize, const M: usize, const W: usize, T: NoisyMeasurement<N, M, W>> Space<M>
+    for NoisyMeasurementSpace<'_, T, N, W>
+{
+    #[inline(always)]
+    fn residual(&self, a: &SVector<f64, M>, b: &SVector<f64, M>) -> SVector<f64, M> {
+        self.0.residual_z(a, b)
+    }
+    #[inline(always)]
+    fn mean(&self, center: &SVector<f64, M>, offset: &SVector<f64, M>) -> SVector<f64, M> {
+        self.0.mean_z(center, offset)
+    }
+}
+
+/// The error of a failed square root of `c A`: the sigma-point scale `c`
+/// when `A` is finite and `c A` is not (a huge `alpha` or `kappa`),
+/// otherwise `err` (about `A` itself).
+#[cold]
+#[inline(never)]
+fn spread_error(err: KalmanError, a: &[f64], c: f64) -> KalmanError {
+    let finite = a.iter().all(|x| x.is_finite());
+    if finite && a.iter().any(|x| !(x * c).is_finite()) {
+        return KalmanError::InvalidParameter {
+            name: "alpha^2 (L + kappa)",
+            value: c,
+            reason: "scaled by it, a covariance overflows: alpha or kappa is too large for \
+                     this covariance",
+        };
+    }
+    err
+}
+
+pub(crate) fn no_output<const K: usize>(
+    _: &SVector<f64, K>,
+    _: &SVector<f64, 0>,
+) -> SVector<f64, 0> {
+    SVector::zeros()
+}
+
+impl SigmaPoints {
+    /// The parameters, checked as [`Ukf::new`](crate::Ukf::new) documents.
+    pub(crate) fn new(alpha: f64, beta: f64, kappa: f64) -> Result<Self> {
+        if !(MIN_ALPHA..=MAX_ALPHA).contains(&alpha) {
+            return Err(KalmanError::InvalidParameter {
+                name: "alpha",
+                value: alpha,
+                reason: "must lie in [1e-4, 1e150] (below 1e-4 round-off replaces the \
+                         covariance of the sigma points; above, alpha^2 overflows)",
+            });
+        }
+        for (name, value) in [("beta", beta), ("kappa", kappa)] {
+            if !value.is_finite() {
+                return Err(KalmanError::InvalidParameter {
+                    name,
+                    value,
+                    reason: "must be finite",
+                });
+            }
+        }
+        Ok(Self { alpha, beta, kappa })
+    }
+
+    /// The unscented transform that is the third-degree spherical-radial
+    /// cubature rule: `alpha = 1`, `beta = 0`, `kappa = 0` (see
+    /// [`Ckf`](crate::Ckf)).
+    pub(crate) const fn cubature() -> Self {
+        Self {
+            alpha: 1.0,
+            beta: 0.0,
+            kappa: 0.0,
+        }
+    }
+
+    /// The weights for a (possibly augmented) state of dimension `l`, checked
+    /// as [`Ukf::weights`](crate::Ukf::weights) documents.
+    #[inline(always)]
+    pub(crate) fn weights_for(&self, l: usize) -> Result<Weights> {
+        let a2 = self.alpha * self.alpha;
+        let lf = l as f64;
+        let c = a2 * (lf + self.kappa);
+        let wi = 0.5 / c;
+        // MIN_SPREAD <= c < inf (1 / inf = 0) and a positive semi-definite
+        // covariance, as float compares (`is_finite` compiles to integer
+        // bit tests on every step)
+        let valid = c >= MIN_SPREAD && wi > 0.0 && a2 * self.kappa + self.beta * lf >= 0.0;
+        if !valid {
+            return Err(self.weights_error(lf, c));
+        }
+        let wm0 = (c - lf) / c;
+        Ok(Weights {
+            wm0,
+            wc0: wm0 + 1.0 - a2 + self.beta,
+            wi,
+            c,
+            g: self.beta - a2,
+        })
+    }
+
+    /// Which parameter makes the weights of dimension `l` invalid.
+    #[cold]
+    #[inline(never)]
+    fn weights_error(&self, l: f64, c: f64) -> KalmanError {
+        let kappa = |reason| KalmanError::InvalidParameter {
+            name: "kappa",
+            value: self.kappa,
+            reason,
+        };
+        // kappa and alpha are finite (checked by `new`): nothing below is NaN
+        if l + self.kappa <= 0.0 {
+            return kappa(
+                "L + kappa must be positive (L: the state dimension, augmented by the noise dimensions)",
+            );
+        }
+        if c < MIN_SPREAD {
+            return kappa(
+                "alpha^2 (L + kappa) must be at least 1e-8: closer to the mean, round-off replaces the covariance of the sigma points",
+            );
+        }
+        if c.is_infinite() {
+            return kappa("alpha^2 (L + kappa) overflows");
+        }
+        let reason = "alpha^2 kappa + beta L must be >= 0 (L: the state dimension), or the sigma-point covariance can be indefinite";
+        if self.beta < 0.0 {
+            KalmanError::InvalidParameter {
+                name: "beta",
+                value: self.beta,
+                reason,
+            }
+        } else {
+            kappa(reason)
+        }
+    }
+
+    /// Pushes the sigma points of `[x; v; w] ~ N([m; mv; mw], diag(P, Qv, Rw))`
+    /// through `xf = f(x, v)` and `y = h(xf, w)`.
+    ///
+    /// The moments are accumulated as deviations from the central point
+    /// (`dx_i = Xf_i - Xf_0`): since `Wm_0 + 2 L W_i = 1`,
+    /// `x = Xf_0 + d` with `d = W_i sum dx_i`, and
+    /// `P_xx = W_i sum dx_i dx_i^T + (beta - alpha^2) d d^T` (likewise
+    /// `P_yy`, `P_xy`). Algebraically the weighted sums above; without the
+    /// large weights `Wm_0`, `Wc_0` of a small `alpha` there is no
+    /// cancellation between them.
+    ///
+    /// The deviations are the residuals of `sx` (state) and `sz`
+    /// (measurement), and the means `sx.mean(Xf_0, d)`, `sz.mean(Y_0, e)`:
+    /// plain arithmetic unless the model overrides its hooks.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub(crate) fn transform<
+        const N: usize,
+        const V: usize,
+        const W: usize,
+        const K: usize,
+        const M: usize,
+    >(
+        &self,
+        prior: &Gaussian<N>,
+        v: &Gaussian<V>,
+        w: &Gaussian<W>,
+        f: impl Fn(&SVector<f64, N>, &SVector<f64, V>) -> SVector<f64, K>,
+        h: impl Fn(&SVector<f64, K>, &SVector<f64, W>) -> SVector<f64, M>,
+        sx: &impl Space<K>,
+        sz: &impl Space<M>,
+        step: Step,
+    ) -> Result<Moments<N, K, M>> {
+        let wt = self.weights_for(N + V + W)?;
+        // the noise distributions come from the model: checked here, where
+        // they are used (finite, symmetric; the square roots below check
+        // that they are positive semi-definite)
+        if V > 0 {
+            linalg::check_finite_vec(v.mean(), "process noise mean", step)?;
+            linalg::check_covariance(v.cov(), "process noise covariance", step)?;
+        }
+        if W > 0 {
+            linalg::check_finite_vec(w.mean(), "measurement noise mean", step)?;
+            linalg::check_covariance(w.cov(), "measurement noise covariance", step)?;
+        }
+        // Lower-triangular factors of `c P`, `c Q_v`, `c R_w`
+        // (`c = alpha^2 (L + kappa)`); `spread` builds the points of column
+        // `j` from rows `j..`, so the points agree exactly with the mean in
+        // the leading coordinates and a model that reads only those is
+        // evaluated once for them (identical calls are merged).
+        let sp = linalg::psd_sqrt(&(prior.cov() * wt.c), "state covariance P", step)
+            .map_err(|e| spread_error(e, prior.cov().as_slice(), wt.c))?;
+        let sv = linalg::psd_sqrt(&(v.cov() * wt.c), "process noise covariance", step)
+            .map_err(|e| spread_error(e, v.cov().as_slice(), wt.c))?;
+        let sw = linalg::psd_sqrt(&(w.cov() * wt.c), "measurement noise covariance", step)
+            .map_err(|e| spread_error(e, w.cov().as_slice(), wt.c))?;
+        let (m, mv, mw) = (prior.mean(), v.mean(), w.mean());
+
+        let xf0 = f(m, mv);
+        let y0 = h(&xf0, mw);
+        // Accumulators start at -0, the identity of `+` (0 + x is not x for
+        // x = -0), so the first addition folds away.
+        let mut sdx = SVector::<f64, K>::repeat(-0.0);
+        let mut sdy = SVector::<f64, M>::repeat(-0.0);
+        let mut sxx = SMatrix::<f64, K, K>::repeat(-0.0);
+        let mut syy = SMatrix::<f64, M, M>::repeat(-0.0);
+        let mut sxy = SMatrix::<f64, K, M>::repeat(-0.0);
+        let mut p_in_x = SMatrix::<f64, N, K>::repeat(-0.0);
+        let mut add = |dx: &SVector<f64, K>, dy: &SVector<f64, M>| {
+            sdx += dx;
+            sdy += dy;
+            // lower triangles of the symmetric sums
+            for j in 0..K {
+                for i in j..K {
+                    sxx[(i, j)] += dx[i] * dx[j];
+                }
+            }
+            for j in 0..M {
+                for i in j..M {
+                    syy[(i, j)] += dy[i] * dy[j];
+                }
+                for i in 0..K {
+                    sxy[(i, j)] += dx[i] * dy[j];
+                }
+            }
+        };
+        for j in 0..N {
+            let col = sp.column(j);
+            let (xp, xm) = linalg::spread(m, &sp, j);
+            let (xp, xm) = (f(&xp, mv), f(&xm, mv));
+            let (dp, dm) = (sx.residual(&xp, &xf0), sx.residual(&xm, &xf0));
+            add(&dp, &sz.residual(&h(&xp, mw), &y0));
+            add(&dm, &sz.residual(&h(&xm, mw), &y0));
+            // Cov(input, propagated) for the smoother (unused elsewhere, and
+            // then optimised away)
+            p_in_x += col * sx.residual(&xp, &xm).transpose();
+        }
+        for j in 0..V {
+            let (vp, vm) = linalg::spread(mv, &sv, j);
+            for vv in [vp, vm] {
+                let xf = f(m, &vv);
+                add(&sx.residual(&xf, &xf0), &sz.residual(&h(&xf, mw), &y0));
+            }
+        }
+        for j in 0..W {
+            let (wp, wm) = linalg::spread(mw, &sw, j);
+            let dx = SVector::<f64, K>::zeros();
+            add(&dx, &sz.residual(&h(&xf0, &wp), &y0));
+            add(&dx, &sz.residual(&h(&xf0, &wm), &y0));
+        }
+
+        let d = sdx * wt.wi;
+        let e = sdy * wt.wi;
+        let x_mean = sx.mean(&xf0, &d);
+        let y_mean = sz.mean(&y0, &e);
+        linalg::check_finite_vec(&x_mean, "sigma-point mean of f", step)?;
+        linalg::check_finite_vec(&y_mean, "sigma-point mean of h", step)?;
+        let mut p_xx = SMatrix::<f64, K, K>::zeros();
+        for j in 0..K {
+            for i in j..K {
+                p_xx[(i, j)] = sxx[(i, j)] * wt.wi + wt.g * d[i] * d[j];
+            }
+        }
+        let mut p_yy = SMatrix::<f64, M, M>::zeros();
+        for j in 0..M {
+            for i in j..M {
+                p_yy[(i, j)] = syy[(i, j)] * wt.wi + wt.g * e[i] * e[j];
+            }
+        }
+        let p_xy = sxy * wt.wi + linalg::mul_t(&(d * wt.g), &e);
+        Ok(Moments {
+            x_mean,
+            p_xx: linalg::mirror_lower(p_xx),
+            y_mean,
+            p_yy: linalg::mirror_lower(p_yy),
+            p_xy,
+            p_in_x: p_in_x * wt.wi,
+        })
+    }
+
+    /// The measurement update from transformed moments (`s` symmetric):
+    /// with `S = L D L^T`, `U = P_xy L^{-T}` and `V = U D^{-1}`,
+    /// `K = V L^{-1}`, `K nu = V y` for `y = L^{-1} nu`, and
+    /// `K S K^T = V U^T`.
+    #[inline(always)]
+    pub(crate) fn correct<const N: usize, const M: usize>(
+        predicted: &Gaussian<N>,
+        y_mean: &SVector<f64, M>,
+        s: SMatrix<f64, M, M>,
+        p_xy: &SMatrix<f64, N, M>,
+        z: &SVector<f64, M>,
+        sz: &impl Space<M>,
+    ) -> Result<Update<N, M>> {
+        linalg::check_finite_vec(z, "measurement z", Step::Update)?;
+        let ldl = linalg::Ldl::new(&s, "innovation covariance S", Step::Update)?;
+        let u = ldl.right_solve_lt(p_xy);
+        let v = ldl.scale_columns(&u);
+        let residual = sz.residual(z, y_mean);
+        let y = ldl.forward(&residual);
+        let mean = predicted.mean() + linalg::mul(&v, &y);
+        let cov = linalg::mirror_lower(linalg::lower_mul_t_add(predicted.cov(), -1.0, &v, &u));
+        let innovation = Innovation::unchecked(residual, &y, s, &ldl);
+        // the checks of the outputs in one test (as the KF's gain step):
+        // the exact checks, in order, name a failure
+        let fast_ok = linalg::min_diagonal(&cov) >= linalg::variance_floor(predicted.cov())
+            && (linalg::sym_sum(&mean, &cov) + innovation.log_likelihood).is_finite();
+        if !fast_ok {
+            linalg::check_variances(&cov, predicted.cov(), "posterior covariance", Step::Update)?;
+            Gaussian::checked(mean, cov, Step::Update)?;
+            innovation.check()?;
+        }
+        Ok(Update {
+            posterior: Gaussian::from_parts(mean, cov),
+            innovation: Some(innovation),
+            iterations: 1,
+        })
+    }
+}
