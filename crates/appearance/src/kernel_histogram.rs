@@ -218,6 +218,9 @@ pub struct KernelHistogram {
     total: f32,
     /// Scratch: squared normalised column offsets of the ellipse.
     dx2: Vec<f32>,
+    /// Scratch: the uniform histograms' integer counts, four tables
+    /// interleaved (bin-major).
+    counts: Vec<[u32; 4]>,
 }
 
 impl KernelHistogram {
@@ -227,6 +230,7 @@ impl KernelHistogram {
             weights: vec![0.0; bins],
             total: 0.0,
             dx2: Vec::new(),
+            counts: Vec::new(),
         }
     }
 
@@ -316,23 +320,53 @@ impl KernelHistogram {
                 .map(|x| ((x as f64 - cx).powi(2) * ia2) as f32),
         );
         let nbins = self.weights.len();
+        let dx2 = &self.dx2;
+        // `dx2` falls to its smallest entry and rises after it (`(x - cx)^2`
+        // is monotone on either side of `cx`, and so is each rounding), so
+        // the columns of a row with `w = (1 - dy2) - dx2 > 0`, that is
+        // `dx2 < 1 - dy2`, are one span, found by two binary searches: no
+        // pixel outside the ellipse is visited.
+        let kmin = dx2
+            .iter()
+            .enumerate()
+            .fold(0, |m, (k, &d)| if d < dx2[m] { k } else { m });
         let mut total = 0f32;
         for y in (y_start..=y_hi).step_by(step) {
             let dy2 = ((y as f64 - cy).powi(2) * ib2) as f32;
             if dy2 >= 1.0 {
                 continue;
             }
-            let row = (y as usize - r.y) * r.width;
-            for (k, &dx2) in self.dx2.iter().enumerate() {
-                let w = 1.0 - dy2 - dx2;
+            let t = 1.0 - dy2;
+            let lo = dx2[..=kmin].partition_point(|&d| d >= t);
+            let hi = kmin + dx2[kmin..].partition_point(|&d| d < t);
+            if lo >= hi {
+                continue;
+            }
+            let row = (y as usize - r.y) * r.width + x_start as usize - r.x;
+            let bins = &map.bins[row + lo * step..];
+            let dxs = &dx2[lo..hi];
+            // The weights' bounds test is the bin check: the first bad bin
+            // in pixel order is the error, as pixel by pixel. (`w > 0`
+            // holds on the whole span; the test is kept as a guard.)
+            let weights = &mut self.weights[..];
+            let mut add = |bin: u16, d: f32| {
+                let w = t - d;
                 if w > 0.0 {
-                    let x = x_start as usize + k * step - r.x;
-                    let bin = usize::from(map.bins[row + x]);
-                    if bin >= nbins {
-                        return Err(incompatible(bin, nbins));
+                    match weights.get_mut(usize::from(bin)) {
+                        Some(v) => *v += w,
+                        None => return Err(incompatible(usize::from(bin), nbins)),
                     }
-                    self.weights[bin] += w;
                     total += w;
+                }
+                Ok(())
+            };
+            if step == 1 {
+                for (&bin, &d) in bins[..dxs.len()].iter().zip(dxs) {
+                    add(bin, d)?;
+                }
+            } else {
+                for (&bin, &d) in bins.iter().step_by(step).zip(dxs) {
+                    add(bin, d)?;
                 }
             }
         }
@@ -424,6 +458,14 @@ impl KernelHistogram {
             let kb = if b < 0 { 0 } else { b as usize / step + 1 };
             (h[2], h[3], ka, kb.max(ka))
         });
+        // Integer counts in four interleaved tables, one per pixel position
+        // mod 4, so that runs of one bin do not wait on each other's
+        // stores. Counting is exact and order-free, so the weights equal
+        // the `+= 1.0` of a pixel-by-pixel loop: `min(count, 2^24)`, where
+        // adding one in `f32` stops.
+        self.counts.clear();
+        self.counts.resize(nbins, [0; 4]);
+        let counts = &mut self.counts[..];
         let mut count = 0usize;
         for y in (y_lo..=y_hi).step_by(step) {
             let yf = y as f64;
@@ -437,31 +479,41 @@ impl KernelHistogram {
                 if span.0 >= span.1 {
                     continue;
                 }
-                let weights = &mut self.weights;
-                let mut add = |bin: u16| {
-                    let bin = usize::from(bin);
-                    if bin >= nbins {
-                        return Err(incompatible(bin, nbins));
+                // The table's bounds test is the bin check: the first bad
+                // bin in pixel order is the error, as pixel by pixel.
+                let mut add = |b: u16, lane: usize| match counts.get_mut(usize::from(b)) {
+                    Some(c) => {
+                        c[lane] += 1;
+                        Ok(())
                     }
-                    weights[bin] += 1.0;
-                    Ok(())
+                    None => Err(incompatible(usize::from(b), nbins)),
                 };
                 if step == 1 {
-                    // contiguous: a plain slice loop
-                    for &bin in &row[span.0..span.1] {
-                        add(bin)?;
+                    let mut quads = row[span.0..span.1].chunks_exact(4);
+                    for q in &mut quads {
+                        add(q[0], 0)?;
+                        add(q[1], 1)?;
+                        add(q[2], 2)?;
+                        add(q[3], 3)?;
+                    }
+                    for &b in quads.remainder() {
+                        add(b, 0)?;
                     }
                 } else {
-                    for &bin in row[span.0 * step..]
+                    let bins = row[span.0 * step..]
                         .iter()
                         .step_by(step)
-                        .take(span.1 - span.0)
-                    {
-                        add(bin)?;
+                        .take(span.1 - span.0);
+                    for (j, &b) in bins.enumerate() {
+                        add(b, j & 3)?;
                     }
                 }
                 count += span.1 - span.0;
             }
+        }
+        for (w, c) in self.weights.iter_mut().zip(counts.iter()) {
+            let c = c.iter().map(|&v| u64::from(v)).sum::<u64>();
+            *w = c.min(1 << 24) as f32;
         }
         self.total = count as f32;
         self.finish();
@@ -738,6 +790,56 @@ mod tests {
         assert_eq!(t.total(), 0.0);
     }
 
+    /// The Epanechnikov histogram pixel by pixel over the bounding box,
+    /// each pixel tested (the code before row spans): weights before
+    /// normalisation, total.
+    fn ellipse_reference(
+        map: &BinMap,
+        (cx, cy): (f64, f64),
+        (a, b): (f64, f64),
+        step: usize,
+        nbins: usize,
+    ) -> (Vec<f32>, f32) {
+        let mut weights = vec![0f32; nbins];
+        let r = map.rect;
+        let (fx, x_lo, x_hi) = BinMap::span(cx, a, r.x, r.width);
+        let (fy, y_lo, y_hi) = BinMap::span(cy, b, r.y, r.height);
+        let align = |first: f64, lo: i64| -> i64 {
+            let off = (lo as f64 - first) as i64;
+            lo + (step as i64 - off.rem_euclid(step as i64)) % step as i64
+        };
+        let (x_start, y_start) = (align(fx, x_lo), align(fy, y_lo));
+        let mut total = 0f32;
+        if x_start > x_hi || y_start > y_hi {
+            return (weights, total);
+        }
+        let (ia2, ib2) = (1.0 / (a * a), 1.0 / (b * b));
+        let dx2: Vec<f32> = (x_start..=x_hi)
+            .step_by(step)
+            .map(|x| ((x as f64 - cx).powi(2) * ia2) as f32)
+            .collect();
+        for y in (y_start..=y_hi).step_by(step) {
+            let dy2 = ((y as f64 - cy).powi(2) * ib2) as f32;
+            if dy2 >= 1.0 {
+                continue;
+            }
+            let row = (y as usize - r.y) * r.width;
+            for (k, &d) in dx2.iter().enumerate() {
+                let w = 1.0 - dy2 - d;
+                if w > 0.0 {
+                    let x = x_start as usize + k * step - r.x;
+                    weights[usize::from(map.bins[row + x])] += w;
+                    total += w;
+                }
+            }
+        }
+        if total > 0.0 {
+            let inv = 1.0 / total;
+            weights.iter_mut().for_each(|v| *v *= inv);
+        }
+        (weights, total)
+    }
+
     /// The uniform histogram pixel by pixel with the hole tested on each
     /// (the code before row spans): weights before normalisation, count.
     fn uniform_reference(
@@ -806,6 +908,39 @@ mod tests {
             proptest::prop_assert!(h.weights().iter().zip(&w).all(|(p, q)| p.to_bits() == q.to_bits()));
             h.rect(&map, cx, cy, a, b, step).unwrap();
             let (w, total) = uniform_reference(&map, (cx, cy), (a, b), None, step, binning.len());
+            proptest::prop_assert_eq!(h.total().to_bits(), total.to_bits());
+            proptest::prop_assert!(h.weights().iter().zip(&w).all(|(p, q)| p.to_bits() == q.to_bits()));
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(512))]
+        /// Ellipses by row spans give the per-pixel histograms bit for bit:
+        /// every step, ellipses partly or wholly off the map, centres on
+        /// pixel centres and between them, thin and round ones.
+        #[test]
+        fn ellipse_spans_match_the_per_pixel_reference(
+            seed in 0u32..1000,
+            cx in -8.0f64..42.0,
+            cy in -8.0f64..32.0,
+            a in 0.3f64..25.0,
+            b in 0.3f64..25.0,
+            step in 1usize..5,
+            on_grid in 0u8..3,
+        ) {
+            let img = bayestrack_testkit::noise(36, 28, 3, seed);
+            let binning = HsvBinning::perez();
+            let mut map = BinMap::new();
+            binning.bin_map_into(img.view(), Rect::new(3, 2, 30, 24), &mut map).unwrap();
+            // on_grid: centres on pixel centres or halfway, integer axes
+            let (cx, cy, a, b) = match on_grid {
+                0 => (cx, cy, a, b),
+                1 => (cx.round(), cy.round(), a.round().max(1.0), b.round().max(1.0)),
+                _ => (cx.round() + 0.5, cy.round() + 0.5, a.round() + 0.5, b.round() + 0.5),
+            };
+            let mut h = KernelHistogram::new(binning.len());
+            h.ellipse(&map, cx, cy, a, b, step).unwrap();
+            let (w, total) = ellipse_reference(&map, (cx, cy), (a, b), step, binning.len());
             proptest::prop_assert_eq!(h.total().to_bits(), total.to_bits());
             proptest::prop_assert!(h.weights().iter().zip(&w).all(|(p, q)| p.to_bits() == q.to_bits()));
         }

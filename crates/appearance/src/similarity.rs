@@ -26,28 +26,81 @@ use crate::{AppearanceError, Result};
 pub fn ncc(a: ImageView<'_, f32>, b: ImageView<'_, f32>) -> Result<f64> {
     a.expect_channels("ncc", 1)?;
     a.expect_same_shape("ncc", &b)?;
-    let n = (a.width() * a.height()) as f64;
-    let (mut sa, mut sb) = (0f64, 0f64);
-    for y in 0..a.height() {
-        for (&p, &q) in a.row(y).iter().zip(b.row(y)) {
+    ncc_centred(a, &Centred::of(b))
+}
+
+/// One side of an NCC, centred: each pixel's deviation from the patch mean
+/// (row-major, `f64`), their sum of squares, and whether the patch sum was
+/// finite. The template side of [`TargetModel::similarity`] is computed once
+/// per template, not once per observed patch. Every sum runs in pixel
+/// order in one accumulator, as the two-pass NCC always did, so the scores
+/// (and the trackers' boxes) are the same bits. (Independent accumulators
+/// would be faster but change the last bits of a score, and the affine
+/// particle filters' tuning and resampling amplify those into different
+/// boxes: 43 px apart on Crossing for stpf.)
+#[derive(Clone, Debug, Default)]
+struct Centred {
+    width: usize,
+    height: usize,
+    dev: Vec<f64>,
+    ss: f64,
+    finite: bool,
+}
+
+impl Centred {
+    fn of(b: ImageView<'_, f32>) -> Self {
+        let mut c = Self::default();
+        c.set(b);
+        c
+    }
+
+    fn set(&mut self, b: ImageView<'_, f32>) {
+        let (w, h) = (b.width(), b.height());
+        self.width = w;
+        self.height = h;
+        let mut sum = 0f64;
+        for y in 0..h {
+            for &q in &b.row(y)[..w] {
+                sum += f64::from(q);
+            }
+        }
+        self.finite = sum.is_finite();
+        let mean = sum / (w * h) as f64;
+        self.dev.clear();
+        for y in 0..h {
+            self.dev
+                .extend(b.row(y)[..w].iter().map(|&q| f64::from(q) - mean));
+        }
+        self.ss = self.dev.iter().fold(0.0, |s, &d| s + d * d);
+    }
+}
+
+/// [`ncc`] of patch `a` against a centred side `b` of the same shape
+/// (checked by the callers).
+fn ncc_centred(a: ImageView<'_, f32>, b: &Centred) -> Result<f64> {
+    let (w, h) = (b.width, b.height);
+    let n = (w * h) as f64;
+    let mut sa = 0f64;
+    for y in 0..h {
+        for &p in &a.row(y)[..w] {
             sa += f64::from(p);
-            sb += f64::from(q);
         }
     }
-    if !sa.is_finite() || !sb.is_finite() {
+    if !sa.is_finite() || !b.finite {
         return Err(AppearanceError::NonFinite { what: "patch" });
     }
-    let (ma, mb) = (sa / n, sb / n);
-    let (mut sab, mut saa, mut sbb) = (0f64, 0f64, 0f64);
-    for y in 0..a.height() {
-        for (&p, &q) in a.row(y).iter().zip(b.row(y)) {
-            let (da, db) = (f64::from(p) - ma, f64::from(q) - mb);
-            sab += da * db;
-            saa += da * da;
-            sbb += db * db;
+    let ma = sa / n;
+    let (mut sab, mut saa) = (0f64, 0f64);
+    if w > 0 {
+        for (y, dev) in b.dev.chunks_exact(w).enumerate() {
+            for (&p, &db) in a.row(y)[..w].iter().zip(dev) {
+                let da = f64::from(p) - ma;
+                sab += da * db;
+                saa += da * da;
+            }
         }
     }
-    let den = (saa * sbb).sqrt();
+    let den = (saa * b.ss).sqrt();
     if den <= 1e-12 * n {
         return Ok(0.0);
     }
@@ -175,6 +228,8 @@ fn check_rate(name: &'static str, rate: f64) -> Result<f64> {
 #[derive(Clone, Debug)]
 pub struct TargetModel {
     template: Image<f32>,
+    /// The template's side of the NCC (kept in step with `template`).
+    centred: Centred,
     tsd: OnlineGaussian,
     bsd: OnlineGaussian,
     template_rate: f32,
@@ -198,7 +253,9 @@ impl TargetModel {
             return Err(AppearanceError::NonFinite { what: "template" });
         }
         let template_rate = check_rate("template_rate", template_rate)? as f32;
+        let centred = Centred::of(template.view());
         Ok(Self {
+            centred,
             template,
             tsd,
             bsd,
@@ -251,7 +308,8 @@ impl TargetModel {
                 want_height: self.template.height(),
             });
         }
-        Ok(ncc(patch, self.template.view())?.max(0.0))
+        patch.expect_channels("ncc", 1)?;
+        Ok(ncc_centred(patch, &self.centred)?.max(0.0))
     }
 
     /// `mu_T - sigma_T`: a tuned particle at or above this is good enough
@@ -325,6 +383,7 @@ impl TargetModel {
                 *t += a * (p - *t);
             }
         }
+        self.centred.set(self.template.view());
         self.tsd.update(score)?;
         for &b in background_scores {
             self.bsd.update(b)?;
@@ -358,6 +417,70 @@ mod tests {
         assert!((ncc(p.view(), q.view()).unwrap() - 0.5 / 0.75f64.sqrt()).abs() < 1e-12);
         let small = Image::new(1, 2, 1, 0f32).unwrap();
         assert!(ncc(a.view(), small.view()).is_err());
+    }
+
+    /// The two-pass NCC as it was before the template side was cached.
+    fn ncc_sequential(a: ImageView<'_, f32>, b: ImageView<'_, f32>) -> f64 {
+        let n = (a.width() * a.height()) as f64;
+        let (mut sa, mut sb) = (0f64, 0f64);
+        for y in 0..a.height() {
+            for (&p, &q) in a.row(y).iter().zip(b.row(y)) {
+                sa += f64::from(p);
+                sb += f64::from(q);
+            }
+        }
+        let (ma, mb) = (sa / n, sb / n);
+        let (mut sab, mut saa, mut sbb) = (0f64, 0f64, 0f64);
+        for y in 0..a.height() {
+            for (&p, &q) in a.row(y).iter().zip(b.row(y)) {
+                let (da, db) = (f64::from(p) - ma, f64::from(q) - mb);
+                sab += da * db;
+                saa += da * da;
+                sbb += db * db;
+            }
+        }
+        let den = (saa * sbb).sqrt();
+        if den <= 1e-12 * n {
+            return 0.0;
+        }
+        (sab / den).clamp(-1.0, 1.0)
+    }
+
+    #[test]
+    fn cached_side_gives_the_two_pass_bits() {
+        // Widths 1 to 19 and 36, 37, a strided view; related and unrelated
+        // patches, a large offset (large mean, small deviations).
+        for (k, w) in (1..=19).chain([36, 37]).enumerate() {
+            let h = 1 + k % 5 + w / 4;
+            let a = texture(w, h, 7 + k as u32);
+            let big = texture(w + 3, h, 99 + k as u32);
+            let b = big.crop(bayestrack_image::Rect::new(2, 0, w, h)).unwrap();
+            let c = a.map(|v| 100.0 + 0.5 * v + 0.01 * (v * 37.0).sin());
+            for (x, y) in [(a.view(), b), (a.view(), c.view()), (b, c.view())] {
+                let (got, want) = (ncc(x, y).unwrap(), ncc_sequential(x, y));
+                assert_eq!(got.to_bits(), want.to_bits(), "{w}x{h}: {got} vs {want}");
+                let (got, want) = (ncc(y, x).unwrap(), ncc_sequential(y, x));
+                assert_eq!(got.to_bits(), want.to_bits(), "{w}x{h}: {got} vs {want}");
+            }
+        }
+    }
+
+    #[test]
+    fn similarity_follows_the_updated_template() {
+        // The cached template side must track every update: the model's
+        // similarity is ncc(patch, template) bit for bit after each.
+        let tsd = OnlineGaussian::new(0.9, 0.05, 0.1).unwrap();
+        let bsd = OnlineGaussian::new(0.0, 0.01, 0.1).unwrap();
+        let mut m = TargetModel::new(texture(36, 36, 1), tsd, bsd, 0.3).unwrap();
+        for seed in 2..6 {
+            let p = texture(36, 36, seed);
+            let q = texture(36, 36, seed + 10);
+            let direct = ncc(q.view(), m.template()).unwrap().max(0.0);
+            assert_eq!(m.similarity(q.view()).unwrap().to_bits(), direct.to_bits());
+            assert!(m.update_above(p.view(), 1.0, &[], 0.0).unwrap());
+            let direct = ncc(q.view(), m.template()).unwrap().max(0.0);
+            assert_eq!(m.similarity(q.view()).unwrap().to_bits(), direct.to_bits());
+        }
     }
 
     #[test]

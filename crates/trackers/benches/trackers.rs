@@ -485,7 +485,8 @@ fn real_sequence(name: &str) -> Option<(Vec<Image<u8>>, BBox)> {
 }
 
 /// The correlation-filter trackers per frame on the real OTB sequences
-/// Crossing (360x240) and Couple (320x240), RGB.
+/// Crossing (360x240) and Couple (320x240), RGB, and the particle filters
+/// hist-pf-scale, hkpf, ispf and stpf.
 fn bench_dcf(c: &mut Criterion) {
     for name in ["Crossing", "Couple"] {
         let Some((frames, first)) = real_sequence(name) else {
@@ -509,6 +510,16 @@ fn bench_dcf(c: &mut Criterion) {
         ];
         for (tname, mut tracker) in trackers {
             bench_steps(&mut group, tname, tracker.as_mut(), &frames, first);
+        }
+        group.finish();
+        // Issue 30's slower particle filters on the same frames, built as
+        // the registry builds them (seed 0, as `cargo xtask otb`).
+        let mut group = c.benchmark_group(format!("{name} real (particle filters)"));
+        group.throughput(Throughput::Elements(1));
+        for tname in ["hist-pf-scale", "hkpf", "ispf", "stpf"] {
+            let mut tracker = bayestrack_trackers::build_tracker(tname, 0).unwrap();
+            let label = format!("{tname} step");
+            bench_steps(&mut group, &label, tracker.as_mut(), &frames, first);
         }
         group.finish();
     }

@@ -1,0 +1,91 @@
+//! Tracker-only time and a box digest of one registered tracker on a shared
+//! real sequence, for profiling (callgrind: `--toggle-collect=*run_tracker*`
+//! counts the tracker calls only, not the JPEG decoding).
+//!
+//! `cargo run --release -p bayestrack-trackers --example profile_tracker -- Crossing hkpf [repeats]`
+
+use bayestrack_image::{BBox, Image};
+use bayestrack_trackers::{Tracker, build_tracker};
+use std::hint::black_box;
+use std::time::Instant;
+
+fn frames(name: &str) -> (Vec<Image<u8>>, BBox) {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/sequences")
+        .join(name);
+    let gt = std::fs::read_to_string(dir.join("groundtruth_rect.txt")).expect("ground truth");
+    let v: Vec<f64> = gt
+        .lines()
+        .next()
+        .expect("a first line")
+        .split([',', '\t', ' '])
+        .filter(|s| !s.is_empty())
+        .map(|s| s.trim().parse().expect("a number"))
+        .collect();
+    let frames = bayestrack_image::list_frames(&dir)
+        .expect("frames")
+        .iter()
+        .map(|p| bayestrack_image::read_frame(p).expect("a frame"))
+        .collect();
+    (frames, BBox::new(v[0], v[1], v[2], v[3]))
+}
+
+/// Every tracker call of one pass; returns an FNV digest of the boxes' bits
+/// and pushes the boxes to `boxes`.
+#[inline(never)]
+fn run_tracker(
+    tracker: &mut dyn Tracker,
+    frames: &[Image<u8>],
+    first: BBox,
+    boxes: &mut Vec<BBox>,
+) -> u64 {
+    let mut h = 0xcbf2_9ce4_8422_2325_u64;
+    let mut mix = |x: f64| {
+        for b in x.to_bits().to_le_bytes() {
+            h = (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3);
+        }
+    };
+    tracker.init(frames[0].view(), first).expect("init");
+    for f in &frames[1..] {
+        let e = tracker.step(black_box(f.view())).expect("step");
+        let b = e.bbox;
+        boxes.push(b);
+        mix(b.x);
+        mix(b.y);
+        mix(b.width);
+        mix(b.height);
+    }
+    h
+}
+
+fn main() {
+    let mut args = std::env::args().skip(1);
+    let seq = args.next().unwrap_or_else(|| "Crossing".into());
+    let name = args.next().unwrap_or_else(|| "hkpf".into());
+    let repeats: usize = args.next().map_or(1, |s| s.parse().expect("repeats"));
+    let (frames, first) = frames(&seq);
+    let mut best = f64::INFINITY;
+    let mut digest = 0;
+    let mut boxes = Vec::with_capacity(frames.len());
+    for _ in 0..repeats {
+        boxes.clear();
+        let mut tracker = build_tracker(&name, 0).expect("tracker");
+        let t0 = Instant::now();
+        digest = run_tracker(tracker.as_mut(), &frames, first, &mut boxes);
+        best = best.min(t0.elapsed().as_secs_f64());
+    }
+    // PROFILE_BOXES=FILE: the boxes, one `x,y,width,height` line a frame
+    // (Rust's shortest round-trip decimal), to compare two builds.
+    if let Ok(path) = std::env::var("PROFILE_BOXES") {
+        let text: String = boxes
+            .iter()
+            .map(|b| format!("{:?},{:?},{:?},{:?}\n", b.x, b.y, b.width, b.height))
+            .collect();
+        std::fs::write(path, text).expect("write the boxes");
+    }
+    println!(
+        "{name} on {seq}: {} frames, digest {digest:016x}, best {:.0} fps",
+        frames.len(),
+        (frames.len() - 1) as f64 / best
+    );
+}
