@@ -36,23 +36,26 @@ options! {
         /// starts a re-initialisation (the tracker's default, 0.035).
         pub avq_trigger: f64 = 0.035, in inside(0.0, 1.0);
         /// How eq. 9's OR sums the two cues for the point cloud (sec. 3.1):
-        /// `raw` (default), `IFD + lambda skin` averaged over the particle's
-        /// window, eq. 7's `dP` read as the value it defines ("`dP_t(x, y)
-        /// = |I_t(x, y) - I_{t-D}(x, y)|`", a map, not a set); or
-        /// `subtracted`, the sum run only over the window's "subtracted
-        /// pixel[s]" (eq. 9: "for the particle's point `(x_P, y_P) in dP_i`
-        /// of both the subtracted pixel and the associated skin-color
-        /// point"), those whose IFD exceeds `subtracted_threshold`. The
-        /// text defines `dP` as a difference, never as a thresholded set,
-        /// so `raw` is the closer reading. (A third reading, each cue
-        /// normalised over the particles before the sum, is not built:
-        /// with `lambda = 1/N` after normalisation the skin term is 1/N of
-        /// the IFD's, i.e. the IFD row.) Contours keep eq. 9 raw (the paper
-        /// uses OR only with points).
-        pub or_weighting: OrWeighting = OrWeighting::Raw;
+        /// `subtracted` (default), the sum run only over the particle's
+        /// window pixels whose IFD exceeds `subtracted_threshold`, or
+        /// `raw`, `IFD + lambda skin` averaged over the whole window. Eq. 9
+        /// sums over "the `i`th particle's point `(x_P, y_P) in dP_i` of
+        /// both the subtracted pixel and the associated skin-color point":
+        /// `dP_i` is a set belonging to particle `i` (eq. 7's map is `dP_t`),
+        /// and its members are "subtracted pixel[s]", so the sum runs over
+        /// the pixels that the subtraction marks, each adding its
+        /// difference and `lambda` times its skin score. `raw` reads `dP_i`
+        /// as the whole window (this code's first reading). A third
+        /// reading, each cue normalised over the particles before the
+        /// sum, is not built: with `lambda = 1/N` after normalisation the
+        /// skin term weighs 1/N of the IFD's. Contours keep eq. 9 raw (the
+        /// paper uses OR only with points).
+        pub or_weighting: OrWeighting = OrWeighting::Subtracted;
         /// The IFD level (grey in `[0, 1]`) above which a pixel is
-        /// "subtracted" (`or_weighting=subtracted`): 0.05, c-AVQ's level
-        /// (13 grey levels; the paper gives no level for sec. 3).
+        /// "subtracted" (`or_weighting=subtracted`): 0.05, the level at
+        /// which c-AVQ counts a pixel as "IFD data" (sec. 4; 13 grey
+        /// levels, well above the sensor's frame-to-frame noise). The
+        /// paper gives no level for sec. 3.
         pub subtracted_threshold: f64 = 0.05, in inside(0.0, 1.0);
         /// Moving non-skin boxes in every scene (0). The paper "assume[s]
         /// that a human is moving in clutter" in front of "a static

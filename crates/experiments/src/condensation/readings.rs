@@ -274,20 +274,21 @@ pub struct Reading {
 /// The readings of `readings=true`, each from the paper's text.
 pub const READINGS: &[Reading] = &[
     Reading {
+        name: "or-raw",
+        set: &[("or_weighting", "raw")],
+        why: "eq. 9's dP_i read as the particle's whole window, IFD + lambda skin averaged \
+              over it (this code's first reading)",
+    },
+    Reading {
         name: "movers-2",
         set: &[("moving_distractors", "2")],
-        why: "two moving saturated non-skin boxes in every scene (this code's first scene; \
-              the paper names no other moving object)",
+        why: "two moving saturated non-skin boxes in every scene (the paper names no other \
+              moving object)",
     },
     Reading {
-        name: "or-subtracted",
-        set: &[("or_weighting", "subtracted")],
-        why: "eq. 9 summed over the window's subtracted pixels only (IFD > 0.05)",
-    },
-    Reading {
-        name: "movers-2-or-subtracted",
-        set: &[("moving_distractors", "2"), ("or_weighting", "subtracted")],
-        why: "both of the above",
+        name: "movers-2-or-raw",
+        set: &[("moving_distractors", "2"), ("or_weighting", "raw")],
+        why: "both of the above: this code's first scene and eq. 9",
     },
     Reading {
         name: "no-static-skin",
