@@ -560,6 +560,68 @@ mod tests {
     }
 
     #[test]
+    fn or_over_the_subtracted_pixels_adds_lambda_skin_where_the_ifd_passes() {
+        use bayestrack_appearance::{Candidate, Scratch, SkinModel};
+        use bayestrack_image::{Image, Rect, Rgb};
+        // An 8x4 frame: left half skin-coloured, right half blue; IFD 0.2
+        // in rows 0-1, 0.01 (under the 0.05 level) in rows 2-3.
+        let (skin, blue) = (Rgb::new(224, 172, 138), Rgb::new(40, 70, 200));
+        let mut rgb = Vec::new();
+        let mut ifd = Vec::new();
+        for y in 0..4 {
+            for x in 0..8 {
+                rgb.extend_from_slice(&if x < 4 { skin } else { blue }.to_array());
+                ifd.push(if y < 2 { 0.2f32 } else { 0.01 });
+            }
+        }
+        let rgb = Image::from_vec(8, 4, 3, rgb).unwrap();
+        let ifd = Image::from_vec(8, 4, 1, ifd).unwrap();
+        let frame = Frame::new().with_rgb(rgb.view()).with_ifd(ifd.view());
+        let model = SkinModel::new(0.066, 0.38, 0.05).unwrap();
+        let cue = SubtractedOr {
+            skin: model,
+            lambda: 0.5,
+            threshold: 0.05,
+        };
+        let c_skin = f64::from(model.score_rgb(skin));
+        let c_blue = f64::from(model.score_rgb(blue));
+        assert!(c_skin > 0.9 && c_blue < 1e-6, "{c_skin} {c_blue}");
+        let mut scratch = Scratch::new();
+        let mut score = |x, y, w, h| {
+            cue.log_likelihood(
+                &frame,
+                &Candidate::Window(Rect::new(x, y, w, h)),
+                &mut scratch,
+            )
+            .unwrap()
+        };
+        // Rows 0-1 pass: each pixel adds 0.2 + lambda C; rows 2-3 add 0.
+        let expect = |c: f64, share: f64| (share * (0.2 + 0.5 * c) + FLOOR).ln();
+        assert!((score(0, 0, 4, 2) - expect(c_skin, 1.0)).abs() < 1e-6);
+        assert!((score(4, 0, 4, 2) - expect(c_blue, 1.0)).abs() < 1e-6);
+        assert!((score(0, 0, 4, 4) - expect(c_skin, 0.5)).abs() < 1e-6);
+        assert!((score(0, 2, 4, 2) - FLOOR.ln()).abs() < 1e-9);
+        // The skin term is what tells the two halves apart.
+        assert!(score(0, 0, 4, 2) > score(4, 0, 4, 2) + 0.5);
+        assert!(
+            cue.log_likelihood(
+                &frame,
+                &Candidate::Window(Rect::new(6, 0, 4, 2)),
+                &mut scratch
+            )
+            .is_err()
+        );
+        assert!(
+            CueSet::OrSubtracted {
+                lambda: 0.02,
+                threshold: f64::NAN
+            }
+            .check()
+            .is_err()
+        );
+    }
+
+    #[test]
     fn second_order_dynamics_is_eq_10() {
         // With sigma = 0 the drift is q + rho (q - q_prev).
         let mut rng = stream_rng(&[2]);
