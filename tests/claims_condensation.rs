@@ -1,17 +1,21 @@
-//! The claims of paper 003 (Lee, Jo and Kang 2005) that our quick
-//! `condensation` run reproduces, and those it does not (asserted as
-//! measured, so that a change that makes them reproduce is noticed). See
-//! docs/reproduction.md, section `condensation`. The grid claims read the
-//! quick run (2 runs, means over runs and frames); the re-initialisation
-//! and crossing claims, whose outcome is all or nothing per run, count
-//! over 16 runs. Every bound was checked by breaking the trackers on
-//! purpose (listed there).
+//! The claims of paper 003 (Lee, Jo and Kang 2005) under the readings of
+//! its text that `CondensationConfig`'s defaults take (no moving object
+//! but the target, eq. 9 summed over the subtracted pixels), and under the
+//! readings that decide them (`condensation::READINGS`): which hold, which
+//! do not, each with two-sided bounds, so that a change that moves a
+//! verdict is noticed. See docs/reproduction.md, section `condensation`.
+//! The grid claims read the quick run (2 runs, means over runs and
+//! frames) and the few grid jobs of a reading they need; the
+//! re-initialisation and crossing claims, whose outcome is all or nothing
+//! per run, count over 16 runs. Every bound was checked by breaking the
+//! trackers on purpose (listed there).
 
 use std::sync::OnceLock;
 
 use bayestrack_experiments::condensation::{
-    CondensationConfig, CondensationExperiment, CondensationResult, CrossingCount, CrossingRun,
-    Cue, Done, GridKey, GridSummary, ReinitRun, Representation, SIDE_TRACKERS, run,
+    Claim, CondensationConfig, CondensationExperiment, CondensationResult, CrossingCount,
+    CrossingRun, Cue, Done, GridKey, GridSummary, READINGS, ReinitRun, Representation,
+    SIDE_TRACKERS, TrackRun, run,
 };
 use bayestrack_experiments::driver::run_jobs;
 
@@ -30,60 +34,190 @@ fn cell(representation: Representation, cue: Cue, n: usize) -> GridSummary {
     result().cell(representation, cue, n)
 }
 
+/// The quick configuration under reading `name`.
+fn reading(name: &str) -> CondensationConfig {
+    READINGS
+        .iter()
+        .find(|r| r.name == name)
+        .unwrap()
+        .config(&CondensationConfig::quick())
+        .unwrap()
+}
+
+/// Grid cells (and the hand runs when `hand`) of `config`, only those
+/// jobs: per key, its runs' centre / outline / lost means.
+fn grid_of(
+    config: &CondensationConfig,
+    keys: &[GridKey],
+    hand: bool,
+) -> (Vec<GridSummary>, Vec<TrackRun>) {
+    let all = GridKey::all();
+    let runs = config.runs;
+    let mut jobs = Vec::new();
+    for k in keys {
+        let i = all.iter().position(|a| a == k).unwrap();
+        jobs.extend(i * runs..(i + 1) * runs);
+    }
+    let side = all.len() * runs + SIDE_TRACKERS.len() * 4 * runs;
+    if hand {
+        jobs.extend(side..side + runs);
+    }
+    let done = run_jobs::<CondensationExperiment>(config, &jobs, None, false).unwrap();
+    let mut grid = Vec::new();
+    let mut hands = Vec::new();
+    for (n, d) in done.into_iter().enumerate() {
+        match d {
+            Done::Grid(t) => grid.push((keys[n / runs], t)),
+            Done::Hand(t) => hands.push(t),
+            _ => panic!("not a grid or hand job"),
+        }
+    }
+    let summary = keys
+        .iter()
+        .map(|k| {
+            let runs: Vec<&TrackRun> = grid
+                .iter()
+                .filter(|(g, _)| g == k)
+                .map(|(_, t)| t)
+                .collect();
+            let m = |f: fn(&TrackRun) -> &Vec<f64>| {
+                let v: Vec<f64> = runs.iter().flat_map(|r| f(r).iter().copied()).collect();
+                if v.is_empty() {
+                    f64::NAN
+                } else {
+                    v.iter().sum::<f64>() / v.len() as f64
+                }
+            };
+            let lost: Vec<bool> = runs.iter().flat_map(|r| r.lost.iter().copied()).collect();
+            GridSummary {
+                key: *k,
+                centre: m(|r| &r.centre),
+                outline: m(|r| &r.outline),
+                loss: lost.iter().filter(|&&l| l).count() as f64 / lost.len() as f64,
+                fps: f64::NAN,
+            }
+        })
+        .collect();
+    (summary, hands)
+}
+
+fn key(representation: Representation, cue: Cue, particles: usize) -> GridKey {
+    GridKey {
+        representation,
+        cue,
+        particles,
+    }
+}
+
 #[test]
-fn both_cues_with_half_the_contours_beat_the_ifd_alone() {
+fn sec31_the_or_point_cloud_tracks_when_eq9_sums_the_subtracted_pixels() {
+    // Sec. 3.1: points, OR (eq. 9), N = 50, lambda = 1/N, 30 px diffusion.
+    // Summed over the subtracted pixels (the default reading) the cloud
+    // tracks the face; over the whole window (`or-raw`) the IFD of the
+    // textured wall under the 30 px diffusion pulls it off in about half
+    // the frames. Measured (quick): subtracted 5.3 px, 0 % lost; raw
+    // 37.3 px, 49 % lost.
+    let or = cell(Representation::Points, Cue::Or, 50);
+    println!("{or:?}");
+    assert!(or.centre >= 1.0 && or.centre <= 9.0, "{or:?}");
+    assert!(or.loss <= 0.05, "{or:?}");
+    assert!(result().verdict(Claim::PointsOrTracks).holds);
+    let (raw, _) = grid_of(
+        &reading("or-raw"),
+        &[key(Representation::Points, Cue::Or, 50)],
+        false,
+    );
+    println!("or-raw: {:?}", raw[0]);
+    assert!(
+        raw[0].centre >= 20.0 && raw[0].centre <= 80.0,
+        "{:?}",
+        raw[0]
+    );
+    assert!(raw[0].loss >= 0.3 && raw[0].loss <= 0.8, "{:?}", raw[0]);
+}
+
+#[test]
+fn sec32_the_hand_contour_on_the_ifd_alone_follows_the_hand_loosely() {
+    // Sec. 3.2: contour, IFD only, N = 200, 45 control points, sigma 5 px /
+    // 3 deg / 0.05; our template the ellipse in the hand's first box.
+    // Not reproduced at the "tracks" bound (lost <= 5 %): measured (quick)
+    // 10.0 px centre, 5.5 px outline, 16 % lost (the IFD band on the
+    // fingers' edges; the wide 3 deg / 0.05 diffusion). With two moving
+    // boxes (`movers-2`) it is lost: 86 px, 80 %.
+    let h = result().hand_summary();
+    println!("{h:?}");
+    assert!(h.centre >= 4.0 && h.centre <= 20.0, "{h:?}");
+    assert!(h.outline >= 2.0 && h.outline <= 10.0, "{h:?}");
+    assert!(h.loss > 0.05 && h.loss <= 0.35, "{h:?}");
+    let (_, hands) = grid_of(&reading("movers-2"), &[], true);
+    let lost = hands
+        .iter()
+        .flat_map(|r| r.lost.iter())
+        .filter(|&&l| l)
+        .count() as f64
+        / hands.iter().map(|r| r.lost.len()).sum::<usize>() as f64;
+    println!("movers-2 hand lost {lost}");
+    assert!(lost >= 0.5, "{lost}");
+}
+
+#[test]
+fn sec33_both_cues_with_half_the_contours_beat_the_ifd_alone_only_among_moving_boxes() {
     // Sec. 3.3: AND (IFD x skin, eq. 11) with N/2 contours tracks better
-    // than one cue with N. Measured (quick), centre / outline / lost: AND
-    // N=50 3.63 / 5.25 / 0 % vs IFD N=100 21.5 / 16.1 / 24 %; AND N=100
-    // 2.63 / 5.08 / 0 % vs IFD N=200 36.8 / 27.1 / 39 % (before the engine
-    // port: 3.11 / 4.12 vs 27.2 / 19.5 / 24 %, 2.28 / 4.06 vs 32.6 / 24.0
-    // / 30 %).
+    // than one cue with N. With the face the only moving object (default)
+    // the IFD contour tracks as well: AND at N/2 has the lower centre
+    // error (quick 3.97 vs 6.04 px at N = 100, 2.54 vs 5.24 at N = 200)
+    // but not the lower outline distance (4.63 vs 4.64, 5.25 vs 4.49 px),
+    // both lose nothing. With two moving boxes (`movers-2`) the IFD alone
+    // follows them and AND wins by far (3.63 / 5.25 / 0 % vs 21.5 / 16.1 /
+    // 24 %; 2.63 / 5.08 / 0 % vs 36.8 / 27.1 / 39 %).
     for n in [100, 200] {
         let and = cell(Representation::Contour, Cue::And, n / 2);
         let ifd = cell(Representation::Contour, Cue::Ifd, n);
         println!("N={n}: {and:?}\n      {ifd:?}");
-        assert!(and.centre <= 5.0, "AND N={}: {and:?}", n / 2);
-        assert!(and.outline <= 6.0, "AND N={}: {and:?}", n / 2);
-        assert_eq!(and.loss, 0.0, "AND N={}: {and:?}", n / 2);
+        assert!(and.centre >= 1.0 && and.centre <= 6.0, "{and:?}");
+        assert!(and.outline >= 2.0 && and.outline <= 7.0, "{and:?}");
+        assert_eq!(and.loss, 0.0, "{and:?}");
+        assert!(ifd.centre >= 3.0 && ifd.centre <= 12.0, "{ifd:?}");
+        assert!(ifd.loss <= 0.05, "{ifd:?}");
+        assert!(and.centre <= 0.8 * ifd.centre, "{and:?} vs {ifd:?}");
+        assert!(and.outline >= 0.8 * ifd.outline, "{and:?} vs {ifd:?}");
+    }
+    assert!(!result().verdict(Claim::AndHalfBeatsIfd).holds);
+    let keys = [
+        key(Representation::Contour, Cue::And, 50),
+        key(Representation::Contour, Cue::Ifd, 100),
+        key(Representation::Contour, Cue::And, 100),
+        key(Representation::Contour, Cue::Ifd, 200),
+    ];
+    let (m, _) = grid_of(&reading("movers-2"), &keys, false);
+    for pair in m.chunks(2) {
+        let (and, ifd) = (pair[0], pair[1]);
+        println!("movers-2: {and:?}\n          {ifd:?}");
+        assert!(
+            and.centre <= 6.0 && and.outline <= 7.0 && and.loss == 0.0,
+            "{and:?}"
+        );
         assert!(and.centre <= 0.5 * ifd.centre, "{and:?} vs {ifd:?}");
         assert!(and.outline <= 0.5 * ifd.outline, "{and:?} vs {ifd:?}");
-        assert!(and.loss < ifd.loss, "{and:?} vs {ifd:?}");
+        assert!(ifd.loss >= 0.1 && ifd.loss <= 0.7, "{ifd:?}");
     }
 }
 
 #[test]
-fn against_the_skin_alone_the_claim_is_printed_not_asserted() {
+fn sec33_against_the_skin_alone_neither_wins() {
     // Against the skin cue alone at N the comparison goes either way: quick
-    // (60 frames, 2 runs) skin N=100 2.92 / 4.24 px beats AND N=50 3.63 /
-    // 5.25 px; full (150 frames, 10 runs) skin N=100 8.36 / 9.95 px beats
-    // AND N=50 13.61 / 14.43 px, whose mean is one run that loses the face
-    // (before the engine port AND won at full scale, 4.70 / 7.53 against
-    // 8.04 / 9.35 px: one or two lost runs decide it). Both track: that
-    // much is asserted.
+    // skin N=100 2.83 / 3.57 px vs AND N=50 3.97 / 4.63 px; skin N=200
+    // 2.39 / 3.32 vs AND N=100 2.54 / 5.25 px. Both track: that much, and
+    // that AND's outline is not better, is asserted.
     for n in [100, 200] {
         let and = cell(Representation::Contour, Cue::And, n / 2);
         let skin = cell(Representation::Contour, Cue::Skin, n);
         println!("N={n}: {and:?}\n      {skin:?}");
-        assert!(skin.centre <= 8.0 && and.centre <= 8.0, "{and:?} {skin:?}");
+        assert!(skin.centre <= 6.0 && and.centre <= 6.0, "{and:?} {skin:?}");
+        assert!(skin.loss == 0.0 && and.loss == 0.0, "{and:?} {skin:?}");
+        assert!(and.outline >= skin.outline, "{and:?} {skin:?}");
     }
-}
-
-#[test]
-fn not_reproduced_the_or_point_cloud_follows_the_moving_distractors() {
-    // Sec. 3.1 tracks a face with points weighted by OR (eq. 9) with
-    // lambda = 1/N: IFD + skin / N is the IFD to within 2 %, and the IFD
-    // alone follows whatever moves. In our clutter (two moving non-skin
-    // boxes) the OR cloud is off the face most of the time, like the IFD
-    // cloud; the AND cloud tracks. Measured (quick), centre / lost: OR N=50
-    // 86.1 px / 88 %, IFD N=50 57.2 / 87 %, AND N=50 4.86 / 0 % (before the
-    // engine port 55.6 / 87 %, 81.7 / 92 %, 4.36 / 0 %).
-    let or = cell(Representation::Points, Cue::Or, 50);
-    let ifd = cell(Representation::Points, Cue::Ifd, 50);
-    let and = cell(Representation::Points, Cue::And, 50);
-    println!("{or:?}\n{ifd:?}\n{and:?}");
-    assert!(or.centre > 30.0 && or.loss > 0.5, "{or:?}");
-    assert!(ifd.centre > 30.0 && ifd.loss > 0.5, "{ifd:?}");
-    assert!(and.centre <= 7.0 && and.loss <= 0.05, "{and:?}");
+    assert!(!result().verdict(Claim::AndHalfBeatsSkin).holds);
 }
 
 /// Runs of the re-initialisation and crossing claims: their outcome is
@@ -157,45 +291,41 @@ fn share(n: usize, of: &CrossingCount) -> f64 {
 }
 
 #[test]
-fn cavq_moves_the_set_onto_the_entering_object() {
+fn sec4_cavq_moves_the_set_onto_the_entering_object_at_once() {
     // Sec. 4: a set "in pause position has to move and track the new
     // object instantaneously"; c-AVQ shifts it onto the winning cluster of
-    // the border stripes. Read over runs, "instantaneously" as within 15
-    // frames of the entry (half a second at 30 fps): with c-AVQ at least a
-    // quarter of the runs lock on that fast (not most: our c-AVQ misses for
-    // the reasons in docs/reproduction.md), and more than without it;
-    // without c-AVQ the set stays on the face: at most a quarter of the
-    // runs reach the newcomer at all within the 45 quick frames (by
-    // diffusion). The OR cloud is already on the distractors (above): not
-    // asserted. Per-run numbers: docs/reproduction.md.
-    for key in &SIDE_TRACKERS[1..] {
+    // the border stripes. Read as within 15 frames of the entry (half a
+    // second at 30 fps). With the face the only other moving object
+    // (default) every side tracker locks on that fast in 14-15 of 16 runs
+    // with c-AVQ (points OR, the paper's point cloud: 2 6 3 2 2 5 2 40 4
+    // 11 2 11 2 - 4 4); without it at most 3 of 16 reach the hand at all
+    // (by diffusion, after 21-31 frames), none within 15. Bound: with at
+    // least 12 of 16 within 15 frames; without at most 4 of 16 at all and
+    // none within 15.
+    for key in &SIDE_TRACKERS {
         let with = lock_on(*key, true);
         let without = lock_on(*key, false);
         println!("{}: with {with:?}\n   without {without:?}", key.label());
         let fast = |v: &[Option<usize>]| v.iter().flatten().filter(|&&k| k <= 15).count();
         let locked = without.iter().flatten().count();
-        assert!(4 * fast(&with) >= SIDE_RUNS, "{}: {with:?}", key.label());
-        assert!(
-            fast(&with) > fast(&without),
-            "{}: {with:?} {without:?}",
-            key.label()
-        );
-        assert!(4 * locked <= SIDE_RUNS, "{}: {without:?}", key.label());
+        assert!(fast(&with) >= 12, "{}: {with:?}", key.label());
+        assert_eq!(fast(&without), 0, "{}: {without:?}", key.label());
+        assert!(locked <= 4, "{}: {without:?}", key.label());
     }
 }
 
 #[test]
-fn priority_ifd_keeps_crossing_contours_apart_in_some_runs() {
-    // Sec. 5: with the priority-subtracted IFD (eq. 15) two crossing
-    // objects are tracked "at different direction". Frames after the
-    // crossing (35 a run; kept / swapped / merged / lost per run in
-    // docs/reproduction.md). Partly reproduced: a run either keeps both
-    // identities for most of those frames or loses them at the crossing,
-    // so the claim counts runs. With priority, at least one run in eight
-    // keeps both identities in over half of the frames after the crossing;
-    // without it no run does, and both sets follow the object in front
-    // (pooled: kept <= 5 %, merged >= 80 %). The OR point clouds are lost
-    // either way (not reproduced; pooled lost >= 90 %).
+fn sec5_priority_ifd_keeps_crossing_objects_apart() {
+    // Sec. 5 (Fig. 6, point clouds): with the priority-subtracted IFD
+    // (eq. 15) two crossing objects are tracked "at different direction".
+    // Frames after the crossing (35 a run). The paper's point clouds (OR,
+    // N = 50) keep both identities in 83 % of the pooled frames with
+    // priority (15 of 16 runs over half), 0 % without (97 % merged):
+    // reproduced. The contours (AND, N = 100) keep them in 7 runs of 16
+    // (pooled 41 %), none without (99 % merged): partly. Bound: points OR
+    // pooled kept in [0.7, 0.95] with, <= 0.05 and merged >= 0.8 without,
+    // at least 12 runs over half with; contour at least 4 runs over half
+    // with, none without, pooled kept <= 0.05 and merged >= 0.8 without.
     for key in SIDE_TRACKERS {
         println!(
             "{}: with {:?}\n   without {:?}",
@@ -204,25 +334,31 @@ fn priority_ifd_keeps_crossing_contours_apart_in_some_runs() {
             crossings(key, false)
         );
     }
-    let contour = SIDE_TRACKERS[2];
     let kept_most = |runs: &[CrossingCount]| runs.iter().filter(|c| 2 * c.kept > c.total()).count();
-    let (with, without) = (crossings(contour, true), crossings(contour, false));
-    let (pooled_with, pooled_without) = (pooled(&with), pooled(&without));
+    let points = SIDE_TRACKERS[0];
+    let (with, without) = (crossings(points, true), crossings(points, false));
+    let (pw, pwo) = (pooled(&with), pooled(&without));
     println!(
-        "contour: runs keeping most frames {} with, {} without; pooled with {pooled_with:?}, without {pooled_without:?}",
+        "points OR: {} runs over half; pooled with {pw:?}, without {pwo:?}",
+        kept_most(&with)
+    );
+    assert!(
+        share(pw.kept, &pw) >= 0.7 && share(pw.kept, &pw) <= 0.95,
+        "{pw:?}"
+    );
+    assert!(kept_most(&with) >= 12, "{with:?}");
+    assert!(share(pwo.kept, &pwo) <= 0.05, "{pwo:?}");
+    assert!(share(pwo.merged, &pwo) >= 0.8, "{pwo:?}");
+    let contour = SIDE_TRACKERS[2];
+    let (with, without) = (crossings(contour, true), crossings(contour, false));
+    let (pw, pwo) = (pooled(&with), pooled(&without));
+    println!(
+        "contour: runs keeping most frames {} with, {} without; pooled with {pw:?}, without {pwo:?}",
         kept_most(&with),
         kept_most(&without)
     );
-    assert!(8 * kept_most(&with) >= SIDE_RUNS, "{with:?}");
+    assert!(kept_most(&with) >= 4, "{with:?}");
     assert_eq!(kept_most(&without), 0, "{without:?}");
-    assert!(
-        share(pooled_without.kept, &pooled_without) <= 0.05,
-        "{pooled_without:?}"
-    );
-    assert!(
-        share(pooled_without.merged, &pooled_without) >= 0.8,
-        "{pooled_without:?}"
-    );
-    let or = pooled(&crossings(SIDE_TRACKERS[0], true));
-    assert!(share(or.lost, &or) >= 0.9, "{or:?}");
+    assert!(share(pwo.kept, &pwo) <= 0.05, "{pwo:?}");
+    assert!(share(pwo.merged, &pwo) >= 0.8, "{pwo:?}");
 }

@@ -40,7 +40,7 @@ use rayon::prelude::*;
 
 use crate::driver::Paper;
 use crate::experiment::{ExperimentError, MAX_FRAMES, MAX_RUNS, write_text};
-use crate::scenes::{FrameTruth, Outline, SceneStream, WebcamScene};
+use crate::scenes::{FrameTruth, Outline, SceneStream, SkinShape, WebcamScene};
 use bayestrack_options::{Options, above, inside, options};
 use bayestrack_otb::Table;
 use bayestrack_otb::plot::{Series, line_chart};
@@ -49,11 +49,13 @@ const ID: &str = "condensation";
 
 mod options;
 mod paper;
+mod readings;
 mod report;
 mod score;
 mod simulate;
 pub use options::*;
 pub use paper::*;
+pub use readings::*;
 use report::*;
 pub use score::*;
 pub use simulate::*;
@@ -80,7 +82,7 @@ impl Paper for CondensationExperiment {
         CondensationConfig::paper()
     }
     fn jobs(c: &CondensationConfig) -> usize {
-        GridKey::all().len() * c.runs + SIDE_TRACKERS.len() * 4 * c.runs + 1
+        GridKey::all().len() * c.runs + SIDE_TRACKERS.len() * 4 * c.runs + c.runs + 1
     }
     fn prepare(c: &CondensationConfig, jobs: &[usize]) -> Result<Self::Shared, ExperimentError> {
         prepare(c, jobs)
@@ -106,7 +108,8 @@ impl Paper for CondensationExperiment {
         done: Vec<Done>,
         dir: &Path,
     ) -> Result<Vec<Table>, ExperimentError> {
-        let result = assemble(config, done)?;
+        let mut result = assemble(config, done)?;
+        result.readings = run_readings(config, false)?;
         write_outputs(&result, dir)?;
         Ok(result.tables())
     }
@@ -126,6 +129,14 @@ impl Paper for CondensationExperiment {
                     let _ = writeln!(out, "grid,{row},{col},{v:.17e}");
                 }
             }
+        }
+        let h = r.hand_summary();
+        for (col, v) in [
+            ("centre", h.centre),
+            ("outline", h.outline),
+            ("lost", h.loss),
+        ] {
+            let _ = writeln!(out, "hand,{HAND_LABEL},{col},{v:.17e}");
         }
         for (i, rr) in r.reinit.iter().enumerate() {
             let _ = writeln!(

@@ -46,6 +46,18 @@ impl Cue {
     }
 }
 
+/// How eq. 9's OR weighs a point (see
+/// [`CondensationConfig::or_weighting`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OrWeighting {
+    /// `IFD + lambda skin` over the whole window.
+    Raw,
+    /// The same over the window's subtracted pixels only.
+    Subtracted,
+}
+
+bayestrack_options::choice! { OrWeighting { Raw = "raw", Subtracted = "subtracted" } }
+
 /// Point cloud or contour particles.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum Representation {

@@ -249,12 +249,17 @@ impl CondensationResult {
 
     /// Every table, in print order.
     pub fn tables(&self) -> Vec<Table> {
-        vec![
+        let mut v = vec![
             self.grid_table(),
             self.claim_table(),
+            self.hand_table(),
             self.reinit_table(),
             self.crossing_table(),
-        ]
+        ];
+        if !self.readings.is_empty() {
+            v.push(readings_table(self));
+        }
+        v
     }
 }
 
@@ -315,6 +320,7 @@ pub(super) fn write_outputs(
         ("claim.csv", result.claim_table()),
         ("reinit.csv", result.reinit_table()),
         ("crossing.csv", result.crossing_table()),
+        ("hand.csv", result.hand_table()),
     ] {
         write_text(&dir.join(name), &table.to_csv())?;
     }
@@ -390,6 +396,9 @@ pub(super) fn write_outputs(
         "distance (px)",
         &reinit,
     )?;
+    if !result.readings.is_empty() {
+        write_text(&dir.join("readings.csv"), &readings_table(result).to_csv())?;
+    }
     let png = "particles_frame.png";
     write_png(dir.join(png), result.snapshot.image.view()).map_err(|e| failed("figure", e))?;
     write_text(

@@ -17,6 +17,7 @@ pub(super) enum Single {
 
 impl Single {
     pub(super) fn new(
+        config: &CondensationConfig,
         representation: Representation,
         cue: Cue,
         particles: usize,
@@ -24,11 +25,12 @@ impl Single {
         seed: u64,
     ) -> Result<Self, ExperimentError> {
         let what = format!("{} {} N={particles}", representation.name(), cue.name());
+        let cues = config.cue_set(representation, cue, particles);
         Ok(match representation {
             Representation::Points => Single::Points(
                 PointCloudTracker::new(
                     PointCloudConfig {
-                        cues: cue.cue_set(particles),
+                        cues,
                         avq,
                         ..PointCloudConfig::paper(particles)
                     },
@@ -39,7 +41,7 @@ impl Single {
             Representation::Contour => Single::Contour(
                 ContourTracker::new(
                     ContourConfig {
-                        cues: cue.cue_set(particles),
+                        cues,
                         avq,
                         ..ContourConfig::face(particles)
                     },
@@ -106,22 +108,65 @@ pub(super) fn track(
     outlines: &[Outline],
 ) -> Result<TrackRun, ExperimentError> {
     let what = format!("{} run {run}", key.label());
-    let mut t = Single::new(key.representation, key.cue, key.particles, None, run as u64)?;
+    let t = Single::new(
+        config,
+        key.representation,
+        key.cue,
+        key.particles,
+        None,
+        run as u64,
+    )?;
+    track_with(t, &what, config, frames, truth, outlines)
+}
+
+/// Sec. 3.2: the hand contour (IFD only, `N = 200`, 45 control points,
+/// [`ContourConfig::hand`]; the template the ellipse inscribed in the
+/// hand's first box) through the hand scene.
+pub(super) fn hand_run(
+    config: &CondensationConfig,
+    run: usize,
+    scene: &Rendered,
+) -> Result<TrackRun, ExperimentError> {
+    let what = format!("{} run {run}", HAND_LABEL);
+    let t = Single::Contour(
+        ContourTracker::new(ContourConfig::hand(), run as u64).map_err(|e| failed(&what, e))?,
+    );
+    track_with(
+        t,
+        &what,
+        config,
+        &scene.frames,
+        &scene.truth,
+        &scene.outlines,
+    )
+}
+
+/// The row label of the sec. 3.2 hand run.
+pub const HAND_LABEL: &str = "hand contour IFD N=200 n=45";
+
+fn track_with(
+    mut t: Single,
+    what: &str,
+    config: &CondensationConfig,
+    frames: &[Image<u8>],
+    truth: &[FrameTruth],
+    outlines: &[Outline],
+) -> Result<TrackRun, ExperimentError> {
     let target = |k: usize| {
         truth[k]
             .target()
-            .ok_or_else(|| failed(&what, format!("frame {k} has no target")))
+            .ok_or_else(|| failed(what, format!("frame {k} has no target")))
     };
     t.tracker()
         .init(frames[0].view(), target(0)?.bbox)
-        .map_err(|e| failed(&what, e))?;
+        .map_err(|e| failed(what, e))?;
     let mut out = TrackRun::default();
     for (k, frame) in frames.iter().enumerate().skip(1) {
         let start = Instant::now();
         let e = t
             .tracker()
             .step(frame.view())
-            .map_err(|e| failed(&what, format!("frame {k}: {e}")))?;
+            .map_err(|e| failed(what, format!("frame {k}: {e}")))?;
         if config.timing {
             out.seconds += start.elapsed().as_secs_f64();
         }
@@ -164,17 +209,31 @@ pub(super) fn render(scene: &WebcamScene, seed: u64) -> Result<Rendered, Experim
     Ok(out)
 }
 
-/// The tracking scene of run `r`.
+/// The tracking scene.
 pub(super) fn tracking_scene(config: &CondensationConfig) -> WebcamScene {
-    WebcamScene {
+    config.scene(WebcamScene {
         frames: config.frames,
         ..WebcamScene::default()
+    })
+}
+
+/// The hand scene of sec. 3.2: the tracking scene with the hand as the
+/// target.
+pub(super) fn hand_scene(config: &CondensationConfig) -> WebcamScene {
+    WebcamScene {
+        target: SkinShape::Hand,
+        ..tracking_scene(config)
     }
+}
+
+/// The crossing scene.
+pub(super) fn crossing_scene(config: &CondensationConfig) -> WebcamScene {
+    config.scene(WebcamScene::crossing())
 }
 
 /// The entering scene, cut `reinit_frames` after the entry.
 pub(super) fn entering_scene(config: &CondensationConfig) -> (WebcamScene, usize) {
-    let mut s = WebcamScene::entering();
+    let mut s = config.scene(WebcamScene::entering());
     let entry = match s.second {
         crate::scenes::SecondObject::Entering { frame } => frame,
         _ => 0,
@@ -214,6 +273,7 @@ pub(super) fn reinit_run(
         if avq { "c-AVQ" } else { "plain" }
     );
     let mut t = Single::new(
+        config,
         key.representation,
         key.cue,
         key.particles,
@@ -306,11 +366,11 @@ pub(super) fn crossing_run(
     let n = key.particles;
     let object = match key.representation {
         Representation::Points => ObjectConfig::Points(PointCloudConfig {
-            cues: key.cue.cue_set(n),
+            cues: config.cue_set(key.representation, key.cue, n),
             ..PointCloudConfig::paper(n)
         }),
         Representation::Contour => ObjectConfig::Contour(ContourConfig {
-            cues: key.cue.cue_set(n),
+            cues: config.cue_set(key.representation, key.cue, n),
             ..ContourConfig::face(n)
         }),
     };
@@ -428,18 +488,23 @@ pub struct CondensationResult {
     pub reinit: Vec<ReinitRun>,
     /// Crossing runs (representation x priority x seed).
     pub crossing: Vec<CrossingRun>,
+    /// The sec. 3.2 hand runs, one per seed.
+    pub hand: Vec<TrackRun>,
+    /// The readings' runs (`readings=true`), in [`READINGS`] order.
+    pub readings: Vec<ReadingResult>,
     /// Contour particles on one frame of run 0.
     pub snapshot: ParticleSnapshot,
 }
 
 /// What job `j` is: the grid runs key-major (`frames.csv`'s order), then
 /// per run the side trackers' re-initialisation and crossing runs, then the
-/// particle snapshot of run 0.
+/// hand run of each run, then the particle snapshot of run 0.
 #[derive(Debug, Clone, Copy)]
 pub(super) enum Job {
     Grid(GridKey, usize),
     Reinit(GridKey, bool, usize),
     Crossing(GridKey, bool, usize),
+    Hand(usize),
     Snapshot,
 }
 
@@ -453,7 +518,12 @@ pub(super) fn job(config: &CondensationConfig, j: usize) -> Job {
     let side = j - grid;
     let per_run = SIDE_TRACKERS.len() * 4;
     if side >= per_run * config.runs {
-        return Job::Snapshot;
+        let hand = side - per_run * config.runs;
+        return if hand < config.runs {
+            Job::Hand(hand)
+        } else {
+            Job::Snapshot
+        };
     }
     let (r, i) = (side / per_run, side % per_run);
     let key = SIDE_TRACKERS[i / 4];
@@ -474,6 +544,8 @@ pub enum Done {
     Reinit(ReinitRun),
     /// A crossing run.
     Crossing(CrossingRun),
+    /// A sec. 3.2 hand run.
+    Hand(TrackRun),
     /// The particle snapshot.
     Snapshot(Box<ParticleSnapshot>),
 }
@@ -500,9 +572,9 @@ pub(super) mod packed_image {
     }
 }
 
-/// The scenes a run's jobs track: the tracking, entering and crossing
-/// scenes.
-pub(super) type Scenes = [Rendered; 3];
+/// The scenes a run's jobs track: the tracking, entering, crossing and
+/// hand scenes.
+pub(super) type Scenes = [Rendered; 4];
 
 /// The scenes of the runs one process's jobs track, rendered once.
 pub struct RenderedRuns(Vec<Option<Scenes>>);
@@ -515,12 +587,15 @@ pub(super) fn prepare(
     let mut needed = vec![false; config.runs];
     for &j in jobs {
         match job(config, j) {
-            Job::Grid(_, r) | Job::Reinit(_, _, r) | Job::Crossing(_, _, r) => needed[r] = true,
+            Job::Grid(_, r) | Job::Reinit(_, _, r) | Job::Crossing(_, _, r) | Job::Hand(r) => {
+                needed[r] = true
+            }
             Job::Snapshot => needed[0] = true,
         }
     }
     let (enter, _) = entering_scene(config);
-    let cross = WebcamScene::crossing();
+    let cross = crossing_scene(config);
+    let hand = hand_scene(config);
     needed
         .par_iter()
         .enumerate()
@@ -529,12 +604,12 @@ pub(super) fn prepare(
                 return Ok(None);
             }
             let s = config.scene_seed + r as u64;
-            // one run per group: its three scenes in parallel
-            let (tracking, (entering, crossing)) = rayon::join(
-                || render(&tracking_scene(config), s),
+            // one run per group: its four scenes in parallel
+            let ((tracking, hand), (entering, crossing)) = rayon::join(
+                || rayon::join(|| render(&tracking_scene(config), s), || render(&hand, s)),
                 || rayon::join(|| render(&enter, s), || render(&cross, s)),
             );
-            Ok(Some([tracking?, entering?, crossing?]))
+            Ok(Some([tracking?, entering?, crossing?, hand?]))
         })
         .collect::<Result<_, _>>()
         .map(RenderedRuns)
@@ -547,7 +622,7 @@ pub(super) fn groups(config: &CondensationConfig, jobs: &[usize]) -> Vec<Vec<usi
     let mut groups = vec![Vec::new(); config.runs];
     for &j in jobs {
         let r = match job(config, j) {
-            Job::Grid(_, r) | Job::Reinit(_, _, r) | Job::Crossing(_, _, r) => r,
+            Job::Grid(_, r) | Job::Reinit(_, _, r) | Job::Crossing(_, _, r) | Job::Hand(r) => r,
             Job::Snapshot => 0,
         };
         groups[r].push(j);
@@ -564,7 +639,7 @@ pub(super) fn run_job(
 ) -> Result<Done, ExperimentError> {
     let job = job(config, j);
     let r = match job {
-        Job::Grid(_, r) | Job::Reinit(_, _, r) | Job::Crossing(_, _, r) => r,
+        Job::Grid(_, r) | Job::Reinit(_, _, r) | Job::Crossing(_, _, r) | Job::Hand(r) => r,
         Job::Snapshot => 0,
     };
     let scenes = scenes
@@ -588,6 +663,7 @@ pub(super) fn run_job(
         Job::Crossing(key, pr, r) => {
             Done::Crossing(crossing_run(key, pr, config, r, &scenes[2], aligned)?)
         }
+        Job::Hand(r) => Done::Hand(hand_run(config, r, &scenes[3])?),
         Job::Snapshot => Done::Snapshot(Box::new(snapshot(&scenes[0], config.frames / 2)?)),
     })
 }
@@ -603,6 +679,7 @@ pub(super) fn assemble(
         .collect();
     let mut reinit = Vec::new();
     let mut crossing = Vec::new();
+    let mut hand = Vec::new();
     let mut snapshot = None;
     for (j, d) in done.into_iter().enumerate() {
         match (job(config, j), d) {
@@ -613,6 +690,7 @@ pub(super) fn assemble(
             }
             (_, Done::Reinit(r)) => reinit.push(r),
             (_, Done::Crossing(c)) => crossing.push(c),
+            (_, Done::Hand(h)) => hand.push(h),
             (_, Done::Snapshot(s)) => snapshot = Some(*s),
             _ => return Err(failed("jobs", format!("job {j} out of place"))),
         }
@@ -622,6 +700,8 @@ pub(super) fn assemble(
         grid,
         reinit,
         crossing,
+        hand,
+        readings: Vec::new(),
         snapshot: snapshot.ok_or_else(|| failed("particle figure", "no snapshot"))?,
     })
 }
@@ -637,7 +717,9 @@ pub fn run(
     progress: bool,
 ) -> Result<CondensationResult, ExperimentError> {
     let done = crate::driver::run_all::<CondensationExperiment>(config, None, progress)?;
-    assemble(config, done)
+    let mut result = assemble(config, done)?;
+    result.readings = run_readings(config, progress)?;
+    Ok(result)
 }
 
 /// One row of `frames.csv`: one frame of one grid run.

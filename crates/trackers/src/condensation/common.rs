@@ -44,6 +44,20 @@ pub enum CueSet {
         /// The balancing coefficient `lambda` (the paper: `1/N`).
         lambda: f64,
     },
+    /// Disjunctive fusion over the *subtracted pixels* only (a reading of
+    /// eq. 9, whose sum runs over "the particle's point `(x_P, y_P) in
+    /// dP_i` of both the subtracted pixel and the associated skin-colour
+    /// point"): a pixel of the particle's support counts when its IFD
+    /// exceeds `threshold`, and then adds `IFD + lambda skin`; the weight
+    /// is that sum over the support's size. Point clouds only (the paper
+    /// uses eq. 9 with points, sec. 3.1); a contour refuses it.
+    OrSubtracted {
+        /// The balancing coefficient `lambda` (the paper: `1/N`).
+        lambda: f64,
+        /// The IFD level (in `[0, 1]` grey) above which a pixel is
+        /// "subtracted".
+        threshold: f64,
+    },
 }
 
 impl CueSet {
@@ -52,24 +66,35 @@ impl CueSet {
         !matches!(self, CueSet::Ifd)
     }
 
-    /// Short label: `ifd`, `skin`, `or`, `and`.
+    /// Short label: `ifd`, `skin`, `or`, `and`, `or-subtracted`.
     pub fn label(self) -> &'static str {
         match self {
             CueSet::Ifd => "ifd",
             CueSet::Skin => "skin",
             CueSet::Or { .. } => "or",
             CueSet::And { .. } => "and",
+            CueSet::OrSubtracted { .. } => "or-subtracted",
         }
     }
 
     pub(super) fn check(self) -> Result<()> {
-        if let CueSet::Or { lambda } | CueSet::And { lambda } = self
+        if let CueSet::Or { lambda } | CueSet::And { lambda } | CueSet::OrSubtracted { lambda, .. } =
+            self
             && !(lambda.is_finite() && lambda > 0.0)
         {
             return Err(TrackerError::InvalidParameter {
                 name: "lambda",
                 value: lambda,
                 reason: "must be finite and positive (use CueSet::Ifd for lambda = 0)",
+            });
+        }
+        if let CueSet::OrSubtracted { threshold, .. } = self
+            && !(threshold.is_finite() && (0.0..1.0).contains(&threshold))
+        {
+            return Err(TrackerError::InvalidParameter {
+                name: "threshold",
+                value: threshold,
+                reason: "the subtracted-pixel IFD level must be in [0, 1)",
             });
         }
         Ok(())
@@ -99,7 +124,84 @@ impl CueSet {
                     .with(1.0, ifd)?
                     .with(lambda, skin.ok_or_else(need)?)?,
             ),
+            CueSet::OrSubtracted { .. } => {
+                return Err(TrackerError::InvalidParameter {
+                    name: "cues",
+                    value: f64::NAN,
+                    reason: "OR over the subtracted pixels weighs point-cloud windows only",
+                });
+            }
         })
+    }
+}
+
+/// [`CueSet::OrSubtracted`] on a point's support window: the mean over the
+/// window of `[dP > threshold] (dP + lambda C)`, as `ln(mean + floor)`.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct SubtractedOr {
+    pub(super) skin: bayestrack_appearance::SkinModel,
+    pub(super) lambda: f64,
+    pub(super) threshold: f32,
+}
+
+impl Cue for SubtractedOr {
+    fn name(&self) -> &'static str {
+        "or-subtracted"
+    }
+
+    fn log_likelihood(
+        &self,
+        frame: &Frame<'_>,
+        candidate: &bayestrack_appearance::Candidate,
+        _scratch: &mut bayestrack_appearance::Scratch,
+    ) -> bayestrack_appearance::Result<f64> {
+        use bayestrack_appearance::{AppearanceError, Candidate};
+        let Candidate::Window(r) = candidate else {
+            return Err(AppearanceError::InvalidParameter {
+                name: "candidate",
+                value: "pose".to_string(),
+                reason: "OR over the subtracted pixels scores windows",
+            });
+        };
+        let ifd = frame.ifd.ok_or(AppearanceError::MissingPlane {
+            cue: "or-subtracted",
+            plane: "ifd",
+        })?;
+        let rgb = frame.rgb.ok_or(AppearanceError::MissingPlane {
+            cue: "or-subtracted",
+            plane: "rgb",
+        })?;
+        ifd.expect_channels("or-subtracted", 1)?;
+        rgb.expect_channels("or-subtracted", 3)?;
+        if r.right() > ifd.width()
+            || r.bottom() > ifd.height()
+            || (ifd.width(), ifd.height()) != (rgb.width(), rgb.height())
+            || r.area() == 0
+        {
+            return Err(AppearanceError::InvalidParameter {
+                name: "window",
+                value: format!("{r:?}"),
+                reason: "must be non-empty and inside the IFD and RGB planes",
+            });
+        }
+        let mut s = 0f64;
+        for y in r.y..r.bottom() {
+            let d = &ifd.row(y)[r.x..r.right()];
+            let c = &rgb.row(y)[3 * r.x..3 * r.right()];
+            for (&v, p) in d.iter().zip(c.chunks_exact(3)) {
+                if v > self.threshold {
+                    let skin = self
+                        .skin
+                        .score_rgb(bayestrack_image::Rgb::new(p[0], p[1], p[2]));
+                    s += f64::from(v) + self.lambda * f64::from(skin);
+                }
+            }
+        }
+        let mean = s / r.area() as f64;
+        if !mean.is_finite() {
+            return Err(AppearanceError::NonFinite { what: "IFD plane" });
+        }
+        Ok((mean + FLOOR).ln())
     }
 }
 
@@ -453,6 +555,68 @@ mod tests {
                 ..c
             }
             .validate()
+            .is_err()
+        );
+    }
+
+    #[test]
+    fn or_over_the_subtracted_pixels_adds_lambda_skin_where_the_ifd_passes() {
+        use bayestrack_appearance::{Candidate, Scratch, SkinModel};
+        use bayestrack_image::{Image, Rect, Rgb};
+        // An 8x4 frame: left half skin-coloured, right half blue; IFD 0.2
+        // in rows 0-1, 0.01 (under the 0.05 level) in rows 2-3.
+        let (skin, blue) = (Rgb::new(224, 172, 138), Rgb::new(40, 70, 200));
+        let mut rgb = Vec::new();
+        let mut ifd = Vec::new();
+        for y in 0..4 {
+            for x in 0..8 {
+                rgb.extend_from_slice(&if x < 4 { skin } else { blue }.to_array());
+                ifd.push(if y < 2 { 0.2f32 } else { 0.01 });
+            }
+        }
+        let rgb = Image::from_vec(8, 4, 3, rgb).unwrap();
+        let ifd = Image::from_vec(8, 4, 1, ifd).unwrap();
+        let frame = Frame::new().with_rgb(rgb.view()).with_ifd(ifd.view());
+        let model = SkinModel::new(0.066, 0.38, 0.05).unwrap();
+        let cue = SubtractedOr {
+            skin: model,
+            lambda: 0.5,
+            threshold: 0.05,
+        };
+        let c_skin = f64::from(model.score_rgb(skin));
+        let c_blue = f64::from(model.score_rgb(blue));
+        assert!(c_skin > 0.9 && c_blue < 1e-6, "{c_skin} {c_blue}");
+        let mut scratch = Scratch::new();
+        let mut score = |x, y, w, h| {
+            cue.log_likelihood(
+                &frame,
+                &Candidate::Window(Rect::new(x, y, w, h)),
+                &mut scratch,
+            )
+            .unwrap()
+        };
+        // Rows 0-1 pass: each pixel adds 0.2 + lambda C; rows 2-3 add 0.
+        let expect = |c: f64, share: f64| (share * (0.2 + 0.5 * c) + FLOOR).ln();
+        assert!((score(0, 0, 4, 2) - expect(c_skin, 1.0)).abs() < 1e-6);
+        assert!((score(4, 0, 4, 2) - expect(c_blue, 1.0)).abs() < 1e-6);
+        assert!((score(0, 0, 4, 4) - expect(c_skin, 0.5)).abs() < 1e-6);
+        assert!((score(0, 2, 4, 2) - FLOOR.ln()).abs() < 1e-9);
+        // The skin term is what tells the two halves apart.
+        assert!(score(0, 0, 4, 2) > score(4, 0, 4, 2) + 0.5);
+        assert!(
+            cue.log_likelihood(
+                &frame,
+                &Candidate::Window(Rect::new(6, 0, 4, 2)),
+                &mut scratch
+            )
+            .is_err()
+        );
+        assert!(
+            CueSet::OrSubtracted {
+                lambda: 0.02,
+                threshold: f64::NAN
+            }
+            .check()
             .is_err()
         );
     }

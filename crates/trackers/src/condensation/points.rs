@@ -24,8 +24,8 @@ use rand::{Rng, RngExt};
 
 use super::avq::{CAvq, CAvqConfig};
 use super::common::{
-    Condensation, CondensationReport, CueSet, FLOOR, NEEDS, Object, ObjectStep, channel_policy,
-    check_damping, check_particles, check_positive, second_order,
+    Condensation, CondensationReport, CueSet, FLOOR, NEEDS, Object, ObjectStep, SubtractedOr,
+    channel_policy, check_damping, check_particles, check_positive, second_order,
 };
 use crate::engine::StateModel;
 use crate::error::{Result, TrackerError};
@@ -135,7 +135,14 @@ impl PointModel {
         } else {
             None
         };
-        let cue = config.cues.build(IfdCue::new(FLOOR, 1)?, skin)?;
+        let cue: Box<dyn bayestrack_appearance::Cue + Send + Sync> = match config.cues {
+            CueSet::OrSubtracted { lambda, threshold } => Box::new(SubtractedOr {
+                skin: SkinModel::from_window(frame, rect, config.sigma_hs)?,
+                lambda,
+                threshold: threshold as f32,
+            }),
+            cues => cues.build(IfdCue::new(FLOOR, 1)?, skin)?,
+        };
         let (x0, y0) = (target.x - 1.0, target.y - 1.0);
         let particles = (0..config.particles)
             .map(|_| {
