@@ -352,7 +352,9 @@ fn flatten<const N: usize>(gs: &[Gaussian<N>]) -> (Vec<f64>, Vec<f64>) {
 /// array, or a sequence whose items are vectors or `None` (missing).
 fn read_zs(zs: &Bound<'_, PyAny>, m: usize) -> PyResult<(Vec<f64>, Vec<bool>)> {
     if let Ok(arr) = zs.cast::<PyArrayDyn<f64>>() {
-        let ro = arr.readonly();
+        let ro = arr
+            .try_readonly()
+            .map_err(|e| PyValueError::new_err(format!("zs cannot be read: {e}")))?;
         let view = ro.as_array();
         let shape = view.shape().to_vec();
         let ok = (shape.len() == 2 && shape[1] == m)
@@ -434,6 +436,14 @@ fn covs_array<'py>(py: Python<'py>, v: Vec<f64>, n: usize) -> PyResult<Bound<'py
 }
 
 // ------------------------------------------------------- KalmanFilter
+
+/// `(means, covariances, means_predicted, covariances_predicted)`.
+type FourArrays<'py> = (
+    Bound<'py, PyAny>,
+    Bound<'py, PyAny>,
+    Bound<'py, PyAny>,
+    Bound<'py, PyAny>,
+);
 
 /// The linear Kalman filter, with filterpy's `KalmanFilter` attributes
 /// (`x`, `P`, `F`, `H`, `Q`, `R`, `B`, `y`, `S`, `log_likelihood`) and
@@ -666,12 +676,7 @@ impl KalmanFilter {
         py: Python<'py>,
         zs: &Bound<'py, PyAny>,
         us: Option<&Bound<'py, PyAny>>,
-    ) -> PyResult<(
-        Bound<'py, PyAny>,
-        Bound<'py, PyAny>,
-        Bound<'py, PyAny>,
-        Bound<'py, PyAny>,
-    )> {
+    ) -> PyResult<FourArrays<'py>> {
         let (dim_x, dim_z) = (self.a.dim_x, self.a.dim_z);
         let (zs, present) = read_zs(zs, dim_z)?;
         let t = present.len();

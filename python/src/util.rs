@@ -46,14 +46,13 @@ pub type Res<T> = Result<T, Fail>;
 /// for everything else, with the Rust message.
 pub fn kalman_err(py: Python<'_>, e: &KalmanError) -> PyErr {
     let msg = e.to_string();
-    if matches!(e, KalmanError::NotPositiveDefinite { .. }) {
-        if let Ok(t) = py
+    if matches!(e, KalmanError::NotPositiveDefinite { .. })
+        && let Ok(t) = py
             .import("numpy.linalg")
             .and_then(|m| m.getattr("LinAlgError"))
             .and_then(|t| t.cast_into::<PyType>().map_err(PyErr::from))
-        {
-            return PyErr::from_type(t, msg);
-        }
+    {
+        return PyErr::from_type(t, msg);
     }
     PyValueError::new_err(msg)
 }
@@ -68,6 +67,17 @@ pub fn to_py_err(py: Python<'_>, f: Fail) -> PyErr {
 
 /// `numpy.asarray(obj, dtype=float64)` as (shape, row-major values).
 pub fn read_f64(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<(Vec<usize>, Vec<f64>)> {
+    // fast paths: a float64 array (no copy, no call into numpy) or a float
+    if let Ok(arr) = obj.cast::<PyArrayDyn<f64>>() {
+        let ro = arr
+            .try_readonly()
+            .map_err(|e| PyValueError::new_err(format!("{name} cannot be read: {e}")))?;
+        let view = ro.as_array();
+        return Ok((view.shape().to_vec(), view.iter().copied().collect()));
+    }
+    if let Ok(f) = obj.cast::<pyo3::types::PyFloat>() {
+        return Ok((vec![], vec![f.value()]));
+    }
     let py = obj.py();
     let np = py.import("numpy")?;
     let kw = PyDict::new(py);
@@ -78,7 +88,9 @@ pub fn read_f64(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<(Vec<usize>, Vec
     let arr = arr
         .cast_into::<PyArrayDyn<f64>>()
         .map_err(|_| PyValueError::new_err(format!("{name} is not a float64 array")))?;
-    let ro = arr.readonly();
+    let ro = arr
+        .try_readonly()
+        .map_err(|e| PyValueError::new_err(format!("{name} cannot be read: {e}")))?;
     let view = ro.as_array();
     Ok((view.shape().to_vec(), view.iter().copied().collect()))
 }
