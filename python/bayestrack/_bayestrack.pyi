@@ -1,0 +1,136 @@
+"""Type stubs of the compiled module ``bayestrack._bayestrack``."""
+
+from typing import Any, Callable, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+ArrayLike = npt.ArrayLike
+Array = npt.NDArray[np.float64]
+
+MAX_DIM_X: int
+MAX_DIM_Z: int
+
+class KalmanFilter:
+    """Linear Kalman filter with filterpy's attributes and methods."""
+
+    dim_x: int
+    dim_z: int
+    dim_u: int
+    x: Array
+    P: Array
+    Q: Array
+    R: Array
+    F: Array
+    H: Array
+    B: Optional[Array]
+    y: Array
+    S: Array
+    log_likelihood: float
+    def __init__(self, dim_x: int, dim_z: int, dim_u: int = 0, joseph: bool = True) -> None: ...
+    def predict(self, u: Optional[ArrayLike] = None) -> None: ...
+    def update(
+        self, z: Optional[ArrayLike], R: Optional[ArrayLike] = None, H: Optional[ArrayLike] = None
+    ) -> None: ...
+    def batch_filter(
+        self, zs: Union[ArrayLike, Sequence[Optional[ArrayLike]]], us: Optional[ArrayLike] = None
+    ) -> Tuple[Array, Array, Array, Array]: ...
+    def rts_smoother(
+        self,
+        Xs: ArrayLike,
+        Ps: ArrayLike,
+        Fs: Optional[Sequence[ArrayLike]] = None,
+        Qs: Optional[Sequence[ArrayLike]] = None,
+    ) -> Tuple[Array, Array]: ...
+
+class ExtendedKalmanFilter:
+    """Extended Kalman filter with filterpy's interface."""
+
+    dim_x: int
+    dim_z: int
+    dim_u: int
+    x: Array
+    P: Array
+    Q: Array
+    R: Array
+    F: Array
+    B: Optional[Array]
+    y: Array
+    S: Array
+    log_likelihood: float
+    iterations: int
+    def __init__(self, dim_x: int, dim_z: int, dim_u: int = 0, joseph: bool = True) -> None: ...
+    def predict(
+        self,
+        u: Optional[ArrayLike] = None,
+        fx: Optional[Callable[[Array], ArrayLike]] = None,
+        FJacobian: Optional[Callable[[Array], ArrayLike]] = None,
+    ) -> None: ...
+    def update(
+        self,
+        z: Optional[ArrayLike],
+        HJacobian: Callable[..., ArrayLike],
+        Hx: Callable[..., ArrayLike],
+        R: Optional[ArrayLike] = None,
+        args: Any = (),
+        hx_args: Any = (),
+    ) -> None: ...
+
+class IteratedExtendedKalmanFilter(ExtendedKalmanFilter):
+    """Iterated EKF: the update relinearises ``Hx`` about its iterate."""
+
+    def __init__(
+        self,
+        dim_x: int,
+        dim_z: int,
+        max_iterations: int = 5,
+        tolerance: float = 1e-12,
+        dim_u: int = 0,
+        joseph: bool = True,
+    ) -> None: ...
+
+class UnscentedKalmanFilter:
+    """Unscented Kalman filter with filterpy's interface."""
+
+    dim_x: int
+    dim_z: int
+    dt: float
+    fx: Callable[..., ArrayLike]
+    hx: Callable[..., ArrayLike]
+    vectorized: bool
+    sigma_parameters: Tuple[float, float, float]
+    x: Array
+    P: Array
+    Q: Array
+    R: Array
+    y: Array
+    S: Array
+    log_likelihood: float
+    def __init__(
+        self,
+        dim_x: int,
+        dim_z: int,
+        dt: float,
+        hx: Callable[..., ArrayLike],
+        fx: Callable[..., ArrayLike],
+        points: Any = None,
+        *,
+        alpha: Optional[float] = None,
+        beta: Optional[float] = None,
+        kappa: Optional[float] = None,
+        vectorized: bool = False,
+    ) -> None: ...
+    def predict(
+        self, dt: Optional[float] = None, fx: Optional[Callable[..., ArrayLike]] = None, **fx_args: Any
+    ) -> None: ...
+    def update(
+        self,
+        z: Optional[ArrayLike],
+        R: Optional[ArrayLike] = None,
+        hx: Optional[Callable[..., ArrayLike]] = None,
+        **hx_args: Any,
+    ) -> None: ...
+    def batch_filter(
+        self, zs: Union[ArrayLike, Sequence[Optional[ArrayLike]]]
+    ) -> Tuple[Array, Array]: ...
+    def rts_smoother(self, Xs: ArrayLike, Ps: ArrayLike) -> Tuple[Array, Array]: ...

@@ -1,0 +1,129 @@
+"""bayestrack against filterpy on the same loops (issue 29's speed goals).
+
+    python bench.py [--steps N]
+
+KF: 4-state constant velocity, 2 positions measured; filterpy's
+predict()/update() loop against bayestrack's batch_filter (no GIL, no Python
+per step) and against bayestrack's own predict()/update() loop.
+UKF: the 5-state coordinated-turn model of the oracle tests; filterpy's loop
+against bayestrack's loop with per-point and vectorised fx/hx.
+Prints the median of 5 repeats per variant and the speed-ups.
+"""
+
+import argparse
+import os
+import sys
+import statistics
+import time
+
+import numpy as np
+
+# python/ holds the package sources without the compiled module: import the
+# installed wheel, not ./bayestrack
+sys.path = [p for p in sys.path if os.path.abspath(p or ".") != os.path.dirname(os.path.abspath(__file__))]
+import bayestrack as bt  # noqa: E402
+
+try:
+    import filterpy.kalman as fpk
+except ImportError:  # pragma: no cover
+    fpk = None
+
+
+def timed(fn, repeats=5):
+    ts = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        ts.append(time.perf_counter() - t0)
+    return statistics.median(ts)
+
+
+def setup_kf(kf, dt=0.1):
+    kf.F = np.array([[1, dt, 0, 0], [0, 1, 0, 0], [0, 0, 1, dt], [0, 0, 0, 1.0]])
+    kf.H = np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]])
+    kf.Q = np.eye(4) * 1e-3
+    kf.R = np.eye(2) * 0.25
+    kf.x = np.zeros((4, 1))
+    kf.P = np.eye(4)
+    return kf
+
+
+def ct_f(x, dt):
+    px, py, v, th, w = x
+    return np.array([px + dt * v * np.cos(th), py + dt * v * np.sin(th), v, th + dt * w, w])
+
+
+def ct_f_vec(xs, dt):
+    px, py, v, th, w = xs.T
+    return np.stack([px + dt * v * np.cos(th), py + dt * v * np.sin(th), v, th + dt * w, w], axis=1)
+
+
+def rb_h(x):
+    return np.array([np.hypot(x[0], x[1]), np.arctan2(x[1], x[0])])
+
+
+def rb_h_vec(xs):
+    return np.stack([np.hypot(xs[:, 0], xs[:, 1]), np.arctan2(xs[:, 1], xs[:, 0])], axis=1)
+
+
+def setup_ukf(u):
+    u.Q = np.diag([0.01, 0.01, 0.05, 0.001, 0.002])
+    u.R = np.diag([0.5 ** 2, 0.01 ** 2])
+    u.x = np.array([10.0, 5.0, 2.0, 0.3, 0.05])
+    u.P = np.diag([1.0, 1.0, 0.5, 0.05, 0.01])
+    return u
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--steps", type=int, default=2000)
+    n = ap.parse_args().steps
+    rng = np.random.default_rng(0)
+    zs = np.cumsum(rng.normal(size=(n, 2)), axis=0)
+    rows = []
+
+    def loop(kf):
+        for z in zs:
+            kf.predict()
+            kf.update(z)
+
+    t_bt_batch = timed(lambda: setup_kf(bt.KalmanFilter(4, 2)).batch_filter(zs))
+    t_bt_loop = timed(lambda: loop(setup_kf(bt.KalmanFilter(4, 2))))
+    rows.append(("KF batch_filter (bayestrack)", t_bt_batch))
+    rows.append(("KF predict/update loop (bayestrack)", t_bt_loop))
+    if fpk:
+        t_fp = timed(lambda: loop(setup_kf(fpk.KalmanFilter(4, 2))))
+        rows.append(("KF predict/update loop (filterpy)", t_fp))
+
+    pts = (0.3, 2.0, -2.0)
+    uzs = [rb_h(np.array([10.0 + 0.5 * k, 5.0, 2.0, 0.3, 0.05])) for k in range(n // 4)]
+
+    def uloop(u):
+        for z in uzs:
+            u.predict()
+            u.update(z)
+
+    mk = lambda h, f, v: setup_ukf(  # noqa: E731
+        bt.UnscentedKalmanFilter(5, 2, 0.5, h, f, alpha=pts[0], beta=pts[1], kappa=pts[2], vectorized=v))
+    t_ukf = timed(lambda: uloop(mk(rb_h, ct_f, False)))
+    t_ukf_v = timed(lambda: uloop(mk(rb_h_vec, ct_f_vec, True)))
+    rows.append((f"UKF loop, per-point fx/hx (bayestrack, {len(uzs)} steps)", t_ukf))
+    rows.append((f"UKF loop, vectorised fx/hx (bayestrack, {len(uzs)} steps)", t_ukf_v))
+    if fpk:
+        sp = fpk.MerweScaledSigmaPoints(5, *pts)
+        t_ukf_fp = timed(lambda: uloop(setup_ukf(fpk.UnscentedKalmanFilter(5, 2, 0.5, rb_h, ct_f, sp))))
+        rows.append((f"UKF loop (filterpy, {len(uzs)} steps)", t_ukf_fp))
+
+    print(f"{'variant':58s} {'total ms':>9s} {'us/step':>9s}")
+    for name, t in rows:
+        steps = len(uzs) if "UKF" in name else n
+        print(f"{name:58s} {t * 1e3:9.2f} {t / steps * 1e6:9.2f}")
+    if fpk:
+        print(f"\nKF batch_filter vs filterpy loop: {t_fp / t_bt_batch:.1f}x (goal 20x)")
+        print(f"KF loop vs filterpy loop: {t_fp / t_bt_loop:.1f}x")
+        print(f"UKF vectorised vs filterpy: {t_ukf_fp / t_ukf_v:.1f}x (goal 10x)")
+        print(f"UKF per-point vs filterpy: {t_ukf_fp / t_ukf:.1f}x")
+
+
+if __name__ == "__main__":
+    main()

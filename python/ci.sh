@@ -1,0 +1,41 @@
+#!/usr/bin/env bash
+# CI step for the Python bindings: build the `bayestrack` wheel (dev profile,
+# the workspace's target/), install it into a virtual environment under
+# target/python-ci/ and run pytest on python/tests.
+# Skips (exit 0, with a message) when python3, venv/pip or maturin are not
+# available; fails when the build or a test fails.
+set -euo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+root="$(cd "$here/.." && pwd)"
+PY="${PYTHON:-python3}"
+skip() { echo "python/ci.sh: SKIPPED: $*"; exit 0; }
+
+command -v "$PY" >/dev/null 2>&1 || skip "no $PY on this machine"
+"$PY" -c 'import sys; sys.exit(sys.version_info < (3, 9))' || skip "$PY is older than 3.9"
+venv="$root/target/python-ci/venv"
+if [ ! -x "$venv/bin/python" ]; then
+    # system site packages: numpy, pytest, filterpy and maturin if installed
+    "$PY" -m venv --system-site-packages "$venv" >/dev/null 2>&1 || skip "$PY -m venv failed (python3-venv missing?)"
+fi
+vpy="$venv/bin/python"
+for mod in numpy pytest; do
+    "$vpy" -c "import $mod" 2>/dev/null || "$vpy" -m pip install -q "$mod" >/dev/null 2>&1 || skip "$mod is not installed and pip cannot install it"
+done
+if ! "$vpy" -m maturin --version >/dev/null 2>&1 && ! command -v maturin >/dev/null 2>&1; then
+    "$vpy" -m pip install -q "maturin>=1.5,<2" >/dev/null 2>&1 || skip "maturin is not installed and pip cannot install it"
+fi
+maturin_cmd=("$vpy" -m maturin)
+"$vpy" -m maturin --version >/dev/null 2>&1 || maturin_cmd=(maturin)
+
+start=$SECONDS
+wheels="$root/target/python-ci/wheels"
+rm -rf "$wheels"
+(cd "$here" && "${maturin_cmd[@]}" build --profile dev --interpreter "$vpy" -o "$wheels" --quiet)
+"$vpy" -m pip install -q --no-deps --force-reinstall "$wheels"/bayestrack-*.whl
+echo "python/ci.sh: wheel built and installed in $((SECONDS - start)) s"
+"$vpy" -c 'import filterpy' 2>/dev/null || echo "python/ci.sh: filterpy not installed: the filterpy agreement tests are skipped"
+# from tests/: python/bayestrack (sources without the compiled module) must
+# not shadow the installed package
+cd "$here/tests"
+"$vpy" -m pytest -q -p no:cacheprovider .
+echo "python/ci.sh: done in $((SECONDS - start)) s"
