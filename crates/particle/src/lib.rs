@@ -1,5 +1,7 @@
 #![doc = include_str!("../README.md")]
 
+mod apf;
+mod chunks;
 mod error;
 mod filter;
 mod proposal;
@@ -9,9 +11,13 @@ mod select;
 mod set;
 mod smc;
 
+pub use apf::{Auxiliary, AuxiliaryFilter};
 pub use error::{ParticleError, ProposalError, Result};
 pub use filter::{Degenerate, ParticleFilter, ResamplePolicy, ResampleTiming, StepReport};
-pub use proposal::{Bootstrap, KalmanProposal, LocalFilter, Model, Proposal, TransitionDensity};
+pub use proposal::{
+    Bootstrap, KalmanProposal, LocalFilter, Model, Proposal, ScalarModel, ScalarTransitionDensity,
+    TransitionDensity,
+};
 pub use resample::{Resampler, Resampling};
 pub use seed::{stream_rng, stream_seed};
 pub use set::{Finite, KalmanParticle, Particle, ParticleSet, log_sum_exp};
