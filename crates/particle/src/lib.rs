@@ -5,6 +5,7 @@ mod chunks;
 mod error;
 mod filter;
 mod proposal;
+mod rbpf;
 mod resample;
 mod seed;
 mod select;
@@ -18,6 +19,7 @@ pub use proposal::{
     Bootstrap, KalmanProposal, LocalFilter, Model, Proposal, ScalarModel, ScalarTransitionDensity,
     TransitionDensity,
 };
+pub use rbpf::{ConditionallyLinear, RaoBlackwellised, RbParticle};
 pub use resample::{Resampler, Resampling};
 pub use seed::{stream_rng, stream_seed};
 pub use set::{Finite, KalmanParticle, Particle, ParticleSet, log_sum_exp};
