@@ -163,6 +163,7 @@ impl AuxiliaryFilter {
             sum2 += w * w;
             mean.axpy(w, x, 1.0);
         }
+        set.scratch.ancestors = ancestors;
         set.particles = children;
         set.log_weights = inc;
         set.k = k;

@@ -11,6 +11,7 @@ mod seed;
 mod select;
 mod set;
 mod smc;
+mod smooth;
 
 pub use apf::{Auxiliary, AuxiliaryFilter};
 pub use error::{ParticleError, ProposalError, Result};
@@ -24,6 +25,7 @@ pub use resample::{Resampler, Resampling};
 pub use seed::{stream_rng, stream_seed};
 pub use set::{Finite, KalmanParticle, Particle, ParticleSet, log_sum_exp};
 pub use smc::Smc;
+pub use smooth::{FixedLag, ffbs, path_means};
 
 /// Re-exported so one dependency is enough: the filters, Gaussians and
 /// errors of the Kalman proposals (`KalmanError` is in [`Proposal`]).

@@ -46,13 +46,19 @@ pub trait ConditionallyLinear<const NN: usize, const NL: usize, const M: usize>:
     /// transition, its linear part written as a measurement of `xl_{k-1}`
     /// (`xn_k - fn = An xl_{k-1} + wn`). `An = 0` and `Qn = 0` make `xn`
     /// deterministic.
-    fn nonlinear(&self, k: usize, xn: &SVector<f64, NN>)
-    -> (SVector<f64, NN>, LinearMeasurement<NL, NN>);
+    fn nonlinear(
+        &self,
+        k: usize,
+        xn: &SVector<f64, NN>,
+    ) -> (SVector<f64, NN>, LinearMeasurement<NL, NN>);
     /// `(fl(xn_{k-1}), [Al(xn_{k-1}), Ql])`: the linear state's transition.
     fn linear(&self, k: usize, xn: &SVector<f64, NN>) -> (SVector<f64, NL>, LinearDynamics<NL>);
     /// `(h(xn_k), [C(xn_k), R])`: the measurement.
-    fn measurement(&self, k: usize, xn: &SVector<f64, NN>)
-    -> (SVector<f64, M>, LinearMeasurement<NL, M>);
+    fn measurement(
+        &self,
+        k: usize,
+        xn: &SVector<f64, NN>,
+    ) -> (SVector<f64, M>, LinearMeasurement<NL, M>);
 }
 
 /// A particle of the Rao-Blackwellised filter: a sampled nonlinear state

@@ -122,7 +122,8 @@ fn coupled_run(threads: usize, n: usize, chunk: usize) -> (Vec<[f64; 2]>, Vec<[f
     )
     .unwrap();
     let full_sensor = LinearMeasurement::new(Matrix1x2::new(1.0, 0.0), Matrix1::new(R)).unwrap();
-    let mut belief = Gaussian::new(Vector2::new(0.0, 1.0), Matrix2::new(0.5, 0.0, 0.0, 1.0)).unwrap();
+    let mut belief =
+        Gaussian::new(Vector2::new(0.0, 1.0), Matrix2::new(0.5, 0.0, 0.0, 1.0)).unwrap();
     let mut rng = stream_rng(&[3]);
     let parts: Vec<RbParticle<1, 1>> = (0..n)
         .map(|_| {
@@ -151,7 +152,10 @@ fn coupled_run(threads: usize, n: usize, chunk: usize) -> (Vec<[f64; 2]>, Vec<[f
             x = Vector2::new(x[0] + DT * x[1] + QN.sqrt() * w[0], x[1] + QL.sqrt() * w[1]);
             let z = Vector1::new(x[0] + R.sqrt() * w[2]);
             belief = kf.predict(&belief, &full_dyn).unwrap();
-            belief = kf.update(&belief, &full_sensor, Some(&z)).unwrap().posterior;
+            belief = kf
+                .update(&belief, &full_sensor, Some(&z))
+                .unwrap()
+                .posterior;
             let r = pf
                 .step(&mut set, &RaoBlackwellised::new(&m), &z, &[5, k])
                 .unwrap();

@@ -1,10 +1,11 @@
 //! The step's estimate, scalar models, the auxiliary particle filter,
-//! against the Kalman filter and the bootstrap filter.
+//! FFBS and fixed-lag smoothing, against the Kalman filter, the RTS smoother
+//! and the bootstrap filter.
 
 use bayestrack_kalman::{Gaussian, Kf, LinearDynamics, LinearMeasurement};
 use bayestrack_particle::{
-    Auxiliary, AuxiliaryFilter, Bootstrap, ParticleFilter, ParticleSet, ResamplePolicy, Resampling,
-    ScalarModel, ScalarTransitionDensity, StepReport, stream_rng,
+    Auxiliary, AuxiliaryFilter, Bootstrap, FixedLag, ParticleFilter, ParticleSet, ResamplePolicy,
+    Resampling, ScalarModel, ScalarTransitionDensity, StepReport, ffbs, path_means, stream_rng,
 };
 use nalgebra::{Matrix1, Vector1};
 use rand::Rng;
@@ -334,4 +335,135 @@ fn apf_refuses_a_reused_key_and_leaves_the_set() {
     assert!(apf.step(&mut set, &m, &0.5, &[1]).is_err());
     assert!(apf.step(&mut set, &m, &f64::NAN, &[2]).is_err());
     assert_eq!(set, before);
+}
+
+/// The KF's filtered beliefs `x_{0|0} .. x_{T|T}` and the model.
+fn kalman_beliefs(m: &Ar1, m0: f64, p0: f64, zs: &[f64]) -> (Vec<Gaussian<1>>, LinearDynamics<1>) {
+    let kf = Kf::default();
+    let dynamics = LinearDynamics::new(Matrix1::new(m.a), Matrix1::new(m.q)).unwrap();
+    let sensor = LinearMeasurement::new(Matrix1::new(1.0), Matrix1::new(m.r)).unwrap();
+    let mut b = Gaussian::new(Vector1::new(m0), Matrix1::new(p0)).unwrap();
+    let mut out = vec![b];
+    for z in zs {
+        let prior = kf.predict(&b, &dynamics).unwrap();
+        b = kf
+            .update(&prior, &sensor, Some(&Vector1::new(*z)))
+            .unwrap()
+            .posterior;
+        out.push(b);
+    }
+    (out, dynamics)
+}
+
+/// The filtering sets `k = 0..T` of a bootstrap filter with `n` particles.
+fn history(m: &Ar1, zs: &[f64], n: usize) -> Vec<ParticleSet<Vector1<f64>>> {
+    let mut set = prior_set(0.0, 1.0, n, 11);
+    let mut out = vec![set.clone()];
+    for (k, z) in zs.iter().enumerate() {
+        ParticleFilter::default()
+            .step(&mut set, &Bootstrap(m), z, &[12, k as u64])
+            .unwrap();
+        out.push(set.clone());
+    }
+    out
+}
+
+const SMOOTH: Ar1 = Ar1 {
+    a: 0.9,
+    q: 0.5,
+    r: 1.0,
+};
+
+#[test]
+fn ffbs_marginals_match_the_rts_smoother() {
+    let m = SMOOTH;
+    let zs = simulate(&m, 0.0, 1.0, 20, 13);
+    let (filtered, dynamics) = kalman_beliefs(&m, 0.0, 1.0, &zs);
+    let rts = Kf::default()
+        .rts_smooth(&filtered, &dynamics, None)
+        .unwrap();
+    let sets = history(&m, &zs, 1000);
+    let paths = 400;
+    let trajectories = ffbs(&sets, &m, paths, 128, &[14]).unwrap();
+    let means = path_means(&trajectories);
+    let (mut worst, mut gap) = (0.0f64, 0.0f64);
+    for (t, s) in rts.iter().enumerate() {
+        let (mu, var) = (s.mean()[0], s.cov()[(0, 0)]);
+        // the paths are nearly independent draws from the smoother (N =
+        // 1,000 >> 400 paths): their mean is off by sd / sqrt(400) = 0.05
+        // sd; 4 of those, and the filter's own error (sd / sqrt(N))
+        let tol = 4.0 * (var / paths as f64).sqrt() + 3.0 * (var / 1000.0).sqrt();
+        let e = (means[t][0] - mu).abs();
+        worst = worst.max(e / tol);
+        let v = trajectories
+            .iter()
+            .map(|p| (p[t][0] - means[t][0]).powi(2))
+            .sum::<f64>()
+            / (paths - 1) as f64;
+        // the sample variance of 400 draws: relative sd sqrt(2 / 399) = 7 %
+        gap = gap.max((v / var - 1.0).abs());
+        // the smoothed marginal is not the filtered one
+    }
+    eprintln!("ffbs: worst mean error {worst:.2} of its tolerance, variance off by {gap:.2}");
+    assert!(worst < 1.0 && gap < 0.3, "{worst} {gap}");
+    // the smoother differs from the filter by more than the tolerance
+    // somewhere, so the test would see a filter posing as a smoother
+    let apart = filtered
+        .iter()
+        .zip(&rts)
+        .map(|(f, s)| (f.mean()[0] - s.mean()[0]).abs() / s.cov()[(0, 0)].sqrt())
+        .fold(0.0, f64::max);
+    assert!(apart > 0.5, "{apart}");
+}
+
+#[test]
+fn ffbs_gives_the_same_bits_on_any_thread_count() {
+    let m = SMOOTH;
+    let zs = simulate(&m, 0.0, 1.0, 8, 15);
+    let sets = history(&m, &zs, 200);
+    let go = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| ffbs(&sets, &m, 100, 16, &[16]).unwrap())
+    };
+    assert_eq!(go(1), go(4));
+}
+
+#[test]
+fn fixed_lag_estimates_match_the_truncated_rts_smoother() {
+    let m = SMOOTH;
+    let lag = 3;
+    let n = 5000;
+    let zs = simulate(&m, 0.0, 1.0, 20, 17);
+    let (filtered, dynamics) = kalman_beliefs(&m, 0.0, 1.0, &zs);
+    let mut set = prior_set(0.0, 1.0, n, 18);
+    let mut smoother = FixedLag::new(lag);
+    smoother.record(&set, None).unwrap();
+    let mut worst = 0.0f64;
+    for (k, z) in zs.iter().enumerate() {
+        let r = ParticleFilter::default()
+            .step(&mut set, &Bootstrap(&m), z, &[19, k as u64])
+            .unwrap();
+        smoother.record(&set, Some(&r)).unwrap();
+        let k = k + 1;
+        match smoother.estimate(&set) {
+            None => assert!(k < lag),
+            Some(x) => {
+                // p(x_{k-lag} | z_{1:k}): RTS over the first k filtered beliefs
+                let rts = Kf::default()
+                    .rts_smooth(&filtered[..=k], &dynamics, None)
+                    .unwrap();
+                let s = rts[k - lag];
+                // the genealogy of 5,000 particles resampled every step
+                // keeps far fewer distinct ancestors 3 steps back: measured
+                // 0.14 sd at worst over the 18 estimates; tolerance 0.25 sd
+                let e = (x[0] - s.mean()[0]).abs() / s.cov()[(0, 0)].sqrt();
+                worst = worst.max(e);
+            }
+        }
+    }
+    eprintln!("fixed lag: worst error {worst:.3} sd");
+    assert!(worst < 0.25, "{worst}");
 }
