@@ -4,6 +4,7 @@ mod apf;
 mod chunks;
 mod error;
 mod filter;
+mod pmmh;
 mod proposal;
 mod rbpf;
 mod resample;
@@ -16,6 +17,7 @@ mod smooth;
 pub use apf::{Auxiliary, AuxiliaryFilter};
 pub use error::{ParticleError, ProposalError, Result};
 pub use filter::{Degenerate, ParticleFilter, ResamplePolicy, ResampleTiming, StepReport};
+pub use pmmh::{Chain, Pmmh};
 pub use proposal::{
     Bootstrap, KalmanProposal, LocalFilter, Model, Proposal, ScalarModel, ScalarTransitionDensity,
     TransitionDensity,
