@@ -169,9 +169,13 @@ where
             parent.xl
         };
         // p(xl_k | xn_{0:k}, z_{1:k-1}): Al, Ql and the offset fl
-        let predicted = self.kf.predict(&xl, &linear)?;
-        let (mean, cov) = predicted.into_parts();
-        let predicted = Gaussian::new(mean + f_l, cov)?;
+        let mut predicted = self.kf.predict(&xl, &linear)?;
+        if f_l.iter().any(|&v| v != 0.0) {
+            // (the offset's belief is checked again: a cost only models
+            // with an fl pay)
+            let (mean, cov) = predicted.into_parts();
+            predicted = Gaussian::new(mean + f_l, cov)?;
+        }
         // weigh by p(z_k | xn_{0:k}, z_{1:k-1}) and update
         let (h, measurement) = self.model.measurement(k, &xn);
         let update = self.kf.update(&predicted, &measurement, Some(&(z - h)))?;
