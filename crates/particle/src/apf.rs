@@ -37,8 +37,19 @@ pub trait Auxiliary<const N: usize>: Model<N> {
     }
 }
 
-/// The auxiliary particle filter's configuration (it resamples every step,
-/// by the first-stage weights).
+/// The auxiliary particle filter (Pitt and Shephard 1999, sec. 3.2): each
+/// step resamples the parents by their weights times a first-stage weight
+/// `g_i ~ p(z_k | x_{k-1,i})` ([`Auxiliary::log_first_stage`]), draws each
+/// child from the transition and weighs it by `p(z_k | x_k) / g_{a_j}`.
+/// Parents the observation rules out are dropped before they are
+/// propagated, which pays where the observation is informative relative to
+/// the spread of the predicted particles.
+///
+/// With Pitt and Shephard's default `g = p(z | mu(x_{k-1}))` and process
+/// noise large against the measurement noise, `g` has lighter tails than
+/// the predictive and the second-stage weights can be heavy (a child far
+/// from its parent's point gets a huge weight): return the predictive,
+/// or a flattened likelihood, from `log_first_stage` there.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AuxiliaryFilter {
     /// Resampling scheme of the first stage (systematic by default).

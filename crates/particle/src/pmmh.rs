@@ -13,7 +13,11 @@ use rand_distr::{Distribution, StandardNormal};
 use crate::error::{ParticleError, Result};
 use crate::seed::{stream_rng, stream_seed};
 
-/// The configuration of a PMMH chain over `P` parameters.
+/// Particle marginal Metropolis-Hastings over `P` static parameters
+/// (Andrieu, Doucet and Holenstein 2010, sec. 2.4.2): a Gaussian
+/// random-walk Metropolis-Hastings chain whose likelihood is a particle
+/// filter's unbiased estimate ([`crate::Smc::log_evidence`]); the chain
+/// still targets the exact posterior `p(theta | z_{1:T})`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Pmmh<const P: usize> {
     /// Iterations (proposals) after the initial point.

@@ -13,7 +13,8 @@ use crate::filter::StepReport;
 use crate::proposal::TransitionDensity;
 use crate::set::{Particle, ParticleSet, exp_flushed};
 
-/// Forward-filtering backward-simulation: draws `trajectories` paths from
+/// Forward-filtering backward-simulation (Godsill, Doucet and West 2004,
+/// sec. 4, Algorithm 1): draws `trajectories` paths from
 /// the joint smoothing distribution `p(x_{0:T} | z_{1:T})` given the
 /// filtering sets `history` (the set after each step, oldest first; the
 /// first may be the initial set at `k = 0`). Each path starts from a
