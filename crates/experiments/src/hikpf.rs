@@ -277,7 +277,7 @@ type PfStep<'a, T> = dyn Fn(
         usize,
         &SVector<f64, 1>,
         &[u64],
-    ) -> Result<bayestrack_particle::StepReport, ParticleError>
+    ) -> Result<bayestrack_particle::StepReport<1>, ParticleError>
     + 'a;
 
 /// Runs one particle filter over one run; the estimate is the mean of the

@@ -8,6 +8,7 @@
 //! the same chunks, with per-chunk results combined in chunk order. The same
 //! key therefore gives the same bits on any number of threads.
 
+use nalgebra::SVector;
 use rand::{RngExt, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rayon::prelude::*;
@@ -16,7 +17,7 @@ use crate::error::{ParticleError, ProposalError, Result};
 use crate::proposal::Proposal;
 use crate::resample::{ChunkedCumulative, Resampling};
 use crate::seed::{extend_seed, stream_rng, stream_seed};
-use crate::set::{ParticleSet, Scratch, check_threshold, exp_flushed};
+use crate::set::{Particle, ParticleSet, Scratch, check_threshold, exp_flushed};
 
 /// When to resample.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -63,6 +64,23 @@ pub enum Degenerate {
 }
 
 /// The configuration of a particle filter; the particle set is the caller's.
+///
+/// [`ParticleFilter::default()`] is the sequential importance resampling
+/// filter of Nagy, Ahmed and Zayed (paper 000) sec. 2.3:
+///
+/// | field | default | meaning |
+/// |---|---|---|
+/// | `resampling` | [`Resampling::Systematic`] | one uniform draw, `N` evenly spaced points (lowest variance of the O(N) schemes here) |
+/// | `policy` | [`ResamplePolicy::Always`] | resample after every step (not adaptively on the ESS) |
+/// | `timing` | [`ResampleTiming::AfterWeighing`] | a step leaves the resampled, equally weighted set |
+/// | `mcmc` | `false` | no Metropolis-Hastings move after resampling |
+/// | `chunk_size` | 1024 | particles per random stream and per parallel task: a set of at most 1024 particles runs on the calling thread |
+/// | `degenerate` | [`Degenerate::Error`] | a step where every weight is zero is an error |
+///
+/// With the default, [`StepReport::mean`] is the filter's estimate of the
+/// step (the weighted mean before resampling); [`ParticleSet::mean`] of the
+/// set afterwards is the mean of the resampled particles, the same
+/// quantity with the resampling noise added.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ParticleFilter {
     /// Resampling scheme.
@@ -92,9 +110,20 @@ impl Default for ParticleFilter {
     }
 }
 
-/// What one step did.
+/// What one step did, for particles with `N`-dimensional states.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct StepReport {
+pub struct StepReport<const N: usize> {
+    /// The weighted mean `sum_i w_{k,i} x_{k,i}` of the proposed particles
+    /// with their new weights, before any resampling: the filter's
+    /// estimate of `E[x_k | z_{1:k}]`. After a step that resampled
+    /// ([`ResampleTiming::AfterWeighing`]), [`ParticleSet::mean`] is the mean
+    /// of the resampled particles instead, the same quantity with the
+    /// resampling noise added; after a step that did not resample (or with
+    /// [`ResampleTiming::BeforeProposal`], which leaves the weighted set) the
+    /// two agree to round-off. For a degenerate step
+    /// ([`Degenerate::IgnoreMeasurement`]) it is the mean under the previous
+    /// weights.
+    pub mean: SVector<f64, N>,
     /// `log sum_i w_{k-1,i} w~_{k,i}`: the log evidence increment
     /// `log p(z_k | z_{1:k-1})` estimate.
     pub log_evidence: f64,
@@ -209,8 +238,34 @@ impl Weighed {
     }
 }
 
+/// `sum_i w_i x_i` over a chunk whose weights `out` are relative to the
+/// chunk's largest (their running sums when `cumulative`).
+fn weighted_states<T: Particle<N>, const N: usize>(
+    ps: &[T],
+    out: &[f64],
+    cumulative: bool,
+) -> SVector<f64, N> {
+    let mut m = SVector::<f64, N>::zeros();
+    let mut prev = 0.0;
+    for (p, &o) in ps.iter().zip(out) {
+        let w = if cumulative {
+            let w = o - prev;
+            prev = o;
+            w
+        } else {
+            o
+        };
+        if w != 0.0 {
+            m.axpy(w, p.state(), 1.0);
+        }
+    }
+    m
+}
+
 /// One chunk's proposal and weights.
-struct ChunkPass {
+struct ChunkPass<const N: usize> {
+    /// `sum_i w_i x_i` with the chunk's weights.
+    weighted: SVector<f64, N>,
     /// The largest updated log-weight, to which the weights are relative.
     max: f64,
     /// The largest log increment.
@@ -334,7 +389,7 @@ impl ParticleFilter {
         proposal: &P,
         z: &Z,
         key: &[u64],
-    ) -> Result<StepReport>
+    ) -> Result<StepReport<N>>
     where
         T: crate::set::Particle<N>,
         Z: ?Sized + Sync,
@@ -358,7 +413,7 @@ impl ParticleFilter {
         z: &Z,
         key: &[u64],
         scratch: &mut Vec<P::Scratch>,
-    ) -> Result<StepReport>
+    ) -> Result<StepReport<N>>
     where
         T: crate::set::Particle<N>,
         Z: ?Sized + Sync,
@@ -399,7 +454,7 @@ impl ParticleFilter {
         key: &[u64],
         parents: &[T],
         scratch_chunks: &mut [P::Scratch],
-    ) -> Result<StepReport>
+    ) -> Result<StepReport<N>>
     where
         T: crate::set::Particle<N>,
         Z: ?Sized + Sync,
@@ -464,11 +519,15 @@ impl ParticleFilter {
                 acc.add(l, x);
             }
             let bad = acc.bad(inc, offset);
-            let weighed = match bad {
-                None => Weighed::of(lw, Some(inc), acc.max, out, cumulative),
-                Some(_) => Weighed::ZERO,
+            let (weighed, weighted) = match bad {
+                None => (
+                    Weighed::of(lw, Some(inc), acc.max, out, cumulative),
+                    weighted_states(ps, out, cumulative),
+                ),
+                Some(_) => (Weighed::ZERO, SVector::zeros()),
             };
             Ok(ChunkPass {
+                weighted,
                 max: acc.max,
                 max_increment: acc.max_increment,
                 bad,
@@ -478,7 +537,7 @@ impl ParticleFilter {
         // one chunk runs on the calling thread: handing it to the pool
         // costs a cross-thread wake-up per step, which a tracker with a
         // few hundred particles at 1,000 frames a second would feel
-        let passes: Vec<Result<ChunkPass>> = if n <= cs {
+        let passes: Vec<Result<ChunkPass<N>>> = if n <= cs {
             vec![pass((
                 0,
                 (
@@ -500,7 +559,7 @@ impl ParticleFilter {
                 .map(pass)
                 .collect()
         };
-        let mut chunks = passes.into_iter().collect::<Result<Vec<ChunkPass>>>()?;
+        let mut chunks = passes.into_iter().collect::<Result<Vec<ChunkPass<N>>>>()?;
         if let Some((index, value)) = chunks.iter().find_map(|c| c.bad) {
             return Err(ParticleError::NonFiniteWeight { index, value });
         }
@@ -529,8 +588,13 @@ impl ParticleFilter {
                     .map(|(lw, out)| Weighed::of(lw, None, max, out, cumulative))
                     .collect()
             };
-            for (chunk, w) in chunks.iter_mut().zip(again) {
+            for ((chunk, w), (ps, out)) in chunks
+                .iter_mut()
+                .zip(again)
+                .zip(particles.chunks(cs).zip(weights.chunks(cs)))
+            {
                 chunk.weighed = w;
+                chunk.weighted = weighted_states(ps, out, cumulative);
             }
             vec![1.0; chunks.len()]
         } else {
@@ -541,11 +605,14 @@ impl ParticleFilter {
         let mut prefix = Vec::with_capacity(chunks.len() + 1);
         prefix.push(0.0);
         let (mut sum, mut sum2) = (0.0, 0.0);
+        let mut mean = SVector::<f64, N>::zeros();
         for (chunk, &f) in chunks.iter().zip(&scale) {
             sum += f * chunk.weighed.sum;
             sum2 += f * f * chunk.weighed.sum2;
+            mean.axpy(f, &chunk.weighted, 1.0);
             prefix.push(sum);
         }
+        mean /= sum;
         let ln_sum = sum.ln();
         let lse = max + ln_sum;
         let log_evidence = if degenerate { f64::NEG_INFINITY } else { lse };
@@ -569,6 +636,7 @@ impl ParticleFilter {
                     .for_each(normalise);
             }
             return Ok(StepReport {
+                mean,
                 log_evidence,
                 ess,
                 resampled: selected,
@@ -631,6 +699,7 @@ impl ParticleFilter {
             0
         };
         Ok(StepReport {
+            mean,
             log_evidence,
             ess,
             resampled: true,

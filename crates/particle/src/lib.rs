@@ -1,21 +1,33 @@
 #![doc = include_str!("../README.md")]
 
+mod apf;
+mod chunks;
 mod error;
 mod filter;
+mod pmmh;
 mod proposal;
+mod rbpf;
 mod resample;
 mod seed;
 mod select;
 mod set;
 mod smc;
+mod smooth;
 
+pub use apf::{Auxiliary, AuxiliaryFilter};
 pub use error::{ParticleError, ProposalError, Result};
 pub use filter::{Degenerate, ParticleFilter, ResamplePolicy, ResampleTiming, StepReport};
-pub use proposal::{Bootstrap, KalmanProposal, LocalFilter, Model, Proposal, TransitionDensity};
+pub use pmmh::{Chain, Pmmh};
+pub use proposal::{
+    Bootstrap, KalmanProposal, LocalFilter, Model, Proposal, ScalarModel, ScalarTransitionDensity,
+    TransitionDensity,
+};
+pub use rbpf::{ConditionallyLinear, RaoBlackwellised, RbParticle};
 pub use resample::{Resampler, Resampling};
 pub use seed::{stream_rng, stream_seed};
 pub use set::{Finite, KalmanParticle, Particle, ParticleSet, log_sum_exp};
 pub use smc::Smc;
+pub use smooth::{FixedLag, ffbs, path_means};
 
 /// Re-exported so one dependency is enough: the filters, Gaussians and
 /// errors of the Kalman proposals (`KalmanError` is in [`Proposal`]).

@@ -70,6 +70,76 @@ pub trait TransitionDensity<const N: usize>: Model<N> {
     fn log_transition(&self, k: usize, x_prev: &SVector<f64, N>, x: &SVector<f64, N>) -> f64;
 }
 
+/// A [`Model`] of a scalar state, written on `f64` rather than on a
+/// 1-vector: every `ScalarModel` is a `Model<1>` (its particles are
+/// `Vector1<f64>`, `set.mean()[0]` the estimate), so it runs in every
+/// filter of the crate.
+///
+/// ```
+/// use bayestrack_particle::{Bootstrap, ParticleFilter, ParticleSet, ScalarModel, Smc};
+/// use bayestrack_particle::nalgebra::Vector1;
+/// use bayestrack_particle::rand::Rng;
+/// use bayestrack_particle::rand_distr::{Distribution, StandardNormal};
+///
+/// /// x_k = 0.9 x_{k-1} + v, z_k = x_k + n, v ~ N(0, 1), n ~ N(0, 0.25).
+/// struct Ar1;
+/// impl ScalarModel for Ar1 {
+///     type Observation = f64;
+///     fn sample_transition<R: Rng + ?Sized>(&self, _k: usize, x: f64, rng: &mut R) -> f64 {
+///         let v: f64 = StandardNormal.sample(rng);
+///         0.9 * x + v
+///     }
+///     fn log_likelihood(&self, _k: usize, x: f64, z: &f64) -> f64 {
+///         -0.5 * (z - x).powi(2) / 0.25
+///     }
+/// }
+///
+/// let set = ParticleSet::new(vec![Vector1::new(0.0); 500])?;
+/// let mut pf = Smc::new(ParticleFilter::default(), set, 7)?;
+/// let report = pf.step(&Bootstrap(&Ar1), &1.0)?;
+/// assert!((report.mean[0] - 0.8).abs() < 0.2);
+/// # Ok::<(), bayestrack_particle::ParticleError>(())
+/// ```
+pub trait ScalarModel: Sync {
+    /// What the likelihood weighs a state against (`z_k`).
+    type Observation: ?Sized + Sync;
+    /// Draws `x_k ~ p(. | x_{k-1})`.
+    fn sample_transition<R: Rng + ?Sized>(&self, k: usize, x_prev: f64, rng: &mut R) -> f64;
+    /// `log p(z_k | x_k)` (unnormalised is enough, as [`Model::log_likelihood`]).
+    fn log_likelihood(&self, k: usize, x: f64, z: &Self::Observation) -> f64;
+}
+
+impl<S: ScalarModel> Model<1> for S {
+    type Observation = S::Observation;
+    #[inline(always)]
+    fn sample_transition<R: Rng + ?Sized>(
+        &self,
+        k: usize,
+        x_prev: &SVector<f64, 1>,
+        rng: &mut R,
+    ) -> SVector<f64, 1> {
+        SVector::<f64, 1>::new(ScalarModel::sample_transition(self, k, x_prev[0], rng))
+    }
+    #[inline(always)]
+    fn log_likelihood(&self, k: usize, x: &SVector<f64, 1>, z: &S::Observation) -> f64 {
+        ScalarModel::log_likelihood(self, k, x[0], z)
+    }
+}
+
+/// The transition density of a [`ScalarModel`], on `f64`: every
+/// `ScalarTransitionDensity` is a [`TransitionDensity<1>`].
+pub trait ScalarTransitionDensity: ScalarModel {
+    /// `log p(x_k | x_{k-1})` (minus infinity outside the support).
+    fn log_transition(&self, k: usize, x_prev: f64, x: f64) -> f64;
+}
+
+impl<S: ScalarTransitionDensity> TransitionDensity<1> for S {
+    #[inline(always)]
+    fn log_transition(&self, k: usize, x_prev: &SVector<f64, 1>, x: &SVector<f64, 1>) -> f64 {
+        ScalarTransitionDensity::log_transition(self, k, x_prev[0], x[0])
+    }
+}
+
 /// An importance proposal for particles of type `T` and observations `Z`.
 ///
 /// The filter calls [`Proposal::propose`] once per particle, chunk by

@@ -23,6 +23,7 @@ pub struct Smc<T> {
     /// The particles and their weights.
     pub set: ParticleSet<T>,
     seed: u64,
+    log_evidence: f64,
 }
 
 impl<T> Smc<T> {
@@ -32,12 +33,26 @@ impl<T> Smc<T> {
     /// As [`ParticleFilter::validate`].
     pub fn new(filter: ParticleFilter, set: ParticleSet<T>, seed: u64) -> Result<Self> {
         filter.validate()?;
-        Ok(Self { filter, set, seed })
+        Ok(Self {
+            filter,
+            set,
+            seed,
+            log_evidence: 0.0,
+        })
     }
 
     /// The seed of the run.
     pub fn seed(&self) -> u64 {
         self.seed
+    }
+
+    /// `log p(z_{1:k})`: the sum of the steps' [`StepReport::log_evidence`]
+    /// since [`Smc::new`] (0 before the first step; minus infinity after a
+    /// degenerate step). Its exponential is an unbiased estimate of the
+    /// likelihood, the quantity particle marginal Metropolis-Hastings
+    /// ([`crate::Pmmh`]) needs.
+    pub fn log_evidence(&self) -> f64 {
+        self.log_evidence
     }
 
     /// The time index of the particles: steps taken ([`ParticleSet::k`]).
@@ -50,7 +65,7 @@ impl<T> Smc<T> {
     ///
     /// # Errors
     /// As [`ParticleFilter::step`].
-    pub fn step<Z, P, const N: usize>(&mut self, proposal: &P, z: &Z) -> Result<StepReport>
+    pub fn step<Z, P, const N: usize>(&mut self, proposal: &P, z: &Z) -> Result<StepReport<N>>
     where
         T: Particle<N>,
         Z: ?Sized + Sync,
@@ -69,14 +84,17 @@ impl<T> Smc<T> {
         proposal: &P,
         z: &Z,
         scratch: &mut Vec<P::Scratch>,
-    ) -> Result<StepReport>
+    ) -> Result<StepReport<N>>
     where
         T: Particle<N>,
         Z: ?Sized + Sync,
         P: Proposal<T, Z>,
     {
         let key = [self.seed, self.set.k() as u64 + 1];
-        self.filter
-            .step_with(&mut self.set, proposal, z, &key, scratch)
+        let report = self
+            .filter
+            .step_with(&mut self.set, proposal, z, &key, scratch)?;
+        self.log_evidence += report.log_evidence;
+        Ok(report)
     }
 }

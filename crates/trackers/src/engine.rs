@@ -131,7 +131,7 @@ impl<const D: usize> CueFilter<D> {
     /// [`TrackerError::Particle`](crate::TrackerError::Particle): the
     /// cue's error naming the particle, all weights zero (unless the
     /// configuration ignores such a measurement), a non-finite weight.
-    pub fn step<M, C>(&mut self, model: &M, cue: &C, frame: &Frame<'_>) -> Result<StepReport>
+    pub fn step<M, C>(&mut self, model: &M, cue: &C, frame: &Frame<'_>) -> Result<StepReport<D>>
     where
         M: StateModel<D> + ?Sized,
         C: Cue + Sync + ?Sized,

@@ -279,7 +279,7 @@ pub struct CondensationReport {
 
 impl CondensationReport {
     /// The report of an engine step over `n` particles.
-    pub(super) fn new(step: &StepReport, n: usize) -> Self {
+    pub(super) fn new<const D: usize>(step: &StepReport<D>, n: usize) -> Self {
         Self {
             ess: step.ess,
             resampled: step.resampled,
