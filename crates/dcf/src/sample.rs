@@ -62,12 +62,20 @@ impl PatchSampler {
                 // entry of the table (below 2^53 for any frame of under 2^45
                 // pixels): the same values as accumulating in f64, in a
                 // fraction of the instructions
-                let mut run = 0u64;
-                for (x, (d, p)) in dst.iter_mut().zip(row.chunks_exact(c)).enumerate() {
-                    let v = p[ch];
-                    *d = f32::from(v);
-                    run += u64::from(v);
+                let mut run = 0i64;
+                let mut put = |x: usize, v: u8| {
+                    dst[x] = f32::from(v);
+                    run += i64::from(v);
                     below[x + 1] = above[x + 1] + run as f64;
+                };
+                if c == 1 {
+                    for (x, &v) in row[..w].iter().enumerate() {
+                        put(x, v);
+                    }
+                } else {
+                    for (x, p) in row.chunks_exact(c).enumerate() {
+                        put(x, p[ch]);
+                    }
                 }
             }
         }
