@@ -164,7 +164,11 @@ impl Fhog {
                 bd = if better { d } else { bd };
                 ba = if better { d.abs() } else { ba };
             }
-            let bin = if bd >= 0.0 { best } else { best + INSENSITIVE as u8 };
+            let bin = if bd >= 0.0 {
+                best
+            } else {
+                best + INSENSITIVE as u8
+            };
             ((gx * gx + gy * gy).sqrt(), bin)
         }
         for y in 0..h {
@@ -187,11 +191,8 @@ impl Fhog {
             // one-sided differences at both ends, central inside
             (mag[0], bins[0]) = pixel(row[1] - row[0], ky * (rb[0] - ra[0]), &dirs);
             let last = w - 1;
-            (mag[last], bins[last]) = pixel(
-                row[last] - row[last - 1],
-                ky * (rb[last] - ra[last]),
-                &dirs,
-            );
+            (mag[last], bins[last]) =
+                pixel(row[last] - row[last - 1], ky * (rb[last] - ra[last]), &dirs);
             let inner = w - 2;
             let (left, right) = (&row[..inner], &row[2..]);
             let (ra, rb) = (&ra[1..][..inner], &rb[1..][..inner]);

@@ -63,6 +63,17 @@ fn main() {
         "dcf-staple" => {
             Box::new(StapleTracker::new(StapleTrackerConfig::default()).expect("staple"))
         }
+        // the same with the other scale filter than the default's
+        "dcf-other-scale" => {
+            let mut c = DcfTrackerConfig::default();
+            c.fdsst = !c.fdsst;
+            Box::new(DcfTracker::new(c).expect("dcf"))
+        }
+        "dcf-staple-other-scale" => {
+            let mut c = StapleTrackerConfig::default();
+            c.fdsst = !c.fdsst;
+            Box::new(StapleTracker::new(c).expect("staple"))
+        }
         other => panic!("unknown tracker {other}"),
     };
     let t = std::time::Instant::now();
