@@ -467,8 +467,8 @@ impl ScaleFilter {
             self.den[n] *= 1.0 - r;
         }
         for row in self.xs.chunks_exact(s) {
-            for n in 0..s {
-                self.den[n] += r * row[n].norm_sqr();
+            for (den, x) in self.den.iter_mut().zip(row) {
+                *den += r * x.norm_sqr();
             }
         }
         if self.interp_inv.is_some() {
