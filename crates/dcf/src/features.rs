@@ -140,6 +140,7 @@ impl Fhog {
         Ok(())
     }
 
+    #[inline(never)]
     fn gradients(&mut self, p: &[f32]) {
         let (w, h) = (self.w, self.h);
         // The nearest of the 18 directions o * 20 degrees maximises
@@ -151,6 +152,25 @@ impl Fhog {
             let a = std::f64::consts::PI * o as f64 / INSENSITIVE as f64;
             (a.cos() as f32, a.sin() as f32)
         });
+        // one pixel: magnitude and bin, branch-free (selects), so that the
+        // inner loop vectorises
+        #[inline(always)]
+        fn pixel(gx: f32, gy: f32, dirs: &[(f32, f32); INSENSITIVE]) -> (f32, u8) {
+            let (mut best, mut bd, mut ba) = (0u8, gx, gx.abs());
+            for (o, &(c, s)) in dirs.iter().enumerate().skip(1) {
+                let d = gx * c + gy * s;
+                let better = d.abs() > ba;
+                best = if better { o as u8 } else { best };
+                bd = if better { d } else { bd };
+                ba = if better { d.abs() } else { ba };
+            }
+            let bin = if bd >= 0.0 {
+                best
+            } else {
+                best + INSENSITIVE as u8
+            };
+            ((gx * gx + gy * gy).sqrt(), bin)
+        }
         for y in 0..h {
             let (ya, yb, ky) = if h == 1 {
                 (0, 0, 0.0)
@@ -164,31 +184,28 @@ impl Fhog {
             let (ra, rb, row) = (&p[ya * w..][..w], &p[yb * w..][..w], &p[y * w..][..w]);
             let mag = &mut self.mag[y * w..][..w];
             let bins = &mut self.bin[y * w..][..w];
-            for x in 0..w {
-                let (xa, xb, kx) = if w == 1 {
-                    (0, 0, 0.0)
-                } else if x == 0 {
-                    (0, 1, 1.0)
-                } else if x == w - 1 {
-                    (w - 2, w - 1, 1.0)
-                } else {
-                    (x - 1, x + 1, 0.5)
-                };
-                let gx = kx * (row[xb] - row[xa]);
+            if w == 1 {
+                (mag[0], bins[0]) = pixel(0.0, ky * (rb[0] - ra[0]), &dirs);
+                continue;
+            }
+            // one-sided differences at both ends, central inside
+            (mag[0], bins[0]) = pixel(row[1] - row[0], ky * (rb[0] - ra[0]), &dirs);
+            let last = w - 1;
+            (mag[last], bins[last]) =
+                pixel(row[last] - row[last - 1], ky * (rb[last] - ra[last]), &dirs);
+            let inner = w - 2;
+            let (left, right) = (&row[..inner], &row[2..]);
+            let (ra, rb) = (&ra[1..][..inner], &rb[1..][..inner]);
+            let (mag, bins) = (&mut mag[1..][..inner], &mut bins[1..][..inner]);
+            for x in 0..inner {
+                let gx = 0.5 * (right[x] - left[x]);
                 let gy = ky * (rb[x] - ra[x]);
-                mag[x] = (gx * gx + gy * gy).sqrt();
-                let (mut best, mut bd) = (0usize, gx);
-                for (o, &(c, s)) in dirs.iter().enumerate().skip(1) {
-                    let d = gx * c + gy * s;
-                    if d.abs() > bd.abs() {
-                        (best, bd) = (o, d);
-                    }
-                }
-                bins[x] = if bd >= 0.0 { best } else { best + INSENSITIVE } as u8;
+                (mag[x], bins[x]) = pixel(gx, gy, &dirs);
             }
         }
     }
 
+    #[inline(never)]
     fn histograms(&mut self) {
         let (w, wb, hb, b) = (self.w, self.wb, self.hb, self.cell);
         let nb = wb * hb;
@@ -239,6 +256,7 @@ impl Fhog {
         }
     }
 
+    #[inline(never)]
     fn normalise(&mut self, out: &mut [f32]) {
         let (wb, hb, b) = (self.wb, self.hb, self.cell as f32);
         let nb = wb * hb;

@@ -15,8 +15,11 @@ pub struct PatchSampler {
     planes: Vec<Vec<f32>>,
     /// Summed-area table of each plane, `(w + 1) x (h + 1)`.
     sums: Vec<Vec<f64>>,
-    /// Scratch: per output column, the clipped edges `[a, b)`.
-    cols: Vec<(f64, f64)>,
+    /// Scratch: the distinct column edges of a patch.
+    xs: Vec<f64>,
+    /// Scratch: per output column, its edges' indices in `xs` and width
+    /// (area averaging), or its two source columns and weight (bilinear).
+    spans: Vec<(usize, usize, f64)>,
     /// Scratch: the table interpolated at the column edges of two rows.
     top: Vec<f64>,
     bottom: Vec<f64>,
@@ -44,22 +47,35 @@ impl PatchSampler {
         (self.w, self.h) = (w, h);
         self.planes.resize_with(c, Vec::new);
         self.sums.resize_with(c, Vec::new);
-        for (ch, plane) in self.planes.iter_mut().enumerate() {
-            plane.clear();
+        let cols = w + 1;
+        for (ch, (plane, sum)) in self.planes.iter_mut().zip(self.sums.iter_mut()).enumerate() {
+            // every entry is written below: no clearing
+            plane.resize(w * h, 0.0);
+            sum.resize(cols * (h + 1), 0.0);
+            sum[..cols].fill(0.0);
             for y in 0..h {
                 let row = frame.row(y);
-                plane.extend(row.chunks_exact(c).map(|p| p[ch] as f32));
-            }
-        }
-        let cols = w + 1;
-        for (plane, sum) in self.planes.iter().zip(self.sums.iter_mut()) {
-            sum.clear();
-            sum.resize(cols * (h + 1), 0.0);
-            for y in 0..h {
-                let mut run = 0.0f64;
-                for x in 0..w {
-                    run += plane[y * w + x] as f64;
-                    sum[(y + 1) * cols + x + 1] = sum[y * cols + x + 1] + run;
+                let dst = &mut plane[y * w..][..w];
+                let (above, below) = sum[y * cols..][..2 * cols].split_at_mut(cols);
+                below[0] = 0.0;
+                // the row's running sum is an exact integer, and so is every
+                // entry of the table (below 2^53 for any frame of under 2^45
+                // pixels): the same values as accumulating in f64, in a
+                // fraction of the instructions
+                let mut run = 0i64;
+                let mut put = |x: usize, v: u8| {
+                    dst[x] = f32::from(v);
+                    run += i64::from(v);
+                    below[x + 1] = above[x + 1] + run as f64;
+                };
+                if c == 1 {
+                    for (x, &v) in row[..w].iter().enumerate() {
+                        put(x, v);
+                    }
+                } else {
+                    for (x, p) in row.chunks_exact(c).enumerate() {
+                        put(x, p[ch]);
+                    }
                 }
             }
         }
@@ -127,18 +143,24 @@ impl PatchSampler {
         let plane = &self.planes[ch];
         let split = |c: f64, n: usize| -> (usize, usize, f32) {
             let c = c.clamp(0.0, (n - 1) as f64);
-            let i = (c.floor() as usize).min(n - 1);
+            // c >= 0: truncation is the floor
+            let i = (c as usize).min(n - 1);
             let j = (i + 1).min(n - 1);
             (i, j, (c - i as f64) as f32)
         };
-        for v in 0..oh {
+        self.spans.clear();
+        self.spans.extend((0..ow).map(|u| {
+            let (a, b, f) = split(x0 + (u as f64 + 0.5) * sx - 0.5, w);
+            (a, b, f64::from(f))
+        }));
+        for (v, orow) in out.chunks_exact_mut(ow).enumerate() {
             let (ya, yb, fy) = split(y0 + (v as f64 + 0.5) * sy - 0.5, h);
             let (ra, rb) = (&plane[ya * w..(ya + 1) * w], &plane[yb * w..(yb + 1) * w]);
-            for u in 0..ow {
-                let (xa, xb, fx) = split(x0 + (u as f64 + 0.5) * sx - 0.5, w);
+            for (o, &(xa, xb, fx)) in orow.iter_mut().zip(&self.spans) {
+                let fx = fx as f32;
                 let top = ra[xa] + fx * (ra[xb] - ra[xa]);
                 let bot = rb[xa] + fx * (rb[xb] - rb[xa]);
-                out[v * ow + u] = top + fy * (bot - top);
+                *o = top + fy * (bot - top);
             }
         }
         Ok(())
@@ -150,6 +172,10 @@ impl PatchSampler {
     /// rectangle clipped to the frame (the summed-area table interpolated
     /// bilinearly at the rectangle's corners); a rectangle left with no
     /// area reads the nearest pixel (edge replication).
+    ///
+    /// Neighbouring rectangles share their edges: the table is interpolated
+    /// once per distinct edge (about one corner per output pixel instead of
+    /// four), the same values bit for bit.
     #[allow(clippy::too_many_arguments)]
     fn area(&mut self, ch: usize, x0: f64, y0: f64, sx: f64, sy: f64, out: &mut [f32], ow: usize) {
         let (w, h) = (self.w, self.h);
@@ -160,44 +186,59 @@ impl PatchSampler {
             if hi - lo > 1e-9 {
                 (lo, hi)
             } else {
-                let p = (lo.min(n as f64 - 0.5)).floor().max(0.0);
+                // lo >= 0: truncation is the floor
+                let p = (lo.min(n as f64 - 0.5) as usize) as f64;
                 (p, p + 1.0)
             }
         };
-        self.cols.clear();
-        self.cols
-            .extend((0..ow).map(|u| edges(x0 + u as f64 * sx, x0 + (u + 1) as f64 * sx, w)));
-        // the table at row coordinate y, at both edges of every column
-        let row_at = |y: f64, out: &mut Vec<f64>, colsx: &[(f64, f64)]| {
+        // the distinct column edges (xs) and each column's pair of indices
+        // into them with its width
+        self.xs.clear();
+        self.spans.clear();
+        for u in 0..ow {
+            let (a, b) = edges(x0 + u as f64 * sx, x0 + (u + 1) as f64 * sx, w);
+            let ia = match self.xs.last() {
+                Some(&last) if last == a => self.xs.len() - 1,
+                _ => {
+                    self.xs.push(a);
+                    self.xs.len() - 1
+                }
+            };
+            self.xs.push(b);
+            self.spans.push((ia, self.xs.len() - 1, b - a));
+        }
+        // the table at row coordinate y, at every column edge
+        let row_at = |y: f64, out: &mut Vec<f64>, xs: &[f64]| {
             let j = (y as usize).min(h - 1);
             let f = y - j as f64;
             let (ra, rb) = (&sum[j * cols..][..cols], &sum[(j + 1) * cols..][..cols]);
-            let at = |x: f64| {
+            out.clear();
+            out.extend(xs.iter().map(|&x| {
                 let i = (x as usize).min(w - 1);
                 let g = x - i as f64;
                 let a = ra[i] + g * (ra[i + 1] - ra[i]);
                 let b = rb[i] + g * (rb[i + 1] - rb[i]);
                 a + f * (b - a)
-            };
-            out.clear();
-            for &(a, b) in colsx {
-                out.push(at(a));
-                out.push(at(b));
-            }
+            }));
         };
         let (mut top, mut bottom) = (
             std::mem::take(&mut self.top),
             std::mem::take(&mut self.bottom),
         );
+        let mut bottom_at = f64::NAN;
         for (v, row) in out.chunks_exact_mut(ow).enumerate() {
             let (a, b) = edges(y0 + v as f64 * sy, y0 + (v + 1) as f64 * sy, h);
-            row_at(a, &mut top, &self.cols);
-            row_at(b, &mut bottom, &self.cols);
+            if a == bottom_at {
+                std::mem::swap(&mut top, &mut bottom);
+            } else {
+                row_at(a, &mut top, &self.xs);
+            }
+            row_at(b, &mut bottom, &self.xs);
+            bottom_at = b;
             let inv_h = 1.0 / (b - a);
-            for (u, o) in row.iter_mut().enumerate() {
-                let (ca, cb) = self.cols[u];
-                let s = bottom[2 * u + 1] - bottom[2 * u] - top[2 * u + 1] + top[2 * u];
-                *o = (s * inv_h / (cb - ca)) as f32;
+            for (o, &(ia, ib, cw)) in row.iter_mut().zip(&self.spans) {
+                let s = bottom[ib] - bottom[ia] - top[ib] + top[ia];
+                *o = (s * inv_h / cw) as f32;
             }
         }
         self.top = top;

@@ -22,14 +22,37 @@ use crate::fft::C32;
 use crate::kcf::{hann, parabola_offset};
 use crate::sample::PatchSampler;
 
-/// DSST's scale parameters (the paper's published values as defaults).
+/// How the scale filter is built.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ScaleMethod {
+    /// DSST (Danelljan et al. 2014): one filter per feature over the `S`
+    /// sampled scales, label peaked at the middle scale of width
+    /// `sqrt(S) * sigma_factor` scale steps.
+    Dsst,
+    /// fDSST (Danelljan et al. 2017, sec. 4.3): the `S` samples are spread
+    /// over the range of `interpolated` scales (exponents
+    /// `(n - floor((S - 1) / 2)) * interpolated / S` of the step), their
+    /// features projected on an orthonormal basis of the learnt sample
+    /// matrix (its QR factor: `S` dimensions instead of thousands), the
+    /// label `interpolated * sigma_factor` steps wide, and the response
+    /// interpolated in the Fourier domain to `interpolated` scales one step
+    /// apart (fDSST: 17 sampled, 33 interpolated).
+    Fdsst {
+        /// Scales of the interpolated response (fDSST: 33).
+        interpolated: usize,
+    },
+}
+
+/// DSST's scale parameters (the paper's published values as defaults;
+/// [`ScaleConfig::fdsst`] gives fDSST's).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ScaleConfig {
-    /// Number of scales `S` (DSST: 33).
+    /// Number of scales `S` sampled (DSST: 33; fDSST: 17).
     pub scales: usize,
     /// Ratio `a` between neighbouring scales (DSST: 1.02).
     pub step: f64,
-    /// Label width as a fraction of `sqrt(S)` (DSST: 1/4).
+    /// Label width as a fraction of `sqrt(S)` (DSST: 1/4) or, for fDSST,
+    /// of the interpolated scales (fDSST: 1/16).
     pub sigma_factor: f64,
     /// Regularisation `lambda` (DSST: 1e-2).
     pub lambda: f64,
@@ -39,6 +62,8 @@ pub struct ScaleConfig {
     pub model_max_area: f64,
     /// Cell of the samples' fHOG, pixels (DSST: 4).
     pub cell: usize,
+    /// DSST or fDSST.
+    pub method: ScaleMethod,
 }
 
 impl Default for ScaleConfig {
@@ -51,6 +76,22 @@ impl Default for ScaleConfig {
             learning_rate: 0.025,
             model_max_area: 512.0,
             cell: 4,
+            method: ScaleMethod::Dsst,
+        }
+    }
+}
+
+impl ScaleConfig {
+    /// fDSST's published parameters (Danelljan et al. 2017, sec. 5.1 and
+    /// its code: 17 scales interpolated to 33, step 1.02, label factor
+    /// 1/16, lambda 1e-2, learning rate 0.025, samples of at most 512
+    /// pixels).
+    pub fn fdsst() -> Self {
+        Self {
+            scales: 17,
+            sigma_factor: 1.0 / 16.0,
+            method: ScaleMethod::Fdsst { interpolated: 33 },
+            ..Self::default()
         }
     }
 }
@@ -97,6 +138,15 @@ impl ScaleConfig {
         if !(1..=16).contains(&self.cell) {
             return bad("scale cell", self.cell as f64, "must be in 1..=16");
         }
+        if let ScaleMethod::Fdsst { interpolated } = self.method
+            && !(self.scales..=1023).contains(&interpolated)
+        {
+            return bad(
+                "interpolated scales",
+                interpolated as f64,
+                "must be at least the sampled scales and at most 1023",
+            );
+        }
         Ok(())
     }
 }
@@ -105,7 +155,8 @@ impl ScaleConfig {
 #[derive(Clone)]
 pub struct ScaleFilter {
     config: ScaleConfig,
-    /// Relative scale of each sample, `a^(floor(S/2) - n)`.
+    /// Relative scale of each sample: DSST `a^(floor(S/2) - n)`, fDSST
+    /// `a^((n - floor((S-1)/2)) I / S)`.
     factors: Vec<f64>,
     window: Vec<f32>,
     ysf: Vec<C32>,
@@ -119,11 +170,22 @@ pub struct ScaleFilter {
     scratch: Vec<C32>,
     hog: Fhog,
     patch: Vec<f32>,
-    feat: Vec<f32>,
+    /// The raw samples, `S` rows of `dims` features.
+    raw: Vec<f32>,
     xs: Vec<C32>,
+    /// DSST: per feature `dims x S`; fDSST: per basis vector `S x S`.
     num: Vec<C32>,
     den: Vec<f32>,
     resp: Vec<C32>,
+    /// fDSST: the learnt sample matrix (`S x dims`), its orthonormal basis
+    /// (`S x dims`, rows), the projected samples' spectra (`S x S`), and
+    /// the inverse FFT of the interpolated response.
+    snum: Vec<f32>,
+    basis: Vec<f32>,
+    proj: Vec<C32>,
+    gs: Vec<f64>,
+    interp_inv: Option<Arc<dyn Fft<f32>>>,
+    interp: Vec<C32>,
     trained: bool,
 }
 
@@ -134,6 +196,24 @@ impl std::fmt::Debug for ScaleFilter {
             .field("model", &(self.mw, self.mh))
             .finish_non_exhaustive()
     }
+}
+
+/// `a . b` in eight lanes (vectorises; a fixed order, so the same bits on
+/// any machine for a given build).
+fn dot(a: &[f32], b: &[f32]) -> f32 {
+    let mut acc = [0.0f32; 8];
+    let (ca, cb) = (a.chunks_exact(8), b.chunks_exact(8));
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        for k in 0..8 {
+            acc[k] += x[k] * y[k];
+        }
+    }
+    let mut tail = 0.0;
+    for (x, y) in ra.iter().zip(rb) {
+        tail += x * y;
+    }
+    ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7])) + tail
 }
 
 impl ScaleFilter {
@@ -152,26 +232,53 @@ impl ScaleFilter {
             });
         }
         let s = config.scales;
-        let half = (s / 2) as f64;
-        let factors: Vec<f64> = (0..s).map(|n| config.step.powf(half - n as f64)).collect();
-        let sigma = (s as f64).sqrt() * config.sigma_factor;
-        // label over the scales, peaked at the middle one
-        let mid = s / 2;
-        let ys: Vec<C32> = (0..s)
-            .map(|n| {
-                let d = n as f64 - mid as f64;
-                C32::new((-0.5 * d * d / (sigma * sigma)).exp() as f32, 0.0)
-            })
-            .collect();
+        let (factors, ys, interpolated): (Vec<f64>, Vec<f64>, usize) = match config.method {
+            ScaleMethod::Dsst => {
+                let half = (s / 2) as f64;
+                let sigma = (s as f64).sqrt() * config.sigma_factor;
+                // label over the scales, peaked at the middle one
+                let mid = s / 2;
+                (
+                    (0..s).map(|n| config.step.powf(half - n as f64)).collect(),
+                    (0..s)
+                        .map(|n| {
+                            let d = n as f64 - mid as f64;
+                            (-0.5 * d * d / (sigma * sigma)).exp()
+                        })
+                        .collect(),
+                    0,
+                )
+            }
+            ScaleMethod::Fdsst { interpolated } => {
+                let mid = (s - 1) / 2;
+                let spread = interpolated as f64 / s as f64;
+                let exp = |n: usize| (n as f64 - mid as f64) * spread;
+                let sigma = interpolated as f64 * config.sigma_factor;
+                (
+                    (0..s).map(|n| config.step.powf(exp(n))).collect(),
+                    // the label peaks at index 0 (fDSST's circshift)
+                    (0..s)
+                        .map(|n| {
+                            let d = exp((n + mid) % s);
+                            (-0.5 * d * d / (sigma * sigma)).exp()
+                        })
+                        .collect(),
+                    interpolated,
+                )
+            }
+        };
         let mut planner = FftPlanner::<f32>::new();
         let fwd = planner.plan_fft_forward(s);
         let inv = planner.plan_fft_inverse(s);
-        let mut scratch = vec![
-            C32::default();
-            fwd.get_inplace_scratch_len()
-                .max(inv.get_inplace_scratch_len())
-        ];
-        let mut ysf = ys;
+        let interp_inv = (interpolated > 0).then(|| planner.plan_fft_inverse(interpolated));
+        let mut scratch_len = fwd
+            .get_inplace_scratch_len()
+            .max(inv.get_inplace_scratch_len());
+        if let Some(p) = &interp_inv {
+            scratch_len = scratch_len.max(p.get_inplace_scratch_len());
+        }
+        let mut scratch = vec![C32::default(); scratch_len];
+        let mut ysf: Vec<C32> = ys.iter().map(|&v| C32::new(v as f32, 0.0)).collect();
         fwd.process_with_scratch(&mut ysf, &mut scratch);
         // model size: the target shrunk to at most model_max_area pixels,
         // and at least 2x2 cells
@@ -182,14 +289,15 @@ impl ScaleFilter {
         let hog = Fhog::new(mw, mh, config.cell)?;
         let dims = hog.len();
         // DSST's window: hann(S) for odd S (zero at the extreme scales),
-        // hann(S + 1) without its first value for even S
+        // hann(S + 1) without its first value for even S; fDSST's hann(S)
         let window = if s < 3 {
             vec![1.0; s]
-        } else if s % 2 == 1 {
+        } else if s % 2 == 1 || interpolated > 0 {
             hann(s)
         } else {
             hann(s + 1)[1..].to_vec()
         };
+        let fdsst = interpolated > 0;
         Ok(Self {
             config,
             factors,
@@ -202,17 +310,36 @@ impl ScaleFilter {
             inv,
             scratch,
             patch: vec![0.0; mw * mh],
-            feat: vec![0.0; dims],
+            raw: vec![0.0; dims * s],
             hog,
             xs: vec![C32::default(); dims * s],
-            num: vec![C32::default(); dims * s],
+            num: vec![C32::default(); if fdsst { s * s } else { dims * s }],
             den: vec![0.0; s],
             resp: vec![C32::default(); s],
+            snum: if fdsst {
+                vec![0.0; dims * s]
+            } else {
+                Vec::new()
+            },
+            basis: if fdsst {
+                vec![0.0; dims * s]
+            } else {
+                Vec::new()
+            },
+            proj: if fdsst {
+                vec![C32::default(); s * s]
+            } else {
+                Vec::new()
+            },
+            gs: if fdsst { vec![0.0; dims] } else { Vec::new() },
+            interp_inv,
+            interp: vec![C32::default(); interpolated],
             trained: false,
         })
     }
 
-    /// The relative scales searched, largest first.
+    /// The relative scales sampled (DSST: largest first; fDSST: smallest
+    /// first).
     pub fn factors(&self) -> &[f64] {
         &self.factors
     }
@@ -228,10 +355,17 @@ impl ScaleFilter {
     }
 
     /// Samples the scales around `(cx, cy)` at `scale` (0-based pixel
-    /// centre; `sampler` holds the frame's gray levels) into the spectra
-    /// along the scale axis.
-    fn sample(&mut self, sampler: &mut PatchSampler, cx: f64, cy: f64, scale: f64) -> Result<()> {
+    /// centre; `sampler` holds the frame's gray levels): the raw features
+    /// of each, one row per scale.
+    fn sample_raw(
+        &mut self,
+        sampler: &mut PatchSampler,
+        cx: f64,
+        cy: f64,
+        scale: f64,
+    ) -> Result<()> {
         let s = self.config.scales;
+        let dims = self.hog.len();
         for n in 0..s {
             let f = scale * self.factors[n];
             let (pw, ph) = (self.base.0 * f, self.base.1 * f);
@@ -241,15 +375,75 @@ impl ScaleFilter {
             for v in self.patch.iter_mut() {
                 *v *= 1.0 / 255.0;
             }
-            self.hog.compute(&self.patch, &mut self.feat)?;
+            self.hog
+                .compute(&self.patch, &mut self.raw[n * dims..][..dims])?;
+        }
+        Ok(())
+    }
+
+    /// The windowed raw samples' spectra along the scale axis, per feature
+    /// (`xs`).
+    fn spectra(&mut self) {
+        let s = self.config.scales;
+        let dims = self.hog.len();
+        for n in 0..s {
             let w = self.window[n];
-            for (d, &v) in self.feat.iter().enumerate() {
+            for (d, &v) in self.raw[n * dims..][..dims].iter().enumerate() {
                 self.xs[d * s + n] = C32::new(v * w, 0.0);
             }
         }
         self.fwd
             .process_with_scratch(&mut self.xs, &mut self.scratch);
-        Ok(())
+    }
+
+    /// fDSST: the rows of `src` (`S x dims`) projected on the basis,
+    /// windowed, transformed along the scales into `proj` (`S x S`: basis
+    /// vector by frequency).
+    fn project(&mut self, learnt: bool) {
+        let s = self.config.scales;
+        let dims = self.hog.len();
+        let src = if learnt { &self.snum } else { &self.raw };
+        for k in 0..s {
+            let q = &self.basis[k * dims..][..dims];
+            for n in 0..s {
+                let v = dot(q, &src[n * dims..][..dims]) * self.window[n];
+                self.proj[k * s + n] = C32::new(v, 0.0);
+            }
+        }
+        self.fwd
+            .process_with_scratch(&mut self.proj, &mut self.scratch);
+    }
+
+    /// fDSST: an orthonormal basis of the learnt samples' span (modified
+    /// Gram-Schmidt in f64 on the rows of `snum`: the QR factor of fDSST's
+    /// code up to signs, which cancel in the filter); a row dependent on
+    /// the earlier ones gets a zero basis vector.
+    fn orthonormalise(&mut self) {
+        let s = self.config.scales;
+        let dims = self.hog.len();
+        for j in 0..s {
+            let (done, rest) = self.basis.split_at_mut(j * dims);
+            let row = &self.snum[j * dims..][..dims];
+            for (g, &v) in self.gs.iter_mut().zip(row) {
+                *g = f64::from(v);
+            }
+            let norm0 = self.gs.iter().map(|v| v * v).sum::<f64>().sqrt();
+            for q in done.chunks_exact(dims) {
+                let r: f64 = q.iter().zip(&self.gs).map(|(&a, b)| f64::from(a) * b).sum();
+                for (g, &a) in self.gs.iter_mut().zip(q) {
+                    *g -= r * f64::from(a);
+                }
+            }
+            let norm = self.gs.iter().map(|v| v * v).sum::<f64>().sqrt();
+            let out = &mut rest[..dims];
+            if norm > 1e-6 * norm0 && norm > 1e-30 {
+                for (o, g) in out.iter_mut().zip(&self.gs) {
+                    *o = (g / norm) as f32;
+                }
+            } else {
+                out.fill(0.0);
+            }
+        }
     }
 
     /// Learns the scale model at `(cx, cy)` and `scale` with `rate` (the
@@ -265,18 +459,37 @@ impl ScaleFilter {
         scale: f64,
         rate: f64,
     ) -> Result<()> {
-        self.sample(sampler, cx, cy, scale)?;
+        self.sample_raw(sampler, cx, cy, scale)?;
+        self.spectra();
         let s = self.config.scales;
         let r = if self.trained { rate as f32 } else { 1.0 };
         for n in 0..s {
             self.den[n] *= 1.0 - r;
         }
-        for (d, row) in self.xs.chunks_exact(s).enumerate() {
-            let num = &mut self.num[d * s..(d + 1) * s];
-            for n in 0..s {
-                let x = row[n];
-                num[n] = num[n] * (1.0 - r) + self.ysf[n] * x.conj() * r;
-                self.den[n] += r * x.norm_sqr();
+        for row in self.xs.chunks_exact(s) {
+            for (den, x) in self.den.iter_mut().zip(row) {
+                *den += r * x.norm_sqr();
+            }
+        }
+        if self.interp_inv.is_some() {
+            // fDSST: learn the sample matrix, then the filter of its
+            // projection on its own basis
+            for (m, &x) in self.snum.iter_mut().zip(&self.raw) {
+                *m = *m * (1.0 - r) + r * x;
+            }
+            self.orthonormalise();
+            self.project(true);
+            for (num, p) in self.num.chunks_exact_mut(s).zip(self.proj.chunks_exact(s)) {
+                for n in 0..s {
+                    num[n] = self.ysf[n] * p[n].conj();
+                }
+            }
+        } else {
+            for (d, row) in self.xs.chunks_exact(s).enumerate() {
+                let num = &mut self.num[d * s..(d + 1) * s];
+                for n in 0..s {
+                    num[n] = num[n] * (1.0 - r) + self.ysf[n] * row[n].conj() * r;
+                }
             }
         }
         self.trained = true;
@@ -284,8 +497,9 @@ impl ScaleFilter {
     }
 
     /// The scale change at `(cx, cy)` from `scale`: the relative factor of
-    /// the best of the sampled scales, refined by a parabola through the
-    /// neighbouring responses (in log scale), and the response's peak.
+    /// the best of the sampled (DSST) or interpolated (fDSST) scales,
+    /// refined by a parabola through the neighbouring responses (in log
+    /// scale), and the response's peak.
     ///
     /// # Errors
     /// [`DcfError::NotInitialised`] before any training; sampler errors.
@@ -299,43 +513,92 @@ impl ScaleFilter {
         if !self.trained {
             return Err(DcfError::NotInitialised);
         }
-        self.sample(sampler, cx, cy, scale)?;
+        self.sample_raw(sampler, cx, cy, scale)?;
         let s = self.config.scales;
         self.resp.fill(C32::default());
-        for (row, num) in self.xs.chunks_exact(s).zip(self.num.chunks_exact(s)) {
-            for n in 0..s {
-                self.resp[n] += num[n] * row[n];
+        if self.interp_inv.is_some() {
+            self.project(false);
+            for (p, num) in self.proj.chunks_exact(s).zip(self.num.chunks_exact(s)) {
+                for n in 0..s {
+                    self.resp[n] += num[n] * p[n];
+                }
+            }
+        } else {
+            self.spectra();
+            for (row, num) in self.xs.chunks_exact(s).zip(self.num.chunks_exact(s)) {
+                for n in 0..s {
+                    self.resp[n] += num[n] * row[n];
+                }
             }
         }
         let lambda = self.config.lambda as f32;
         for n in 0..s {
             self.resp[n] /= self.den[n] + lambda;
         }
+        if let Some(interp_inv) = &self.interp_inv {
+            return self.interpolated(interp_inv.clone());
+        }
         self.inv
             .process_with_scratch(&mut self.resp, &mut self.scratch);
         // the label peaks at the middle scale: the response peaks at the
         // index of the sample whose scale matches the model
-        let mut best = (f32::NEG_INFINITY, 0usize);
-        for (n, v) in self.resp.iter().enumerate() {
-            if v.re > best.0 {
-                best = (v.re, n);
-            }
-        }
-        if !best.0.is_finite() {
-            return Err(DcfError::NonFinite {
-                what: "scale response",
-            });
-        }
-        let n = best.1;
+        let (n, best) = argmax(&self.resp)?;
         let off = if n > 0 && n + 1 < s {
-            parabola_offset(self.resp[n - 1].re, best.0, self.resp[n + 1].re)
+            parabola_offset(self.resp[n - 1].re, best, self.resp[n + 1].re)
         } else {
             0.0
         };
         // sample n has the factor step^(floor(S/2) - n)
         let factor = self.config.step.powf((s / 2) as f64 - (n as f64 + off));
-        Ok((factor, best.0 / s as f32))
+        Ok((factor, best / s as f32))
     }
+
+    /// fDSST: the response's spectrum zero-padded to the interpolated
+    /// scales (fDSST's `resizeDFT`), back to scales one step apart; the
+    /// peak's index (cyclic, 0 = no change) is the exponent of the step.
+    fn interpolated(&mut self, inv: Arc<dyn Fft<f32>>) -> Result<(f64, f32)> {
+        let (s, ni) = (self.config.scales, self.interp.len());
+        let k = ni as f32 / s as f32;
+        let mids = s.div_ceil(2);
+        let mide = (s - 1) / 2;
+        self.interp.fill(C32::default());
+        for i in 0..mids {
+            self.interp[i] = self.resp[i] * k;
+        }
+        for i in 0..mide {
+            self.interp[ni - mide + i] = self.resp[s - mide + i] * k;
+        }
+        inv.process_with_scratch(&mut self.interp, &mut self.scratch);
+        let (n, best) = argmax(&self.interp)?;
+        let at = |i: usize| self.interp[i % ni].re;
+        let off = if ni >= 3 {
+            parabola_offset(at(n + ni - 1), best, at(n + 1))
+        } else {
+            0.0
+        };
+        let e = if n <= (ni - 1) / 2 {
+            n as f64
+        } else {
+            n as f64 - ni as f64
+        };
+        Ok((self.config.step.powf(e + off), best / ni as f32))
+    }
+}
+
+/// The index and real part of the largest real part.
+fn argmax(v: &[C32]) -> Result<(usize, f32)> {
+    let mut best = (f32::NEG_INFINITY, 0usize);
+    for (n, c) in v.iter().enumerate() {
+        if c.re > best.0 {
+            best = (c.re, n);
+        }
+    }
+    if !best.0.is_finite() {
+        return Err(DcfError::NonFinite {
+            what: "scale response",
+        });
+    }
+    Ok((best.1, best.0))
 }
 
 #[cfg(test)]
@@ -382,6 +645,41 @@ mod tests {
         let mut s1 = sampler(1.04);
         let (factor, _) = f.detect(&mut s1, 79.5, 59.5, 1.04).unwrap();
         assert!((factor - 1.0).abs() < 0.02, "{factor}");
+    }
+
+    #[test]
+    fn fdsst_estimates_a_zoom_within_one_step() {
+        let mut f = ScaleFilter::new(ScaleConfig::fdsst(), 40.0, 28.0).unwrap();
+        assert_eq!(f.factors().len(), 17);
+        let mut s0 = sampler(1.0);
+        f.train(&mut s0, 79.5, 59.5, 1.0, 0.025).unwrap();
+        for zoom in [1.04, 1.0 / 1.04, 1.0, 1.1] {
+            let mut s1 = sampler(zoom);
+            let (factor, _) = f.detect(&mut s1, 79.5, 59.5, 1.0).unwrap();
+            let err = (factor.ln() - zoom.ln()).abs() / 1.02f64.ln();
+            assert!(
+                err < 1.0,
+                "zoom {zoom}: factor {factor:.4}, {err:.2} steps off"
+            );
+        }
+        let mut s1 = sampler(1.04);
+        let (factor, _) = f.detect(&mut s1, 79.5, 59.5, 1.04).unwrap();
+        assert!((factor - 1.0).abs() < 0.02, "{factor}");
+    }
+
+    #[test]
+    fn fdsst_basis_is_orthonormal() {
+        let mut f = ScaleFilter::new(ScaleConfig::fdsst(), 40.0, 28.0).unwrap();
+        let mut s0 = sampler(1.0);
+        f.train(&mut s0, 79.5, 59.5, 1.0, 0.025).unwrap();
+        let dims = f.hog.len();
+        for i in 0..17 {
+            for j in 0..17 {
+                let d = dot(&f.basis[i * dims..][..dims], &f.basis[j * dims..][..dims]);
+                let want = if i == j { 1.0 } else { 0.0 };
+                assert!((d - want).abs() < 1e-4, "q{i} . q{j} = {d}");
+            }
+        }
     }
 
     #[test]

@@ -18,7 +18,7 @@
 //! (a weak or multi-modal peak: occlusion, fast appearance change).
 
 use bayestrack_dcf::kcf::Kernel;
-use bayestrack_dcf::scale::ScaleConfig;
+use bayestrack_dcf::scale::{ScaleConfig, ScaleMethod};
 use bayestrack_dcf::{Dcf, DcfConfig, Padding, Staple, StapleConfig, Step};
 use bayestrack_image::BBox;
 use bayestrack_options::options;
@@ -64,6 +64,12 @@ options! {
         pub scale_learning_rate: f64 = 0.025;
         /// Largest area of the scale samples, pixels (DSST: 512).
         pub scale_model_max_area: f64 = 512.0;
+        /// fDSST's scale filter (Danelljan et al. 2017): 17 scales
+        /// interpolated to 33, label factor 1/16, features compressed on the
+        /// learnt samples' basis, instead of DSST's 33 (`scales` and
+        /// `scale_sigma_factor` then unused); the step, lambda, rate and area
+        /// above still apply.
+        pub fdsst: bool = false;
         /// Gate the model update on the response (LMCF's rule).
         pub gate: bool = true;
         /// Fraction of the mean peak a learnt response needs (LMCF beta_1: 0.7).
@@ -95,15 +101,19 @@ impl DcfTrackerConfig {
             learning_rate: self.learning_rate,
             cell: self.cell,
             model_area: self.model_area,
-            scale: self.scale.then_some(ScaleConfig {
-                scales: self.scales,
-                step: self.scale_step,
-                sigma_factor: self.scale_sigma_factor,
-                lambda: self.scale_lambda,
-                learning_rate: self.scale_learning_rate,
-                model_max_area: self.scale_model_max_area,
-                cell: self.cell,
-            }),
+            scale: self.scale.then_some(scale_config(
+                self.fdsst,
+                ScaleConfig {
+                    scales: self.scales,
+                    step: self.scale_step,
+                    sigma_factor: self.scale_sigma_factor,
+                    lambda: self.scale_lambda,
+                    learning_rate: self.scale_learning_rate,
+                    model_max_area: self.scale_model_max_area,
+                    cell: self.cell,
+                    method: ScaleMethod::Dsst,
+                },
+            )),
             gate: self.gate.then_some((self.gate_peak, self.gate_apce)),
         }
     }
@@ -149,6 +159,12 @@ options! {
         pub scale_learning_rate: f64 = 0.025;
         /// Largest area of the scale samples, pixels (Staple: 32 x 16 = 512).
         pub scale_model_max_area: f64 = 512.0;
+        /// fDSST's scale filter (Danelljan et al. 2017): 17 scales
+        /// interpolated to 33, label factor 1/16, features compressed on the
+        /// learnt samples' basis, instead of DSST's 33 (`scales` and
+        /// `scale_sigma_factor` then unused); the step, lambda, rate and area
+        /// above still apply.
+        pub fdsst: bool = false;
         /// Gate the model updates on the correlation response (LMCF's rule).
         pub gate: bool = true;
         /// Fraction of the mean peak a learnt response needs (LMCF beta_1: 0.7).
@@ -175,21 +191,43 @@ impl StapleTrackerConfig {
                 learning_rate: self.learning_rate,
                 cell: self.cell,
                 model_area: self.model_area,
-                scale: self.scale.then_some(ScaleConfig {
-                    scales: self.scales,
-                    step: self.scale_step,
-                    sigma_factor: self.scale_sigma_factor,
-                    lambda: self.scale_lambda,
-                    learning_rate: self.scale_learning_rate,
-                    model_max_area: self.scale_model_max_area,
-                    cell: self.cell,
-                }),
+                scale: self.scale.then_some(scale_config(
+                    self.fdsst,
+                    ScaleConfig {
+                        scales: self.scales,
+                        step: self.scale_step,
+                        sigma_factor: self.scale_sigma_factor,
+                        lambda: self.scale_lambda,
+                        learning_rate: self.scale_learning_rate,
+                        model_max_area: self.scale_model_max_area,
+                        cell: self.cell,
+                        method: ScaleMethod::Dsst,
+                    },
+                )),
                 gate: self.gate.then_some((self.gate_peak, self.gate_apce)),
             },
             merge_factor: self.merge_factor,
             colour_rate: self.colour_rate,
             inner_padding: self.inner_padding,
         }
+    }
+}
+
+/// The scale filter's configuration: `dsst` as given, or fDSST's
+/// published scales, label and method with `dsst`'s step, lambda, rate,
+/// area and cell.
+fn scale_config(fdsst: bool, dsst: ScaleConfig) -> ScaleConfig {
+    if fdsst {
+        ScaleConfig {
+            step: dsst.step,
+            lambda: dsst.lambda,
+            learning_rate: dsst.learning_rate,
+            model_max_area: dsst.model_max_area,
+            cell: dsst.cell,
+            ..ScaleConfig::fdsst()
+        }
+    } else {
+        dsst
     }
 }
 
