@@ -8,8 +8,12 @@
 //! velocity with Gaussian noise relative to the current size
 //! `z = s sqrt(w0 h0)`: `c' = c + v + n_p z`, `v' = v + n_v z`,
 //! `ln s' = ln s + n_s` ([`PfDcfConfig::position_noise`],
-//! [`PfDcfConfig::velocity_noise`], [`PfDcfConfig::scale_noise`]); the
-//! centre is kept on the frame and the scale within the filter's bounds.
+//! [`PfDcfConfig::velocity_noise`], [`PfDcfConfig::scale_noise`]), or
+//! with probability `e` ([`PfDcfConfig::jump_fraction`]) a jump
+//! `c' = c + n_j z`, `v' = 0` ([`PfDcfConfig::jump_spread`]), a valid
+//! transition density (so the bootstrap weights stay `p(y | x)`) whose
+//! particles find a target that moved abruptly; the centre is kept on the
+//! frame and the scale within the filter's bounds.
 //!
 //! # Likelihood
 //! Before the particles move, the KCF filter of `bayestrack-dcf` (the
@@ -72,7 +76,7 @@ use bayestrack_image::BBox;
 use bayestrack_options::options;
 use bayestrack_particle::{ParticleSet, Proposal, Resampling, Smc, stream_seed};
 use nalgebra::SVector;
-use rand::Rng;
+use rand::{Rng, RngExt};
 use rand_distr::{Distribution, StandardNormal};
 
 use crate::engine::select_predict_measure;
@@ -124,6 +128,13 @@ options! {
         pub velocity_noise: f64 = 0.05;
         /// Log-scale noise `sigma_s` per frame (0.02); 0 keeps the first size.
         pub scale_noise: f64 = 0.02;
+        /// Fraction `e` of particles that jump instead of moving at
+        /// constant velocity (0.1, as `hist-pf-scale`): they find a target
+        /// that moved abruptly within the window.
+        pub jump_fraction: f64 = 0.1;
+        /// Jump spread `sigma_j`, fraction of the target size (0.5, as
+        /// `hist-pf-scale`).
+        pub jump_spread: f64 = 0.5;
         /// Ratio between the three response scales (SiamFC-3s: 1.0375).
         pub scale_step: f64 = 1.0375;
         /// Gate the model update on the response (LMCF's rule); without the
@@ -173,11 +184,15 @@ impl PfDcfConfig {
             ("position_noise", self.position_noise),
             ("velocity_noise", self.velocity_noise),
             ("scale_noise", self.scale_noise),
+            ("jump_spread", self.jump_spread),
         ];
         for (name, v) in nonneg {
             if !(v.is_finite() && v >= 0.0) {
                 return bad(name, v, "must be finite and >= 0");
             }
+        }
+        if !(0.0..=1.0).contains(&self.jump_fraction) {
+            return bad("jump_fraction", self.jump_fraction, "must be in [0, 1]");
         }
         if !(self.scale_step.is_finite() && self.scale_step > 1.0 && self.scale_step <= 2.0) {
             return bad("scale_step", self.scale_step, "must be in (1, 2]");
@@ -337,13 +352,21 @@ impl PfDcfProposal<'_> {
         let c = self.config;
         let z = self.z0 * x[4].exp();
         let (sp, ss) = (self.spread.0 * z, self.spread.1);
+        let jump = c.jump_fraction > 0.0 && rng.random::<f64>() < c.jump_fraction;
         let mut n = || -> f64 { StandardNormal.sample(rng) };
         let mut y = *x;
-        y[0] += x[2] + c.position_noise * sp * n();
-        y[1] += x[3] + c.position_noise * sp * n();
-        y[2] += c.velocity_noise * sp * n();
-        y[3] += c.velocity_noise * sp * n();
-        y[4] += c.scale_noise * ss * n();
+        if jump {
+            y[0] += c.jump_spread * sp * n();
+            y[1] += c.jump_spread * sp * n();
+            y[2] = 0.0;
+            y[3] = 0.0;
+        } else {
+            y[0] += x[2] + c.position_noise * sp * n();
+            y[1] += x[3] + c.position_noise * sp * n();
+            y[2] += c.velocity_noise * sp * n();
+            y[3] += c.velocity_noise * sp * n();
+            y[4] += c.scale_noise * ss * n();
+        }
         y[0] = y[0].clamp(0.0, self.frame.0 - 1.0);
         y[1] = y[1].clamp(0.0, self.frame.1 - 1.0);
         y[4] = y[4].clamp(self.scale_bounds.0, self.scale_bounds.1);
@@ -645,6 +668,11 @@ mod tests {
         got.iter().zip(truth).map(|(a, b)| iou(a, b)).sum::<f64>() / got.len() as f64
     }
 
+    /// A target moving on a curve while it grows by 40 % or shrinks by 30 %
+    /// over 60 frames, gray and RGB, two seeds. Measured (this build): mean
+    /// IoU 0.833 to 0.907, worst centre error 1.66 to 2.50 px, final size
+    /// within 12.1 % of the truth (the scale lags a growing target). Bounds:
+    /// IoU 0.78, centre 3.5 px, size 15 %.
     #[test]
     fn holds_growing_and_shrinking_targets() {
         for (rgb, grow) in [(false, 1.4), (true, 1.4), (false, 0.7), (true, 1.0)] {
@@ -659,7 +687,181 @@ mod tests {
                     "rgb {rgb} grow {grow} seed {seed}: IoU {iou:.3}, centre {centre:.2}, size ratio {last:.3}, {:?}",
                     t.diagnostics()
                 );
+                let case = format!("rgb {rgb} grow {grow} seed {seed}");
+                assert!(iou >= 0.78, "{case}: mean IoU {iou:.3}");
+                assert!(centre < 3.5, "{case}: centre error {centre:.2}");
+                assert!((last - 1.0).abs() < 0.15, "{case}: size ratio {last:.3}");
             }
         }
+    }
+
+    /// With the log-scale noise 0 the particles keep the first size: the
+    /// size bound above fails on the growing target.
+    #[test]
+    fn without_log_scale_noise_the_size_is_lost() {
+        let (frames, truth) = scene(61, false, 3.0, |k| growing(k, 1.4));
+        let mut t = pf(
+            PfDcfConfig {
+                scale_noise: 0.0,
+                ..PfDcfConfig::default()
+            },
+            1,
+        );
+        let got = run(&mut t, &frames, truth[0]);
+        let last = got.last().unwrap().width / truth.last().unwrap().width;
+        assert!((last - 1.0 / 1.4).abs() < 1e-9, "{last}");
+    }
+
+    /// A target that moves 40 px while the scene is blanked (frames 15 to
+    /// 24: a flat grey band over the whole track), farther than the half
+    /// window (30 px) the normal search covers. Returns frames and truth.
+    fn jump_scene() -> (Vec<Image<u8>>, Vec<BBox>) {
+        let path = |k: usize| {
+            let jump = if k >= 20 { 40.0 } else { 0.0 };
+            (45.0 + 0.5 * k as f64 + jump, 60.0, 24.0, 30.0)
+        };
+        let (mut frames, truth) = scene(50, false, 3.0, path);
+        for f in &mut frames[15..25] {
+            for y in 30..90 {
+                for x in 20..150 {
+                    f.set(x, y, 0, 128);
+                }
+            }
+        }
+        (frames, truth)
+    }
+
+    fn lost_run(config: PfDcfConfig, seed: u64) -> (Vec<BBox>, Vec<bool>, PfDcfDiagnostics) {
+        let (frames, truth) = jump_scene();
+        let mut t = pf(config, seed);
+        t.init(frames[0].view(), truth[0]).unwrap();
+        let (mut boxes, mut lost) = (vec![truth[0]], vec![false]);
+        for f in &frames[1..] {
+            let e = t.step(f.view()).unwrap();
+            boxes.push(e.bbox);
+            lost.push(e.lost);
+        }
+        (boxes, lost, t.diagnostics())
+    }
+
+    /// The blanked frames are refused (lost, model frozen); the wide search
+    /// finds the target 40 px away when it comes back.
+    #[test]
+    fn re_detects_a_target_that_moved_while_hidden() {
+        let (_, truth) = jump_scene();
+        for seed in [1, 2, 3] {
+            let (boxes, lost, d) = lost_run(PfDcfConfig::default(), seed);
+            let (centre, _) = errors(&boxes[35..], &truth[35..]);
+            eprintln!("seed {seed}: {d:?}, centre error after {centre:.2}, lost {lost:?}");
+            assert!(lost[..15].iter().all(|l| !l), "seed {seed}: {lost:?}");
+            assert!(lost[15..25].iter().all(|&l| l), "seed {seed}: {lost:?}");
+            assert!(d.reacquisitions >= 1, "seed {seed}: {d:?}");
+            assert!(
+                centre < 3.0,
+                "seed {seed}: centre error {centre:.2} after re-detection"
+            );
+        }
+    }
+
+    /// Mutations of the re-detection: without the wider search, or without
+    /// the gate (the model learns the blank band), the target is not found
+    /// again.
+    #[test]
+    fn without_re_detection_the_target_stays_lost() {
+        let (_, truth) = jump_scene();
+        for (name, config) in [
+            (
+                "no redetect",
+                PfDcfConfig {
+                    redetect: false,
+                    ..PfDcfConfig::default()
+                },
+            ),
+            (
+                "no gate",
+                PfDcfConfig {
+                    gate: false,
+                    ..PfDcfConfig::default()
+                },
+            ),
+        ] {
+            let (boxes, _, d) = lost_run(config, 1);
+            let (centre, _) = errors(&boxes[35..], &truth[35..]);
+            eprintln!("{name}: {d:?}, centre error after {centre:.2}");
+            assert!(centre > 10.0, "{name}: centre error {centre:.2}");
+        }
+    }
+
+    #[test]
+    fn deterministic_for_a_seed() {
+        let (frames, truth) = scene(20, true, 3.0, |k| growing(k, 1.2));
+        let a = run(&mut pf(PfDcfConfig::default(), 4), &frames, truth[0]);
+        let b = run(&mut pf(PfDcfConfig::default(), 4), &frames, truth[0]);
+        let c = run(&mut pf(PfDcfConfig::default(), 5), &frames, truth[0]);
+        assert_eq!(a, b);
+        assert_ne!(a, c);
+    }
+
+    #[test]
+    fn bad_input_is_an_error() {
+        for bad in [
+            PfDcfConfig {
+                particles: 0,
+                ..PfDcfConfig::default()
+            },
+            PfDcfConfig {
+                likelihood: f64::NAN,
+                ..PfDcfConfig::default()
+            },
+            PfDcfConfig {
+                scale_step: 1.0,
+                ..PfDcfConfig::default()
+            },
+            PfDcfConfig {
+                redetect_grid: 2,
+                ..PfDcfConfig::default()
+            },
+            PfDcfConfig {
+                redetect_spread: 0.5,
+                ..PfDcfConfig::default()
+            },
+        ] {
+            assert!(matches!(
+                PfDcfTracker::new(bad, 0),
+                Err(TrackerError::InvalidParameter { .. })
+            ));
+        }
+        assert!(matches!(
+            PfDcfTracker::new(
+                PfDcfConfig {
+                    cell: 0,
+                    ..PfDcfConfig::default()
+                },
+                0
+            ),
+            Err(TrackerError::Dcf(_))
+        ));
+        let gray = Image::from_fn(40, 30, |x, y| ((x * 7 + y * 3) % 50) as u8).unwrap();
+        let two = Image::new(40, 30, 2, 0u8).unwrap();
+        let mut t = pf(PfDcfConfig::default(), 0);
+        assert!(matches!(
+            t.step(gray.view()),
+            Err(TrackerError::NotInitialised)
+        ));
+        assert!(matches!(
+            t.init(two.view(), BBox::new(1.0, 1.0, 5.0, 5.0)),
+            Err(TrackerError::Channels { .. })
+        ));
+        // a flat frame: a zero response, equal weights; tracked, not NaN
+        let flat = Image::new(40, 30, 1, 7u8).unwrap();
+        t.init(flat.view(), BBox::new(10.0, 10.0, 8.0, 8.0))
+            .unwrap();
+        let e = t.step(flat.view()).unwrap();
+        assert!(e.bbox.x.is_finite() && e.bbox.width.is_finite());
+        let other = Image::new(41, 30, 1, 0u8).unwrap();
+        assert!(matches!(
+            t.step(other.view()),
+            Err(TrackerError::FrameSizeChanged { .. })
+        ));
     }
 }

@@ -214,7 +214,7 @@ pub const REGISTRY: &[TrackerInfo] = &[
     },
     TrackerInfo {
         name: "pf-dcf",
-        summary: "real video: 200 particles over (x, y, vx, vy, ln s) weighed by exp(20 R / mean peak), R the KCF fHOG response (dcf's filter) at 3 scales 1.0375 apart; LMCF gate: a refused frame freezes the model and the next search spreads 3x wider over a 3x3 window grid until the response passes again",
+        summary: "real video: 200 particles over (x, y, vx, vy, ln s) (constant velocity, 10 % jumps) weighed by exp(20 R / mean peak), R the KCF fHOG response (dcf's filter) at 3 scales 1.0375 apart; LMCF gate: a refused frame freezes the model and the next search spreads 3x wider over a 3x3 window grid until the response passes again",
         handles_scale: true,
         options: PfDcfConfig::specs,
         build: |seed, set| boxed(PfDcfTracker::new(options_of("pf-dcf", &[], set)?, seed)),
