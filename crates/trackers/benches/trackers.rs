@@ -533,6 +533,7 @@ fn bench_pf_dcf(c: &mut Criterion) {
 criterion_group!(
     benches,
     bench_dcf,
+    bench_pf_dcf,
     bench_ball,
     bench_road,
     bench_street,

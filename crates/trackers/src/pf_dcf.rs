@@ -206,7 +206,8 @@ impl PfDcfConfig {
                 return bad(name, v, "must be in [1, 100]");
             }
         }
-        if self.redetect_grid == 0 || self.redetect_grid % 2 == 0 || self.redetect_grid > 9 {
+        if self.redetect_grid == 0 || self.redetect_grid.is_multiple_of(2) || self.redetect_grid > 9
+        {
             return bad(
                 "redetect_grid",
                 self.redetect_grid as f64,
