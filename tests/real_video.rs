@@ -121,3 +121,17 @@ fn correlation_filters_on_couple() {
         );
     }
 }
+
+/// pf-dcf (the correlation response as a particle likelihood) on
+/// Crossing: measured AUC 0.772, P@20 1.000 (seed 0, `cargo xtask otb`);
+/// floors 0.6 and 0.9. On Couple it loses the walkers (AUC 0.086) and on
+/// David it scores AUC 0.565: no floor claims more than Crossing yet.
+#[test]
+fn pf_dcf_follows_crossing() {
+    let Some(seq) = sequence("Crossing") else {
+        return;
+    };
+    let (auc, p20) = one_pass("pf-dcf", &seq);
+    assert!(auc >= 0.6, "pf-dcf: AUC {auc:.3} below the floor 0.6");
+    assert!(p20 >= 0.9, "pf-dcf: P@20 {p20:.3} below the floor 0.9");
+}

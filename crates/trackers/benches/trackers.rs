@@ -13,6 +13,7 @@ use bayestrack_trackers::{DcfTracker, DcfTrackerConfig, StapleTracker, StapleTra
 use bayestrack_trackers::{
     HkpfConfig, HkpfTracker, IspfConfig, IspfTracker, StpfConfig, StpfTracker,
 };
+use bayestrack_trackers::{PfDcfConfig, PfDcfTracker};
 use criterion::measurement::WallTime;
 use criterion::{BenchmarkGroup, Criterion, Throughput, criterion_group, criterion_main};
 use rand::SeedableRng;
@@ -525,9 +526,25 @@ fn bench_dcf(c: &mut Criterion) {
     }
 }
 
+/// `pf-dcf` per frame on the same real sequences as [`bench_dcf`], RGB
+/// (200 particles, 3 responses and one model update per tracked frame).
+fn bench_pf_dcf(c: &mut Criterion) {
+    for name in ["Crossing", "Couple"] {
+        let Some((frames, first)) = real_sequence(name) else {
+            continue;
+        };
+        let mut group = c.benchmark_group(format!("{name} real RGB (pf-dcf)"));
+        group.throughput(Throughput::Elements(1));
+        let mut tracker = PfDcfTracker::new(PfDcfConfig::default(), 0).unwrap();
+        bench_steps(&mut group, "pf-dcf step", &mut tracker, &frames, first);
+        group.finish();
+    }
+}
+
 criterion_group!(
     benches,
     bench_dcf,
+    bench_pf_dcf,
     bench_ball,
     bench_road,
     bench_street,

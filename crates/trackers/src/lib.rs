@@ -13,6 +13,7 @@ mod histogram_filters;
 mod mad_correlation;
 mod multi_target;
 mod ncc_scale;
+mod pf_dcf;
 mod registry;
 mod shell;
 mod tracker;
@@ -43,6 +44,7 @@ pub use multi_target::{
     measurement_matrix, transition_matrix,
 };
 pub use ncc_scale::{NccScaleConfig, NccScaleCore, NccScaleTracker};
+pub use pf_dcf::{PfDcfConfig, PfDcfCore, PfDcfDiagnostics, PfDcfTracker};
 pub use registry::{REGISTRY, TrackerInfo, build_tracker, tracker_info};
 pub use shell::{ChannelPolicy, InitialBox, Needs, PlaneBuffers, Planes, Shell, TrackerCore};
 pub use tracker::{Estimate, FrameGuard, Tracker, check_initial_box};

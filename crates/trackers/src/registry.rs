@@ -12,6 +12,7 @@ use crate::mad_correlation::{
     MadTracker, MadTrackerConfig, PfCorrelationConfig, PfCorrelationTracker,
 };
 use crate::ncc_scale::{NccScaleConfig, NccScaleTracker};
+use crate::pf_dcf::{PfDcfConfig, PfDcfTracker};
 use crate::tracker::Tracker;
 use bayestrack_options::{Options, Spec, options};
 
@@ -210,6 +211,13 @@ pub const REGISTRY: &[TrackerInfo] = &[
         handles_scale: true,
         options: StapleTrackerConfig::specs,
         build: |_, set| boxed(StapleTracker::new(options_of("dcf-staple", &[], set)?)),
+    },
+    TrackerInfo {
+        name: "pf-dcf",
+        summary: "real video: 200 particles over (x, y, vx, vy, ln s) (constant velocity, 10 % jumps) weighed by exp(20 R / mean peak), R the KCF fHOG response (dcf's filter) at 3 scales 1.0375 apart; LMCF gate: a refused frame freezes the model and the next search spreads 3x wider over a 3x3 window grid until the response passes again",
+        handles_scale: true,
+        options: PfDcfConfig::specs,
+        build: |seed, set| boxed(PfDcfTracker::new(options_of("pf-dcf", &[], set)?, seed)),
     },
     TrackerInfo {
         name: "hist-pf-scale",
