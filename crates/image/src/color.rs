@@ -120,7 +120,9 @@ fn rgb_to_hsv_f32(r: f32, g: f32, b: f32) -> (f32, f32, f32) {
 
 /// Shortest signed distance between two hues in turns, in `[-0.5, 0.5]`.
 ///
-/// Hue is circular: 0.98 and 0.02 are 0.04 apart, not 0.96.
+/// Hue is circular: 0.98 and 0.02 are 0.04 apart, not 0.96. Hues come
+/// from the colour conversions of this crate, which are finite; a NaN or
+/// infinite argument gives NaN (there is no distance to give).
 #[inline]
 pub fn hue_distance(a: f32, b: f32) -> f32 {
     let d = (a - b).rem_euclid(1.0);

@@ -408,6 +408,11 @@ impl<T: Clone> ParticleSet<T> {
     }
 
     /// Weighted covariance `sum w_i (x_i - m)(x_i - m)^T`.
+    ///
+    /// The states are finite (every constructor checks them), but an entry
+    /// whose square passes the largest `f64` (a spread beyond about 1e154)
+    /// is infinite here, as in any `f64` arithmetic; check
+    /// `is_finite()` on the result where states can be that far apart.
     pub fn covariance<const N: usize>(&self) -> SMatrix<f64, N, N>
     where
         T: Particle<N>,
