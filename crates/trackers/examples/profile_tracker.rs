@@ -2,10 +2,11 @@
 //! real sequence, for profiling (callgrind: `--toggle-collect=*run_tracker*`
 //! counts the tracker calls only, not the JPEG decoding).
 //!
-//! `cargo run --release -p bayestrack-trackers --example profile_tracker -- Crossing hkpf [repeats]`
+//! `cargo run --release -p bayestrack-trackers --example profile_tracker -- Crossing hkpf [repeats] [key=value ...]`
+//! (options as `--set` takes them, e.g. `dcf 1 fdsst=true`).
 
 use bayestrack_image::{BBox, Image};
-use bayestrack_trackers::{Tracker, build_tracker};
+use bayestrack_trackers::{Tracker, tracker_info};
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -63,13 +64,20 @@ fn main() {
     let seq = args.next().unwrap_or_else(|| "Crossing".into());
     let name = args.next().unwrap_or_else(|| "hkpf".into());
     let repeats: usize = args.next().map_or(1, |s| s.parse().expect("repeats"));
+    let set: Vec<(String, String)> = args
+        .map(|kv| {
+            let (k, v) = kv.split_once('=').expect("options as key=value");
+            (k.to_string(), v.to_string())
+        })
+        .collect();
+    let info = tracker_info(&name).expect("a registered tracker");
     let (frames, first) = frames(&seq);
     let mut best = f64::INFINITY;
     let mut digest = 0;
     let mut boxes = Vec::with_capacity(frames.len());
     for _ in 0..repeats {
         boxes.clear();
-        let mut tracker = build_tracker(&name, 0).expect("tracker");
+        let mut tracker = info.build_with(0, &set).expect("tracker options");
         let t0 = Instant::now();
         digest = run_tracker(tracker.as_mut(), &frames, first, &mut boxes);
         best = best.min(t0.elapsed().as_secs_f64());
