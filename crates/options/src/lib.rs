@@ -454,6 +454,43 @@ impl<A: Options, B: Options> Options for (A, B) {
     }
 }
 
+/// The specs of a group of options (`groups { .. }` in [`options!`]) with
+/// the defaults its parent declares for it.
+#[doc(hidden)]
+pub fn __group_specs<G: Options>(parent_default: &G) -> Vec<Spec> {
+    let values = parent_default.values();
+    G::specs()
+        .into_iter()
+        .map(|mut s| {
+            if let Some((_, v)) = values.iter().find(|(k, _)| *k == s.key) {
+                s.default.clone_from(v);
+            }
+            s
+        })
+        .collect()
+}
+
+/// Panics (in debug builds: a declaration error, found by the first test
+/// that lists the options) when two options of `name` share a key.
+#[doc(hidden)]
+pub fn __check_unique(name: &str, specs: &[Spec]) {
+    if cfg!(debug_assertions) {
+        for (i, a) in specs.iter().enumerate() {
+            assert!(
+                specs[..i].iter().all(|b| b.key != a.key),
+                "options {name}: the key `{}` is declared twice (own fields and groups share one namespace)",
+                a.key
+            );
+        }
+    }
+}
+
+/// `e` listing `valid` as the valid keys.
+#[doc(hidden)]
+pub fn __with_keys(e: OptionError, valid: String) -> OptionError {
+    with_keys(e, valid)
+}
+
 /// `e` listing `valid` as the valid keys.
 fn with_keys(e: OptionError, valid: String) -> OptionError {
     match e {
@@ -483,7 +520,11 @@ fn with_keys(e: OptionError, valid: String) -> OptionError {
 ///
 /// `DOMAIN` is a [`Domain`] of the type (`1..=100`, [`above`]`(0.0)`,
 /// [`Each`]); `CODEC` a [`Codec`] for a type that is not an
-/// [`OptionValue`]. After the struct, `check PATH;` names a
+/// [`OptionValue`]. After the struct, `groups { /// doc
+/// pub NAME: TYPE = DEFAULT; .. }` embeds other options structs as fields
+/// whose keys join this struct's (one flat namespace, no prefix: a key in
+/// two places is a declaration error), each with the default this struct
+/// gives it (shared parameter sets with per-user defaults). Then `check PATH;` names a
 /// `fn(&Self) -> Result<(), String>` run after every [`Options::set`] and by
 /// [`Options::validate`] (for rules between options). The struct must be
 /// `Clone`. See the crate docs for an example.
@@ -498,6 +539,12 @@ macro_rules! options {
                     $(, in $dom:expr)? $(, via $codec:ty)? ;
             )*
         }
+        $(groups {
+            $(
+                $(#[doc = $gdoc:literal])*
+                $gvis:vis $gfield:ident : $gty:ty = $gdefault:expr ;
+            )*
+        })?
         $(check $check:path;)?
     ) => {
         $(#[$meta])*
@@ -506,18 +553,26 @@ macro_rules! options {
                 $(#[doc = $doc])*
                 $fvis $field: $ty,
             )*
+            $($(
+                $(#[doc = $gdoc])*
+                $gvis $gfield: $gty,
+            )*)?
         }
 
         impl ::core::default::Default for $name {
             /// Every option at its declared default.
             fn default() -> Self {
-                Self { $($field: $default,)* }
+                Self {
+                    $($field: $default,)*
+                    $($($gfield: $gdefault,)*)?
+                }
             }
         }
 
         impl $crate::Options for $name {
             fn specs() -> ::std::vec::Vec<$crate::Spec> {
-                ::std::vec![$(
+                #[allow(unused_mut)]
+                let mut specs = ::std::vec![$(
                     $crate::Spec {
                         key: stringify!($field),
                         ty: <$crate::options!(@codec $ty $(, $codec)?) as $crate::Codec<$ty>>::type_name(),
@@ -525,16 +580,27 @@ macro_rules! options {
                         default: <$crate::options!(@codec $ty $(, $codec)?) as $crate::Codec<$ty>>::format(&$default),
                         doc: $crate::__doc(&[$($doc),*]),
                     },
-                )*]
+                )*];
+                $($(
+                    let group: $gty = $gdefault;
+                    specs.extend($crate::__group_specs(&group));
+                )*)?
+                $crate::__check_unique(stringify!($name), &specs);
+                specs
             }
 
             fn values(&self) -> ::std::vec::Vec<(&'static str, ::std::string::String)> {
-                ::std::vec![$(
+                #[allow(unused_mut)]
+                let mut values = ::std::vec![$(
                     (
                         stringify!($field),
                         <$crate::options!(@codec $ty $(, $codec)?) as $crate::Codec<$ty>>::format(&self.$field),
                     ),
-                )*]
+                )*];
+                $($(
+                    values.extend($crate::Options::values(&self.$gfield));
+                )*)?
+                values
             }
 
             fn set(&mut self, key: &str, value: &str) -> ::core::result::Result<(), $crate::OptionError> {
@@ -563,6 +629,13 @@ macro_rules! options {
                         next.$field = v;
                     }
                 )*
+                $($(
+                    if !known && <$gty as $crate::Options>::specs().iter().any(|s| s.key == key) {
+                        known = true;
+                        $crate::Options::set(&mut next.$gfield, key, value)
+                            .map_err(|e| $crate::__with_keys(e, <Self as $crate::Options>::keys()))?;
+                    }
+                )*)?
                 if !known {
                     return Err($crate::OptionError::UnknownKey {
                         key: key.to_string(),
@@ -575,6 +648,7 @@ macro_rules! options {
             }
 
             fn validate(&self) -> ::core::result::Result<(), $crate::OptionError> {
+                #[allow(unused_variables)]
                 let bad = |key: &str, expected: ::std::string::String| $crate::OptionError::BadValue {
                     key: key.to_string(),
                     value: <Self as $crate::Options>::get(self, key).unwrap_or_default(),
@@ -589,6 +663,10 @@ macro_rules! options {
                         ));
                     }
                 )?)*
+                $($(
+                    $crate::Options::validate(&self.$gfield)
+                        .map_err(|e| $crate::__with_keys(e, <Self as $crate::Options>::keys()))?;
+                )*)?
                 $( $check(self).map_err(|e| bad("", e))?; )?
                 Ok(())
             }
@@ -900,5 +978,109 @@ mod tests {
         let mut q = (Count::default(), All::default());
         q.set_all(&p.describe()).unwrap();
         assert_eq!(p, q);
+    }
+
+    options! {
+        /// A parameter set shared by two structs.
+        #[derive(Debug, Clone, PartialEq)]
+        struct Shared {
+            /// A rate.
+            rate: f64 = 0.5, in inside(0.0, 1.0);
+            /// A switch.
+            on: bool = true;
+        }
+        check shared_check;
+    }
+
+    fn shared_check(c: &Shared) -> Result<(), String> {
+        if c.on || c.rate == 0.5 {
+            Ok(())
+        } else {
+            Err("rate is unused when off: leave it at 0.5".into())
+        }
+    }
+
+    options! {
+        /// Own fields, then a group with its own default.
+        #[derive(Debug, Clone, PartialEq)]
+        struct Outer {
+            /// A count.
+            count: usize = 3, in 1..=10;
+        }
+        groups {
+            /// The shared set, at this struct's rate.
+            shared: Shared = Shared { rate: 0.25, ..Shared::default() };
+        }
+        check outer_check;
+    }
+
+    fn outer_check(c: &Outer) -> Result<(), String> {
+        if c.count > 5 && c.shared.rate > 0.5 {
+            Err("count above 5 needs rate at most 0.5".into())
+        } else {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn groups_join_the_namespace_with_the_parents_defaults() {
+        let mut o = Outer::default();
+        assert_eq!(o.shared.rate, 0.25);
+        let specs = Outer::specs();
+        let keys: Vec<_> = specs.iter().map(|s| s.key).collect();
+        assert_eq!(keys, ["count", "rate", "on"]);
+        // the listing shows the parent's default for the group, not the
+        // group's own
+        assert_eq!(specs[1].default, "0.25");
+        assert_eq!(o.describe(), "count=3 rate=0.25 on=true");
+        o.set("rate", "0.75").unwrap();
+        assert_eq!(o.shared.rate, 0.75);
+        // the group's domain, the group's check, the parent's check: each
+        // refuses and leaves the options as they were
+        let e = o.set("rate", "2").unwrap_err().to_string();
+        assert_eq!(e, "bad value `2` for `rate`: expected 0 < v < 1");
+        let e = o.set("on", "false").unwrap_err().to_string();
+        assert!(e.contains("unused when off"), "{e}");
+        let e = o.set("count", "7").unwrap_err().to_string();
+        assert!(e.contains("needs rate at most 0.5"), "{e}");
+        assert_eq!(o.describe(), "count=3 rate=0.75 on=true");
+        // an unknown key lists the group's keys too
+        let e = o.set("rat", "1").unwrap_err();
+        let OptionError::UnknownKey { valid, .. } = &e else {
+            panic!("{e:?}")
+        };
+        assert!(valid.contains("rate (0 < v < 1)") && valid.contains("count (1..=10)"));
+        // a group error lists the parent's keys
+        let OptionError::BadValue { valid, .. } = o.set("rate", "2").unwrap_err() else {
+            panic!()
+        };
+        assert!(valid.contains("count (1..=10)"), "{valid}");
+        // validate reaches into the group
+        let mut bad = Outer::default();
+        bad.shared.rate = 3.0;
+        assert_eq!(bad.validate().unwrap_err().key(), "rate");
+        // describe -> set_all round trip
+        let mut p = Outer::default();
+        p.set_all(&o.describe()).unwrap();
+        assert_eq!(p, o);
+    }
+
+    options! {
+        /// A key in its own fields and in a group.
+        #[derive(Debug, Clone, PartialEq)]
+        struct Twice {
+            /// Clashes with the group's.
+            rate: f64 = 0.1;
+        }
+        groups {
+            /// The shared set.
+            shared: Shared = Shared::default();
+        }
+    }
+
+    #[test]
+    #[should_panic(expected = "the key `rate` is declared twice")]
+    fn a_key_in_a_group_and_the_struct_is_a_declaration_error() {
+        let _ = Twice::specs();
     }
 }

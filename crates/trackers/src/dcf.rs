@@ -28,11 +28,11 @@ use crate::shell::{ChannelPolicy, InitialBox, Needs, Planes, Shell, TrackerCore}
 use crate::tracker::Estimate;
 
 options! {
-    /// Every parameter of [`DcfTracker`]: KCF's published HOG parameters
-    /// (Henriques et al. 2015, sec. 6.1), DSST's scale filter (Danelljan
-    /// et al. 2014, sec. 4), LMCF's update gate (Wang et al. 2017, sec. 3.3).
+    /// KCF's translation filter on fHOG, with KCF's published HOG values
+    /// (Henriques et al. 2015, sec. 6.1): the options `dcf` and `pf-dcf`
+    /// share.
     #[derive(Debug, Clone, Copy, PartialEq)]
-    pub struct DcfTrackerConfig {
+    pub struct KcfOptions {
         /// Search window `(1 + padding)` times the target (KCF: 1.5).
         pub padding: f64 = 1.5;
         /// Ridge regularisation lambda (KCF: 1e-4).
@@ -50,42 +50,11 @@ options! {
         /// area, 150^2): larger windows are shrunk to it, smaller ones stay at
         /// the frame's resolution (KCF); bounds the cost per frame.
         pub model_area: f64 = 22500.0;
-        /// Estimate the scale with DSST's filter (false: translation only).
-        pub scale: bool = true;
-        /// Number of scales (DSST: 33).
-        pub scales: usize = 33;
-        /// Ratio between neighbouring scales (DSST: 1.02).
-        pub scale_step: f64 = 1.02;
-        /// Scale label width per sqrt(scales) (DSST: 1/4).
-        pub scale_sigma_factor: f64 = 0.25;
-        /// Scale filter regularisation (DSST: 1e-2).
-        pub scale_lambda: f64 = 1e-2;
-        /// Scale model learning rate (DSST: 0.025).
-        pub scale_learning_rate: f64 = 0.025;
-        /// Largest area of the scale samples, pixels (DSST: 512).
-        pub scale_model_max_area: f64 = 512.0;
-        /// fDSST's scale filter (Danelljan et al. 2017): 17 scales
-        /// interpolated to 33, label factor 1/16, features compressed on the
-        /// learnt samples' basis, instead of DSST's 33 (`scales` and
-        /// `scale_sigma_factor` then unused); the step, lambda, rate and area
-        /// above still apply.
-        pub fdsst: bool = false;
-        /// Gate the model update on the response (LMCF's rule).
-        pub gate: bool = true;
-        /// Fraction of the mean peak a learnt response needs (LMCF beta_1: 0.7).
-        pub gate_peak: f64 = 0.7;
-        /// Fraction of the mean APCE a learnt response needs (LMCF beta_2: 0.45).
-        pub gate_apce: f64 = 0.45;
     }
-    check check_dcf;
 }
 
-fn check_dcf(c: &DcfTrackerConfig) -> std::result::Result<(), String> {
-    c.to_dcf().validate().map_err(|e| e.to_string())
-}
-
-impl DcfTrackerConfig {
-    /// The model's configuration.
+impl KcfOptions {
+    /// The filter's configuration, without scale filter or gate.
     pub fn to_dcf(&self) -> DcfConfig {
         DcfConfig {
             padding: Padding::Relative(self.padding),
@@ -101,20 +70,112 @@ impl DcfTrackerConfig {
             learning_rate: self.learning_rate,
             cell: self.cell,
             model_area: self.model_area,
-            scale: self.scale.then_some(scale_config(
-                self.fdsst,
-                ScaleConfig {
-                    scales: self.scales,
-                    step: self.scale_step,
-                    sigma_factor: self.scale_sigma_factor,
-                    lambda: self.scale_lambda,
-                    learning_rate: self.scale_learning_rate,
-                    model_max_area: self.scale_model_max_area,
-                    cell: self.cell,
-                    method: ScaleMethod::Dsst,
-                },
-            )),
-            gate: self.gate.then_some((self.gate_peak, self.gate_apce)),
+            scale: None,
+            gate: None,
+        }
+    }
+}
+
+options! {
+    /// DSST's scale filter (Danelljan et al. 2014, sec. 4), or fDSST's
+    /// (Danelljan et al. 2017): the options `dcf` and `dcf-staple` share
+    /// (Staple's regularisation is 1e-3, DSST's 1e-2).
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub struct ScaleOptions {
+        /// Estimate the scale with DSST's filter (false: translation only).
+        pub scale: bool = true;
+        /// Number of scales (DSST: 33).
+        pub scales: usize = 33;
+        /// Ratio between neighbouring scales (DSST: 1.02).
+        pub scale_step: f64 = 1.02;
+        /// Scale label width per sqrt(scales) (DSST: 1/4).
+        pub scale_sigma_factor: f64 = 0.25;
+        /// Scale filter regularisation (DSST: 1e-2; Staple: 1e-3).
+        pub scale_lambda: f64 = 1e-2;
+        /// Scale model learning rate (DSST: 0.025).
+        pub scale_learning_rate: f64 = 0.025;
+        /// Largest area of the scale samples, pixels (DSST: 512; Staple:
+        /// 32 x 16 = 512).
+        pub scale_model_max_area: f64 = 512.0;
+        /// fDSST's scale filter (Danelljan et al. 2017): 17 scales
+        /// interpolated to 33, label factor 1/16, features compressed on the
+        /// learnt samples' basis, instead of DSST's 33 (`scales` and
+        /// `scale_sigma_factor` then unused); the step, lambda, rate and area
+        /// above still apply.
+        pub fdsst: bool = false;
+    }
+}
+
+impl ScaleOptions {
+    /// The scale filter's configuration for HOG cells of `cell` pixels, or
+    /// `None` without scale estimation.
+    pub fn to_scale(&self, cell: usize) -> Option<ScaleConfig> {
+        self.scale.then_some(scale_config(
+            self.fdsst,
+            ScaleConfig {
+                scales: self.scales,
+                step: self.scale_step,
+                sigma_factor: self.scale_sigma_factor,
+                lambda: self.scale_lambda,
+                learning_rate: self.scale_learning_rate,
+                model_max_area: self.scale_model_max_area,
+                cell,
+                method: ScaleMethod::Dsst,
+            },
+        ))
+    }
+}
+
+options! {
+    /// LMCF's update gate (Wang et al. 2017, sec. 3.3): a response is learnt
+    /// only when its peak and APCE reach fractions of their means.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub struct GateOptions {
+        /// Gate the model update on the response (LMCF's rule); without the
+        /// gate every frame is learnt and none is lost.
+        pub gate: bool = true;
+        /// Fraction of the mean peak a learnt response needs (LMCF beta_1: 0.7).
+        pub gate_peak: f64 = 0.7;
+        /// Fraction of the mean APCE a learnt response needs (LMCF beta_2: 0.45).
+        pub gate_apce: f64 = 0.45;
+    }
+}
+
+impl GateOptions {
+    /// `(peak, APCE)` fractions, or `None` without the gate.
+    pub fn to_gate(&self) -> Option<(f64, f64)> {
+        self.gate.then_some((self.gate_peak, self.gate_apce))
+    }
+}
+
+options! {
+    /// Every parameter of [`DcfTracker`]: KCF's published HOG parameters
+    /// (Henriques et al. 2015, sec. 6.1), DSST's scale filter (Danelljan
+    /// et al. 2014, sec. 4), LMCF's update gate (Wang et al. 2017, sec. 3.3).
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub struct DcfTrackerConfig {}
+    groups {
+        /// The translation filter.
+        pub kcf: KcfOptions = KcfOptions::default();
+        /// The scale filter.
+        pub scale: ScaleOptions = ScaleOptions::default();
+        /// The update gate.
+        pub gate: GateOptions = GateOptions::default();
+    }
+    check check_dcf;
+}
+
+fn check_dcf(c: &DcfTrackerConfig) -> std::result::Result<(), String> {
+    c.to_dcf().validate().map_err(|e| e.to_string())
+}
+
+impl DcfTrackerConfig {
+    /// The model's configuration.
+    pub fn to_dcf(&self) -> DcfConfig {
+        DcfConfig {
+            scale: self.scale.to_scale(self.kcf.cell),
+            gate: self.gate.to_gate(),
+            ..self.kcf.to_dcf()
         }
     }
 }
@@ -122,7 +183,7 @@ impl DcfTrackerConfig {
 options! {
     /// Every parameter of [`StapleTracker`]: Staple's published values
     /// (Bertinetto et al. 2016, sec. 5 and its code's defaults), DSST's scale
-    /// filter, LMCF's update gate.
+    /// filter (with Staple's regularisation), LMCF's update gate.
     #[derive(Debug, Clone, Copy, PartialEq)]
     pub struct StapleTrackerConfig {
         /// Context added to each side of the window, in mean sides
@@ -145,32 +206,15 @@ options! {
         pub colour_rate: f64 = 0.04;
         /// Foreground shrink per mean side (Staple's inner padding: 0.2).
         pub inner_padding: f64 = 0.2;
-        /// Estimate the scale with DSST's filter (false: translation only).
-        pub scale: bool = true;
-        /// Number of scales (Staple = DSST: 33).
-        pub scales: usize = 33;
-        /// Ratio between neighbouring scales (1.02).
-        pub scale_step: f64 = 1.02;
-        /// Scale label width per sqrt(scales) (1/4).
-        pub scale_sigma_factor: f64 = 0.25;
-        /// Scale filter regularisation (Staple: 1e-3).
-        pub scale_lambda: f64 = 1e-3;
-        /// Scale model learning rate (0.025).
-        pub scale_learning_rate: f64 = 0.025;
-        /// Largest area of the scale samples, pixels (Staple: 32 x 16 = 512).
-        pub scale_model_max_area: f64 = 512.0;
-        /// fDSST's scale filter (Danelljan et al. 2017): 17 scales
-        /// interpolated to 33, label factor 1/16, features compressed on the
-        /// learnt samples' basis, instead of DSST's 33 (`scales` and
-        /// `scale_sigma_factor` then unused); the step, lambda, rate and area
-        /// above still apply.
-        pub fdsst: bool = false;
-        /// Gate the model updates on the correlation response (LMCF's rule).
-        pub gate: bool = true;
-        /// Fraction of the mean peak a learnt response needs (LMCF beta_1: 0.7).
-        pub gate_peak: f64 = 0.7;
-        /// Fraction of the mean APCE a learnt response needs (LMCF beta_2: 0.45).
-        pub gate_apce: f64 = 0.45;
+    }
+    groups {
+        /// The scale filter (Staple's regularisation 1e-3).
+        pub scale: ScaleOptions = ScaleOptions {
+            scale_lambda: 1e-3,
+            ..ScaleOptions::default()
+        };
+        /// The update gate (on the correlation response).
+        pub gate: GateOptions = GateOptions::default();
     }
     check check_staple;
 }
@@ -191,20 +235,8 @@ impl StapleTrackerConfig {
                 learning_rate: self.learning_rate,
                 cell: self.cell,
                 model_area: self.model_area,
-                scale: self.scale.then_some(scale_config(
-                    self.fdsst,
-                    ScaleConfig {
-                        scales: self.scales,
-                        step: self.scale_step,
-                        sigma_factor: self.scale_sigma_factor,
-                        lambda: self.scale_lambda,
-                        learning_rate: self.scale_learning_rate,
-                        model_max_area: self.scale_model_max_area,
-                        cell: self.cell,
-                        method: ScaleMethod::Dsst,
-                    },
-                )),
-                gate: self.gate.then_some((self.gate_peak, self.gate_apce)),
+                scale: self.scale.to_scale(self.cell),
+                gate: self.gate.to_gate(),
             },
             merge_factor: self.merge_factor,
             colour_rate: self.colour_rate,
@@ -474,14 +506,20 @@ mod tests {
             (
                 "dcf",
                 dcf(DcfTrackerConfig {
-                    scale: false,
+                    scale: ScaleOptions {
+                        scale: false,
+                        ..ScaleOptions::default()
+                    },
                     ..DcfTrackerConfig::default()
                 }),
             ),
             (
                 "dcf-staple",
                 staple(StapleTrackerConfig {
-                    scale: false,
+                    scale: ScaleOptions {
+                        scale: false,
+                        ..ScaleOptions::default()
+                    },
                     ..StapleTrackerConfig::default()
                 }),
             ),
@@ -589,10 +627,11 @@ mod tests {
             (
                 "dcf frozen",
                 false,
-                dcf(DcfTrackerConfig {
-                    learning_rate: 0.0,
-                    scale_learning_rate: 0.0,
-                    ..DcfTrackerConfig::default()
+                dcf({
+                    let mut c = DcfTrackerConfig::default();
+                    c.kcf.learning_rate = 0.0;
+                    c.scale.scale_learning_rate = 0.0;
+                    c
                 }),
             ),
         ];
@@ -625,24 +664,17 @@ mod tests {
 
     #[test]
     fn bad_input_is_an_error() {
-        for bad in [
-            DcfTrackerConfig {
-                padding: f64::NAN,
-                ..DcfTrackerConfig::default()
-            },
-            DcfTrackerConfig {
-                cell: 0,
-                ..DcfTrackerConfig::default()
-            },
-            DcfTrackerConfig {
-                scales: 0,
-                ..DcfTrackerConfig::default()
-            },
-            DcfTrackerConfig {
-                learning_rate: 2.0,
-                ..DcfTrackerConfig::default()
-            },
-        ] {
+        let edits: [fn(&mut DcfTrackerConfig); 4] = [
+            |c| c.kcf.padding = f64::NAN,
+            |c| c.kcf.cell = 0,
+            |c| c.scale.scales = 0,
+            |c| c.kcf.learning_rate = 2.0,
+        ];
+        for bad in edits.map(|edit| {
+            let mut c = DcfTrackerConfig::default();
+            edit(&mut c);
+            c
+        }) {
             assert!(matches!(DcfTracker::new(bad), Err(TrackerError::Dcf(_))));
         }
         assert!(

@@ -29,7 +29,8 @@ pub use condensation::{
     ObjectConfig, ObjectEstimate, PointCloudConfig, PointCloudCore, PointCloudTracker,
 };
 pub use dcf::{
-    DcfCore, DcfTracker, DcfTrackerConfig, StapleCore, StapleTracker, StapleTrackerConfig,
+    DcfCore, DcfTracker, DcfTrackerConfig, GateOptions, KcfOptions, ScaleOptions, StapleCore,
+    StapleTracker, StapleTrackerConfig,
 };
 pub use engine::{CueFilter, CueProposal, StateModel, select_predict_measure};
 pub use error::{Result, TrackerError};

@@ -71,8 +71,7 @@
 use std::convert::Infallible;
 
 use bayestrack_dcf::confidence::ApceGate;
-use bayestrack_dcf::kcf::Kernel;
-use bayestrack_dcf::{Dcf, DcfConfig, Padding};
+use bayestrack_dcf::{Dcf, DcfConfig};
 use bayestrack_image::BBox;
 use bayestrack_options::options;
 use bayestrack_particle::{ParticleSet, Proposal, Resampling, Smc, stream_seed};
@@ -80,6 +79,7 @@ use nalgebra::SVector;
 use rand::{Rng, RngExt};
 use rand_distr::{Distribution, StandardNormal};
 
+use crate::dcf::{GateOptions, KcfOptions};
 use crate::engine::select_predict_measure;
 use crate::error::{Result, TrackerError};
 use crate::shell::{ChannelPolicy, InitialBox, Needs, Planes, Shell, TrackerCore};
@@ -100,21 +100,6 @@ options! {
     /// (`cargo xtask stress`), never on the real sequences.
     #[derive(Debug, Clone, Copy, PartialEq)]
     pub struct PfDcfConfig {
-        /// Search window `(1 + padding)` times the target (KCF: 1.5).
-        pub padding: f64 = 1.5;
-        /// Ridge regularisation lambda (KCF: 1e-4).
-        pub lambda: f64 = 1e-4;
-        /// Label standard deviation per `sqrt(w h)` of the target (KCF: 0.1).
-        pub output_sigma_factor: f64 = 0.1;
-        /// Gaussian kernel bandwidth (KCF with HOG: 0.5); 0 selects the
-        /// linear kernel.
-        pub kernel_sigma: f64 = 0.5;
-        /// Model learning rate (KCF with HOG: 0.02).
-        pub learning_rate: f64 = 0.02;
-        /// fHOG cell, pixels (KCF: 4).
-        pub cell: usize = 4;
-        /// Largest area of the search window, model pixels (Staple's 150^2).
-        pub model_area: f64 = 22500.0;
         /// Number of particles (200; the likelihood is a look-up, so the
         /// count costs little).
         pub particles: usize = 200;
@@ -138,13 +123,6 @@ options! {
         pub jump_spread: f64 = 0.5;
         /// Ratio between the three response scales (SiamFC-3s: 1.0375).
         pub scale_step: f64 = 1.0375;
-        /// Gate the model update on the response (LMCF's rule); without the
-        /// gate every frame is learnt and none is lost.
-        pub gate: bool = true;
-        /// Fraction of the mean peak a learnt response needs (LMCF beta_1: 0.7).
-        pub gate_peak: f64 = 0.7;
-        /// Fraction of the mean APCE a learnt response needs (LMCF beta_2: 0.45).
-        pub gate_apce: f64 = 0.45;
         /// Search wider while lost (false: the frozen model searches one
         /// window with the usual spread).
         pub redetect: bool = true;
@@ -155,6 +133,12 @@ options! {
         /// Windows per side of the search grid while lost (3: 3 x 3
         /// windows half a window apart, about 3.75 target sizes across).
         pub redetect_grid: usize = 3;
+    }
+    groups {
+        /// The correlation filter (KCF's published values).
+        pub kcf: KcfOptions = KcfOptions::default();
+        /// The update gate (LMCF's).
+        pub gate: GateOptions = GateOptions::default();
     }
     check check_pf_dcf;
 }
@@ -221,23 +205,7 @@ impl PfDcfConfig {
     /// The correlation filter's configuration (no scale filter: the
     /// particles carry the scale; no gate: the tracker keeps its own).
     pub fn to_dcf(&self) -> DcfConfig {
-        DcfConfig {
-            padding: Padding::Relative(self.padding),
-            lambda: self.lambda,
-            output_sigma_factor: self.output_sigma_factor,
-            kernel: if self.kernel_sigma == 0.0 {
-                Kernel::Linear
-            } else {
-                Kernel::Gaussian {
-                    sigma: self.kernel_sigma,
-                }
-            },
-            learning_rate: self.learning_rate,
-            cell: self.cell,
-            model_area: self.model_area,
-            scale: None,
-            gate: None,
-        }
+        self.kcf.to_dcf()
     }
 }
 
@@ -446,7 +414,7 @@ impl PfDcfCore {
         config.validate()?;
         Ok(Self {
             dcf: Dcf::new(config.to_dcf())?,
-            gate: ApceGate::new(config.gate_peak, config.gate_apce),
+            gate: ApceGate::new(config.gate.gate_peak, config.gate.gate_apce),
             config,
             seed,
             peaks: (0.0, 0),
@@ -518,8 +486,8 @@ impl PfDcfCore {
         let s = ls.exp();
         // half a window apart
         let stride = (
-            self.size0.0 * s * (1.0 + c.padding) / 2.0,
-            self.size0.1 * s * (1.0 + c.padding) / 2.0,
+            self.size0.0 * s * (1.0 + c.kcf.padding) / 2.0,
+            self.size0.1 * s * (1.0 + c.kcf.padding) / 2.0,
         );
         r.stride = stride;
         r.windows = g * g;
@@ -583,7 +551,7 @@ impl TrackerCore for PfDcfCore {
         self.frame = (gray.width() as f64, gray.height() as f64);
         // the filter's bounds (DSST's): the window at least 5 pixels, the
         // target at most the frame
-        let (ww, wh) = (w * (1.0 + c.padding), h * (1.0 + c.padding));
+        let (ww, wh) = (w * (1.0 + c.kcf.padding), h * (1.0 + c.kcf.padding));
         let min_scale = (5.0 / ww.min(wh)).min(1.0);
         let max_scale = (self.frame.0 / w).min(self.frame.1 / h).max(1.0);
         self.scale_bounds = (min_scale.ln(), max_scale.ln());
@@ -646,7 +614,7 @@ impl TrackerCore for PfDcfCore {
         smc.step_with(&proposal, &(), &mut self.chunks)?;
         let mean: State = smc.set.mean();
         let n = smc.set.len();
-        let admitted = !c.gate || self.gate.admit(peak, apce);
+        let admitted = !c.gate.gate || self.gate.admit(peak, apce);
         self.diagnostics.frames += 1;
         if admitted {
             if self.lost {
@@ -805,7 +773,10 @@ mod tests {
         assert!(d.lost_frames >= 10, "{d:?}");
         let (_, lost, d) = lost_run(
             PfDcfConfig {
-                gate: false,
+                gate: GateOptions {
+                    gate: false,
+                    ..GateOptions::default()
+                },
                 ..PfDcfConfig::default()
             },
             1,
@@ -855,7 +826,10 @@ mod tests {
         assert!(matches!(
             PfDcfTracker::new(
                 PfDcfConfig {
-                    cell: 0,
+                    kcf: KcfOptions {
+                        cell: 0,
+                        ..KcfOptions::default()
+                    },
                     ..PfDcfConfig::default()
                 },
                 0
