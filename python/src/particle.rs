@@ -342,12 +342,15 @@ impl ParticleFilter {
         if max == f64::NEG_INFINITY {
             return Err(particle_err(&ParticleError::AllWeightsZero { count: n }));
         }
-        let sum: f64 = lw.iter().map(|l| (l - max).exp()).sum();
+        // one exponential per particle: the weights relative to the
+        // largest, then normalised by their sum
+        let mut w: Vec<f64> = lw.iter().map(|l| (l - max).exp()).collect();
+        let sum: f64 = w.iter().sum();
         let lse = max + sum.ln();
-        for l in &mut lw {
+        for (l, w) in lw.iter_mut().zip(&mut w) {
             *l -= lse;
+            *w /= sum;
         }
-        let w: Vec<f64> = lw.iter().map(|l| l.exp()).collect();
         let ess = 1.0 / w.iter().map(|w| w * w).sum::<f64>();
         let mut mean = vec![0.0; dim];
         for (row, &wi) in m.particles.chunks_exact(dim).zip(&w) {
