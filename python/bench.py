@@ -7,6 +7,10 @@ predict()/update() loop against bayestrack's batch_filter (no GIL, no Python
 per step) and against bayestrack's own predict()/update() loop.
 UKF: the 5-state coordinated-turn model of the oracle tests; filterpy's loop
 against bayestrack's loop with per-point and vectorised fx/hx.
+PF: one bootstrap step of paper 000's scalar model (the hikpf model,
+10,000 particles): the built-in Rust model, the same model as a vectorised
+Python model in bayestrack's ParticleFilter, and a pure-numpy bootstrap PF
+(systematic resampling) written the usual way.
 Prints the median of 5 repeats per variant and the speed-ups.
 """
 
@@ -29,12 +33,12 @@ except ImportError:  # pragma: no cover
     fpk = None
 
 
-def timed(fn, repeats=5):
+def timed(fn, repeats=5, clock=time.perf_counter):
     ts = []
     for _ in range(repeats):
-        t0 = time.perf_counter()
+        t0 = clock()
         fn()
-        ts.append(time.perf_counter() - t0)
+        ts.append(clock() - t0)
     return statistics.median(ts)
 
 
@@ -74,10 +78,90 @@ def setup_ukf(u):
     return u
 
 
+# ------------------------------------------------------------------ PF
+
+SIN_FREQ, SIGMA = 0.04, 1e-5
+
+
+def hikpf_sample(p, k, rng):
+    t = k + 1
+    return (1.0 + np.sin(SIN_FREQ * np.pi * t) + 0.5 * p
+            + rng.gamma(3.0, 0.5, size=p.shape))
+
+
+def hikpf_ll(p, z, k):
+    x = p[:, 0]
+    h = 0.2 * x * x if k + 1 <= 30 else 0.5 * x - 2.0
+    e = z - h
+    return -0.5 * e * e / SIGMA - 0.5 * np.log(SIGMA)
+
+
+def numpy_pf(n, zs, seed=0):
+    """A pure-numpy bootstrap PF on the same model (systematic resampling)."""
+    rng = np.random.default_rng(seed)
+    x = np.ones((n, 1))
+    for k, z in enumerate(zs, start=1):
+        x = hikpf_sample(x, k, rng)
+        lw = hikpf_ll(x, z, k)
+        w = np.exp(lw - lw.max())
+        w /= w.sum()
+        _ = w @ x
+        u = (rng.random() + np.arange(n)) / n
+        idx = np.minimum(np.searchsorted(np.cumsum(w), u), n - 1)
+        x = x[idx]
+    return x
+
+
+def hikpf_measurements(steps, seed=1):
+    rng = np.random.default_rng(seed)
+    x, zs = 1.0, []
+    for k in range(1, steps + 1):
+        x = hikpf_sample(np.array([[x]]), k, rng)[0, 0]
+        t = k + 1
+        h = 0.2 * x * x if t <= 30 else 0.5 * x - 2.0
+        zs.append(h + np.sqrt(SIGMA) * rng.normal())
+    return zs
+
+
+def pf_rows(n_particles=10_000, steps=59):
+    zs = hikpf_measurements(steps)
+
+    def run(pf):
+        for z in zs:
+            pf.step(z)
+
+    # CPU time of this process (all threads): on a loaded machine wall time
+    # mostly measures the other processes; the comparison is single-threaded
+    cpu = time.process_time
+    t_rust = timed(lambda: run(bt.ParticleFilter.hikpf(n_particles, seed=1, threads=1)), clock=cpu)
+    t_rust_mt = timed(lambda: run(bt.ParticleFilter.hikpf(n_particles, seed=1)))
+    t_py = timed(lambda: run(bt.ParticleFilter(n_particles, 1, hikpf_sample, hikpf_ll,
+                                               particles=np.ones((n_particles, 1)), seed=1)),
+                 clock=cpu)
+    t_np = timed(lambda: numpy_pf(n_particles, zs), clock=cpu)
+    rows = [
+        (f"PF step, built-in Rust model, 1 thread, CPU ({n_particles} particles)", t_rust),
+        (f"PF step, built-in Rust model, all threads, wall ({n_particles})", t_rust_mt),
+        (f"PF step, vectorised Python model, CPU ({n_particles})", t_py),
+        (f"PF step, pure-numpy bootstrap PF, CPU ({n_particles})", t_np),
+    ]
+    return rows, steps, t_rust, t_py, t_np
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--steps", type=int, default=2000)
-    n = ap.parse_args().steps
+    ap.add_argument("--only-pf", action="store_true", help="run the PF rows alone")
+    args = ap.parse_args()
+    n = args.steps
+    pf, pf_steps, t_rust, t_py, t_np = pf_rows()
+    if args.only_pf:
+        print(f"{'variant':58s} {'total ms':>9s} {'us/step':>9s}")
+        for name, t in pf:
+            print(f"{name:58s} {t * 1e3:9.2f} {t / pf_steps * 1e6:9.2f}")
+        print(f"\nPF Python model vs built-in Rust model (CPU, 1 thread): {t_py / t_rust:.2f}x (goal within 2x)")
+        print(f"PF Python model vs pure numpy: {t_np / t_py:.2f}x faster")
+        return
     rng = np.random.default_rng(0)
     zs = np.cumsum(rng.normal(size=(n, 2)), axis=0)
     rows = []
@@ -114,10 +198,13 @@ def main():
         t_ukf_fp = timed(lambda: uloop(setup_ukf(fpk.UnscentedKalmanFilter(5, 2, 0.5, rb_h, ct_f, sp))))
         rows.append((f"UKF loop (filterpy, {len(uzs)} steps)", t_ukf_fp))
 
+    rows += pf
     print(f"{'variant':58s} {'total ms':>9s} {'us/step':>9s}")
     for name, t in rows:
-        steps = len(uzs) if "UKF" in name else n
+        steps = len(uzs) if "UKF" in name else pf_steps if "PF" in name else n
         print(f"{name:58s} {t * 1e3:9.2f} {t / steps * 1e6:9.2f}")
+    print(f"\nPF Python model vs built-in Rust model (CPU, 1 thread): {t_py / t_rust:.2f}x (goal within 2x)")
+    print(f"PF Python model vs pure numpy: {t_np / t_py:.2f}x faster")
     if fpk:
         print(f"\nKF batch_filter vs filterpy loop: {t_fp / t_bt_batch:.1f}x (goal 20x)")
         print(f"KF loop vs filterpy loop: {t_fp / t_bt_loop:.1f}x")

@@ -53,3 +53,8 @@ __all__ = [
     "MAX_DIM_X",
     "MAX_DIM_Z",
 ]
+
+# --- filters (pypf) ---
+from ._bayestrack import HybridUkfIekf, ParticleFilter, stream_seed  # noqa: E402
+
+__all__ += ["ParticleFilter", "HybridUkfIekf", "stream_seed"]

@@ -134,3 +134,105 @@ class UnscentedKalmanFilter:
         self, zs: Union[ArrayLike, Sequence[Optional[ArrayLike]]]
     ) -> Tuple[Array, Array]: ...
     def rts_smoother(self, Xs: ArrayLike, Ps: ArrayLike) -> Tuple[Array, Array]: ...
+
+# --- filters (pypf) ---
+
+def stream_seed(key: Sequence[int]) -> int:
+    """The seed the filters mix from a key of integers (``[seed, k]``)."""
+    ...
+
+class ParticleFilter:
+    """Bootstrap particle filter: a vectorised Python model or a built-in Rust one."""
+
+    n: int
+    dim: int
+    seed: int
+    k: int
+    particles: Array
+    weights: Array
+    mean: Array
+    covariance: Array
+    ess: float
+    log_evidence: float
+    estimate: Optional[Array]
+    def __init__(
+        self,
+        n: int,
+        dim: int,
+        sample: Callable[[Array, int, np.random.Generator], ArrayLike],
+        log_likelihood: Callable[[Array, Any, int], ArrayLike],
+        particles: Optional[ArrayLike] = None,
+        *,
+        resampling: str = "systematic",
+        ess_threshold: Optional[float] = None,
+        seed: int = 0,
+        threads: Optional[int] = None,
+    ) -> None: ...
+    @staticmethod
+    def hikpf(
+        n: int,
+        x0: float = 1.0,
+        sin_freq: float = 0.04,
+        *,
+        resampling: str = "systematic",
+        ess_threshold: Optional[float] = None,
+        seed: int = 0,
+        threads: Optional[int] = None,
+    ) -> "ParticleFilter": ...
+    @staticmethod
+    def constant_velocity(
+        n: int,
+        axes: int = 2,
+        dt: float = 1.0,
+        q: float = 1.0,
+        r: float = 1.0,
+        particles: Optional[ArrayLike] = None,
+        *,
+        resampling: str = "systematic",
+        ess_threshold: Optional[float] = None,
+        seed: int = 0,
+        threads: Optional[int] = None,
+    ) -> "ParticleFilter": ...
+    def predict(self) -> None: ...
+    def update(self, z: Any) -> Array: ...
+    def step(self, z: Any) -> Array: ...
+
+class HybridUkfIekf:
+    """Hybrid UKF -> IEKF step of paper 000 (sec. 3.3)."""
+
+    dim_x: int
+    dim_z: int
+    dt: float
+    x: Array
+    P: Array
+    Q: Array
+    R: Array
+    y: Array
+    S: Array
+    log_likelihood: float
+    iterations: int
+    x_ukf: Optional[Array]
+    P_ukf: Optional[Array]
+    fx: Callable[..., ArrayLike]
+    hx: Callable[..., ArrayLike]
+    HJacobian: Callable[..., ArrayLike]
+    def __init__(
+        self,
+        dim_x: int,
+        dim_z: int,
+        dt: float,
+        hx: Callable[..., ArrayLike],
+        fx: Callable[..., ArrayLike],
+        HJacobian: Callable[..., ArrayLike],
+        *,
+        alpha: float = 1e-3,
+        beta: float = 2.0,
+        kappa: float = 0.0,
+        max_iterations: int = 5,
+        tolerance: float = 1e-12,
+        prior: str = "ukf_predicted",
+    ) -> None: ...
+    def step(self, z: Optional[ArrayLike], R: Optional[ArrayLike] = None) -> None: ...
+    def batch_filter(
+        self, zs: Union[ArrayLike, Sequence[Optional[ArrayLike]]]
+    ) -> Tuple[Array, Array]: ...

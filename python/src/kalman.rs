@@ -1,12 +1,14 @@
 //! The Kalman family with filterpy's names: `KalmanFilter`,
 //! `ExtendedKalmanFilter`, `IteratedExtendedKalmanFilter` and
-//! `UnscentedKalmanFilter`.
+//! `UnscentedKalmanFilter`, and the hybrid UKF -> IEKF step
+//! `HybridUkfIekf`.
 
 use std::cell::RefCell;
 
+use bayestrack_kalman::HybridUkfIekf as RustHybrid;
 use bayestrack_kalman::{
-    CovarianceUpdate, Ekf, FnDynamics, FnMeasurement, Gaussian, Iekf, Kf, LinearDynamics,
-    LinearMeasurement, Ukf, Update,
+    Additive, CovarianceUpdate, Ekf, FnDynamics, FnMeasurement, Gaussian, HybridPrior, Iekf, Kf,
+    LinearDynamics, LinearMeasurement, Ukf, Update,
 };
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 use numpy::{PyArrayDyn, PyArrayMethods};
@@ -435,6 +437,126 @@ fn covs_array<'py>(py: Python<'py>, v: Vec<f64>, n: usize) -> PyResult<Bound<'py
         .map(|a| a.into_any())
 }
 
+// ------------------------------------------- shared attribute plumbing
+
+/// `#[pymethods] impl $ty { ... }` with the attributes every filter keeps in
+/// its [`Arrays`] (`dim_x`, `dim_z`, `x`, `P`, `Q`, `R`, `y`, `S`,
+/// `log_likelihood`) followed by the class's own methods.
+///
+/// The caller writes the `#[pymethods]` attribute: generated from the
+/// caller's tokens, the names pyo3 makes for `**kwargs` are in the scope of
+/// the methods that use them (macro hygiene).
+macro_rules! belief_pymethods {
+    ($hash:tt $attr:tt $ty:ident, { $($rest:tt)* }) => {
+        $hash $attr
+        impl $ty {
+            /// State dimension.
+            #[getter]
+            fn dim_x(&self) -> usize {
+                self.a.dim_x
+            }
+            /// Measurement dimension.
+            #[getter]
+            fn dim_z(&self) -> usize {
+                self.a.dim_z
+            }
+            /// State mean.
+            #[getter]
+            fn get_x(&self, py: Python<'_>) -> Py<PyAny> {
+                self.a.x.clone_ref(py)
+            }
+            #[setter]
+            fn set_x(&mut self, v: &Bound<'_, PyAny>) -> PyResult<()> {
+                self.a.x = checked_x(v, self.a.dim_x, "x")?;
+                Ok(())
+            }
+            /// State covariance.
+            #[getter(P)]
+            fn get_p(&self, py: Python<'_>) -> Py<PyAny> {
+                self.a.p.clone_ref(py)
+            }
+            #[setter(P)]
+            fn set_p(&mut self, v: &Bound<'_, PyAny>) -> PyResult<()> {
+                self.a.p = checked_matrix(v, self.a.dim_x, self.a.dim_x, "P")?;
+                Ok(())
+            }
+            /// Process noise covariance.
+            #[getter(Q)]
+            fn get_q(&self, py: Python<'_>) -> Py<PyAny> {
+                self.a.q.clone_ref(py)
+            }
+            #[setter(Q)]
+            fn set_q(&mut self, v: &Bound<'_, PyAny>) -> PyResult<()> {
+                self.a.q = checked_matrix(v, self.a.dim_x, self.a.dim_x, "Q")?;
+                Ok(())
+            }
+            /// Measurement noise covariance.
+            #[getter(R)]
+            fn get_r(&self, py: Python<'_>) -> Py<PyAny> {
+                self.a.r.clone_ref(py)
+            }
+            #[setter(R)]
+            fn set_r(&mut self, v: &Bound<'_, PyAny>) -> PyResult<()> {
+                self.a.r = checked_matrix(v, self.a.dim_z, self.a.dim_z, "R")?;
+                Ok(())
+            }
+            /// Residual of the last update.
+            #[getter]
+            fn y(&self, py: Python<'_>) -> Py<PyAny> {
+                self.a.y.clone_ref(py)
+            }
+            /// Innovation covariance of the last update.
+            #[getter(S)]
+            fn get_s(&self, py: Python<'_>) -> Py<PyAny> {
+                self.a.s.clone_ref(py)
+            }
+            /// Log-likelihood of the last measurement (NaN before the first).
+            #[getter]
+            fn log_likelihood(&self) -> f64 {
+                self.a.log_likelihood
+            }
+
+            $($rest)*
+        }
+    };
+}
+
+/// [`belief_pymethods`] plus the linear model's `F` and `B` (fields `f`,
+/// `b` and `dim_u`) of the KF and the EKF.
+macro_rules! linear_pymethods {
+    ($hash:tt $attr:tt $ty:ident, { $($rest:tt)* }) => {
+        belief_pymethods!($hash $attr $ty, {
+            /// State transition matrix (of the linear `predict()`).
+            #[getter(F)]
+            fn get_f(&self, py: Python<'_>) -> Py<PyAny> {
+                self.f.clone_ref(py)
+            }
+            #[setter(F)]
+            fn set_f(&mut self, v: &Bound<'_, PyAny>) -> PyResult<()> {
+                self.f = checked_matrix(v, self.a.dim_x, self.a.dim_x, "F")?;
+                Ok(())
+            }
+            /// Control matrix (`None` when there is no control input).
+            #[getter(B)]
+            fn get_b(&self, py: Python<'_>) -> Option<Py<PyAny>> {
+                self.b.as_ref().map(|b| b.clone_ref(py))
+            }
+            #[setter(B)]
+            fn set_b(&mut self, v: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
+                self.b = match v {
+                    Some(v) if !v.is_none() => {
+                        Some(checked_matrix(v, self.a.dim_x, self.dim_u, "B")?)
+                    }
+                    _ => None,
+                };
+                Ok(())
+            }
+
+            $($rest)*
+        });
+    };
+}
+
 // ------------------------------------------------------- KalmanFilter
 
 /// `(means, covariances, means_predicted, covariances_predicted)`.
@@ -484,286 +606,202 @@ impl KalmanFilter {
     }
 }
 
-#[pymethods]
-impl KalmanFilter {
-    /// `KalmanFilter(dim_x, dim_z, dim_u=0, joseph=True)`: `x = 0`,
-    /// `P = F = Q = I`, `H = 0`, `R = I`, `B = None` (filterpy's defaults).
-    #[new]
-    #[pyo3(signature = (dim_x, dim_z, dim_u = 0, joseph = true))]
-    fn new(
-        py: Python<'_>,
-        dim_x: usize,
-        dim_z: usize,
-        dim_u: usize,
-        joseph: bool,
-    ) -> PyResult<Self> {
-        check_dims(dim_x, dim_z)?;
-        if dim_u > dim_x {
-            return Err(PyValueError::new_err(format!(
-                "dim_u = {dim_u} > dim_x = {dim_x} is not supported"
-            )));
-        }
-        Ok(Self {
-            a: Arrays::new(py, dim_x, dim_z, true)?,
-            dim_u,
-            f: py_mat(py, &DMatrix::identity(dim_x, dim_x))
-                .into_any()
-                .unbind(),
-            h: py_mat(py, &DMatrix::zeros(dim_z, dim_x))
-                .into_any()
-                .unbind(),
-            b: None,
-            kf: Kf::new(covariance_update(joseph)),
-        })
-    }
-
-    /// State dimension.
-    #[getter]
-    fn dim_x(&self) -> usize {
-        self.a.dim_x
-    }
-    /// Measurement dimension.
-    #[getter]
-    fn dim_z(&self) -> usize {
-        self.a.dim_z
-    }
-    /// State mean.
-    #[getter]
-    fn get_x(&self, py: Python<'_>) -> Py<PyAny> {
-        self.a.x.clone_ref(py)
-    }
-    #[setter]
-    fn set_x(&mut self, v: &Bound<'_, PyAny>) -> PyResult<()> {
-        self.a.x = checked_x(v, self.a.dim_x, "x")?;
-        Ok(())
-    }
-    /// State covariance.
-    #[getter(P)]
-    fn get_p(&self, py: Python<'_>) -> Py<PyAny> {
-        self.a.p.clone_ref(py)
-    }
-    #[setter(P)]
-    fn set_p(&mut self, v: &Bound<'_, PyAny>) -> PyResult<()> {
-        self.a.p = checked_matrix(v, self.a.dim_x, self.a.dim_x, "P")?;
-        Ok(())
-    }
-    /// Process noise covariance.
-    #[getter(Q)]
-    fn get_q(&self, py: Python<'_>) -> Py<PyAny> {
-        self.a.q.clone_ref(py)
-    }
-    #[setter(Q)]
-    fn set_q(&mut self, v: &Bound<'_, PyAny>) -> PyResult<()> {
-        self.a.q = checked_matrix(v, self.a.dim_x, self.a.dim_x, "Q")?;
-        Ok(())
-    }
-    /// Measurement noise covariance.
-    #[getter(R)]
-    fn get_r(&self, py: Python<'_>) -> Py<PyAny> {
-        self.a.r.clone_ref(py)
-    }
-    #[setter(R)]
-    fn set_r(&mut self, v: &Bound<'_, PyAny>) -> PyResult<()> {
-        self.a.r = checked_matrix(v, self.a.dim_z, self.a.dim_z, "R")?;
-        Ok(())
-    }
-    /// State transition matrix.
-    #[getter(F)]
-    fn get_f(&self, py: Python<'_>) -> Py<PyAny> {
-        self.f.clone_ref(py)
-    }
-    #[setter(F)]
-    fn set_f(&mut self, v: &Bound<'_, PyAny>) -> PyResult<()> {
-        self.f = checked_matrix(v, self.a.dim_x, self.a.dim_x, "F")?;
-        Ok(())
-    }
-    /// Measurement matrix.
-    #[getter(H)]
-    fn get_h(&self, py: Python<'_>) -> Py<PyAny> {
-        self.h.clone_ref(py)
-    }
-    #[setter(H)]
-    fn set_h(&mut self, v: &Bound<'_, PyAny>) -> PyResult<()> {
-        self.h = checked_matrix(v, self.a.dim_z, self.a.dim_x, "H")?;
-        Ok(())
-    }
-    /// Control matrix (`None` when there is no control input).
-    #[getter(B)]
-    fn get_b(&self, py: Python<'_>) -> Option<Py<PyAny>> {
-        self.b.as_ref().map(|b| b.clone_ref(py))
-    }
-    #[setter(B)]
-    fn set_b(&mut self, v: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
-        self.b = match v {
-            Some(v) if !v.is_none() => Some(checked_matrix(v, self.a.dim_x, self.dim_u, "B")?),
-            _ => None,
-        };
-        Ok(())
-    }
-    /// Residual of the last update.
-    #[getter]
-    fn y(&self, py: Python<'_>) -> Py<PyAny> {
-        self.a.y.clone_ref(py)
-    }
-    /// Innovation covariance of the last update.
-    #[getter(S)]
-    fn get_s(&self, py: Python<'_>) -> Py<PyAny> {
-        self.a.s.clone_ref(py)
-    }
-    /// Log-likelihood of the last measurement (NaN before the first).
-    #[getter]
-    fn log_likelihood(&self) -> f64 {
-        self.a.log_likelihood
-    }
-
-    /// Time update `x = F x (+ B u)`, `P = F P F^T + Q`.
-    #[pyo3(signature = (u = None))]
-    fn predict(&mut self, py: Python<'_>, u: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
-        let (x, p, f, q) = (self.a.x(py)?, self.a.p(py)?, self.f(py)?, self.a.q(py)?);
-        let bu = match (u, self.b(py)?) {
-            (Some(u), Some(b)) if !u.is_none() => Some((b, vector(u, self.dim_u, "u")?)),
-            (Some(u), None) if !u.is_none() => {
-                return Err(PyValueError::new_err("u given but B is None"));
+linear_pymethods!(
+    #[pymethods]
+    KalmanFilter,
+    {
+        /// `KalmanFilter(dim_x, dim_z, dim_u=0, joseph=True)`: `x = 0`,
+        /// `P = F = Q = I`, `H = 0`, `R = I`, `B = None` (filterpy's defaults).
+        #[new]
+        #[pyo3(signature = (dim_x, dim_z, dim_u = 0, joseph = true))]
+        fn new(
+            py: Python<'_>,
+            dim_x: usize,
+            dim_z: usize,
+            dim_u: usize,
+            joseph: bool,
+        ) -> PyResult<Self> {
+            check_dims(dim_x, dim_z)?;
+            if dim_u > dim_x {
+                return Err(PyValueError::new_err(format!(
+                    "dim_u = {dim_u} > dim_x = {dim_x} is not supported"
+                )));
             }
-            _ => None,
-        };
-        let kf = self.kf;
-        let control = bu.as_ref().map(|(b, u)| (b, u));
-        let (x, p) = dispatch_n!(self.a.dim_x, linear_predict(&kf, &x, &p, &f, &q, control))
-            .map_err(|e| to_py_err(py, e))?;
-        self.a.set_belief(py, &x, &p)
-    }
+            Ok(Self {
+                a: Arrays::new(py, dim_x, dim_z, true)?,
+                dim_u,
+                f: py_mat(py, &DMatrix::identity(dim_x, dim_x))
+                    .into_any()
+                    .unbind(),
+                h: py_mat(py, &DMatrix::zeros(dim_z, dim_x))
+                    .into_any()
+                    .unbind(),
+                b: None,
+                kf: Kf::new(covariance_update(joseph)),
+            })
+        }
 
-    /// Measurement update with `z` (`None`: missing, the prior is kept);
-    /// `R` and `H` override the stored ones for this step.
-    #[pyo3(signature = (z, R = None, H = None))]
-    #[allow(non_snake_case)]
-    fn update(
-        &mut self,
-        py: Python<'_>,
-        z: Option<&Bound<'_, PyAny>>,
-        R: Option<&Bound<'_, PyAny>>,
-        H: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<()> {
-        let z = match z {
-            Some(z) if !z.is_none() => Some(vector(z, self.a.dim_z, "z")?),
-            _ => None,
-        };
-        let (x, p, h, r) = (
-            self.a.x(py)?,
-            self.a.p(py)?,
-            self.h(py, H)?,
-            self.a.r(py, R)?,
-        );
-        let kf = self.kf;
-        let out = dispatch_nm!(
-            self.a.dim_x,
-            self.a.dim_z,
-            linear_update(&kf, &x, &p, &h, &r, z.as_ref())
-        )
-        .map_err(|e| to_py_err(py, e))?;
-        self.a.set_update(py, &out)
-    }
+        /// Measurement matrix.
+        #[getter(H)]
+        fn get_h(&self, py: Python<'_>) -> Py<PyAny> {
+            self.h.clone_ref(py)
+        }
+        #[setter(H)]
+        fn set_h(&mut self, v: &Bound<'_, PyAny>) -> PyResult<()> {
+            self.h = checked_matrix(v, self.a.dim_z, self.a.dim_x, "H")?;
+            Ok(())
+        }
 
-    /// Runs `predict` + `update` over `zs` (a `(T, dim_z)` array, or a
-    /// sequence with `None` for missing measurements) without the GIL;
-    /// `us` are the controls (`(T, dim_u)`). Returns
-    /// `(means, covariances, means_predicted, covariances_predicted)` as
-    /// filterpy does, and leaves the filter at the last posterior.
-    #[pyo3(signature = (zs, us = None))]
-    fn batch_filter<'py>(
-        &mut self,
-        py: Python<'py>,
-        zs: &Bound<'py, PyAny>,
-        us: Option<&Bound<'py, PyAny>>,
-    ) -> PyResult<FourArrays<'py>> {
-        let (dim_x, dim_z) = (self.a.dim_x, self.a.dim_z);
-        let (zs, present) = read_zs(zs, dim_z)?;
-        let t = present.len();
-        let b = self.b(py)?;
-        let us = match us {
-            Some(us) if !us.is_none() => {
-                if b.is_none() {
-                    return Err(PyValueError::new_err("us given but B is None"));
+        /// Time update `x = F x (+ B u)`, `P = F P F^T + Q`.
+        #[pyo3(signature = (u = None))]
+        fn predict(&mut self, py: Python<'_>, u: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
+            let (x, p, f, q) = (self.a.x(py)?, self.a.p(py)?, self.f(py)?, self.a.q(py)?);
+            let bu = match (u, self.b(py)?) {
+                (Some(u), Some(b)) if !u.is_none() => Some((b, vector(u, self.dim_u, "u")?)),
+                (Some(u), None) if !u.is_none() => {
+                    return Err(PyValueError::new_err("u given but B is None"));
                 }
-                let m = matrix(us, t, self.dim_u, "us").or_else(|_| {
-                    // (T,) for dim_u == 1
-                    if self.dim_u == 1 {
-                        vector(us, t, "us").map(|v| DMatrix::from_column_slice(t, 1, v.as_slice()))
-                    } else {
-                        Err(PyValueError::new_err(format!(
-                            "us must have shape ({t}, {})",
-                            self.dim_u
-                        )))
-                    }
-                })?;
-                m.transpose().as_slice().to_vec()
-            }
-            _ => Vec::new(),
-        };
-        let dim_u = if us.is_empty() { 0 } else { self.dim_u };
-        let input = BatchIn {
-            kf: self.kf,
-            x: self.a.x(py)?,
-            p: self.a.p(py)?,
-            f: self.f(py)?,
-            q: self.a.q(py)?,
-            h: self.h(py, None)?,
-            r: self.a.r(py, None)?,
-            b: if dim_u > 0 { b } else { None },
-            us,
-            dim_u,
-            zs,
-            present,
-        };
-        let out = py
-            .detach(|| dispatch_nm!(dim_x, dim_z, linear_batch(&input)))
-            .map_err(|e| to_py_err(py, e))?;
-        let column = self.a.is_column(py)?;
-        if let Some(last) = &out.last {
-            self.a.set_update(py, last)?;
+                _ => None,
+            };
+            let kf = self.kf;
+            let control = bu.as_ref().map(|(b, u)| (b, u));
+            let (x, p) = dispatch_n!(self.a.dim_x, linear_predict(&kf, &x, &p, &f, &q, control))
+                .map_err(|e| to_py_err(py, e))?;
+            self.a.set_belief(py, &x, &p)
         }
-        Ok((
-            means_array(py, out.means, dim_x, column)?,
-            covs_array(py, out.covs, dim_x)?,
-            means_array(py, out.means_p, dim_x, column)?,
-            covs_array(py, out.covs_p, dim_x)?,
-        ))
-    }
 
-    /// Rauch-Tung-Striebel smoothing of filtered `Xs` `(T, dim_x)` and `Ps`
-    /// `(T, dim_x, dim_x)` with this filter's `F` and `Q` (or `Fs` / `Qs`
-    /// when all of their entries are the same matrix); returns
-    /// `(xs, Ps)` (filterpy's method also returns gains and predictions).
-    #[pyo3(signature = (Xs, Ps, Fs = None, Qs = None))]
-    #[allow(non_snake_case)]
-    fn rts_smoother<'py>(
-        &self,
-        py: Python<'py>,
-        Xs: &Bound<'py, PyAny>,
-        Ps: &Bound<'py, PyAny>,
-        Fs: Option<&Bound<'py, PyAny>>,
-        Qs: Option<&Bound<'py, PyAny>>,
-    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-        let n = self.a.dim_x;
-        let (xs, ps) = read_beliefs(Xs, Ps, n)?;
-        let f = constant_or(py, Fs, n, "Fs", self.f(py)?)?;
-        let q = constant_or(py, Qs, n, "Qs", self.a.q(py)?)?;
-        let kf = self.kf;
-        let (m, c) = py
-            .detach(|| dispatch_n!(n, linear_rts(&kf, &xs, &ps, &f, &q)))
+        /// Measurement update with `z` (`None`: missing, the prior is kept);
+        /// `R` and `H` override the stored ones for this step.
+        #[pyo3(signature = (z, R = None, H = None))]
+        #[allow(non_snake_case)]
+        fn update(
+            &mut self,
+            py: Python<'_>,
+            z: Option<&Bound<'_, PyAny>>,
+            R: Option<&Bound<'_, PyAny>>,
+            H: Option<&Bound<'_, PyAny>>,
+        ) -> PyResult<()> {
+            let z = match z {
+                Some(z) if !z.is_none() => Some(vector(z, self.a.dim_z, "z")?),
+                _ => None,
+            };
+            let (x, p, h, r) = (
+                self.a.x(py)?,
+                self.a.p(py)?,
+                self.h(py, H)?,
+                self.a.r(py, R)?,
+            );
+            let kf = self.kf;
+            let out = dispatch_nm!(
+                self.a.dim_x,
+                self.a.dim_z,
+                linear_update(&kf, &x, &p, &h, &r, z.as_ref())
+            )
             .map_err(|e| to_py_err(py, e))?;
-        let column = matches!(read_f64(Xs, "Xs")?.0.len(), 3);
-        Ok((means_array(py, m, n, column)?, covs_array(py, c, n)?))
-    }
+            self.a.set_update(py, &out)
+        }
 
-    fn __repr__(&self) -> String {
-        format!(
-            "KalmanFilter(dim_x={}, dim_z={}, dim_u={})",
-            self.a.dim_x, self.a.dim_z, self.dim_u
-        )
+        /// Runs `predict` + `update` over `zs` (a `(T, dim_z)` array, or a
+        /// sequence with `None` for missing measurements) without the GIL;
+        /// `us` are the controls (`(T, dim_u)`). Returns
+        /// `(means, covariances, means_predicted, covariances_predicted)` as
+        /// filterpy does, and leaves the filter at the last posterior.
+        #[pyo3(signature = (zs, us = None))]
+        fn batch_filter<'py>(
+            &mut self,
+            py: Python<'py>,
+            zs: &Bound<'py, PyAny>,
+            us: Option<&Bound<'py, PyAny>>,
+        ) -> PyResult<FourArrays<'py>> {
+            let (dim_x, dim_z) = (self.a.dim_x, self.a.dim_z);
+            let (zs, present) = read_zs(zs, dim_z)?;
+            let t = present.len();
+            let b = self.b(py)?;
+            let us = match us {
+                Some(us) if !us.is_none() => {
+                    if b.is_none() {
+                        return Err(PyValueError::new_err("us given but B is None"));
+                    }
+                    let m = matrix(us, t, self.dim_u, "us").or_else(|_| {
+                        // (T,) for dim_u == 1
+                        if self.dim_u == 1 {
+                            vector(us, t, "us")
+                                .map(|v| DMatrix::from_column_slice(t, 1, v.as_slice()))
+                        } else {
+                            Err(PyValueError::new_err(format!(
+                                "us must have shape ({t}, {})",
+                                self.dim_u
+                            )))
+                        }
+                    })?;
+                    m.transpose().as_slice().to_vec()
+                }
+                _ => Vec::new(),
+            };
+            let dim_u = if us.is_empty() { 0 } else { self.dim_u };
+            let input = BatchIn {
+                kf: self.kf,
+                x: self.a.x(py)?,
+                p: self.a.p(py)?,
+                f: self.f(py)?,
+                q: self.a.q(py)?,
+                h: self.h(py, None)?,
+                r: self.a.r(py, None)?,
+                b: if dim_u > 0 { b } else { None },
+                us,
+                dim_u,
+                zs,
+                present,
+            };
+            let out = py
+                .detach(|| dispatch_nm!(dim_x, dim_z, linear_batch(&input)))
+                .map_err(|e| to_py_err(py, e))?;
+            let column = self.a.is_column(py)?;
+            if let Some(last) = &out.last {
+                self.a.set_update(py, last)?;
+            }
+            Ok((
+                means_array(py, out.means, dim_x, column)?,
+                covs_array(py, out.covs, dim_x)?,
+                means_array(py, out.means_p, dim_x, column)?,
+                covs_array(py, out.covs_p, dim_x)?,
+            ))
+        }
+
+        /// Rauch-Tung-Striebel smoothing of filtered `Xs` `(T, dim_x)` and `Ps`
+        /// `(T, dim_x, dim_x)` with this filter's `F` and `Q` (or `Fs` / `Qs`
+        /// when all of their entries are the same matrix); returns
+        /// `(xs, Ps)` (filterpy's method also returns gains and predictions).
+        #[pyo3(signature = (Xs, Ps, Fs = None, Qs = None))]
+        #[allow(non_snake_case)]
+        fn rts_smoother<'py>(
+            &self,
+            py: Python<'py>,
+            Xs: &Bound<'py, PyAny>,
+            Ps: &Bound<'py, PyAny>,
+            Fs: Option<&Bound<'py, PyAny>>,
+            Qs: Option<&Bound<'py, PyAny>>,
+        ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+            let n = self.a.dim_x;
+            let (xs, ps) = read_beliefs(Xs, Ps, n)?;
+            let f = constant_or(py, Fs, n, "Fs", self.f(py)?)?;
+            let q = constant_or(py, Qs, n, "Qs", self.a.q(py)?)?;
+            let kf = self.kf;
+            let (m, c) = py
+                .detach(|| dispatch_n!(n, linear_rts(&kf, &xs, &ps, &f, &q)))
+                .map_err(|e| to_py_err(py, e))?;
+            let column = matches!(read_f64(Xs, "Xs")?.0.len(), 3);
+            Ok((means_array(py, m, n, column)?, covs_array(py, c, n)?))
+        }
+
+        fn __repr__(&self) -> String {
+            format!(
+                "KalmanFilter(dim_x={}, dim_z={}, dim_u={})",
+                self.a.dim_x, self.a.dim_z, self.dim_u
+            )
+        }
     }
-}
+);
 
 /// `default`, or the one matrix that every entry of `seq` equals.
 fn constant_or(
@@ -941,218 +979,134 @@ impl ExtendedKalmanFilter {
     }
 }
 
-#[pymethods]
-impl ExtendedKalmanFilter {
-    /// `ExtendedKalmanFilter(dim_x, dim_z, dim_u=0, joseph=True)`.
-    #[new]
-    #[pyo3(signature = (dim_x, dim_z, dim_u = 0, joseph = true))]
-    fn new(
-        py: Python<'_>,
-        dim_x: usize,
-        dim_z: usize,
-        dim_u: usize,
-        joseph: bool,
-    ) -> PyResult<Self> {
-        Self::build(
-            py,
-            dim_x,
-            dim_z,
-            dim_u,
-            Linearised::Ekf(Ekf::new(covariance_update(joseph))),
-        )
-    }
-
-    /// State dimension.
-    #[getter]
-    fn dim_x(&self) -> usize {
-        self.a.dim_x
-    }
-    /// Measurement dimension.
-    #[getter]
-    fn dim_z(&self) -> usize {
-        self.a.dim_z
-    }
-    /// State mean.
-    #[getter]
-    fn get_x(&self, py: Python<'_>) -> Py<PyAny> {
-        self.a.x.clone_ref(py)
-    }
-    #[setter]
-    fn set_x(&mut self, v: &Bound<'_, PyAny>) -> PyResult<()> {
-        self.a.x = checked_x(v, self.a.dim_x, "x")?;
-        Ok(())
-    }
-    /// State covariance.
-    #[getter(P)]
-    fn get_p(&self, py: Python<'_>) -> Py<PyAny> {
-        self.a.p.clone_ref(py)
-    }
-    #[setter(P)]
-    fn set_p(&mut self, v: &Bound<'_, PyAny>) -> PyResult<()> {
-        self.a.p = checked_matrix(v, self.a.dim_x, self.a.dim_x, "P")?;
-        Ok(())
-    }
-    /// Process noise covariance.
-    #[getter(Q)]
-    fn get_q(&self, py: Python<'_>) -> Py<PyAny> {
-        self.a.q.clone_ref(py)
-    }
-    #[setter(Q)]
-    fn set_q(&mut self, v: &Bound<'_, PyAny>) -> PyResult<()> {
-        self.a.q = checked_matrix(v, self.a.dim_x, self.a.dim_x, "Q")?;
-        Ok(())
-    }
-    /// Measurement noise covariance.
-    #[getter(R)]
-    fn get_r(&self, py: Python<'_>) -> Py<PyAny> {
-        self.a.r.clone_ref(py)
-    }
-    #[setter(R)]
-    fn set_r(&mut self, v: &Bound<'_, PyAny>) -> PyResult<()> {
-        self.a.r = checked_matrix(v, self.a.dim_z, self.a.dim_z, "R")?;
-        Ok(())
-    }
-    /// State transition matrix of the linear `predict()`.
-    #[getter(F)]
-    fn get_f(&self, py: Python<'_>) -> Py<PyAny> {
-        self.f.clone_ref(py)
-    }
-    #[setter(F)]
-    fn set_f(&mut self, v: &Bound<'_, PyAny>) -> PyResult<()> {
-        self.f = checked_matrix(v, self.a.dim_x, self.a.dim_x, "F")?;
-        Ok(())
-    }
-    /// Control matrix (`None` when there is no control input).
-    #[getter(B)]
-    fn get_b(&self, py: Python<'_>) -> Option<Py<PyAny>> {
-        self.b.as_ref().map(|b| b.clone_ref(py))
-    }
-    #[setter(B)]
-    fn set_b(&mut self, v: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
-        self.b = match v {
-            Some(v) if !v.is_none() => Some(checked_matrix(v, self.a.dim_x, self.dim_u, "B")?),
-            _ => None,
-        };
-        Ok(())
-    }
-    /// Residual of the last update.
-    #[getter]
-    fn y(&self, py: Python<'_>) -> Py<PyAny> {
-        self.a.y.clone_ref(py)
-    }
-    /// Innovation covariance of the last update.
-    #[getter(S)]
-    fn get_s(&self, py: Python<'_>) -> Py<PyAny> {
-        self.a.s.clone_ref(py)
-    }
-    /// Log-likelihood of the last measurement (NaN before the first).
-    #[getter]
-    fn log_likelihood(&self) -> f64 {
-        self.a.log_likelihood
-    }
-
-    /// Time update: linear with `F` (and `B u`) as filterpy's EKF, or, with
-    /// `fx` and `FJacobian` (callables of the column state), the EKF
-    /// prediction `x = fx(x)`, `P = J P J^T + Q`.
-    #[pyo3(signature = (u = None, fx = None, FJacobian = None))]
-    #[allow(non_snake_case)]
-    fn predict(
-        &mut self,
-        py: Python<'_>,
-        u: Option<&Bound<'_, PyAny>>,
-        fx: Option<&Bound<'_, PyAny>>,
-        FJacobian: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<()> {
-        let (x, p, q) = (self.a.x(py)?, self.a.p(py)?, self.a.q(py)?);
-        let n = self.a.dim_x;
-        let (x, p) = match (fx, FJacobian) {
-            (Some(fx), Some(fj)) => {
-                if u.is_some_and(|u| !u.is_none()) {
-                    return Err(PyValueError::new_err("u cannot be combined with fx"));
-                }
-                let ekf = self.ekf();
-                dispatch_n!(n, ext_predict(&ekf, &x, &p, &q, fx, fj))
-            }
-            (None, None) => {
-                let f = matrix(self.f.bind(py), n, n, "F")?;
-                let b = match &self.b {
-                    Some(b) => Some(matrix(b.bind(py), n, self.dim_u, "B")?),
-                    None => None,
-                };
-                let bu = match (u, b) {
-                    (Some(u), Some(b)) if !u.is_none() => Some((b, vector(u, self.dim_u, "u")?)),
-                    (Some(u), None) if !u.is_none() => {
-                        return Err(PyValueError::new_err("u given but B is None"));
-                    }
-                    _ => None,
-                };
-                let kf = self.kf();
-                let control = bu.as_ref().map(|(b, u)| (b, u));
-                dispatch_n!(n, linear_predict(&kf, &x, &p, &f, &q, control))
-            }
-            _ => {
-                return Err(PyTypeError::new_err(
-                    "fx and FJacobian must be given together",
-                ));
-            }
-        }
-        .map_err(|e| to_py_err(py, e))?;
-        self.a.set_belief(py, &x, &p)
-    }
-
-    /// Measurement update: `HJacobian(x, *args)` returns `dh/dx`
-    /// (`(dim_z, dim_x)`), `Hx(x, *hx_args)` the predicted measurement;
-    /// `z = None` keeps the prior.
-    #[pyo3(signature = (z, HJacobian, Hx, R = None, args = None, hx_args = None))]
-    #[allow(non_snake_case, clippy::too_many_arguments)]
-    fn update(
-        &mut self,
-        py: Python<'_>,
-        z: Option<&Bound<'_, PyAny>>,
-        HJacobian: &Bound<'_, PyAny>,
-        Hx: &Bound<'_, PyAny>,
-        R: Option<&Bound<'_, PyAny>>,
-        args: Option<&Bound<'_, PyAny>>,
-        hx_args: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<()> {
-        if !HJacobian.is_callable() || !Hx.is_callable() {
-            return Err(PyTypeError::new_err("HJacobian and Hx must be callable"));
-        }
-        let Some(z) = z.filter(|z| !z.is_none()) else {
-            let (x, p) = (self.a.x(py)?, self.a.p(py)?);
-            self.iterations = 0;
-            return self.a.set_update(
+linear_pymethods!(
+    #[pymethods]
+    ExtendedKalmanFilter,
+    {
+        /// `ExtendedKalmanFilter(dim_x, dim_z, dim_u=0, joseph=True)`.
+        #[new]
+        #[pyo3(signature = (dim_x, dim_z, dim_u = 0, joseph = true))]
+        fn new(
+            py: Python<'_>,
+            dim_x: usize,
+            dim_z: usize,
+            dim_u: usize,
+            joseph: bool,
+        ) -> PyResult<Self> {
+            Self::build(
                 py,
-                &UpdOut {
-                    x,
-                    p,
-                    innovation: None,
-                    iterations: 0,
-                },
-            );
-        };
-        let z = vector(z, self.a.dim_z, "z")?;
-        let (x, p, r) = (self.a.x(py)?, self.a.p(py)?, self.a.r(py, R)?);
-        let (args, hx_args) = (tuple_items(args)?, tuple_items(hx_args)?);
-        let filter = self.filter;
-        let out = dispatch_nm!(
-            self.a.dim_x,
-            self.a.dim_z,
-            ext_update(filter, &x, &p, &r, &z, HJacobian, Hx, &args, &hx_args)
-        )
-        .map_err(|e| to_py_err(py, e))?;
-        self.iterations = out.iterations;
-        self.a.set_update(py, &out)
-    }
+                dim_x,
+                dim_z,
+                dim_u,
+                Linearised::Ekf(Ekf::new(covariance_update(joseph))),
+            )
+        }
 
-    fn __repr__(&self) -> String {
-        let name = match self.filter {
-            Linearised::Ekf(_) => "ExtendedKalmanFilter",
-            Linearised::Iekf(_) => "IteratedExtendedKalmanFilter",
-        };
-        format!("{name}(dim_x={}, dim_z={})", self.a.dim_x, self.a.dim_z)
+        /// Time update: linear with `F` (and `B u`) as filterpy's EKF, or, with
+        /// `fx` and `FJacobian` (callables of the column state), the EKF
+        /// prediction `x = fx(x)`, `P = J P J^T + Q`.
+        #[pyo3(signature = (u = None, fx = None, FJacobian = None))]
+        #[allow(non_snake_case)]
+        fn predict(
+            &mut self,
+            py: Python<'_>,
+            u: Option<&Bound<'_, PyAny>>,
+            fx: Option<&Bound<'_, PyAny>>,
+            FJacobian: Option<&Bound<'_, PyAny>>,
+        ) -> PyResult<()> {
+            let (x, p, q) = (self.a.x(py)?, self.a.p(py)?, self.a.q(py)?);
+            let n = self.a.dim_x;
+            let (x, p) = match (fx, FJacobian) {
+                (Some(fx), Some(fj)) => {
+                    if u.is_some_and(|u| !u.is_none()) {
+                        return Err(PyValueError::new_err("u cannot be combined with fx"));
+                    }
+                    let ekf = self.ekf();
+                    dispatch_n!(n, ext_predict(&ekf, &x, &p, &q, fx, fj))
+                }
+                (None, None) => {
+                    let f = matrix(self.f.bind(py), n, n, "F")?;
+                    let b = match &self.b {
+                        Some(b) => Some(matrix(b.bind(py), n, self.dim_u, "B")?),
+                        None => None,
+                    };
+                    let bu = match (u, b) {
+                        (Some(u), Some(b)) if !u.is_none() => {
+                            Some((b, vector(u, self.dim_u, "u")?))
+                        }
+                        (Some(u), None) if !u.is_none() => {
+                            return Err(PyValueError::new_err("u given but B is None"));
+                        }
+                        _ => None,
+                    };
+                    let kf = self.kf();
+                    let control = bu.as_ref().map(|(b, u)| (b, u));
+                    dispatch_n!(n, linear_predict(&kf, &x, &p, &f, &q, control))
+                }
+                _ => {
+                    return Err(PyTypeError::new_err(
+                        "fx and FJacobian must be given together",
+                    ));
+                }
+            }
+            .map_err(|e| to_py_err(py, e))?;
+            self.a.set_belief(py, &x, &p)
+        }
+
+        /// Measurement update: `HJacobian(x, *args)` returns `dh/dx`
+        /// (`(dim_z, dim_x)`), `Hx(x, *hx_args)` the predicted measurement;
+        /// `z = None` keeps the prior.
+        #[pyo3(signature = (z, HJacobian, Hx, R = None, args = None, hx_args = None))]
+        #[allow(non_snake_case, clippy::too_many_arguments)]
+        fn update(
+            &mut self,
+            py: Python<'_>,
+            z: Option<&Bound<'_, PyAny>>,
+            HJacobian: &Bound<'_, PyAny>,
+            Hx: &Bound<'_, PyAny>,
+            R: Option<&Bound<'_, PyAny>>,
+            args: Option<&Bound<'_, PyAny>>,
+            hx_args: Option<&Bound<'_, PyAny>>,
+        ) -> PyResult<()> {
+            if !HJacobian.is_callable() || !Hx.is_callable() {
+                return Err(PyTypeError::new_err("HJacobian and Hx must be callable"));
+            }
+            let Some(z) = z.filter(|z| !z.is_none()) else {
+                let (x, p) = (self.a.x(py)?, self.a.p(py)?);
+                self.iterations = 0;
+                return self.a.set_update(
+                    py,
+                    &UpdOut {
+                        x,
+                        p,
+                        innovation: None,
+                        iterations: 0,
+                    },
+                );
+            };
+            let z = vector(z, self.a.dim_z, "z")?;
+            let (x, p, r) = (self.a.x(py)?, self.a.p(py)?, self.a.r(py, R)?);
+            let (args, hx_args) = (tuple_items(args)?, tuple_items(hx_args)?);
+            let filter = self.filter;
+            let out = dispatch_nm!(
+                self.a.dim_x,
+                self.a.dim_z,
+                ext_update(filter, &x, &p, &r, &z, HJacobian, Hx, &args, &hx_args)
+            )
+            .map_err(|e| to_py_err(py, e))?;
+            self.iterations = out.iterations;
+            self.a.set_update(py, &out)
+        }
+
+        fn __repr__(&self) -> String {
+            let name = match self.filter {
+                Linearised::Ekf(_) => "ExtendedKalmanFilter",
+                Linearised::Iekf(_) => "IteratedExtendedKalmanFilter",
+            };
+            format!("{name}(dim_x={}, dim_z={})", self.a.dim_x, self.a.dim_z)
+        }
     }
-}
+);
 
 /// The iterated extended Kalman filter: the EKF's interface, with an
 /// update that relinearises `Hx` about its latest iterate (Gauss-Newton,
@@ -1353,231 +1307,412 @@ impl UnscentedKalmanFilter {
     }
 }
 
-#[pymethods]
-impl UnscentedKalmanFilter {
-    /// `UnscentedKalmanFilter(dim_x, dim_z, dt, hx, fx, points=None,
-    /// alpha=1e-3, beta=2.0, kappa=0.0, vectorized=False)`.
-    #[new]
-    #[pyo3(signature = (dim_x, dim_z, dt, hx, fx, points = None, *, alpha = None, beta = None, kappa = None, vectorized = false))]
-    #[allow(clippy::too_many_arguments)]
-    fn new(
-        py: Python<'_>,
-        dim_x: usize,
-        dim_z: usize,
-        dt: f64,
-        hx: Py<PyAny>,
-        fx: Py<PyAny>,
-        points: Option<&Bound<'_, PyAny>>,
-        alpha: Option<f64>,
-        beta: Option<f64>,
-        kappa: Option<f64>,
-        vectorized: bool,
-    ) -> PyResult<Self> {
-        check_dims(dim_x, dim_z)?;
-        if !hx.bind(py).is_callable() || !fx.bind(py).is_callable() {
-            return Err(PyTypeError::new_err("hx and fx must be callable"));
-        }
-        let get = |name: &str, given: Option<f64>, default: f64| -> PyResult<f64> {
-            if let Some(v) = given {
-                return Ok(v);
+belief_pymethods!(
+    #[pymethods]
+    UnscentedKalmanFilter,
+    {
+        /// `UnscentedKalmanFilter(dim_x, dim_z, dt, hx, fx, points=None,
+        /// alpha=1e-3, beta=2.0, kappa=0.0, vectorized=False)`.
+        #[new]
+        #[pyo3(signature = (dim_x, dim_z, dt, hx, fx, points = None, *, alpha = None, beta = None, kappa = None, vectorized = false))]
+        #[allow(clippy::too_many_arguments)]
+        fn new(
+            py: Python<'_>,
+            dim_x: usize,
+            dim_z: usize,
+            dt: f64,
+            hx: Py<PyAny>,
+            fx: Py<PyAny>,
+            points: Option<&Bound<'_, PyAny>>,
+            alpha: Option<f64>,
+            beta: Option<f64>,
+            kappa: Option<f64>,
+            vectorized: bool,
+        ) -> PyResult<Self> {
+            check_dims(dim_x, dim_z)?;
+            if !hx.bind(py).is_callable() || !fx.bind(py).is_callable() {
+                return Err(PyTypeError::new_err("hx and fx must be callable"));
             }
-            match points.filter(|p| !p.is_none()) {
-                Some(p) => p.getattr(name)?.extract(),
-                None => Ok(default),
+            let get = |name: &str, given: Option<f64>, default: f64| -> PyResult<f64> {
+                if let Some(v) = given {
+                    return Ok(v);
+                }
+                match points.filter(|p| !p.is_none()) {
+                    Some(p) => p.getattr(name)?.extract(),
+                    None => Ok(default),
+                }
+            };
+            let (alpha, beta, kappa) = (
+                get("alpha", alpha, 1e-3)?,
+                get("beta", beta, 2.0)?,
+                get("kappa", kappa, 0.0)?,
+            );
+            let ukf = Ukf::new(alpha, beta, kappa).map_err(|e| crate::util::kalman_err(py, &e))?;
+            ukf.weights(dim_x)
+                .map_err(|e| crate::util::kalman_err(py, &e))?;
+            if !dt.is_finite() {
+                return Err(PyValueError::new_err("dt is not finite"));
             }
-        };
-        let (alpha, beta, kappa) = (
-            get("alpha", alpha, 1e-3)?,
-            get("beta", beta, 2.0)?,
-            get("kappa", kappa, 0.0)?,
-        );
-        let ukf = Ukf::new(alpha, beta, kappa).map_err(|e| crate::util::kalman_err(py, &e))?;
-        ukf.weights(dim_x)
-            .map_err(|e| crate::util::kalman_err(py, &e))?;
-        if !dt.is_finite() {
-            return Err(PyValueError::new_err("dt is not finite"));
+            Ok(Self {
+                a: Arrays::new(py, dim_x, dim_z, false)?,
+                dt,
+                fx,
+                hx,
+                vectorized,
+                ukf,
+            })
         }
-        Ok(Self {
-            a: Arrays::new(py, dim_x, dim_z, false)?,
-            dt,
-            fx,
-            hx,
-            vectorized,
-            ukf,
-        })
-    }
 
-    /// State dimension.
-    #[getter]
-    fn dim_x(&self) -> usize {
-        self.a.dim_x
-    }
-    /// Measurement dimension.
-    #[getter]
-    fn dim_z(&self) -> usize {
-        self.a.dim_z
-    }
-    /// `(alpha, beta, kappa)`.
-    #[getter]
-    fn sigma_parameters(&self) -> (f64, f64, f64) {
-        (self.ukf.alpha(), self.ukf.beta(), self.ukf.kappa())
-    }
-    /// State mean.
-    #[getter]
-    fn get_x(&self, py: Python<'_>) -> Py<PyAny> {
-        self.a.x.clone_ref(py)
-    }
-    #[setter]
-    fn set_x(&mut self, v: &Bound<'_, PyAny>) -> PyResult<()> {
-        self.a.x = checked_x(v, self.a.dim_x, "x")?;
-        Ok(())
-    }
-    /// State covariance.
-    #[getter(P)]
-    fn get_p(&self, py: Python<'_>) -> Py<PyAny> {
-        self.a.p.clone_ref(py)
-    }
-    #[setter(P)]
-    fn set_p(&mut self, v: &Bound<'_, PyAny>) -> PyResult<()> {
-        self.a.p = checked_matrix(v, self.a.dim_x, self.a.dim_x, "P")?;
-        Ok(())
-    }
-    /// Process noise covariance.
-    #[getter(Q)]
-    fn get_q(&self, py: Python<'_>) -> Py<PyAny> {
-        self.a.q.clone_ref(py)
-    }
-    #[setter(Q)]
-    fn set_q(&mut self, v: &Bound<'_, PyAny>) -> PyResult<()> {
-        self.a.q = checked_matrix(v, self.a.dim_x, self.a.dim_x, "Q")?;
-        Ok(())
-    }
-    /// Measurement noise covariance.
-    #[getter(R)]
-    fn get_r(&self, py: Python<'_>) -> Py<PyAny> {
-        self.a.r.clone_ref(py)
-    }
-    #[setter(R)]
-    fn set_r(&mut self, v: &Bound<'_, PyAny>) -> PyResult<()> {
-        self.a.r = checked_matrix(v, self.a.dim_z, self.a.dim_z, "R")?;
-        Ok(())
-    }
-    /// Residual of the last update.
-    #[getter]
-    fn y(&self, py: Python<'_>) -> Py<PyAny> {
-        self.a.y.clone_ref(py)
-    }
-    /// Innovation covariance of the last update.
-    #[getter(S)]
-    fn get_s(&self, py: Python<'_>) -> Py<PyAny> {
-        self.a.s.clone_ref(py)
-    }
-    /// Log-likelihood of the last measurement (NaN before the first).
-    #[getter]
-    fn log_likelihood(&self) -> f64 {
-        self.a.log_likelihood
-    }
-
-    /// Time update through `fx` (`dt` and `fx` override the stored ones for
-    /// this step; keyword arguments go to `fx`).
-    #[pyo3(signature = (dt = None, fx = None, **fx_args))]
-    fn predict(
-        &mut self,
-        py: Python<'_>,
-        dt: Option<f64>,
-        fx: Option<&Bound<'_, PyAny>>,
-        fx_args: Option<&Bound<'_, PyDict>>,
-    ) -> PyResult<()> {
-        let (x, p, q) = (self.a.x(py)?, self.a.p(py)?, self.a.q(py)?);
-        let (sf, sh) = (self.fx.bind(py).clone(), self.hx.bind(py).clone());
-        let fx = fx.unwrap_or(&sf);
-        let m = self.model(py, fx, &sh, dt.unwrap_or(self.dt), fx_args, None);
-        let (x, p) =
-            dispatch_n!(self.a.dim_x, ukf_predict(&m, &x, &p, &q)).map_err(|e| to_py_err(py, e))?;
-        self.a.set_belief(py, &x, &p)
-    }
-
-    /// Measurement update through `hx` (`z = None`: missing; `R` and `hx`
-    /// override the stored ones; keyword arguments go to `hx`).
-    #[pyo3(signature = (z, R = None, hx = None, **hx_args))]
-    #[allow(non_snake_case)]
-    fn update(
-        &mut self,
-        py: Python<'_>,
-        z: Option<&Bound<'_, PyAny>>,
-        R: Option<&Bound<'_, PyAny>>,
-        hx: Option<&Bound<'_, PyAny>>,
-        hx_args: Option<&Bound<'_, PyDict>>,
-    ) -> PyResult<()> {
-        let z = match z {
-            Some(z) if !z.is_none() => Some(vector(z, self.a.dim_z, "z")?),
-            _ => None,
-        };
-        let (x, p, r) = (self.a.x(py)?, self.a.p(py)?, self.a.r(py, R)?);
-        let (sf, sh) = (self.fx.bind(py).clone(), self.hx.bind(py).clone());
-        let hx = hx.unwrap_or(&sh);
-        let m = self.model(py, &sf, hx, self.dt, None, hx_args);
-        let out = dispatch_nm!(
-            self.a.dim_x,
-            self.a.dim_z,
-            ukf_update(&m, &x, &p, &r, z.as_ref())
-        )
-        .map_err(|e| to_py_err(py, e))?;
-        self.a.set_update(py, &out)
-    }
-
-    /// `predict` + `update` over `zs` (a `(T, dim_z)` array or a sequence
-    /// with `None` for missing measurements); returns `(means, covariances)`
-    /// as filterpy does and leaves the filter at the last posterior.
-    fn batch_filter<'py>(
-        &mut self,
-        py: Python<'py>,
-        zs: &Bound<'py, PyAny>,
-    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-        let n = self.a.dim_x;
-        let (zv, present) = read_zs(zs, self.a.dim_z)?;
-        let mut means = Vec::with_capacity(present.len() * n);
-        let mut covs = Vec::with_capacity(present.len() * n * n);
-        let dim_z = self.a.dim_z;
-        for (k, &has) in present.iter().enumerate() {
-            self.predict(py, None, None, None)?;
-            let z = has.then(|| {
-                numpy::PyArray1::from_slice(py, &zv[k * dim_z..(k + 1) * dim_z]).into_any()
-            });
-            self.update(py, z.as_ref(), None, None, None)?;
-            means.extend_from_slice(self.a.x(py)?.as_slice());
-            covs.extend(self.a.p(py)?.transpose().iter().copied());
+        /// `(alpha, beta, kappa)`.
+        #[getter]
+        fn sigma_parameters(&self) -> (f64, f64, f64) {
+            (self.ukf.alpha(), self.ukf.beta(), self.ukf.kappa())
         }
-        Ok((means_array(py, means, n, false)?, covs_array(py, covs, n)?))
-    }
 
-    /// Unscented RTS smoothing (Sarkka 2008) of filtered `Xs` `(T, dim_x)`
-    /// and `Ps` with `fx`, `dt` and `Q`; returns `(xs, Ps)`.
-    #[pyo3(signature = (Xs, Ps))]
-    #[allow(non_snake_case)]
-    fn rts_smoother<'py>(
-        &self,
-        py: Python<'py>,
-        Xs: &Bound<'py, PyAny>,
-        Ps: &Bound<'py, PyAny>,
-    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-        let n = self.a.dim_x;
-        let (xs, ps) = read_beliefs(Xs, Ps, n)?;
-        let q = self.a.q(py)?;
-        let (sf, sh) = (self.fx.bind(py).clone(), self.hx.bind(py).clone());
-        let m = self.model(py, &sf, &sh, self.dt, None, None);
-        let (mv, cv) = dispatch_n!(n, ukf_rts(&m, &xs, &ps, &q)).map_err(|e| to_py_err(py, e))?;
-        Ok((means_array(py, mv, n, false)?, covs_array(py, cv, n)?))
-    }
+        /// Time update through `fx` (`dt` and `fx` override the stored ones for
+        /// this step; keyword arguments go to `fx`).
+        #[pyo3(signature = (dt = None, fx = None, **fx_args))]
+        fn predict(
+            &mut self,
+            py: Python<'_>,
+            dt: Option<f64>,
+            fx: Option<&Bound<'_, PyAny>>,
+            fx_args: Option<&Bound<'_, PyDict>>,
+        ) -> PyResult<()> {
+            let (x, p, q) = (self.a.x(py)?, self.a.p(py)?, self.a.q(py)?);
+            let (sf, sh) = (self.fx.bind(py).clone(), self.hx.bind(py).clone());
+            let fx = fx.unwrap_or(&sf);
+            let m = self.model(py, fx, &sh, dt.unwrap_or(self.dt), fx_args, None);
+            let (x, p) = dispatch_n!(self.a.dim_x, ukf_predict(&m, &x, &p, &q))
+                .map_err(|e| to_py_err(py, e))?;
+            self.a.set_belief(py, &x, &p)
+        }
 
-    fn __repr__(&self) -> String {
-        format!(
-            "UnscentedKalmanFilter(dim_x={}, dim_z={}, alpha={}, beta={}, kappa={})",
-            self.a.dim_x,
-            self.a.dim_z,
-            self.ukf.alpha(),
-            self.ukf.beta(),
-            self.ukf.kappa()
-        )
+        /// Measurement update through `hx` (`z = None`: missing; `R` and `hx`
+        /// override the stored ones; keyword arguments go to `hx`).
+        #[pyo3(signature = (z, R = None, hx = None, **hx_args))]
+        #[allow(non_snake_case)]
+        fn update(
+            &mut self,
+            py: Python<'_>,
+            z: Option<&Bound<'_, PyAny>>,
+            R: Option<&Bound<'_, PyAny>>,
+            hx: Option<&Bound<'_, PyAny>>,
+            hx_args: Option<&Bound<'_, PyDict>>,
+        ) -> PyResult<()> {
+            let z = match z {
+                Some(z) if !z.is_none() => Some(vector(z, self.a.dim_z, "z")?),
+                _ => None,
+            };
+            let (x, p, r) = (self.a.x(py)?, self.a.p(py)?, self.a.r(py, R)?);
+            let (sf, sh) = (self.fx.bind(py).clone(), self.hx.bind(py).clone());
+            let hx = hx.unwrap_or(&sh);
+            let m = self.model(py, &sf, hx, self.dt, None, hx_args);
+            let out = dispatch_nm!(
+                self.a.dim_x,
+                self.a.dim_z,
+                ukf_update(&m, &x, &p, &r, z.as_ref())
+            )
+            .map_err(|e| to_py_err(py, e))?;
+            self.a.set_update(py, &out)
+        }
+
+        /// `predict` + `update` over `zs` (a `(T, dim_z)` array or a sequence
+        /// with `None` for missing measurements); returns `(means, covariances)`
+        /// as filterpy does and leaves the filter at the last posterior.
+        fn batch_filter<'py>(
+            &mut self,
+            py: Python<'py>,
+            zs: &Bound<'py, PyAny>,
+        ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+            let n = self.a.dim_x;
+            let (zv, present) = read_zs(zs, self.a.dim_z)?;
+            let mut means = Vec::with_capacity(present.len() * n);
+            let mut covs = Vec::with_capacity(present.len() * n * n);
+            let dim_z = self.a.dim_z;
+            for (k, &has) in present.iter().enumerate() {
+                self.predict(py, None, None, None)?;
+                let z = has.then(|| {
+                    numpy::PyArray1::from_slice(py, &zv[k * dim_z..(k + 1) * dim_z]).into_any()
+                });
+                self.update(py, z.as_ref(), None, None, None)?;
+                means.extend_from_slice(self.a.x(py)?.as_slice());
+                covs.extend(self.a.p(py)?.transpose().iter().copied());
+            }
+            Ok((means_array(py, means, n, false)?, covs_array(py, covs, n)?))
+        }
+
+        /// Unscented RTS smoothing (Sarkka 2008) of filtered `Xs` `(T, dim_x)`
+        /// and `Ps` with `fx`, `dt` and `Q`; returns `(xs, Ps)`.
+        #[pyo3(signature = (Xs, Ps))]
+        #[allow(non_snake_case)]
+        fn rts_smoother<'py>(
+            &self,
+            py: Python<'py>,
+            Xs: &Bound<'py, PyAny>,
+            Ps: &Bound<'py, PyAny>,
+        ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+            let n = self.a.dim_x;
+            let (xs, ps) = read_beliefs(Xs, Ps, n)?;
+            let q = self.a.q(py)?;
+            let (sf, sh) = (self.fx.bind(py).clone(), self.hx.bind(py).clone());
+            let m = self.model(py, &sf, &sh, self.dt, None, None);
+            let (mv, cv) =
+                dispatch_n!(n, ukf_rts(&m, &xs, &ps, &q)).map_err(|e| to_py_err(py, e))?;
+            Ok((means_array(py, mv, n, false)?, covs_array(py, cv, n)?))
+        }
+
+        fn __repr__(&self) -> String {
+            format!(
+                "UnscentedKalmanFilter(dim_x={}, dim_z={}, alpha={}, beta={}, kappa={})",
+                self.a.dim_x,
+                self.a.dim_z,
+                self.ukf.alpha(),
+                self.ukf.beta(),
+                self.ukf.kappa()
+            )
+        }
     }
+);
+
+// --------------------------------------------------------- hybrid step
+
+/// The Python model of a hybrid step.
+struct HybridModel<'a, 'py> {
+    filter: RustHybrid,
+    fx: &'a Bound<'py, PyAny>,
+    hx: &'a Bound<'py, PyAny>,
+    hjacobian: &'a Bound<'py, PyAny>,
+    dt: Bound<'py, PyAny>,
 }
+
+/// The final update and the UKF posterior of step (a).
+type HybridOut = (UpdOut, DVector<f64>, DMatrix<f64>);
+
+fn hybrid_step<const N: usize, const M: usize>(
+    m: &HybridModel<'_, '_>,
+    x: &DVector<f64>,
+    p: &DMatrix<f64>,
+    q: &DMatrix<f64>,
+    r: &DMatrix<f64>,
+    z: Option<&DVector<f64>>,
+) -> Res<HybridOut> {
+    let err = RefCell::new(None);
+    let g = belief::<N>(x, p)?;
+    let fmap = PyMap::<N>::new(
+        m.fx,
+        vec![m.dt.clone()],
+        None,
+        "fx",
+        &err,
+        Shape::Flat,
+        false,
+    );
+    let hmap = PyMap::<N>::new(m.hx, vec![], None, "hx", &err, Shape::Flat, false);
+    let jmap = PyMap::<N>::new(
+        m.hjacobian,
+        vec![],
+        None,
+        "HJacobian",
+        &err,
+        Shape::Flat,
+        false,
+    );
+    let dynamics = FnDynamics::new(|s: &SVector<f64, N>| fmap.vector::<N>(s), sm::<N, N>(q))?;
+    let measurement =
+        FnMeasurement::<N, M, _>::new(|s: &SVector<f64, N>| hmap.vector::<M>(s), sm::<M, M>(r))?
+            .with_jacobian(|s: &SVector<f64, N>| jmap.matrix::<M, N>(s));
+    let z = z.map(sv::<M>);
+    finish(
+        m.filter
+            .step(&g, &Additive(&dynamics), &measurement, z.as_ref())
+            .map(|s| {
+                let a = &s.ukf.update.posterior;
+                (upd_out(&s.update), dv(a.mean()), dm(a.cov()))
+            }),
+        &err,
+    )
+}
+
+/// The hybrid UKF -> IEKF step of the HIKPF proposal (Nagy, Ahmed and
+/// Zayed (paper 000) sec. 3.3): (a) a UKF step with `fx(x, dt)` (additive
+/// process noise `Q`) and `hx(x)`, then (b) an IEKF update that
+/// relinearises `hx` with `HJacobian(x)` (a `(dim_z, dim_x)` array) about
+/// its latest iterate, starting from the UKF posterior. The callables take
+/// the state as a 1-D array (as the UKF's); `x` is `(dim_x,)`.
+///
+/// `prior` names the prior of step (b): `"ukf_predicted"` (default, the
+/// measurement used once) or `"ukf_posterior"` (the paper's wording, the
+/// measurement used twice). After `step`, `x_ukf` and `P_ukf` hold the UKF
+/// posterior of step (a) and `iterations` the IEKF's relinearisations.
+#[pyclass(module = "bayestrack._bayestrack")]
+pub struct HybridUkfIekf {
+    a: Arrays,
+    /// Time step passed to `fx`.
+    #[pyo3(get, set)]
+    dt: f64,
+    /// State transition function `fx(x, dt)`.
+    #[pyo3(get, set)]
+    fx: Py<PyAny>,
+    /// Measurement function `hx(x)`.
+    #[pyo3(get, set)]
+    hx: Py<PyAny>,
+    /// Jacobian of `hx`, `HJacobian(x)`.
+    #[pyo3(get, set, name = "HJacobian")]
+    hjacobian: Py<PyAny>,
+    filter: RustHybrid,
+    /// IEKF relinearisations of the last step.
+    #[pyo3(get)]
+    iterations: usize,
+    x_ukf: Option<Py<PyAny>>,
+    p_ukf: Option<Py<PyAny>>,
+}
+
+belief_pymethods!(
+    #[pymethods]
+    HybridUkfIekf,
+    {
+        /// `HybridUkfIekf(dim_x, dim_z, dt, hx, fx, HJacobian, alpha=1e-3,
+        /// beta=2.0, kappa=0.0, max_iterations=5, tolerance=1e-12,
+        /// prior="ukf_predicted")`.
+        #[new]
+        #[pyo3(signature = (dim_x, dim_z, dt, hx, fx, HJacobian, *, alpha = 1e-3, beta = 2.0, kappa = 0.0, max_iterations = 5, tolerance = 1e-12, prior = "ukf_predicted"))]
+        #[allow(clippy::too_many_arguments, non_snake_case)]
+        fn new(
+            py: Python<'_>,
+            dim_x: usize,
+            dim_z: usize,
+            dt: f64,
+            hx: Py<PyAny>,
+            fx: Py<PyAny>,
+            HJacobian: Py<PyAny>,
+            alpha: f64,
+            beta: f64,
+            kappa: f64,
+            max_iterations: usize,
+            tolerance: f64,
+            prior: &str,
+        ) -> PyResult<Self> {
+            check_dims(dim_x, dim_z)?;
+            if !hx.bind(py).is_callable()
+                || !fx.bind(py).is_callable()
+                || !HJacobian.bind(py).is_callable()
+            {
+                return Err(PyTypeError::new_err(
+                    "hx, fx and HJacobian must be callable",
+                ));
+            }
+            let prior = match prior {
+                "ukf_predicted" => HybridPrior::UkfPredicted,
+                "ukf_posterior" => HybridPrior::UkfPosterior,
+                other => {
+                    return Err(PyValueError::new_err(format!(
+                        "prior = {other:?}: must be \"ukf_predicted\" or \"ukf_posterior\""
+                    )));
+                }
+            };
+            let ukf = Ukf::new(alpha, beta, kappa).map_err(|e| to_py_err(py, e.into()))?;
+            let iekf = Iekf::new(max_iterations, tolerance).map_err(|e| to_py_err(py, e.into()))?;
+            let mut filter = RustHybrid::new(ukf, iekf);
+            filter.prior = prior;
+            Ok(Self {
+                a: Arrays::new(py, dim_x, dim_z, false)?,
+                dt,
+                fx,
+                hx,
+                hjacobian: HJacobian,
+                filter,
+                iterations: 0,
+                x_ukf: None,
+                p_ukf: None,
+            })
+        }
+
+        /// The UKF posterior mean of step (a) of the last step (`None` before).
+        #[getter]
+        fn x_ukf(&self, py: Python<'_>) -> Option<Py<PyAny>> {
+            self.x_ukf.as_ref().map(|x| x.clone_ref(py))
+        }
+
+        /// The UKF posterior covariance of step (a) of the last step.
+        #[getter(P_ukf)]
+        fn p_ukf(&self, py: Python<'_>) -> Option<Py<PyAny>> {
+            self.p_ukf.as_ref().map(|p| p.clone_ref(py))
+        }
+
+        /// One step from the belief at `k-1` to the belief at `k` with
+        /// measurement `z` (`None`: missing, the UKF prediction alone).
+        #[pyo3(signature = (z, R = None))]
+        #[allow(non_snake_case)]
+        fn step(
+            &mut self,
+            py: Python<'_>,
+            z: Option<&Bound<'_, PyAny>>,
+            R: Option<&Bound<'_, PyAny>>,
+        ) -> PyResult<()> {
+            let z = match z {
+                Some(z) if !z.is_none() => Some(vector(z, self.a.dim_z, "z")?),
+                _ => None,
+            };
+            let (x, p, q, r) = (
+                self.a.x(py)?,
+                self.a.p(py)?,
+                self.a.q(py)?,
+                self.a.r(py, R)?,
+            );
+            let (fx, hx, hj) = (
+                self.fx.bind(py).clone(),
+                self.hx.bind(py).clone(),
+                self.hjacobian.bind(py).clone(),
+            );
+            let m = HybridModel {
+                filter: self.filter,
+                fx: &fx,
+                hx: &hx,
+                hjacobian: &hj,
+                dt: PyFloat::new(py, self.dt).into_any(),
+            };
+            let (out, xu, pu) = dispatch_nm!(
+                self.a.dim_x,
+                self.a.dim_z,
+                hybrid_step(&m, &x, &p, &q, &r, z.as_ref())
+            )
+            .map_err(|e| to_py_err(py, e))?;
+            self.a.set_update(py, &out)?;
+            self.iterations = out.iterations;
+            self.x_ukf = Some(py_vec(py, &xu).into_any().unbind());
+            self.p_ukf = Some(py_mat(py, &pu).into_any().unbind());
+            Ok(())
+        }
+
+        /// `step` over `zs` (a `(T, dim_z)` array or a sequence with `None` for
+        /// missing measurements); returns `(means, covariances)`.
+        fn batch_filter<'py>(
+            &mut self,
+            py: Python<'py>,
+            zs: &Bound<'py, PyAny>,
+        ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+            let n = self.a.dim_x;
+            let dim_z = self.a.dim_z;
+            let (zv, present) = read_zs(zs, dim_z)?;
+            let mut means = Vec::with_capacity(present.len() * n);
+            let mut covs = Vec::with_capacity(present.len() * n * n);
+            for (k, &has) in present.iter().enumerate() {
+                let z = has.then(|| {
+                    numpy::PyArray1::from_slice(py, &zv[k * dim_z..(k + 1) * dim_z]).into_any()
+                });
+                self.step(py, z.as_ref(), None)?;
+                means.extend_from_slice(self.a.x(py)?.as_slice());
+                covs.extend(self.a.p(py)?.transpose().iter().copied());
+            }
+            Ok((means_array(py, means, n, false)?, covs_array(py, covs, n)?))
+        }
+
+        fn __repr__(&self) -> String {
+            format!(
+                "HybridUkfIekf(dim_x={}, dim_z={}, prior={:?})",
+                self.a.dim_x, self.a.dim_z, self.filter.prior
+            )
+        }
+    }
+);

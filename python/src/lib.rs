@@ -9,6 +9,9 @@
 mod kalman;
 mod pymap;
 mod util;
+// --- filters (pypf) ---
+mod particle;
+mod pf_models;
 
 use pyo3::prelude::*;
 
@@ -19,6 +22,11 @@ fn _bayestrack(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<kalman::ExtendedKalmanFilter>()?;
     m.add_class::<kalman::IteratedExtendedKalmanFilter>()?;
     m.add_class::<kalman::UnscentedKalmanFilter>()?;
+    // --- filters (pypf) ---
+    m.add_class::<particle::ParticleFilter>()?;
+    m.add_class::<kalman::HybridUkfIekf>()?;
+    m.add_function(wrap_pyfunction!(particle::py_stream_seed, m)?)?;
+    m.add_function(wrap_pyfunction!(particle::_hikpf_reference_run, m)?)?;
     m.add("MAX_DIM_X", util::MAX_X)?;
     m.add("MAX_DIM_Z", util::MAX_Z)?;
     Ok(())
