@@ -9,6 +9,10 @@
 mod kalman;
 mod pymap;
 mod util;
+// --- trackers (pytrack) ---
+mod experiments;
+mod otb;
+mod tracking;
 
 use pyo3::prelude::*;
 
@@ -21,5 +25,16 @@ fn _bayestrack(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<kalman::UnscentedKalmanFilter>()?;
     m.add("MAX_DIM_X", util::MAX_X)?;
     m.add("MAX_DIM_Z", util::MAX_Z)?;
+    // --- trackers (pytrack) ---
+    m.add_class::<tracking::Tracker>()?;
+    m.add_function(wrap_pyfunction!(tracking::tracker_names, m)?)?;
+    m.add_function(wrap_pyfunction!(tracking::tracker_options, m)?)?;
+    m.add_class::<otb::PySequence>()?;
+    m.add_class::<otb::FrameIter>()?;
+    m.add_function(wrap_pyfunction!(otb::score, m)?)?;
+    m.add_function(wrap_pyfunction!(otb::load_sequence, m)?)?;
+    m.add_function(wrap_pyfunction!(otb::format_box, m)?)?;
+    m.add_function(wrap_pyfunction!(experiments::reproduce_rows, m)?)?;
+    m.add_function(wrap_pyfunction!(experiments::experiment_names, m)?)?;
     Ok(())
 }
