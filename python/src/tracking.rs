@@ -7,6 +7,7 @@ use std::sync::Mutex;
 use bayestrack_image::{BBox, ImageView};
 use bayestrack_otb::clip_initial_box;
 use bayestrack_trackers::{REGISTRY, TrackerError, tracker_info};
+use numpy::ndarray::{ArrayView2, ArrayViewD, Axis, Ix2};
 use numpy::{PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
@@ -146,24 +147,8 @@ where
             Some(s) => (s, false),
             None => {
                 buf.clear();
-                buf.reserve(h * w * c);
-                match view.as_slice() {
-                    Some(s) if swap => {
-                        for p in s.chunks_exact(3) {
-                            buf.extend_from_slice(&[p[2], p[1], p[0]]);
-                        }
-                    }
-                    Some(s) => buf.extend_from_slice(s),
-                    None if swap => {
-                        // iter() walks in logical (row-major) order
-                        let mut it = view.iter();
-                        while let (Some(&b), Some(&g), Some(&r)) = (it.next(), it.next(), it.next())
-                        {
-                            buf.extend_from_slice(&[r, g, b]);
-                        }
-                    }
-                    None => buf.extend(view.iter().copied()),
-                }
+                buf.resize(h * w * c, 0);
+                copy_frame(&view, swap, buf);
                 (&buf[..], true)
             }
         };
@@ -173,6 +158,44 @@ where
     let (r, copied) = out;
     let r = r.map_err(|e| PyValueError::new_err(format!("frame: {e}")))?;
     Ok((r, copied))
+}
+
+/// Copies a frame array of any strides into row-major `out` (`h * w * c`
+/// bytes), swapping the first and third channels when `swap`: row by row,
+/// each row as a slice where its pixels are contiguous.
+fn copy_frame(view: &ArrayViewD<'_, u8>, swap: bool, out: &mut [u8]) {
+    let rows: Vec<ArrayView2<'_, u8>> = match view.ndim() {
+        // (H, W): each row as (W, 1)
+        2 => view
+            .outer_iter()
+            .filter_map(|r| r.insert_axis(Axis(1)).into_dimensionality::<Ix2>().ok())
+            .collect(),
+        _ => view
+            .outer_iter()
+            .filter_map(|r| r.into_dimensionality::<Ix2>().ok())
+            .collect(),
+    };
+    let row_len = out.len() / rows.len().max(1);
+    for (row, dst) in rows.iter().zip(out.chunks_exact_mut(row_len.max(1))) {
+        match (row.as_slice(), swap) {
+            (Some(src), false) => dst.copy_from_slice(src),
+            (Some(src), true) => {
+                for (d, p) in dst.chunks_exact_mut(3).zip(src.chunks_exact(3)) {
+                    d[0] = p[2];
+                    d[1] = p[1];
+                    d[2] = p[0];
+                }
+            }
+            (None, _) => {
+                for (d, p) in dst.chunks_exact_mut(row.ncols()).zip(row.outer_iter()) {
+                    for (k, v) in d.iter_mut().enumerate() {
+                        let from = if swap { 2 - k } else { k };
+                        *v = p[from];
+                    }
+                }
+            }
+        }
+    }
 }
 
 /// The tracker and what it keeps between calls.
