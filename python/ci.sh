@@ -34,6 +34,13 @@ rm -rf "$wheels"
 "$vpy" -m pip install -q --no-deps --force-reinstall "$wheels"/bayestrack-*.whl
 echo "python/ci.sh: wheel built and installed in $((SECONDS - start)) s"
 "$vpy" -c 'import filterpy' 2>/dev/null || echo "python/ci.sh: filterpy not installed: the filterpy agreement tests are skipped"
+# --- trackers (pytrack) ---
+# the CLI `cargo test --workspace` built: test_tracker.py compares its box
+# files with the Python trackers' boxes (skipped, saying so, without it)
+target_dir="${CARGO_TARGET_DIR:-$root/target}"
+if [ -z "${BAYESTRACK_CLI:-}" ] && [ -x "$target_dir/debug/bayestrack" ]; then
+    export BAYESTRACK_CLI="$target_dir/debug/bayestrack"
+fi
 # from tests/: python/bayestrack (sources without the compiled module) must
 # not shadow the installed package
 cd "$here/tests"

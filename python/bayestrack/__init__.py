@@ -21,6 +21,11 @@ from ._bayestrack import (
     UnscentedKalmanFilter,
 )
 
+# --- trackers (pytrack) ---
+from ._bayestrack import Tracker, experiment_names, tracker_names, tracker_options
+from . import otb
+from ._experiments import reproduce_table
+
 
 class MerweScaledSigmaPoints:
     """Van der Merwe's scaled sigma points, as filterpy names them.
@@ -52,6 +57,13 @@ __all__ = [
     "MerweScaledSigmaPoints",
     "MAX_DIM_X",
     "MAX_DIM_Z",
+    # --- trackers (pytrack) ---
+    "Tracker",
+    "tracker_names",
+    "tracker_options",
+    "otb",
+    "reproduce_table",
+    "experiment_names",
 ]
 
 # --- filters (pypf) ---

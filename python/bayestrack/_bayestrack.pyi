@@ -1,6 +1,8 @@
 """Type stubs of the compiled module ``bayestrack._bayestrack``."""
 
 from typing import Any, Callable, Optional, Sequence, Tuple, Union
+from typing import Dict, Iterator, List  # --- trackers (pytrack) ---
+import os  # --- trackers (pytrack) ---
 
 import numpy as np
 import numpy.typing as npt
@@ -236,3 +238,65 @@ class HybridUkfIekf:
     def batch_filter(
         self, zs: Union[ArrayLike, Sequence[Optional[ArrayLike]]]
     ) -> Tuple[Array, Array]: ...
+# --- trackers (pytrack) ---
+
+Box = Tuple[float, float, float, float]
+Frame = npt.NDArray[np.uint8]
+
+class Tracker:
+    """A registered tracker with OpenCV's interface: ``init(frame, box)``,
+    then ``ok, box = update(frame)`` per frame. Frames are uint8 ``(H, W, 3)``
+    BGR (``bgr=False``: RGB) or ``(H, W)`` gray; boxes ``(x, y, w, h)`` with
+    a 0-based corner (``one_based=True``: OTB's 1-based)."""
+
+    name: str
+    options: List[str]
+    init_box: Optional[Box]
+    copied: bool
+    particles: int
+    def __init__(
+        self,
+        name: str,
+        *,
+        seed: int = 0,
+        bgr: bool = True,
+        one_based: bool = False,
+        **options: Union[bool, int, float, str],
+    ) -> None: ...
+    def init(self, frame: Frame, box: ArrayLike) -> None: ...
+    def update(self, frame: Frame) -> Tuple[bool, Box]: ...
+
+def tracker_names() -> List[str]: ...
+def tracker_options(name: str) -> List[Dict[str, str]]: ...
+
+class TrackingSequence:
+    """A tracking sequence on disk; frames decoded one at a time."""
+
+    name: str
+    path: str
+    files: List[str]
+    groundtruth: Array
+    labelled: npt.NDArray[np.bool_]
+    init_box: Optional[Box]
+    notes: List[str]
+    def __len__(self) -> int: ...
+    def __getitem__(self, index: int) -> Frame: ...
+    def __iter__(self) -> Iterator[Frame]: ...
+
+class FrameIter:
+    def __iter__(self) -> FrameIter: ...
+    def __next__(self) -> Frame: ...
+
+def load_sequence(
+    path: Union[str, "os.PathLike[str]"],
+    *,
+    bgr: bool = True,
+    one_based: bool = False,
+    require_groundtruth: bool = True,
+) -> TrackingSequence: ...
+def score(gt: Any, boxes: ArrayLike) -> Dict[str, Any]: ...
+def format_box(box: ArrayLike) -> str: ...
+def reproduce_rows(
+    name: str, full: bool = False, *, out: Optional[str] = None, **options: Union[bool, int, float, str]
+) -> List[Dict[str, Any]]: ...
+def experiment_names() -> List[str]: ...

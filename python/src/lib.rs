@@ -12,6 +12,10 @@ mod util;
 // --- filters (pypf) ---
 mod particle;
 mod pf_models;
+// --- trackers (pytrack) ---
+mod experiments;
+mod otb;
+mod tracking;
 
 use pyo3::prelude::*;
 
@@ -29,5 +33,16 @@ fn _bayestrack(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(particle::_hikpf_reference_run, m)?)?;
     m.add("MAX_DIM_X", util::MAX_X)?;
     m.add("MAX_DIM_Z", util::MAX_Z)?;
+    // --- trackers (pytrack) ---
+    m.add_class::<tracking::Tracker>()?;
+    m.add_function(wrap_pyfunction!(tracking::tracker_names, m)?)?;
+    m.add_function(wrap_pyfunction!(tracking::tracker_options, m)?)?;
+    m.add_class::<otb::PySequence>()?;
+    m.add_class::<otb::FrameIter>()?;
+    m.add_function(wrap_pyfunction!(otb::score, m)?)?;
+    m.add_function(wrap_pyfunction!(otb::load_sequence, m)?)?;
+    m.add_function(wrap_pyfunction!(otb::format_box, m)?)?;
+    m.add_function(wrap_pyfunction!(experiments::reproduce_rows, m)?)?;
+    m.add_function(wrap_pyfunction!(experiments::experiment_names, m)?)?;
     Ok(())
 }
