@@ -1,8 +1,8 @@
 //! An unscented Kalman filter with an angle in the state: a robot [x, y, heading] drives six
 //! circles measuring range and bearing to a landmark. Heading and bearing cross +-pi every lap;
-//! the residual and mean hooks wrap them. `cargo run --example ukf_angle`
+//! the model's `Angles` spaces wrap them. `cargo run --example ukf_angle`
 
-use bayestrack::kalman::{Dynamics, Gaussian, Measurement, Ukf};
+use bayestrack::kalman::{Angles, Dynamics, Gaussian, Manifold, Measurement, Ukf};
 use bayestrack::nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector2, Vector3};
 
 fn wrap<const D: usize>(mut v: SVector<f64, D>, i: usize) -> SVector<f64, D> {
@@ -19,11 +19,8 @@ impl Dynamics<3> for Robot {
     fn process_noise(&self) -> SMatrix<f64, 3, 3> {
         Matrix3::from_diagonal(&Vector3::new(1e-3, 1e-3, 1e-4))
     }
-    fn residual_x(&self, a: &SVector<f64, 3>, b: &SVector<f64, 3>) -> SVector<f64, 3> {
-        wrap(a - b, 2)
-    }
-    fn mean_x(&self, center: &SVector<f64, 3>, offset: &SVector<f64, 3>) -> SVector<f64, 3> {
-        wrap(center + offset, 2)
+    fn state_space(&self) -> impl Manifold<3> {
+        Angles::new([false, false, true]) // the heading wraps
     }
 }
 impl Measurement<3, 2> for Robot {
@@ -34,8 +31,8 @@ impl Measurement<3, 2> for Robot {
     fn measurement_noise(&self) -> SMatrix<f64, 2, 2> {
         Matrix2::from_diagonal(&Vector2::new(0.1 * 0.1, 0.05 * 0.05))
     }
-    fn residual_z(&self, a: &SVector<f64, 2>, b: &SVector<f64, 2>) -> SVector<f64, 2> {
-        wrap(a - b, 1)
+    fn measurement_space(&self) -> impl Manifold<2> {
+        Angles::new([false, true]) // the bearing wraps
     }
 }
 

@@ -34,7 +34,8 @@ pub trait Belief<const N: usize>: Clone + core::fmt::Debug {
     /// The moment-matched Gaussian of the mixture `sum_i w_i N(m_i, P_i)`
     /// of `components` with `weights` (non-negative, summing to 1), in this
     /// form: `m = sum w_i m_i`, `P = sum w_i (P_i + (m_i - m)(m_i - m)^T)`
-    /// for a covariance; for a square root, the triangular factor of the
+    /// for a covariance (components of weight 0 are left out); for a
+    /// square root, the triangular factor of the
     /// columns `sqrt(w_i) S_i` and `sqrt(w_i) (m_i - m)` (`S_i` a square
     /// root of `P_i`: a square-root component's own factor), by rotations,
     /// so no covariance is formed. Mean differences are plain subtraction
@@ -164,7 +165,9 @@ impl<const N: usize> Belief<N> for Gaussian<N> {
     fn mix(weights: &[f64], components: &[ModeBelief<N>]) -> Result<Self> {
         let m = mixed_mean(weights, components)?;
         let mut p = SMatrix::<f64, N, N>::zeros();
-        for (w, c) in weights.iter().zip(components) {
+        // a component of weight 0 is skipped: it adds nothing, and
+        // `0 * inf` (a mean 1e154 away) would be NaN
+        for (w, c) in weights.iter().zip(components).filter(|(w, _)| **w > 0.0) {
             let d = c.mean() - m;
             p += (c.covariance() + d * d.transpose()) * *w;
         }
@@ -201,7 +204,7 @@ impl<const N: usize> Belief<N> for SqrtGaussian<N> {
     fn mix(weights: &[f64], components: &[ModeBelief<N>]) -> Result<Self> {
         let m = mixed_mean(weights, components)?;
         let mut l = SMatrix::<f64, N, N>::zeros();
-        for (w, c) in weights.iter().zip(components) {
+        for (w, c) in weights.iter().zip(components).filter(|(w, _)| **w > 0.0) {
             let sw = w.sqrt();
             linalg::tria_into(&mut l, &(c.sqrt_cov()? * sw));
             linalg::chol_update(&mut l, (c.mean() - m) * sw);

@@ -98,7 +98,8 @@ impl<const N: usize> ImmBelief<N> {
     }
 }
 
-/// What [`Imm::step`] returns.
+/// What [`Imm::step`] returns ([`Imm::step_into`] fills one; the default
+/// is empty, its buffers to be grown by the first step).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ImmStep<const N: usize, const M: usize> {
     /// The belief after the step.
@@ -108,6 +109,19 @@ pub struct ImmStep<const N: usize, const M: usize> {
     /// `ln p(z_k | z_{1:k-1})` of the mixture, `ln sum_j cbar_j L_j`
     /// (`None` for a missing measurement).
     pub log_likelihood: Option<f64>,
+}
+
+impl<const N: usize, const M: usize> Default for ImmStep<N, M> {
+    fn default() -> Self {
+        Self {
+            belief: ImmBelief {
+                probabilities: Vec::new(),
+                modes: Vec::new(),
+            },
+            innovations: Vec::new(),
+            log_likelihood: None,
+        }
+    }
 }
 
 /// The interacting multiple model estimator: `r` models (any mix of KF,
@@ -256,21 +270,7 @@ impl<'a, const N: usize, const M: usize> Imm<'a, N, M> {
     /// there is not one per model or they are not a probability vector, or
     /// "mode beliefs" when there is not one per model.
     pub fn belief(&self, probabilities: &[f64], modes: Vec<ModeBelief<N>>) -> Result<ImmBelief<N>> {
-        if probabilities.len() != self.len() {
-            return Err(KalmanError::InvalidParameter {
-                name: "mode probabilities",
-                value: probabilities.len() as f64,
-                reason: "one per model",
-            });
-        }
-        check_probabilities(probabilities, "mode probabilities")?;
-        if modes.len() != self.len() {
-            return Err(KalmanError::InvalidParameter {
-                name: "mode beliefs",
-                value: modes.len() as f64,
-                reason: "one per model",
-            });
-        }
+        self.check_belief(probabilities, modes.len())?;
         Ok(ImmBelief {
             probabilities: probabilities.to_vec(),
             modes,
@@ -288,20 +288,85 @@ impl<'a, const N: usize, const M: usize> Imm<'a, N, M> {
         belief: &ImmBelief<N>,
         z: Option<&SVector<f64, M>>,
     ) -> Result<ImmStep<N, M>> {
+        let mut out = ImmStep::default();
+        self.step_into(belief, z, &mut out)?;
+        Ok(out)
+    }
+
+    /// [`Imm::step`] into `out`, reusing its buffers: once they have grown
+    /// to the number of models (after the first call), a step allocates
+    /// nothing on the heap (with up to 16 models; more take one buffer of
+    /// mixing weights per step), given models whose own steps do not (the
+    /// crate's filters do not). Alternate two [`ImmStep`]s to run a filter
+    /// in place:
+    ///
+    /// ```
+    /// # use bayestrack_kalman::{Gaussian, Imm, ImmStep, Kf, LinearDynamics, LinearMeasurement, Mode, NoiseModel};
+    /// # use nalgebra::{Matrix2, Vector2, Vector4};
+    /// # let sensor = LinearMeasurement::<4, 2>::position_with_noise(Matrix2::identity() * 0.25)?;
+    /// # let quiet = LinearDynamics::<4>::constant_velocity(0.1, 0.01, NoiseModel::Discrete)?;
+    /// # let agile = LinearDynamics::<4>::constant_velocity(0.1, 5.0, NoiseModel::Discrete)?;
+    /// let imm = Imm::new(
+    ///     vec![
+    ///         Box::new(Mode::new(Kf::default(), quiet, sensor)),
+    ///         Box::new(Mode::new(Kf::default(), agile, sensor)),
+    ///     ],
+    ///     &[0.95, 0.05, 0.05, 0.95],
+    /// )?;
+    /// let start = Gaussian::diagonal(Vector4::zeros(), Vector4::repeat(1.0))?;
+    /// let mut now = ImmStep { belief: imm.start(&[0.5, 0.5], &start)?, ..ImmStep::default() };
+    /// let mut next = ImmStep::default();
+    /// for k in 0..10 {
+    ///     let z = Vector2::new(0.1 * k as f64, 0.0);
+    ///     imm.step_into(&now.belief, Some(&z), &mut next)?;
+    ///     std::mem::swap(&mut now, &mut next);
+    /// }
+    /// assert_eq!(now.belief, {
+    ///     let mut b = imm.start(&[0.5, 0.5], &start)?;
+    ///     for k in 0..10 {
+    ///         b = imm.step(&b, Some(&Vector2::new(0.1 * k as f64, 0.0)))?.belief;
+    ///     }
+    ///     b
+    /// });
+    /// # Ok::<(), bayestrack_kalman::KalmanError>(())
+    /// ```
+    ///
+    /// # Errors
+    /// As [`Imm::step`]; `out` then holds a partial step.
+    pub fn step_into(
+        &self,
+        belief: &ImmBelief<N>,
+        z: Option<&SVector<f64, M>>,
+        out: &mut ImmStep<N, M>,
+    ) -> Result<()> {
         let r = self.len();
-        let belief = self.belief(&belief.probabilities, belief.modes.clone())?;
+        self.check_belief(&belief.probabilities, belief.modes.len())?;
         let mu = &belief.probabilities;
         let p = |i: usize, j: usize| self.transition[i * r + j];
-        let cbar: Vec<f64> = (0..r)
-            .map(|j| (0..r).map(|i| p(i, j) * mu[i]).sum())
-            .collect();
-        let mut modes = Vec::with_capacity(r);
-        let mut innovations = Vec::with_capacity(r);
-        let mut weights = vec![0.0; r];
+        let mut stack = [0.0; 16];
+        let mut heap = Vec::new();
+        let weights: &mut [f64] = if r <= stack.len() {
+            &mut stack[..r]
+        } else {
+            heap.resize(r, 0.0);
+            &mut heap
+        };
+        let ImmStep {
+            belief: ImmBelief {
+                probabilities,
+                modes,
+            },
+            innovations,
+            log_likelihood,
+        } = out;
+        probabilities.clear();
+        modes.clear();
+        innovations.clear();
         for (j, model) in self.models.iter().enumerate() {
-            if cbar[j] > 0.0 {
+            let cbar: f64 = (0..r).map(|i| p(i, j) * mu[i]).sum();
+            if cbar > 0.0 {
                 for (i, w) in weights.iter_mut().enumerate() {
-                    *w = p(i, j) * mu[i] / cbar[j];
+                    *w = p(i, j) * mu[i] / cbar;
                 }
             } else {
                 // unreachable mode: its probability stays 0; it keeps its
@@ -309,34 +374,51 @@ impl<'a, const N: usize, const M: usize> Imm<'a, N, M> {
                 weights.fill(0.0);
                 weights[j] = 1.0;
             }
-            let (posterior, innovation) = model.step(&weights, &belief.modes, z)?;
+            let (posterior, innovation) = model.step(weights, &belief.modes, z)?;
+            // the predicted probability, until the likelihoods are in
+            probabilities.push(cbar);
             modes.push(posterior);
             innovations.push(innovation);
         }
-        let (probabilities, log_likelihood) = if z.is_some() {
+        *log_likelihood = if z.is_some() {
             // ln cbar_j + ln L_j, normalised by log-sum-exp
-            let logs: Vec<f64> = cbar
+            for (l, i) in probabilities.iter_mut().zip(innovations.iter()) {
+                *l = l.ln() + i.as_ref().map_or(0.0, |i| i.log_likelihood);
+            }
+            let top = probabilities
                 .iter()
-                .zip(&innovations)
-                .map(|(c, i)| c.ln() + i.as_ref().map_or(0.0, |i| i.log_likelihood))
-                .collect();
-            let top = logs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            let sum: f64 = logs.iter().map(|l| (l - top).exp()).sum();
+                .copied()
+                .fold(f64::NEG_INFINITY, f64::max);
+            let sum: f64 = probabilities.iter().map(|l| (l - top).exp()).sum();
             let log_norm = top + sum.ln();
-            (
-                logs.iter().map(|l| (l - log_norm).exp()).collect(),
-                Some(log_norm),
-            )
+            for l in probabilities.iter_mut() {
+                *l = (*l - log_norm).exp();
+            }
+            Some(log_norm)
         } else {
-            (cbar, None)
+            None
         };
-        Ok(ImmStep {
-            belief: ImmBelief {
-                probabilities,
-                modes,
-            },
-            innovations,
-            log_likelihood,
-        })
+        Ok(())
+    }
+
+    /// The checks of [`Imm::belief`] on a belief's probabilities and number
+    /// of mode beliefs.
+    fn check_belief(&self, probabilities: &[f64], modes: usize) -> Result<()> {
+        if probabilities.len() != self.len() {
+            return Err(KalmanError::InvalidParameter {
+                name: "mode probabilities",
+                value: probabilities.len() as f64,
+                reason: "one per model",
+            });
+        }
+        check_probabilities(probabilities, "mode probabilities")?;
+        if modes != self.len() {
+            return Err(KalmanError::InvalidParameter {
+                name: "mode beliefs",
+                value: modes as f64,
+                reason: "one per model",
+            });
+        }
+        Ok(())
     }
 }

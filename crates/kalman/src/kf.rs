@@ -8,7 +8,7 @@ use crate::error::{KalmanError, Result, Step};
 use crate::gaussian::Gaussian;
 use crate::linalg;
 use crate::model::{
-    self, DynamicsJacobian, LinearDynamics, LinearMeasurement, MeasurementJacobian,
+    self, DynamicsJacobian, LinearDynamics, LinearMeasurement, Manifold, MeasurementJacobian,
 };
 use crate::update::{CovarianceUpdate, Update, gain_step};
 
@@ -197,7 +197,7 @@ impl Ekf {
         linear_predict(dynamics.propagate(prior.mean()), &f, prior.cov(), &q)
     }
 
-    /// Update with `nu = z - h(x)` (taken by [`Measurement::residual_z`](crate::Measurement::residual_z))
+    /// Update with `nu = z - h(x)` (taken in the model's [`Measurement::measurement_space`](crate::Measurement::measurement_space))
     /// and `H` evaluated at the prior mean.
     ///
     /// # Errors
@@ -243,7 +243,9 @@ impl Ekf {
         let step = gain_step(
             x,
             prior.cov(),
-            measurement.residual_z(z, &measurement.observe(x)),
+            measurement
+                .measurement_space()
+                .residual(z, &measurement.observe(x)),
             &h,
             r,
             self.covariance_update,
@@ -360,13 +362,14 @@ impl Iekf {
         linalg::check_finite_vec(x0, "linearisation point", Step::Update)?;
         let xf = prior.mean();
         let r = model::measurement_noise(measurement)?;
+        let space = measurement.measurement_space();
         let mut xi = *x0;
         let mut iterations = 0;
         loop {
             iterations += 1;
             let h = measurement.jacobian(&xi);
             linalg::check_finite_mat(&h, "Jacobian H", Step::Update)?;
-            let residual = measurement.residual_z(z, &measurement.observe(&xi)) - h * (xf - xi);
+            let residual = space.residual(z, &measurement.observe(&xi)) - h * (xf - xi);
             let step = gain_step(xf, prior.cov(), residual, &h, &r, self.covariance_update)?;
             let moved = (step.mean - xi).amax();
             xi = step.mean;

@@ -33,14 +33,14 @@ pub use hybrid::{HybridPrior, HybridStep, HybridUkfIekf};
 pub use imm::{Imm, ImmBelief, ImmModel, ImmStep, Mode};
 pub use kf::{Ekf, Iekf, Kf};
 pub use model::{
-    Additive, Dynamics, DynamicsJacobian, LinearDynamics, LinearMeasurement, Measurement,
-    MeasurementJacobian, NoiseCovariance, NoisyDynamics, NoisyMeasurement,
+    Additive, Angles, Dynamics, DynamicsJacobian, Euclidean, LinearDynamics, LinearMeasurement,
+    Manifold, Measurement, MeasurementJacobian, NoiseCovariance, NoisyDynamics, NoisyMeasurement,
 };
 pub use motion::{NoiseModel, white_noise};
 pub use smoother::{RtsSmoother, batch_smooth, fixed_lag_smooth};
 pub use srkf::SrKf;
 pub use srukf::{SqrtGaussian, SqrtUpdate, SrUkf};
-pub use ukf::{Ukf, UkfStep};
+pub use ukf::{NoiseForm, Ukf, UkfStep};
 pub use update::{CovarianceUpdate, Innovation, Update};
 
 /// Re-exported so users name the same `nalgebra` as the crate.

@@ -859,11 +859,26 @@ fn semidefinite_sqrt_t(
         return Err(KalmanError::NonFinite { what: matrix, step });
     }
     let m = nalgebra::DMatrix::from_column_slice(d, d, m);
+    // Entries near the ends of the range (|m_ij| beyond 2^+-500) are
+    // brought to 1 by a power of two 4^k (exact, and its square root 2^k
+    // too) before the decomposition: at 1e308, `m + m^T` and the
+    // eigen-solver's intermediate squares overflow, and a NaN eigenvalue
+    // then passed the sign test below (a variance of -1e308 was accepted).
+    let top = m.amax();
+    let k = if top > 0.0 && !(2f64.powi(-500)..=2f64.powi(500)).contains(&top) {
+        (top.log2() / 2.0).round() as i32
+    } else {
+        0
+    };
+    // 2^-k twice: 2^-2k itself underflows to 0 for k = 512
+    let (down, up) = (2f64.powi(-k), 2f64.powi(k));
+    let m = if k == 0 { m } else { m * down * down };
     let sym = (&m + m.transpose()) * 0.5;
     let eig = sym.symmetric_eigen();
     let largest = eig.eigenvalues.amax();
     let tol = 1e-12 * largest.max(f64::MIN_POSITIVE) * d as f64;
-    if eig.eigenvalues.iter().any(|&l| l < -tol) {
+    // a NaN eigenvalue (or tolerance) is rejected too
+    if eig.eigenvalues.iter().any(|&l| l.is_nan() || l < -tol) || tol.is_nan() {
         return Err(KalmanError::NotPositiveDefinite { matrix, step });
     }
     let mut s = eig.eigenvectors;
@@ -877,6 +892,14 @@ fn semidefinite_sqrt_t(
         if r[(i, i)] < 0.0 {
             r.row_mut(i).neg_mut();
         }
+    }
+    if k != 0 {
+        // the factor of the scaled matrix, scaled back (after the QR, whose
+        // norms would overflow at the original scale)
+        r *= up;
+    }
+    if !r.iter().all(|x| x.is_finite()) {
+        return Err(KalmanError::NonFinite { what: matrix, step });
     }
     Ok(r)
 }

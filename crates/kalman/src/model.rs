@@ -5,6 +5,8 @@
 //! and IEKF. Models whose noise enters non-additively (the augmented UKF of
 //! Nagy, Ahmed and Zayed (paper 000) sec. 3.3, `x_a = [x, v, n]`) implement [`NoisyDynamics`] and
 //! [`NoisyMeasurement`]; [`Additive`] turns an additive model into one.
+//! States and measurements that are not plain vectors (angles) name their
+//! [`Manifold`].
 
 use nalgebra::{SMatrix, SVector};
 
@@ -57,6 +59,123 @@ impl<const D: usize> NoiseCovariance<D> {
     }
 }
 
+/// The space a state or a measurement lives in, as the filters see it:
+/// the difference of two points and a point moved by a vector (the
+/// `[-]` and `[+]` of Hertzberg et al. 2013; filterpy's `residual_x` /
+/// `residual_z` and `x_mean_fn` / `z_mean_fn`). The one hook for states
+/// and measurements that are not plain vectors: a model returns one from
+/// [`Dynamics::state_space`], [`Measurement::measurement_space`] (and the
+/// same methods of [`NoisyDynamics`] and [`NoisyMeasurement`]), and every
+/// filter of the crate (KF, EKF, IEKF, UKF, CKF, SR-UKF, the augmented UKF
+/// and the RTS smoothers) takes its differences and means through it.
+///
+/// The sigma-point mean is `center [+] offset`, with `center` the central
+/// point and `offset` the weighted mean of the residuals `X_i [-] center`
+/// of the other points (one step of the mean on a manifold): with a
+/// wrapping residual and a wrapping `[+]`, the circular mean of points that
+/// span less than half a turn.
+///
+/// Both methods default to plain arithmetic ([`Euclidean`]).
+///
+/// ```
+/// use bayestrack_kalman::{Angles, Euclidean, Manifold};
+/// use nalgebra::Vector2;
+///
+/// // a position and a heading
+/// let space = Angles::new([false, true]);
+/// let a = Vector2::new(1.0, 3.1);
+/// let b = Vector2::new(0.5, -3.1);
+/// let d = space.residual(&a, &b);
+/// assert!((d[1] - (6.2 - std::f64::consts::TAU)).abs() < 1e-12);
+/// assert_eq!(Euclidean.residual(&a, &b), a - b);
+/// ```
+pub trait Manifold<const D: usize> {
+    /// `a [-] b`: the vector that takes `b` to `a`.
+    #[inline(always)]
+    fn residual(&self, a: &SVector<f64, D>, b: &SVector<f64, D>) -> SVector<f64, D> {
+        a - b
+    }
+
+    /// `center [+] offset`: `center` moved by `offset`.
+    #[inline(always)]
+    fn boxplus(&self, center: &SVector<f64, D>, offset: &SVector<f64, D>) -> SVector<f64, D> {
+        center + offset
+    }
+}
+
+/// The vector space `R^D`: plain subtraction and addition (the default
+/// [`Manifold`] of every model).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Euclidean;
+
+impl<const D: usize> Manifold<D> for Euclidean {}
+
+impl<const D: usize, T: Manifold<D> + ?Sized> Manifold<D> for &T {
+    #[inline(always)]
+    fn residual(&self, a: &SVector<f64, D>, b: &SVector<f64, D>) -> SVector<f64, D> {
+        (**self).residual(a, b)
+    }
+    #[inline(always)]
+    fn boxplus(&self, center: &SVector<f64, D>, offset: &SVector<f64, D>) -> SVector<f64, D> {
+        (**self).boxplus(center, offset)
+    }
+}
+
+/// Vectors some of whose components are angles in radians: those
+/// components of a residual and of `[+]` are wrapped to `(-pi, pi]`, the
+/// others are plain arithmetic.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Angles<const D: usize> {
+    angle: [bool; D],
+}
+
+impl<const D: usize> Angles<D> {
+    /// `angle[i]`: component `i` is an angle.
+    pub const fn new(angle: [bool; D]) -> Self {
+        Self { angle }
+    }
+
+    /// Which components are angles.
+    pub const fn mask(&self) -> &[bool; D] {
+        &self.angle
+    }
+
+    /// `v` with its angle components wrapped to `(-pi, pi]` (a non-finite
+    /// component stays non-finite, and the filters report it).
+    #[inline]
+    pub fn wrap(&self, mut v: SVector<f64, D>) -> SVector<f64, D> {
+        for (x, &is_angle) in v.iter_mut().zip(&self.angle) {
+            if is_angle {
+                *x = wrap_angle(*x);
+            }
+        }
+        v
+    }
+}
+
+/// `a` wrapped to `(-pi, pi]` (the range of `atan2`).
+#[inline]
+fn wrap_angle(a: f64) -> f64 {
+    use std::f64::consts::{PI, TAU};
+    if a > -PI && a <= PI {
+        a
+    } else {
+        let w = (a + PI).rem_euclid(TAU) - PI;
+        if w == -PI { PI } else { w }
+    }
+}
+
+impl<const D: usize> Manifold<D> for Angles<D> {
+    #[inline]
+    fn residual(&self, a: &SVector<f64, D>, b: &SVector<f64, D>) -> SVector<f64, D> {
+        self.wrap(a - b)
+    }
+    #[inline]
+    fn boxplus(&self, center: &SVector<f64, D>, offset: &SVector<f64, D>) -> SVector<f64, D> {
+        self.wrap(center + offset)
+    }
+}
+
 /// `Q` of `dynamics` for a filter step: the model's checked matrix, or
 /// [`Dynamics::process_noise`] checked now (named "process noise Q" in
 /// `step`); exactly symmetric either way.
@@ -104,26 +223,14 @@ pub trait Dynamics<const N: usize> {
         None
     }
 
-    /// The difference `a - b` of two states (filterpy's `residual_x`), used
-    /// by the UKF wherever it differences propagated sigma points. Override
-    /// it for states with angles (wrap the angle components to
-    /// `(-pi, pi]`); the default is plain subtraction.
+    /// The space of the state: how the sigma-point filters difference and
+    /// average states ([`Manifold`]). The default, [`Euclidean`], is plain
+    /// arithmetic; return an [`Angles`] (or your own [`Manifold`]) for a
+    /// state with angles. Every filter and smoother of the crate takes the
+    /// state's residuals and means through it.
     #[inline(always)]
-    fn residual_x(&self, a: &SVector<f64, N>, b: &SVector<f64, N>) -> SVector<f64, N> {
-        a - b
-    }
-
-    /// The mean of the propagated sigma points (filterpy's `x_mean_fn`), given
-    /// as the central point `center` and the weighted mean `offset` of the
-    /// residuals [`Dynamics::residual_x`] of the other points from it: the
-    /// mean is `center (+) offset`, one step of the mean on a manifold
-    /// (Hertzberg et al. 2013). The default is `center + offset`, the
-    /// ordinary weighted mean (since the weights sum to one); for angles,
-    /// add and wrap the result, which with a wrapping residual gives the
-    /// circular mean of points that span less than half a turn.
-    #[inline(always)]
-    fn mean_x(&self, center: &SVector<f64, N>, offset: &SVector<f64, N>) -> SVector<f64, N> {
-        center + offset
+    fn state_space(&self) -> impl Manifold<N> {
+        Euclidean
     }
 }
 
@@ -146,24 +253,14 @@ pub trait Measurement<const N: usize, const M: usize> {
         None
     }
 
-    /// The difference `a - b` of two measurements (filterpy's `residual_z`):
-    /// the innovation `z - z_hat` of every filter, and the differences of
-    /// the UKF's sigma points in measurement space. Override it for
-    /// measurements with angles (a bearing: wrap to `(-pi, pi]`); the default
-    /// is plain subtraction.
+    /// The space of the measurement ([`Manifold`]): the innovation
+    /// `z [-] z_hat` of every filter, and the differences and mean of the
+    /// UKF's sigma points in measurement space, are taken through it. The
+    /// default, [`Euclidean`], is plain arithmetic; return an [`Angles`]
+    /// for a measurement with angles (a bearing).
     #[inline(always)]
-    fn residual_z(&self, a: &SVector<f64, M>, b: &SVector<f64, M>) -> SVector<f64, M> {
-        a - b
-    }
-
-    /// The mean of the UKF's sigma points in measurement space (filterpy's
-    /// `z_mean_fn`), as `center (+) offset` with `offset` the weighted mean
-    /// of the residuals [`Measurement::residual_z`] from the central point
-    /// `center` (see [`Dynamics::mean_x`]). The default is
-    /// `center + offset`; for angles, add and wrap.
-    #[inline(always)]
-    fn mean_z(&self, center: &SVector<f64, M>, offset: &SVector<f64, M>) -> SVector<f64, M> {
-        center + offset
+    fn measurement_space(&self) -> impl Manifold<M> {
+        Euclidean
     }
 }
 
@@ -183,17 +280,11 @@ pub trait NoisyDynamics<const N: usize, const V: usize> {
     /// The distribution of `v`.
     fn process_noise_dist(&self) -> Gaussian<V>;
 
-    /// The difference `a - b` of two states, as [`Dynamics::residual_x`]
-    /// (the augmented UKF differences its propagated sigma points with it).
+    /// The space of the state, as [`Dynamics::state_space`] (the augmented
+    /// UKF differences and averages its propagated sigma points in it).
     #[inline(always)]
-    fn residual_x(&self, a: &SVector<f64, N>, b: &SVector<f64, N>) -> SVector<f64, N> {
-        a - b
-    }
-
-    /// The mean of the propagated sigma points, as [`Dynamics::mean_x`].
-    #[inline(always)]
-    fn mean_x(&self, center: &SVector<f64, N>, offset: &SVector<f64, N>) -> SVector<f64, N> {
-        center + offset
+    fn state_space(&self) -> impl Manifold<N> {
+        Euclidean
     }
 }
 
@@ -204,25 +295,16 @@ pub trait NoisyMeasurement<const N: usize, const M: usize, const W: usize> {
     /// The distribution of `n`.
     fn measurement_noise_dist(&self) -> Gaussian<W>;
 
-    /// The difference `a - b` of two measurements, as
-    /// [`Measurement::residual_z`] (the innovation and the augmented UKF's
-    /// sigma-point differences).
+    /// The space of the measurement, as [`Measurement::measurement_space`].
     #[inline(always)]
-    fn residual_z(&self, a: &SVector<f64, M>, b: &SVector<f64, M>) -> SVector<f64, M> {
-        a - b
-    }
-
-    /// The mean of the sigma points in measurement space, as
-    /// [`Measurement::mean_z`].
-    #[inline(always)]
-    fn mean_z(&self, center: &SVector<f64, M>, offset: &SVector<f64, M>) -> SVector<f64, M> {
-        center + offset
+    fn measurement_space(&self) -> impl Manifold<M> {
+        Euclidean
     }
 }
 
 /// Adapter: an additive-noise model seen as a general-noise one
 /// (`f(x, v) = f(x) + v`, `v ~ N(0, Q)`), for the augmented UKF. The
-/// model's residual and mean hooks carry over.
+/// model's [`Manifold`]s carry over.
 #[derive(Debug, Clone, Copy)]
 pub struct Additive<'a, T>(pub &'a T);
 
@@ -233,11 +315,8 @@ impl<const N: usize, T: Dynamics<N>> NoisyDynamics<N, N> for Additive<'_, T> {
     fn process_noise_dist(&self) -> Gaussian<N> {
         Gaussian::from_parts(SVector::zeros(), self.0.process_noise())
     }
-    fn residual_x(&self, a: &SVector<f64, N>, b: &SVector<f64, N>) -> SVector<f64, N> {
-        self.0.residual_x(a, b)
-    }
-    fn mean_x(&self, center: &SVector<f64, N>, offset: &SVector<f64, N>) -> SVector<f64, N> {
-        self.0.mean_x(center, offset)
+    fn state_space(&self) -> impl Manifold<N> {
+        self.0.state_space()
     }
 }
 
@@ -250,11 +329,8 @@ impl<const N: usize, const M: usize, T: Measurement<N, M>> NoisyMeasurement<N, M
     fn measurement_noise_dist(&self) -> Gaussian<M> {
         Gaussian::from_parts(SVector::zeros(), self.0.measurement_noise())
     }
-    fn residual_z(&self, a: &SVector<f64, M>, b: &SVector<f64, M>) -> SVector<f64, M> {
-        self.0.residual_z(a, b)
-    }
-    fn mean_z(&self, center: &SVector<f64, M>, offset: &SVector<f64, M>) -> SVector<f64, M> {
-        self.0.mean_z(center, offset)
+    fn measurement_space(&self) -> impl Manifold<M> {
+        self.0.measurement_space()
     }
 }
 

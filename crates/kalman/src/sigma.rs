@@ -21,7 +21,7 @@ use nalgebra::{SMatrix, SVector};
 use crate::error::{KalmanError, Result, Step};
 use crate::gaussian::Gaussian;
 use crate::linalg;
-use crate::model::{Dynamics, Measurement, NoisyDynamics, NoisyMeasurement};
+use crate::model::Manifold;
 use crate::update::{Innovation, Update};
 
 /// The smallest `alpha` accepted: van der Merwe's lower end (see [`Ukf::new`](crate::Ukf::new)).
@@ -68,88 +68,6 @@ pub(crate) struct SigmaPoints {
 /// The zero-dimensional Gaussian: "no noise block".
 pub(crate) fn none<const D: usize>() -> Gaussian<D> {
     Gaussian::from_parts(SVector::zeros(), SMatrix::zeros())
-}
-
-/// Differences and means in one space (state or measurement) of the
-/// sigma points: the hooks of [`Dynamics`] and [`Measurement`], or plain
-/// arithmetic.
-pub(crate) trait Space<const D: usize> {
-    fn residual(&self, a: &SVector<f64, D>, b: &SVector<f64, D>) -> SVector<f64, D>;
-    fn mean(&self, center: &SVector<f64, D>, offset: &SVector<f64, D>) -> SVector<f64, D>;
-}
-
-/// Plain subtraction and addition.
-pub(crate) struct Plain;
-
-impl<const D: usize> Space<D> for Plain {
-    #[inline(always)]
-    fn residual(&self, a: &SVector<f64, D>, b: &SVector<f64, D>) -> SVector<f64, D> {
-        a - b
-    }
-    #[inline(always)]
-    fn mean(&self, center: &SVector<f64, D>, offset: &SVector<f64, D>) -> SVector<f64, D> {
-        center + offset
-    }
-}
-
-/// The state-space hooks of a [`Dynamics`].
-pub(crate) struct StateSpace<'a, T>(pub(crate) &'a T);
-
-impl<const N: usize, T: Dynamics<N>> Space<N> for StateSpace<'_, T> {
-    #[inline(always)]
-    fn residual(&self, a: &SVector<f64, N>, b: &SVector<f64, N>) -> SVector<f64, N> {
-        self.0.residual_x(a, b)
-    }
-    #[inline(always)]
-    fn mean(&self, center: &SVector<f64, N>, offset: &SVector<f64, N>) -> SVector<f64, N> {
-        self.0.mean_x(center, offset)
-    }
-}
-
-/// The measurement-space hooks of a [`Measurement`].
-pub(crate) struct MeasurementSpace<'a, T, const N: usize>(pub(crate) &'a T);
-
-impl<const N: usize, const M: usize, T: Measurement<N, M>> Space<M> for MeasurementSpace<'_, T, N> {
-    #[inline(always)]
-    fn residual(&self, a: &SVector<f64, M>, b: &SVector<f64, M>) -> SVector<f64, M> {
-        self.0.residual_z(a, b)
-    }
-    #[inline(always)]
-    fn mean(&self, center: &SVector<f64, M>, offset: &SVector<f64, M>) -> SVector<f64, M> {
-        self.0.mean_z(center, offset)
-    }
-}
-
-/// The state-space hooks of a [`NoisyDynamics`].
-pub(crate) struct NoisyStateSpace<'a, T, const V: usize>(pub(crate) &'a T);
-
-impl<const N: usize, const V: usize, T: NoisyDynamics<N, V>> Space<N>
-    for NoisyStateSpace<'_, T, V>
-{
-    #[inline(always)]
-    fn residual(&self, a: &SVector<f64, N>, b: &SVector<f64, N>) -> SVector<f64, N> {
-        self.0.residual_x(a, b)
-    }
-    #[inline(always)]
-    fn mean(&self, center: &SVector<f64, N>, offset: &SVector<f64, N>) -> SVector<f64, N> {
-        self.0.mean_x(center, offset)
-    }
-}
-
-/// The measurement-space hooks of a [`NoisyMeasurement`].
-pub(crate) struct NoisyMeasurementSpace<'a, T, const N: usize, const W: usize>(pub(crate) &'a T);
-
-impl<const N: usize, const M: usize, const W: usize, T: NoisyMeasurement<N, M, W>> Space<M>
-    for NoisyMeasurementSpace<'_, T, N, W>
-{
-    #[inline(always)]
-    fn residual(&self, a: &SVector<f64, M>, b: &SVector<f64, M>) -> SVector<f64, M> {
-        self.0.residual_z(a, b)
-    }
-    #[inline(always)]
-    fn mean(&self, center: &SVector<f64, M>, offset: &SVector<f64, M>) -> SVector<f64, M> {
-        self.0.mean_z(center, offset)
-    }
 }
 
 /// The error of a failed square root of `c A`: the sigma-point scale `c`
@@ -283,7 +201,7 @@ impl SigmaPoints {
     /// cancellation between them.
     ///
     /// The deviations are the residuals of `sx` (state) and `sz`
-    /// (measurement), and the means `sx.mean(Xf_0, d)`, `sz.mean(Y_0, e)`:
+    /// (measurement), and the means `sx.boxplus(Xf_0, d)`, `sz.boxplus(Y_0, e)`:
     /// plain arithmetic unless the model overrides its hooks.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
@@ -300,8 +218,8 @@ impl SigmaPoints {
         w: &Gaussian<W>,
         f: impl Fn(&SVector<f64, N>, &SVector<f64, V>) -> SVector<f64, K>,
         h: impl Fn(&SVector<f64, K>, &SVector<f64, W>) -> SVector<f64, M>,
-        sx: &impl Space<K>,
-        sz: &impl Space<M>,
+        sx: &impl Manifold<K>,
+        sz: &impl Manifold<M>,
         step: Step,
     ) -> Result<Moments<N, K, M>> {
         let wt = self.weights_for(N + V + W)?;
@@ -384,8 +302,8 @@ impl SigmaPoints {
 
         let d = sdx * wt.wi;
         let e = sdy * wt.wi;
-        let x_mean = sx.mean(&xf0, &d);
-        let y_mean = sz.mean(&y0, &e);
+        let x_mean = sx.boxplus(&xf0, &d);
+        let y_mean = sz.boxplus(&y0, &e);
         linalg::check_finite_vec(&x_mean, "sigma-point mean of f", step)?;
         linalg::check_finite_vec(&y_mean, "sigma-point mean of h", step)?;
         let mut p_xx = SMatrix::<f64, K, K>::zeros();
@@ -422,7 +340,7 @@ impl SigmaPoints {
         s: SMatrix<f64, M, M>,
         p_xy: &SMatrix<f64, N, M>,
         z: &SVector<f64, M>,
-        sz: &impl Space<M>,
+        sz: &impl Manifold<M>,
     ) -> Result<Update<N, M>> {
         linalg::check_finite_vec(z, "measurement z", Step::Update)?;
         let ldl = linalg::Ldl::new(&s, "innovation covariance S", Step::Update)?;

@@ -10,7 +10,7 @@ use crate::error::{Result, Step};
 use crate::gaussian::Gaussian;
 use crate::kf::{Ekf, Kf};
 use crate::linalg;
-use crate::model::{self, Dynamics, DynamicsJacobian, LinearDynamics};
+use crate::model::{self, Dynamics, DynamicsJacobian, LinearDynamics, Manifold};
 use crate::ukf::Ukf;
 
 /// One backward step: from `x_{k|k}`, the prediction `x_{k+1|k}` with the
@@ -43,7 +43,7 @@ fn rts_step<const N: usize>(
 /// cross-covariance `C_k = Cov(x_k, x_{k+1})` (`P_k F^T` for a linear model,
 /// its sigma-point estimate for the URTS smoother of Sarkka 2008); the
 /// mean difference is taken by `residual` (the model's
-/// [`crate::Dynamics::residual_x`]); see `rts_step`.
+/// [`crate::Dynamics::state_space`]); see `rts_step`.
 pub(crate) fn rts_backward<const N: usize>(
     filtered: &[Gaussian<N>],
     residual: impl Fn(&SVector<f64, N>, &SVector<f64, N>) -> SVector<f64, N>,
@@ -79,8 +79,8 @@ pub trait RtsSmoother<const N: usize, D> {
         dynamics: &D,
     ) -> Result<(Gaussian<N>, SMatrix<f64, N, N>)>;
 
-    /// The difference `a - b` of two states (the model's
-    /// [`Dynamics::residual_x`] where it has one).
+    /// The difference `a [-] b` of two states (in the model's
+    /// [`Dynamics::state_space`] where it has one).
     fn state_residual(
         &self,
         dynamics: &D,
@@ -129,48 +129,57 @@ impl<const N: usize, D: DynamicsJacobian<N>> RtsSmoother<N, D> for Ekf {
         a: &SVector<f64, N>,
         b: &SVector<f64, N>,
     ) -> SVector<f64, N> {
-        dynamics.residual_x(a, b)
+        dynamics.state_space().residual(a, b)
     }
 }
 
-impl<const N: usize, D: Dynamics<N>> RtsSmoother<N, D> for Ukf {
-    fn smoothing_prediction(
-        &self,
-        filtered: &Gaussian<N>,
-        dynamics: &D,
-    ) -> Result<(Gaussian<N>, SMatrix<f64, N, N>)> {
-        let q = model::process_noise(dynamics, Step::Smooth)?;
-        Ukf::smoothing_prediction(self, filtered, dynamics, &q)
-    }
+/// The unscented RTS smoother of Sarkka 2008, one body for the UKF and the
+/// CKF (whose sigma points are the cubature rule's).
+macro_rules! sigma_point_smoother {
+    ($($filter:ty),*) => {$(
+        impl<const N: usize, D: Dynamics<N>> RtsSmoother<N, D> for $filter {
+            fn smoothing_prediction(
+                &self,
+                filtered: &Gaussian<N>,
+                dynamics: &D,
+            ) -> Result<(Gaussian<N>, SMatrix<f64, N, N>)> {
+                let q = model::process_noise(dynamics, Step::Smooth)?;
+                self.as_ukf().smoothing_prediction(filtered, dynamics, &q)
+            }
 
-    fn state_residual(
-        &self,
-        dynamics: &D,
-        a: &SVector<f64, N>,
-        b: &SVector<f64, N>,
-    ) -> SVector<f64, N> {
-        dynamics.residual_x(a, b)
+            fn state_residual(
+                &self,
+                dynamics: &D,
+                a: &SVector<f64, N>,
+                b: &SVector<f64, N>,
+            ) -> SVector<f64, N> {
+                dynamics.state_space().residual(a, b)
+            }
+        }
+    )*};
+}
+
+/// The UKF with a sigma-point filter's points.
+trait AsUkf {
+    fn as_ukf(&self) -> &Ukf;
+}
+
+impl AsUkf for Ukf {
+    #[inline(always)]
+    fn as_ukf(&self) -> &Ukf {
+        self
     }
 }
 
-impl<const N: usize, D: Dynamics<N>> RtsSmoother<N, D> for Ckf {
-    fn smoothing_prediction(
-        &self,
-        filtered: &Gaussian<N>,
-        dynamics: &D,
-    ) -> Result<(Gaussian<N>, SMatrix<f64, N, N>)> {
-        RtsSmoother::smoothing_prediction(&Ukf::cubature(), filtered, dynamics)
-    }
-
-    fn state_residual(
-        &self,
-        dynamics: &D,
-        a: &SVector<f64, N>,
-        b: &SVector<f64, N>,
-    ) -> SVector<f64, N> {
-        dynamics.residual_x(a, b)
+impl AsUkf for Ckf {
+    #[inline(always)]
+    fn as_ukf(&self) -> &Ukf {
+        const CUBATURE: Ukf = Ukf::cubature();
+        &CUBATURE
     }
 }
+
+sigma_point_smoother!(Ukf, Ckf);
 
 /// RTS smoothing of a [`batch_filter`](crate::batch_filter) result with
 /// the filter that made it (KF, EKF, UKF or CKF): `x_{k|T}` for every `k`.

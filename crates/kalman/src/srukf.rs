@@ -41,7 +41,7 @@ use nalgebra::{SMatrix, SVector};
 use crate::error::{KalmanError, Result, Step};
 use crate::gaussian::{FactoredGaussian, Gaussian, LN_2PI};
 use crate::linalg;
-use crate::model::{self, Dynamics, Measurement};
+use crate::model::{self, Dynamics, Manifold, Measurement};
 use crate::ukf::Ukf;
 use crate::update::Innovation;
 
@@ -276,20 +276,21 @@ impl SrUkf {
         let m = prior.mean();
         let sl = Self::spread_factor(&prior.l, wt.c)?;
         let xf0 = dynamics.propagate(m);
+        let space = dynamics.state_space();
         let mut sdx = SVector::<f64, N>::repeat(-0.0);
         let mut plus = SMatrix::<f64, N, N>::zeros();
         let mut minus = SMatrix::<f64, N, N>::zeros();
         for j in 0..N {
             let (xp, xm) = linalg::spread(m, &sl, j);
-            let dp = dynamics.residual_x(&dynamics.propagate(&xp), &xf0);
-            let dm = dynamics.residual_x(&dynamics.propagate(&xm), &xf0);
+            let dp = space.residual(&dynamics.propagate(&xp), &xf0);
+            let dm = space.residual(&dynamics.propagate(&xm), &xf0);
             sdx += dp;
             sdx += dm;
             plus.set_column(j, &dp);
             minus.set_column(j, &dm);
         }
         let d = sdx * wt.wi;
-        let mean = dynamics.mean_x(&xf0, &d);
+        let mean = space.boxplus(&xf0, &d);
         let sw = wt.wi.sqrt();
         let mut l = sq;
         linalg::tria_into(&mut l, &(plus * sw));
@@ -338,6 +339,7 @@ impl SrUkf {
         let m = prior.mean();
         let sl = Self::spread_factor(&prior.l, wt.c)?;
         let y0 = measurement.observe(m);
+        let space = measurement.measurement_space();
         let sw = wt.wi.sqrt();
         // the joint factor of [y; x], from sqrt(R) and the weighted
         // deviation columns; the x deviations of the points about the
@@ -348,8 +350,8 @@ impl SrUkf {
         for j in 0..N {
             let (xp, xm) = linalg::spread(m, &sl, j);
             let (dxp, dxm) = (xp - m, xm - m);
-            let dyp = measurement.residual_z(&measurement.observe(&xp), &y0);
-            let dym = measurement.residual_z(&measurement.observe(&xm), &y0);
+            let dyp = space.residual(&measurement.observe(&xp), &y0);
+            let dym = space.residual(&measurement.observe(&xm), &y0);
             sdx += dxp;
             sdx += dxm;
             sdy += dyp;
@@ -359,7 +361,7 @@ impl SrUkf {
         }
         let d = sdx * wt.wi;
         let e = sdy * wt.wi;
-        let y_mean = measurement.mean_z(&y0, &e);
+        let y_mean = space.boxplus(&y0, &e);
         linalg::check_finite_vec(&y_mean, "sigma-point mean of h", step)?;
         let gs = wt.g.abs().sqrt();
         if wt.g >= 0.0 {
@@ -373,7 +375,7 @@ impl SrUkf {
                 step,
             )?;
         }
-        let residual = measurement.residual_z(z, &y_mean);
+        let residual = space.residual(z, &y_mean);
         joint_posterior(&joint, m, residual, step)
     }
 }

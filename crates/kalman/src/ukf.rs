@@ -21,11 +21,10 @@ use crate::error::KalmanError;
 use crate::error::{Result, Step};
 use crate::gaussian::Gaussian;
 use crate::linalg;
-use crate::model::{self, Dynamics, Measurement, NoisyDynamics, NoisyMeasurement};
-use crate::sigma::{
-    MeasurementSpace, NoisyMeasurementSpace, NoisyStateSpace, Plain, SigmaPoints, Space,
-    StateSpace, no_output, none,
+use crate::model::{
+    self, Additive, Dynamics, Euclidean, Manifold, Measurement, NoisyDynamics, NoisyMeasurement,
 };
+use crate::sigma::{SigmaPoints, no_output, none};
 use crate::update::Update;
 
 /// Scaled unscented transform parameters and the filter built on them.
@@ -71,15 +70,62 @@ use crate::update::Update;
 /// # Ok::<(), bayestrack_kalman::KalmanError>(())
 /// ```
 ///
-/// Angles in the state or the measurement (a heading, a bearing): override
-/// the residual and mean hooks of the model ([`Dynamics::residual_x`],
-/// [`Dynamics::mean_x`], [`Measurement::residual_z`],
-/// [`Measurement::mean_z`], and the same hooks of [`NoisyDynamics`] and
-/// [`NoisyMeasurement`] for the augmented form) to wrap; the UKF forms
-/// every sigma-point difference, mean and innovation through them.
+/// Angles in the state or the measurement (a heading, a bearing): the
+/// model names its [`Manifold`] ([`Dynamics::state_space`],
+/// [`Measurement::measurement_space`], and the same methods of
+/// [`NoisyDynamics`] and [`NoisyMeasurement`] for the augmented form; an
+/// [`Angles`](crate::Angles) wraps); the UKF forms every sigma-point
+/// difference, mean and innovation through it.
+///
+/// How the noise of an additive model enters, [`NoiseForm`], is chosen
+/// once, on the filter ([`Ukf::with_noise_form`]); `predict`, `update` and
+/// `step`, called directly or through [`KalmanFilter`](crate::KalmanFilter)
+/// and the particle filters' local step, all read it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Ukf {
     points: SigmaPoints,
+    noise: NoiseForm,
+}
+
+/// How the noise of an additive model (`x_k = f(x_{k-1}) + v`,
+/// `z = h(x) + n`) enters the sigma-point filter: the one place that
+/// decides it, read by every UKF step ([`Ukf::predict`], [`Ukf::update`],
+/// [`Ukf::step`]) whichever trait calls it.
+///
+/// The two forms agree for linear models and differ (by the spread of the
+/// points: the weights depend on the dimension of the set) for nonlinear
+/// ones.
+///
+/// ```
+/// use bayestrack_kalman::{Gaussian, KalmanPredict, NoiseForm, Ukf, FnDynamics};
+/// use nalgebra::{Matrix2, Vector2};
+///
+/// let pendulum = FnDynamics::new(
+///     |x: &Vector2<f64>| Vector2::new(x[0] + 0.1 * x[1], x[1] - 0.981 * x[0].sin()),
+///     Matrix2::new(1e-4, 0.0, 0.0, 1e-2),
+/// )?;
+/// let belief = Gaussian::new(Vector2::new(0.5, 0.0), Matrix2::identity() * 0.1)?;
+/// let augmented = Ukf::new(1.0, 2.0, 0.0)?.with_noise_form(NoiseForm::Augmented);
+/// // the inherent method and the trait give the augmented form's answer
+/// let p = augmented.predict(&belief, &pendulum)?;
+/// assert_eq!(KalmanPredict::predict(&augmented, &belief, &pendulum)?, p);
+/// assert_eq!(augmented.predict_augmented(&belief, &bayestrack_kalman::Additive(&pendulum))?, p);
+/// # Ok::<(), bayestrack_kalman::KalmanError>(())
+/// ```
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+pub enum NoiseForm {
+    /// `Q` and `R` are added to the sigma-point covariances
+    /// (`P = sum Wc dX dX^T + Q`): sigma points of the `N`-dimensional
+    /// state only. The default, as filterpy's `UnscentedKalmanFilter`.
+    #[default]
+    Additive,
+    /// The state is augmented with the noise (Nagy, Ahmed and Zayed (paper
+    /// 000) sec. 3.3): sigma points of `[x; v]` through `f(x) + v` in the
+    /// prediction, of `[x; n]` through `h(x) + n` in the update
+    /// ([`Ukf::predict_augmented`] and [`Ukf::update_augmented`] with the
+    /// model seen through [`Additive`](crate::Additive)); in [`Ukf::step`],
+    /// one set of `[x; v; n]` ([`Ukf::step_augmented`]).
+    Augmented,
 }
 
 /// The predicted belief and the measurement update of a joint UKF step.
@@ -109,6 +155,7 @@ impl Ukf {
     pub fn new(alpha: f64, beta: f64, kappa: f64) -> Result<Self> {
         Ok(Self {
             points: SigmaPoints::new(alpha, beta, kappa)?,
+            noise: NoiseForm::Additive,
         })
     }
 
@@ -116,7 +163,21 @@ impl Ukf {
     pub(crate) const fn cubature() -> Self {
         Self {
             points: SigmaPoints::cubature(),
+            noise: NoiseForm::Additive,
         }
+    }
+
+    /// This filter with the noise of additive models entering in `form`
+    /// (the default is [`NoiseForm::Additive`]).
+    #[must_use]
+    pub const fn with_noise_form(mut self, form: NoiseForm) -> Self {
+        self.noise = form;
+        self
+    }
+
+    /// How the noise of additive models enters ([`NoiseForm`]).
+    pub const fn noise_form(&self) -> NoiseForm {
+        self.noise
     }
 
     /// The checked sigma-point parameters (shared with the SR-UKF).
@@ -175,8 +236,8 @@ impl Ukf {
         q_add: &SMatrix<f64, N, N>,
         r_add: &SMatrix<f64, M, M>,
         z: &SVector<f64, M>,
-        sx: &impl Space<N>,
-        sz: &impl Space<M>,
+        sx: &impl Manifold<N>,
+        sz: &impl Manifold<M>,
     ) -> Result<UkfStep<N, M>> {
         let mo = self
             .points
@@ -188,8 +249,10 @@ impl Ukf {
         Ok(UkfStep { predicted, update })
     }
 
-    /// Additive-noise time update: sigma points of the prior through `f`,
-    /// `P = sum Wc (X - x)(X - x)^T + Q`.
+    /// Time update: sigma points of the prior through `f`,
+    /// `P = sum Wc (X - x)(X - x)^T + Q` ([`NoiseForm::Additive`], the
+    /// default), or [`Ukf::predict_augmented`] of the model seen through
+    /// [`Additive`](crate::Additive) ([`NoiseForm::Augmented`]).
     ///
     /// # Errors
     /// [`KalmanError::NotPositiveDefinite`] when the prior covariance has no
@@ -204,6 +267,9 @@ impl Ukf {
         prior: &Gaussian<N>,
         dynamics: &D,
     ) -> Result<Gaussian<N>> {
+        if self.noise == NoiseForm::Augmented {
+            return self.predict_augmented(prior, &Additive(dynamics));
+        }
         let q = model::process_noise(dynamics, Step::Predict)?;
         let mo = self.points.transform(
             prior,
@@ -211,14 +277,16 @@ impl Ukf {
             &none::<0>(),
             |x, _| dynamics.propagate(x),
             no_output,
-            &StateSpace(dynamics),
-            &Plain,
+            &dynamics.state_space(),
+            &Euclidean,
             Step::Predict,
         )?;
         Gaussian::checked(mo.x_mean, linalg::add_sym(&mo.p_xx, &q), Step::Predict)
     }
 
-    /// Additive-noise measurement update with sigma points drawn from `prior`.
+    /// Measurement update with sigma points drawn from `prior`, in the
+    /// filter's [`NoiseForm`] (augmented: [`Ukf::update_augmented`] of the
+    /// model seen through [`Additive`](crate::Additive)).
     ///
     /// # Errors
     /// As [`Ukf::predict`]; [`KalmanError::NotPositiveDefinite`] naming the
@@ -235,6 +303,9 @@ impl Ukf {
         let Some(z) = z else {
             return Ok(Update::missing(prior));
         };
+        if self.noise == NoiseForm::Augmented {
+            return self.update_augmented(prior, &Additive(measurement), Some(z));
+        }
         let r = model::measurement_noise(measurement)?;
         let mo = self.points.transform(
             prior,
@@ -242,8 +313,8 @@ impl Ukf {
             &none::<0>(),
             |x, _| *x,
             |x, _| measurement.observe(x),
-            &Plain,
-            &MeasurementSpace(measurement),
+            &Euclidean,
+            &measurement.measurement_space(),
             Step::Update,
         )?;
         SigmaPoints::correct(
@@ -252,7 +323,7 @@ impl Ukf {
             linalg::add_sym(&mo.p_yy, &r),
             &mo.p_xy,
             z,
-            &MeasurementSpace(measurement),
+            &measurement.measurement_space(),
         )
     }
 
@@ -262,7 +333,9 @@ impl Ukf {
     /// set, the points of the prior through `f` and the propagated points
     /// through `h` (`Q` enters `P_{k|k-1}` but not the cross-covariance).
     /// One square root and one pass instead of two; identical to the default
-    /// for linear `f` only when `Q = 0`.
+    /// for linear `f` only when `Q = 0`. With [`NoiseForm::Augmented`],
+    /// [`Ukf::step_augmented`] of the model seen through
+    /// [`Additive`](crate::Additive) (one set of `[x; v; n]`).
     ///
     /// # Errors
     /// As [`Ukf::predict`] and [`Ukf::update`].
@@ -281,6 +354,14 @@ impl Ukf {
                 update: Update::missing(&predicted),
             });
         };
+        if self.noise == NoiseForm::Augmented {
+            return self.step_augmented(
+                prior,
+                &Additive(dynamics),
+                &Additive(measurement),
+                Some(z),
+            );
+        }
         let q = model::process_noise(dynamics, Step::Predict)?;
         let r = model::measurement_noise(measurement)?;
         self.joint(
@@ -292,8 +373,8 @@ impl Ukf {
             &q,
             &r,
             z,
-            &StateSpace(dynamics),
-            &MeasurementSpace(measurement),
+            &dynamics.state_space(),
+            &measurement.measurement_space(),
         )
     }
 
@@ -312,8 +393,8 @@ impl Ukf {
             &none::<0>(),
             |x, v| dynamics.propagate_with(x, v),
             no_output,
-            &NoisyStateSpace(dynamics),
-            &Plain,
+            &dynamics.state_space(),
+            &Euclidean,
             Step::Predict,
         )?;
         Gaussian::checked(mo.x_mean, mo.p_xx, Step::Predict)
@@ -343,8 +424,8 @@ impl Ukf {
             &measurement.measurement_noise_dist(),
             |x, _| *x,
             |x, n| measurement.observe_with(x, n),
-            &Plain,
-            &NoisyMeasurementSpace(measurement),
+            &Euclidean,
+            &measurement.measurement_space(),
             Step::Update,
         )?;
         SigmaPoints::correct(
@@ -353,7 +434,7 @@ impl Ukf {
             mo.p_yy,
             &mo.p_xy,
             z,
-            &NoisyMeasurementSpace(measurement),
+            &measurement.measurement_space(),
         )
     }
 
@@ -392,13 +473,14 @@ impl Ukf {
             &SMatrix::zeros(),
             &SMatrix::zeros(),
             z,
-            &NoisyStateSpace(dynamics),
-            &NoisyMeasurementSpace(measurement),
+            &dynamics.state_space(),
+            &measurement.measurement_space(),
         )
     }
 
     /// Unscented Rauch-Tung-Striebel smoothing (Sarkka 2008) of filtered
-    /// beliefs produced with additive-noise `dynamics`.
+    /// beliefs produced with additive-noise `dynamics`, its predictions in
+    /// the filter's [`NoiseForm`].
     ///
     /// # Errors
     /// As [`Ukf::predict`]; [`KalmanError::NotPositiveDefinite`] when a
@@ -409,7 +491,7 @@ impl Ukf {
         dynamics: &D,
     ) -> Result<Vec<Gaussian<N>>> {
         let q = model::process_noise(dynamics, Step::Smooth)?;
-        let space = StateSpace(dynamics);
+        let space = dynamics.state_space();
         let residual = |a: &SVector<f64, N>, b: &SVector<f64, N>| space.residual(a, b);
         crate::smoother::rts_backward(filtered, residual, |_, g| {
             self.smoothing_prediction(g, dynamics, &q)
@@ -426,14 +508,32 @@ impl Ukf {
         dynamics: &D,
         q: &SMatrix<f64, N, N>,
     ) -> Result<(Gaussian<N>, SMatrix<f64, N, N>)> {
+        if self.noise == NoiseForm::Augmented {
+            // the prediction of `predict` in this form; the noise points
+            // do not move the input state, so the cross-covariance is the
+            // sum over the state's points alone
+            let noisy = Additive(dynamics);
+            let mo = self.points.transform(
+                g,
+                &noisy.process_noise_dist(),
+                &none::<0>(),
+                |x, v| noisy.propagate_with(x, v),
+                no_output,
+                &dynamics.state_space(),
+                &Euclidean,
+                Step::Smooth,
+            )?;
+            let predicted = Gaussian::checked(mo.x_mean, mo.p_xx, Step::Smooth)?;
+            return Ok((predicted, mo.p_in_x));
+        }
         let mo = self.points.transform(
             g,
             &none::<0>(),
             &none::<0>(),
             |x, _| dynamics.propagate(x),
             no_output,
-            &StateSpace(dynamics),
-            &Plain,
+            &dynamics.state_space(),
+            &Euclidean,
             Step::Smooth,
         )?;
         let predicted = Gaussian::checked(mo.x_mean, linalg::add_sym(&mo.p_xx, q), Step::Smooth)?;

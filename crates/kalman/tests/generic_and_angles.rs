@@ -5,8 +5,8 @@
 use std::f64::consts::PI;
 
 use bayestrack_kalman::{
-    Additive, Dynamics, Ekf, Gaussian, Iekf, KalmanFilter, KalmanPredict, Kf, LinearDynamics,
-    LinearMeasurement, Measurement, Result, Ukf, Update,
+    Additive, Angles, Dynamics, Ekf, Gaussian, Iekf, KalmanFilter, KalmanPredict, Kf,
+    LinearDynamics, LinearMeasurement, Manifold, Measurement, Result, Ukf, Update,
 };
 use nalgebra::{Matrix2, Matrix2x4, Matrix4, SMatrix, SVector, Vector2, Vector4};
 
@@ -140,21 +140,8 @@ impl Measurement<2, 2> for RangeBearing {
     fn measurement_noise(&self) -> SMatrix<f64, 2, 2> {
         Matrix2::new(0.01, 0.0, 0.0, 1e-4) // 0.1 in range, 0.01 rad
     }
-    fn residual_z(&self, a: &SVector<f64, 2>, b: &SVector<f64, 2>) -> SVector<f64, 2> {
-        let d = a - b;
-        if self.hooks {
-            Vector2::new(d[0], wrap(d[1]))
-        } else {
-            d
-        }
-    }
-    fn mean_z(&self, center: &SVector<f64, 2>, offset: &SVector<f64, 2>) -> SVector<f64, 2> {
-        let m = center + offset;
-        if self.hooks {
-            Vector2::new(m[0], wrap(m[1]))
-        } else {
-            m
-        }
+    fn measurement_space(&self) -> impl Manifold<2> {
+        Angles::new([false, self.hooks])
     }
 }
 
@@ -226,21 +213,8 @@ impl Dynamics<1> for Heading {
     fn process_noise(&self) -> SMatrix<f64, 1, 1> {
         SMatrix::from([[1e-4]])
     }
-    fn residual_x(&self, a: &SVector<f64, 1>, b: &SVector<f64, 1>) -> SVector<f64, 1> {
-        let d = a - b;
-        if self.hooks {
-            SVector::from([wrap(d[0])])
-        } else {
-            d
-        }
-    }
-    fn mean_x(&self, center: &SVector<f64, 1>, offset: &SVector<f64, 1>) -> SVector<f64, 1> {
-        let m = center + offset;
-        if self.hooks {
-            SVector::from([wrap(m[0])])
-        } else {
-            m
-        }
+    fn state_space(&self) -> impl Manifold<1> {
+        Angles::new([self.hooks])
     }
 }
 
