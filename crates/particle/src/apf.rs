@@ -204,12 +204,21 @@ impl AuxiliaryFilter {
         {
             let anc = &ancestors;
             let g = &g;
+            let first = &first;
             for_chunks(cs, &mut children, &mut inc, key, |o, xs, ws, rng| {
                 for (i, (x, w)) in xs.iter_mut().zip(ws.iter_mut()).enumerate() {
                     let j = o + i;
                     let child = model.sample_transition(k, x, rng);
                     if !child.iter().all(|v| v.is_finite()) {
                         return Err(ParticleError::NonFiniteState { index: j });
+                    }
+                    if first[anc[j]] == f64::NEG_INFINITY {
+                        // a parent of first-stage weight zero (kept in
+                        // place without resampling): its child's weight
+                        // w g p / g is zero, whatever p / g would say
+                        *x = child;
+                        *w = f64::NEG_INFINITY;
+                        continue;
                     }
                     let l = model.log_likelihood(k, &child, z) - g[anc[j]];
                     if l.is_nan() || l == f64::INFINITY {

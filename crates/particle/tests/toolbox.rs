@@ -385,7 +385,7 @@ fn ffbs_marginals_match_the_rts_smoother() {
     let sets = history(&m, &zs, 1000);
     let paths = 400;
     let trajectories = ffbs(&sets, &m, paths, 128, &[14]).unwrap();
-    let means = path_means(&trajectories);
+    let means = path_means(&trajectories).unwrap();
     let (mut worst, mut gap) = (0.0f64, 0.0f64);
     for (t, s) in rts.iter().enumerate() {
         let (mu, var) = (s.mean()[0], s.cov()[(0, 0)]);
