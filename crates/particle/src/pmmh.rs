@@ -80,7 +80,9 @@ impl<const P: usize> Chain<P> {
         let n = v.len();
         let lo = (((1.0 - level) / 2.0) * n as f64).floor() as usize;
         let hi = ((((1.0 + level) / 2.0) * n as f64).ceil() as usize).clamp(1, n) - 1;
-        Some((v[lo.min(n - 1)], v[hi]))
+        // a tiny level can put the upper order statistic below the lower
+        let lo = lo.min(n - 1);
+        Some((v[lo], v[hi.max(lo)]))
     }
 }
 

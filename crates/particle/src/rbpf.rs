@@ -239,6 +239,14 @@ where
         // weigh by p(z_k | xn_{0:k}, z_{1:k-1}) and update
         let (h, measurement) = self.model.measurement(k, &xn);
         let update = self.kf.update(&predicted, &measurement, Some(&(z - h)))?;
+        if update.posterior.cov().diagonal().iter().any(|&v| v < 0.0) {
+            // the Kalman update at subnormal variances can round a zero
+            // variance to a negative one: refused, not carried on
+            return Err(KalmanError::NotPositiveDefinite {
+                matrix: "linear-state posterior covariance",
+                step: Step::Update,
+            });
+        }
         let lw = update.innovation.map_or(0.0, |i| i.log_likelihood);
         Ok((
             RbParticle {

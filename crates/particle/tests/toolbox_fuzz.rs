@@ -269,10 +269,16 @@ proptest! {
         let mut smoother = FixedLag::new(lag);
         smoother.record(&set, None).unwrap();
         let pf = ParticleFilter::default();
+        let calm = Extreme { a: 1.0, s: 1.0, r: 1.0 };
         for k in 0..3u64 {
-            // a report of another set's step must not index this set's lines
-            let Ok(rep) = pf.step(&mut other, &Bootstrap(&m), &z, &[6, k]) else { break };
-            let _ = smoother.record(&set, Some(&rep));
+            // a report of another set's step that resampled, while this
+            // set holds no ancestors (it has not stepped yet): refused,
+            // not a panic on its empty ancestor list
+            let Ok(rep) = pf.step(&mut other, &Bootstrap(&calm), &0.0, &[6, k]) else { break };
+            let foreign = smoother.record(&set, Some(&rep));
+            if k == 0 {
+                prop_assert!(foreign.is_err());
+            }
             let Ok(rep) = pf.step(&mut set, &Bootstrap(&m), &z, &[7, k]) else { break };
             if smoother.record(&set, Some(&rep)).is_err() {
                 break;
@@ -288,15 +294,19 @@ proptest! {
         iterations in count(),
         (s0, s1) in (extreme_f64(), extreme_f64()),
         (t0, t1) in (extreme_f64(), extreme_f64()),
-        (p, l) in (extreme_f64(), extreme_f64()),
+        (p, l) in (
+            prop_oneof![extreme_f64(), Just(1e308), Just(-1e308)],
+            prop_oneof![extreme_f64(), Just(1e308), Just(-1e308)],
+        ),
         seed in any::<u64>(),
         (burn_in, i, level) in (count(), 0usize..3, extreme_f64()),
     ) {
         let pmmh = Pmmh { iterations, step: Vector2::new(s0, s1), seed };
         // log densities from the drawn numbers, scaled by theta
         let prior = |t: &Vector2<f64>| p * (1.0 + t[0].abs().min(1.0));
+        // (l = 1e308 overflows to +inf away from theta0 = 0)
         let like = |t: &Vector2<f64>, _seed: u64| -> Result<f64, ParticleError> {
-            Ok(l - t[1].abs().min(1e300))
+            Ok(l * (1.0 + t[1].abs().min(1.0)))
         };
         let Ok(chain) = pmmh.run(Vector2::new(t0, t1), prior, like) else { return Ok(()) };
         prop_assert!(iterations < Pmmh::<2>::MAX_SAMPLES);
@@ -314,4 +324,109 @@ proptest! {
             prop_assert!(i < 2 && lo.is_finite() && hi.is_finite() && lo <= hi);
         }
     }
+}
+
+/// Stays put; log-likelihood and first-stage weight from a rule.
+struct Rule {
+    log_likelihood: fn(f64) -> f64,
+}
+
+impl ScalarModel for Rule {
+    type Observation = f64;
+    fn sample_transition<R: Rng + ?Sized>(&self, _k: usize, x: f64, _rng: &mut R) -> f64 {
+        x
+    }
+    fn log_likelihood(&self, _k: usize, x: f64, _z: &f64) -> f64 {
+        (self.log_likelihood)(x)
+    }
+}
+
+impl Auxiliary<1> for Rule {
+    fn point(&self, _k: usize, x_prev: &Vector1<f64>) -> Vector1<f64> {
+        *x_prev
+    }
+}
+
+#[test]
+fn an_apf_parent_of_zero_first_stage_weight_leaves_a_child_of_weight_zero() {
+    // without resampling the parent at -1 stays in place; its child's
+    // weight w g p / g is zero, not the NaN of (-inf) - (-inf)
+    let m = Rule {
+        log_likelihood: |x| if x < 0.0 { f64::NEG_INFINITY } else { -x },
+    };
+    let mut set = set_of(&[-1.0, 1.0, 2.0]).unwrap();
+    let apf = AuxiliaryFilter {
+        policy: ResamplePolicy::Never,
+        ..AuxiliaryFilter::default()
+    };
+    let r = apf.step(&mut set, &m, &0.0, &[1]).unwrap();
+    assert!(!r.resampled);
+    let w = set.weights();
+    assert_eq!(w[0], 0.0);
+    // w g p / g = p: weights e^-1 and e^-2, normalised
+    let e = (-1.0f64).exp();
+    assert!((w[1] - 1.0 / (1.0 + e)).abs() < 1e-12, "{w:?}");
+    assert!((r.mean[0] - (1.0 + 2.0 * e) / (1.0 + e)).abs() < 1e-12);
+}
+
+#[test]
+fn smc_refuses_a_log_evidence_past_the_largest_f64() {
+    let m = Rule {
+        log_likelihood: |_| 1e308,
+    };
+    let mut smc = Smc::new(ParticleFilter::default(), set_of(&[0.0, 1.0]).unwrap(), 1).unwrap();
+    smc.step(&Bootstrap(&m), &0.0).unwrap();
+    assert_eq!(smc.log_evidence(), 1e308);
+    assert!(matches!(
+        smc.step(&Bootstrap(&m), &0.0),
+        Err(ParticleError::InvalidParameter {
+            name: "log evidence",
+            ..
+        })
+    ));
+    assert_eq!(smc.log_evidence(), 1e308);
+}
+
+#[test]
+fn huge_counts_are_refused_before_they_allocate() {
+    let history = vec![set_of(&[0.0, 1.0]).unwrap(); 3];
+    let m = Extreme {
+        a: 1.0,
+        s: 1.0,
+        r: 1.0,
+    };
+    for n in [usize::MAX, 1 << 40, 1 << 26] {
+        assert!(matches!(
+            ffbs(&history, &m, n, 64, &[1]),
+            Err(ParticleError::TooLarge { .. })
+        ));
+    }
+    let pmmh = Pmmh {
+        iterations: usize::MAX,
+        step: Vector1::new(0.1),
+        seed: 1,
+    };
+    assert!(matches!(
+        pmmh.run(Vector1::new(0.0), |_| 0.0, |_, _| Ok(0.0)),
+        Err(ParticleError::TooLarge { .. })
+    ));
+}
+
+#[test]
+fn a_credible_interval_at_a_tiny_level_is_ordered() {
+    let chain = bayestrack_particle::Chain {
+        samples: (0..5).map(|i| Vector1::new(f64::from(i))).collect(),
+        log_likelihoods: vec![0.0; 5],
+        accepted: 0,
+    };
+    for level in [8.4e-18, 1e-300, 5e-324, 0.5, 1.0] {
+        let (lo, hi) = chain.credible_interval(0, level, 1).unwrap();
+        assert!(lo <= hi, "level {level}: [{lo}, {hi}]");
+    }
+    for level in [0.0, -0.5, 1.5, f64::NAN] {
+        assert_eq!(chain.credible_interval(0, level, 1), None);
+    }
+    assert_eq!(chain.credible_interval(1, 0.9, 1), None);
+    assert_eq!(chain.mean(5), None);
+    assert_eq!(chain.mean(4), Some(Vector1::new(4.0)));
 }
