@@ -97,7 +97,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         log_evidence(t, &ys, seed)
     })?;
     let burn_in = 500;
-    let mean = chain.mean(burn_in);
+    let mean = chain.mean(burn_in).ok_or("no samples")?;
     println!(
         "PMMH, {} iterations ({burn_in} burn-in), bootstrap filter N = {N}, T = {T}; acceptance rate {:.2}",
         pmmh.iterations,

@@ -86,7 +86,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             history.push(set.clone());
         }
         let paths = ffbs(&history, &Growth, PATHS, 64, &[run, u64::MAX])?;
-        let means = path_means(&paths);
+        let means = path_means(&paths)?;
         for (m, x) in means[1..].iter().zip(&xs) {
             se_s += (m[0] - x).powi(2);
         }

@@ -68,6 +68,17 @@ pub enum ParticleError {
         /// Which particle.
         index: usize,
     },
+    /// A count that would make the call allocate more than its documented
+    /// limit.
+    #[error("{what} = {requested} needs more memory than the limit of {limit} (see its docs)")]
+    TooLarge {
+        /// Which count, e.g. "ffbs trajectories x steps".
+        what: &'static str,
+        /// The count asked for (saturated at `usize::MAX`).
+        requested: usize,
+        /// The largest count allowed.
+        limit: usize,
+    },
 }
 
 /// Shorthand for results of this crate.

@@ -27,7 +27,7 @@ pub use resample::{Resampler, Resampling};
 pub use seed::{stream_rng, stream_seed};
 pub use set::{Finite, KalmanParticle, Particle, ParticleSet, log_sum_exp};
 pub use smc::Smc;
-pub use smooth::{FixedLag, ffbs, path_means};
+pub use smooth::{FFBS_MAX_BYTES, FixedLag, ffbs, path_means};
 
 /// Re-exported so one dependency is enough: the filters, Gaussians and
 /// errors of the Kalman proposals (`KalmanError` is in [`Proposal`]).

@@ -54,17 +54,24 @@ impl<const P: usize> Chain<P> {
         self.accepted as f64 / proposals as f64
     }
 
-    /// The posterior mean of the samples after the first `burn_in`.
-    pub fn mean(&self, burn_in: usize) -> SVector<f64, P> {
-        let kept = &self.samples[burn_in.min(self.samples.len())..];
-        kept.iter().sum::<SVector<f64, P>>() / kept.len().max(1) as f64
+    /// The posterior mean of the samples after the first `burn_in`;
+    /// `None` when no sample is kept.
+    pub fn mean(&self, burn_in: usize) -> Option<SVector<f64, P>> {
+        let kept = self.samples.get(burn_in..).filter(|k| !k.is_empty())?;
+        // the samples are finite (Pmmh::run refuses others); the plain sum
+        // of samples near f64::MAX would overflow
+        Some(crate::smooth::bounded_mean(kept.iter()))
     }
 
     /// The equal-tailed credible interval of parameter `i` with mass
     /// `level` (0.95 for 95 %) from the samples after `burn_in`: the
     /// `(1 - level) / 2` and `(1 + level) / 2` empirical quantiles (lower
-    /// and upper order statistics); `None` when no sample is kept.
+    /// and upper order statistics); `None` when no sample is kept, `i` is
+    /// not a parameter index or `level` is not in (0, 1].
     pub fn credible_interval(&self, i: usize, level: f64, burn_in: usize) -> Option<(f64, f64)> {
+        if i >= P || !(level > 0.0 && level <= 1.0) {
+            return None;
+        }
         let mut v: Vec<f64> = self.samples.get(burn_in..)?.iter().map(|s| s[i]).collect();
         if v.is_empty() {
             return None;
@@ -73,11 +80,17 @@ impl<const P: usize> Chain<P> {
         let n = v.len();
         let lo = (((1.0 - level) / 2.0) * n as f64).floor() as usize;
         let hi = ((((1.0 + level) / 2.0) * n as f64).ceil() as usize).clamp(1, n) - 1;
-        Some((v[lo.min(n - 1)], v[hi]))
+        // a tiny level can put the upper order statistic below the lower
+        let lo = lo.min(n - 1);
+        Some((v[lo], v[hi.max(lo)]))
     }
 }
 
 impl<const P: usize> Pmmh<P> {
+    /// The most samples (the initial point and the iterations) a chain
+    /// keeps: 2^24, 16.8 million (about 400 MB for `P` = 2).
+    pub const MAX_SAMPLES: usize = 1 << 24;
+
     /// Runs the chain from `theta0`. `log_prior(theta)` is the log prior
     /// density (minus infinity outside the support: such a proposal is
     /// rejected without running a filter); `log_likelihood(theta, seed)`
@@ -85,11 +98,18 @@ impl<const P: usize> Pmmh<P> {
     /// `log p^(z_{1:T} | theta)` (minus infinity when every weight died).
     /// The chain is a function of `seed` alone.
     ///
+    /// The chain keeps every sample: [`ParticleError::TooLarge`] for
+    /// `iterations` of [`Pmmh::MAX_SAMPLES`] or more (run longer chains
+    /// in segments, each from the last sample of the previous one with
+    /// its own seed).
+    ///
     /// # Errors
-    /// [`ParticleError::InvalidParameter`] for a non-finite or negative
-    /// step, a `theta0` outside the prior's support or with a log
-    /// likelihood that is not finite, or a NaN log likelihood; whatever
-    /// `log_likelihood` returns.
+    /// [`ParticleError::TooLarge`]; [`ParticleError::InvalidParameter`]
+    /// for a non-finite or negative step, a non-finite `theta0` or one
+    /// outside the prior's support or with a log likelihood that is not
+    /// finite, a proposal that leaves the finite numbers, or a NaN or
+    /// `+inf` log prior or log likelihood; whatever `log_likelihood`
+    /// returns.
     pub fn run<F, G>(
         &self,
         theta0: SVector<f64, P>,
@@ -100,6 +120,21 @@ impl<const P: usize> Pmmh<P> {
         F: Fn(&SVector<f64, P>) -> f64,
         G: FnMut(&SVector<f64, P>, u64) -> Result<f64>,
     {
+        let limit = Self::MAX_SAMPLES;
+        if self.iterations >= limit {
+            return Err(ParticleError::TooLarge {
+                what: "pmmh iterations",
+                requested: self.iterations,
+                limit: limit - 1,
+            });
+        }
+        if let Some(&t) = theta0.iter().find(|t| !t.is_finite()) {
+            return Err(ParticleError::InvalidParameter {
+                name: "theta0",
+                value: t,
+                reason: "the initial point must be finite",
+            });
+        }
         if let Some(&s) = self.step.iter().find(|s| !s.is_finite() || **s < 0.0) {
             return Err(ParticleError::InvalidParameter {
                 name: "step",
@@ -118,33 +153,44 @@ impl<const P: usize> Pmmh<P> {
         }
         let mut theta = theta0;
         let mut chain = Chain {
-            samples: vec![theta0],
-            log_likelihoods: vec![ll],
+            samples: Vec::with_capacity(self.iterations + 1),
+            log_likelihoods: Vec::with_capacity(self.iterations + 1),
             accepted: 0,
         };
+        chain.samples.push(theta0);
+        chain.log_likelihoods.push(ll);
         for i in 1..=self.iterations as u64 {
             let mut rng = stream_rng(&[self.seed, i, 0]);
             let e = SVector::<f64, P>::from_fn(|_, _| StandardNormal.sample(&mut rng));
             let cand = theta + self.step.component_mul(&e);
+            if let Some(&c) = cand.iter().find(|c| !c.is_finite()) {
+                return Err(ParticleError::InvalidParameter {
+                    name: "step",
+                    value: c,
+                    reason: "the random walk left the finite numbers (step too large for theta)",
+                });
+            }
             let u: f64 = rng.random();
             let lp_c = log_prior(&cand);
-            if lp_c.is_nan() {
+            if lp_c.is_nan() || lp_c == f64::INFINITY {
                 return Err(ParticleError::InvalidParameter {
                     name: "log prior",
                     value: lp_c,
-                    reason: "is NaN",
+                    reason: "must be finite or minus infinity",
                 });
             }
             if lp_c > f64::NEG_INFINITY {
                 let ll_c = log_likelihood(&cand, stream_seed(&[self.seed, i, 1]))?;
-                if ll_c.is_nan() {
+                if ll_c.is_nan() || ll_c == f64::INFINITY {
                     return Err(ParticleError::InvalidParameter {
                         name: "log likelihood",
                         value: ll_c,
-                        reason: "is NaN",
+                        reason: "must be finite or minus infinity",
                     });
                 }
-                if u.ln() < (ll_c + lp_c) - (ll + lp) {
+                // differences first: the sums of two large log densities
+                // can overflow where their differences do not
+                if u.ln() < (ll_c - ll) + (lp_c - lp) {
                     theta = cand;
                     ll = ll_c;
                     lp = lp_c;

@@ -9,8 +9,9 @@
 //! z_k  = h(xn_k)      + C(xn_k) xl_k          + e,    e ~ N(0, R)
 //! ```
 //!
-//! (`wn`, `wl` independent: the paper's eq. 18 with `Q^{ln} = 0`). Each
-//! particle carries a sample of the nonlinear state `xn` and a Gaussian
+//! (`wn`, `wl` independent, or correlated by
+//! [`ConditionallyLinear::cross_covariance`], the paper's correlated case).
+//! Each particle carries a sample of the nonlinear state `xn` and a Gaussian
 //! belief over the linear state `xl`, kept by a [`Kf`]. A step draws
 //! `xn_k` from its marginal `N(fn + An xl, An P An^T + Qn)` (the paper's
 //! eq. 25a), updates `xl_{k-1}` with the pseudo-measurement `xn_k - fn =
@@ -31,7 +32,7 @@
 //! (criterion on the 2-core development machine; the
 //! `rbpf_vs_bootstrap` example measures 572 against 265 ns).
 
-use bayestrack_kalman::{Gaussian, KalmanError, Kf, LinearDynamics, LinearMeasurement};
+use bayestrack_kalman::{Gaussian, KalmanError, Kf, LinearDynamics, LinearMeasurement, Step};
 use nalgebra::{SMatrix, SVector};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -63,6 +64,18 @@ pub trait ConditionallyLinear<const NN: usize, const NL: usize, const M: usize>:
         k: usize,
         xn: &SVector<f64, NN>,
     ) -> (SVector<f64, M>, LinearMeasurement<NL, M>);
+
+    /// The cross-covariance `Qln = E[wl wn^T]` (`NL x NN`, linear noise
+    /// first) of the linear and the nonlinear state's process noise at
+    /// step `k` (Schön, Gustafsson and Nordlund 2005, the model with
+    /// correlated process noise); `None`, the default, for independent
+    /// noises. The joint covariance `[[Ql, Qln], [Qln^T,
+    /// Qn]]` must be positive semi-definite and `Qn` positive definite
+    /// wherever `Qln` is not zero.
+    fn cross_covariance(&self, k: usize, xn: &SVector<f64, NN>) -> Option<SMatrix<f64, NL, NN>> {
+        let _ = (k, xn);
+        None
+    }
 }
 
 /// A particle of the Rao-Blackwellised filter: a sampled nonlinear state
@@ -121,8 +134,11 @@ impl<const NN: usize, const NL: usize> ParticleSet<RbParticle<NN, NL>> {
 /// z_k  = h(xn_k)      + C(xn_k) xl_k          + e,    e ~ N(0, R)
 /// ```
 ///
-/// (`wn`, `wl` independent: the paper's eq. 18 with `Q^{ln} = 0`). Each
-/// particle carries a sample of the nonlinear state `xn` and a Gaussian
+/// (`wn`, `wl` independent, or correlated by
+/// [`ConditionallyLinear::cross_covariance`], the paper's correlated case,
+/// which conditions `wl` on the `wn` the drawn `xn_k` implies: `Al - D An`,
+/// `Ql - D Qln^T` and the offset `fl + D (xn_k - fn)`, `D = Qln Qn^-1`).
+/// Each particle carries a sample of the nonlinear state `xn` and a Gaussian
 /// belief over the linear state `xl`, kept by a [`Kf`]. A step draws
 /// `xn_k` from its marginal `N(fn + An xl, An P An^T + Qn)` (the paper's
 /// eq. 25a), updates `xl_{k-1}` with the pseudo-measurement `xn_k - fn =
@@ -202,6 +218,16 @@ where
         } else {
             parent.xl
         };
+        // correlated noise (the paper's correlated case): wl = D wn + wl', D =
+        // Qln Qn^-1, wl' ~ N(0, Ql - D Qln^T) independent of wn, and wn =
+        // xn_k - fn - An xl_{k-1}, so xl_k = (fl + D (xn_k - fn)) + (Al - D
+        // An) xl_{k-1} + wl'
+        let (f_l, linear) = match self.model.cross_covariance(k, &parent.xn) {
+            Some(q_ln) if q_ln.iter().any(|&v| v != 0.0) => {
+                decorrelate(f_l, &linear, &nonlinear, &q_ln, &(xn - f_n))?
+            }
+            _ => (f_l, linear),
+        };
         // p(xl_k | xn_{0:k}, z_{1:k-1}): Al, Ql and the offset fl
         let mut predicted = self.kf.predict(&xl, &linear)?;
         if f_l.iter().any(|&v| v != 0.0) {
@@ -213,6 +239,14 @@ where
         // weigh by p(z_k | xn_{0:k}, z_{1:k-1}) and update
         let (h, measurement) = self.model.measurement(k, &xn);
         let update = self.kf.update(&predicted, &measurement, Some(&(z - h)))?;
+        if update.posterior.cov().diagonal().iter().any(|&v| v < 0.0) {
+            // the Kalman update at subnormal variances can round a zero
+            // variance to a negative one: refused, not carried on
+            return Err(KalmanError::NotPositiveDefinite {
+                matrix: "linear-state posterior covariance",
+                step: Step::Update,
+            });
+        }
         let lw = update.innovation.map_or(0.0, |i| i.log_likelihood);
         Ok((
             RbParticle {
@@ -222,4 +256,44 @@ where
             lw,
         ))
     }
+}
+
+/// The linear state's transition given the nonlinear state's noise `wn =
+/// dn - An xl` (`dn = xn_k - fn`) when the noises are correlated by `q_ln`:
+/// offset `fl + D dn`, matrix `Al - D An`, noise `Ql - D Qln^T`, `D = Qln
+/// Qn^-1`.
+fn decorrelate<const NN: usize, const NL: usize>(
+    f_l: SVector<f64, NL>,
+    linear: &LinearDynamics<NL>,
+    nonlinear: &LinearMeasurement<NL, NN>,
+    q_ln: &SMatrix<f64, NL, NN>,
+    d_n: &SVector<f64, NN>,
+) -> Result<(SVector<f64, NL>, LinearDynamics<NL>), KalmanError> {
+    if !q_ln.iter().all(|v| v.is_finite()) {
+        return Err(KalmanError::NonFinite {
+            what: "cross-covariance Qln",
+            step: Step::Predict,
+        });
+    }
+    let chol = nonlinear
+        .noise()
+        .cholesky()
+        .ok_or(KalmanError::NotPositiveDefinite {
+            matrix: "nonlinear-state noise Qn (with a cross-covariance Qln)",
+            step: Step::Predict,
+        })?;
+    // D^T = Qn^-1 Qln^T
+    let d = chol.solve(&q_ln.transpose()).transpose();
+    let q = linear.noise() - d * q_ln.transpose();
+    let q = (q + q.transpose()) * 0.5;
+    let a = linear.transition() - d * nonlinear.matrix();
+    let dynamics = LinearDynamics::new(a, q).map_err(|e| match e {
+        KalmanError::NotPositiveDefinite { step, .. } => KalmanError::NotPositiveDefinite {
+            matrix: "conditional linear-state noise Ql - Qln Qn^-1 Qln^T \
+                     (the joint process noise is not positive semi-definite)",
+            step,
+        },
+        e => e,
+    })?;
+    Ok((f_l + d * d_n, dynamics))
 }

@@ -1,7 +1,7 @@
 //! A particle filter that runs: configuration, particle set and seed, with
 //! the step keys numbered by the filter.
 
-use crate::error::Result;
+use crate::error::{ParticleError, Result};
 use crate::filter::{ParticleFilter, StepReport};
 use crate::proposal::Proposal;
 use crate::set::{Particle, ParticleSet};
@@ -64,7 +64,9 @@ impl<T> Smc<T> {
     /// `[seed, k]`, `k` the time index the proposal draws.
     ///
     /// # Errors
-    /// As [`ParticleFilter::step`].
+    /// As [`ParticleFilter::step`]; [`ParticleError::InvalidParameter`]
+    /// when the running log evidence would pass `f64::MAX` (the set has
+    /// stepped, [`Smc::log_evidence`] keeps the total before the step).
     pub fn step<Z, P, const N: usize>(&mut self, proposal: &P, z: &Z) -> Result<StepReport<N>>
     where
         T: Particle<N>,
@@ -78,7 +80,9 @@ impl<T> Smc<T> {
     /// the caller ([`ParticleFilter::step_with`]).
     ///
     /// # Errors
-    /// As [`ParticleFilter::step`].
+    /// As [`ParticleFilter::step`]; [`ParticleError::InvalidParameter`]
+    /// when the running log evidence would pass `f64::MAX` (the set has
+    /// stepped, [`Smc::log_evidence`] keeps the total before the step).
     pub fn step_with<Z, P, const N: usize>(
         &mut self,
         proposal: &P,
@@ -94,7 +98,19 @@ impl<T> Smc<T> {
         let report = self
             .filter
             .step_with(&mut self.set, proposal, z, &key, scratch)?;
-        self.log_evidence += report.log_evidence;
+        // increments are finite or minus infinity, but their sum can
+        // overflow: past -f64::MAX it saturates at minus infinity (the
+        // evidence is zero to f64 precision); past f64::MAX it is an error
+        let total = self.log_evidence + report.log_evidence;
+        if total == f64::INFINITY {
+            return Err(ParticleError::InvalidParameter {
+                name: "log evidence",
+                value: total,
+                reason: "the sum of the steps' log evidence overflowed f64 \
+                         (the set has stepped; the total is that before the step)",
+            });
+        }
+        self.log_evidence = total;
         Ok(report)
     }
 }

@@ -13,6 +13,9 @@ use crate::filter::StepReport;
 use crate::proposal::TransitionDensity;
 use crate::set::{Particle, ParticleSet, exp_flushed};
 
+/// The most bytes of paths one [`ffbs`] call returns: 1 GiB.
+pub const FFBS_MAX_BYTES: usize = 1 << 30;
+
 /// Forward-filtering backward-simulation (Godsill, Doucet and West 2004,
 /// sec. 4, Algorithm 1): draws `trajectories` paths from
 /// the joint smoothing distribution `p(x_{0:T} | z_{1:T})` given the
@@ -28,8 +31,13 @@ use crate::set::{Particle, ParticleSet, exp_flushed};
 /// `key`: the same bits on any number of threads. The marginal means of
 /// the paths ([`path_means`]) estimate the smoothed means `E[x_t | z_{1:T}]`.
 ///
+/// The paths are kept in memory: at most [`FFBS_MAX_BYTES`] of states
+/// (`trajectories x history.len()` of them; draw more in several calls
+/// with different keys).
+///
 /// # Errors
 /// [`ParticleError::Empty`] for no sets or no trajectories,
+/// [`ParticleError::TooLarge`] past [`FFBS_MAX_BYTES`],
 /// [`ParticleError::InvalidParameter`] for a zero chunk size,
 /// [`ParticleError::NonFiniteWeight`] for a NaN or `+inf` backward log
 /// weight, [`ParticleError::AllWeightsZero`] when no particle of a set can
@@ -50,6 +58,16 @@ where
         return Err(ParticleError::Empty);
     }
     let t_len = history.len();
+    let state = std::mem::size_of::<SVector<f64, N>>().max(1);
+    let limit = FFBS_MAX_BYTES / state;
+    let states = trajectories.saturating_mul(t_len);
+    if states > limit {
+        return Err(ParticleError::TooLarge {
+            what: "ffbs trajectories x steps",
+            requested: states,
+            limit,
+        });
+    }
     let mut paths = vec![vec![SVector::<f64, N>::zeros(); t_len]; trajectories];
     let mut unused = vec![(); trajectories];
     for_chunks(chunk_size, &mut paths, &mut unused, key, |_, ps, _, rng| {
@@ -105,19 +123,56 @@ fn draw(logs: &[f64], u: f64) -> Result<usize> {
 }
 
 /// The mean over paths at each time: `out[t] = mean_j paths[j][t]`.
-pub fn path_means<const N: usize>(paths: &[Vec<SVector<f64, N>>]) -> Vec<SVector<f64, N>> {
-    let Some(first) = paths.first() else {
-        return Vec::new();
-    };
+///
+/// # Errors
+/// [`ParticleError::Empty`] for no paths,
+/// [`ParticleError::LengthMismatch`] when a path's length (`weights`)
+/// differs from the first's (`particles`),
+/// [`ParticleError::NonFiniteState`] naming the first path with a
+/// non-finite state.
+pub fn path_means<const N: usize>(paths: &[Vec<SVector<f64, N>>]) -> Result<Vec<SVector<f64, N>>> {
+    let first = paths.first().ok_or(ParticleError::Empty)?;
     let mut out = vec![SVector::<f64, N>::zeros(); first.len()];
-    for p in paths {
-        for (o, x) in out.iter_mut().zip(p) {
-            *o += x;
+    for (j, p) in paths.iter().enumerate() {
+        if p.len() != first.len() {
+            return Err(ParticleError::LengthMismatch {
+                particles: first.len(),
+                weights: p.len(),
+            });
+        }
+        if !p.iter().all(|x| x.iter().all(|v| v.is_finite())) {
+            return Err(ParticleError::NonFiniteState { index: j });
         }
     }
-    let n = paths.len() as f64;
-    out.iter_mut().for_each(|o| *o /= n);
-    out
+    for (t, o) in out.iter_mut().enumerate() {
+        *o = bounded_mean(paths.iter().map(|p| &p[t]));
+    }
+    Ok(out)
+}
+
+/// The mean of finite vectors, finite at any magnitude: per component,
+/// the values over their largest magnitude are summed (each partial sum
+/// of `k` terms at most `k`), so the mean is within the values' range
+/// and never rounds past `f64::MAX`. Zero for no vectors.
+pub(crate) fn bounded_mean<'a, const N: usize>(
+    xs: impl Iterator<Item = &'a SVector<f64, N>> + Clone,
+) -> SVector<f64, N> {
+    let scale = xs.clone().fold(SVector::<f64, N>::zeros(), |m, x| {
+        m.zip_map(x, |a, b| a.max(b.abs()))
+    });
+    let (mut sum, mut n) = (SVector::<f64, N>::zeros(), 0usize);
+    for x in xs {
+        n += 1;
+        for c in 0..N {
+            if scale[c] > 0.0 {
+                sum[c] += x[c] / scale[c];
+            }
+        }
+    }
+    if n == 0 {
+        return sum;
+    }
+    SVector::<f64, N>::from_fn(|c, _| sum[c] / n as f64 * scale[c])
 }
 
 /// Fixed-lag smoothing by the particles' genealogy: each particle keeps
@@ -148,7 +203,9 @@ impl<const N: usize> FixedLag<N> {
     ///
     /// # Errors
     /// [`ParticleError::LengthMismatch`] when the set's size changed since
-    /// the last record.
+    /// the last record, or when `report` says the step resampled but the
+    /// set holds no ancestors for each of its particles (a report of
+    /// another set).
     pub fn record<T: Particle<N>>(
         &mut self,
         set: &ParticleSet<T>,
@@ -167,11 +224,19 @@ impl<const N: usize> FixedLag<N> {
         }
         if report.is_some_and(|r| r.resampled) {
             let anc = &set.scratch.ancestors;
+            if anc.len() != n || anc.iter().any(|&a| a >= n) {
+                // a report of another set, or of a step that did not
+                // leave its ancestors here
+                return Err(ParticleError::LengthMismatch {
+                    particles: n,
+                    weights: anc.len(),
+                });
+            }
             self.lines = anc.iter().map(|&a| self.lines[a].clone()).collect();
         }
         for (line, p) in self.lines.iter_mut().zip(set.particles()) {
             line.push(*p.state());
-            if line.len() > self.lag + 1 {
+            if line.len() > self.lag.saturating_add(1) {
                 line.remove(0);
             }
         }
@@ -181,7 +246,8 @@ impl<const N: usize> FixedLag<N> {
     /// `E[x_{k-lag} | z_{1:k}]` under the weights of `set` (the set last
     /// recorded); `None` before `lag` steps have been recorded.
     pub fn estimate<T: Particle<N>>(&self, set: &ParticleSet<T>) -> Option<SVector<f64, N>> {
-        if self.lines.len() != set.len() || self.lines.first()?.len() != self.lag + 1 {
+        if self.lines.len() != set.len() || self.lines.first()?.len() != self.lag.saturating_add(1)
+        {
             return None;
         }
         let mut m = SVector::<f64, N>::zeros();

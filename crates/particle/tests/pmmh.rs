@@ -80,7 +80,7 @@ fn pmmh_recovers_a_known_parameter_inside_its_95_percent_interval() {
         .unwrap();
     let burn_in = 300;
     let (lo, hi) = chain.credible_interval(0, 0.95, burn_in).unwrap();
-    let mean = chain.mean(burn_in)[0];
+    let mean = chain.mean(burn_in).unwrap()[0];
     let rate = chain.acceptance_rate();
     eprintln!("a: mean {mean:.3}, 95 % [{lo:.3}, {hi:.3}], acceptance {rate:.2}");
     assert!(lo < truth && truth < hi, "[{lo}, {hi}]");

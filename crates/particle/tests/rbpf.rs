@@ -1,8 +1,9 @@
 //! The Rao-Blackwellised particle filter against the Kalman filter.
 
-use bayestrack_kalman::{Gaussian, Kf, LinearDynamics, LinearMeasurement};
+use bayestrack_kalman::{Gaussian, KalmanError, Kf, LinearDynamics, LinearMeasurement};
 use bayestrack_particle::{
-    ConditionallyLinear, ParticleFilter, ParticleSet, RaoBlackwellised, RbParticle, stream_rng,
+    ConditionallyLinear, ParticleFilter, ParticleSet, Proposal, RaoBlackwellised, RbParticle,
+    stream_rng,
 };
 use nalgebra::{Matrix1, Matrix1x2, Matrix2, SVector, Vector1, Vector2};
 use rand_distr::{Distribution, StandardNormal};
@@ -183,4 +184,114 @@ fn rbpf_tracks_the_kalman_filter_when_the_linear_state_drives_the_nonlinear_one(
 #[test]
 fn rbpf_gives_the_same_bits_on_any_thread_count() {
     assert_eq!(coupled_run(1, 300, 64).0, coupled_run(4, 300, 64).0);
+}
+
+/// A fully linear model `xn_k = 0.8 xn + 0.5 xl + wn`, `xl_k = 0.3 xn +
+/// 0.9 xl + wl`, `z = 0.4 xn + xl + e`, with `cov(wl, wn) = qln`.
+struct Correlated {
+    qln: f64,
+}
+
+const CQN: f64 = 0.1;
+const CQL: f64 = 0.05;
+const CR: f64 = 0.2;
+
+impl ConditionallyLinear<1, 1, 1> for Correlated {
+    fn nonlinear(&self, _k: usize, xn: &Vector1<f64>) -> (Vector1<f64>, LinearMeasurement<1, 1>) {
+        (
+            xn * 0.8,
+            LinearMeasurement::new(Matrix1::new(0.5), Matrix1::new(CQN)).unwrap(),
+        )
+    }
+    fn linear(&self, _k: usize, xn: &Vector1<f64>) -> (Vector1<f64>, LinearDynamics<1>) {
+        (
+            xn * 0.3,
+            LinearDynamics::new(Matrix1::new(0.9), Matrix1::new(CQL)).unwrap(),
+        )
+    }
+    fn measurement(&self, _k: usize, xn: &Vector1<f64>) -> (Vector1<f64>, LinearMeasurement<1, 1>) {
+        (
+            xn * 0.4,
+            LinearMeasurement::new(Matrix1::new(1.0), Matrix1::new(CR)).unwrap(),
+        )
+    }
+    fn cross_covariance(&self, _k: usize, _xn: &Vector1<f64>) -> Option<Matrix1<f64>> {
+        Some(Matrix1::new(self.qln))
+    }
+}
+
+#[test]
+fn rbpf_equals_the_kalman_filter_given_the_nonlinear_path_with_correlated_noise() {
+    // each particle's linear belief is p(xl_k | xn_{0:k}, z_{1:k}) and its
+    // weight increment log p(z_k | xn_{0:k}, z_{1:k-1}): a 2-state KF of
+    // the same model with the joint noise [[Qn, Qln], [Qln, Ql]], which
+    // measures xn_k exactly and then z_k, gives both; to 1e-9, with the
+    // noises correlated 0.85 and uncorrelated
+    for qln in [0.06, -0.03, 0.0] {
+        let m = Correlated { qln };
+        let f = Matrix2::new(0.8, 0.5, 0.3, 0.9);
+        let q = Matrix2::new(CQN, qln, qln, CQL);
+        let h = Matrix1x2::new(0.4, 1.0);
+        let mut sim = stream_rng(&[31]);
+        let mut rng = stream_rng(&[32]);
+        let mut x = Vector2::new(0.3, 1.0);
+        let lq = q.cholesky().unwrap().l();
+        let mut p = RbParticle {
+            xn: Vector1::new(0.3),
+            xl: Gaussian::new(Vector1::new(1.0), Matrix1::new(1.0)).unwrap(),
+        };
+        let (mut mean, mut cov) = (Vector2::new(0.3, 1.0), Matrix2::new(0.0, 0.0, 0.0, 1.0));
+        let rb = RaoBlackwellised::new(&m);
+        for k in 1..=30 {
+            let w: Vector2<f64> = Vector2::from_fn(|_, _| StandardNormal.sample(&mut sim));
+            x = f * x + lq * w;
+            let e: f64 = StandardNormal.sample(&mut sim);
+            let z = Vector1::new((h * x)[0] + CR.sqrt() * e);
+            let (child, lw) = rb.propose(k, &p, &z, &mut (), &mut rng).unwrap();
+            // the reference: predict, measure xn_k exactly, measure z_k
+            mean = f * mean;
+            cov = f * cov * f.transpose() + q;
+            let s = cov[(0, 0)];
+            let gain = cov.column(0) / s;
+            mean += gain * (child.xn[0] - mean[0]);
+            cov -= gain * gain.transpose() * s;
+            let s = (h * cov * h.transpose())[0] + CR;
+            let v = z[0] - (h * mean)[0];
+            let ll = -0.5 * ((2.0 * std::f64::consts::PI * s).ln() + v * v / s);
+            let gain = cov * h.transpose() / s;
+            mean += gain * v;
+            cov -= gain * gain.transpose() * s;
+            assert!(
+                (child.xl.mean()[0] - mean[1]).abs() < 1e-9,
+                "qln {qln} k={k}"
+            );
+            assert!(
+                (child.xl.cov()[(0, 0)] - cov[(1, 1)]).abs() < 1e-9,
+                "qln {qln} k={k}"
+            );
+            assert!((lw - ll).abs() < 1e-9, "qln {qln} k={k}: {lw} vs {ll}");
+            p = child;
+        }
+    }
+}
+
+#[test]
+fn rbpf_refuses_a_joint_noise_that_is_not_a_covariance() {
+    let p = RbParticle {
+        xn: Vector1::new(0.3),
+        xl: Gaussian::new(Vector1::new(1.0), Matrix1::new(1.0)).unwrap(),
+    };
+    let z = Vector1::new(0.0);
+    // |Qln| > sqrt(Qn Ql): no joint Gaussian has these blocks
+    let m = Correlated { qln: 0.1 };
+    let mut rng = stream_rng(&[33]);
+    assert!(matches!(
+        RaoBlackwellised::new(&m).propose(1, &p, &z, &mut (), &mut rng),
+        Err(KalmanError::NotPositiveDefinite { .. })
+    ));
+    let m = Correlated { qln: f64::NAN };
+    assert!(matches!(
+        RaoBlackwellised::new(&m).propose(1, &p, &z, &mut (), &mut rng),
+        Err(KalmanError::NonFinite { .. })
+    ));
 }

@@ -385,7 +385,7 @@ fn ffbs_marginals_match_the_rts_smoother() {
     let sets = history(&m, &zs, 1000);
     let paths = 400;
     let trajectories = ffbs(&sets, &m, paths, 128, &[14]).unwrap();
-    let means = path_means(&trajectories);
+    let means = path_means(&trajectories).unwrap();
     let (mut worst, mut gap) = (0.0f64, 0.0f64);
     for (t, s) in rts.iter().enumerate() {
         let (mu, var) = (s.mean()[0], s.cov()[(0, 0)]);
@@ -466,4 +466,120 @@ fn fixed_lag_estimates_match_the_truncated_rts_smoother() {
     }
     eprintln!("fixed lag: worst error {worst:.3} sd");
     assert!(worst < 0.25, "{worst}");
+}
+
+/// The APF with `policy` over `zs` from `prior_set(0, 1, n, seed)`.
+fn apf_run<M: Auxiliary<1, Observation = f64>>(
+    policy: ResamplePolicy,
+    m: &M,
+    zs: &[f64],
+    n: usize,
+    seed: u64,
+) -> Vec<StepReport<1>> {
+    let apf = AuxiliaryFilter {
+        policy,
+        ..AuxiliaryFilter::default()
+    };
+    let mut set = prior_set(0.0, 1.0, n, seed);
+    zs.iter()
+        .enumerate()
+        .map(|(k, z)| apf.step(&mut set, m, z, &[seed, 77, k as u64]).unwrap())
+        .collect()
+}
+
+#[test]
+fn apf_estimates_agree_whether_or_not_the_first_stage_resamples() {
+    // threshold 0 never resamples (the first-stage weights ride on in the
+    // second-stage ones), threshold 1 resamples at every step: both
+    // estimate the same posterior, within 5 Monte Carlo standard errors
+    // sd / sqrt(ESS) of the KF's mean, with either first stage
+    let m = Ar1 {
+        a: 0.9,
+        q: 1.0,
+        r: 0.25,
+    };
+    let zs = simulate(&m, 0.0, 1.0, 4, 11);
+    let (kf, vars, _) = kalman(&m, 0.0, 1.0, &zs);
+    let n = 20_000;
+    for (name, run) in [
+        (
+            "predictive g",
+            &(|p, s| apf_run(p, &m, &zs, n, s))
+                as &dyn Fn(ResamplePolicy, u64) -> Vec<StepReport<1>>,
+        ),
+        ("point g", &|p, s| apf_run(p, &PointAr1(m), &zs, n, s)),
+    ] {
+        let never = run(ResamplePolicy::Ess(0.0), 12);
+        let always = run(ResamplePolicy::Ess(1.0), 13);
+        let half = run(ResamplePolicy::Ess(0.5), 14);
+        assert!(never.iter().all(|r| !r.resampled));
+        assert!(always.iter().all(|r| r.resampled));
+        for k in 0..zs.len() {
+            let (a, b) = (never[k].mean[0], always[k].mean[0]);
+            let tol = |r: &StepReport<1>| 5.0 * (vars[k] / r.ess).sqrt();
+            eprintln!(
+                "{name} k={k}: kf {:.4} never {a:.4} (ess {:.0}) always {b:.4} (ess {:.0}) half {:.4}",
+                kf[k], never[k].ess, always[k].ess, half[k].mean[0]
+            );
+            for (policy, r) in [
+                ("never", &never[k]),
+                ("always", &always[k]),
+                ("half", &half[k]),
+            ] {
+                assert!(
+                    (r.mean[0] - kf[k]).abs() < tol(r),
+                    "{name} {policy} k={k}: {} vs kf {}, tol {}",
+                    r.mean[0],
+                    kf[k],
+                    tol(r)
+                );
+            }
+            assert!(
+                (a - b).abs() < tol(&never[k]) + tol(&always[k]),
+                "{name} k={k}: {a} vs {b}"
+            );
+        }
+    }
+}
+
+#[test]
+fn apf_evidence_stays_unbiased_with_an_ess_trigger() {
+    // E[exp(log Z)] = p(z_{1:T}) for every policy: the mean over 1,000
+    // seeds of Z / Z_kf is 1 within 4 of its standard errors, and that
+    // standard error is below 0.03 (so the test can see a 12 % bias)
+    let m = Ar1 {
+        a: 0.9,
+        q: 1.0,
+        r: 1.0,
+    };
+    let zs = simulate(&m, 0.0, 1.0, 4, 21);
+    let (_, _, kf_ll) = kalman(&m, 0.0, 1.0, &zs);
+    let seeds = 1000;
+    for policy in [
+        ResamplePolicy::Ess(0.0),
+        ResamplePolicy::Ess(0.5),
+        ResamplePolicy::Ess(1.0),
+    ] {
+        for point in [false, true] {
+            let ratios: Vec<f64> = (0..seeds)
+                .map(|s| {
+                    let r = if point {
+                        apf_run(policy, &PointAr1(m), &zs, 100, 1000 + s)
+                    } else {
+                        apf_run(policy, &m, &zs, 100, 1000 + s)
+                    };
+                    (r.iter().map(|r| r.log_evidence).sum::<f64>() - kf_ll).exp()
+                })
+                .collect();
+            let mean = ratios.iter().sum::<f64>() / seeds as f64;
+            let var = ratios.iter().map(|r| (r - mean).powi(2)).sum::<f64>() / (seeds - 1) as f64;
+            let se = (var / seeds as f64).sqrt();
+            eprintln!("{policy:?} point {point}: mean Z/Z_kf {mean:.4} se {se:.4}");
+            assert!(se < 0.03, "{policy:?} point {point}: se {se}");
+            assert!(
+                (mean - 1.0).abs() < 4.0 * se,
+                "{policy:?} point {point}: mean Z/Z_kf {mean} se {se}"
+            );
+        }
+    }
 }
