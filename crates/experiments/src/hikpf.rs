@@ -13,8 +13,8 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use bayestrack_kalman::{
-    Additive, Dynamics, DynamicsJacobian, Ekf, Gaussian, HybridPrior, HybridUkfIekf, Iekf,
-    Measurement, MeasurementJacobian, Ukf,
+    Dynamics, DynamicsJacobian, Ekf, Gaussian, HybridPrior, HybridUkfIekf, Iekf, Measurement,
+    MeasurementJacobian, NoiseForm, Ukf,
 };
 use bayestrack_particle::{
     Bootstrap, Degenerate, KalmanParticle, KalmanProposal, LocalFilter, Model, ParticleError,
@@ -337,7 +337,9 @@ fn run_kalman(
     run: usize,
     y: &[f64],
 ) -> Result<Vec<f64>, ExperimentError> {
-    let ukf = Ukf::new(1.0, 0.0, 2.0).expect("valid UT parameters");
+    let ukf = Ukf::new(1.0, 0.0, 2.0)
+        .expect("valid UT parameters")
+        .with_noise_form(NoiseForm::Augmented);
     let ekf = Ekf::default();
     let mut belief =
         Gaussian::new(Vector1::new(1.0), Matrix1::new(P0)).map_err(|e| failed(kind, run, 1, e))?;
@@ -351,7 +353,7 @@ fn run_kalman(
                 .and_then(|p| ekf.update(&p, &m, Some(&z)))
                 .map(|u| u.posterior),
             _ => ukf
-                .step_augmented(&belief, &Additive(&m), &Additive(&m), Some(&z))
+                .step(&belief, &m, &m, Some(&z))
                 .map(|s| s.update.posterior),
         };
         belief = next.map_err(|e| failed(kind, run, t, e))?;
@@ -363,7 +365,9 @@ fn run_kalman(
 /// Every filter on one run.
 fn one_run(c: &HikpfConfig, run: usize) -> Result<Vec<RunOutcome>, ExperimentError> {
     let (x, y) = simulate(c, run);
-    let ukf = Ukf::new(1.0, 0.0, 2.0).expect("valid UT parameters");
+    let ukf = Ukf::new(1.0, 0.0, 2.0)
+        .expect("valid UT parameters")
+        .with_noise_form(NoiseForm::Augmented);
     let iekf =
         Iekf::new(c.iekf_iterations, c.iekf_tolerance).map_err(|e| ExperimentError::Failed {
             id: "hikpf",

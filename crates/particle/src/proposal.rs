@@ -256,7 +256,10 @@ where
         model: &D,
         z: &SVector<f64, M>,
     ) -> Result<Gaussian<N>, KalmanError> {
-        let step = self.step_augmented(prior, &Additive(model), &Additive(model), Some(z))?;
+        // the filter's own noise form decides (`Ukf::with_noise_form`): the
+        // unscented particle filter of van der Merwe et al. uses the
+        // augmented one
+        let step = self.step(prior, model, model, Some(z))?;
         Ok(step.update.posterior)
     }
 }

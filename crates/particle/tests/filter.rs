@@ -3,7 +3,7 @@
 
 use bayestrack_kalman::{
     Dynamics, DynamicsJacobian, Ekf, Gaussian, HybridUkfIekf, Iekf, Kf, LinearDynamics,
-    LinearMeasurement, Measurement, MeasurementJacobian, Ukf,
+    LinearMeasurement, Measurement, MeasurementJacobian, NoiseForm, Ukf,
 };
 use bayestrack_particle::{
     Bootstrap, Degenerate, KalmanParticle, KalmanProposal, Model, ParticleError, ParticleFilter,
@@ -213,7 +213,13 @@ fn kalman_proposal_filters_match_the_kalman_filter() {
         ("ekf", run_kalman_pf(Ekf::default(), false).0),
         (
             "ukf",
-            run_kalman_pf(Ukf::new(1.0, 0.0, 2.0).unwrap(), false).0,
+            run_kalman_pf(
+                Ukf::new(1.0, 0.0, 2.0)
+                    .unwrap()
+                    .with_noise_form(NoiseForm::Augmented),
+                false,
+            )
+            .0,
         ),
         ("iekf", run_kalman_pf(Iekf::new(3, 1e-9).unwrap(), false).0),
         (
