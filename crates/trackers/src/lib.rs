@@ -21,7 +21,7 @@ mod tracker;
 pub use affine_pf::{
     AffineTracker, AppearanceConfig, FrameStats, HkpfConfig, HkpfCore, HkpfTracker, IspfConfig,
     IspfCore, IspfTracker, RegionConfig, ScoredPose, StopRule, StpfConfig, StpfCore, StpfTracker,
-    UpdateRule,
+    TsdInit, UpdateRule,
 };
 pub use condensation::{
     CAvq, CAvqConfig, Condensation, CondensationReport, ContourConfig, ContourCore, ContourTracker,

@@ -37,8 +37,8 @@ use bayestrack_otb::Table;
 use bayestrack_otb::metrics::{FeaturePoints, rms_error_eq6};
 use bayestrack_otb::plot::{Series, line_chart};
 use bayestrack_trackers::{
-    AffineTracker, HkpfConfig, HkpfTracker, IspfConfig, IspfTracker, RegionConfig, StpfConfig,
-    StpfTracker,
+    AffineTracker, AppearanceConfig, HkpfConfig, HkpfTracker, IspfConfig, IspfTracker,
+    RegionConfig, StpfConfig, StpfTracker, TsdInit,
 };
 use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;

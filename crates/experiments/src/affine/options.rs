@@ -53,6 +53,23 @@ options! {
         /// do not give it, and it sets the region's size (`S = P + r^2
         /// I`): 1.5 px gives a 3-sigma reach of 6.8 px in steady state.
         pub region_r: f64 = 1.5, in inside(0.0, 1000.0);
+        /// Also adapt the Kalman region within the frame that holds a jump
+        /// (HKPF and the self-tuning filter): when the frame's first
+        /// particles (HKPF: the first half; self-tuning: the first batch)
+        /// all score at or below `mu_B + sigma_B`, the region is widened
+        /// for the rest of the frame (false: paper 002 Fig. 2 feeds `M*`
+        /// back to the Kalman filter at the end of the frame, so the
+        /// "maneuver detection" of sec. 1 widens the next frame's region;
+        /// see `RegionConfig::adapt_within_frame`).
+        pub region_in_frame: bool = false;
+        /// Where the self-tuning filters' (ISPF, ours) and HKPF's target
+        /// similarity distribution (TSD) comes from: `perturbations`
+        /// (default: perturbations of the first frame's box at start-up)
+        /// or `tracked` (the tracked estimates' scores once two exist; see
+        /// `TsdInit`). Paper 002 sec. 1 calls the TSD "the similarity
+        /// distribution of target patches" and leaves its initialisation
+        /// to ISPF's paper.
+        pub tsd_init: TsdSource = TsdSource::Perturbations;
         /// ISPF checks its stopping threshold after every tuned particle
         /// instead of after every batch (false: paper 002 sec. 3.2 counts
         /// stopping inside a batch among its own filter's advantages).
@@ -163,8 +180,10 @@ impl AffineConfig {
                 .unwrap_or_else(|| setting.hkpf_particles()),
             region: RegionConfig {
                 r: self.region_r,
+                adapt_within_frame: self.region_in_frame,
                 ..d.region
             },
+            appearance: self.appearance(d.appearance),
             ..d
         }
     }
@@ -176,18 +195,33 @@ impl AffineConfig {
             max_particles: self.max_particles,
             region: RegionConfig {
                 r: self.region_r,
+                adapt_within_frame: self.region_in_frame,
                 ..d.region
             },
+            appearance: self.appearance(d.appearance),
             ..d
         }
     }
 
     /// ISPF's settings.
     pub fn ispf(&self) -> IspfConfig {
+        let d = IspfConfig::default();
         IspfConfig {
             max_particles: self.max_particles,
             stop_inside_batch: self.ispf_stop_inside_batch,
-            ..IspfConfig::default()
+            appearance: self.appearance(d.appearance),
+            ..d
+        }
+    }
+
+    /// `base` with this run's TSD source.
+    fn appearance(&self, base: AppearanceConfig) -> AppearanceConfig {
+        AppearanceConfig {
+            tsd_init: match self.tsd_init {
+                TsdSource::Perturbations => TsdInit::Perturbations,
+                TsdSource::Tracked => TsdInit::Tracked,
+            },
+            ..base
         }
     }
 }

@@ -22,6 +22,18 @@ pub enum Motion {
 
 choice! { Motion { Teleport = "teleport", Shake = "shake", Drift = "drift" } }
 
+/// Where the target similarity distribution comes from (the `tsd_init`
+/// option; the trackers' `TsdInit`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TsdSource {
+    /// Perturbations of the first frame's box at start-up (default).
+    Perturbations,
+    /// The tracked estimates' scores, once two exist.
+    Tracked,
+}
+
+choice! { TsdSource { Perturbations = "perturbations", Tracked = "tracked" } }
+
 /// The three synthetic settings, each mirroring one of the paper's videos.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Setting {

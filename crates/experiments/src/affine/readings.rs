@@ -275,6 +275,21 @@ pub const READINGS: &[Reading] = &[
         why: "the Kalman region (unstated in both papers) with r = 4 px instead of 1.5",
     },
     Reading {
+        name: "region-in-frame",
+        set: &[("region_in_frame", "true")],
+        settings: &Setting::ALL,
+        why: "the region 'adaptive to motion change' (sec. 0) adapted within the frame that \
+              holds the jump: widened for the rest of the frame when the first particles find \
+              nothing above mu_B + sigma_B",
+    },
+    Reading {
+        name: "tsd-tracked",
+        set: &[("tsd_init", "tracked")],
+        settings: &Setting::ALL,
+        why: "the TSD, 'the similarity distribution of target patches' (sec. 1), learnt from \
+              the tracked estimates' scores instead of start-up perturbations",
+    },
+    Reading {
         name: "ispf-stop-per-particle",
         set: &[("ispf_stop_inside_batch", "true")],
         settings: &Setting::ALL,

@@ -69,6 +69,28 @@ impl UpdateRule {
     }
 }
 
+/// Where the target similarity distribution (TSD) comes from. Paper 002
+/// calls the TSD "the similarity distribution of target patches", "trained
+/// online" and updated from `M*` (sec. 0-1), and leaves its initialisation
+/// to ISPF's paper.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum TsdInit {
+    /// From [`AppearanceConfig::tsd_samples`] perturbations of `M_0` at
+    /// start-up (half the pose estimator's training spread: about how close
+    /// tuning brings a particle), then updated from each `M*` at
+    /// `distribution_rate`. The default: a TSD exists from the first frame,
+    /// which Algorithm 1 needs for its stop test in frame 1, and it is
+    /// learnt from target patches (of the first frame).
+    #[default]
+    Perturbations,
+    /// From the tracked patches: the start-up TSD serves only until two
+    /// estimates `M*` have updated the models; from then the TSD is the
+    /// sample distribution of the tracked estimates' scores (equal weights
+    /// until `1 / distribution_rate` of them, then forgetting at
+    /// `distribution_rate`).
+    Tracked,
+}
+
 /// The observation, appearance model and pose estimator shared by the
 /// three paper-002 trackers ([`HkpfTracker`](crate::HkpfTracker), [`IspfTracker`](crate::IspfTracker),
 /// [`StpfTracker`](crate::StpfTracker); Xu, Gao and Yang 2015).
@@ -121,6 +143,9 @@ pub struct AppearanceConfig {
     pub training_per_update: usize,
     /// Target patches that make the initial TSD (30).
     pub tsd_samples: usize,
+    /// Where the TSD comes from ([`TsdInit`]; default the start-up
+    /// perturbations).
+    pub tsd_init: TsdInit,
     /// Forgetting rate of TSD and BSD (0.05: a time constant of 20 frames).
     pub distribution_rate: f64,
     /// Template blending rate at an update (0.1).
@@ -140,6 +165,7 @@ impl Default for AppearanceConfig {
             initial_training: 300,
             training_per_update: 10,
             tsd_samples: 30,
+            tsd_init: TsdInit::Perturbations,
             distribution_rate: 0.05,
             template_rate: 0.1,
             update_rule: UpdateRule::default(),
@@ -270,6 +296,18 @@ pub struct RegionConfig {
     /// Factor on the region covariance after a detected manoeuvre (9: three
     /// times the standard deviation).
     pub manoeuvre_gain: f64,
+    /// Also adapt the region within the frame (false). Paper 002 only says
+    /// the region is "adaptive to motion change" by "maneuver detection"
+    /// (sec. 0-1), and its Fig. 2 feeds `M*` back to the Kalman filter at
+    /// the end of the frame, so by default a manoeuvre detected from a
+    /// frame's innovation widens the next frame's region. With `true` the
+    /// frame that holds the jump also adapts: when the first particles of
+    /// the frame (HKPF: the first half; the self-tuning filter: the first
+    /// batch) all score at or below the lost threshold `mu_B + sigma_B`
+    /// (none looks more like the target than the background: the target is
+    /// not in the region), the region is widened by `manoeuvre_gain` for
+    /// the rest of the frame.
+    pub adapt_within_frame: bool,
 }
 
 impl Default for RegionConfig {
@@ -280,6 +318,7 @@ impl Default for RegionConfig {
             sigma0: [1.0, 3.0, 0.5],
             gate: 9.21,
             manoeuvre_gain: 9.0,
+            adapt_within_frame: false,
         }
     }
 }
@@ -341,9 +380,29 @@ impl Region {
         pose_sigma: &[f64; 4],
     ) -> Result<(Vector2<f64>, Matrix6<f64>)> {
         let d = self.kf.predict()?;
+        let psi = self.psi(m_prev, pose_sigma, self.manoeuvre)?;
+        Ok((d, psi))
+    }
+
+    /// Whether the region may still be widened within this frame
+    /// ([`RegionConfig::adapt_within_frame`], and not widened already).
+    pub(crate) fn can_widen(&self) -> bool {
+        self.cfg.adapt_within_frame && !self.manoeuvre
+    }
+
+    /// The widened `Psi_k` of the current prediction (after
+    /// [`Region::predict`]), for the rest of a frame whose first particles
+    /// found nothing ([`RegionConfig::adapt_within_frame`]).
+    pub(crate) fn widened(&self, m_prev: &Affine2, pose_sigma: &[f64; 4]) -> Result<Matrix6<f64>> {
+        self.psi(m_prev, pose_sigma, true)
+    }
+
+    /// `Psi_k` of the predicted region, widened by `manoeuvre_gain` when
+    /// `widen`.
+    fn psi(&self, m_prev: &Affine2, pose_sigma: &[f64; 4], widen: bool) -> Result<Matrix6<f64>> {
         let r2 = self.cfg.r * self.cfg.r;
         let mut s = self.kf.position_covariance() + Matrix2::identity() * r2;
-        if self.manoeuvre {
+        if widen {
             s *= self.cfg.manoeuvre_gain;
         }
         let a = m_prev.linear();
@@ -358,7 +417,7 @@ impl Region {
             psi[(i, i)] = v * v;
         }
         psi.fixed_view_mut::<2, 2>(4, 4).copy_from(&t);
-        Ok((d, psi))
+        Ok(psi)
     }
 
     /// Restarts the Kalman filter at `centre` with zero velocity and
@@ -462,6 +521,9 @@ pub(crate) struct Core {
     model: Option<TargetModel>,
     patch: Vec<f32>,
     bg: Vec<f64>,
+    /// The scores of the tracked estimates that updated the models, while
+    /// they make the TSD ([`TsdInit::Tracked`]).
+    tracked: Vec<f64>,
     pub(crate) pose: Affine2,
     pub(crate) k: u64,
     pub(crate) stats: FrameStats,
@@ -487,6 +549,7 @@ impl Core {
             model: None,
             patch: vec![0.0; ps * ps],
             bg: Vec::with_capacity(8),
+            tracked: Vec::new(),
             pose: Affine2::identity(),
             k: 0,
             stats: FrameStats::default(),
@@ -612,6 +675,7 @@ impl Core {
         self.size = (w, h);
         self.pose = m0;
         self.k = 0;
+        self.tracked.clear();
         let mut rng = stream_rng(&[self.key, self.seed, u64::MAX]);
         // Provisional model to score the TSD / BSD samples.
         let prior = OnlineGaussian::new(0.3, 0.15, self.cfg.distribution_rate)?;
@@ -829,6 +893,31 @@ impl Core {
         Affine2::from_matrix(pool.particles()[*self.ancestors.get(i)?]).ok()
     }
 
+    /// [`TsdInit::Tracked`]: the TSD becomes the sample distribution of the
+    /// tracked estimates' scores once two have updated the models, until
+    /// `1 / distribution_rate` of them (then the model's own forgetting
+    /// update goes on alone).
+    fn learn_tsd(&mut self, score: f64) -> Result<()> {
+        let rate = self.cfg.distribution_rate;
+        let window = (1.0 / rate).ceil() as usize;
+        if self.cfg.tsd_init != TsdInit::Tracked || self.tracked.len() >= window {
+            return Ok(());
+        }
+        self.tracked.push(score);
+        if self.tracked.len() < 2 {
+            return Ok(());
+        }
+        let tsd = OnlineGaussian::from_samples(&self.tracked, rate)?;
+        let model = self.model.as_ref().ok_or(TrackerError::NotInitialised)?;
+        self.model = Some(TargetModel::new(
+            model.template().to_image(),
+            tsd,
+            *model.bsd(),
+            self.cfg.template_rate,
+        )?);
+        Ok(())
+    }
+
     /// The end of a frame: adopts `m_star` (or keeps `fallback` when no
     /// particle could be scored), updates the models when the score passes
     /// the update rule, trains the pose estimator when `train`, and builds
@@ -867,6 +956,9 @@ impl Core {
                 let view = ImageView::from_slice(&self.patch, ps, ps, 1, ps)?;
                 let model = self.model.as_mut().ok_or(TrackerError::NotInitialised)?;
                 self.stats.updated = model.update_above(view, score, &self.bg, update_threshold)?;
+                if self.stats.updated {
+                    self.learn_tsd(score)?;
+                }
             }
             if self.stats.updated && train && self.cfg.training_per_update > 0 {
                 self.ready_all()?;

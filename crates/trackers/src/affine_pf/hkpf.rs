@@ -58,7 +58,10 @@ impl HkpfConfig {
 /// The hierarchical Kalman-particle filter (Yin et al. 2011).
 ///
 /// Each frame: the Kalman filter predicts the displacement `d_k` and the
-/// region ([`RegionConfig`]; widened after a manoeuvre); `particles` poses
+/// region ([`RegionConfig`]; widened after a manoeuvre, and with
+/// [`RegionConfig::adapt_within_frame`] for the second half of the
+/// particles when none of the first half beats the lost threshold
+/// `mu_B + sigma_B`); `particles` poses
 /// `M_i = exp(d_k(1) A5 + d_k(2) A6) M_{k-1} exp(Omega_i)`,
 /// `Omega_i ~ N(0, Psi_k)` (eq. 4-5), are scored by their similarity; the
 /// best one is the estimate `M*` (eq. 2) and its centre the Kalman
@@ -149,8 +152,22 @@ impl TrackerCore for HkpfCore {
         core.stats.manoeuvre = region.manoeuvre();
         let m_prev = core.pose;
         let (d, psi) = region.predict(&m_prev, &self.config.pose_sigma)?;
-        let dynamics = BrownianDynamics::new(psi)?;
-        for _ in 0..self.config.particles {
+        let mut dynamics = BrownianDynamics::new(psi)?;
+        // `adapt_within_frame`: after the first half, widen the region for
+        // the second if nothing found so far beats the lost threshold.
+        let half = self.config.particles.div_ceil(2);
+        for i in 0..self.config.particles {
+            if i == half && region.can_widen() {
+                let lost = core
+                    .model()
+                    .ok_or(TrackerError::NotInitialised)?
+                    .update_threshold();
+                if core.best().is_none_or(|b| b.similarity <= lost) {
+                    dynamics =
+                        BrownianDynamics::new(region.widened(&m_prev, &self.config.pose_sigma)?)?;
+                    core.stats.manoeuvre = true;
+                }
+            }
             let m = dynamics.propagate(&m_prev, d, &mut rng)?;
             let similarity = core.score(&m)?.unwrap_or(f64::NEG_INFINITY);
             core.scored.push(ScoredPose {

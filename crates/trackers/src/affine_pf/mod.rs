@@ -78,7 +78,8 @@ mod ispf;
 mod stpf;
 
 pub use common::{
-    AffineTracker, AppearanceConfig, FrameStats, RegionConfig, ScoredPose, StopRule, UpdateRule,
+    AffineTracker, AppearanceConfig, FrameStats, RegionConfig, ScoredPose, StopRule, TsdInit,
+    UpdateRule,
 };
 pub use hkpf::{HkpfConfig, HkpfCore, HkpfTracker};
 pub use ispf::{IspfConfig, IspfCore, IspfTracker};

@@ -92,7 +92,10 @@ impl StpfConfig {
 ///
 /// Each frame:
 /// 1. the Kalman filter predicts `d_k` and the region `Psi_C`
-///    ([`RegionConfig`]); `Delta N_0` particles are drawn by eq. 4-5;
+///    ([`RegionConfig`]); `Delta N_0` particles are drawn by eq. 4-5
+///    (with [`RegionConfig::adapt_within_frame`], when none of them beats
+///    the lost threshold `mu_B + sigma_B` the region is widened by
+///    `manoeuvre_gain` for the later batches of the frame);
 /// 2. each is tuned to its best neighbour and scored; the batch stops early
 ///    as soon as a tuned particle's similarity exceeds the threshold
 ///    ([`StopRule`]);
@@ -219,6 +222,20 @@ impl TrackerCore for StpfCore {
             n += 1;
         }
         core.stats.batches = 1;
+        // `adapt_within_frame`: the first batch found nothing that beats
+        // the lost threshold, so the target is not in the region: widen it
+        // for the rest of the frame.
+        let mut psi = psi;
+        if s_max <= threshold && region.can_widen() {
+            let lost = core
+                .model()
+                .ok_or(TrackerError::NotInitialised)?
+                .update_threshold();
+            if s_max <= lost {
+                psi = BrownianDynamics::new(region.widened(&m_prev, &c.pose_sigma)?)?;
+                core.stats.manoeuvre = true;
+            }
+        }
         // Step 4.
         let mut s_prev = s_max;
         while s_max <= threshold && n < c.max_particles {
