@@ -617,33 +617,38 @@ impl ExactSum for i64 {}
 impl ExactSum for i128 {}
 
 /// The exact L2 state of [`histogram_search`]'s sliding window:
-/// `e[k] = c_k R - r_k n` per channel-major bin `k`, and `s = sum_k e_k^2`.
+/// `e[c][k] = c_k R - r_k n` per channel `c` and bin `k`, and `t`, the
+/// change of `s = sum e^2` since the first window in units of `2R`.
+///
+/// A pixel leaving bin `a` while one enters bin `b` changes `s` by
+/// `2R (e_b - e_a) + 2R^2`, so `t` by `e_b - e_a + R`, an integer: windows
+/// compare by `t` exactly as by `s`, without the multiplication. The
+/// tables are indexed by `u8` (bins below 256 per channel), so no index
+/// is checked against a length in the loop.
 struct ExactL2<'a, A> {
-    e: Vec<A>,
-    s: A,
+    e: [[A; 256]; 3],
+    t: A,
     /// `R`, the reference's pixel count.
     r: A,
-    /// `2 R^2`, the change of `s` from a moved pixel beyond the `e` terms.
-    two_r2: A,
-    /// `offset[c][v]`: the channel-major bin of value `v` in channel `c`.
-    offset: [[u16; 256]; 3],
+    /// `bin[v]`: the bin of value `v` (every channel alike).
+    bin: [u8; 256],
     frame: ImageView<'a, u8>,
 }
 
 impl<A: ExactSum> ExactL2<'_, A> {
     /// A pixel `out` leaves the window and `inn` enters it:
-    /// `s += 2R (e_b - e_a) + 2R^2 [a != b]` (zero when the bins agree),
-    /// then `e_a -= R`, `e_b += R`.
+    /// `t += e_b - e_a + R` (nothing when the bins agree), then
+    /// `e_a -= R`, `e_b += R`.
     #[inline(always)]
     fn swap(&mut self, out: &[u8], inn: &[u8]) {
-        for c in 0..3 {
-            let a = usize::from(self.offset[c][usize::from(out[c])]);
-            let b = usize::from(self.offset[c][usize::from(inn[c])]);
+        for (c, e) in self.e.iter_mut().enumerate() {
+            let a = usize::from(self.bin[usize::from(out[c])]);
+            let b = usize::from(self.bin[usize::from(inn[c])]);
             if a != b {
-                let (ea, eb) = (self.e[a], self.e[b]);
-                self.s += (eb - ea + eb - ea) * self.r + self.two_r2;
-                self.e[a] = ea - self.r;
-                self.e[b] = eb + self.r;
+                let (ea, eb) = (e[a], e[b]);
+                self.t += eb - ea + self.r;
+                e[a] = ea - self.r;
+                e[b] = eb + self.r;
             }
         }
     }
@@ -682,39 +687,40 @@ fn l2_search<A: ExactSum>(
     let bins = reference.bins;
     let n = (width * height) as i64;
     let r = i64::from(reference.pixels);
-    let mut offset = [[0u16; 256]; 3];
-    for (c, o) in offset.iter_mut().enumerate() {
-        for (v, slot) in o.iter_mut().enumerate() {
-            *slot = (c * bins + ((v * bins) >> 8)) as u16;
-        }
+    let mut bin = [0u8; 256];
+    for (v, slot) in bin.iter_mut().enumerate() {
+        // below 256: bins <= 256 and v < 256
+        *slot = ((v * bins) >> 8) as u8;
     }
     // The first window's counts.
-    let mut counts = vec![0i64; 3 * bins];
+    let mut counts = [[0i64; 256]; 3];
     for yy in region.y..region.y + height {
         let row = &frame.row(yy)[region.x * 3..(region.x + width) * 3];
         for p in row.chunks_exact(3) {
-            for c in 0..3 {
-                counts[usize::from(offset[c][usize::from(p[c])])] += 1;
+            for (c, counts) in counts.iter_mut().enumerate() {
+                counts[usize::from(bin[usize::from(p[c])])] += 1;
             }
         }
     }
-    let e: Vec<A> = counts
-        .iter()
-        .zip(&reference.counts)
-        .map(|(&c, &q)| A::from(c * r) - A::from(i64::from(q)) * A::from(n))
-        .collect();
-    let s = e.iter().fold(A::from(0), |acc, &v| acc + v * v);
-    let ra = A::from(r);
+    let mut e = [[A::from(0); 256]; 3];
+    for ((e, counts), q) in e
+        .iter_mut()
+        .zip(&counts)
+        .zip(reference.counts.chunks_exact(bins))
+    {
+        for ((e, &c), &q) in e.iter_mut().zip(counts).zip(q) {
+            *e = A::from(c * r) - A::from(i64::from(q)) * A::from(n);
+        }
+    }
     let mut st = ExactL2 {
         e,
-        s,
-        r: ra,
-        two_r2: A::from(2) * ra * ra,
-        offset,
+        t: A::from(0),
+        r: A::from(r),
+        bin,
         frame,
     };
     let (nx, ny) = (region.width - width + 1, region.height - height + 1);
-    let mut best = (st.s, region.y, region.x);
+    let mut best = (st.t, region.y, region.x);
     let mut consider = |s: A, x: usize, y: usize| {
         if (s, y, x) < best {
             best = (s, y, x);
@@ -739,7 +745,7 @@ fn l2_search<A: ExactSum>(
                         y -= 1;
                     }
                 }
-                consider(st.s, x, y);
+                consider(st.t, x, y);
             }
         }
     } else {
@@ -758,7 +764,7 @@ fn l2_search<A: ExactSum>(
                         x -= 1;
                     }
                 }
-                consider(st.s, x, y);
+                consider(st.t, x, y);
             }
         }
     }

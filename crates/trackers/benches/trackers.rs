@@ -486,8 +486,8 @@ fn real_sequence(name: &str) -> Option<(Vec<Image<u8>>, BBox)> {
 }
 
 /// The correlation-filter trackers per frame on the real OTB sequences
-/// Crossing (360x240) and Couple (320x240), RGB, and the particle filters
-/// hist-pf-scale, hkpf, ispf and stpf.
+/// Crossing (360x240) and Couple (320x240), RGB (every other tracker on
+/// the same frames: [`bench_registry`]).
 fn bench_dcf(c: &mut Criterion) {
     for name in ["Crossing", "Couple"] {
         let Some((frames, first)) = real_sequence(name) else {
@@ -513,13 +513,25 @@ fn bench_dcf(c: &mut Criterion) {
             bench_steps(&mut group, tname, tracker.as_mut(), &frames, first);
         }
         group.finish();
-        // Issue 30's slower particle filters on the same frames, built as
-        // the registry builds them (seed 0, as `cargo xtask otb`).
-        let mut group = c.benchmark_group(format!("{name} real (particle filters)"));
+    }
+}
+
+/// Every registered tracker (`REGISTRY`, built as `bayestrack track` and
+/// `cargo xtask otb` build them: seed 0, default options) per frame on the
+/// real Crossing (360x240) and Couple (320x240) frames: the throughput line
+/// of each is the tracker-only frames per second that README quotes.
+fn bench_registry(c: &mut Criterion) {
+    for name in ["Crossing", "Couple"] {
+        let Some((frames, first)) = real_sequence(name) else {
+            continue;
+        };
+        let mut group = c.benchmark_group(format!("{name} real (every registered tracker)"));
         group.throughput(Throughput::Elements(1));
-        for tname in ["hist-pf-scale", "hkpf", "ispf", "stpf"] {
-            let mut tracker = bayestrack_trackers::build_tracker(tname, 0).unwrap();
-            let label = format!("{tname} step");
+        group.warm_up_time(std::time::Duration::from_secs(1));
+        group.measurement_time(std::time::Duration::from_secs(3));
+        for info in bayestrack_trackers::REGISTRY {
+            let mut tracker = info.build(0).unwrap();
+            let label = format!("{} step", info.name);
             bench_steps(&mut group, &label, tracker.as_mut(), &frames, first);
         }
         group.finish();
@@ -545,6 +557,7 @@ criterion_group!(
     benches,
     bench_dcf,
     bench_pf_dcf,
+    bench_registry,
     bench_ball,
     bench_road,
     bench_street,
