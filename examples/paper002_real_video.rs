@@ -27,7 +27,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use bayestrack::affine::{Affine2, AffineGroup, PoseConfig, PoseEstimator};
-use bayestrack::image::{BBox, Border, Image, ImageView, to_gray_unit, warp_into};
+use bayestrack::image::{BBox, Border, Image, to_gray_unit, warp_into};
 use bayestrack::nalgebra::{Matrix2, Vector2};
 use bayestrack::otb::Sequence;
 use bayestrack::otb::metrics::{iou, score_otb};
