@@ -161,28 +161,44 @@ fn sec32_the_hand_contour_on_the_ifd_alone_follows_the_hand_loosely() {
 }
 
 #[test]
-fn sec33_both_cues_with_half_the_contours_beat_the_ifd_alone_only_among_moving_boxes() {
+fn sec33_both_cues_with_half_the_contours_beat_the_ifd_alone_when_the_face_turns() {
     // Sec. 3.3: AND (IFD x skin, eq. 11) with N/2 contours tracks better
-    // than one cue with N. With the face the only moving object (default)
-    // the IFD contour tracks as well: AND at N/2 has the lower centre
-    // error (quick 3.97 vs 6.04 px at N = 100, 2.54 vs 5.24 at N = 200)
-    // but not the lower outline distance (4.63 vs 4.64, 5.25 vs 4.49 px),
-    // both lose nothing. With two moving boxes (`movers-2`) the IFD alone
-    // follows them and AND wins by far (3.63 / 5.25 / 0 % vs 21.5 / 16.1 /
-    // 24 %; 2.63 / 5.08 / 0 % vs 36.8 / 27.1 / 39 %).
+    // than one cue with N. With the face turning (+-15 deg) and changing
+    // size (+-15 %) as the paper's contour state assumes (default,
+    // `pose_motion`), AND at N/2 has the lower centre error and the lower
+    // outline distance, both lose (almost) nothing: quick 3.20 / 3.90 / 0 %
+    // vs 8.91 / 5.74 / 2.5 % at N = 100, 2.82 / 4.90 / 0 % vs 7.25 / 5.05 /
+    // 0 % at N = 200: reproduced. With the face upright (`upright`, this
+    // code's first scene) the IFD contour's outline is as good (3.03 vs
+    // 3.56, 4.01 vs 3.92 px): the claim needs the turning face. With two
+    // moving boxes (`movers-2`) the IFD alone follows them and AND wins by
+    // far.
     for n in [100, 200] {
         let and = cell(Representation::Contour, Cue::And, n / 2);
         let ifd = cell(Representation::Contour, Cue::Ifd, n);
         println!("N={n}: {and:?}\n      {ifd:?}");
         assert!(and.centre >= 1.0 && and.centre <= 6.0, "{and:?}");
-        assert!(and.outline >= 2.0 && and.outline <= 7.0, "{and:?}");
+        assert!(and.outline >= 2.0 && and.outline <= 6.0, "{and:?}");
         assert_eq!(and.loss, 0.0, "{and:?}");
-        assert!(ifd.centre >= 3.0 && ifd.centre <= 12.0, "{ifd:?}");
+        assert!(ifd.centre >= 4.0 && ifd.centre <= 14.0, "{ifd:?}");
         assert!(ifd.loss <= 0.05, "{ifd:?}");
-        assert!(and.centre <= 0.8 * ifd.centre, "{and:?} vs {ifd:?}");
+        assert!(and.centre <= 0.6 * ifd.centre, "{and:?} vs {ifd:?}");
+        assert!(and.outline < ifd.outline, "{and:?} vs {ifd:?}");
+    }
+    assert!(result().verdict(Claim::AndHalfBeatsIfd).holds);
+    let pairs = [
+        key(Representation::Contour, Cue::And, 50),
+        key(Representation::Contour, Cue::Ifd, 100),
+        key(Representation::Contour, Cue::And, 100),
+        key(Representation::Contour, Cue::Ifd, 200),
+    ];
+    let (up, _) = grid_of(&reading("upright"), &pairs, false);
+    for pair in up.chunks(2) {
+        let (and, ifd) = (pair[0], pair[1]);
+        println!("upright: {and:?}\n         {ifd:?}");
+        assert!(and.loss == 0.0 && ifd.loss <= 0.05, "{and:?} {ifd:?}");
         assert!(and.outline >= 0.8 * ifd.outline, "{and:?} vs {ifd:?}");
     }
-    assert!(!result().verdict(Claim::AndHalfBeatsIfd).holds);
     let keys = [
         key(Representation::Contour, Cue::And, 50),
         key(Representation::Contour, Cue::Ifd, 100),
@@ -200,6 +216,30 @@ fn sec33_both_cues_with_half_the_contours_beat_the_ifd_alone_only_among_moving_b
         assert!(and.centre <= 0.5 * ifd.centre, "{and:?} vs {ifd:?}");
         assert!(and.outline <= 0.5 * ifd.outline, "{and:?} vs {ifd:?}");
         assert!(ifd.loss >= 0.1 && ifd.loss <= 0.7, "{ifd:?}");
+    }
+}
+
+#[test]
+fn sec33_the_contours_turn_and_scale_with_the_face() {
+    // The contour state carries "the rotating angle and the scaling
+    // factor" (eq. 13). With the face turning +-15 deg and changing size
+    // +-15 % (default) the AND contour's outline is worse than with the
+    // face upright (`upright`) by the lag of its pose only: quick 3.90 vs
+    // 3.03 px at N = 50, 4.90 vs 4.01 at N = 100 (+0.87, +0.89). With the
+    // contour's rotation and scale frozen (no diffusion of theta, alpha)
+    // the turning costs +2.04 and +1.43 px (4.44 vs 2.40, 3.75 vs 2.32).
+    // Bound: the turning face costs at most 1.25 px of outline.
+    let keys = [
+        key(Representation::Contour, Cue::And, 50),
+        key(Representation::Contour, Cue::And, 100),
+    ];
+    let (up, _) = grid_of(&reading("upright"), &keys, false);
+    for (k, u) in keys.iter().zip(&up) {
+        let turning = cell(k.representation, k.cue, k.particles);
+        println!("turning {turning:?}\nupright {u:?}");
+        assert!(turning.loss == 0.0 && u.loss == 0.0, "{turning:?} {u:?}");
+        let cost = turning.outline - u.outline;
+        assert!((0.0..=1.25).contains(&cost), "{turning:?} vs {u:?}: {cost}");
     }
 }
 

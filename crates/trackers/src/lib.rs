@@ -24,9 +24,10 @@ pub use affine_pf::{
     TsdInit, UpdateRule,
 };
 pub use condensation::{
-    CAvq, CAvqConfig, Condensation, CondensationReport, ContourConfig, ContourCore, ContourTracker,
-    CueSet, CurveCue, CurveCueKind, LOST_LOG_LIKELIHOOD, MultiCondensation, MultiConfig,
-    ObjectConfig, ObjectEstimate, PointCloudConfig, PointCloudCore, PointCloudTracker,
+    CAvq, CAvqConfig, Condensation, CondensationReport, ContourConfig, ContourCore,
+    ContourDynamics, ContourTracker, CueSet, CurveCue, CurveCueKind, LOST_LOG_LIKELIHOOD,
+    MultiCondensation, MultiConfig, ObjectConfig, ObjectEstimate, PointCloudConfig, PointCloudCore,
+    PointCloudTracker,
 };
 pub use dcf::{
     DcfCore, DcfTracker, DcfTrackerConfig, GateOptions, KcfOptions, ScaleOptions, StapleCore,

@@ -3,8 +3,11 @@
 //!
 //! - **Tracking grid** (sec. 3): cue {IFD, skin, OR, AND} x representation
 //!   {point cloud (sec. 3.1), B-spline contour (sec. 3.3)} x `N` {50, 100,
-//!   200} on the default scene (a face wandering in clutter: two static
-//!   skin-coloured and two moving non-skin distractors): mean centre error,
+//!   200} on the default scene (a face wandering, turning and changing
+//!   size in clutter: two static skin-coloured distractors, no other
+//!   moving object unless `moving_distractors` says so; the contours'
+//!   rotation and scale by Blake and Isard's AR(2) model around the
+//!   template, `contour_dynamics`): mean centre error,
 //!   mean distance from the mean contour to the true outline (contours
 //!   only), loss rate and frames per second, over seeded runs.
 //! - **Re-initialisation** (sec. 4): on [`WebcamScene::entering`] the
@@ -33,15 +36,15 @@ use std::time::Instant;
 
 use bayestrack_image::{BBox, Image, write_png};
 use bayestrack_trackers::{
-    CAvqConfig, ContourConfig, ContourTracker, CueSet, MultiCondensation, MultiConfig,
-    ObjectConfig, PointCloudConfig, PointCloudTracker, Tracker,
+    CAvqConfig, ContourConfig, ContourDynamics, ContourTracker, CueSet, MultiCondensation,
+    MultiConfig, ObjectConfig, PointCloudConfig, PointCloudTracker, Tracker,
 };
 use rayon::prelude::*;
 
 use crate::driver::Paper;
 use crate::experiment::{ExperimentError, MAX_FRAMES, MAX_RUNS, write_text};
 use crate::scenes::{FrameTruth, Outline, SceneStream, SkinShape, WebcamScene};
-use bayestrack_options::{Options, above, inside, options};
+use bayestrack_options::{Options, above, above_to, inside, options};
 use bayestrack_otb::Table;
 use bayestrack_otb::plot::{Series, line_chart};
 
@@ -178,6 +181,31 @@ mod tests {
         assert!(c.apply("frames", "1").is_err());
         assert!(c.apply("bogus", "1").is_err());
         assert!(c.apply("lock_distance", "nan").is_err());
+        c.apply("contour_dynamics", "velocity").unwrap();
+        assert_eq!(c.contour_dynamics, ContourMotion::Velocity);
+        assert_eq!(
+            c.contour(ContourConfig::face(50)).dynamics,
+            ContourDynamics::DampedVelocity
+        );
+        c.apply("contour_dynamics", "ar2").unwrap();
+        assert!(matches!(
+            c.contour(ContourConfig::hand()).dynamics,
+            ContourDynamics::Ar2 { rms_theta_deg, rms_alpha } if rms_theta_deg == 15.0 && rms_alpha == 0.15
+        ));
+        assert!(c.apply("contour_dynamics", "random").is_err());
+        assert!(c.apply("rotation_deg", "91").is_err());
+        assert!(c.apply("scale_change", "-0.1").is_err());
+        assert!(c.apply("face_size", "0").is_err());
+        c.apply("pose_motion", "false").unwrap();
+        let s = c.posed(WebcamScene::default());
+        assert_eq!((s.rotation_deg, s.scale_change), (0.0, 0.0));
+        c.apply("pose_motion", "true").unwrap();
+        c.apply("face_size", "1.5").unwrap();
+        let s = c.posed(WebcamScene::default());
+        assert_eq!(
+            (s.rotation_deg, s.scale_change, s.target_size),
+            (15.0, 0.15, 1.5)
+        );
         assert!(!c.describe().is_empty());
     }
 

@@ -58,6 +58,18 @@ pub enum OrWeighting {
 
 bayestrack_options::choice! { OrWeighting { Raw = "raw", Subtracted = "subtracted" } }
 
+/// How the contours' rotation and scale move (see
+/// [`CondensationConfig::contour_dynamics`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ContourMotion {
+    /// Eq. 10's damped velocity, no preferred rotation or scale.
+    Velocity,
+    /// Blake and Isard's AR(2) model around the template mean.
+    Ar2,
+}
+
+bayestrack_options::choice! { ContourMotion { Velocity = "velocity", Ar2 = "ar2" } }
+
 /// Point cloud or contour particles.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum Representation {

@@ -296,6 +296,17 @@ pub const READINGS: &[Reading] = &[
         why: "'clutter' read as the textured wall alone, no skin-coloured objects",
     },
     Reading {
+        name: "velocity",
+        set: &[("contour_dynamics", "velocity")],
+        why: "eq. 10's A read as the point cloud's damped velocity for the contours' rotation \
+              and scale too, no return to the template (this code's first reading)",
+    },
+    Reading {
+        name: "upright",
+        set: &[("pose_motion", "false")],
+        why: "the target never turns or changes size (this code's first scene)",
+    },
+    Reading {
         name: "frame-640x480",
         set: &[("width", "640"), ("height", "480")],
         why: "a VGA webcam (the paper gives no frame size; the face keeps 40x52 px)",

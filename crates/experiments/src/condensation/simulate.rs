@@ -40,11 +40,11 @@ impl Single {
             ),
             Representation::Contour => Single::Contour(
                 ContourTracker::new(
-                    ContourConfig {
+                    config.contour(ContourConfig {
                         cues,
                         avq,
                         ..ContourConfig::face(particles)
-                    },
+                    }),
                     seed,
                 )
                 .map_err(|e| failed(&what, e))?,
@@ -129,7 +129,8 @@ pub(super) fn hand_run(
 ) -> Result<TrackRun, ExperimentError> {
     let what = format!("{} run {run}", HAND_LABEL);
     let t = Single::Contour(
-        ContourTracker::new(ContourConfig::hand(), run as u64).map_err(|e| failed(&what, e))?,
+        ContourTracker::new(config.contour(ContourConfig::hand()), run as u64)
+            .map_err(|e| failed(&what, e))?,
     );
     track_with(
         t,
@@ -211,7 +212,7 @@ pub(super) fn render(scene: &WebcamScene, seed: u64) -> Result<Rendered, Experim
 
 /// The tracking scene.
 pub(super) fn tracking_scene(config: &CondensationConfig) -> WebcamScene {
-    config.scene(WebcamScene {
+    config.posed(WebcamScene {
         frames: config.frames,
         ..WebcamScene::default()
     })
@@ -369,10 +370,10 @@ pub(super) fn crossing_run(
             cues: config.cue_set(key.representation, key.cue, n),
             ..PointCloudConfig::paper(n)
         }),
-        Representation::Contour => ObjectConfig::Contour(ContourConfig {
+        Representation::Contour => ObjectConfig::Contour(config.contour(ContourConfig {
             cues: config.cue_set(key.representation, key.cue, n),
             ..ContourConfig::face(n)
-        }),
+        })),
     };
     let mut m = MultiCondensation::new(
         MultiConfig {
@@ -445,11 +446,13 @@ pub struct ParticleSnapshot {
 }
 
 pub(super) fn snapshot(
+    config: &CondensationConfig,
     scene: &Rendered,
     frame: usize,
 ) -> Result<ParticleSnapshot, ExperimentError> {
     let what = "particle figure";
-    let mut t = ContourTracker::new(ContourConfig::face(100), 0).map_err(|e| failed(what, e))?;
+    let mut t = ContourTracker::new(config.contour(ContourConfig::face(100)), 0)
+        .map_err(|e| failed(what, e))?;
     let face = scene.truth[0]
         .target()
         .ok_or_else(|| failed(what, "no face"))?;
@@ -664,7 +667,7 @@ pub(super) fn run_job(
             Done::Crossing(crossing_run(key, pr, config, r, &scenes[2], aligned)?)
         }
         Job::Hand(r) => Done::Hand(hand_run(config, r, &scenes[3])?),
-        Job::Snapshot => Done::Snapshot(Box::new(snapshot(&scenes[0], config.frames / 2)?)),
+        Job::Snapshot => Done::Snapshot(Box::new(snapshot(config, &scenes[0], config.frames / 2)?)),
     })
 }
 

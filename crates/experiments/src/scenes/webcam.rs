@@ -119,6 +119,18 @@ pub struct WebcamScene {
     pub second: SecondObject,
     /// Standard deviation of the sensor noise in grey levels (3).
     pub sensor_noise: f64,
+    /// Size of the target (object 0) relative to its shape's 40x52 face
+    /// or 31x43 hand (1).
+    pub target_size: f64,
+    /// Amplitude in degrees of the target's in-plane rotation about its
+    /// centre, `theta(t) = A sin(omega t + phi)` with a period of 4 s
+    /// (x [`WebcamScene::target_speed`]) and a phase drawn from the seed
+    /// (0: the target never rotates).
+    pub rotation_deg: f64,
+    /// Relative amplitude of the target's change of scale,
+    /// `s(t) = target_size (1 + A sin(omega t + phi))` with a period of
+    /// 5 s and its own phase (0: the size never changes).
+    pub scale_change: f64,
 }
 
 impl Default for WebcamScene {
@@ -134,6 +146,9 @@ impl Default for WebcamScene {
             moving_distractors: 2,
             second: SecondObject::None,
             sensor_noise: 3.0,
+            target_size: 1.0,
+            rotation_deg: 0.0,
+            scale_change: 0.0,
         }
     }
 }
@@ -185,6 +200,9 @@ impl WebcamScene {
             0.0,
             16.0,
         )?;
+        check_range(NAME, "target_size", self.target_size, 0.25, 4.0)?;
+        check_range(NAME, "rotation_deg", self.rotation_deg, 0.0, 90.0)?;
+        check_range(NAME, "scale_change", self.scale_change, 0.0, 0.5)?;
         check_range(NAME, "sensor_noise", self.sensor_noise, 0.0, 255.0)
     }
 
@@ -222,10 +240,24 @@ impl WebcamScene {
                 self.target_speed,
             ),
         };
+        // Phases of the target's rotation and scale from their own stream,
+        // so that a scene without them draws exactly what it drew before.
+        let mut turn = scene_rng(seed, KEY, streams::MOTION, 1);
+        let tau = std::f64::consts::TAU;
+        let target_pose = Pose {
+            size: self.target_size,
+            rotation: self.rotation_deg.to_radians(),
+            rotation_omega: self.target_speed * tau / 4.0,
+            rotation_phase: turn.random_range(0.0..tau),
+            scale: self.scale_change,
+            scale_omega: self.target_speed * tau / 5.0,
+            scale_phase: turn.random_range(0.0..tau),
+        };
         let mut people = vec![Person {
             shape: self.target.shape(),
             label: self.target.label(),
             path: target_path,
+            pose: target_pose,
         }];
         let other = self.target.other();
         match self.second {
@@ -233,6 +265,7 @@ impl WebcamScene {
             SecondObject::Crossing { frame } => people.push(Person {
                 shape: other.shape(),
                 label: other.label(),
+                pose: Pose::FIXED,
                 path: Path::Linear {
                     start: [w / 2.0 + 2.5 * frame as f64, h / 2.0 - 6.0],
                     velocity: [-2.5, 0.0],
@@ -252,6 +285,7 @@ impl WebcamScene {
                 people.push(Person {
                     shape,
                     label: other.label(),
+                    pose: Pose::FIXED,
                     path: Path::Enter {
                         frame,
                         start: [border_x, y],
@@ -728,11 +762,109 @@ impl Path {
     }
 }
 
+/// How a skin object turns and changes size about its centre.
+#[derive(Debug, Clone, Copy)]
+struct Pose {
+    size: f64,
+    rotation: f64,
+    rotation_omega: f64,
+    rotation_phase: f64,
+    scale: f64,
+    scale_omega: f64,
+    scale_phase: f64,
+}
+
+impl Pose {
+    /// Upright at its shape's size, always.
+    const FIXED: Pose = Pose {
+        size: 1.0,
+        rotation: 0.0,
+        rotation_omega: 0.0,
+        rotation_phase: 0.0,
+        scale: 0.0,
+        scale_omega: 0.0,
+        scale_phase: 0.0,
+    };
+
+    /// (rotation in radians, scale) at frame `k`.
+    fn at(&self, k: usize, fps: f64) -> (f64, f64) {
+        let t = k as f64 / fps;
+        let theta = if self.rotation == 0.0 {
+            0.0
+        } else {
+            self.rotation * (self.rotation_omega * t + self.rotation_phase).sin()
+        };
+        let s = if self.scale == 0.0 {
+            self.size
+        } else {
+            self.size * (1.0 + self.scale * (self.scale_omega * t + self.scale_phase).sin())
+        };
+        (theta, s)
+    }
+}
+
+/// Where an object stands in frame k: centre, rotation and scale.
+#[derive(Debug, Clone, Copy)]
+struct Placed {
+    c: [f64; 2],
+    cos: f64,
+    sin: f64,
+    s: f64,
+}
+
+impl Placed {
+    fn new(c: [f64; 2], (theta, s): (f64, f64)) -> Self {
+        let (sin, cos) = if theta == 0.0 {
+            (0.0, 1.0)
+        } else {
+            theta.sin_cos()
+        };
+        Self { c, cos, sin, s }
+    }
+
+    /// Object coordinates of image point (x, y) (exactly x - cx, y - cy
+    /// for an upright object of size 1).
+    fn local(&self, x: f64, y: f64) -> (f64, f64) {
+        let (dx, dy) = (x - self.c[0], y - self.c[1]);
+        (
+            (self.cos * dx + self.sin * dy) / self.s,
+            (self.cos * dy - self.sin * dx) / self.s,
+        )
+    }
+
+    /// Image point of object coordinates (u, v).
+    fn image(&self, u: f64, v: f64) -> [f64; 2] {
+        [
+            self.c[0] + self.s * (self.cos * u - self.sin * v),
+            self.c[1] + self.s * (self.sin * u + self.cos * v),
+        ]
+    }
+
+    /// The image box [x0, y0, x1, y1] of the object's extent rectangle
+    /// (the extent itself, moved, for an upright object of size 1).
+    fn extent(&self, e: [f64; 4]) -> [f64; 4] {
+        let corners = [[e[0], e[1]], [e[2], e[1]], [e[2], e[3]], [e[0], e[3]]];
+        corners.iter().fold(
+            [
+                f64::INFINITY,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                f64::NEG_INFINITY,
+            ],
+            |a, &[u, v]| {
+                let [x, y] = self.image(u, v);
+                [a[0].min(x), a[1].min(y), a[2].max(x), a[3].max(y)]
+            },
+        )
+    }
+}
+
 #[derive(Debug, Clone)]
 struct Person {
     shape: Shape,
     label: &'static str,
     path: Path,
+    pose: Pose,
 }
 
 /// The webcam scene frame by frame (see [`WebcamScene::stream`]).
@@ -756,29 +888,43 @@ impl WebcamStream {
     pub fn outlines(&self, k: usize) -> Vec<Outline> {
         self.people
             .iter()
-            .zip(self.centers(k))
-            .map(|(p, [cx, cy])| p.shape.outline().translated(cx, cy))
+            .zip(self.placed(k))
+            .map(|(p, at)| {
+                let o = p.shape.outline();
+                if at.sin == 0.0 && at.s == 1.0 {
+                    o.translated(at.c[0], at.c[1])
+                } else {
+                    Outline {
+                        polylines: o
+                            .polylines
+                            .iter()
+                            .map(|l| l.iter().map(|q| at.image(q[0], q[1])).collect())
+                            .collect(),
+                    }
+                }
+            })
             .collect()
     }
 
-    fn visible_fraction(&self, i: usize, centers: &[[f64; 2]]) -> f64 {
+    fn visible_fraction(&self, i: usize, placed: &[Placed]) -> f64 {
         let (w, h) = (self.params.width as i64, self.params.height as i64);
         let person = &self.people[i];
-        let [cx, cy] = centers[i];
-        let [x0, y0, x1, y1] = person.shape.extent;
+        let at = placed[i];
+        let [x0, y0, x1, y1] = at.extent(person.shape.extent);
         let (mut total, mut seen) = (0.0, 0.0);
-        for y in pixel_span(cy + y0, cy + y1) {
-            for x in pixel_span(cx + x0, cx + x1) {
+        for y in pixel_span(y0, y1) {
+            for x in pixel_span(x0, x1) {
                 let (fx, fy) = (x as f64, y as f64);
-                let c = person.shape.coverage(fx - cx, fy - cy);
+                let (u, v) = at.local(fx, fy);
+                let c = person.shape.coverage(u, v);
                 total += c;
                 if c <= 0.0 || x < 0 || y < 0 || x >= w || y >= h {
                     continue;
                 }
                 let hidden = (i + 1..self.people.len())
                     .map(|j| {
-                        let [ox, oy] = centers[j];
-                        self.people[j].shape.coverage(fx - ox, fy - oy)
+                        let (u, v) = placed[j].local(fx, fy);
+                        self.people[j].shape.coverage(u, v)
                     })
                     .fold(0.0, f64::max);
                 seen += c * (1.0 - hidden);
@@ -787,10 +933,11 @@ impl WebcamStream {
         if total > 0.0 { seen / total } else { 0.0 }
     }
 
-    fn centers(&self, k: usize) -> Vec<[f64; 2]> {
+    fn placed(&self, k: usize) -> Vec<Placed> {
+        let fps = self.params.fps;
         self.people
             .iter()
-            .map(|p| p.path.at(k, self.params.fps))
+            .map(|p| Placed::new(p.path.at(k, fps), p.pose.at(k, fps)))
             .collect()
     }
 
@@ -800,19 +947,25 @@ impl WebcamStream {
         }
         let k = self.next;
         self.next += 1;
-        let centers = self.centers(k);
+        let placed = self.placed(k);
         let objects = self
             .people
             .iter()
             .enumerate()
             .map(|(i, p)| {
+                let at = placed[i];
                 let [x0, y0, x1, y1] = p.shape.extent;
-                let [cx, cy] = centers[i];
+                let bbox = if at.sin == 0.0 && at.s == 1.0 {
+                    otb_box(at.c[0] + x0, at.c[1] + y0, x1 - x0, y1 - y0)
+                } else {
+                    let [x0, y0, x1, y1] = at.extent(p.shape.extent);
+                    otb_box(x0, y0, x1 - x0, y1 - y0)
+                };
                 ObjectTruth {
                     id: i,
                     label: p.label,
-                    bbox: otb_box(cx + x0, cy + y0, x1 - x0, y1 - y0),
-                    visible_fraction: self.visible_fraction(i, &centers),
+                    bbox,
+                    visible_fraction: self.visible_fraction(i, &placed),
                 }
             })
             .collect();
@@ -853,11 +1006,11 @@ impl WebcamStream {
                 }
             }
         }
-        for (person, [cx, cy]) in self.people.iter().zip(self.centers(k)) {
-            let [x0, y0, x1, y1] = person.shape.extent;
-            for y in clipped_span(cy + y0, cy + y1, p.height) {
-                for x in clipped_span(cx + x0, cx + x1, p.width) {
-                    let (dx, dy) = (x as f64 - cx, y as f64 - cy);
+        for (person, at) in self.people.iter().zip(self.placed(k)) {
+            let [x0, y0, x1, y1] = at.extent(person.shape.extent);
+            for y in clipped_span(y0, y1, p.height) {
+                for x in clipped_span(x0, x1, p.width) {
+                    let (dx, dy) = at.local(x as f64, y as f64);
                     let c = person.shape.coverage(dx, dy);
                     if c > 0.0 {
                         paint(x, y, person.shape.color(dx, dy), c);
@@ -953,6 +1106,80 @@ mod tests {
         let face = SkinShape::Face.shape().outline();
         assert_eq!(face.polylines.len(), 1);
         assert!((face.distance([0.0, 0.0]) - 20.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn a_turning_target_is_drawn_where_its_outline_and_box_say() {
+        let p = WebcamScene {
+            frames: 90,
+            target_size: 1.2,
+            rotation_deg: 15.0,
+            scale_change: 0.15,
+            static_skin_distractors: 0,
+            moving_distractors: 0,
+            ..WebcamScene::default()
+        };
+        let mut stream = p.stream(3).unwrap();
+        let (mut min_w, mut max_w) = (f64::INFINITY, 0.0_f64);
+        let mut tilted = 0;
+        while let Some(f) = stream.next_frame() {
+            let k = f.truth.index;
+            let b = f.truth.objects[0].bbox;
+            let (x0, y0) = (b.x - 1.5, b.y - 1.5);
+            let o = &stream.outlines(k)[0];
+            let pts: Vec<[f64; 2]> = o.points().collect();
+            let c = pts
+                .iter()
+                .fold([0.0, 0.0], |a, q| [a[0] + q[0], a[1] + q[1]]);
+            let c = [c[0] / pts.len() as f64, c[1] / pts.len() as f64];
+            // The box holds the outline.
+            for &[x, y] in &pts {
+                assert!(
+                    x >= x0 - 1e-9 && x <= x0 + b.width + 1e-9,
+                    "frame {k}: x {x}"
+                );
+                assert!(
+                    y >= y0 - 1e-9 && y <= y0 + b.height + 1e-9,
+                    "frame {k}: y {y}"
+                );
+            }
+            // 3 px inside the outline is skin (R - B about 70 and more), 3
+            // px outside is the near-grey wall (R - B about -8).
+            let img = &f.image;
+            let px = |x: f64, y: f64| {
+                let (x, y) = (x.round() as usize, y.round() as usize);
+                let o = y * img.stride() + 3 * x;
+                let d = img.as_slice();
+                f64::from(d[o]) - f64::from(d[o + 2])
+            };
+            for q in pts.iter().step_by(40) {
+                let (dx, dy) = (c[0] - q[0], c[1] - q[1]);
+                let n = dx.hypot(dy);
+                let (ux, uy) = (dx / n, dy / n);
+                let (ox, oy) = (q[0] - 3.0 * ux, q[1] - 3.0 * uy);
+                if ox < 0.0 || oy < 0.0 || ox > 318.0 || oy > 238.0 {
+                    continue;
+                }
+                let inside = px(q[0] + 3.0 * ux, q[1] + 3.0 * uy);
+                let outside = px(q[0] - 3.0 * ux, q[1] - 3.0 * uy);
+                assert!(inside > 40.0, "frame {k}: {inside} inside at {q:?}");
+                assert!(outside < 20.0, "frame {k}: {outside} outside at {q:?}");
+            }
+            // The ellipse's widest point: not on the horizontal axis when it
+            // is tilted.
+            let right = pts
+                .iter()
+                .fold(pts[0], |a, &q| if q[0] > a[0] { q } else { a });
+            if (right[1] - c[1]).abs() > 2.0 {
+                tilted += 1;
+            }
+            min_w = min_w.min(b.width);
+            max_w = max_w.max(b.width);
+        }
+        // Size 1.2 x (1 +- 0.15) of the 40 px wide face (wider when tilted).
+        assert!(min_w >= 1.2 * 0.85 * 40.0 - 1.0, "{min_w}");
+        assert!(max_w - min_w > 6.0, "{min_w} - {max_w}");
+        assert!(tilted > 30, "{tilted} of 90 frames tilted");
     }
 
     #[test]

@@ -72,6 +72,10 @@ pub struct ContourConfig {
     pub sigma_alpha: f64,
     /// `rho` of eq. 10 (1/2; see the `condensation` module docs).
     pub velocity_damping: f64,
+    /// How rotation and scale move between frames: eq. 10's damped
+    /// velocity (the default of these presets) or Blake and Isard's
+    /// second-order auto-regressive model around the template.
+    pub dynamics: ContourDynamics,
     /// The cues (AND, eq. 11, `lambda = 1/N` face; IFD only hand).
     pub cues: CueSet,
     /// `sigma_hs` of the skin model, eq. 8 (0.05).
@@ -109,6 +113,7 @@ impl ContourConfig {
             sigma_theta_deg: 1.0,
             sigma_alpha: 0.01,
             velocity_damping: 0.5,
+            dynamics: ContourDynamics::DampedVelocity,
             cues: CueSet::And {
                 lambda: 1.0 / particles.max(1) as f64,
             },
@@ -160,6 +165,7 @@ impl ContourConfig {
         check_positive("sigma_alpha", self.sigma_alpha)?;
         check_positive("sigma_hs", self.sigma_hs)?;
         check_damping(self.velocity_damping)?;
+        self.coefficients()?;
         if !(self.skin_inset.is_finite() && self.skin_inset >= 0.0) {
             return Err(TrackerError::InvalidParameter {
                 name: "skin_inset",
@@ -180,6 +186,111 @@ impl ContourConfig {
             a.validate()?;
         }
         Ok(())
+    }
+}
+
+/// How a contour's rotation `theta` and scale increment `alpha` move from
+/// frame to frame (the `A` of eq. 10 for those two components; the
+/// centroid always follows eq. 10's damped velocity, because the object
+/// may wander anywhere in the frame).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub enum ContourDynamics {
+    /// Eq. 10 as for the point cloud, `q_t = q_{t-1} + rho (q_{t-1} -
+    /// q_{t-2}) + sigma v_t`: `theta` and `alpha` wander with no preferred
+    /// value (between selections their spread grows without bound).
+    DampedVelocity,
+    /// Blake and Isard (1998, ch. 9, the paper's ref. \[5\]): a
+    /// second-order auto-regressive process around the template's mean
+    /// shape (`theta = alpha = 0`), `q_t = (r + rho) q_{t-1} - r rho
+    /// q_{t-2} + sigma v_t`, whose characteristic roots are `rho` (the
+    /// velocity's damping, as in eq. 10) and `r < 1` (the return to the
+    /// template). `r` is solved so that the process's stationary
+    /// root-mean-square displacement is `rms_theta_deg` (`rms_alpha`),
+    /// Blake and Isard's parametrisation by an rms displacement; `sigma`
+    /// stays the paper's per-frame diffusion. `r = 1` would be
+    /// [`ContourDynamics::DampedVelocity`].
+    Ar2 {
+        /// Stationary rms of the rotation about the template, degrees.
+        rms_theta_deg: f64,
+        /// Stationary rms of the scale increment about the template.
+        rms_alpha: f64,
+    },
+}
+
+/// Stationary variance of `q_t = a1 q_{t-1} + a2 q_{t-2} + v_t` with unit
+/// innovation variance (infinite when not stationary).
+fn ar2_variance(a1: f64, a2: f64) -> f64 {
+    let d = (1.0 + a2) * ((1.0 - a2).powi(2) - a1 * a1);
+    if d > 0.0 && a2.abs() < 1.0 {
+        (1.0 - a2) / d
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// The `(a1, a2)` of the AR(2) process with roots `r` and `rho` whose
+/// stationary rms under diffusion `sigma` is `rms`: bisection on `r` in
+/// `[0, 1)` (the variance grows with `r`).
+fn ar2_coefficients(name: &'static str, rho: f64, sigma: f64, rms: f64) -> Result<(f64, f64)> {
+    check_positive(name, rms)?;
+    if rho >= 1.0 {
+        return Err(TrackerError::InvalidParameter {
+            name: "velocity_damping",
+            value: rho,
+            reason: "the AR(2) contour dynamics needs velocity_damping < 1 (a stationary process)",
+        });
+    }
+    let target = (rms / sigma).powi(2);
+    let var = |r: f64| ar2_variance(r + rho, -r * rho);
+    if var(0.0) >= target {
+        return Err(TrackerError::InvalidParameter {
+            name,
+            value: rms,
+            reason: "must exceed the spread of one damped step, sigma / sqrt(1 - rho^2)",
+        });
+    }
+    let (mut lo, mut hi) = (0.0_f64, 1.0_f64);
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if var(mid) < target {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let r = 0.5 * (lo + hi);
+    Ok((r + rho, -r * rho))
+}
+
+impl ContourConfig {
+    /// The AR(2) coefficients `(a1, a2)` of `theta` and `alpha` under
+    /// [`ContourDynamics::Ar2`], `None` under damped velocity.
+    ///
+    /// # Errors
+    /// [`TrackerError::InvalidParameter`] for an rms that is not finite and
+    /// positive or not above one step's spread, or `velocity_damping = 1`.
+    pub fn coefficients(&self) -> Result<Option<[(f64, f64); 2]>> {
+        match self.dynamics {
+            ContourDynamics::DampedVelocity => Ok(None),
+            ContourDynamics::Ar2 {
+                rms_theta_deg,
+                rms_alpha,
+            } => Ok(Some([
+                ar2_coefficients(
+                    "rms_theta_deg",
+                    self.velocity_damping,
+                    self.sigma_theta_deg,
+                    rms_theta_deg,
+                )?,
+                ar2_coefficients(
+                    "rms_alpha",
+                    self.velocity_damping,
+                    self.sigma_alpha,
+                    rms_alpha,
+                )?,
+            ])),
+        }
     }
 }
 
@@ -304,6 +415,8 @@ impl Cue for CurveCue {
 pub(super) struct ContourModel {
     sigma: [f64; 4],
     rho: f64,
+    /// `(a1, a2)` of `theta` and `alpha` under the AR(2) dynamics.
+    ar2: Option<[(f64, f64); 2]>,
     alpha_range: (f64, f64),
     frame: (usize, usize),
     /// The template curve's samples (template coordinates, centred on the
@@ -419,6 +532,7 @@ impl ContourModel {
         let model = ContourModel {
             sigma,
             rho: config.velocity_damping,
+            ar2: config.coefficients()?,
             alpha_range: config.alpha_range,
             frame: (frame.width(), frame.height()),
             samples,
@@ -493,7 +607,8 @@ impl ContourModel {
 }
 
 impl StateModel<8> for ContourModel {
-    /// Eq. 10 on `(x, y, theta, alpha)`.
+    /// Eq. 10 on `(x, y, theta, alpha)`; `theta` and `alpha` by the AR(2)
+    /// model around the template under [`ContourDynamics::Ar2`].
     #[inline]
     fn predict<R: Rng + ?Sized>(
         &self,
@@ -503,7 +618,14 @@ impl StateModel<8> for ContourModel {
     ) -> SVector<f64, 8> {
         let mut x = *p;
         for i in 0..4 {
-            let (q, qp) = second_order(p[i], p[i + 4], self.rho, self.sigma[i], rng);
+            let (q, qp) = match (i, &self.ar2) {
+                (2 | 3, Some(c)) => {
+                    let (a1, a2) = c[i - 2];
+                    let v: f64 = StandardNormal.sample(rng);
+                    (a1 * p[i] + a2 * p[i + 4] + self.sigma[i] * v, p[i])
+                }
+                _ => second_order(p[i], p[i + 4], self.rho, self.sigma[i], rng),
+            };
             x[i] = q;
             x[i + 4] = qp;
         }
@@ -768,5 +890,93 @@ mod tests {
             ContourTracker::with_outline(ContourConfig::hand(), vec![Vector2::zeros(); 2], 0)
                 .is_err()
         );
+    }
+}
+
+#[cfg(test)]
+mod dynamics_tests {
+    use super::*;
+
+    fn model(config: &ContourConfig) -> ContourModel {
+        ContourModel {
+            sigma: [
+                config.sigma_xy,
+                config.sigma_xy,
+                config.sigma_theta_deg.to_radians(),
+                config.sigma_alpha,
+            ],
+            rho: config.velocity_damping,
+            ar2: config.coefficients().unwrap(),
+            alpha_range: config.alpha_range,
+            frame: (320, 240),
+            samples: Vec::new(),
+        }
+    }
+
+    /// Spread of theta (degrees) and alpha after `steps` predictions from
+    /// rest, over many independent chains.
+    fn spread(config: &ContourConfig, steps: usize) -> (f64, f64) {
+        let m = model(config);
+        let mut rng = stream_rng(&[KEY, 99]);
+        let chains = 4000;
+        let (mut st, mut sa) = (0.0, 0.0);
+        for _ in 0..chains {
+            let mut s = SVector::<f64, 8>::zeros();
+            for k in 0..steps {
+                s = m.predict(k, &s, &mut rng);
+            }
+            st += s[2].to_degrees().powi(2);
+            sa += s[3].powi(2);
+        }
+        ((st / chains as f64).sqrt(), (sa / chains as f64).sqrt())
+    }
+
+    #[test]
+    fn ar2_holds_theta_and_alpha_at_the_stated_rms_around_the_template() {
+        let ar2 = ContourConfig {
+            dynamics: ContourDynamics::Ar2 {
+                rms_theta_deg: 10.0,
+                rms_alpha: 0.1,
+            },
+            ..ContourConfig::face(100)
+        };
+        let [(a1, a2), _] = ar2.coefficients().unwrap().unwrap();
+        // Roots rho = 1/2 and r in (0, 1).
+        let r = a1 - 0.5;
+        assert!(
+            r > 0.0 && r < 1.0 && (a2 + 0.5 * r).abs() < 1e-12,
+            "{a1} {a2}"
+        );
+        // Long after the start the spread is the stated rms (4000 chains:
+        // 2.2 % standard error of an rms), and it stays there.
+        for steps in [400, 800] {
+            let (t, a) = spread(&ar2, steps);
+            assert!((t - 10.0).abs() < 0.8, "{steps}: theta rms {t}");
+            assert!((a - 0.1).abs() < 0.008, "{steps}: alpha rms {a}");
+        }
+        // Eq. 10's damped velocity has no mean to return to: its spread
+        // grows as the square root of the steps (1.15 sigma sqrt(k)... far
+        // above the AR(2)'s after 400 steps).
+        let free = ContourConfig::face(100);
+        let (t, a) = spread(&free, 400);
+        assert!(t > 30.0 && a > 0.3, "damped velocity: {t} deg, {a}");
+    }
+
+    #[test]
+    fn ar2_rejects_an_rms_below_one_step_and_a_unit_velocity_root() {
+        let bad = |rms_theta_deg: f64, rms_alpha: f64, rho: f64| ContourConfig {
+            dynamics: ContourDynamics::Ar2 {
+                rms_theta_deg,
+                rms_alpha,
+            },
+            velocity_damping: rho,
+            ..ContourConfig::face(100)
+        };
+        assert!(bad(10.0, 0.1, 0.5).validate().is_ok());
+        // One damped step already spreads sigma / sqrt(1 - rho^2) = 1.15 deg.
+        assert!(bad(1.1, 0.1, 0.5).validate().is_err());
+        assert!(bad(10.0, f64::NAN, 0.5).validate().is_err());
+        assert!(bad(-1.0, 0.1, 0.5).validate().is_err());
+        assert!(bad(10.0, 0.1, 1.0).validate().is_err());
     }
 }

@@ -67,6 +67,8 @@ mod points;
 
 pub use avq::{CAvq, CAvqConfig};
 pub use common::{Condensation, CondensationReport, CueSet, LOST_LOG_LIKELIHOOD};
-pub use contour::{ContourConfig, ContourCore, ContourTracker, CurveCue, CurveCueKind};
+pub use contour::{
+    ContourConfig, ContourCore, ContourDynamics, ContourTracker, CurveCue, CurveCueKind,
+};
 pub use multi::{MultiCondensation, MultiConfig, ObjectConfig, ObjectEstimate};
 pub use points::{PointCloudConfig, PointCloudCore, PointCloudTracker};
