@@ -33,7 +33,7 @@ impl<const N: usize> Gaussian<N> {
     pub fn new(mean: SVector<f64, N>, cov: SMatrix<f64, N, N>) -> Result<Self> {
         linalg::check_finite_vec(&mean, "mean", Step::Construction)?;
         linalg::check_covariance(&cov, "covariance", Step::Construction)?;
-        linalg::psd_sqrt(&cov, "covariance", Step::Construction)?;
+        linalg::user_psd_sqrt(&cov, "covariance", Step::Construction)?;
         Ok(Self { mean, cov })
     }
 

@@ -277,15 +277,25 @@ pub(crate) fn variance_floor<const D: usize>(prior: &SMatrix<f64, D, D>) -> f64 
 /// reported as a covariance that is not positive semi-definite.
 #[inline]
 pub(crate) fn check_variances<const D: usize>(
-    cov: &SMatrix<f64, D, D>,
+    cov: &mut SMatrix<f64, D, D>,
     prior: &SMatrix<f64, D, D>,
     matrix: &'static str,
     step: Step,
 ) -> Result<()> {
     // NaN variances pass here (`min` skips them): the finiteness checks
     // that follow report them
-    if min_diagonal(cov) < variance_floor(prior) {
-        return Err(KalmanError::NotPositiveDefinite { matrix, step });
+    let min = min_diagonal(cov);
+    if min < 0.0 {
+        if min < variance_floor(prior) {
+            return Err(KalmanError::NotPositiveDefinite { matrix, step });
+        }
+        // round-off below zero is returned as zero: a variance returned
+        // with `Ok` is never negative
+        for i in 0..D {
+            if cov[(i, i)] < 0.0 {
+                cov[(i, i)] = 0.0;
+            }
+        }
     }
     Ok(())
 }
@@ -330,7 +340,24 @@ pub(crate) fn check_noise<const D: usize>(
     if D == 0 || Ldl::new(m, matrix, step).is_ok() {
         return Ok(());
     }
-    psd_sqrt(m, matrix, step).map(|_| ())
+    user_psd_sqrt(m, matrix, step).map(|_| ())
+}
+
+/// [`psd_sqrt`] of a covariance a user or a model gives: a variance is
+/// never negative, so a diagonal entry below zero is refused before the
+/// semi-definite path, whose eigenvalue tolerance is for round-off off the
+/// diagonal (`R = -5e-324` passed it and came back as a negative
+/// posterior variance).
+#[inline(always)]
+pub(crate) fn user_psd_sqrt<const D: usize>(
+    m: &SMatrix<f64, D, D>,
+    matrix: &'static str,
+    step: Step,
+) -> Result<SMatrix<f64, D, D>> {
+    if min_diagonal(m) < 0.0 {
+        return Err(KalmanError::NotPositiveDefinite { matrix, step });
+    }
+    psd_sqrt(m, matrix, step)
 }
 
 /// The Cholesky factorisation `A = L L^T` of a small symmetric positive

@@ -366,7 +366,7 @@ impl<const N: usize, const U: usize> LinearDynamics<N, U> {
         linalg::check_finite_mat(&f, "transition matrix F", Step::Construction)?;
         linalg::check_finite_mat(&b, "control matrix B", Step::Construction)?;
         linalg::check_covariance(&q, "process noise Q", Step::Construction)?;
-        linalg::psd_sqrt(&q, "process noise Q", Step::Construction)?;
+        linalg::user_psd_sqrt(&q, "process noise Q", Step::Construction)?;
         // symmetrised once here instead of on every step (the same bits:
         // `(Q + Q^T) / 2` is what each step formed)
         Ok(Self {
@@ -431,7 +431,7 @@ impl<const N: usize, const M: usize> LinearMeasurement<N, M> {
     pub fn new(h: SMatrix<f64, M, N>, r: SMatrix<f64, M, M>) -> Result<Self> {
         linalg::check_finite_mat(&h, "measurement matrix H", Step::Construction)?;
         linalg::check_covariance(&r, "measurement noise R", Step::Construction)?;
-        linalg::psd_sqrt(&r, "measurement noise R", Step::Construction)?;
+        linalg::user_psd_sqrt(&r, "measurement noise R", Step::Construction)?;
         Ok(Self {
             h,
             r: linalg::symmetrize(&r),

@@ -349,14 +349,19 @@ impl SigmaPoints {
         let residual = sz.residual(z, y_mean);
         let y = ldl.forward(&residual);
         let mean = predicted.mean() + linalg::mul(&v, &y);
-        let cov = linalg::mirror_lower(linalg::lower_mul_t_add(predicted.cov(), -1.0, &v, &u));
+        let mut cov = linalg::mirror_lower(linalg::lower_mul_t_add(predicted.cov(), -1.0, &v, &u));
         let innovation = Innovation::unchecked(residual, &y, s, &ldl);
         // the checks of the outputs in one test (as the KF's gain step):
         // the exact checks, in order, name a failure
-        let fast_ok = linalg::min_diagonal(&cov) >= linalg::variance_floor(predicted.cov())
+        let fast_ok = linalg::min_diagonal(&cov) >= 0.0
             && (linalg::sym_sum(&mean, &cov) + innovation.log_likelihood).is_finite();
         if !fast_ok {
-            linalg::check_variances(&cov, predicted.cov(), "posterior covariance", Step::Update)?;
+            linalg::check_variances(
+                &mut cov,
+                predicted.cov(),
+                "posterior covariance",
+                Step::Update,
+            )?;
             Gaussian::checked(mean, cov, Step::Update)?;
             innovation.check()?;
         }

@@ -88,7 +88,7 @@ impl<const N: usize> SqrtGaussian<N> {
     /// [`KalmanError::NotPositiveDefinite`] naming "covariance" (construction
     /// step) when the covariance has a clearly negative eigenvalue.
     pub fn from_gaussian(g: &Gaussian<N>) -> Result<Self> {
-        let l = linalg::psd_sqrt(g.cov(), "covariance", Step::Construction)?;
+        let l = linalg::user_psd_sqrt(g.cov(), "covariance", Step::Construction)?;
         Ok(Self { mean: *g.mean(), l })
     }
 

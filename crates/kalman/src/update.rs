@@ -158,16 +158,16 @@ pub(crate) fn gain_step<const N: usize, const M: usize>(
         }
         CovarianceUpdate::Standard => linalg::lower_mul_t_add(p, -1.0, &v, &u),
     };
-    let new_cov = linalg::mirror_lower(new_cov);
+    let mut new_cov = linalg::mirror_lower(new_cov);
     let innovation = Innovation::unchecked(residual, &y, s, &ldl);
     // every check of the outputs in one test: the variances against their
     // floor, and one sum that is finite only when the mean, the covariance
     // and the log-likelihood are (the latter only when the NIS is); the
     // exact checks, in order, name the failure
-    let fast_ok = linalg::min_diagonal(&new_cov) >= linalg::variance_floor(p)
+    let fast_ok = linalg::min_diagonal(&new_cov) >= 0.0
         && (linalg::sym_sum(&new_mean, &new_cov) + innovation.log_likelihood).is_finite();
     if !fast_ok {
-        linalg::check_variances(&new_cov, p, "posterior covariance", Step::Update)?;
+        linalg::check_variances(&mut new_cov, p, "posterior covariance", Step::Update)?;
         linalg::check_finite_sym_belief(
             &new_mean,
             "posterior mean",

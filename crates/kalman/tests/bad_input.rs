@@ -607,3 +607,79 @@ impl bayestrack_kalman::Measurement<2, 1> for SquareSensor {
         Matrix1::new(1e-6)
     }
 }
+
+/// Issue 28 ("Ok with a negative variance"): a noise or prior covariance
+/// with a variance below zero, however small, is refused (the semi-definite
+/// path's eigenvalue tolerance let `R = -5e-324` through, and `Kf::update`
+/// on a subnormal prior then returned a posterior variance of -5e-324).
+#[test]
+fn a_negative_variance_is_refused_however_small() {
+    let tiny = -5e-324;
+    assert!(matches!(
+        LinearMeasurement::new(Matrix1x2::new(1.0, 0.0), Matrix1::new(tiny)),
+        Err(KalmanError::NotPositiveDefinite { .. })
+    ));
+    assert!(matches!(
+        LinearDynamics::new(Matrix2::identity(), Matrix2::new(1.0, 0.0, 0.0, tiny)),
+        Err(KalmanError::NotPositiveDefinite { .. })
+    ));
+    assert!(matches!(
+        Gaussian::new(Vector2::zeros(), Matrix2::new(tiny, 0.0, 0.0, 1.0)),
+        Err(KalmanError::NotPositiveDefinite { .. })
+    ));
+    assert!(matches!(
+        NoiseCovariance::new(Matrix1::new(tiny)),
+        Err(KalmanError::NotPositiveDefinite { .. })
+    ));
+    // zero stays a valid (degenerate) variance
+    assert!(LinearMeasurement::new(Matrix1x2::new(1.0, 0.0), Matrix1::new(0.0)).is_ok());
+}
+
+/// Every posterior a filter returns with `Ok` has no negative variance:
+/// subnormal and tiny priors and noises, where round-off reaches below
+/// zero, come back clamped to zero or as an error.
+#[test]
+fn posterior_variances_returned_with_ok_are_never_negative() {
+    // exact measurements (R = 0) of one component leave it 0 up to
+    // round-off, which reaches below zero for some priors
+    let scales = [
+        0.0, 5e-324, 1e-310, 1e-300, 1e-160, 1e-20, 0.1, 0.3, 0.7, 1.0, 1.7, 3.3, 1e20, 1e150,
+    ];
+    let mut checked = 0;
+    for &p0 in &scales {
+        for &r in &scales {
+            for &c in &[0.0, 0.5, 0.3, 0.999_999] {
+                let off = c * p0;
+                let Ok(prior) = Gaussian::new(
+                    Vector2::new(1.0, -1.0),
+                    Matrix2::new(p0, off, off, 2.0 * p0),
+                ) else {
+                    continue;
+                };
+                for row in [Matrix1x2::new(1.0, 1.0), Matrix1x2::new(1.0, 0.0)] {
+                    let Ok(h) = LinearMeasurement::new(row, Matrix1::new(r)) else {
+                        continue;
+                    };
+                    let z = Vector1::new(0.5);
+                    let updates = [
+                        Kf::default()
+                            .update(&prior, &h, Some(&z))
+                            .map(|u| u.posterior),
+                        Ukf::new(1.0, 2.0, 0.0)
+                            .unwrap()
+                            .update(&prior, &h, Some(&z))
+                            .map(|u| u.posterior),
+                    ];
+                    for u in updates.into_iter().flatten() {
+                        checked += 1;
+                        for i in 0..2 {
+                            let v = u.cov()[(i, i)];
+                            assert!(v >= 0.0, "p0 {p0:e}, r {r:e}, c {c}: variance {v:e}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(checked > 100, "{checked}");
+}
