@@ -443,14 +443,14 @@ impl<A: Options, B: Options> Options for (A, B) {
         } else {
             self.1.set(key, value)
         };
-        result.map_err(|e| with_keys(e, Self::keys()))
+        result.map_err(|e| __with_keys(e, Self::keys()))
     }
 
     fn validate(&self) -> Result<(), OptionError> {
         self.0
             .validate()
             .and_then(|()| self.1.validate())
-            .map_err(|e| with_keys(e, Self::keys()))
+            .map_err(|e| __with_keys(e, Self::keys()))
     }
 }
 
@@ -485,14 +485,10 @@ pub fn __check_unique(name: &str, specs: &[Spec]) {
     }
 }
 
-/// `e` listing `valid` as the valid keys.
+/// `e` listing `valid` as the valid keys (the tuple of two option sets and
+/// `options!` groups).
 #[doc(hidden)]
 pub fn __with_keys(e: OptionError, valid: String) -> OptionError {
-    with_keys(e, valid)
-}
-
-/// `e` listing `valid` as the valid keys.
-fn with_keys(e: OptionError, valid: String) -> OptionError {
     match e {
         OptionError::UnknownKey { key, .. } => OptionError::UnknownKey { key, valid },
         OptionError::BadValue {
