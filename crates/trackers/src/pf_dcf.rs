@@ -502,9 +502,12 @@ impl PfDcfCore {
         };
         for j in 0..g {
             for i in 0..g {
-                let wc = (
-                    (centre.0 + (i as f64 - half) * stride.0).clamp(0.0, self.frame.0 - 1.0),
-                    (centre.1 + (j as f64 - half) * stride.1).clamp(0.0, self.frame.1 - 1.0),
+                let wc = in_frame(
+                    (
+                        centre.0 + (i as f64 - half) * stride.0,
+                        centre.1 + (j as f64 - half) * stride.1,
+                    ),
+                    self.frame,
                 );
                 for l in 0..nl {
                     let resp = self.dcf.detect(wc, r.levels[l].exp())?;
@@ -542,10 +545,7 @@ impl PfDcfCore {
     /// peak is what tracking would see. Returns the peak, APCE and the
     /// refined position.
     fn second_look(&mut self, at: (f64, f64), ls: f64) -> Result<Best> {
-        let at = (
-            at.0.clamp(0.0, self.frame.0 - 1.0),
-            at.1.clamp(0.0, self.frame.1 - 1.0),
-        );
+        let at = in_frame(at, self.frame);
         let resp = self.dcf.detect(at, ls.exp())?;
         self.diagnostics.responses += 1;
         Ok(Best {
@@ -554,6 +554,11 @@ impl PfDcfCore {
             at: (at.0 + resp.dx, at.1 + resp.dy),
         })
     }
+}
+
+/// `p` moved into a frame of `(width, height)` pixels (0-based centres).
+fn in_frame(p: (f64, f64), frame: (f64, f64)) -> (f64, f64) {
+    (p.0.clamp(0.0, frame.0 - 1.0), p.1.clamp(0.0, frame.1 - 1.0))
 }
 
 /// The strongest middle-scale response of a frame.
@@ -629,10 +634,7 @@ impl TrackerCore for PfDcfCore {
         } else {
             (predicted[0], predicted[1], predicted[2])
         };
-        let centre = (
-            px.clamp(0.0, self.frame.0 - 1.0),
-            py.clamp(0.0, self.frame.1 - 1.0),
-        );
+        let centre = in_frame((px, py), self.frame);
         let best = self.respond(centre, pl, wide)?;
         // while lost, a centred second look at the grid's best peak decides
         // re-acquisition: when the gate would learn it, the particles
