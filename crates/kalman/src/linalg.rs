@@ -686,20 +686,167 @@ pub(crate) fn chol_downdate<const D: usize>(
     Ok(())
 }
 
-/// `L' = tria([L, A])`: the lower-triangular factor of `L L^T + A A^T`, the
-/// `R^T` of a QR factorisation of `[L, A]^T`, formed column by column of `A`
-/// with Givens rotations ([`chol_update`]): `K` rank-1 updates of `D^2 / 2`
-/// rotations each, the operation count of a Householder QR of the `(D + K)
-/// x D` stack, with no stacked matrix (whose size `D + K` a const generic
-/// cannot name on stable Rust) and no allocation.
+/// The columns a triangularisation folds into a factor: three blocks side
+/// by side, `[A1, A2, A3]` with `R` rows (the width `K1 + K2 + K3` cannot
+/// be a const generic expression on stable Rust; an unused block has width
+/// 0 and costs nothing).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Cols<const R: usize, const K1: usize, const K2: usize, const K3: usize> {
+    pub(crate) a1: SMatrix<f64, R, K1>,
+    pub(crate) a2: SMatrix<f64, R, K2>,
+    pub(crate) a3: SMatrix<f64, R, K3>,
+}
+
+/// One row of a [`Cols`].
+#[derive(Clone, Copy)]
+struct ColsRow<const K1: usize, const K2: usize, const K3: usize> {
+    r1: [f64; K1],
+    r2: [f64; K2],
+    r3: [f64; K3],
+}
+
+impl<const K1: usize, const K2: usize, const K3: usize> ColsRow<K1, K2, K3> {
+    /// The squared norm, block sums in parallel.
+    #[inline(always)]
+    fn norm_sq(&self) -> f64 {
+        block_dot(&self.r1, &self.r1)
+            + block_dot(&self.r2, &self.r2)
+            + block_dot(&self.r3, &self.r3)
+    }
+}
+
+/// `a . b` (`0` for `K = 0`) in two interleaved partial sums.
+#[inline(always)]
+fn block_dot<const K: usize>(a: &[f64; K], b: &[f64; K]) -> f64 {
+    if K == 0 {
+        return 0.0;
+    }
+    dot::<K>(|k| a[k] * b[k])
+}
+
+impl<const R: usize, const K1: usize> Cols<R, K1, 0, 0> {
+    /// One block.
+    #[inline(always)]
+    pub(crate) fn one(a1: SMatrix<f64, R, K1>) -> Self {
+        Self {
+            a1,
+            a2: SMatrix::zeros(),
+            a3: SMatrix::zeros(),
+        }
+    }
+}
+
+impl<const R: usize, const K1: usize, const K2: usize, const K3: usize> Cols<R, K1, K2, K3> {
+    #[inline(always)]
+    fn row(&self, i: usize) -> ColsRow<K1, K2, K3> {
+        ColsRow {
+            r1: std::array::from_fn(|k| self.a1[(i, k)]),
+            r2: std::array::from_fn(|k| self.a2[(i, k)]),
+            r3: std::array::from_fn(|k| self.a3[(i, k)]),
+        }
+    }
+
+    /// Row `i` dotted with `t`.
+    #[inline(always)]
+    fn dot_row(&self, i: usize, t: &ColsRow<K1, K2, K3>) -> f64 {
+        block_dot(&self.row(i).r1, &t.r1)
+            + block_dot(&self.row(i).r2, &t.r2)
+            + block_dot(&self.row(i).r3, &t.r3)
+    }
+
+    /// Row `i` minus `f t`.
+    #[inline(always)]
+    fn sub_row(&mut self, i: usize, f: f64, t: &ColsRow<K1, K2, K3>) {
+        for k in 0..K1 {
+            self.a1[(i, k)] -= f * t.r1[k];
+        }
+        for k in 0..K2 {
+            self.a2[(i, k)] -= f * t.r2[k];
+        }
+        for k in 0..K3 {
+            self.a3[(i, k)] -= f * t.r3[k];
+        }
+    }
+}
+
+/// The Householder reflection that folds a row `[x0, t]` of `[L, A]`
+/// (`x0 = L_rr >= 0`, the rest of the row of `L` zero, `t` the row of `A`,
+/// `s = |t|^2 > 0`) into `[sigma, 0]`, `sigma = |[x0, t]|`: with
+/// `v = [x0 - sigma, t]` and `H = I - 2 v v^T / v^T v`, another row
+/// `[c, a]` (`d = a . t`) becomes `[(x0 c + d) / sigma, a - f t]` with
+/// `f = ((x0 + sigma) d / s - c) / sigma`. The forms avoid the cancellation
+/// of `x0 - sigma` (`= -s / (x0 + sigma)`), `1 / s` is computed beside the
+/// square root, and the diagonal comes out non-negative.
+#[derive(Clone, Copy)]
+struct Reflector {
+    x0: f64,
+    inv_sigma: f64,
+    k: f64,
+}
+
+impl Reflector {
+    /// The reflection and `sigma`.
+    #[inline(always)]
+    fn new(x0: f64, s: f64) -> (Self, f64) {
+        let inv_s = 1.0 / s;
+        let sigma = (x0 * x0 + s).sqrt();
+        let inv_sigma = 1.0 / sigma;
+        (
+            Self {
+                x0,
+                inv_sigma,
+                k: (x0 + sigma) * inv_s,
+            },
+            sigma,
+        )
+    }
+
+    /// The new `L` entry of a row whose entry was `c` and whose `A` row
+    /// dotted with `t` is `d`, and the multiple `f` of `t` to subtract
+    /// from that row.
+    #[inline(always)]
+    fn apply(&self, c: f64, d: f64) -> (f64, f64) {
+        (
+            (self.x0 * c + d) * self.inv_sigma,
+            (self.k * d - c) * self.inv_sigma,
+        )
+    }
+}
+
+/// `L' = tria([L, A])`: the lower-triangular factor (non-negative
+/// diagonal) of `L L^T + A A^T`, the `R^T` of a QR factorisation of
+/// `[L, A]^T`, for a lower-triangular `L` with a non-negative diagonal, by
+/// Householder reflections ([`JointFactor::tria`] with no measurement
+/// block): one square root and two divisions per row of `L`, where Givens
+/// rotations take one of each per entry of `A`.
 #[inline(always)]
 pub(crate) fn tria_into<const D: usize, const K: usize>(
     l: &mut SMatrix<f64, D, D>,
     a: &SMatrix<f64, D, K>,
 ) {
-    for j in 0..K {
-        chol_update(l, a.column(j).into_owned());
-    }
+    tria_cols(l, Cols::one(*a));
+}
+
+/// [`tria_into`] with the columns of `A` in blocks.
+#[inline(always)]
+pub(crate) fn tria_cols<const D: usize, const K1: usize, const K2: usize, const K3: usize>(
+    l: &mut SMatrix<f64, D, D>,
+    a: Cols<D, K1, K2, K3>,
+) {
+    let mut joint = JointFactor::<0, D> {
+        c: SMatrix::zeros(),
+        b: SMatrix::zeros(),
+        a: *l,
+    };
+    joint.tria(
+        Cols::<0, K1, K2, K3> {
+            a1: SMatrix::zeros(),
+            a2: SMatrix::zeros(),
+            a3: SMatrix::zeros(),
+        },
+        a,
+    );
+    *l = joint.a;
 }
 
 /// A lower-triangular factor `[[C, 0], [B, A]]` of a joint `(M + N) x (M +
@@ -728,31 +875,51 @@ impl<const M: usize, const N: usize> JointFactor<M, N> {
         }
     }
 
-    /// Rank-1 update with `[vy; vx]`, as [`chol_update`].
+    /// Folds the columns `[Y; X]` (`Y` the measurement rows, `X` the
+    /// state rows) into the factor: `[[C, 0], [B, A]]` becomes the
+    /// lower-triangular factor of `J J^T + [Y; X] [Y; X]^T`, by Householder
+    /// reflections row by row (see [`tria_into`]); the diagonals of `C` and
+    /// `A` must be non-negative, and stay so.
     #[inline(always)]
-    pub(crate) fn update(&mut self, mut vy: SVector<f64, M>, mut vx: SVector<f64, N>) {
-        for k in 0..M {
-            let xk = vy[k];
-            if xk == 0.0 {
+    pub(crate) fn tria<const K1: usize, const K2: usize, const K3: usize>(
+        &mut self,
+        mut y: Cols<M, K1, K2, K3>,
+        mut x: Cols<N, K1, K2, K3>,
+    ) {
+        for r in 0..M {
+            let t = y.row(r);
+            let s = t.norm_sq();
+            // a zero row of `Y` leaves the factor as it is (NaN passes on)
+            if s == 0.0 {
                 continue;
             }
-            let lkk = self.c[(k, k)];
-            let r = (lkk * lkk + xk * xk).sqrt();
-            let inv = 1.0 / r;
-            let (c, s) = (lkk * inv, xk * inv);
-            self.c[(k, k)] = r;
-            for i in (k + 1)..M {
-                let (a, b) = (self.c[(i, k)], vy[i]);
-                self.c[(i, k)] = c * a + s * b;
-                vy[i] = c * b - s * a;
+            let (h, sigma) = Reflector::new(self.c[(r, r)], s);
+            self.c[(r, r)] = sigma;
+            for j in (r + 1)..M {
+                let (c, f) = h.apply(self.c[(j, r)], y.dot_row(j, &t));
+                self.c[(j, r)] = c;
+                y.sub_row(j, f, &t);
             }
             for i in 0..N {
-                let (a, b) = (self.b[(i, k)], vx[i]);
-                self.b[(i, k)] = c * a + s * b;
-                vx[i] = c * b - s * a;
+                let (c, f) = h.apply(self.b[(i, r)], x.dot_row(i, &t));
+                self.b[(i, r)] = c;
+                x.sub_row(i, f, &t);
             }
         }
-        chol_update(&mut self.a, vx);
+        for r in 0..N {
+            let t = x.row(r);
+            let s = t.norm_sq();
+            if s == 0.0 {
+                continue;
+            }
+            let (h, sigma) = Reflector::new(self.a[(r, r)], s);
+            self.a[(r, r)] = sigma;
+            for j in (r + 1)..N {
+                let (c, f) = h.apply(self.a[(j, r)], x.dot_row(j, &t));
+                self.a[(j, r)] = c;
+                x.sub_row(j, f, &t);
+            }
+        }
     }
 
     /// Rank-1 downdate with `[vy; vx]`, as [`chol_downdate`].
@@ -1045,6 +1212,28 @@ mod tests {
     }
 
     #[test]
+    fn tria_of_a_singular_factor_and_zero_rows() {
+        // a zero row of A leaves its pivot at 0; the next row is folded in
+        let mut l = Matrix2::zeros();
+        tria_into(
+            &mut l,
+            &nalgebra::Matrix2x3::new(0.0, 0.0, 0.0, 1.0, 2.0, 0.0),
+        );
+        assert_eq!(l, Matrix2::new(0.0, 0.0, 0.0, 5f64.sqrt()));
+        // a rank-1 A onto a zero factor: L L^T = A A^T, diagonal >= 0
+        let a = nalgebra::Matrix2x1::new(-3.0, 4.0);
+        let mut l = Matrix2::zeros();
+        tria_into(&mut l, &a);
+        assert!((l * l.transpose() - a * a.transpose()).amax() < 1e-14);
+        assert!(l[(0, 0)] >= 0.0 && l[(1, 1)] >= 0.0 && l[(0, 1)] == 0.0);
+        // a NaN column gives a NaN factor (reported by the filters), not a
+        // finite wrong one
+        let mut l = Matrix2::identity();
+        tria_into(&mut l, &nalgebra::Matrix2x1::new(f64::NAN, 1.0));
+        assert!(l.iter().any(|x| x.is_nan()));
+    }
+
+    #[test]
     fn triangular_solves() {
         let l = chol4(&spd4(2));
         let b = nalgebra::Matrix4x2::new(1.0, 2.0, -1.0, 0.5, 3.0, 0.0, 0.25, -2.0);
@@ -1059,13 +1248,33 @@ mod tests {
         });
         let joint = w * w.transpose();
         let mut jf = JointFactor::<2, 4>::new(nalgebra::Matrix2::identity() * 0.5);
-        for j in 0..9 {
-            let col = w.column(j);
-            jf.update(
-                col.fixed_rows::<2>(0).into_owned(),
-                col.fixed_rows::<4>(2).into_owned(),
-            );
-        }
+        // the nine columns in blocks of 4, 3 and 2
+        let cols = |r0: usize, rows: usize| {
+            let block = |c0: usize, k: usize| w.view((r0, c0), (rows, k)).clone_owned();
+            (block(0, 4), block(4, 3), block(7, 2))
+        };
+        let (y1, y2, y3) = cols(0, 2);
+        let (x1, x2, x3) = cols(2, 4);
+        jf.tria(
+            Cols::<2, 4, 3, 2> {
+                a1: y1.fixed_view::<2, 4>(0, 0).into_owned(),
+                a2: y2.fixed_view::<2, 3>(0, 0).into_owned(),
+                a3: y3.fixed_view::<2, 2>(0, 0).into_owned(),
+            },
+            Cols::<4, 4, 3, 2> {
+                a1: x1.fixed_view::<4, 4>(0, 0).into_owned(),
+                a2: x2.fixed_view::<4, 3>(0, 0).into_owned(),
+                a3: x3.fixed_view::<4, 2>(0, 0).into_owned(),
+            },
+        );
+        assert!(jf.c.upper_triangle() == nalgebra::Matrix2::from_diagonal(&jf.c.diagonal()));
+        assert!(jf.a.upper_triangle() == nalgebra::Matrix4::from_diagonal(&jf.a.diagonal()));
+        assert!(
+            jf.c.diagonal()
+                .iter()
+                .chain(jf.a.diagonal().iter())
+                .all(|&d| d > 0.0)
+        );
         let s = joint.fixed_view::<2, 2>(0, 0) + nalgebra::Matrix2::identity() * 0.25;
         let pxy = joint.fixed_view::<4, 2>(2, 0).into_owned();
         let p = joint.fixed_view::<4, 4>(2, 2).into_owned();
@@ -1079,7 +1288,7 @@ mod tests {
             nalgebra::Vector2::new(0.3, -0.2),
             nalgebra::Vector4::new(1.0, 0.0, -0.5, 2.0),
         );
-        jf.update(vy, vx);
+        jf.tria(Cols::one(vy), Cols::one(vx));
         jf.downdate(vy, vx, "S", "P", Step::Update).unwrap();
         assert!((jf.c - before.c).amax() < 1e-12);
         assert!((jf.b - before.b).amax() < 1e-12);

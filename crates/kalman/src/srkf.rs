@@ -16,7 +16,7 @@ use crate::srukf::{SqrtGaussian, SqrtUpdate, joint_posterior};
 /// so the covariance is positive semi-definite by construction.
 ///
 /// - predict: `x = F x`, `L' = tria([F L, sqrt(Q)])` (the factor of
-///   `F P F^T + Q`, by Givens rotations; no `F P F^T` is formed);
+///   `F P F^T + Q`, by Householder reflections; no `F P F^T` is formed);
 /// - update: the triangularisation of `[[sqrt(R), H L], [0, L]]` is
 ///   `[[S_y, 0], [U, L+]]` with `S_y S_y^T = S = H P H^T + R`, the gain
 ///   `K = U S_y^{-1}` and `L+ L+^T = P - K S K^T`; the mean is
@@ -96,10 +96,7 @@ impl SrKf {
             "measurement noise R",
             step,
         )?);
-        let hl = linalg::mul(h, l);
-        for j in 0..N {
-            joint.update(hl.column(j).into_owned(), l.column(j).into_owned());
-        }
+        joint.tria(linalg::Cols::one(linalg::mul(h, l)), linalg::Cols::one(*l));
         let residual = z - linalg::mul(h, prior.mean());
         joint_posterior(&joint, prior.mean(), residual, step)
     }

@@ -9,9 +9,11 @@
 //! propagated central point, `d = W_i sum dX_i`:
 //!
 //! - mean `x = X_0 + d`;
-//! - factor `L' = tria([sqrt(W_i) dX_1 .. sqrt(W_i) dX_2n, sqrt(Q)])`
-//!   (the transposed `R` of a QR factorisation), then a rank-1 Cholesky
-//!   update (`g > 0`) or downdate (`g < 0`) with `sqrt(|g|) d`.
+//! - factor `L' = tria([sqrt(W_i) dX_1 .. sqrt(W_i) dX_2n, sqrt(Q), sqrt(g) d])`
+//!   for `g >= 0` (the transposed `R` of a QR factorisation, by Householder
+//!   reflections: one square root per row, not one per entry as Givens
+//!   rotations take); for `g < 0` the same without the last column, then a
+//!   rank-1 Cholesky downdate with `sqrt(-g) d`.
 //!
 //! This is van der Merwe and Wan's time update written about the central
 //! point instead of the mean: `sum_i Wc_i (X_i - x)(X_i - x)^T = W_i sum
@@ -23,13 +25,14 @@
 //!
 //! The measurement update triangularises the JOINT deviations of `[y; x]`
 //! (the array form of square-root filtering, Morf and Kailath 1975):
-//! `tria([[sqrt(R), sqrt(W_i) dY_i], [0, sqrt(W_i) dX_i]])` (then the rank-1
-//! term `g [e; d][e; d]^T`) is `[[S_y, 0], [U, L+]]` with `S_y S_y^T = S`,
+//! `tria([[sqrt(R), sqrt(W_i) dY_i], [0, sqrt(W_i) dX_i]])` (with the rank-1
+//! term `g [e; d][e; d]^T`: one more column for `g >= 0`, a downdate
+//! after it for `g < 0`) is `[[S_y, 0], [U, L+]]` with `S_y S_y^T = S`,
 //! `U = P_xy S_y^{-T}` (so the gain is `K = U S_y^{-1}` and `K S_y = U`)
 //! and `L+ L+^T = P - U U^T`, the posterior. The mean is
 //! `x + U (S_y^{-1} nu)`. This is the matrix van der Merwe and Wan's update
 //! forms by `M` rank-1 downdates of `L` with the columns of `U`, by
-//! rotations alone: the downdates subtract `U U^T` from `P`, and with a
+//! orthogonal transformations alone: the downdates subtract `U U^T` from `P`, and with a
 //! large dynamic range (a variance of 1e8 measured with variance 1e-10)
 //! they cancel below round-off exactly where the UKF's `P - K S K^T` does
 //! (measured: they fail with a pivot `<= 0` on the test of
@@ -292,10 +295,20 @@ impl SrUkf {
         let d = sdx * wt.wi;
         let mean = space.boxplus(&xf0, &d);
         let sw = wt.wi.sqrt();
+        // one triangularisation of [sqrt(Q), sqrt(W_i) dX, sqrt(g) d] when
+        // g >= 0; a negative g is a downdate after it
         let mut l = sq;
-        linalg::tria_into(&mut l, &(plus * sw));
-        linalg::tria_into(&mut l, &(minus * sw));
-        Self::mean_shift_term(&mut l, wt.g, &d, "predicted covariance", step)?;
+        linalg::tria_cols(
+            &mut l,
+            linalg::Cols {
+                a1: plus * sw,
+                a2: minus * sw,
+                a3: d * wt.g.max(0.0).sqrt(),
+            },
+        );
+        if wt.g < 0.0 {
+            Self::mean_shift_term(&mut l, wt.g, &d, "predicted covariance", step)?;
+        }
         linalg::check_finite_vec(&mean, "predicted mean", step)?;
         linalg::check_finite_mat(&l, "predicted covariance factor", step)?;
         Ok(SqrtGaussian { mean, l })
@@ -303,7 +316,7 @@ impl SrUkf {
 
     /// Measurement update with sigma points drawn from `prior`'s factor:
     /// `S_y`, the gain's factor `U = P_xy S_y^{-T}` and the posterior factor
-    /// from one triangularisation (QR by Givens rotations) of the weighted
+    /// from one triangularisation (QR by Householder reflections) of the weighted
     /// joint deviations of measurement and state and `sqrt(R)` (see the
     /// module documentation), the mean by one triangular solve.
     ///
@@ -347,6 +360,10 @@ impl SrUkf {
         let mut joint = linalg::JointFactor::<M, N>::new(sr);
         let mut sdx = SVector::<f64, N>::repeat(-0.0);
         let mut sdy = SVector::<f64, M>::repeat(-0.0);
+        let mut yp = SMatrix::<f64, M, N>::zeros();
+        let mut ym = SMatrix::<f64, M, N>::zeros();
+        let mut xp_cols = SMatrix::<f64, N, N>::zeros();
+        let mut xm_cols = SMatrix::<f64, N, N>::zeros();
         for j in 0..N {
             let (xp, xm) = linalg::spread(m, &sl, j);
             let (dxp, dxm) = (xp - m, xm - m);
@@ -356,17 +373,32 @@ impl SrUkf {
             sdx += dxm;
             sdy += dyp;
             sdy += dym;
-            joint.update(dyp * sw, dxp * sw);
-            joint.update(dym * sw, dxm * sw);
+            yp.set_column(j, &dyp);
+            ym.set_column(j, &dym);
+            xp_cols.set_column(j, &dxp);
+            xm_cols.set_column(j, &dxm);
         }
         let d = sdx * wt.wi;
         let e = sdy * wt.wi;
         let y_mean = space.boxplus(&y0, &e);
         linalg::check_finite_vec(&y_mean, "sigma-point mean of h", step)?;
         let gs = wt.g.abs().sqrt();
-        if wt.g >= 0.0 {
-            joint.update(e * gs, d * gs);
-        } else {
+        // one triangularisation of the joint columns, with the rank-1 term
+        // when g >= 0; a negative g is a downdate after it
+        let ge = if wt.g >= 0.0 { gs } else { 0.0 };
+        joint.tria(
+            linalg::Cols {
+                a1: yp * sw,
+                a2: ym * sw,
+                a3: e * ge,
+            },
+            linalg::Cols {
+                a1: xp_cols * sw,
+                a2: xm_cols * sw,
+                a3: d * ge,
+            },
+        );
+        if wt.g < 0.0 {
             joint.downdate(
                 e * gs,
                 d * gs,
