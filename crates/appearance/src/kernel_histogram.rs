@@ -1057,9 +1057,12 @@ mod tests {
             outer in 1.01f64..3.0,
             step in 1usize..5,
             integer_edges in proptest::bool::ANY,
+            wide in proptest::bool::ANY,
         ) {
             let img = bayestrack_testkit::noise(36, 28, 3, seed);
-            let binning = HsvBinning::perez();
+            // wide: 299 bins, more than the unchecked table's 256 (the
+            // checked loop)
+            let binning = if wide { HsvBinning::new(17, 10, 0.1, 0.2).unwrap() } else { HsvBinning::perez() };
             let mut map = BinMap::new();
             binning.bin_map_into(img.view(), Rect::new(3, 2, 30, 24), &mut map).unwrap();
             // integer_edges: the hole's edges on pixel centres
@@ -1093,9 +1096,12 @@ mod tests {
             b in 0.3f64..25.0,
             step in 1usize..5,
             on_grid in 0u8..3,
+            wide in proptest::bool::ANY,
         ) {
             let img = bayestrack_testkit::noise(36, 28, 3, seed);
-            let binning = HsvBinning::perez();
+            // wide: 299 bins, more than the unchecked table's 256 (the
+            // checked loop)
+            let binning = if wide { HsvBinning::new(17, 10, 0.1, 0.2).unwrap() } else { HsvBinning::perez() };
             let mut map = BinMap::new();
             binning.bin_map_into(img.view(), Rect::new(3, 2, 30, 24), &mut map).unwrap();
             // on_grid: centres on pixel centres or halfway, integer axes
