@@ -39,9 +39,10 @@ pub struct HsvBinning {
     s_min: f32,
     v_min: f32,
     /// Bin of each RGB colour quantised to 5 bits per channel.
-    rgb_lut: Vec<u16>,
+    /// (A fixed array: a 15-bit index needs no bounds test.)
+    rgb_lut: Box<[u16; 1 << 15]>,
     /// Bin of each gray level (always a value bin).
-    gray_lut: Vec<u16>,
+    gray_lut: Box<[u16; 256]>,
 }
 
 impl HsvBinning {
@@ -82,16 +83,16 @@ impl HsvBinning {
             v_bins,
             s_min,
             v_min,
-            rgb_lut: Vec::new(),
-            gray_lut: Vec::new(),
+            rgb_lut: Box::new([0; 1 << 15]),
+            gray_lut: Box::new([0; 256]),
         };
-        b.gray_lut = (0..256u32).map(|v| b.value_bin(v as f32 / 255.0)).collect();
-        b.rgb_lut = (0..1u32 << 15)
-            .map(|q| {
-                let level = |s: u32| (((q >> s) & 31) << 3 | 4) as u8;
-                b.bin_exact(Rgb::new(level(10), level(5), level(0)))
-            })
-            .collect();
+        for v in 0..256u32 {
+            b.gray_lut[v as usize] = b.value_bin(v as f32 / 255.0);
+        }
+        for q in 0..1u32 << 15 {
+            let level = |s: u32| (((q >> s) & 31) << 3 | 4) as u8;
+            b.rgb_lut[q as usize] = b.bin_exact(Rgb::new(level(10), level(5), level(0)));
+        }
         Ok(b)
     }
 
@@ -159,15 +160,23 @@ impl HsvBinning {
         }
         check_window("bin map", rect, frame.width(), frame.height())?;
         map.rect = rect;
+        map.limit = self.len();
         map.bins.clear();
-        map.bins.reserve(rect.area());
-        for y in rect.y..rect.bottom() {
+        map.bins.resize(rect.area(), 0);
+        if rect.width == 0 {
+            return Ok(());
+        }
+        let rows = map.bins.chunks_exact_mut(rect.width);
+        for (y, out) in (rect.y..rect.bottom()).zip(rows) {
             let row = &frame.row(y)[rect.x * ch..rect.right() * ch];
             if ch == 1 {
-                map.bins.extend(row.iter().map(|&v| self.bin_gray(v)));
+                for (o, &v) in out.iter_mut().zip(row) {
+                    *o = self.bin_gray(v);
+                }
             } else {
-                map.bins
-                    .extend(row.chunks_exact(3).map(|p| self.bin_rgb(p[0], p[1], p[2])));
+                for (o, p) in out.iter_mut().zip(row.chunks_exact(3)) {
+                    *o = self.bin_rgb(p[0], p[1], p[2]);
+                }
             }
         }
         Ok(())
@@ -179,6 +188,21 @@ impl HsvBinning {
 pub struct BinMap {
     rect: Rect,
     bins: Vec<u16>,
+    /// Every bin of `bins` is below this (the binning's bin count).
+    limit: usize,
+}
+
+/// Most bins of the unchecked fast paths of [`KernelHistogram`]: their
+/// tables are fixed arrays indexed by a `u8`, so no bounds test.
+const FAST_BINS: usize = 256;
+
+impl BinMap {
+    /// Whether every bin of the map is below `bins` and `bins` fits the
+    /// fixed tables: a histogram of `bins` bins may then count it without
+    /// a bin check per pixel (the bin as a `u8` is the bin).
+    fn fits(&self, bins: usize) -> bool {
+        self.limit <= bins && bins <= FAST_BINS
+    }
 }
 
 impl BinMap {
@@ -330,6 +354,15 @@ impl KernelHistogram {
             .iter()
             .enumerate()
             .fold(0, |m, (k, &d)| if d < dx2[m] { k } else { m });
+        if map.fits(nbins) && unimodal(dx2, kmin) {
+            let rows = (y_start..=y_hi).step_by(step).map(|y| {
+                let dy2 = ((y as f64 - cy).powi(2) * ib2) as f32;
+                ((y as usize - r.y) * r.width + x_start as usize - r.x, dy2)
+            });
+            self.total = ellipse_fast(&map.bins, rows, dx2, kmin, step, &mut self.weights);
+            self.finish();
+            return Ok(());
+        }
         let mut total = 0f32;
         for y in (y_start..=y_hi).step_by(step) {
             let dy2 = ((y as f64 - cy).powi(2) * ib2) as f32;
@@ -463,9 +496,42 @@ impl KernelHistogram {
         // stores. Counting is exact and order-free, so the weights equal
         // the `+= 1.0` of a pixel-by-pixel loop: `min(count, 2^24)`, where
         // adding one in `f32` stops.
-        self.counts.clear();
-        self.counts.resize(nbins, [0; 4]);
-        let counts = &mut self.counts[..];
+        if self.counts.len() < nbins.max(FAST_BINS) {
+            self.counts.resize(nbins.max(FAST_BINS), [0; 4]);
+        }
+        self.counts[..nbins].fill([0; 4]);
+        if map.fits(nbins) {
+            // No bin check: every bin of the map is a bin of the table.
+            let table: &mut [[u32; 4]; FAST_BINS] = (&mut self.counts[..FAST_BINS])
+                .try_into()
+                .expect("the table has FAST_BINS rows");
+            let mut count = 0usize;
+            for y in (y_lo..=y_hi).step_by(step) {
+                let yf = y as f64;
+                let (ka, kb) = match skip {
+                    Some((y0, y1, ka, kb)) if yf >= y0 && yf <= y1 => (ka, kb),
+                    _ => (n, n),
+                };
+                let start = (y as usize - r.y) * r.width + x_lo as usize - r.x;
+                let row = &map.bins[start..start + (n - 1) * step + 1];
+                if step == 1 {
+                    count_unchecked(table, &row[..ka]);
+                    if kb < n {
+                        count_unchecked(table, &row[kb..]);
+                    }
+                } else {
+                    for (j, &b) in row.iter().step_by(step).enumerate() {
+                        if j < ka || j >= kb {
+                            table[usize::from(b as u8)][j & 3] += 1;
+                        }
+                    }
+                }
+                count += ka + (n - kb);
+            }
+            self.total_counts(nbins, count);
+            return Ok(());
+        }
+        let counts = &mut self.counts[..nbins];
         let mut count = 0usize;
         for y in (y_lo..=y_hi).step_by(step) {
             let yf = y as f64;
@@ -511,13 +577,28 @@ impl KernelHistogram {
                 count += span.1 - span.0;
             }
         }
-        for (w, c) in self.weights.iter_mut().zip(counts.iter()) {
-            let c = c.iter().map(|&v| u64::from(v)).sum::<u64>();
-            *w = c.min(1 << 24) as f32;
+        self.total_counts(nbins, count);
+        Ok(())
+    }
+
+    /// The weights from the integer tables of [`KernelHistogram::uniform`]
+    /// and `count` pixels, normalised.
+    fn total_counts(&mut self, nbins: usize, count: usize) {
+        let counts = &self.counts[..nbins];
+        if count < 1 << 24 {
+            // Every bin's count is below 2^24: its four parts add in `u32`
+            // and convert to `f32` exactly, no clamp (vector lanes).
+            for (w, c) in self.weights.iter_mut().zip(counts) {
+                *w = (c[0] + c[1] + c[2] + c[3]) as f32;
+            }
+        } else {
+            for (w, c) in self.weights.iter_mut().zip(counts) {
+                let c = c.iter().map(|&v| u64::from(v)).sum::<u64>();
+                *w = c.min(1 << 24) as f32;
+            }
         }
         self.total = count as f32;
         self.finish();
-        Ok(())
     }
 
     /// The background weights of Ning, Zhang, Zhang and Wu ("Robust
@@ -639,6 +720,91 @@ impl KernelHistogram {
             self.total = self.total.max(1.0);
         }
         Ok(())
+    }
+}
+
+/// Whether `dx2` does not rise up to `kmin` and does not fall after it
+/// (false with a NaN): the span of a row is then exactly the entries below
+/// its threshold, and every one of them has a positive weight.
+fn unimodal(dx2: &[f32], kmin: usize) -> bool {
+    dx2[..=kmin].windows(2).all(|p| p[0] >= p[1]) && dx2[kmin..].windows(2).all(|p| p[0] <= p[1])
+}
+
+/// [`KernelHistogram::ellipse`] on a map whose bins all fit `weights`
+/// (`BinMap::fits`) with unimodal column offsets (`unimodal`): `rows`
+/// gives each sampled row's start in `bins` and its `dy2`. The same
+/// weights added in the same order as the checked loop (so the same bits),
+/// into a fixed table with no bin check; each row's span is found by
+/// moving the previous row's ends (the threshold `1 - dy2` rises, then
+/// falls). Returns the total weight.
+fn ellipse_fast(
+    bins: &[u16],
+    rows: impl Iterator<Item = (usize, f32)>,
+    dx2: &[f32],
+    kmin: usize,
+    step: usize,
+    weights: &mut [f32],
+) -> f32 {
+    let mut acc = [0f32; FAST_BINS];
+    let mut total = 0f32;
+    let (mut lo, mut hi) = (kmin + 1, kmin);
+    for (start, dy2) in rows {
+        // A NaN row is skipped too: the checked loop refuses its (NaN)
+        // weights one by one.
+        if dy2.is_nan() || dy2 >= 1.0 {
+            continue;
+        }
+        let t = 1.0 - dy2;
+        // lo: the first k <= kmin with dx2[k] < t (kmin + 1 if none)
+        while lo > 0 && dx2[lo - 1] < t {
+            lo -= 1;
+        }
+        while lo <= kmin && dx2[lo] >= t {
+            lo += 1;
+        }
+        // hi: the first k >= kmin with dx2[k] >= t (the length if none)
+        while hi > kmin && dx2[hi - 1] >= t {
+            hi -= 1;
+        }
+        while hi < dx2.len() && dx2[hi] < t {
+            hi += 1;
+        }
+        if lo >= hi {
+            continue;
+        }
+        let dxs = &dx2[lo..hi];
+        let first = start + lo * step;
+        if step == 1 {
+            for (&bin, &d) in bins[first..first + dxs.len()].iter().zip(dxs) {
+                let w = t - d;
+                acc[usize::from(bin as u8)] += w;
+                total += w;
+            }
+        } else {
+            for (&bin, &d) in bins[first..].iter().step_by(step).zip(dxs) {
+                let w = t - d;
+                acc[usize::from(bin as u8)] += w;
+                total += w;
+            }
+        }
+    }
+    weights.copy_from_slice(&acc[..weights.len()]);
+    total
+}
+
+/// Counts the bins of `row` into the four interleaved tables (pixel `j`
+/// into table `j % 4`), with no bin check (`BinMap::fits`).
+#[inline]
+fn count_unchecked(table: &mut [[u32; 4]; FAST_BINS], row: &[u16]) {
+    let mut quads = row.chunks_exact(4);
+    for q in &mut quads {
+        table[usize::from(q[0] as u8)][0] += 1;
+        table[usize::from(q[1] as u8)][1] += 1;
+        table[usize::from(q[2] as u8)][2] += 1;
+        table[usize::from(q[3] as u8)][3] += 1;
+    }
+    for &b in quads.remainder() {
+        table[usize::from(b as u8)][0] += 1;
     }
 }
 
@@ -891,9 +1057,12 @@ mod tests {
             outer in 1.01f64..3.0,
             step in 1usize..5,
             integer_edges in proptest::bool::ANY,
+            wide in proptest::bool::ANY,
         ) {
             let img = bayestrack_testkit::noise(36, 28, 3, seed);
-            let binning = HsvBinning::perez();
+            // wide: 299 bins, more than the unchecked table's 256 (the
+            // checked loop)
+            let binning = if wide { HsvBinning::new(17, 10, 0.1, 0.2).unwrap() } else { HsvBinning::perez() };
             let mut map = BinMap::new();
             binning.bin_map_into(img.view(), Rect::new(3, 2, 30, 24), &mut map).unwrap();
             // integer_edges: the hole's edges on pixel centres
@@ -927,9 +1096,12 @@ mod tests {
             b in 0.3f64..25.0,
             step in 1usize..5,
             on_grid in 0u8..3,
+            wide in proptest::bool::ANY,
         ) {
             let img = bayestrack_testkit::noise(36, 28, 3, seed);
-            let binning = HsvBinning::perez();
+            // wide: 299 bins, more than the unchecked table's 256 (the
+            // checked loop)
+            let binning = if wide { HsvBinning::new(17, 10, 0.1, 0.2).unwrap() } else { HsvBinning::perez() };
             let mut map = BinMap::new();
             binning.bin_map_into(img.view(), Rect::new(3, 2, 30, 24), &mut map).unwrap();
             // on_grid: centres on pixel centres or halfway, integer axes
