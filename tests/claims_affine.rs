@@ -158,3 +158,36 @@ fn not_reproduced_the_self_tuning_filter_uses_a_fifth_of_the_papers_particles_on
     let s = summary(Setting::Cock, Filter::Stpf);
     assert!(within(s.particles, 3.0, 10.0), "{s:?}");
 }
+
+#[test]
+fn particles_per_frame_within_their_bands_on_every_setting() {
+    // Paper 002 gives particles per frame (sec. 3.2-3.3, Fig. 8): HKPF
+    // 150 / 100 / 50 (fixed), the self-tuning filter 28.2 / 9.7 / 8.6,
+    // ISPF - / 13.2 / 15.5. Bands, each two-sided: HKPF's count is the
+    // paper's exactly; the self-tuning filter and ISPF within 25 % of
+    // the count measured at this commit (the runs are seeded, so the band
+    // is headroom for a change of code that keeps the filters, not for
+    // noise), and, where the paper gives a count and ours reproduces it,
+    // within half to twice the paper's.
+    let measured = [
+        // (setting, self-tuning, ISPF), measured
+        (Setting::Cock, 5.2, 9.9),
+        (Setting::Sylvester, 6.9, 10.5),
+        (Setting::Dudek, 6.8, 11.3),
+    ];
+    for (setting, stpf, ispf) in measured {
+        let [hkpf_paper, ispf_paper, stpf_paper] = setting.paper_particles();
+        let h = summary(setting, Filter::Hkpf);
+        assert_eq!(Some(h.particles), hkpf_paper, "{h:?}");
+        let s = summary(setting, Filter::Stpf);
+        assert!(within(s.particles, 0.75 * stpf, 1.25 * stpf), "{s:?}");
+        let i = summary(setting, Filter::Ispf);
+        assert!(within(i.particles, 0.75 * ispf, 1.25 * ispf), "{i:?}");
+        if setting != Setting::Cock {
+            // (Cock's 28.2 is not reproduced: see the test above)
+            let (sp, ip) = (stpf_paper.unwrap(), ispf_paper.unwrap());
+            assert!(within(s.particles, sp / 2.0, sp * 2.0), "{s:?}");
+            assert!(within(i.particles, ip / 2.0, ip * 2.0), "{i:?}");
+        }
+    }
+}
