@@ -161,12 +161,16 @@ fn sec31_the_or_point_cloud_tracks_when_eq9_sums_the_subtracted_pixels() {
 /// varies by about 1 px from run to run).
 const SKIN_RUNS: usize = 8;
 
+/// One frame of an OR-cloud run: the estimated centre, the true centre
+/// and the face's smaller side (px).
+type CloudFrame = ([f64; 2], [f64; 2], f64);
+
 /// The point cloud of sec. 3.1 (`N = 50`, eq. 9 over the subtracted
 /// pixels at `subtracted_threshold`) with balancing coefficient `lambda`
 /// through the tracking scene of `config`, run `r` on scene seed
 /// `scene_seed + r` with tracker seed `r` (the experiment's seeds): per
 /// run, the estimated centres and the true ones.
-fn or_cloud(config: &CondensationConfig, lambda: f64) -> Vec<Vec<([f64; 2], [f64; 2], f64)>> {
+fn or_cloud(config: &CondensationConfig, lambda: f64) -> Vec<Vec<CloudFrame>> {
     let scene = config.posed(WebcamScene {
         frames: config.frames,
         ..WebcamScene::default()
@@ -226,7 +230,7 @@ fn sec31_the_skin_term_of_eq9_moves_the_cloud_but_not_its_accuracy() {
     };
     let with = or_cloud(&config, 1.0 / 50.0);
     let without = or_cloud(&config, 0.0);
-    let score = |runs: &[Vec<([f64; 2], [f64; 2], f64)>]| {
+    let score = |runs: &[Vec<CloudFrame>]| {
         let (mut err, mut lost, mut n) = (0.0, 0usize, 0usize);
         for (e, t, side) in runs.iter().flatten() {
             let d = (e[0] - t[0]).hypot(e[1] - t[1]);
