@@ -18,6 +18,8 @@ use bayestrack_experiments::condensation::{
     SIDE_TRACKERS, TrackRun, run,
 };
 use bayestrack_experiments::driver::run_jobs;
+use bayestrack_experiments::scenes::{SceneStream, WebcamScene};
+use bayestrack_trackers::{CueSet, PointCloudConfig, PointCloudTracker, Tracker};
 
 fn result() -> &'static CondensationResult {
     static CELL: OnceLock<CondensationResult> = OnceLock::new();
@@ -115,8 +117,8 @@ fn sec31_the_or_point_cloud_tracks_when_eq9_sums_the_subtracted_pixels() {
     // Summed over the subtracted pixels (the default reading) the cloud
     // tracks the face; over the whole window (`or-raw`) the IFD of the
     // textured wall under the 30 px diffusion pulls it off in about half
-    // the frames. Measured (quick): subtracted 5.3 px, 0 % lost; raw
-    // 37.3 px, 49 % lost.
+    // the frames. Measured (quick, the turning face): subtracted 6.15 px,
+    // 0 % lost; raw 42.5 px, 55 % lost (upright: 5.3 px; 37.3 px, 49 %).
     let or = cell(Representation::Points, Cue::Or, 50);
     println!("{or:?}");
     assert!(or.centre >= 1.0 && or.centre <= 9.0, "{or:?}");
@@ -134,6 +136,127 @@ fn sec31_the_or_point_cloud_tracks_when_eq9_sums_the_subtracted_pixels() {
         raw[0]
     );
     assert!(raw[0].loss >= 0.3 && raw[0].loss <= 0.8, "{:?}", raw[0]);
+    // Each cue normalised over the set before the sum (`or-normalised`):
+    // the wall's IFD is back in every window and, with `lambda = 1/N`, the
+    // skin term weighs 1/N of the IFD's on average: the cloud wanders like
+    // the raw and the IFD-alone clouds. Measured: quick 28.8 px, 41 %
+    // lost (raw 42.5 px, 55 %); 8 quick runs (a probe of the trackers)
+    // normalised 23.5 px, 39 %; raw 32.3 px, 50 %; IFD alone 24.9 px, 45
+    // %. Bound: centre in [10, 60] px, lost in [15 %, 70 %].
+    let (norm, _) = grid_of(
+        &reading("or-normalised"),
+        &[key(Representation::Points, Cue::Or, 50)],
+        false,
+    );
+    println!("or-normalised: {:?}", norm[0]);
+    assert!(
+        norm[0].centre >= 10.0 && norm[0].centre <= 60.0,
+        "{:?}",
+        norm[0]
+    );
+    assert!(norm[0].loss >= 0.15 && norm[0].loss <= 0.7, "{:?}", norm[0]);
+}
+
+/// Runs of the skin-term claim (8 quick runs: one OR cloud's accuracy
+/// varies by about 1 px from run to run).
+const SKIN_RUNS: usize = 8;
+
+/// One frame of an OR-cloud run: the estimated centre, the true centre
+/// and the face's smaller side (px).
+type CloudFrame = ([f64; 2], [f64; 2], f64);
+
+/// The point cloud of sec. 3.1 (`N = 50`, eq. 9 over the subtracted
+/// pixels at `subtracted_threshold`) with balancing coefficient `lambda`
+/// through the tracking scene of `config`, run `r` on scene seed
+/// `scene_seed + r` with tracker seed `r` (the experiment's seeds): per
+/// run, the estimated centres and the true ones.
+fn or_cloud(config: &CondensationConfig, lambda: f64) -> Vec<Vec<CloudFrame>> {
+    let scene = config.posed(WebcamScene {
+        frames: config.frames,
+        ..WebcamScene::default()
+    });
+    (0..config.runs)
+        .map(|r| {
+            let mut stream = scene.stream(config.scene_seed + r as u64).unwrap();
+            let mut t = PointCloudTracker::new(
+                PointCloudConfig {
+                    cues: CueSet::OrSubtracted {
+                        lambda,
+                        threshold: config.subtracted_threshold,
+                    },
+                    ..PointCloudConfig::paper(50)
+                },
+                r as u64,
+            )
+            .unwrap();
+            let first = stream.next_frame().unwrap();
+            t.init(first.image.view(), first.truth.target().unwrap().bbox)
+                .unwrap();
+            let mut out = Vec::new();
+            while let Some(f) = stream.next_frame() {
+                let e = t.step(f.image.view()).unwrap();
+                let o = f.truth.target().unwrap();
+                let (x, y) = e.bbox.center();
+                let side = o.bbox.width.min(o.bbox.height);
+                out.push(([x - 1.0, y - 1.0], o.center0(), side));
+            }
+            out
+        })
+        .collect()
+}
+
+#[test]
+fn sec31_the_skin_term_of_eq9_moves_the_cloud_but_not_its_accuracy() {
+    // Sec. 3.1 (Fig. 2) weighs the cloud with "both subtracted images and
+    // skin colors": eq. 9's `lambda C` with `lambda = 1/N`. Over the
+    // subtracted pixels (the default reading) the skin term adds at most
+    // 1/N = 0.02 to a pixel whose IFD passes 0.05, and the subtracted
+    // pixels of the default scene are all the face's: with or without it
+    // (`lambda = 0`, the thresholded IFD alone) the cloud tracks equally
+    // well. Measured (8 quick runs): 5.63 px, 0 % lost with the skin term,
+    // 5.72 px, 0 % without; 4 runs of 150 frames 5.54 vs 5.47 px. It
+    // does not help in any other scene tried either (docs/reproduction.md:
+    // faster or slower face, no static skin distractors; with one or two
+    // moving non-skin boxes the cloud is lost in about half the frames
+    // either way, which run is lost decided by the random streams). What
+    // the term does do is move the weights, so the two clouds part: their
+    // estimates are 6.0 px apart per frame on average, as far as either is
+    // from the face. Bound: both track (0 % lost, centre in [1, 9] px),
+    // centres within 1 px of each other; the estimates 0.5-10 px apart on
+    // average (0 when the skin term is dropped: the mutation fails here).
+    let config = CondensationConfig {
+        runs: SKIN_RUNS,
+        ..CondensationConfig::quick()
+    };
+    let with = or_cloud(&config, 1.0 / 50.0);
+    let without = or_cloud(&config, 0.0);
+    let score = |runs: &[Vec<CloudFrame>]| {
+        let (mut err, mut lost, mut n) = (0.0, 0usize, 0usize);
+        for (e, t, side) in runs.iter().flatten() {
+            let d = (e[0] - t[0]).hypot(e[1] - t[1]);
+            err += d;
+            lost += usize::from(d > config.lost_fraction * side);
+            n += 1;
+        }
+        (err / n as f64, lost as f64 / n as f64)
+    };
+    let (cw, lw) = score(&with);
+    let (cwo, lwo) = score(&without);
+    let apart: Vec<f64> = with
+        .iter()
+        .flatten()
+        .zip(without.iter().flatten())
+        .map(|(a, b)| (a.0[0] - b.0[0]).hypot(a.0[1] - b.0[1]))
+        .collect();
+    let apart = apart.iter().sum::<f64>() / apart.len() as f64;
+    println!(
+        "OR with skin {cw:.2} px, lost {lw:.3}; without {cwo:.2} px, lost {lwo:.3}; \
+         estimates {apart:.2} px apart"
+    );
+    assert!((1.0..=9.0).contains(&cw) && lw == 0.0, "{cw} {lw}");
+    assert!((1.0..=9.0).contains(&cwo) && lwo == 0.0, "{cwo} {lwo}");
+    assert!((cw - cwo).abs() <= 1.0, "{cw} vs {cwo}");
+    assert!((0.5..=10.0).contains(&apart), "{apart}");
 }
 
 #[test]

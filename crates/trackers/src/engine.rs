@@ -153,6 +153,49 @@ impl<const D: usize> CueFilter<D> {
         states.iter_mut().for_each(&mut f);
     }
 
+    /// Adds `log_increments[i]` to particle `i`'s log weight and normalises
+    /// the weights: a measurement that needs the whole set before it can
+    /// weigh one particle (a cue normalised over the particles), applied
+    /// after a [`CueFilter::step`] with a flat cue. Returns the effective
+    /// sample size afterwards.
+    ///
+    /// # Errors
+    /// [`TrackerError::InvalidParameter`](crate::TrackerError::InvalidParameter)
+    /// when the increments are not one per particle or one is NaN or
+    /// `+inf`; [`TrackerError::Particle`](crate::TrackerError::Particle)
+    /// when every weight would be zero. The set is unchanged on error.
+    pub fn reweigh(&mut self, log_increments: &[f64]) -> Result<f64> {
+        let n = self.smc.set.len();
+        if log_increments.len() != n {
+            return Err(crate::TrackerError::InvalidParameter {
+                name: "log_increments",
+                value: log_increments.len() as f64,
+                reason: "must hold one increment per particle",
+            });
+        }
+        if let Some(&bad) = log_increments
+            .iter()
+            .find(|l| l.is_nan() || **l == f64::INFINITY)
+        {
+            return Err(crate::TrackerError::InvalidParameter {
+                name: "log_increments",
+                value: bad,
+                reason: "must be finite or -inf (zero likelihood)",
+            });
+        }
+        let saved = self.smc.set.log_weights().to_vec();
+        let (_, log_w) = self.smc.set.parts_mut();
+        for (l, d) in log_w.iter_mut().zip(log_increments) {
+            *l += d;
+        }
+        if let Err(e) = self.smc.set.normalize() {
+            let (_, log_w) = self.smc.set.parts_mut();
+            log_w.copy_from_slice(&saved);
+            return Err(e.into());
+        }
+        Ok(self.smc.set.ess())
+    }
+
     /// The configuration.
     pub fn filter(&self) -> &ParticleFilter {
         &self.smc.filter

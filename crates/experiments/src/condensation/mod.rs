@@ -193,6 +193,16 @@ mod tests {
             ContourDynamics::Ar2 { rms_theta_deg, rms_alpha } if rms_theta_deg == 15.0 && rms_alpha == 0.15
         ));
         assert!(c.apply("contour_dynamics", "random").is_err());
+        c.apply("or_weighting", "normalised").unwrap();
+        assert_eq!(
+            c.cue_set(Representation::Points, Cue::Or, 50),
+            CueSet::OrNormalised { lambda: 0.02 }
+        );
+        assert_eq!(
+            c.cue_set(Representation::Contour, Cue::Or, 50),
+            CueSet::Or { lambda: 0.02 }
+        );
+        c.apply("or_weighting", "subtracted").unwrap();
         assert!(c.apply("rotation_deg", "91").is_err());
         assert!(c.apply("scale_change", "-0.1").is_err());
         assert!(c.apply("face_size", "0").is_err());

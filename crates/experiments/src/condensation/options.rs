@@ -45,11 +45,15 @@ options! {
         /// and its members are "subtracted pixel[s]", so the sum runs over
         /// the pixels that the subtraction marks, each adding its
         /// difference and `lambda` times its skin score. `raw` reads `dP_i`
-        /// as the whole window (this code's first reading). A third
-        /// reading, each cue normalised over the particles before the
-        /// sum, is not built: with `lambda = 1/N` after normalisation the
-        /// skin term weighs 1/N of the IFD's. Contours keep eq. 9 raw (the
-        /// paper uses OR only with points).
+        /// as the whole window (this code's first reading). `normalised`
+        /// puts the two cues on one scale before `lambda` balances them:
+        /// particle `i`'s window means `a_i` (IFD) and `b_i` (skin), each
+        /// plus the cues' floor 1e-12, are divided by their means over the
+        /// predicted particles inside the frame, and the particle weighs
+        /// `a_i / mean a + lambda b_i / mean b`
+        /// ([`CueSet::OrNormalised`]); with `lambda = 1/N` the skin term
+        /// then weighs 1/N of the IFD's on average. Contours keep eq. 9
+        /// raw (the paper uses OR only with points).
         pub or_weighting: OrWeighting = OrWeighting::Subtracted;
         /// The IFD level (grey in `[0, 1]`) above which a pixel is
         /// "subtracted" (`or_weighting=subtracted`): 0.05, the level at
@@ -248,6 +252,9 @@ impl CondensationConfig {
             (Representation::Points, Cue::Or, OrWeighting::Subtracted) => CueSet::OrSubtracted {
                 lambda: 1.0 / n.max(1) as f64,
                 threshold: self.subtracted_threshold,
+            },
+            (Representation::Points, Cue::Or, OrWeighting::Normalised) => CueSet::OrNormalised {
+                lambda: 1.0 / n.max(1) as f64,
             },
             _ => cue.cue_set(n),
         }

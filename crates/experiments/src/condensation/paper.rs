@@ -54,9 +54,12 @@ pub enum OrWeighting {
     Raw,
     /// The same over the window's subtracted pixels only.
     Subtracted,
+    /// Each cue's window mean divided by its mean over the particle set
+    /// before the sum ([`CueSet::OrNormalised`]).
+    Normalised,
 }
 
-bayestrack_options::choice! { OrWeighting { Raw = "raw", Subtracted = "subtracted" } }
+bayestrack_options::choice! { OrWeighting { Raw = "raw", Subtracted = "subtracted", Normalised = "normalised" } }
 
 /// How the contours' rotation and scale move (see
 /// [`CondensationConfig::contour_dynamics`]).

@@ -280,6 +280,12 @@ pub const READINGS: &[Reading] = &[
               over it (this code's first reading)",
     },
     Reading {
+        name: "or-normalised",
+        set: &[("or_weighting", "normalised")],
+        why: "eq. 9 with each cue's window mean divided by its mean over the particle set \
+              before the sum (the two cues on one scale before lambda balances them)",
+    },
+    Reading {
         name: "movers-2",
         set: &[("moving_distractors", "2")],
         why: "two moving saturated non-skin boxes in every scene (the paper names no other \

@@ -575,60 +575,77 @@ pub(super) mod packed_image {
     }
 }
 
-/// The scenes a run's jobs track: the tracking, entering, crossing and
-/// hand scenes.
-pub(super) type Scenes = [Rendered; 4];
+/// Which of a run's four scenes a job tracks: the tracking scene (grid
+/// jobs and the snapshot), the entering, crossing and hand scenes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum SceneKind {
+    Tracking = 0,
+    Entering = 1,
+    Crossing = 2,
+    Hand = 3,
+}
 
-/// The scenes of the runs one process's jobs track, rendered once.
-pub struct RenderedRuns(Vec<Option<Scenes>>);
+impl Job {
+    /// The run whose scenes the job tracks and which of them.
+    pub(super) fn scene(self) -> (usize, SceneKind) {
+        match self {
+            Job::Grid(_, r) => (r, SceneKind::Tracking),
+            Job::Reinit(_, _, r) => (r, SceneKind::Entering),
+            Job::Crossing(_, _, r) => (r, SceneKind::Crossing),
+            Job::Hand(r) => (r, SceneKind::Hand),
+            Job::Snapshot => (0, SceneKind::Tracking),
+        }
+    }
+}
 
-/// Renders the scenes of the runs `jobs` need (in parallel).
+/// The scenes one process's jobs track, rendered once: per run, each of
+/// its four scenes ([`SceneKind`] order) when some job needs it.
+pub struct RenderedRuns(Vec<[Option<Rendered>; 4]>);
+
+/// Renders the scenes `jobs` need (in parallel).
 pub(super) fn prepare(
     config: &CondensationConfig,
     jobs: &[usize],
 ) -> Result<RenderedRuns, ExperimentError> {
-    let mut needed = vec![false; config.runs];
+    let mut needed = vec![[false; 4]; config.runs];
     for &j in jobs {
-        match job(config, j) {
-            Job::Grid(_, r) | Job::Reinit(_, _, r) | Job::Crossing(_, _, r) | Job::Hand(r) => {
-                needed[r] = true
-            }
-            Job::Snapshot => needed[0] = true,
-        }
+        let (r, kind) = job(config, j).scene();
+        needed[r][kind as usize] = true;
     }
     let (enter, _) = entering_scene(config);
-    let cross = crossing_scene(config);
-    let hand = hand_scene(config);
-    needed
-        .par_iter()
+    let scenes = [
+        tracking_scene(config),
+        enter,
+        crossing_scene(config),
+        hand_scene(config),
+    ];
+    let wanted: Vec<(usize, usize)> = needed
+        .iter()
         .enumerate()
-        .map(|(r, &need)| {
-            if !need {
-                return Ok(None);
-            }
-            let s = config.scene_seed + r as u64;
-            // one run per group: its four scenes in parallel
-            let ((tracking, hand), (entering, crossing)) = rayon::join(
-                || rayon::join(|| render(&tracking_scene(config), s), || render(&hand, s)),
-                || rayon::join(|| render(&enter, s), || render(&cross, s)),
-            );
-            Ok(Some([tracking?, entering?, crossing?, hand?]))
-        })
-        .collect::<Result<_, _>>()
-        .map(RenderedRuns)
+        .flat_map(|(r, n)| (0..4).filter(move |&k| n[k]).map(move |k| (r, k)))
+        .collect();
+    let rendered = wanted
+        .par_iter()
+        .map(|&(r, k)| render(&scenes[k], config.scene_seed + r as u64))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut out: Vec<[Option<Rendered>; 4]> =
+        (0..config.runs).map(|_| Default::default()).collect();
+    for ((r, k), scene) in wanted.into_iter().zip(rendered) {
+        out[r][k] = Some(scene);
+    }
+    Ok(RenderedRuns(out))
 }
 
-/// The jobs of one run per group (the snapshot with run 0), so that one
-/// run's scenes are in memory at a time: keeping every run's frames took
-/// 855 MB at paper scale.
+/// The jobs that track one scene of one run per group (the snapshot with
+/// run 0's tracking scene), so that one scene's frames are in memory at a
+/// time: keeping every run's frames took 855 MB at paper scale, one run's
+/// four scenes at a time about 120 MB in the 320x240 frame and four times
+/// that in the `frame-640x480` reading.
 pub(super) fn groups(config: &CondensationConfig, jobs: &[usize]) -> Vec<Vec<usize>> {
-    let mut groups = vec![Vec::new(); config.runs];
+    let mut groups = vec![Vec::new(); 4 * config.runs];
     for &j in jobs {
-        let r = match job(config, j) {
-            Job::Grid(_, r) | Job::Reinit(_, _, r) | Job::Crossing(_, _, r) | Job::Hand(r) => r,
-            Job::Snapshot => 0,
-        };
-        groups[r].push(j);
+        let (r, kind) = job(config, j).scene();
+        groups[4 * r + kind as usize].push(j);
     }
     groups.retain(|g| !g.is_empty());
     groups
@@ -641,33 +658,32 @@ pub(super) fn run_job(
     j: usize,
 ) -> Result<Done, ExperimentError> {
     let job = job(config, j);
-    let r = match job {
-        Job::Grid(_, r) | Job::Reinit(_, _, r) | Job::Crossing(_, _, r) | Job::Hand(r) => r,
-        Job::Snapshot => 0,
-    };
-    let scenes = scenes
+    let (r, kind) = job.scene();
+    let scene = scenes
         .0
         .get(r)
-        .and_then(Option::as_ref)
-        .ok_or_else(|| failed("scene", format!("run {r} not rendered")))?;
+        .and_then(|s| s[kind as usize].as_ref())
+        .ok_or_else(|| failed("scene", format!("run {r}'s {kind:?} scene not rendered")))?;
     let (_, entry) = entering_scene(config);
     let aligned = match WebcamScene::crossing().second {
         crate::scenes::SecondObject::Crossing { frame } => frame,
         _ => 0,
     };
     Ok(match job {
-        Job::Grid(key, r) => {
-            let s = &scenes[0];
-            Done::Grid(track(key, config, r, &s.frames, &s.truth, &s.outlines)?)
-        }
-        Job::Reinit(key, avq, r) => {
-            Done::Reinit(reinit_run(key, avq, config, r, &scenes[1], entry)?)
-        }
+        Job::Grid(key, r) => Done::Grid(track(
+            key,
+            config,
+            r,
+            &scene.frames,
+            &scene.truth,
+            &scene.outlines,
+        )?),
+        Job::Reinit(key, avq, r) => Done::Reinit(reinit_run(key, avq, config, r, scene, entry)?),
         Job::Crossing(key, pr, r) => {
-            Done::Crossing(crossing_run(key, pr, config, r, &scenes[2], aligned)?)
+            Done::Crossing(crossing_run(key, pr, config, r, scene, aligned)?)
         }
-        Job::Hand(r) => Done::Hand(hand_run(config, r, &scenes[3])?),
-        Job::Snapshot => Done::Snapshot(Box::new(snapshot(config, &scenes[0], config.frames / 2)?)),
+        Job::Hand(r) => Done::Hand(hand_run(config, r, scene)?),
+        Job::Snapshot => Done::Snapshot(Box::new(snapshot(config, scene, config.frames / 2)?)),
     })
 }
 

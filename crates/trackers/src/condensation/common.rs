@@ -1,7 +1,7 @@
 //! What the CONDENSATION trackers share: the cue sets, the filter's
 //! configuration, one object's particle filter and the checks.
 
-use bayestrack_appearance::{Cue, DEFAULT_FLOOR, Frame, Fusion, FusionRule};
+use bayestrack_appearance::{Cue, DEFAULT_FLOOR, Frame, Fusion, FusionRule, IfdCue, SkinCue};
 use bayestrack_image::{Affine2, BBox, ImageView};
 use bayestrack_particle::{
     Degenerate, ParticleFilter, ResamplePolicy, ResampleTiming, Resampling, StepReport,
@@ -52,11 +52,26 @@ pub enum CueSet {
     /// is that sum over the support's size. Point clouds only (the paper
     /// uses eq. 9 with points, sec. 3.1); a contour refuses it.
     OrSubtracted {
-        /// The balancing coefficient `lambda` (the paper: `1/N`).
+        /// The balancing coefficient `lambda` (the paper: `1/N`; 0 is the
+        /// thresholded IFD alone, eq. 9 with sec. 3.2's `lambda = 0`).
         lambda: f64,
         /// The IFD level (in `[0, 1]` grey) above which a pixel is
         /// "subtracted".
         threshold: f64,
+    },
+    /// Disjunctive fusion with each cue *normalised over the particle set*
+    /// before the sum (a reading of eq. 9 that puts the two cues on one
+    /// scale before `lambda` balances them): each particle `i` inside the
+    /// frame gets its window's IFD score `a_i` and skin score `b_i` (each
+    /// the window mean plus the cues' floor, [`DEFAULT_FLOOR`], so never
+    /// zero), and weighs `a_i / mean_j a_j + lambda b_i / mean_j b_j`, the
+    /// means over the particles inside the frame after the prediction. A
+    /// cue that is zero everywhere thus adds the same to every particle. A
+    /// particle off the frame weighs zero. Point clouds only (a contour
+    /// refuses it).
+    OrNormalised {
+        /// The balancing coefficient `lambda` (the paper: `1/N`).
+        lambda: f64,
     },
 }
 
@@ -66,7 +81,8 @@ impl CueSet {
         !matches!(self, CueSet::Ifd)
     }
 
-    /// Short label: `ifd`, `skin`, `or`, `and`, `or-subtracted`.
+    /// Short label: `ifd`, `skin`, `or`, `and`, `or-subtracted`,
+    /// `or-normalised`.
     pub fn label(self) -> &'static str {
         match self {
             CueSet::Ifd => "ifd",
@@ -74,11 +90,21 @@ impl CueSet {
             CueSet::Or { .. } => "or",
             CueSet::And { .. } => "and",
             CueSet::OrSubtracted { .. } => "or-subtracted",
+            CueSet::OrNormalised { .. } => "or-normalised",
         }
     }
 
     pub(super) fn check(self) -> Result<()> {
-        if let CueSet::Or { lambda } | CueSet::And { lambda } | CueSet::OrSubtracted { lambda, .. } =
+        if let CueSet::OrSubtracted { lambda, .. } = self
+            && !(lambda.is_finite() && lambda >= 0.0)
+        {
+            return Err(TrackerError::InvalidParameter {
+                name: "lambda",
+                value: lambda,
+                reason: "must be finite and non-negative (0: the thresholded IFD alone)",
+            });
+        }
+        if let CueSet::Or { lambda } | CueSet::And { lambda } | CueSet::OrNormalised { lambda } =
             self
             && !(lambda.is_finite() && lambda > 0.0)
         {
@@ -129,6 +155,13 @@ impl CueSet {
                     name: "cues",
                     value: f64::NAN,
                     reason: "OR over the subtracted pixels weighs point-cloud windows only",
+                });
+            }
+            CueSet::OrNormalised { .. } => {
+                return Err(TrackerError::InvalidParameter {
+                    name: "cues",
+                    value: f64::NAN,
+                    reason: "OR with the cues normalised over the set weighs point clouds only",
                 });
             }
         })
@@ -202,6 +235,96 @@ impl Cue for SubtractedOr {
             return Err(AppearanceError::NonFinite { what: "IFD plane" });
         }
         Ok((mean + FLOOR).ln())
+    }
+}
+
+/// A cue that weighs every candidate alike (log-likelihood 0): the
+/// engine's step with it selects and predicts and leaves the weights to
+/// [`NormalisedOr`].
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Flat;
+
+impl Cue for Flat {
+    fn name(&self) -> &'static str {
+        "flat"
+    }
+
+    fn log_likelihood(
+        &self,
+        _frame: &Frame<'_>,
+        _candidate: &bayestrack_appearance::Candidate,
+        _scratch: &mut bayestrack_appearance::Scratch,
+    ) -> bayestrack_appearance::Result<f64> {
+        Ok(0.0)
+    }
+}
+
+/// [`CueSet::OrNormalised`]: the two cues of eq. 9, each normalised over
+/// the predicted set before the sum.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct NormalisedOr {
+    pub(super) ifd: IfdCue,
+    pub(super) skin: SkinCue,
+    pub(super) lambda: f64,
+}
+
+impl NormalisedOr {
+    /// Weighs the predicted set of `filter` on `frame`: the log increment
+    /// `ln(a_i / mean a + lambda b_i / mean b)` of every particle inside
+    /// the frame (`-inf` off it). Returns the effective sample size after
+    /// and the best raw eq. 9 log score, `max ln(a_i + lambda b_i)` (the
+    /// evidence the lost test reads; the normalised scores average 1 by
+    /// construction and say nothing about it).
+    pub(super) fn weigh<M: StateModel<D>, const D: usize>(
+        &self,
+        model: &M,
+        filter: &mut CueFilter<D>,
+        frame: &Frame<'_>,
+    ) -> Result<(f64, f64)> {
+        let mut scratch = bayestrack_appearance::Scratch::default();
+        let mut scores = Vec::with_capacity(filter.len());
+        for x in filter.set().particles() {
+            scores.push(match model.candidate(x) {
+                Some(c) => {
+                    let a = self.ifd.log_likelihood_or_zero(frame, &c, &mut scratch)?;
+                    let b = self.skin.log_likelihood_or_zero(frame, &c, &mut scratch)?;
+                    Some((a.exp(), b.exp()))
+                }
+                None => None,
+            });
+        }
+        let inside: Vec<(f64, f64)> = scores
+            .iter()
+            .flatten()
+            .copied()
+            .filter(|(a, b)| *a > 0.0 && *b > 0.0)
+            .collect();
+        if inside.is_empty() {
+            return Ok((filter.set().ess(), f64::NEG_INFINITY));
+        }
+        let k = inside.len() as f64;
+        let mean_a = inside.iter().map(|p| p.0).sum::<f64>() / k;
+        let mean_b = inside.iter().map(|p| p.1).sum::<f64>() / k;
+        if !(mean_a.is_finite() && mean_b.is_finite()) {
+            return Err(TrackerError::InvalidParameter {
+                name: "cue scores",
+                value: mean_a + mean_b,
+                reason: "the IFD and skin scores must be finite",
+            });
+        }
+        let mut best = f64::NEG_INFINITY;
+        let increments: Vec<f64> = scores
+            .iter()
+            .map(|s| match s {
+                Some((a, b)) if *a > 0.0 && *b > 0.0 => {
+                    best = best.max((a + self.lambda * b).ln());
+                    (a / mean_a + self.lambda * b / mean_b).ln()
+                }
+                _ => f64::NEG_INFINITY,
+            })
+            .collect();
+        let ess = filter.reweigh(&increments)?;
+        Ok((ess, best))
     }
 }
 
@@ -398,6 +521,9 @@ pub(super) struct Object<M, const D: usize> {
     pub(super) model: M,
     pub(super) cue: Box<dyn Cue + Send + Sync>,
     pub(super) filter: CueFilter<D>,
+    /// Set for [`CueSet::OrNormalised`]: the step predicts with [`Flat`]
+    /// and this weighs the whole set (`cue` is then unused).
+    pub(super) normalised: Option<NormalisedOr>,
 }
 
 impl<M, const D: usize> std::fmt::Debug for Object<M, D> {
@@ -436,13 +562,24 @@ impl<M: StateModel<D>, const D: usize> Object<M, D> {
             model,
             cue,
             filter: CueFilter::new(condensation.filter(), particles, seed)?,
+            normalised: None,
         })
     }
 
     /// One select / predict / measure step of the engine.
     pub(super) fn step(&mut self, frame: &Frame<'_>) -> Result<CondensationReport> {
-        let report = self.filter.step(&self.model, &*self.cue, frame)?;
-        Ok(CondensationReport::new(&report, self.filter.len()))
+        let Some(normalised) = self.normalised else {
+            let report = self.filter.step(&self.model, &*self.cue, frame)?;
+            return Ok(CondensationReport::new(&report, self.filter.len()));
+        };
+        let step = self.filter.step(&self.model, &Flat, frame)?;
+        let mut report = CondensationReport::new(&step, self.filter.len());
+        if !step.degenerate {
+            let (ess, best) = normalised.weigh(&self.model, &mut self.filter, frame)?;
+            report.ess = ess;
+            report.best_log_likelihood = best;
+        }
+        Ok(report)
     }
 
     /// The weighted mean (eq. 4).
@@ -618,6 +755,100 @@ mod tests {
             }
             .check()
             .is_err()
+        );
+    }
+
+    #[test]
+    fn or_normalised_divides_each_cue_by_its_mean_over_the_set() {
+        use bayestrack_appearance::{Candidate, SkinModel};
+        use bayestrack_image::{Image, Rect, Rgb};
+        /// A 2x2 window at the state, which never moves; off the frame
+        /// for a negative x.
+        struct Still;
+        impl StateModel<2> for Still {
+            fn predict<R: Rng + ?Sized>(
+                &self,
+                _k: usize,
+                x: &SVector<f64, 2>,
+                _rng: &mut R,
+            ) -> SVector<f64, 2> {
+                *x
+            }
+            fn candidate(&self, x: &SVector<f64, 2>) -> Option<Candidate> {
+                (x[0] >= 0.0)
+                    .then(|| Candidate::Window(Rect::new(x[0] as usize, x[1] as usize, 2, 2)))
+            }
+        }
+        // The 8x4 frame of the subtracted-pixel test: left half skin, right
+        // half blue; IFD 0.2 in rows 0-1, 0.01 in rows 2-3.
+        let (skin, blue) = (Rgb::new(224, 172, 138), Rgb::new(40, 70, 200));
+        let mut rgb = Vec::new();
+        let mut ifd = Vec::new();
+        for y in 0..4 {
+            for x in 0..8 {
+                rgb.extend_from_slice(&if x < 4 { skin } else { blue }.to_array());
+                ifd.push(if y < 2 { 0.2f32 } else { 0.01 });
+            }
+        }
+        let rgb = Image::from_vec(8, 4, 3, rgb).unwrap();
+        let ifd = Image::from_vec(8, 4, 1, ifd).unwrap();
+        let frame = Frame::new().with_rgb(rgb.view()).with_ifd(ifd.view());
+        let model = SkinModel::new(0.066, 0.38, 0.05).unwrap();
+        let (c_skin, c_blue) = (
+            f64::from(model.score_rgb(skin)),
+            f64::from(model.score_rgb(blue)),
+        );
+        let lambda = 0.5;
+        let or = NormalisedOr {
+            ifd: IfdCue::new(FLOOR, 1).unwrap(),
+            skin: SkinCue::new(model, FLOOR, 1).unwrap(),
+            lambda,
+        };
+        let states = [[0.0, 0.0], [4.0, 0.0], [0.0, 2.0], [-1.0, 0.0]]
+            .map(|[x, y]| SVector::<f64, 2>::new(x, y))
+            .to_vec();
+        let mut filter = CueFilter::new(Condensation::POINT_CLOUD.filter(), states, 3).unwrap();
+        let step = filter.step(&Still, &Flat, &frame).unwrap();
+        assert!(!step.degenerate && !step.resampled);
+        let (ess, best) = or.weigh(&Still, &mut filter, &frame).unwrap();
+        // (a, b) per particle: skin and moving, blue and moving, skin and
+        // still, off the frame.
+        let ab =
+            [(0.2, c_skin), (0.2, c_blue), (0.01, c_skin)].map(|(a, b)| (a + FLOOR, b + FLOOR));
+        let ma = ab.iter().map(|p| p.0).sum::<f64>() / 3.0;
+        let mb = ab.iter().map(|p| p.1).sum::<f64>() / 3.0;
+        let raw: Vec<f64> = ab.iter().map(|(a, b)| a / ma + lambda * b / mb).collect();
+        let z: f64 = raw.iter().sum();
+        let w = filter.set().weights();
+        for (i, r) in raw.iter().enumerate() {
+            assert!((w[i] - r / z).abs() < 1e-6, "{i}: {w:?} vs {raw:?}");
+        }
+        assert_eq!(w[3], 0.0, "off the frame weighs zero");
+        assert!((ess - 1.0 / w.iter().map(|v| v * v).sum::<f64>()).abs() < 1e-9);
+        assert!((best - (0.2 + lambda * c_skin).ln()).abs() < 1e-6, "{best}");
+        // Normalised, the skin term moves the weight: the skin particle
+        // outweighs the blue one with the same IFD by lambda (c_skin -
+        // c_blue) / mb of the sum's scale.
+        assert!(w[0] > w[1] * 1.2, "{w:?}");
+        // Bad increments are typed errors and leave the set unchanged.
+        let before = filter.set().log_weights().to_vec();
+        assert!(filter.reweigh(&[0.0; 3]).is_err());
+        assert!(filter.reweigh(&[0.0, f64::NAN, 0.0, 0.0]).is_err());
+        assert!(filter.reweigh(&[f64::NEG_INFINITY; 4]).is_err());
+        assert_eq!(filter.set().log_weights(), &before[..]);
+        assert!(CueSet::OrNormalised { lambda: 0.0 }.check().is_err());
+        // Over the subtracted pixels lambda = 0 is the thresholded IFD alone.
+        let sub = |lambda| CueSet::OrSubtracted {
+            lambda,
+            threshold: 0.05,
+        };
+        assert!(sub(0.0).check().is_ok());
+        assert!(sub(-0.01).check().is_err() && sub(f64::NAN).check().is_err());
+        assert!(
+            CueSet::OrNormalised { lambda: 0.02 }
+                .build(IfdCue::new(FLOOR, 1).unwrap(), None::<SkinCue>)
+                .is_err(),
+            "contours refuse it"
         );
     }
 

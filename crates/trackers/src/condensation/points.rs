@@ -24,8 +24,8 @@ use rand::{Rng, RngExt};
 
 use super::avq::{CAvq, CAvqConfig};
 use super::common::{
-    Condensation, CondensationReport, CueSet, FLOOR, NEEDS, Object, ObjectStep, SubtractedOr,
-    channel_policy, check_damping, check_particles, check_positive, second_order,
+    Condensation, CondensationReport, CueSet, FLOOR, Flat, NEEDS, NormalisedOr, Object, ObjectStep,
+    SubtractedOr, channel_policy, check_damping, check_particles, check_positive, second_order,
 };
 use crate::engine::StateModel;
 use crate::error::{Result, TrackerError};
@@ -135,12 +135,25 @@ impl PointModel {
         } else {
             None
         };
+        let mut normalised = None;
         let cue: Box<dyn bayestrack_appearance::Cue + Send + Sync> = match config.cues {
             CueSet::OrSubtracted { lambda, threshold } => Box::new(SubtractedOr {
                 skin: SkinModel::from_window(frame, rect, config.sigma_hs)?,
                 lambda,
                 threshold: threshold as f32,
             }),
+            CueSet::OrNormalised { lambda } => {
+                normalised = Some(NormalisedOr {
+                    ifd: IfdCue::new(FLOOR, 1)?,
+                    skin: SkinCue::new(
+                        SkinModel::from_window(frame, rect, config.sigma_hs)?,
+                        FLOOR,
+                        1,
+                    )?,
+                    lambda,
+                });
+                Box::new(Flat)
+            }
             cues => cues.build(IfdCue::new(FLOOR, 1)?, skin)?,
         };
         let (x0, y0) = (target.x - 1.0, target.y - 1.0);
@@ -158,13 +171,15 @@ impl PointModel {
             frame: (frame.width(), frame.height()),
             size: (target.width, target.height),
         };
-        Ok(Box::new(Object::new(
+        let mut object = Box::new(Object::new(
             model,
             cue,
             &config.condensation,
             particles,
             seed,
-        )?))
+        )?);
+        object.normalised = normalised;
+        Ok(object)
     }
 
     /// The support window of a particle, `None` when its centre is off the
