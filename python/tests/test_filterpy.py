@@ -5,11 +5,13 @@ side, step by step, on the same measurements."""
 import numpy as np
 import pytest
 from numpy.random import default_rng
-from scipy.linalg import block_diag
 
 import bayestrack as bt
 
 fp = pytest.importorskip("filterpy", reason="filterpy is not installed: pip install filterpy")
+# filterpy depends on scipy; imported after the skip so that a machine
+# without either skips this module instead of failing its collection
+from scipy.linalg import block_diag  # noqa: E402
 from filterpy.common import Q_continuous_white_noise  # noqa: E402
 from filterpy.kalman import (  # noqa: E402
     ExtendedKalmanFilter,
