@@ -17,9 +17,13 @@ per-call time of a round (criterion's median for ours, read from its
 estimates.json); the script prints the median over rounds of each and the
 ratio ours / OpenCV TM_SQDIFF. One thread for both.
 
+On a machine with AVX-512, --simd avx2 caps our kernels at AVX2 (the
+bench reads BAYESTRACK_SIMD; OpenCV keeps its own dispatch) to time the
+path an AVX2-only machine runs.
+
 Usage:
   pip install opencv-python-headless numpy
-  python3 tools/opencv_bench.py [--rounds 5] [--bench-exe PATH]
+  python3 tools/opencv_bench.py [--rounds 5] [--bench-exe PATH] [--simd avx2]
 Without --bench-exe it builds the bench with
   cargo bench -p bayestrack-appearance --bench appearance --no-run
 and runs the executable cargo reports.
@@ -122,7 +126,7 @@ def bench_exe():
     sys.exit("could not find the appearance bench executable in cargo's output")
 
 
-def ours(exe, seconds):
+def ours(exe, seconds, simd=None):
     """One run of our MAD benches: {case name: criterion's median (s)}.
 
     Criterion's median of its samples' per-iteration times, read from the
@@ -130,12 +134,15 @@ def ours(exe, seconds):
     sides report the same statistic as median_time() does for OpenCV."""
     import tempfile
 
+    env = {**os.environ}
+    if simd:
+        env["BAYESTRACK_SIMD"] = simd
     with tempfile.TemporaryDirectory() as home:
         subprocess.run(
             [exe, "--bench", "--warm-up-time", "0.5", "--measurement-time", str(seconds),
              "mad_search|MadSearch|mad_map_into"],
             cwd=ROOT / "crates" / "appearance", check=True, capture_output=True, text=True,
-            env={**os.environ, "CRITERION_HOME": home})
+            env={**env, "CRITERION_HOME": home})
         times = {}
         for bench in Path(home).glob("*/new/benchmark.json"):
             name = json.loads(bench.read_text())["full_id"]
@@ -190,6 +197,8 @@ def main():
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--seconds", type=float, default=2.0, help="criterion measurement time")
     ap.add_argument("--bench-exe", help="the built appearance bench executable")
+    ap.add_argument("--simd", choices=["scalar", "sse2", "avx2", "avx512"],
+                    help="cap our kernels at this level (BAYESTRACK_SIMD)")
     ap.add_argument("--opencv-only", action="store_true",
                     help="time OpenCV alone (no cargo needed)")
     args = ap.parse_args()
@@ -204,11 +213,12 @@ def main():
         other_references()
         return
     exe = os.path.abspath(args.bench_exe) if args.bench_exe else bench_exe()
-    print(f"OpenCV {cv2.__version__}, threads = {cv2.getNumThreads()}; ours: {os.path.basename(exe)}")
+    print(f"OpenCV {cv2.__version__}, threads = {cv2.getNumThreads()}; ours: {os.path.basename(exe)}"
+          f" (kernels: {args.simd or 'best level'})")
     cv = opencv_cases()
     ours_t, cv_t = {}, {}
     for r in range(args.rounds):
-        for k, v in ours(exe, args.seconds).items():
+        for k, v in ours(exe, args.seconds, args.simd).items():
             ours_t.setdefault(k, []).append(v)
         for k, fn in cv.items():
             cv_t.setdefault(k, []).append(median_time(fn))

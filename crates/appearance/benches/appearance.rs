@@ -64,7 +64,34 @@ fn rendered(dx: usize, dy: usize, ch: usize, seed: u32) -> Image<u8> {
     img
 }
 
+/// `BAYESTRACK_SIMD=scalar|sse2|avx2|avx512` caps the kernels' level (to
+/// time the AVX2 paths on a machine with AVX-512; unset: the best level).
+fn simd_cap() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(simd_cap_once);
+}
+
+fn simd_cap_once() {
+    use bayestrack_image::{SimdLevel, simd};
+    let Some(v) = std::env::var_os("BAYESTRACK_SIMD") else {
+        return;
+    };
+    let level = match v.to_str() {
+        Some("scalar") => SimdLevel::Scalar,
+        Some("sse2") => SimdLevel::Sse2,
+        Some("avx2") => SimdLevel::Avx2,
+        Some("avx512") => SimdLevel::Avx512,
+        _ => panic!("BAYESTRACK_SIMD={v:?}: expected scalar, sse2, avx2 or avx512"),
+    };
+    simd::set_max_level(level);
+    eprintln!(
+        "kernels capped at {level:?}: running at {:?}",
+        SimdLevel::detect()
+    );
+}
+
 fn bench_mad(c: &mut Criterion) {
+    simd_cap();
     let full = Rect::new(0, 0, 320, 240);
     let mut searcher = MadSearch::new();
     let mut map = Image::new(291, 221, 1, 0f32).unwrap();
@@ -115,6 +142,7 @@ fn bench_mad(c: &mut Criterion) {
 }
 
 fn bench_histogram(c: &mut Criterion) {
+    simd_cap();
     let frame = noise(320, 240, 3, 2);
     let window = Rect::new(100, 80, 40, 40);
     let mut h256 = RgbHistogram::new(256).unwrap();
@@ -150,6 +178,7 @@ fn bench_histogram(c: &mut Criterion) {
 }
 
 fn bench_skin_ifd(c: &mut Criterion) {
+    simd_cap();
     let frame = noise(320, 240, 3, 4);
     let prev = noise(320, 240, 3, 5);
     let model = SkinModel::new(0.05, 0.4, SkinModel::PAPER_SIGMA).unwrap();

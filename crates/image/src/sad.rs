@@ -47,7 +47,15 @@ pub struct SadTemplate {
     /// Under AVX-512 with one 32-byte chunk per row: each padded row twice
     /// (64 bytes), for the kernel that runs two windows per `vpsadbw`.
     doubled: Vec<u8>,
+    /// Under AVX2, gray rows of 1 to [`QUAD_MAX`] bytes: each row cut into
+    /// groups of four 4-byte blocks (zero-padded), each group's 16 bytes
+    /// stored twice (32 bytes, one copy per 128-bit lane), for the
+    /// `vmpsadbw` kernel ([`x86::quads`]).
+    quads: Vec<u8>,
 }
+
+/// The longest gray row (bytes) the AVX2 `vmpsadbw` kernel takes.
+const QUAD_MAX: usize = 128;
 
 impl Default for SadTemplate {
     fn default() -> Self {
@@ -69,6 +77,7 @@ impl SadTemplate {
             padded: Vec::new(),
             masks: Vec::new(),
             doubled: Vec::new(),
+            quads: Vec::new(),
         }
     }
 
@@ -113,6 +122,19 @@ impl SadTemplate {
                 self.doubled.extend_from_slice(row);
             }
             self.masks.extend_from_within(..32);
+        }
+        self.quads.clear();
+        if self.level == SimdLevel::Avx2 && template.channels() == 1 && (1..=QUAD_MAX).contains(&n)
+        {
+            let groups = n.div_ceil(16);
+            self.quads.resize(self.rows * groups * 32, 0);
+            for r in 0..self.rows {
+                for (g, part) in template.row(r).chunks(16).enumerate() {
+                    let o = (r * groups + g) * 32;
+                    self.quads[o..o + part.len()].copy_from_slice(part);
+                    self.quads[o + 16..o + 16 + part.len()].copy_from_slice(part);
+                }
+            }
         }
     }
 
@@ -166,7 +188,8 @@ impl SadTemplate {
             step: ch,
             out,
         };
-        if self.level == SimdLevel::Avx2 && ch == 1 && self.chunks == 1 {
+        if self.level == SimdLevel::Avx2 && ch == 1 && (self.chunks == 1 || !self.quads.is_empty())
+        {
             // its own dispatched function, so that the other paths' code
             // stays as it was (the colour surface took 2% more
             // instructions with both in one)
@@ -288,8 +311,9 @@ impl Kernel for &mut Windows<'_> {
     }
 }
 
-/// Gray [`Windows`] under AVX2 with rows of one 32-byte chunk: the
-/// unmasked batches of [`x86::narrow`] first.
+/// Gray [`Windows`] under AVX2 with rows of at most [`QUAD_MAX`] bytes:
+/// the `vmpsadbw` batches of [`x86::quads`] first, then (rows of one
+/// 32-byte chunk) the unmasked batches of [`x86::narrow`].
 struct Narrow<'a>(Windows<'a>);
 
 impl Kernel for &mut Narrow<'_> {
@@ -556,9 +580,10 @@ mod x86 {
         windows!(Avx2(simd), t, f, stride, start, step, out, 32, 8);
     }
 
-    /// [`windows_avx2`] for gray windows (`step` 1) with rows of one
-    /// 32-byte chunk: rows of 11 to 32 bytes twelve windows at a time with
-    /// no mask ([`narrow`]), the rest as [`windows_avx2`].
+    /// [`windows_avx2`] for gray windows (`step` 1) with rows of at most
+    /// [`super::QUAD_MAX`] bytes: thirty-two windows at a time by
+    /// `vmpsadbw` ([`quads`]), then rows of 11 to 32 bytes twelve windows
+    /// at a time with no mask ([`narrow`]), the rest as [`windows_avx2`].
     #[inline(always)]
     pub(super) fn windows_avx2_narrow(
         simd: V3,
@@ -568,6 +593,12 @@ mod x86 {
         start: usize,
         out: &mut [u32],
     ) {
+        let done = if t.quads.is_empty() {
+            0
+        } else {
+            quads(simd, t, f, stride, start, out)
+        };
+        let (start, out) = (start + done, &mut out[done..]);
         let done = if t.chunks == 1 && t.width == 32 {
             narrow(simd, t, f, stride, start, out)
         } else {
@@ -575,6 +606,146 @@ mod x86 {
         };
         let (start, out, step) = (start + done, &mut out[done..], 1);
         windows!(Avx2(simd), t, f, stride, start, step, out, 32, 8);
+    }
+
+    /// Windows per batch of [`quads`].
+    const QUADS: usize = 32;
+
+    /// Gray windows with rows of 1 to [`super::QUAD_MAX`] bytes under
+    /// AVX2, [`QUADS`] consecutive ones at a time, by `vmpsadbw`: per
+    /// 128-bit lane it sums the absolute differences of one 4-byte block of
+    /// the template row with the frame bytes at eight consecutive offsets
+    /// (eight 16-bit sums). A 32-byte frame load at `p` thus advances the
+    /// windows `p .. p + 8` (low lane) and `p + 16 .. p + 24` (high lane)
+    /// by one block, and the load at `p + 8` the other sixteen; each load
+    /// serves two blocks (the instruction's frame offset 0 or 4). One
+    /// `vmpsadbw` does the work of two 32-byte `vpsadbw` (64 absolute
+    /// differences) and needs no horizontal sum. A row of `n` bytes takes
+    /// `ceil(n / 4)` blocks; the zero padding of the last block also
+    /// counts the frame bytes past the row (`|f - 0| = f`), which are
+    /// subtracted at once (one load and two widening unpacks per padded
+    /// column and row). The 16-bit sums wrap, which is exact as long as
+    /// the true sum fits: they are widened to 32 bits every
+    /// `65535 / (255 n)` rows. Returns how many windows it did (a multiple
+    /// of [`QUADS`], stopping where the reads would leave `f`).
+    #[inline(always)]
+    pub(super) fn quads(
+        simd: V3,
+        t: &SadTemplate,
+        f: &[u8],
+        stride: usize,
+        start: usize,
+        out: &mut [u32],
+    ) -> usize {
+        let n = t.row_len;
+        if t.rows == 0 || !(1..=super::QUAD_MAX).contains(&n) {
+            return 0;
+        }
+        let avx2 = simd.avx2;
+        let l = Avx2(simd);
+        let blocks = n.div_ceil(4);
+        let (full, rest) = (blocks / 4, blocks % 4);
+        let groups = blocks.div_ceil(4);
+        let pad = 4 * blocks - n;
+        // The bytes a row's loads reach past the batch's first window: the
+        // last full group's load at 16 g + 16, the partial group's at
+        // 16 g + 8 (one or two blocks) or 16 g + 16, the padded columns'.
+        let reach = [
+            32 + 16 * full,
+            if rest == 0 {
+                0
+            } else {
+                16 * full + if rest <= 2 { 40 } else { 48 }
+            },
+            n + pad + 31,
+        ];
+        let span = reach.into_iter().max().unwrap_or(0);
+        // Rows whose 16-bit sums cannot exceed 65535.
+        let run = 65535 / (255 * n);
+        let zero = l.zero();
+        let mut k = 0;
+        while k + QUADS <= out.len() {
+            let base = start + k;
+            if base + (t.rows - 1) * stride + span > f.len() {
+                break;
+            }
+            // 32-bit sums, windows [0..4 | 16..20], [4..8 | 20..24],
+            // [8..12 | 24..28], [12..16 | 28..32].
+            let mut w = [zero; 4];
+            let mut r0 = 0;
+            while r0 < t.rows {
+                let r1 = (r0 + run).min(t.rows);
+                // 16-bit sums, windows [0..8 | 16..24] and [8..16 | 24..32].
+                let (mut a, mut b) = (zero, zero);
+                for r in r0..r1 {
+                    let o = base + r * stride;
+                    let row = &f[o..o + span];
+                    let tq = &t.quads[r * groups * 32..(r + 1) * groups * 32];
+                    let mut lo = l.ld(row, 0);
+                    for g in 0..full {
+                        let tv = l.ld(tq, 32 * g);
+                        let mid = l.ld(row, 16 * g + 8);
+                        let hi = l.ld(row, 16 * g + 16);
+                        let a01 = avx2._mm256_add_epi16(
+                            avx2._mm256_mpsadbw_epu8::<0o00>(lo, tv),
+                            avx2._mm256_mpsadbw_epu8::<0o55>(lo, tv),
+                        );
+                        let a23 = avx2._mm256_add_epi16(
+                            avx2._mm256_mpsadbw_epu8::<0o22>(mid, tv),
+                            avx2._mm256_mpsadbw_epu8::<0o77>(mid, tv),
+                        );
+                        let b01 = avx2._mm256_add_epi16(
+                            avx2._mm256_mpsadbw_epu8::<0o00>(mid, tv),
+                            avx2._mm256_mpsadbw_epu8::<0o55>(mid, tv),
+                        );
+                        let b23 = avx2._mm256_add_epi16(
+                            avx2._mm256_mpsadbw_epu8::<0o22>(hi, tv),
+                            avx2._mm256_mpsadbw_epu8::<0o77>(hi, tv),
+                        );
+                        a = avx2._mm256_add_epi16(a, avx2._mm256_add_epi16(a01, a23));
+                        b = avx2._mm256_add_epi16(b, avx2._mm256_add_epi16(b01, b23));
+                        lo = hi;
+                    }
+                    if rest > 0 {
+                        let tv = l.ld(tq, 32 * full);
+                        let mid = l.ld(row, 16 * full + 8);
+                        a = avx2._mm256_add_epi16(a, avx2._mm256_mpsadbw_epu8::<0o00>(lo, tv));
+                        b = avx2._mm256_add_epi16(b, avx2._mm256_mpsadbw_epu8::<0o00>(mid, tv));
+                        if rest > 1 {
+                            a = avx2._mm256_add_epi16(a, avx2._mm256_mpsadbw_epu8::<0o55>(lo, tv));
+                            b = avx2._mm256_add_epi16(b, avx2._mm256_mpsadbw_epu8::<0o55>(mid, tv));
+                        }
+                        if rest > 2 {
+                            let hi = l.ld(row, 16 * full + 16);
+                            a = avx2._mm256_add_epi16(a, avx2._mm256_mpsadbw_epu8::<0o22>(mid, tv));
+                            b = avx2._mm256_add_epi16(b, avx2._mm256_mpsadbw_epu8::<0o22>(hi, tv));
+                        }
+                    }
+                    // The frame bytes the zero padding counted: byte i of
+                    // the load at n + q is window i's column n + q.
+                    for q in 0..pad {
+                        let v = l.ld(row, n + q);
+                        a = avx2._mm256_sub_epi16(a, avx2._mm256_unpacklo_epi8(v, zero));
+                        b = avx2._mm256_sub_epi16(b, avx2._mm256_unpackhi_epi8(v, zero));
+                    }
+                }
+                w[0] = avx2._mm256_add_epi32(w[0], avx2._mm256_unpacklo_epi16(a, zero));
+                w[1] = avx2._mm256_add_epi32(w[1], avx2._mm256_unpackhi_epi16(a, zero));
+                w[2] = avx2._mm256_add_epi32(w[2], avx2._mm256_unpacklo_epi16(b, zero));
+                w[3] = avx2._mm256_add_epi32(w[3], avx2._mm256_unpackhi_epi16(b, zero));
+                r0 = r1;
+            }
+            let sums: [[u32; 8]; 4] = [
+                cast(avx2._mm256_permute2x128_si256::<0x20>(w[0], w[1])),
+                cast(avx2._mm256_permute2x128_si256::<0x20>(w[2], w[3])),
+                cast(avx2._mm256_permute2x128_si256::<0x31>(w[0], w[1])),
+                cast(avx2._mm256_permute2x128_si256::<0x31>(w[2], w[3])),
+            ];
+            let sums: [u32; QUADS] = cast(sums);
+            out[k..k + QUADS].copy_from_slice(&sums);
+            k += QUADS;
+        }
+        k
     }
 
     /// Windows per batch of [`narrow`].
@@ -902,6 +1073,68 @@ pub(crate) mod tests {
                     let white = Image::new(tw + 40, th, 1, 255u8).unwrap();
                     let black = Image::new(tw, th, 1, 0u8).unwrap();
                     let mut tpl = SadTemplate::new(level);
+                    tpl.set(black.view());
+                    let mut out = vec![0u32; 41];
+                    tpl.sad_windows(white.view(), 0, 0, &mut out);
+                    assert!(
+                        out.iter().all(|&o| o as usize == 255 * tw * th),
+                        "{level:?} {tw}x{th}: {out:?}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn gray_batches_of_every_width_equal_the_reference() {
+        // Every gray row length the AVX2 vmpsadbw kernel takes (1 to
+        // QUAD_MAX bytes: every number of blocks and of padded columns) and
+        // a few past it; runs of 31 to 70 windows from two first windows
+        // (batches of 32 and leftovers), in a crop (stride past the width)
+        // whose last windows reach the buffer's end (the batch stops where
+        // its reads would leave it).
+        for level in levels() {
+            let mut tpl = SadTemplate::new(level);
+            for tw in 1..=QUAD_MAX + 2 {
+                for th in [1, 2, 5] {
+                    let seed = (tw * 10 + th) as u32;
+                    let fw = tw + 69;
+                    let big = random(fw + 2, th + 3, 1, seed);
+                    let frame = big.crop(Rect::new(2, 1, fw, th + 2)).unwrap();
+                    let t_img = random(tw, th, 1, seed + 1);
+                    tpl.set(t_img.view());
+                    for (x0, y) in [(0, 0), (1, 2)] {
+                        for n in [31, 32, 33, 64, 70 - x0] {
+                            let mut out = vec![0u32; n];
+                            tpl.sad_windows(frame, x0, y, &mut out);
+                            for (i, &o) in out.iter().enumerate() {
+                                let want = reference(frame, t_img.view(), x0 + i, y);
+                                assert_eq!(
+                                    o,
+                                    want,
+                                    "{level:?} {tw}x{th} at ({}, {y}) of {n}",
+                                    x0 + i
+                                );
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn saturated_gray_rows_at_the_16_bit_widening_period() {
+        // 255 against 0 everywhere: the vmpsadbw kernel's 16-bit sums reach
+        // 65535 - (65535 mod 255 n) before they are widened (every
+        // 65535 / (255 n) rows); one row more must not wrap.
+        for level in levels() {
+            let mut tpl = SadTemplate::new(level);
+            for tw in 1..=QUAD_MAX + 2 {
+                let run = 65535 / (255 * tw);
+                for th in [run.max(1), run + 1, 2 * run + 1] {
+                    let white = Image::new(tw + 40, th, 1, 255u8).unwrap();
+                    let black = Image::new(tw, th, 1, 0u8).unwrap();
                     tpl.set(black.view());
                     let mut out = vec![0u32; 41];
                     tpl.sad_windows(white.view(), 0, 0, &mut out);

@@ -39,6 +39,8 @@
 //! }
 //! ```
 
+use std::sync::atomic::{AtomicU8, Ordering};
+
 /// An instruction set the kernels can run with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[non_exhaustive]
@@ -73,8 +75,11 @@ impl SimdLevel {
             .unwrap_or(SimdLevel::Scalar)
     }
 
-    /// Whether this CPU runs the level.
+    /// Whether this CPU runs the level and [`set_max_level`] allows it.
     pub fn is_available(self) -> bool {
+        if self.rank() > MAX_LEVEL.load(Ordering::Relaxed) {
+            return false;
+        }
         match self {
             SimdLevel::Scalar => true,
             #[cfg(target_arch = "x86_64")]
@@ -88,6 +93,16 @@ impl SimdLevel {
         }
     }
 
+    /// The levels' order (they nest).
+    const fn rank(self) -> u8 {
+        match self {
+            SimdLevel::Scalar => 0,
+            SimdLevel::Sse2 => 1,
+            SimdLevel::Avx2 => 2,
+            SimdLevel::Avx512 => 3,
+        }
+    }
+
     /// This level if this CPU runs it, else the best one it runs.
     pub fn or_best(self) -> Self {
         if self.is_available() {
@@ -98,24 +113,26 @@ impl SimdLevel {
     }
 
     /// Runs `kernel` compiled for this level, or for the best level this
-    /// CPU runs if it does not run this one (the levels nest: a CPU with
-    /// AVX-512 has AVX2, and every x86-64 CPU has SSE2).
+    /// CPU runs (and [`set_max_level`] allows) if it does not run this one
+    /// (the levels nest: a CPU with AVX-512 has AVX2, and every x86-64 CPU
+    /// has SSE2).
     #[inline(always)]
     pub fn run<K: Kernel>(self, kernel: K) -> K::Output {
         #[cfg(target_arch = "x86_64")]
         {
             use pulp::x86::{V1, V3, V4};
-            if matches!(self, SimdLevel::Avx512)
+            let rank = self.rank().min(MAX_LEVEL.load(Ordering::Relaxed));
+            if rank >= 3
                 && let Some(token) = V4::try_new()
             {
                 return token.vectorize(Body(kernel, token));
             }
-            if matches!(self, SimdLevel::Avx512 | SimdLevel::Avx2)
+            if rank >= 2
                 && let Some(token) = V3::try_new()
             {
                 return token.vectorize(Body(kernel, token));
             }
-            if !matches!(self, SimdLevel::Scalar)
+            if rank >= 1
                 && let Some(token) = V1::try_new()
             {
                 return token.vectorize(Body(kernel, token));
@@ -125,8 +142,34 @@ impl SimdLevel {
     }
 }
 
+/// The highest level [`dispatch`], [`SimdLevel::run`] and
+/// [`SimdLevel::detect`] use (the rank of a [`SimdLevel`]).
+static MAX_LEVEL: AtomicU8 = AtomicU8::new(SimdLevel::Avx512.rank());
+
+/// Caps the level every kernel of the process runs at, from now on: a
+/// machine with AVX-512 can then time and test the AVX2 paths (the benches
+/// take it from the `BAYESTRACK_SIMD` environment variable). Objects that
+/// chose their level before (a [`crate::SadTemplate`], which keeps the
+/// level it was built with, or a thread's cached one) keep it. Every level
+/// gives the same results; only the speed changes. `SimdLevel::Avx512`
+/// lifts the cap.
+pub fn set_max_level(level: SimdLevel) {
+    MAX_LEVEL.store(level.rank(), Ordering::Relaxed);
+}
+
+/// The cap [`set_max_level`] set ([`SimdLevel::Avx512`] if none).
+pub fn max_level() -> SimdLevel {
+    match MAX_LEVEL.load(Ordering::Relaxed) {
+        0 => SimdLevel::Scalar,
+        1 => SimdLevel::Sse2,
+        2 => SimdLevel::Avx2,
+        _ => SimdLevel::Avx512,
+    }
+}
+
 /// Runs `kernel` compiled for the best level this CPU has
-/// ([`SimdLevel::Avx512`], [`SimdLevel::Avx2`] or the baseline).
+/// ([`SimdLevel::Avx512`], [`SimdLevel::Avx2`] or the baseline), at most
+/// the one [`set_max_level`] allows.
 #[inline(always)]
 pub fn dispatch<K: Kernel>(kernel: K) -> K::Output {
     SimdLevel::Avx512.run(kernel)
