@@ -2,8 +2,8 @@
 # CI step for the Python bindings: build the `bayestrack` wheel (dev profile,
 # the workspace's target/), install it into a virtual environment under
 # target/python-ci/ and run pytest on python/tests.
-# Skips (exit 0, with a message) when python3, venv/pip or maturin are not
-# available; fails when the build or a test fails.
+# Skips (exit 0, with a message) when python3, venv, numpy, pytest or
+# maturin are not installed; fails when the build or a test fails.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/.." && pwd)"
@@ -18,11 +18,13 @@ if [ ! -x "$venv/bin/python" ]; then
     "$PY" -m venv --system-site-packages "$venv" >/dev/null 2>&1 || skip "$PY -m venv failed (python3-venv missing?)"
 fi
 vpy="$venv/bin/python"
+# Nothing is downloaded: CI's time and result must not depend on the
+# network (pip install numpy pytest maturin filterpy to run this step).
 for mod in numpy pytest; do
-    "$vpy" -c "import $mod" 2>/dev/null || "$vpy" -m pip install -q "$mod" >/dev/null 2>&1 || skip "$mod is not installed and pip cannot install it"
+    "$vpy" -c "import $mod" 2>/dev/null || skip "$mod is not installed (pip install numpy pytest maturin)"
 done
 if ! "$vpy" -m maturin --version >/dev/null 2>&1 && ! command -v maturin >/dev/null 2>&1; then
-    "$vpy" -m pip install -q "maturin>=1.5,<2" >/dev/null 2>&1 || skip "maturin is not installed and pip cannot install it"
+    skip "maturin is not installed (pip install maturin)"
 fi
 maturin_cmd=("$vpy" -m maturin)
 "$vpy" -m maturin --version >/dev/null 2>&1 || maturin_cmd=(maturin)
