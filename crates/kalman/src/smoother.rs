@@ -33,8 +33,15 @@ fn rts_step<const N: usize>(
     )?;
     let gain = chol.solve(&cross.transpose()).transpose();
     let mean = filtered.mean() + gain * residual(next.mean(), predicted.mean());
-    let cov = filtered.cov() + gain * (next.cov() - predicted.cov()) * gain.transpose();
-    Gaussian::checked(mean, linalg::symmetrize(&cov), Step::Smooth)
+    let mut cov = linalg::symmetrize(
+        &(filtered.cov() + gain * (next.cov() - predicted.cov()) * gain.transpose()),
+    );
+    // `P_s = P + G (P_s' - P_pred) G^T` subtracts up to `P` itself (the
+    // smoothed covariance lies between 0 and `P`): a variance below the
+    // round-off of `P` is a wrong number (extreme, ill-scaled beliefs),
+    // an error rather than a negative variance returned with `Ok`
+    linalg::check_variances(&mut cov, filtered.cov(), "smoothed covariance", Step::Smooth)?;
+    Gaussian::checked(mean, cov, Step::Smooth)
 }
 
 /// Backward pass over filtered beliefs `x_{k|k}`.
