@@ -599,7 +599,7 @@ impl Job {
 }
 
 /// The scenes one process's jobs track, rendered once: per run, each of
-/// its four scenes ([`SceneKind`] order) when some job needs it.
+/// its four scenes (`SceneKind` order) when some job needs it.
 pub struct RenderedRuns(Vec<[Option<Rendered>; 4]>);
 
 /// Renders the scenes `jobs` need (in parallel).
