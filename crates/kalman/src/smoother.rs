@@ -40,7 +40,12 @@ fn rts_step<const N: usize>(
     // smoothed covariance lies between 0 and `P`): a variance below the
     // round-off of `P` is a wrong number (extreme, ill-scaled beliefs),
     // an error rather than a negative variance returned with `Ok`
-    linalg::check_variances(&mut cov, filtered.cov(), "smoothed covariance", Step::Smooth)?;
+    linalg::check_variances(
+        &mut cov,
+        filtered.cov(),
+        "smoothed covariance",
+        Step::Smooth,
+    )?;
     Gaussian::checked(mean, cov, Step::Smooth)
 }
 

@@ -1,6 +1,6 @@
 //! Bad input gives the documented error, never a panic or a NaN.
 
-mod common;
+use crate::common;
 
 use bayestrack_kalman::{
     Ekf, Gaussian, Iekf, KalmanError, Kf, LinearDynamics, LinearMeasurement, NoiseCovariance, Step,

@@ -1,6 +1,6 @@
 //! Identities between filters: each pair must agree to round-off.
 
-mod common;
+use crate::common;
 
 use bayestrack_kalman::{
     Additive, CovarianceUpdate, Ekf, Gaussian, HybridPrior, HybridUkfIekf, Iekf, Kf, Ukf,

@@ -3,7 +3,7 @@
 //! covariance loses definiteness and the SR-UKF's factor does not, and its
 //! typed errors.
 
-mod common;
+use crate::common;
 
 use bayestrack_kalman::{
     Dynamics, FnDynamics, FnMeasurement, Gaussian, KalmanError, LinearDynamics, LinearMeasurement,

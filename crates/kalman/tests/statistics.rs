@@ -1,7 +1,7 @@
 //! Consistency over Monte Carlo runs: a correctly specified Kalman filter has
 //! NEES and NIS inside their chi-square bands; a mis-specified one does not.
 
-mod common;
+use crate::common;
 
 use bayestrack_kalman::{ChiSquareBand, Gaussian, Kf, LinearDynamics, LinearMeasurement, nees};
 use common::constant_velocity;

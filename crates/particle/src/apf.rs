@@ -243,6 +243,9 @@ impl AuxiliaryFilter {
             sum2 += w * w;
             mean.axpy(w, x, 1.0);
         }
+        let mean = crate::set::finite_mean(mean, || {
+            children.iter().zip(inc.iter().map(|&l| exp_flushed(l)))
+        });
         set.scratch.ancestors = ancestors;
         set.particles = children;
         set.log_weights = inc;
