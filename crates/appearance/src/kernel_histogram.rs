@@ -491,6 +491,20 @@ impl KernelHistogram {
             let kb = if b < 0 { 0 } else { b as usize / step + 1 };
             (h[2], h[3], ka, kb.max(ka))
         });
+        // Each counted row: its bins from column x_lo (every step-th one
+        // counted) and the hole's counted-column range ka..kb (empty off
+        // the hole's rows).
+        let rows = || {
+            (y_lo..=y_hi).step_by(step).map(move |y| {
+                let yf = y as f64;
+                let (ka, kb) = match skip {
+                    Some((y0, y1, ka, kb)) if yf >= y0 && yf <= y1 => (ka, kb),
+                    _ => (n, n),
+                };
+                let start = (y as usize - r.y) * r.width + x_lo as usize - r.x;
+                (&map.bins[start..start + (n - 1) * step + 1], ka, kb)
+            })
+        };
         // Integer counts in four interleaved tables, one per pixel position
         // mod 4, so that runs of one bin do not wait on each other's
         // stores. Counting is exact and order-free, so the weights equal
@@ -506,14 +520,7 @@ impl KernelHistogram {
                 .try_into()
                 .expect("the table has FAST_BINS rows");
             let mut count = 0usize;
-            for y in (y_lo..=y_hi).step_by(step) {
-                let yf = y as f64;
-                let (ka, kb) = match skip {
-                    Some((y0, y1, ka, kb)) if yf >= y0 && yf <= y1 => (ka, kb),
-                    _ => (n, n),
-                };
-                let start = (y as usize - r.y) * r.width + x_lo as usize - r.x;
-                let row = &map.bins[start..start + (n - 1) * step + 1];
+            for (row, ka, kb) in rows() {
                 if step == 1 {
                     count_unchecked(table, &row[..ka]);
                     if kb < n {
@@ -533,14 +540,7 @@ impl KernelHistogram {
         }
         let counts = &mut self.counts[..nbins];
         let mut count = 0usize;
-        for y in (y_lo..=y_hi).step_by(step) {
-            let yf = y as f64;
-            let (ka, kb) = match skip {
-                Some((y0, y1, ka, kb)) if yf >= y0 && yf <= y1 => (ka, kb),
-                _ => (n, n),
-            };
-            let start = (y as usize - r.y) * r.width + x_lo as usize - r.x;
-            let row = &map.bins[start..start + (n - 1) * step + 1];
+        for (row, ka, kb) in rows() {
             for span in [(0, ka), (kb, n)] {
                 if span.0 >= span.1 {
                     continue;

@@ -121,6 +121,25 @@ pub fn paste<T: Pixel>(frame: &mut Image<T>, patch: ImageView<'_, T>, x: usize, 
     }
 }
 
+/// Panics unless every file of `tests_dir` (each `*.rs` but the root, and
+/// each folder with a `mod.rs`) is declared `mod <name>;` in `root_source`,
+/// the text of a crate's one integration-test root (`tests/integration.rs`
+/// under `autotests = false`): a file left out would never run.
+pub fn assert_every_test_file_is_a_module(tests_dir: &str, root: &str, root_source: &str) {
+    for entry in std::fs::read_dir(tests_dir).unwrap_or_else(|e| panic!("{tests_dir}: {e}")) {
+        let path = entry.unwrap_or_else(|e| panic!("{tests_dir}: {e}")).path();
+        let Some(stem) = path.file_stem().and_then(|s| s.to_str()) else {
+            continue;
+        };
+        let module = path.extension().is_some_and(|e| e == "rs") && stem != root
+            || path.join("mod.rs").is_file();
+        assert!(
+            !module || root_source.contains(&format!("\nmod {stem};\n")),
+            "{tests_dir}/{stem} is not a module of {root}.rs: its tests never run"
+        );
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -696,12 +696,15 @@ mod tests {
         );
     }
 
-    #[test]
-    fn or_over_the_subtracted_pixels_adds_lambda_skin_where_the_ifd_passes() {
-        use bayestrack_appearance::{Candidate, Scratch, SkinModel};
-        use bayestrack_image::{Image, Rect, Rgb};
-        // An 8x4 frame: left half skin-coloured, right half blue; IFD 0.2
-        // in rows 0-1, 0.01 (under the 0.05 level) in rows 2-3.
+    /// An 8x4 frame, left half skin-coloured and right half blue, and its
+    /// IFD: 0.2 in rows 0-1, 0.01 (under the 0.05 level) in rows 2-3.
+    fn half_skin_frame() -> (
+        bayestrack_image::Image<u8>,
+        bayestrack_image::Image<f32>,
+        bayestrack_image::Rgb,
+        bayestrack_image::Rgb,
+    ) {
+        use bayestrack_image::{Image, Rgb};
         let (skin, blue) = (Rgb::new(224, 172, 138), Rgb::new(40, 70, 200));
         let mut rgb = Vec::new();
         let mut ifd = Vec::new();
@@ -713,6 +716,14 @@ mod tests {
         }
         let rgb = Image::from_vec(8, 4, 3, rgb).unwrap();
         let ifd = Image::from_vec(8, 4, 1, ifd).unwrap();
+        (rgb, ifd, skin, blue)
+    }
+
+    #[test]
+    fn or_over_the_subtracted_pixels_adds_lambda_skin_where_the_ifd_passes() {
+        use bayestrack_appearance::{Candidate, Scratch, SkinModel};
+        use bayestrack_image::Rect;
+        let (rgb, ifd, skin, blue) = half_skin_frame();
         let frame = Frame::new().with_rgb(rgb.view()).with_ifd(ifd.view());
         let model = SkinModel::new(0.066, 0.38, 0.05).unwrap();
         let cue = SubtractedOr {
@@ -761,7 +772,7 @@ mod tests {
     #[test]
     fn or_normalised_divides_each_cue_by_its_mean_over_the_set() {
         use bayestrack_appearance::{Candidate, SkinModel};
-        use bayestrack_image::{Image, Rect, Rgb};
+        use bayestrack_image::Rect;
         /// A 2x2 window at the state, which never moves; off the frame
         /// for a negative x.
         struct Still;
@@ -779,19 +790,7 @@ mod tests {
                     .then(|| Candidate::Window(Rect::new(x[0] as usize, x[1] as usize, 2, 2)))
             }
         }
-        // The 8x4 frame of the subtracted-pixel test: left half skin, right
-        // half blue; IFD 0.2 in rows 0-1, 0.01 in rows 2-3.
-        let (skin, blue) = (Rgb::new(224, 172, 138), Rgb::new(40, 70, 200));
-        let mut rgb = Vec::new();
-        let mut ifd = Vec::new();
-        for y in 0..4 {
-            for x in 0..8 {
-                rgb.extend_from_slice(&if x < 4 { skin } else { blue }.to_array());
-                ifd.push(if y < 2 { 0.2f32 } else { 0.01 });
-            }
-        }
-        let rgb = Image::from_vec(8, 4, 3, rgb).unwrap();
-        let ifd = Image::from_vec(8, 4, 1, ifd).unwrap();
+        let (rgb, ifd, skin, blue) = half_skin_frame();
         let frame = Frame::new().with_rgb(rgb.view()).with_ifd(ifd.view());
         let model = SkinModel::new(0.066, 0.38, 0.05).unwrap();
         let (c_skin, c_blue) = (
