@@ -93,9 +93,10 @@ fn variants() -> Vec<Variant> {
             CueSet::OrNormalised { lambda: lambda50 },
         ),
         p("points IFD", false, CueSet::Ifd),
+        // (lambda = 0 still builds the skin model: RGB only)
         p(
             "points IFD subtracted",
-            false,
+            true,
             CueSet::OrSubtracted {
                 lambda: 0.0,
                 threshold: 0.05,
