@@ -456,6 +456,50 @@ pub(crate) fn check_threshold(threshold: f64) -> Result<()> {
     Ok(())
 }
 
+/// `mean`, a weighted mean `sum w_i x_i` of the finite states of `terms`
+/// (`(x_i, w_i)`, weights summing to one up to round-off), returned as it
+/// is when finite. A component that rounded past the largest `f64` (states
+/// within a rounding of it, or weights summing to `1 + 1e-16`) is summed
+/// again over halved states, doubled and clamped into the states' range: a
+/// weighted mean of finite states is finite.
+#[inline]
+pub(crate) fn finite_mean<'a, const N: usize, I>(
+    mean: SVector<f64, N>,
+    terms: impl Fn() -> I,
+) -> SVector<f64, N>
+where
+    I: Iterator<Item = (&'a SVector<f64, N>, f64)>,
+{
+    if mean.iter().all(|v| v.is_finite()) {
+        return mean;
+    }
+    redo_mean(mean, terms)
+}
+
+#[cold]
+#[inline(never)]
+fn redo_mean<'a, const N: usize, I>(
+    mut mean: SVector<f64, N>,
+    terms: impl Fn() -> I,
+) -> SVector<f64, N>
+where
+    I: Iterator<Item = (&'a SVector<f64, N>, f64)>,
+{
+    for j in 0..N {
+        if mean[j].is_finite() {
+            continue;
+        }
+        let (mut half, mut lo, mut hi) = (0.0, f64::INFINITY, f64::NEG_INFINITY);
+        for (x, w) in terms() {
+            half += w * (x[j] * 0.5);
+            lo = lo.min(x[j]);
+            hi = hi.max(x[j]);
+        }
+        mean[j] = (2.0 * half).max(lo).min(hi);
+    }
+    mean
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -608,48 +652,4 @@ mod tests {
         assert_eq!(anc.len(), 2);
         assert!((s.ess() - 2.0).abs() < 1e-12);
     }
-}
-
-/// `mean`, a weighted mean `sum w_i x_i` of the finite states of `terms`
-/// (`(x_i, w_i)`, weights summing to one up to round-off), returned as it
-/// is when finite. A component that rounded past the largest `f64` (states
-/// within a rounding of it, or weights summing to `1 + 1e-16`) is summed
-/// again over halved states, doubled and clamped into the states' range: a
-/// weighted mean of finite states is finite.
-#[inline]
-pub(crate) fn finite_mean<'a, const N: usize, I>(
-    mean: SVector<f64, N>,
-    terms: impl Fn() -> I,
-) -> SVector<f64, N>
-where
-    I: Iterator<Item = (&'a SVector<f64, N>, f64)>,
-{
-    if mean.iter().all(|v| v.is_finite()) {
-        return mean;
-    }
-    redo_mean(mean, terms)
-}
-
-#[cold]
-#[inline(never)]
-fn redo_mean<'a, const N: usize, I>(
-    mut mean: SVector<f64, N>,
-    terms: impl Fn() -> I,
-) -> SVector<f64, N>
-where
-    I: Iterator<Item = (&'a SVector<f64, N>, f64)>,
-{
-    for j in 0..N {
-        if mean[j].is_finite() {
-            continue;
-        }
-        let (mut half, mut lo, mut hi) = (0.0, f64::INFINITY, f64::NEG_INFINITY);
-        for (x, w) in terms() {
-            half += w * (x[j] * 0.5);
-            lo = lo.min(x[j]);
-            hi = hi.max(x[j]);
-        }
-        mean[j] = (2.0 * half).max(lo).min(hi);
-    }
-    mean
 }
