@@ -259,19 +259,38 @@ fn sec31_the_skin_term_of_eq9_moves_the_cloud_but_not_its_accuracy() {
     assert!((0.5..=10.0).contains(&apart), "{apart}");
 }
 
+/// Runs of the full-length hand test, and its two-sided bounds: half and
+/// twice the measured centre error and outline distance (MEASURED).
+const HAND_RUNS: usize = 4;
+const HAND_CENTRE: (f64, f64) = (4.0, 20.0);
+const HAND_OUTLINE: (f64, f64) = (2.0, 12.0);
+
 #[test]
-fn sec32_the_hand_contour_on_the_ifd_alone_follows_the_hand_loosely() {
+fn sec32_the_hand_contour_on_the_ifd_alone_tracks_the_hand_at_full_length() {
     // Sec. 3.2: contour, IFD only, N = 200, 45 control points, sigma 5 px /
-    // 3 deg / 0.05; our template the ellipse in the hand's first box.
-    // Not reproduced at the "tracks" bound (lost <= 5 %): measured (quick)
-    // 10.0 px centre, 5.5 px outline, 16 % lost (the IFD band on the
-    // fingers' edges; the wide 3 deg / 0.05 diffusion). With two moving
-    // boxes (`movers-2`) it is lost: 86 px, 80 %.
-    let h = result().hand_summary();
-    println!("{h:?}");
-    assert!(h.centre >= 4.0 && h.centre <= 20.0, "{h:?}");
-    assert!(h.outline >= 2.0 && h.outline <= 10.0, "{h:?}");
-    assert!(h.loss > 0.05 && h.loss <= 0.35, "{h:?}");
+    // 3 deg / 0.05; our template the ellipse in the hand's first box, the
+    // hand turning and changing size (`pose_motion`). Judged at the
+    // paper-scale length (150 frames; `--full`, 10 runs: 10.42 px centre,
+    // 6.32 px outline, 4 % lost): the hand is tracked. The quick scale's two
+    // 60-frame runs lose 14 %, which is why this test runs its own jobs.
+    // With two moving boxes (`movers-2`, quick) it is lost: 86 px, 80 %.
+    let config = CondensationConfig {
+        frames: 150,
+        runs: HAND_RUNS,
+        ..CondensationConfig::quick()
+    };
+    let (_, hands) = grid_of(&config, &[], true);
+    let pooled = |f: fn(&TrackRun) -> Vec<f64>| {
+        let all: Vec<f64> = hands.iter().flat_map(f).collect();
+        all.iter().sum::<f64>() / all.len() as f64
+    };
+    let centre = pooled(|r| r.centre.clone());
+    let outline = pooled(|r| r.outline.clone());
+    let lost = pooled(|r| r.lost.iter().map(|&l| f64::from(u8::from(l))).collect());
+    println!("hand, {HAND_RUNS} runs x 150 frames: {centre:.2} / {outline:.2} px, lost {lost:.3}");
+    assert!((HAND_CENTRE.0..=HAND_CENTRE.1).contains(&centre), "{centre}");
+    assert!((HAND_OUTLINE.0..=HAND_OUTLINE.1).contains(&outline), "{outline}");
+    assert!(lost <= 0.05, "{lost}");
     let (_, hands) = grid_of(&reading("movers-2"), &[], true);
     let lost = hands
         .iter()

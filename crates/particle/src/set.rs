@@ -396,9 +396,9 @@ impl<T: Clone> ParticleSet<T> {
         }
     }
 
-    /// Weighted mean `sum w_i x_i`; finite, since the states are (a sum
-    /// that rounds past the largest `f64` is redone, see
-    /// [`finite_mean`]).
+    /// Weighted mean `sum w_i x_i`; finite, since the states are (a
+    /// component whose sum rounds past the largest `f64` is summed again
+    /// over halved states and clamped into the states' range).
     pub fn mean<const N: usize>(&self) -> SVector<f64, N>
     where
         T: Particle<N>,
