@@ -260,10 +260,14 @@ fn sec31_the_skin_term_of_eq9_moves_the_cloud_but_not_its_accuracy() {
 }
 
 /// Runs of the full-length hand test, and its two-sided bounds: half and
-/// twice the measured centre error and outline distance (MEASURED).
-const HAND_RUNS: usize = 4;
-const HAND_CENTRE: (f64, f64) = (4.0, 20.0);
-const HAND_OUTLINE: (f64, f64) = (2.0, 12.0);
+/// twice the measured centre error and outline distance (6 runs x 150
+/// frames: 9.69 / 5.50 px, 3.1 % lost; about 7 s in the test profile).
+/// Freezing the contour's rotation and scale does not fail it (10.09 /
+/// 5.84 px, 4.8 %): `sec33_the_contours_turn_and_scale_with_the_face`
+/// catches that.
+const HAND_RUNS: usize = 6;
+const HAND_CENTRE: (f64, f64) = (4.8, 19.4);
+const HAND_OUTLINE: (f64, f64) = (2.75, 11.0);
 
 #[test]
 fn sec32_the_hand_contour_on_the_ifd_alone_tracks_the_hand_at_full_length() {
@@ -288,8 +292,14 @@ fn sec32_the_hand_contour_on_the_ifd_alone_tracks_the_hand_at_full_length() {
     let outline = pooled(|r| r.outline.clone());
     let lost = pooled(|r| r.lost.iter().map(|&l| f64::from(u8::from(l))).collect());
     println!("hand, {HAND_RUNS} runs x 150 frames: {centre:.2} / {outline:.2} px, lost {lost:.3}");
-    assert!((HAND_CENTRE.0..=HAND_CENTRE.1).contains(&centre), "{centre}");
-    assert!((HAND_OUTLINE.0..=HAND_OUTLINE.1).contains(&outline), "{outline}");
+    assert!(
+        (HAND_CENTRE.0..=HAND_CENTRE.1).contains(&centre),
+        "{centre}"
+    );
+    assert!(
+        (HAND_OUTLINE.0..=HAND_OUTLINE.1).contains(&outline),
+        "{outline}"
+    );
     assert!(lost <= 0.05, "{lost}");
     let (_, hands) = grid_of(&reading("movers-2"), &[], true);
     let lost = hands
