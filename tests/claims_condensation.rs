@@ -14,7 +14,7 @@ use std::sync::OnceLock;
 
 use bayestrack_experiments::condensation::{
     Claim, CondensationConfig, CondensationExperiment, CondensationResult, CrossingCount,
-    CrossingRun, Cue, Done, GridKey, GridSummary, READINGS, ReinitRun, Representation,
+    CrossingRun, Cue, Done, GridKey, GridSummary, HandSummary, READINGS, ReinitRun, Representation,
     SIDE_TRACKERS, TrackRun, run,
 };
 use bayestrack_experiments::driver::run_jobs;
@@ -103,6 +103,17 @@ fn grid_of(
     (summary, hands)
 }
 
+/// The OR point cloud (N = 50) of the quick scale under reading `name`.
+fn or_cloud_under(name: &str) -> GridSummary {
+    let (cells, _) = grid_of(
+        &reading(name),
+        &[key(Representation::Points, Cue::Or, 50)],
+        false,
+    );
+    println!("{name}: {:?}", cells[0]);
+    cells[0]
+}
+
 fn key(representation: Representation, cue: Cue, particles: usize) -> GridKey {
     GridKey {
         representation,
@@ -124,18 +135,9 @@ fn sec31_the_or_point_cloud_tracks_when_eq9_sums_the_subtracted_pixels() {
     assert!(or.centre >= 1.0 && or.centre <= 9.0, "{or:?}");
     assert!(or.loss <= 0.05, "{or:?}");
     assert!(result().verdict(Claim::PointsOrTracks).holds);
-    let (raw, _) = grid_of(
-        &reading("or-raw"),
-        &[key(Representation::Points, Cue::Or, 50)],
-        false,
-    );
-    println!("or-raw: {:?}", raw[0]);
-    assert!(
-        raw[0].centre >= 20.0 && raw[0].centre <= 80.0,
-        "{:?}",
-        raw[0]
-    );
-    assert!(raw[0].loss >= 0.3 && raw[0].loss <= 0.8, "{:?}", raw[0]);
+    let raw = or_cloud_under("or-raw");
+    assert!(raw.centre >= 20.0 && raw.centre <= 80.0, "{raw:?}");
+    assert!(raw.loss >= 0.3 && raw.loss <= 0.8, "{raw:?}");
     // Each cue normalised over the set before the sum (`or-normalised`):
     // the wall's IFD is back in every window and, with `lambda = 1/N`, the
     // skin term weighs 1/N of the IFD's on average: the cloud wanders like
@@ -143,18 +145,9 @@ fn sec31_the_or_point_cloud_tracks_when_eq9_sums_the_subtracted_pixels() {
     // lost (raw 42.5 px, 55 %); 8 quick runs (a probe of the trackers)
     // normalised 23.5 px, 39 %; raw 32.3 px, 50 %; IFD alone 24.9 px, 45
     // %. Bound: centre in [10, 60] px, lost in [15 %, 70 %].
-    let (norm, _) = grid_of(
-        &reading("or-normalised"),
-        &[key(Representation::Points, Cue::Or, 50)],
-        false,
-    );
-    println!("or-normalised: {:?}", norm[0]);
-    assert!(
-        norm[0].centre >= 10.0 && norm[0].centre <= 60.0,
-        "{:?}",
-        norm[0]
-    );
-    assert!(norm[0].loss >= 0.15 && norm[0].loss <= 0.7, "{:?}", norm[0]);
+    let norm = or_cloud_under("or-normalised");
+    assert!(norm.centre >= 10.0 && norm.centre <= 60.0, "{norm:?}");
+    assert!(norm.loss >= 0.15 && norm.loss <= 0.7, "{norm:?}");
 }
 
 /// Runs of the skin-term claim (8 quick runs: one OR cloud's accuracy
@@ -284,13 +277,11 @@ fn sec32_the_hand_contour_on_the_ifd_alone_tracks_the_hand_at_full_length() {
         ..CondensationConfig::quick()
     };
     let (_, hands) = grid_of(&config, &[], true);
-    let pooled = |f: fn(&TrackRun) -> Vec<f64>| {
-        let all: Vec<f64> = hands.iter().flat_map(f).collect();
-        all.iter().sum::<f64>() / all.len() as f64
-    };
-    let centre = pooled(|r| r.centre.clone());
-    let outline = pooled(|r| r.outline.clone());
-    let lost = pooled(|r| r.lost.iter().map(|&l| f64::from(u8::from(l))).collect());
+    let HandSummary {
+        centre,
+        outline,
+        loss: lost,
+    } = HandSummary::of(&hands);
     println!("hand, {HAND_RUNS} runs x 150 frames: {centre:.2} / {outline:.2} px, lost {lost:.3}");
     assert!(
         (HAND_CENTRE.0..=HAND_CENTRE.1).contains(&centre),
@@ -302,12 +293,7 @@ fn sec32_the_hand_contour_on_the_ifd_alone_tracks_the_hand_at_full_length() {
     );
     assert!(lost <= 0.05, "{lost}");
     let (_, hands) = grid_of(&reading("movers-2"), &[], true);
-    let lost = hands
-        .iter()
-        .flat_map(|r| r.lost.iter())
-        .filter(|&&l| l)
-        .count() as f64
-        / hands.iter().map(|r| r.lost.len()).sum::<usize>() as f64;
+    let lost = HandSummary::of(&hands).loss;
     println!("movers-2 hand lost {lost}");
     assert!(lost >= 0.5, "{lost}");
 }

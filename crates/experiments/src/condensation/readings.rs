@@ -99,22 +99,7 @@ fn pct(v: f64) -> String {
 impl CondensationResult {
     /// The sec. 3.2 hand runs summarised (centre, outline, lost; no fps).
     pub fn hand_summary(&self) -> HandSummary {
-        let all = |f: fn(&TrackRun) -> &Vec<f64>| -> Vec<f64> {
-            self.hand
-                .iter()
-                .flat_map(|r| f(r).iter().copied())
-                .collect()
-        };
-        let lost: Vec<f64> = self
-            .hand
-            .iter()
-            .flat_map(|r| r.lost.iter().map(|&l| f64::from(u8::from(l))))
-            .collect();
-        HandSummary {
-            centre: mean(&all(|r| &r.centre)),
-            outline: mean(&all(|r| &r.outline)),
-            loss: mean(&lost),
-        }
+        HandSummary::of(&self.hand)
     }
 
     /// Every claim judged on this run.
@@ -257,6 +242,24 @@ pub struct HandSummary {
     pub outline: f64,
     /// Share of frames lost.
     pub loss: f64,
+}
+
+impl HandSummary {
+    /// Means over every frame of `runs` (pooled).
+    pub fn of(runs: &[TrackRun]) -> Self {
+        let all = |f: fn(&TrackRun) -> &Vec<f64>| -> Vec<f64> {
+            runs.iter().flat_map(|r| f(r).iter().copied()).collect()
+        };
+        let lost: Vec<f64> = runs
+            .iter()
+            .flat_map(|r| r.lost.iter().map(|&l| f64::from(u8::from(l))))
+            .collect();
+        Self {
+            centre: mean(&all(|r| &r.centre)),
+            outline: mean(&all(|r| &r.outline)),
+            loss: mean(&lost),
+        }
+    }
 }
 
 /// One reading of choices paper 003 leaves open, as `--set` overrides on
