@@ -39,6 +39,7 @@ fn run_tracker(
     frames: &[Image<u8>],
     first: BBox,
     boxes: &mut Vec<BBox>,
+    lost: &mut usize,
 ) -> u64 {
     let mut h = 0xcbf2_9ce4_8422_2325_u64;
     let mut mix = |x: f64| {
@@ -50,6 +51,7 @@ fn run_tracker(
     for f in &frames[1..] {
         let e = tracker.step(black_box(f.view())).expect("step");
         let b = e.bbox;
+        *lost += usize::from(e.lost);
         boxes.push(b);
         mix(b.x);
         mix(b.y);
@@ -75,11 +77,13 @@ fn main() {
     let mut best = f64::INFINITY;
     let mut digest = 0;
     let mut boxes = Vec::with_capacity(frames.len());
+    let mut lost = 0;
     for _ in 0..repeats {
         boxes.clear();
+        lost = 0;
         let mut tracker = info.build_with(0, &set).expect("tracker options");
         let t0 = Instant::now();
-        digest = run_tracker(tracker.as_mut(), &frames, first, &mut boxes);
+        digest = run_tracker(tracker.as_mut(), &frames, first, &mut boxes, &mut lost);
         best = best.min(t0.elapsed().as_secs_f64());
     }
     // PROFILE_BOXES=FILE: the boxes, one `x,y,width,height` line a frame
@@ -92,7 +96,7 @@ fn main() {
         std::fs::write(path, text).expect("write the boxes");
     }
     println!(
-        "{name} on {seq}: {} frames, digest {digest:016x}, best {:.0} fps",
+        "{name} on {seq}: {} frames, digest {digest:016x}, best {:.0} fps, {lost} reported lost",
         frames.len(),
         (frames.len() - 1) as f64 / best
     );
