@@ -69,6 +69,13 @@ pub(crate) fn check_finite_mat<const R: usize, const C: usize>(
     }
 }
 
+/// The sum of the entries of `v`: finite exactly when all of them are
+/// (unless the sum overflows; `-0` for `D = 0`).
+#[inline(always)]
+pub(crate) fn vec_sum<const D: usize>(v: &SVector<f64, D>) -> f64 {
+    lane_sum(v.as_slice())
+}
+
 /// The sum of the entries of `mean` and of the lower triangle of `cov`, in
 /// two interleaved partial sums: finite exactly when all of them are
 /// (unless the sum overflows), so for an exactly symmetric `cov` a test

@@ -57,12 +57,58 @@ pub(crate) struct Moments<const N: usize, const K: usize, const M: usize> {
     pub(crate) p_in_x: SMatrix<f64, N, K>,
 }
 
-/// The scaled sigma-point parameters `alpha`, `beta`, `kappa`, checked.
+impl<const N: usize, const K: usize, const M: usize> Moments<N, K, M> {
+    /// The checks of the sigma-point means, in order: "sigma-point mean of
+    /// f", then "of h" (the transform leaves them to its caller).
+    #[inline(always)]
+    pub(crate) fn check_means(&self, step: Step) -> Result<()> {
+        linalg::check_finite_vec(&self.x_mean, "sigma-point mean of f", step)?;
+        linalg::check_finite_vec(&self.y_mean, "sigma-point mean of h", step)
+    }
+
+    /// A sum that is finite only if both means are (the fast form of
+    /// [`Moments::check_means`], folded into a caller's output test).
+    #[inline(always)]
+    pub(crate) fn means_sum(&self) -> f64 {
+        linalg::vec_sum(&self.x_mean) + linalg::vec_sum(&self.y_mean)
+    }
+
+    /// The prediction `N(x_mean, cov)` (`cov` exactly symmetric), checked:
+    /// the means (as [`Moments::check_means`]), then the belief's mean and
+    /// covariance ("mean", "covariance" in `step`), with one fast test for
+    /// all of them and the exact checks, in that order, only when it fails.
+    #[inline(always)]
+    pub(crate) fn prediction(&self, cov: SMatrix<f64, K, K>, step: Step) -> Result<Gaussian<K>> {
+        debug_assert!(
+            cov == cov.transpose() || cov.iter().any(|x| x.is_nan()),
+            "filter output not exactly symmetric"
+        );
+        if !(linalg::sym_sum(&self.x_mean, &cov) + linalg::vec_sum(&self.y_mean)).is_finite() {
+            self.check_means(step)?;
+            linalg::check_finite_sym_belief(&self.x_mean, "mean", &cov, "covariance", step)?;
+        }
+        // built in one place (not in each branch): the result stays in
+        // registers instead of a stack slot both branches write
+        Ok(Gaussian::from_parts(self.x_mean, cov))
+    }
+}
+
+/// The scaled sigma-point parameters `alpha`, `beta`, `kappa`, checked,
+/// with what every step's weights need computed once: `alpha^2`,
+/// `beta - alpha^2` and the dimensions whose weights are valid.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct SigmaPoints {
     pub(crate) alpha: f64,
     pub(crate) beta: f64,
     pub(crate) kappa: f64,
+    /// `alpha^2`.
+    a2: f64,
+    /// `beta - alpha^2`.
+    g: f64,
+    /// The dimensions `L` whose weights pass the checks of
+    /// [`SigmaPoints::weights_for`] are `lo..=hi` (none when `lo > hi`).
+    lo: usize,
+    hi: usize,
 }
 
 /// The zero-dimensional Gaussian: "no noise block".
@@ -115,42 +161,121 @@ impl SigmaPoints {
                 });
             }
         }
-        Ok(Self { alpha, beta, kappa })
+        let a2 = alpha * alpha;
+        let mut points = Self {
+            alpha,
+            beta,
+            kappa,
+            a2,
+            g: beta - a2,
+            lo: 1,
+            hi: 0,
+        };
+        (points.lo, points.hi) = points.valid_dimensions();
+        Ok(points)
+    }
+
+    /// `c = alpha^2 (L + kappa)` for dimension `l`, as every step forms it.
+    #[inline(always)]
+    fn spread(&self, l: f64) -> f64 {
+        self.a2 * (l + self.kappa)
+    }
+
+    /// The weights' checks for dimension `l`, evaluated (tests): `1e-8 <= c < inf`
+    /// and `alpha^2 kappa + beta L >= 0` (what `weights_for` checked on
+    /// every step before the range was computed once).
+    #[cfg(test)]
+    fn weights_valid(&self, l: usize) -> bool {
+        let lf = l as f64;
+        let c = self.spread(lf);
+        c >= MIN_SPREAD && 0.5 / c > 0.0 && self.a2 * self.kappa + self.beta * lf >= 0.0
+    }
+
+    /// The range `lo..=hi` of dimensions `L` whose weights are valid. Each
+    /// check is monotone in `L` (`L as f64`, `c` and `beta L` are rounded
+    /// monotone functions of `L`; adding the constant `alpha^2 kappa` keeps
+    /// the order): `c >= 1e-8` holds from some `L` on, `0.5 / c > 0`
+    /// (given that, `c < inf`) up to some `L`, and `alpha^2 kappa + beta L >= 0` from some `L` on when
+    /// `beta >= 0` and up to some `L` when `beta < 0`. So the valid
+    /// dimensions are the interval of the lower and upper bounds, found by
+    /// bisection on the same float expressions (tests/bad_input.rs checks
+    /// it against the direct evaluation).
+    fn valid_dimensions(&self) -> (usize, usize) {
+        let rises = self.beta >= 0.0;
+        let from = |l: usize| {
+            let lf = l as f64;
+            self.spread(lf) >= MIN_SPREAD
+                && (!rises || self.a2 * self.kappa + self.beta * lf >= 0.0)
+        };
+        // with `c >= 1e-8 > 0`, `0.5 / c > 0` exactly when `c < inf` (the
+        // smallest `0.5 / c`, about 2.8e-309, is a positive subnormal)
+        let upto = |l: usize| {
+            let lf = l as f64;
+            self.spread(lf) < f64::INFINITY
+                && (rises || self.a2 * self.kappa + self.beta * lf >= 0.0)
+        };
+        if !from(usize::MAX) || !upto(0) {
+            return (1, 0);
+        }
+        // smallest l with from(l): from(b) holds throughout
+        let (mut a, mut b) = (0usize, usize::MAX);
+        while a < b {
+            let mid = a + (b - a) / 2;
+            if from(mid) { b = mid } else { a = mid + 1 }
+        }
+        let lo = a;
+        // largest l with upto(l): upto(a) holds throughout
+        let (mut a, mut b) = (0usize, usize::MAX);
+        while a < b {
+            let mid = b - (b - a) / 2;
+            if upto(mid) { a = mid } else { b = mid - 1 }
+        }
+        (lo, a)
+    }
+
+    /// The range of valid dimensions (tests).
+    #[cfg(test)]
+    pub(crate) fn valid_range(&self) -> (usize, usize) {
+        (self.lo, self.hi)
     }
 
     /// The unscented transform that is the third-degree spherical-radial
     /// cubature rule: `alpha = 1`, `beta = 0`, `kappa = 0` (see
     /// [`Ckf`](crate::Ckf)).
     pub(crate) const fn cubature() -> Self {
+        // c = L: valid from L = 1 on (c < inf for every L; alpha^2 kappa +
+        // beta L = 0); a unit test compares these with `new(1, 0, 0)`
         Self {
             alpha: 1.0,
             beta: 0.0,
             kappa: 0.0,
+            a2: 1.0,
+            g: -1.0,
+            lo: 1,
+            hi: usize::MAX,
         }
     }
 
     /// The weights for a (possibly augmented) state of dimension `l`, checked
     /// as [`Ukf::weights`](crate::Ukf::weights) documents.
+    ///
+    /// The checks (`1e-8 <= c < inf`, `alpha^2 kappa + beta L >= 0`) were
+    /// evaluated for every `L` when the parameters were checked: here they
+    /// are one range test on `L`, constant after inlining.
     #[inline(always)]
     pub(crate) fn weights_for(&self, l: usize) -> Result<Weights> {
-        let a2 = self.alpha * self.alpha;
         let lf = l as f64;
-        let c = a2 * (lf + self.kappa);
-        let wi = 0.5 / c;
-        // MIN_SPREAD <= c < inf (1 / inf = 0) and a positive semi-definite
-        // covariance, as float compares (`is_finite` compiles to integer
-        // bit tests on every step)
-        let valid = c >= MIN_SPREAD && wi > 0.0 && a2 * self.kappa + self.beta * lf >= 0.0;
-        if !valid {
+        let c = self.spread(lf);
+        if l < self.lo || l > self.hi {
             return Err(self.weights_error(lf, c));
         }
         let wm0 = (c - lf) / c;
         Ok(Weights {
             wm0,
-            wc0: wm0 + 1.0 - a2 + self.beta,
-            wi,
+            wc0: wm0 + 1.0 - self.a2 + self.beta,
+            wi: 0.5 / c,
             c,
-            g: self.beta - a2,
+            g: self.g,
         })
     }
 
@@ -191,6 +316,10 @@ impl SigmaPoints {
 
     /// Pushes the sigma points of `[x; v; w] ~ N([m; mv; mw], diag(P, Qv, Rw))`
     /// through `xf = f(x, v)` and `y = h(xf, w)`.
+    ///
+    /// The means are not checked here: the caller runs
+    /// [`Moments::check_means`] (or folds it into the test of its outputs,
+    /// running it first when that test fails).
     ///
     /// The moments are accumulated as deviations from the central point
     /// (`dx_i = Xf_i - Xf_0`): since `Wm_0 + 2 L W_i = 1`,
@@ -302,10 +431,10 @@ impl SigmaPoints {
 
         let d = sdx * wt.wi;
         let e = sdy * wt.wi;
+        // the means' finiteness is checked by the caller
+        // ([`Moments::check_means`]), folded into its test of its outputs
         let x_mean = sx.boxplus(&xf0, &d);
         let y_mean = sz.boxplus(&y0, &e);
-        linalg::check_finite_vec(&x_mean, "sigma-point mean of f", step)?;
-        linalg::check_finite_vec(&y_mean, "sigma-point mean of h", step)?;
         let mut p_xx = SMatrix::<f64, K, K>::zeros();
         for j in 0..K {
             for i in j..K {
@@ -333,6 +462,14 @@ impl SigmaPoints {
     /// with `S = L D L^T`, `U = P_xy L^{-T}` and `V = U D^{-1}`,
     /// `K = V L^{-1}`, `K nu = V y` for `y = L^{-1} nu`, and
     /// `K S K^T = V U^T`.
+    ///
+    /// The checks of the inputs are deferred and folded into the test of
+    /// the outputs: `pending` (checks the caller left, such as
+    /// [`Moments::check_means`], whose values sum to `pending_sum`), then
+    /// the finiteness of `z` ("measurement z"), run in that order before
+    /// any other error is returned, so the errors are those of checking
+    /// each input first.
+    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     pub(crate) fn correct<const N: usize, const M: usize>(
         predicted: &Gaussian<N>,
@@ -341,9 +478,20 @@ impl SigmaPoints {
         p_xy: &SMatrix<f64, N, M>,
         z: &SVector<f64, M>,
         sz: &impl Manifold<M>,
+        pending_sum: f64,
+        pending: impl Fn() -> Result<()>,
     ) -> Result<Update<N, M>> {
-        linalg::check_finite_vec(z, "measurement z", Step::Update)?;
-        let ldl = linalg::Ldl::new(&s, "innovation covariance S", Step::Update)?;
+        let inputs = || {
+            pending()?;
+            linalg::check_finite_vec(z, "measurement z", Step::Update)
+        };
+        let ldl = match linalg::Ldl::new(&s, "innovation covariance S", Step::Update) {
+            Ok(ldl) => ldl,
+            Err(e) => {
+                inputs()?;
+                return Err(e);
+            }
+        };
         let u = ldl.right_solve_lt(p_xy);
         let v = ldl.scale_columns(&u);
         let residual = sz.residual(z, y_mean);
@@ -354,8 +502,12 @@ impl SigmaPoints {
         // the checks of the outputs in one test (as the KF's gain step):
         // the exact checks, in order, name a failure
         let fast_ok = linalg::min_diagonal(&cov) >= 0.0
-            && (linalg::sym_sum(&mean, &cov) + innovation.log_likelihood).is_finite();
+            && (linalg::sym_sum(&mean, &cov)
+                + innovation.log_likelihood
+                + (pending_sum + linalg::vec_sum(z)))
+            .is_finite();
         if !fast_ok {
+            inputs()?;
             linalg::check_variances(
                 &mut cov,
                 predicted.cov(),
@@ -370,5 +522,64 @@ impl SigmaPoints {
             innovation: Some(innovation),
             iterations: 1,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The range of valid dimensions computed once is exactly the set of
+    /// dimensions whose weights pass the checks evaluated directly.
+    #[test]
+    fn the_valid_dimensions_are_those_the_checks_accept() {
+        let alphas = [1e-4, 1e-3, 0.5, 1.0, 3.0, 1e100, 1e150];
+        let betas = [0.0, -0.0, 2.0, -1.0, -1e6, 1e300, -1e300, f64::MAX];
+        let kappas = [
+            0.0,
+            3.0,
+            -2.0,
+            -3.0,
+            -60.5,
+            1e-300,
+            -3.0 + 1e-300,
+            1e300,
+            -1e300,
+            f64::MAX,
+        ];
+        let large = [
+            1usize << 40,
+            1 << 53,
+            (1 << 53) + 1,
+            1 << 62,
+            usize::MAX - 1,
+            usize::MAX,
+        ];
+        let mut seen = [0usize; 2];
+        for a in alphas {
+            for b in betas {
+                for k in kappas {
+                    let p = SigmaPoints::new(a, b, k).unwrap();
+                    let (lo, hi) = p.valid_range();
+                    for l in (0..=80).chain(large) {
+                        let direct = p.weights_valid(l);
+                        assert_eq!(direct, lo <= l && l <= hi, "{a} {b} {k} {l}: {lo}..={hi}");
+                        assert_eq!(p.weights_for(l).is_ok(), direct, "{a} {b} {k} {l}");
+                        seen[usize::from(direct)] += 1;
+                    }
+                }
+            }
+        }
+        // both outcomes are exercised
+        assert!(seen[0] > 1000 && seen[1] > 1000, "{seen:?}");
+    }
+
+    /// The constant cubature parameters equal those `new` computes.
+    #[test]
+    fn the_cubature_constants_are_those_of_new() {
+        assert_eq!(
+            SigmaPoints::cubature(),
+            SigmaPoints::new(1.0, 0.0, 0.0).unwrap()
+        );
     }
 }

@@ -242,10 +242,11 @@ impl Ukf {
         let mo = self
             .points
             .transform(prior, v, w, f, h, sx, sz, Step::Predict)?;
-        let predicted =
-            Gaussian::checked(mo.x_mean, linalg::add_sym(&mo.p_xx, q_add), Step::Predict)?;
+        // the means are checked with the prediction (both of them)
+        let predicted = mo.prediction(linalg::add_sym(&mo.p_xx, q_add), Step::Predict)?;
         let s = linalg::add_sym(&mo.p_yy, r_add);
-        let update = SigmaPoints::correct(&predicted, &mo.y_mean, s, &mo.p_xy, z, sz)?;
+        let update =
+            SigmaPoints::correct(&predicted, &mo.y_mean, s, &mo.p_xy, z, sz, -0.0, || Ok(()))?;
         Ok(UkfStep { predicted, update })
     }
 
@@ -281,7 +282,7 @@ impl Ukf {
             &Euclidean,
             Step::Predict,
         )?;
-        Gaussian::checked(mo.x_mean, linalg::add_sym(&mo.p_xx, &q), Step::Predict)
+        mo.prediction(linalg::add_sym(&mo.p_xx, &q), Step::Predict)
     }
 
     /// Measurement update with sigma points drawn from `prior`, in the
@@ -324,6 +325,8 @@ impl Ukf {
             &mo.p_xy,
             z,
             &measurement.measurement_space(),
+            mo.means_sum(),
+            || mo.check_means(Step::Update),
         )
     }
 
@@ -397,7 +400,7 @@ impl Ukf {
             &Euclidean,
             Step::Predict,
         )?;
-        Gaussian::checked(mo.x_mean, mo.p_xx, Step::Predict)
+        mo.prediction(mo.p_xx, Step::Predict)
     }
 
     /// Augmented measurement update: sigma points of `[x; n]` through `h(x, n)`.
@@ -435,6 +438,8 @@ impl Ukf {
             &mo.p_xy,
             z,
             &measurement.measurement_space(),
+            mo.means_sum(),
+            || mo.check_means(Step::Update),
         )
     }
 
@@ -523,7 +528,7 @@ impl Ukf {
                 &Euclidean,
                 Step::Smooth,
             )?;
-            let predicted = Gaussian::checked(mo.x_mean, mo.p_xx, Step::Smooth)?;
+            let predicted = mo.prediction(mo.p_xx, Step::Smooth)?;
             return Ok((predicted, mo.p_in_x));
         }
         let mo = self.points.transform(
@@ -536,7 +541,7 @@ impl Ukf {
             &Euclidean,
             Step::Smooth,
         )?;
-        let predicted = Gaussian::checked(mo.x_mean, linalg::add_sym(&mo.p_xx, q), Step::Smooth)?;
+        let predicted = mo.prediction(linalg::add_sym(&mo.p_xx, q), Step::Smooth)?;
         Ok((predicted, mo.p_in_x))
     }
 }

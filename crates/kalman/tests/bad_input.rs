@@ -683,3 +683,210 @@ fn posterior_variances_returned_with_ok_are_never_negative() {
     }
     assert!(checked > 100, "{checked}");
 }
+
+/// A measurement space whose mean is not finite while its residuals are:
+/// only the check of the sigma-point mean of `h` (and of `z`) can report
+/// it, since every output of the update is finite.
+struct InfiniteMean;
+
+impl bayestrack_kalman::Manifold<1> for InfiniteMean {
+    fn residual(&self, _: &Vector1<f64>, _: &Vector1<f64>) -> Vector1<f64> {
+        Vector1::zeros()
+    }
+    fn boxplus(&self, _: &Vector1<f64>, _: &Vector1<f64>) -> Vector1<f64> {
+        Vector1::new(f64::INFINITY)
+    }
+}
+
+/// A pendulum-like model whose state and measurement spaces are
+/// [`InfiniteMean`]-style when asked.
+struct BadSpaces {
+    bad_state: bool,
+    bad_measurement: bool,
+}
+
+/// The state space of [`BadSpaces`]: plain, or with an infinite mean.
+struct StateSpace(bool);
+
+impl bayestrack_kalman::Manifold<2> for StateSpace {
+    fn boxplus(&self, c: &Vector2<f64>, o: &Vector2<f64>) -> Vector2<f64> {
+        if self.0 {
+            Vector2::new(f64::INFINITY, 0.0)
+        } else {
+            c + o
+        }
+    }
+}
+
+/// The measurement space of [`BadSpaces`].
+struct MeasurementSpace(bool);
+
+impl bayestrack_kalman::Manifold<1> for MeasurementSpace {
+    fn residual(&self, a: &Vector1<f64>, b: &Vector1<f64>) -> Vector1<f64> {
+        if self.0 {
+            InfiniteMean.residual(a, b)
+        } else {
+            a - b
+        }
+    }
+    fn boxplus(&self, c: &Vector1<f64>, o: &Vector1<f64>) -> Vector1<f64> {
+        if self.0 {
+            InfiniteMean.boxplus(c, o)
+        } else {
+            c + o
+        }
+    }
+}
+
+impl bayestrack_kalman::Dynamics<2> for BadSpaces {
+    fn propagate(&self, x: &Vector2<f64>) -> Vector2<f64> {
+        Vector2::new(x[0] + 0.1 * x[1], x[1] - 0.1 * x[0].sin())
+    }
+    fn process_noise(&self) -> Matrix2<f64> {
+        Matrix2::identity() * 1e-4
+    }
+    fn state_space(&self) -> impl bayestrack_kalman::Manifold<2> {
+        StateSpace(self.bad_state)
+    }
+}
+
+impl bayestrack_kalman::Measurement<2, 1> for BadSpaces {
+    fn observe(&self, x: &Vector2<f64>) -> Vector1<f64> {
+        Vector1::new(x[0].sin())
+    }
+    fn measurement_noise(&self) -> Matrix1<f64> {
+        Matrix1::new(0.01)
+    }
+    fn measurement_space(&self) -> impl bayestrack_kalman::Manifold<1> {
+        MeasurementSpace(self.bad_measurement)
+    }
+}
+
+/// The UKF checks the sigma-point means and `z` even when they leave no
+/// trace in the outputs (the checks are folded into the test of the
+/// outputs, and run in order, each named, when it fails): a measurement
+/// space whose residuals are zero and whose mean is infinite gives finite
+/// outputs, so only these checks report it.
+#[test]
+fn the_ukf_names_a_non_finite_sigma_point_mean_or_z_even_with_finite_outputs() {
+    use bayestrack_kalman::Manifold;
+    let prior = Gaussian::new(Vector2::new(0.5, 0.1), Matrix2::identity() * 0.1).unwrap();
+    let ukf = Ukf::new(1.0, 2.0, 0.0).unwrap();
+    let z = Vector1::new(0.4);
+    let (plain, bad_f, bad_h) = (
+        BadSpaces {
+            bad_state: false,
+            bad_measurement: false,
+        },
+        BadSpaces {
+            bad_state: true,
+            bad_measurement: false,
+        },
+        BadSpaces {
+            bad_state: false,
+            bad_measurement: true,
+        },
+    );
+    fn non_finite<T>(what: &'static str, step: Step) -> Result<T, KalmanError> {
+        Err(KalmanError::NonFinite { what, step })
+    }
+    assert!(ukf.predict(&prior, &plain).is_ok());
+    assert!(ukf.update(&prior, &plain, Some(&z)).is_ok());
+    assert_eq!(
+        ukf.predict(&prior, &bad_f),
+        non_finite("sigma-point mean of f", Step::Predict)
+    );
+    assert_eq!(
+        ukf.update(&prior, &bad_h, Some(&z)),
+        non_finite("sigma-point mean of h", Step::Update)
+    );
+    // one sigma-point set: both means are checked with the prediction
+    assert_eq!(
+        ukf.step(&prior, &plain, &bad_h, Some(&z)).map(|s| s.update),
+        non_finite("sigma-point mean of h", Step::Predict)
+    );
+    assert_eq!(
+        ukf.step(&prior, &bad_f, &plain, Some(&z)).map(|s| s.update),
+        non_finite("sigma-point mean of f", Step::Predict)
+    );
+    // a NaN z whose residual the space maps to zero: every output is
+    // finite, z is still refused (and named before the bad mean of h
+    // would be: the means first)
+    let zero_residual = MeasurementSpace(true);
+    assert_eq!(
+        zero_residual.residual(&Vector1::new(f64::NAN), &z),
+        Vector1::zeros()
+    );
+    let nan = Vector1::new(f64::NAN);
+    assert_eq!(
+        ukf.update(&prior, &bad_h, Some(&nan)),
+        non_finite("sigma-point mean of h", Step::Update)
+    );
+    let nan_z_only = ZeroResidual;
+    assert_eq!(
+        ukf.update(&prior, &nan_z_only, Some(&nan)),
+        non_finite("measurement z", Step::Update)
+    );
+    assert_eq!(
+        ukf.step(&prior, &plain, &nan_z_only, Some(&nan))
+            .map(|s| s.update),
+        non_finite("measurement z", Step::Update)
+    );
+}
+
+/// `h(x) = sin x_0` in a measurement space whose residuals are zero (its
+/// mean is plain): a non-finite `z` leaves the outputs finite.
+struct ZeroResidual;
+
+/// The space of [`ZeroResidual`].
+struct ZeroResidualSpace;
+
+impl bayestrack_kalman::Manifold<1> for ZeroResidualSpace {
+    fn residual(&self, _: &Vector1<f64>, _: &Vector1<f64>) -> Vector1<f64> {
+        Vector1::zeros()
+    }
+}
+
+impl bayestrack_kalman::Measurement<2, 1> for ZeroResidual {
+    fn observe(&self, x: &Vector2<f64>) -> Vector1<f64> {
+        Vector1::new(x[0].sin())
+    }
+    fn measurement_noise(&self) -> Matrix1<f64> {
+        Matrix1::new(0.01)
+    }
+    fn measurement_space(&self) -> impl bayestrack_kalman::Manifold<1> {
+        ZeroResidualSpace
+    }
+}
+
+/// When the innovation covariance cannot be factored and an input is bad,
+/// the input is named (the checks of the inputs run first, as when each
+/// was checked before use): an `h` that is infinite at one sigma point
+/// makes both the mean of `h` and `S` non-finite.
+#[test]
+fn a_bad_sigma_point_mean_is_named_before_the_innovation_covariance() {
+    struct Spike;
+    impl bayestrack_kalman::Measurement<2, 1> for Spike {
+        fn observe(&self, x: &Vector2<f64>) -> Vector1<f64> {
+            Vector1::new(if x[0] > 0.6 { f64::INFINITY } else { x[0] })
+        }
+        fn measurement_noise(&self) -> Matrix1<f64> {
+            Matrix1::new(0.01)
+        }
+    }
+    let prior = Gaussian::new(Vector2::new(0.5, 0.1), Matrix2::identity() * 0.1).unwrap();
+    let ukf = Ukf::new(1.0, 2.0, 0.0).unwrap();
+    let expected = Err(KalmanError::NonFinite {
+        what: "sigma-point mean of h",
+        step: Step::Update,
+    });
+    assert_eq!(
+        ukf.update(&prior, &Spike, Some(&Vector1::new(0.4))),
+        expected
+    );
+    // and before a bad z
+    assert_eq!(
+        ukf.update(&prior, &Spike, Some(&Vector1::new(f64::NAN))),
+        expected
+    );
+}
