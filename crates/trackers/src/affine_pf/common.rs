@@ -516,6 +516,9 @@ pub(crate) struct Core {
     source: Image<u8>,
     /// Which bands of `gray` hold the current frame.
     converted: Vec<bool>,
+    /// Convert every frame whole as it arrives (the tests compare the lazy
+    /// conversion with it).
+    pub(crate) eager: bool,
     size: (f64, f64),
     pe: Option<PoseEstimator>,
     model: Option<TargetModel>,
@@ -544,6 +547,7 @@ impl Core {
             gray: Image::new(1, 1, 1, 0f32)?,
             source: Image::new(1, 1, 1, 0u8)?,
             converted: Vec::new(),
+            eager: false,
             size: (0.0, 0.0),
             pe: None,
             model: None,
@@ -619,8 +623,8 @@ impl Core {
         Ok(())
     }
 
-    /// Converts every band (before the pose estimator trains: its random
-    /// perturbations may read anywhere).
+    /// Converts every band (before the pose estimator's initial training:
+    /// its random perturbations may read anywhere).
     fn ready_all(&mut self) -> Result<()> {
         self.ready_rows(0, self.gray.height())
     }
@@ -739,6 +743,9 @@ impl Core {
     /// counters.
     pub(crate) fn begin(&mut self, frame: &ImageView<'_, u8>) -> Result<()> {
         self.load(frame)?;
+        if self.eager {
+            self.ready_all()?;
+        }
         self.stats = FrameStats::default();
         self.scored.clear();
         self.pool = None;
@@ -918,6 +925,24 @@ impl Core {
         Ok(())
     }
 
+    /// Trains the pose estimator on `training_per_update` perturbations of
+    /// `pose` ([`PoseEstimator::train`]'s draws): the perturbations first,
+    /// so that only the rows their patches read are converted.
+    fn train_at<R: Rng + ?Sized>(&mut self, pose: &Affine2, rng: &mut R) -> Result<()> {
+        let pe = self.pe.as_ref().ok_or(TrackerError::NotInitialised)?;
+        let poses = pe.training_poses(pose, self.cfg.training_per_update, rng)?;
+        let maps = poses
+            .iter()
+            .map(|(_, m)| pe.patch_map(m))
+            .collect::<std::result::Result<Vec<_>, _>>()?;
+        for map in &maps {
+            self.ready_for(map, self.cfg.pose.patch_size)?;
+        }
+        let pe = self.pe.as_mut().ok_or(TrackerError::NotInitialised)?;
+        pe.train_on(self.gray.view(), &poses)?;
+        Ok(())
+    }
+
     /// The end of a frame: adopts `m_star` (or keeps `fallback` when no
     /// particle could be scored), updates the models when the score passes
     /// the update rule, trains the pose estimator when `train`, and builds
@@ -961,9 +986,7 @@ impl Core {
                 }
             }
             if self.stats.updated && train && self.cfg.training_per_update > 0 {
-                self.ready_all()?;
-                let pe = self.pe.as_mut().ok_or(TrackerError::NotInitialised)?;
-                pe.train(self.gray.view(), &pose, self.cfg.training_per_update, rng)?;
+                self.train_at(&pose, rng)?;
             }
         }
         let (w, h) = self.size;
@@ -985,4 +1008,50 @@ pub(crate) fn gaussian<R: Rng + ?Sized>(sigma: &AlgebraVector, rng: &mut R) -> A
         *v = s * z;
     }
     d
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use bayestrack_image::BBox;
+    use rand::SeedableRng;
+
+    /// A textured frame whose content moves by `(0.9, 1.3) k` px in frame `k`.
+    pub(crate) fn frame(k: usize) -> Image<u8> {
+        let (dx, dy) = (0.9 * k as f64, 1.3 * k as f64);
+        Image::from_fn(160, 120, |x, y| {
+            let (u, v) = (x as f64 - dx, y as f64 - dy);
+            let t = (u * 0.31).sin() * (v * 0.23).cos() + (0.11 * u + 0.17 * v).sin();
+            (128.0 + 60.0 * t).round().clamp(0.0, 255.0) as u8
+        })
+        .unwrap()
+    }
+
+    /// Training on a new frame converts the rows its perturbations read
+    /// first: the pose estimator (its whole LWPR model) learns exactly what
+    /// it learns from the whole converted frame (nothing else of the frame
+    /// is converted here, so a perturbation reading a stale row, the
+    /// previous frame's, would change it).
+    #[test]
+    fn training_converts_the_rows_it_reads() {
+        let (f0, f1) = (frame(0), frame(3));
+        let target = BBox::new(60.0, 44.0, 36.0, 30.0);
+        let cfg = AppearanceConfig {
+            training_per_update: 30,
+            ..AppearanceConfig::default()
+        };
+        let trained = |eager: bool| {
+            let mut core = Core::new(1, 2, cfg.clone()).unwrap();
+            core.eager = eager;
+            core.init(&f0.view(), target, true).unwrap();
+            core.begin(&f1.view()).unwrap();
+            let pose = core.pose.compose(&Affine2::translation(2.7, 3.9));
+            let mut rng = Xoshiro256PlusPlus::seed_from_u64(9);
+            core.train_at(&pose, &mut rng).unwrap();
+            // The whole model, every number printed to its last bit.
+            format!("{:?}", core.pe.unwrap().model())
+        };
+        // (Compared as a whole: a failure would print two huge models.)
+        assert!(trained(false) == trained(true), "the models differ");
+    }
 }
