@@ -81,6 +81,28 @@ pub struct PoseEstimator {
     pred: Vec<f64>,
 }
 
+/// The cell sums of one band of `P` patch rows (`ps` wide) into `feat`
+/// (one per cell of `P x P` pixels): each cell's rows top to bottom, each
+/// row left to right, added to `0.0` in `f64` (the order of the generic
+/// loop in [`PoseEstimator::features`], with the pooling factor known at
+/// compile time).
+#[inline(always)]
+fn pool_band<const P: usize>(band: &[f32], ps: usize, feat: &mut [f64]) {
+    let mut rows: [core::slice::ChunksExact<'_, f32>; P] =
+        core::array::from_fn(|r| band[r * ps..(r + 1) * ps].chunks_exact(P));
+    for f in feat.iter_mut() {
+        let mut s = 0.0;
+        for row in rows.iter_mut() {
+            if let Some(cell) = row.next() {
+                for v in cell {
+                    s += f64::from(*v);
+                }
+            }
+        }
+        *f = s;
+    }
+}
+
 impl PoseEstimator {
     /// A new, untrained estimator for a `template_w x template_h` target.
     pub fn new(cfg: PoseConfig, template_w: f64, template_h: f64) -> Result<Self> {
@@ -199,16 +221,29 @@ impl PoseEstimator {
             }
             FeatureKind::Gray => {
                 // Cell sums over the cell's rows, each row left to right.
-                for (cy, band) in self.patch.chunks_exact(pool * ps).enumerate() {
-                    let feat = &mut self.feat[cy * cells..(cy + 1) * cells];
-                    for (cx, f) in feat.iter_mut().enumerate() {
-                        let mut s = 0.0;
-                        for row in band.chunks_exact(ps) {
-                            for v in &row[cx * pool..(cx + 1) * pool] {
-                                s += f64::from(*v);
+                for (band, feat) in self
+                    .patch
+                    .chunks_exact(pool * ps)
+                    .zip(self.feat.chunks_exact_mut(cells))
+                {
+                    match pool {
+                        2 => pool_band::<2>(band, ps, feat),
+                        3 => pool_band::<3>(band, ps, feat),
+                        4 => pool_band::<4>(band, ps, feat),
+                        _ => {
+                            for (cx, f) in feat.iter_mut().enumerate() {
+                                let mut s = 0.0;
+                                for row in band.chunks_exact(ps) {
+                                    for v in &row[cx * pool..(cx + 1) * pool] {
+                                        s += f64::from(*v);
+                                    }
+                                }
+                                *f = s;
                             }
                         }
-                        *f = s * inv;
+                    }
+                    for f in feat.iter_mut() {
+                        *f *= inv;
                         total += *f;
                     }
                 }
@@ -260,7 +295,8 @@ impl PoseEstimator {
     /// Trains on `n` random perturbations `M* exp(delta)`,
     /// `delta ~ N(0, diag(train_sigma^2))`, of the estimate `m_star` in
     /// `frame`; perturbations whose patch leaves the frame are skipped.
-    /// Returns the number of samples used.
+    /// Returns the number of samples used. The same as
+    /// [`PoseEstimator::training_poses`] then [`PoseEstimator::train_on`].
     pub fn train<T: Pixel, R: Rng + ?Sized>(
         &mut self,
         frame: ImageView<'_, T>,
@@ -269,16 +305,47 @@ impl PoseEstimator {
         rng: &mut R,
     ) -> Result<usize> {
         frame.expect_channels("pose training", 1)?;
-        let mut used = 0;
-        let mut target = [0.0; 6];
+        let poses = self.training_poses(m_star, n, rng)?;
+        self.train_on(frame, &poses)
+    }
+
+    /// The `n` random perturbations [`PoseEstimator::train`] trains on:
+    /// each `(delta, M* exp(delta))`, `delta ~ N(0, diag(train_sigma^2))`
+    /// drawn from `rng` in order. A caller that must prepare the frame's
+    /// pixels the patches read (see [`PoseEstimator::patch_map`]) draws
+    /// them first and passes them to [`PoseEstimator::train_on`].
+    pub fn training_poses<R: Rng + ?Sized>(
+        &self,
+        m_star: &Affine2,
+        n: usize,
+        rng: &mut R,
+    ) -> Result<Vec<(AlgebraVector, Affine2)>> {
+        let mut poses = Vec::with_capacity(n);
         for _ in 0..n {
             let mut delta = AlgebraVector::zeros();
             for (d, s) in delta.iter_mut().zip(self.cfg.train_sigma.iter()) {
                 let z: f64 = StandardNormal.sample(rng);
                 *d = s * z;
             }
-            let m = m_star.compose(&Affine2::exp(&delta)?);
-            match self.features(frame, &m) {
+            poses.push((delta, m_star.compose(&Affine2::exp(&delta)?)));
+        }
+        Ok(poses)
+    }
+
+    /// Trains on the perturbations `(delta, M* exp(delta))` of
+    /// [`PoseEstimator::training_poses`], in order (the target of pose
+    /// `M* exp(delta)` is `-delta`); those whose patch leaves the frame are
+    /// skipped. Returns the number of samples used.
+    pub fn train_on<T: Pixel>(
+        &mut self,
+        frame: ImageView<'_, T>,
+        poses: &[(AlgebraVector, Affine2)],
+    ) -> Result<usize> {
+        frame.expect_channels("pose training", 1)?;
+        let mut used = 0;
+        let mut target = [0.0; 6];
+        for (delta, m) in poses {
+            match self.features(frame, m) {
                 Ok(_) => {}
                 Err(AffineError::Image(bayestrack_image::ImageError::PatchOutside { .. })) => {
                     continue;

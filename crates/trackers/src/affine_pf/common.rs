@@ -500,8 +500,10 @@ pub struct ScoredPose {
     pub similarity: f64,
 }
 
-/// Rows per band of [`Core`]'s lazily converted gray frame.
+/// Rows per tile of [`Core`]'s lazily converted gray frame.
 const BAND: usize = 16;
+/// Columns per tile of [`Core`]'s lazily converted gray frame.
+const TILE: usize = 32;
 
 /// State shared by the three trackers.
 #[derive(Debug, Clone)]
@@ -509,13 +511,18 @@ pub(crate) struct Core {
     key: u64,
     seed: u64,
     cfg: AppearanceConfig,
-    /// The frame as gray `f32`, converted lazily in bands of [`BAND`]
-    /// rows: only the rows the frame's warps read ([`Core::ready_for`]).
+    /// The frame as gray `f32`, converted lazily in tiles of [`BAND`]
+    /// rows and [`TILE`] columns: only the tiles the frame's warps read
+    /// ([`Core::ready_for`]).
     gray: Image<f32>,
-    /// A copy of the frame the gray bands are converted from.
+    /// A copy of the frame the gray tiles are converted from.
     source: Image<u8>,
-    /// Which bands of `gray` hold the current frame.
+    /// Which tiles of `gray` hold the current frame (row-major: band by
+    /// band, `width.div_ceil(TILE)` tiles a band).
     converted: Vec<bool>,
+    /// Convert every frame whole as it arrives (the tests compare the lazy
+    /// conversion with it).
+    pub(crate) eager: bool,
     size: (f64, f64),
     pe: Option<PoseEstimator>,
     model: Option<TargetModel>,
@@ -544,6 +551,7 @@ impl Core {
             gray: Image::new(1, 1, 1, 0f32)?,
             source: Image::new(1, 1, 1, 0u8)?,
             converted: Vec::new(),
+            eager: false,
             size: (0.0, 0.0),
             pe: None,
             model: None,
@@ -573,11 +581,11 @@ impl Core {
     }
 
     /// Takes the frame (1 or 3 channels, checked by the shell): a copy to
-    /// convert to gray `f32` in `[0, 1]` band by band, as the warps need
-    /// rows ([`Core::ready_for`], [`Core::ready_all`]). The affine
-    /// trackers' warps read a few boxes' worth of rows, so most of the
-    /// frame is never converted; a converted row holds the same values as
-    /// converting the whole frame.
+    /// convert to gray `f32` in `[0, 1]` tile by tile, as the warps need
+    /// pixels ([`Core::ready_for`], [`Core::ready_all`]). The affine
+    /// trackers' warps read a few boxes' worth of the frame, so most of it
+    /// is never converted; the conversion is pixel by pixel, so a converted
+    /// tile holds the same values as converting the whole frame.
     fn load(&mut self, frame: &ImageView<'_, u8>) -> Result<()> {
         let (w, h, ch) = (frame.width(), frame.height(), frame.channels());
         if (self.gray.width(), self.gray.height()) != (w, h) {
@@ -595,55 +603,71 @@ impl Core {
             self.source.row_mut(y).copy_from_slice(frame.row(y));
         }
         self.converted.clear();
-        self.converted.resize(h.div_ceil(BAND), false);
+        self.converted
+            .resize(h.div_ceil(BAND) * w.div_ceil(TILE), false);
         Ok(())
     }
 
-    /// Converts the bands of rows `y0..=y1` (clamped to the frame) that
-    /// are not converted yet.
-    fn ready_rows(&mut self, y0: usize, y1: usize) -> Result<()> {
+    /// Converts the tiles of columns `x0..=x1` and rows `y0..=y1`
+    /// (clamped to the frame) that are not converted yet.
+    fn ready_rect(&mut self, (x0, x1): (usize, usize), (y0, y1): (usize, usize)) -> Result<()> {
         let (w, h) = (self.gray.width(), self.gray.height());
-        let last = y1.min(h.saturating_sub(1));
-        for band in y0 / BAND..=last / BAND {
-            if self.converted.get(band) != Some(&false) {
-                continue;
+        let (x1, y1) = (x1.min(w.saturating_sub(1)), y1.min(h.saturating_sub(1)));
+        let tiles = w.div_ceil(TILE);
+        for band in y0 / BAND..=y1 / BAND {
+            for tile in (x0 / TILE..=x1 / TILE).take_while(|&t| t < tiles) {
+                let i = band * tiles + tile;
+                if self.converted.get(i) != Some(&false) {
+                    continue;
+                }
+                let (x, y) = (tile * TILE, band * BAND);
+                let rect = bayestrack_image::Rect::new(x, y, TILE.min(w - x), BAND.min(h - y));
+                let src = self.source.view();
+                let src = src.crop(rect)?;
+                let mut gray = self.gray.view_mut();
+                let mut out = gray.crop_mut(rect)?;
+                bayestrack_image::to_gray_unit_into(src, &mut out)?;
+                self.converted[i] = true;
             }
-            let rect = bayestrack_image::Rect::new(0, band * BAND, w, BAND.min(h - band * BAND));
-            let src = self.source.view();
-            let src = src.crop(rect)?;
-            let mut gray = self.gray.view_mut();
-            let mut out = gray.crop_mut(rect)?;
-            bayestrack_image::to_gray_unit_into(src, &mut out)?;
-            self.converted[band] = true;
         }
         Ok(())
     }
 
-    /// Converts every band (before the pose estimator trains: its random
-    /// perturbations may read anywhere).
+    /// Converts every tile (before the pose estimator's initial training:
+    /// its random perturbations may read anywhere).
     fn ready_all(&mut self) -> Result<()> {
-        self.ready_rows(0, self.gray.height())
+        self.ready_rect((0, self.gray.width()), (0, self.gray.height()))
     }
 
-    /// Converts the rows a `ps x ps` warp through `map` reads: the
-    /// corners' rows (an affine map's extremes), widened by two rows for
-    /// the bilinear neighbour and rounding; everything when a corner is
-    /// not finite (the warp then fails on its own).
+    /// Converts the pixels a `ps x ps` warp through `map` reads: the
+    /// corners' columns and rows (an affine map's extremes), widened by
+    /// two for the bilinear neighbour and rounding; everything when a
+    /// corner is not finite (the warp then fails on its own).
     fn ready_for(&mut self, map: &Affine2, ps: usize) -> Result<()> {
         let far = (ps.max(1) - 1) as f64;
-        let ys = [(0.0, 0.0), (far, 0.0), (0.0, far), (far, far)].map(|(u, v)| map.apply(u, v).1);
-        let (lo, hi) = ys
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &y| {
-                (lo.min(y), hi.max(y))
-            });
-        if !(lo.is_finite() && hi.is_finite()) {
+        let corners =
+            [(0.0, 0.0), (far, 0.0), (0.0, far), (far, far)].map(|(u, v)| map.apply(u, v));
+        let range = |pick: fn(&(f64, f64)) -> f64| {
+            corners
+                .iter()
+                .map(pick)
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                    (lo.min(v), hi.max(v))
+                })
+        };
+        let ((xlo, xhi), (ylo, yhi)) = (range(|c| c.0), range(|c| c.1));
+        if !(xlo.is_finite() && xhi.is_finite() && ylo.is_finite() && yhi.is_finite()) {
             return self.ready_all();
         }
-        let h = self.gray.height() as f64;
-        let y0 = (lo.floor() - 2.0).clamp(0.0, h) as usize;
-        let y1 = (hi.floor() + 2.0).clamp(0.0, h) as usize;
-        self.ready_rows(y0, y1)
+        let span = |lo: f64, hi: f64, n: usize| {
+            let n = n as f64;
+            (
+                (lo.floor() - 2.0).clamp(0.0, n) as usize,
+                (hi.floor() + 2.0).clamp(0.0, n) as usize,
+            )
+        };
+        let (w, h) = (self.gray.width(), self.gray.height());
+        self.ready_rect(span(xlo, xhi, w), span(ylo, yhi, h))
     }
 
     /// Starts on a frame (checked, with a checked box, by the shell):
@@ -739,6 +763,9 @@ impl Core {
     /// counters.
     pub(crate) fn begin(&mut self, frame: &ImageView<'_, u8>) -> Result<()> {
         self.load(frame)?;
+        if self.eager {
+            self.ready_all()?;
+        }
         self.stats = FrameStats::default();
         self.scored.clear();
         self.pool = None;
@@ -918,6 +945,24 @@ impl Core {
         Ok(())
     }
 
+    /// Trains the pose estimator on `training_per_update` perturbations of
+    /// `pose` ([`PoseEstimator::train`]'s draws): the perturbations first,
+    /// so that only the rows their patches read are converted.
+    fn train_at<R: Rng + ?Sized>(&mut self, pose: &Affine2, rng: &mut R) -> Result<()> {
+        let pe = self.pe.as_ref().ok_or(TrackerError::NotInitialised)?;
+        let poses = pe.training_poses(pose, self.cfg.training_per_update, rng)?;
+        let maps = poses
+            .iter()
+            .map(|(_, m)| pe.patch_map(m))
+            .collect::<std::result::Result<Vec<_>, _>>()?;
+        for map in &maps {
+            self.ready_for(map, self.cfg.pose.patch_size)?;
+        }
+        let pe = self.pe.as_mut().ok_or(TrackerError::NotInitialised)?;
+        pe.train_on(self.gray.view(), &poses)?;
+        Ok(())
+    }
+
     /// The end of a frame: adopts `m_star` (or keeps `fallback` when no
     /// particle could be scored), updates the models when the score passes
     /// the update rule, trains the pose estimator when `train`, and builds
@@ -961,9 +1006,7 @@ impl Core {
                 }
             }
             if self.stats.updated && train && self.cfg.training_per_update > 0 {
-                self.ready_all()?;
-                let pe = self.pe.as_mut().ok_or(TrackerError::NotInitialised)?;
-                pe.train(self.gray.view(), &pose, self.cfg.training_per_update, rng)?;
+                self.train_at(&pose, rng)?;
             }
         }
         let (w, h) = self.size;
@@ -985,4 +1028,50 @@ pub(crate) fn gaussian<R: Rng + ?Sized>(sigma: &AlgebraVector, rng: &mut R) -> A
         *v = s * z;
     }
     d
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use bayestrack_image::BBox;
+    use rand::SeedableRng;
+
+    /// A textured frame whose content moves by `(0.9, 1.3) k` px in frame `k`.
+    pub(crate) fn frame(k: usize) -> Image<u8> {
+        let (dx, dy) = (0.9 * k as f64, 1.3 * k as f64);
+        Image::from_fn(160, 120, |x, y| {
+            let (u, v) = (x as f64 - dx, y as f64 - dy);
+            let t = (u * 0.31).sin() * (v * 0.23).cos() + (0.11 * u + 0.17 * v).sin();
+            (128.0 + 60.0 * t).round().clamp(0.0, 255.0) as u8
+        })
+        .unwrap()
+    }
+
+    /// Training on a new frame converts the rows its perturbations read
+    /// first: the pose estimator (its whole LWPR model) learns exactly what
+    /// it learns from the whole converted frame (nothing else of the frame
+    /// is converted here, so a perturbation reading a stale row, the
+    /// previous frame's, would change it).
+    #[test]
+    fn training_converts_the_rows_it_reads() {
+        let (f0, f1) = (frame(0), frame(3));
+        let target = BBox::new(60.0, 44.0, 36.0, 30.0);
+        let cfg = AppearanceConfig {
+            training_per_update: 30,
+            ..AppearanceConfig::default()
+        };
+        let trained = |eager: bool| {
+            let mut core = Core::new(1, 2, cfg.clone()).unwrap();
+            core.eager = eager;
+            core.init(&f0.view(), target, true).unwrap();
+            core.begin(&f1.view()).unwrap();
+            let pose = core.pose.compose(&Affine2::translation(2.7, 3.9));
+            let mut rng = Xoshiro256PlusPlus::seed_from_u64(9);
+            core.train_at(&pose, &mut rng).unwrap();
+            // The whole model, every number printed to its last bit.
+            format!("{:?}", core.pe.unwrap().model())
+        };
+        // (Compared as a whole: a failure would print two huge models.)
+        assert!(trained(false) == trained(true), "the models differ");
+    }
 }

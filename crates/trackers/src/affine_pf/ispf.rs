@@ -244,3 +244,36 @@ impl TrackerCore for IspfCore {
         Ok(est)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Tracker;
+    use crate::affine_pf::common::tests::frame;
+    use bayestrack_image::BBox;
+
+    /// The frame is converted to gray lazily, band by band, and the pose
+    /// estimator's training perturbations convert the rows they read
+    /// first: the same poses, bit for bit, as converting every frame whole.
+    #[test]
+    fn lazy_gray_conversion_tracks_as_the_whole_frame() {
+        let frames: Vec<_> = (0..10).map(frame).collect();
+        let run = |eager: bool| {
+            let mut t = IspfTracker::new(IspfConfig::default(), 5).unwrap();
+            t.core_mut().core.eager = eager;
+            t.init(frames[0].view(), BBox::new(60.0, 44.0, 36.0, 30.0))
+                .unwrap();
+            let mut out = Vec::new();
+            let mut updates = 0;
+            for f in &frames[1..] {
+                let e = t.step(f.view()).unwrap();
+                updates += usize::from(t.stats().updated);
+                out.push(e.pose.unwrap().as_array().map(f64::to_bits));
+            }
+            (out, updates)
+        };
+        let (lazy, updates) = run(false);
+        assert!(updates >= 3, "the pose estimator trained {updates} times");
+        assert_eq!(lazy, run(true).0);
+    }
+}
