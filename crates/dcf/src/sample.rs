@@ -16,7 +16,7 @@ pub struct PatchSampler {
     /// Summed-area table of each plane, `(w + 1) x (h + 1)`.
     sums: Vec<Vec<f64>>,
     /// Scratch: the distinct column edges of a patch.
-    xs: Vec<f64>,
+    xs: Vec<(usize, f64)>,
     /// Scratch: per output column, its edges' indices in `xs` and width
     /// (area averaging), or its two source columns and weight (bilinear).
     spans: Vec<(usize, usize, f64)>,
@@ -191,35 +191,42 @@ impl PatchSampler {
                 (p, p + 1.0)
             }
         };
-        // the distinct column edges (xs) and each column's pair of indices
-        // into them with its width
+        // the distinct column edges (xs: each as its table column and the
+        // fraction to the next one) and each column's pair of indices into
+        // them with its width
         self.xs.clear();
         self.spans.clear();
+        let at = |x: f64| -> (usize, f64) {
+            // x >= 0: truncation is the floor
+            let i = (x as usize).min(w - 1);
+            (i, x - i as f64)
+        };
+        let mut last = f64::NAN;
         for u in 0..ow {
             let (a, b) = edges(x0 + u as f64 * sx, x0 + (u + 1) as f64 * sx, w);
-            let ia = match self.xs.last() {
-                Some(&last) if last == a => self.xs.len() - 1,
-                _ => {
-                    self.xs.push(a);
-                    self.xs.len() - 1
-                }
+            let ia = if a == last {
+                self.xs.len() - 1
+            } else {
+                self.xs.push(at(a));
+                self.xs.len() - 1
             };
-            self.xs.push(b);
+            self.xs.push(at(b));
+            last = b;
             self.spans.push((ia, self.xs.len() - 1, b - a));
         }
         // the table at row coordinate y, at every column edge
-        let row_at = |y: f64, out: &mut Vec<f64>, xs: &[f64]| {
+        let row_at = |y: f64, out: &mut Vec<f64>, xs: &[(usize, f64)]| {
             let j = (y as usize).min(h - 1);
             let f = y - j as f64;
             let (ra, rb) = (&sum[j * cols..][..cols], &sum[(j + 1) * cols..][..cols]);
-            out.clear();
-            out.extend(xs.iter().map(|&x| {
-                let i = (x as usize).min(w - 1);
-                let g = x - i as f64;
-                let a = ra[i] + g * (ra[i + 1] - ra[i]);
-                let b = rb[i] + g * (rb[i + 1] - rb[i]);
-                a + f * (b - a)
-            }));
+            out.resize(xs.len(), 0.0);
+            for (o, &(i, g)) in out.iter_mut().zip(xs) {
+                let (a0, a1) = (ra[i], ra[i + 1]);
+                let (b0, b1) = (rb[i], rb[i + 1]);
+                let a = a0 + g * (a1 - a0);
+                let b = b0 + g * (b1 - b0);
+                *o = a + f * (b - a);
+            }
         };
         let (mut top, mut bottom) = (
             std::mem::take(&mut self.top),
