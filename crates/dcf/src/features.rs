@@ -62,8 +62,16 @@ pub struct Fhog {
     bin: Vec<u8>,
     sensitive: Vec<f32>,
     padded: Vec<f32>,
-    /// Per pixel column: its lower cell (+1) and the two cells' weights.
-    cols: Vec<(usize, f32, f32)>,
+    /// Per pixel column: its lower cell (+1 for the padding) and the
+    /// weights of that cell and the next.
+    col_cell: Vec<u32>,
+    col_lo: Vec<f32>,
+    col_hi: Vec<f32>,
+    /// Scratch of one row of pixels: the four shares of each pixel (the
+    /// lower-left, lower-right, upper-left, upper-right cells of its 2x2)
+    /// and where its bin's top-left cell lies in `padded`.
+    shares: Vec<f32>,
+    at: Vec<u32>,
     insensitive: Vec<f32>,
     block: Vec<f32>,
     /// Per cell: its energy, then the norms of its four blocks and its
@@ -89,6 +97,12 @@ impl Fhog {
         }
         let (wb, hb) = (w / cell, h / cell);
         let nb = wb * hb;
+        let (col_cell, (col_lo, col_hi)) = (0..wb * cell)
+            .map(|x| {
+                let (c0, f) = split(x, cell);
+                (c0 as u32, (1.0 - f, f))
+            })
+            .unzip();
         Ok(Self {
             w,
             h,
@@ -101,7 +115,11 @@ impl Fhog {
             bin: vec![0; w * h],
             sensitive: vec![0.0; SENSITIVE * nb],
             padded: vec![0.0; SENSITIVE * (wb + 2) * (hb + 2)],
-            cols: Vec::with_capacity(wb * cell),
+            col_cell,
+            col_lo,
+            col_hi,
+            shares: vec![0.0; 4 * wb * cell],
+            at: vec![0; wb * cell],
             insensitive: vec![0.0; INSENSITIVE * nb],
             block: vec![0.0; wb.saturating_sub(1).max(1) * hb.saturating_sub(1).max(1)],
             energy: vec![0.0; nb],
@@ -159,7 +177,7 @@ impl Fhog {
     /// bits (no fused multiply-add, the same order of every sum).
     fn compute_at(&mut self, level: SimdLevel, patch: &[f32], out: &mut [f32]) {
         self.gradients(level, patch);
-        self.histograms();
+        self.histograms(level);
         self.normalise(level, out);
     }
 
@@ -205,9 +223,13 @@ impl Fhog {
         });
     }
 
+    /// Per row of pixels, a vector pass computes every pixel's four shares
+    /// and its bin's place, then a scalar pass adds them into the padded
+    /// histograms in pixel order (each cell's sum in the order of the
+    /// per-pixel scatter).
     #[inline(never)]
-    fn histograms(&mut self) {
-        let (w, wb, hb, b) = (self.w, self.wb, self.hb, self.cell);
+    fn histograms(&mut self, level: SimdLevel) {
+        let (wb, hb) = (self.wb, self.hb);
         let nb = wb * hb;
         // binned on a grid padded by one cell on each side (the shares
         // that fall off the grid land there and are dropped), so the inner
@@ -215,37 +237,21 @@ impl Fhog {
         let (pw, ph) = (wb + 2, hb + 2);
         let np = pw * ph;
         self.padded.fill(0.0);
-        let inv = 1.0 / b as f32;
-        let norm = inv * inv;
-        // per axis: the lower cell (+1 for the padding) and the upper one's
-        // weight; pixel i sits at (i + 0.5) / b - 0.5 in cell units
-        let split = |i: usize| -> (usize, f32) {
-            let c = (i as f32 + 0.5) * inv - 0.5 + 1.0;
-            let c0 = c as usize; // c >= 0.5 > 0: truncation is floor
-            (c0, c - c0 as f32)
-        };
-        self.cols.clear();
-        self.cols.extend((0..wb * b).map(|i| {
-            let (c0, f) = split(i);
-            (c0, 1.0 - f, f)
-        }));
-        for y in 0..hb * b {
-            let (y0, fy) = split(y);
-            let mag = &self.mag[y * w..][..wb * b];
-            let bins = &self.bin[y * w..][..wb * b];
-            let row = y0 * pw;
-            for ((&m, &o), &(x0, gx, fx)) in mag.iter().zip(bins).zip(&self.cols) {
-                let m = m * norm;
-                // the 2x2 cells the pixel's shares go to, one slice
-                let top = o as usize * np + row + x0;
-                let quad = &mut self.padded[top..top + pw + 2];
-                let (wy1, wy0) = (fy * m, (1.0 - fy) * m);
-                quad[0] += gx * wy0;
-                quad[1] += fx * wy0;
-                quad[pw] += gx * wy1;
-                quad[pw + 1] += fx * wy1;
-            }
-        }
+        level.run(Histograms {
+            w: self.w,
+            cell: self.cell,
+            rows: hb * self.cell,
+            pw,
+            np,
+            mag: &self.mag,
+            bin: &self.bin,
+            col_cell: &self.col_cell,
+            col_lo: &self.col_lo,
+            col_hi: &self.col_hi,
+            shares: &mut self.shares,
+            at: &mut self.at,
+            padded: &mut self.padded,
+        });
         for o in 0..SENSITIVE {
             let src = &self.padded[o * np..][..np];
             let dst = &mut self.sensitive[o * nb..][..nb];
@@ -317,6 +323,74 @@ fn pixel(gx: f32, gy: f32, dirs: &[(f32, f32); INSENSITIVE]) -> (f32, u8) {
         best + INSENSITIVE as u8
     };
     ((gx * gx + gy * gy).sqrt(), bin)
+}
+
+/// The lower cell (+1 for the padding) of pixel `i` on one axis and the
+/// upper cell's weight: pixel `i` sits at `(i + 0.5) / b - 0.5` in cell
+/// units.
+fn split(i: usize, cell: usize) -> (usize, f32) {
+    let inv = 1.0 / cell as f32;
+    let c = (i as f32 + 0.5) * inv - 0.5 + 1.0;
+    let c0 = c as usize; // c >= 0.5 > 0: truncation is floor
+    (c0, c - c0 as f32)
+}
+
+/// The orientation histograms of the cells (see [`Fhog::histograms`]).
+struct Histograms<'a> {
+    w: usize,
+    cell: usize,
+    rows: usize,
+    pw: usize,
+    np: usize,
+    mag: &'a [f32],
+    bin: &'a [u8],
+    col_cell: &'a [u32],
+    col_lo: &'a [f32],
+    col_hi: &'a [f32],
+    shares: &'a mut [f32],
+    at: &'a mut [u32],
+    padded: &'a mut [f32],
+}
+
+impl Kernel for Histograms<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        let (w, pw, np) = (self.w, self.pw, self.np);
+        let n = self.col_cell.len();
+        let inv = 1.0 / self.cell as f32;
+        let norm = inv * inv;
+        let (cells, lo, hi) = (&self.col_cell[..n], &self.col_lo[..n], &self.col_hi[..n]);
+        let at = &mut self.at[..n];
+        let (s00, rest) = self.shares.split_at_mut(n);
+        let (s01, rest) = rest.split_at_mut(n);
+        let (s10, s11) = rest.split_at_mut(n);
+        let (s00, s01, s10, s11) = (&mut s00[..n], &mut s01[..n], &mut s10[..n], &mut s11[..n]);
+        for y in 0..self.rows {
+            let (y0, fy) = split(y, self.cell);
+            let mag = &self.mag[y * w..][..n];
+            let bins = &self.bin[y * w..][..n];
+            let row = (y0 * pw) as u32;
+            for x in 0..n {
+                let m = mag[x] * norm;
+                let (wy1, wy0) = (fy * m, (1.0 - fy) * m);
+                s00[x] = lo[x] * wy0;
+                s01[x] = hi[x] * wy0;
+                s10[x] = lo[x] * wy1;
+                s11[x] = hi[x] * wy1;
+                at[x] = u32::from(bins[x]) * np as u32 + row + cells[x];
+            }
+            for x in 0..n {
+                // the 2x2 cells the pixel's shares go to, one slice
+                let top = at[x] as usize;
+                let quad = &mut self.padded[top..top + pw + 2];
+                quad[0] += s00[x];
+                quad[1] += s01[x];
+                quad[pw] += s10[x];
+                quad[pw + 1] += s11[x];
+            }
+        }
+    }
 }
 
 /// The magnitude and bin of every pixel of a patch from its gradients.
