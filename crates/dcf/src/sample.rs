@@ -221,8 +221,8 @@ impl PatchSampler {
             let (ra, rb) = (&sum[j * cols..][..cols], &sum[(j + 1) * cols..][..cols]);
             out.resize(xs.len(), 0.0);
             for (o, &(i, g)) in out.iter_mut().zip(xs) {
-                let (a0, a1) = (ra[i], ra[i + 1]);
-                let (b0, b1) = (rb[i], rb[i + 1]);
+                let [a0, a1]: [f64; 2] = ra[i..i + 2].try_into().unwrap_or_default();
+                let [b0, b1]: [f64; 2] = rb[i..i + 2].try_into().unwrap_or_default();
                 let a = a0 + g * (a1 - a0);
                 let b = b0 + g * (b1 - b0);
                 *o = a + f * (b - a);
