@@ -67,11 +67,6 @@ pub struct Fhog {
     col_cell: Vec<u32>,
     col_lo: Vec<f32>,
     col_hi: Vec<f32>,
-    /// Scratch of one row of pixels: the four shares of each pixel (the
-    /// lower-left, lower-right, upper-left, upper-right cells of its 2x2)
-    /// and where its bin's top-left cell lies in `padded`.
-    shares: Vec<f32>,
-    at: Vec<u32>,
     insensitive: Vec<f32>,
     block: Vec<f32>,
     /// Per cell: its energy, then the norms of its four blocks and its
@@ -118,8 +113,6 @@ impl Fhog {
             col_cell,
             col_lo,
             col_hi,
-            shares: vec![0.0; 4 * wb * cell],
-            at: vec![0; wb * cell],
             insensitive: vec![0.0; INSENSITIVE * nb],
             block: vec![0.0; wb.saturating_sub(1).max(1) * hb.saturating_sub(1).max(1)],
             energy: vec![0.0; nb],
@@ -223,10 +216,8 @@ impl Fhog {
         });
     }
 
-    /// Per row of pixels, a vector pass computes every pixel's four shares
-    /// and its bin's place, then a scalar pass adds them into the padded
-    /// histograms in pixel order (each cell's sum in the order of the
-    /// per-pixel scatter).
+    /// Each pixel's four shares added into the padded histograms in pixel
+    /// order (one slice per pixel: no bounds test per share).
     #[inline(never)]
     fn histograms(&mut self, level: SimdLevel) {
         let (wb, hb) = (self.wb, self.hb);
@@ -248,8 +239,6 @@ impl Fhog {
             col_cell: &self.col_cell,
             col_lo: &self.col_lo,
             col_hi: &self.col_hi,
-            shares: &mut self.shares,
-            at: &mut self.at,
             padded: &mut self.padded,
         });
         for o in 0..SENSITIVE {
@@ -347,8 +336,6 @@ struct Histograms<'a> {
     col_cell: &'a [u32],
     col_lo: &'a [f32],
     col_hi: &'a [f32],
-    shares: &'a mut [f32],
-    at: &'a mut [u32],
     padded: &'a mut [f32],
 }
 
@@ -361,33 +348,21 @@ impl Kernel for Histograms<'_> {
         let inv = 1.0 / self.cell as f32;
         let norm = inv * inv;
         let (cells, lo, hi) = (&self.col_cell[..n], &self.col_lo[..n], &self.col_hi[..n]);
-        let at = &mut self.at[..n];
-        let (s00, rest) = self.shares.split_at_mut(n);
-        let (s01, rest) = rest.split_at_mut(n);
-        let (s10, s11) = rest.split_at_mut(n);
-        let (s00, s01, s10, s11) = (&mut s00[..n], &mut s01[..n], &mut s10[..n], &mut s11[..n]);
         for y in 0..self.rows {
             let (y0, fy) = split(y, self.cell);
             let mag = &self.mag[y * w..][..n];
             let bins = &self.bin[y * w..][..n];
-            let row = (y0 * pw) as u32;
+            let row = y0 * pw;
             for x in 0..n {
                 let m = mag[x] * norm;
-                let (wy1, wy0) = (fy * m, (1.0 - fy) * m);
-                s00[x] = lo[x] * wy0;
-                s01[x] = hi[x] * wy0;
-                s10[x] = lo[x] * wy1;
-                s11[x] = hi[x] * wy1;
-                at[x] = u32::from(bins[x]) * np as u32 + row + cells[x];
-            }
-            for x in 0..n {
                 // the 2x2 cells the pixel's shares go to, one slice
-                let top = at[x] as usize;
+                let top = usize::from(bins[x]) * np + row + cells[x] as usize;
                 let quad = &mut self.padded[top..top + pw + 2];
-                quad[0] += s00[x];
-                quad[1] += s01[x];
-                quad[pw] += s10[x];
-                quad[pw + 1] += s11[x];
+                let (wy1, wy0) = (fy * m, (1.0 - fy) * m);
+                quad[0] += lo[x] * wy0;
+                quad[1] += hi[x] * wy0;
+                quad[pw] += lo[x] * wy1;
+                quad[pw + 1] += hi[x] * wy1;
             }
         }
     }
