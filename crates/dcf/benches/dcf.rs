@@ -1,11 +1,15 @@
 //! Criterion benchmarks of the correlation-filter kernels: the 2-D real
 //! FFT round trip at 2,3,5-smooth and prime sizes (what the padding to
-//! smooth sizes buys) and fHOG of a search window.
+//! smooth sizes buys), fHOG of a search window and of a scale sample (the
+//! scale filter computes 17-33 of them a frame), and the area sampling of
+//! a patch from a frame.
 
 use std::hint::black_box;
 
 use bayestrack_dcf::features::Fhog;
 use bayestrack_dcf::fft::{C32, Fft2};
+use bayestrack_dcf::sample::PatchSampler;
+use bayestrack_image::Image;
 use criterion::{Criterion, criterion_group, criterion_main};
 
 fn bench_fft(c: &mut Criterion) {
@@ -45,5 +49,36 @@ fn bench_hog(c: &mut Criterion) {
     });
 }
 
-criterion_group!(benches, bench_fft, bench_hog);
+fn bench_small_hog(c: &mut Criterion) {
+    // a scale sample: the target shrunk to at most 512 pixels
+    let (w, h) = (32usize, 16usize);
+    let patch: Vec<f32> = (0..w * h)
+        .map(|i| (((i % w) * 13 + (i / w) * 7) % 255) as f32 / 255.0)
+        .collect();
+    let mut hog = Fhog::new(w, h, 4).unwrap();
+    let mut out = vec![0.0; hog.len()];
+    c.bench_function("fhog 32x16 px, 4 px cells", |b| {
+        b.iter(|| {
+            hog.compute(black_box(&patch), &mut out).unwrap();
+            black_box(out[0])
+        })
+    });
+}
+
+fn bench_sample(c: &mut Criterion) {
+    // a 320x240 frame, a 152x152 patch shrunk from 1.37 times its size
+    let frame = Image::from_fn(320, 240, |x, y| ((x * 7 + y * 13 + x * y) % 251) as u8).unwrap();
+    let mut s = PatchSampler::new();
+    s.load(frame.view()).unwrap();
+    let mut out = vec![0.0f32; 152 * 152];
+    c.bench_function("area sample 152x152 from 1.37x", |b| {
+        b.iter(|| {
+            s.sample(0, black_box(40.3), 10.7, 1.37, 1.37, &mut out, 152, 152)
+                .unwrap();
+            black_box(out[0])
+        })
+    });
+}
+
+criterion_group!(benches, bench_fft, bench_hog, bench_small_hog, bench_sample);
 criterion_main!(benches);

@@ -30,6 +30,8 @@
 //!
 //! A patch of fewer than 2x2 cells has no block: all features are 0.
 
+use bayestrack_image::simd::{Kernel, SimdLevel, Token};
+
 use crate::error::{DcfError, Result};
 
 /// Channels of the fHOG output.
@@ -53,13 +55,25 @@ pub struct Fhog {
     cell: usize,
     wb: usize,
     hb: usize,
+    /// Gradients along x and y, per pixel.
+    gx: Vec<f32>,
+    gy: Vec<f32>,
     mag: Vec<f32>,
     bin: Vec<u8>,
     sensitive: Vec<f32>,
     padded: Vec<f32>,
-    cols: Vec<(usize, f32)>,
+    /// Per pixel column: its lower cell (+1 for the padding) and the
+    /// weights of that cell and the next.
+    col_cell: Vec<u32>,
+    col_lo: Vec<f32>,
+    col_hi: Vec<f32>,
     insensitive: Vec<f32>,
     block: Vec<f32>,
+    /// Per cell: its energy, then the norms of its four blocks and its
+    /// four texture sums (channel-major scratch of `normalise`).
+    energy: Vec<f32>,
+    norms: Vec<f32>,
+    texture: Vec<f32>,
 }
 
 impl Fhog {
@@ -78,19 +92,32 @@ impl Fhog {
         }
         let (wb, hb) = (w / cell, h / cell);
         let nb = wb * hb;
+        let (col_cell, (col_lo, col_hi)) = (0..wb * cell)
+            .map(|x| {
+                let (c0, f) = split(x, cell);
+                (c0 as u32, (1.0 - f, f))
+            })
+            .unzip();
         Ok(Self {
             w,
             h,
             cell,
             wb,
             hb,
+            gx: vec![0.0; w * h],
+            gy: vec![0.0; w * h],
             mag: vec![0.0; w * h],
             bin: vec![0; w * h],
             sensitive: vec![0.0; SENSITIVE * nb],
             padded: vec![0.0; SENSITIVE * (wb + 2) * (hb + 2)],
-            cols: Vec::with_capacity(wb * cell),
+            col_cell,
+            col_lo,
+            col_hi,
             insensitive: vec![0.0; INSENSITIVE * nb],
             block: vec![0.0; wb.saturating_sub(1).max(1) * hb.saturating_sub(1).max(1)],
+            energy: vec![0.0; nb],
+            norms: vec![0.0; 4 * nb],
+            texture: vec![0.0; 4 * nb],
         })
     }
 
@@ -134,43 +161,25 @@ impl Fhog {
                 got: out.len(),
             });
         }
-        self.gradients(patch);
-        self.histograms();
-        self.normalise(out);
+        self.compute_at(SimdLevel::Avx512, patch, out);
         Ok(())
     }
 
+    /// [`Fhog::compute`] with its vector kernels compiled for `level` (or
+    /// the best level this CPU runs below it): every level gives the same
+    /// bits (no fused multiply-add, the same order of every sum).
+    fn compute_at(&mut self, level: SimdLevel, patch: &[f32], out: &mut [f32]) {
+        self.gradients(level, patch);
+        self.histograms(level);
+        self.normalise(level, out);
+    }
+
+    /// Per pixel: the gradient (one plane of `gx`, one of `gy`), then
+    /// its magnitude and bin in one flat pass over the patch (a vector
+    /// loop with a single scalar remainder, whatever the row width).
     #[inline(never)]
-    fn gradients(&mut self, p: &[f32]) {
+    fn gradients(&mut self, level: SimdLevel, p: &[f32]) {
         let (w, h) = (self.w, self.h);
-        // The nearest of the 18 directions o * 20 degrees maximises
-        // cos(theta - theta_o): the largest |g . u_o| over the 9
-        // directions of the first half circle, its sign telling the half.
-        // This is `round(18 theta / 2 pi) mod 18` without the arc tangent
-        // (the profile's largest cost); exact ties go to the lower bin.
-        let dirs: [(f32, f32); INSENSITIVE] = std::array::from_fn(|o| {
-            let a = std::f64::consts::PI * o as f64 / INSENSITIVE as f64;
-            (a.cos() as f32, a.sin() as f32)
-        });
-        // one pixel: magnitude and bin, branch-free (selects), so that the
-        // inner loop vectorises
-        #[inline(always)]
-        fn pixel(gx: f32, gy: f32, dirs: &[(f32, f32); INSENSITIVE]) -> (f32, u8) {
-            let (mut best, mut bd, mut ba) = (0u8, gx, gx.abs());
-            for (o, &(c, s)) in dirs.iter().enumerate().skip(1) {
-                let d = gx * c + gy * s;
-                let better = d.abs() > ba;
-                best = if better { o as u8 } else { best };
-                bd = if better { d } else { bd };
-                ba = if better { d.abs() } else { ba };
-            }
-            let bin = if bd >= 0.0 {
-                best
-            } else {
-                best + INSENSITIVE as u8
-            };
-            ((gx * gx + gy * gy).sqrt(), bin)
-        }
         for y in 0..h {
             let (ya, yb, ky) = if h == 1 {
                 (0, 0, 0.0)
@@ -182,32 +191,36 @@ impl Fhog {
                 (y - 1, y + 1, 0.5)
             };
             let (ra, rb, row) = (&p[ya * w..][..w], &p[yb * w..][..w], &p[y * w..][..w]);
-            let mag = &mut self.mag[y * w..][..w];
-            let bins = &mut self.bin[y * w..][..w];
+            let gy = &mut self.gy[y * w..][..w];
+            for ((g, &a), &b) in gy.iter_mut().zip(ra).zip(rb) {
+                *g = ky * (b - a);
+            }
+            let gx = &mut self.gx[y * w..][..w];
             if w == 1 {
-                (mag[0], bins[0]) = pixel(0.0, ky * (rb[0] - ra[0]), &dirs);
+                gx[0] = 0.0;
                 continue;
             }
             // one-sided differences at both ends, central inside
-            (mag[0], bins[0]) = pixel(row[1] - row[0], ky * (rb[0] - ra[0]), &dirs);
+            gx[0] = row[1] - row[0];
             let last = w - 1;
-            (mag[last], bins[last]) =
-                pixel(row[last] - row[last - 1], ky * (rb[last] - ra[last]), &dirs);
-            let inner = w - 2;
-            let (left, right) = (&row[..inner], &row[2..]);
-            let (ra, rb) = (&ra[1..][..inner], &rb[1..][..inner]);
-            let (mag, bins) = (&mut mag[1..][..inner], &mut bins[1..][..inner]);
-            for x in 0..inner {
-                let gx = 0.5 * (right[x] - left[x]);
-                let gy = ky * (rb[x] - ra[x]);
-                (mag[x], bins[x]) = pixel(gx, gy, &dirs);
+            gx[last] = row[last] - row[last - 1];
+            for ((g, &l), &r) in gx[1..last].iter_mut().zip(row).zip(&row[2..]) {
+                *g = 0.5 * (r - l);
             }
         }
+        level.run(GradientBins {
+            gx: &self.gx,
+            gy: &self.gy,
+            mag: &mut self.mag,
+            bin: &mut self.bin,
+        });
     }
 
+    /// Each pixel's four shares added into the padded histograms in pixel
+    /// order (one slice per pixel: no bounds test per share).
     #[inline(never)]
-    fn histograms(&mut self) {
-        let (w, wb, hb, b) = (self.w, self.wb, self.hb, self.cell);
+    fn histograms(&mut self, level: SimdLevel) {
+        let (wb, hb) = (self.wb, self.hb);
         let nb = wb * hb;
         // binned on a grid padded by one cell on each side (the shares
         // that fall off the grid land there and are dropped), so the inner
@@ -215,32 +228,19 @@ impl Fhog {
         let (pw, ph) = (wb + 2, hb + 2);
         let np = pw * ph;
         self.padded.fill(0.0);
-        let inv = 1.0 / b as f32;
-        let norm = inv * inv;
-        // per axis: the lower cell (+1 for the padding) and the upper one's
-        // weight; pixel i sits at (i + 0.5) / b - 0.5 in cell units
-        let split = |i: usize| -> (usize, f32) {
-            let c = (i as f32 + 0.5) * inv - 0.5 + 1.0;
-            let c0 = c as usize; // c >= 0.5 > 0: truncation is floor
-            (c0, c - c0 as f32)
-        };
-        self.cols.clear();
-        self.cols.extend((0..wb * b).map(split));
-        for y in 0..hb * b {
-            let (y0, fy) = split(y);
-            let mag = &self.mag[y * w..][..wb * b];
-            let bins = &self.bin[y * w..][..wb * b];
-            for ((&m, &o), &(x0, fx)) in mag.iter().zip(bins).zip(&self.cols) {
-                let m = m * norm;
-                let hist = &mut self.padded[o as usize * np..][..np];
-                let top = y0 * pw + x0;
-                let (wy1, wy0) = (fy * m, (1.0 - fy) * m);
-                hist[top] += (1.0 - fx) * wy0;
-                hist[top + 1] += fx * wy0;
-                hist[top + pw] += (1.0 - fx) * wy1;
-                hist[top + pw + 1] += fx * wy1;
-            }
-        }
+        level.run(Histograms {
+            w: self.w,
+            cell: self.cell,
+            rows: hb * self.cell,
+            pw,
+            np,
+            mag: &self.mag,
+            bin: &self.bin,
+            col_cell: &self.col_cell,
+            col_lo: &self.col_lo,
+            col_hi: &self.col_hi,
+            padded: &mut self.padded,
+        });
         for o in 0..SENSITIVE {
             let src = &self.padded[o * np..][..np];
             let dst = &mut self.sensitive[o * nb..][..nb];
@@ -248,16 +248,18 @@ impl Fhog {
                 dst[cy * wb..][..wb].copy_from_slice(&src[(cy + 1) * pw + 1..][..wb]);
             }
         }
-        for o in 0..INSENSITIVE {
-            for i in 0..nb {
-                self.insensitive[o * nb + i] =
-                    self.sensitive[o * nb + i] + self.sensitive[(o + INSENSITIVE) * nb + i];
-            }
+        let (lo, hi) = self.sensitive.split_at(INSENSITIVE * nb);
+        for ((d, &a), &b) in self.insensitive.iter_mut().zip(lo).zip(hi) {
+            *d = a + b;
         }
     }
 
+    /// Channel-major: the cells' energies, the blocks' norms, each cell's
+    /// four norms gathered once, then per channel one contiguous (vector)
+    /// loop over the cells, with the per-value arithmetic of the
+    /// cell-by-cell definition (the same order of every sum).
     #[inline(never)]
-    fn normalise(&mut self, out: &mut [f32]) {
+    fn normalise(&mut self, level: SimdLevel, out: &mut [f32]) {
         let (wb, hb, b) = (self.wb, self.hb, self.cell as f32);
         let nb = wb * hb;
         if wb < 2 || hb < 2 {
@@ -265,55 +267,244 @@ impl Fhog {
             return;
         }
         let eps = 1e-4 / 4.0 / (b * b * b * b);
-        let energy = |x: usize, y: usize| -> f32 {
-            (0..INSENSITIVE)
-                .map(|o| {
-                    let v = self.insensitive[o * nb + y * wb + x];
-                    v * v
-                })
-                .sum()
-        };
-        let bw = wb - 1;
-        for by in 0..hb - 1 {
-            for bx in 0..bw {
-                let e = energy(bx, by)
-                    + energy(bx + 1, by)
-                    + energy(bx, by + 1)
-                    + energy(bx + 1, by + 1);
-                self.block[by * bw + bx] = 1.0 / (e + eps).sqrt();
+        level.run(Normalise {
+            wb,
+            hb,
+            eps,
+            sensitive: &self.sensitive[..SENSITIVE * nb],
+            insensitive: &self.insensitive[..INSENSITIVE * nb],
+            energy: &mut self.energy[..nb],
+            block: &mut self.block,
+            norms: &mut self.norms[..4 * nb],
+            texture: &mut self.texture[..4 * nb],
+            out: &mut out[..HOG_CHANNELS * nb],
+        });
+    }
+}
+
+/// The unit vectors of the 9 directions `o * 20` degrees, `o < 9`.
+fn directions() -> [(f32, f32); INSENSITIVE] {
+    std::array::from_fn(|o| {
+        let a = std::f64::consts::PI * o as f64 / INSENSITIVE as f64;
+        (a.cos() as f32, a.sin() as f32)
+    })
+}
+
+/// One pixel's magnitude and bin, branch-free (selects, so that a loop of
+/// them vectorises). The nearest of the 18 directions `o * 20` degrees
+/// maximises `cos(theta - theta_o)`: the largest `|g . u_o|` over the 9
+/// directions of the first half circle, its sign telling the half. This
+/// is `round(18 theta / 2 pi) mod 18` without the arc tangent; exact ties
+/// go to the lower bin.
+#[inline(always)]
+fn pixel(gx: f32, gy: f32, dirs: &[(f32, f32); INSENSITIVE]) -> (f32, u8) {
+    let (mut best, mut bd, mut ba) = (0u8, gx, gx.abs());
+    for (o, &(c, s)) in dirs.iter().enumerate().skip(1) {
+        let d = gx * c + gy * s;
+        let better = d.abs() > ba;
+        best = if better { o as u8 } else { best };
+        bd = if better { d } else { bd };
+        ba = if better { d.abs() } else { ba };
+    }
+    let bin = if bd >= 0.0 {
+        best
+    } else {
+        best + INSENSITIVE as u8
+    };
+    ((gx * gx + gy * gy).sqrt(), bin)
+}
+
+/// The lower cell (+1 for the padding) of pixel `i` on one axis and the
+/// upper cell's weight: pixel `i` sits at `(i + 0.5) / b - 0.5` in cell
+/// units.
+fn split(i: usize, cell: usize) -> (usize, f32) {
+    let inv = 1.0 / cell as f32;
+    let c = (i as f32 + 0.5) * inv - 0.5 + 1.0;
+    let c0 = c as usize; // c >= 0.5 > 0: truncation is floor
+    (c0, c - c0 as f32)
+}
+
+/// The orientation histograms of the cells (see [`Fhog::histograms`]).
+struct Histograms<'a> {
+    w: usize,
+    cell: usize,
+    rows: usize,
+    pw: usize,
+    np: usize,
+    mag: &'a [f32],
+    bin: &'a [u8],
+    col_cell: &'a [u32],
+    col_lo: &'a [f32],
+    col_hi: &'a [f32],
+    padded: &'a mut [f32],
+}
+
+impl Kernel for Histograms<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        let (w, pw, np) = (self.w, self.pw, self.np);
+        let n = self.col_cell.len();
+        let inv = 1.0 / self.cell as f32;
+        let norm = inv * inv;
+        let (cells, lo, hi) = (&self.col_cell[..n], &self.col_lo[..n], &self.col_hi[..n]);
+        for y in 0..self.rows {
+            let (y0, fy) = split(y, self.cell);
+            let mag = &self.mag[y * w..][..n];
+            let bins = &self.bin[y * w..][..n];
+            let row = y0 * pw;
+            for x in 0..n {
+                let m = mag[x] * norm;
+                // the 2x2 cells the pixel's shares go to, one slice
+                let top = usize::from(bins[x]) * np + row + cells[x] as usize;
+                let quad = &mut self.padded[top..top + pw + 2];
+                let (wy1, wy0) = (fy * m, (1.0 - fy) * m);
+                quad[0] += lo[x] * wy0;
+                quad[1] += hi[x] * wy0;
+                quad[pw] += lo[x] * wy1;
+                quad[pw + 1] += hi[x] * wy1;
             }
         }
+    }
+}
+
+/// The magnitude and bin of every pixel of a patch from its gradients.
+struct GradientBins<'a> {
+    gx: &'a [f32],
+    gy: &'a [f32],
+    mag: &'a mut [f32],
+    bin: &'a mut [u8],
+}
+
+impl Kernel for GradientBins<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        let dirs = directions();
+        let n = self.mag.len();
+        let (gx, gy, bin) = (&self.gx[..n], &self.gy[..n], &mut self.bin[..n]);
+        for (((m, o), &gx), &gy) in self.mag.iter_mut().zip(bin).zip(gx).zip(gy) {
+            (*m, *o) = pixel(gx, gy, &dirs);
+        }
+    }
+}
+
+/// fHOG's normalisation and channels (see [`Fhog::normalise`]).
+struct Normalise<'a> {
+    wb: usize,
+    hb: usize,
+    eps: f32,
+    sensitive: &'a [f32],
+    insensitive: &'a [f32],
+    energy: &'a mut [f32],
+    block: &'a mut [f32],
+    norms: &'a mut [f32],
+    texture: &'a mut [f32],
+    out: &'a mut [f32],
+}
+
+impl Kernel for Normalise<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        let (wb, hb) = (self.wb, self.hb);
+        let nb = wb * hb;
+        // each cell's energy, the insensitive bins' squares summed in bin
+        // order (as `Iterator::sum` from its neutral element)
+        let energy = self.energy;
+        energy.fill(-0.0);
+        for ins in self.insensitive.chunks_exact(nb) {
+            for (e, &v) in energy.iter_mut().zip(ins) {
+                *e += v * v;
+            }
+        }
+        // each block's 1 / sqrt(sum of its four cells' energies + eps)
+        let bw = wb - 1;
+        for by in 0..hb - 1 {
+            let (r0, r1) = (&energy[by * wb..][..wb], &energy[(by + 1) * wb..][..wb]);
+            let dst = &mut self.block[by * bw..][..bw];
+            for (bx, d) in dst.iter_mut().enumerate() {
+                let e = r0[bx] + r0[bx + 1] + r1[bx] + r1[bx + 1];
+                *d = 1.0 / (e + self.eps).sqrt();
+            }
+        }
+        // each cell's four blocks, clamped to the grid
+        let (n0, rest) = self.norms.split_at_mut(nb);
+        let (n1, rest) = rest.split_at_mut(nb);
+        let (n2, n3) = rest.split_at_mut(nb);
         for y in 0..hb {
+            let bys = [y.min(hb - 2), y.saturating_sub(1).min(hb - 2)];
             for x in 0..wb {
-                // the four blocks that contain cell (x, y), clamped to the grid
                 let bxs = [x.min(bw - 1), x.saturating_sub(1).min(bw - 1)];
-                let bys = [y.min(hb - 2), y.saturating_sub(1).min(hb - 2)];
-                let n = [
-                    self.block[bys[0] * bw + bxs[0]],
-                    self.block[bys[1] * bw + bxs[0]],
-                    self.block[bys[0] * bw + bxs[1]],
-                    self.block[bys[1] * bw + bxs[1]],
-                ];
                 let i = y * wb + x;
-                let mut texture = [0.0f32; 4];
-                for o in 0..SENSITIVE {
-                    let v = self.sensitive[o * nb + i];
-                    let mut s = 0.0;
-                    for (t, &nk) in texture.iter_mut().zip(&n) {
-                        let c = (v * nk).min(CLIP);
-                        s += c;
-                        *t += c;
-                    }
-                    out[o * nb + i] = R * s;
+                n0[i] = self.block[bys[0] * bw + bxs[0]];
+                n1[i] = self.block[bys[1] * bw + bxs[0]];
+                n2[i] = self.block[bys[0] * bw + bxs[1]];
+                n3[i] = self.block[bys[1] * bw + bxs[1]];
+            }
+        }
+        let (n0, n1, n2, n3) = (&n0[..nb], &n1[..nb], &n2[..nb], &n3[..nb]);
+        let (t0, rest) = self.texture.split_at_mut(nb);
+        let (t1, rest) = rest.split_at_mut(nb);
+        let (t2, t3) = rest.split_at_mut(nb);
+        let (t0, t1, t2, t3) = (&mut t0[..nb], &mut t1[..nb], &mut t2[..nb], &mut t3[..nb]);
+        t0.fill(0.0);
+        t1.fill(0.0);
+        t2.fill(0.0);
+        t3.fill(0.0);
+        let (out, out_texture) = self.out.split_at_mut((SENSITIVE + INSENSITIVE) * nb);
+        let (out_sensitive, out_insensitive) = out.split_at_mut(SENSITIVE * nb);
+        // sensitive channels: the sum of the four clipped values, each also
+        // added to its block's texture sum
+        for (src, dst) in self
+            .sensitive
+            .chunks_exact(nb)
+            .zip(out_sensitive.chunks_exact_mut(nb))
+        {
+            let dst = &mut dst[..nb];
+            for i in 0..nb {
+                let v = src[i];
+                let c = [
+                    (v * n0[i]).min(CLIP),
+                    (v * n1[i]).min(CLIP),
+                    (v * n2[i]).min(CLIP),
+                    (v * n3[i]).min(CLIP),
+                ];
+                let mut s = 0.0;
+                for c in c {
+                    s += c;
                 }
-                for o in 0..INSENSITIVE {
-                    let v = self.insensitive[o * nb + i];
-                    let s: f32 = n.iter().map(|&nk| (v * nk).min(CLIP)).sum();
-                    out[(SENSITIVE + o) * nb + i] = R * s;
-                }
-                for (k, t) in texture.iter().enumerate() {
-                    out[(SENSITIVE + INSENSITIVE + k) * nb + i] = R * t;
-                }
+                t0[i] += c[0];
+                t1[i] += c[1];
+                t2[i] += c[2];
+                t3[i] += c[3];
+                dst[i] = R * s;
+            }
+        }
+        for (src, dst) in self
+            .insensitive
+            .chunks_exact(nb)
+            .zip(out_insensitive.chunks_exact_mut(nb))
+        {
+            let dst = &mut dst[..nb];
+            for i in 0..nb {
+                let v = src[i];
+                let c = [
+                    (v * n0[i]).min(CLIP),
+                    (v * n1[i]).min(CLIP),
+                    (v * n2[i]).min(CLIP),
+                    (v * n3[i]).min(CLIP),
+                ];
+                let s: f32 = c.iter().sum();
+                dst[i] = R * s;
+            }
+        }
+        for (t, dst) in [&*t0, &*t1, &*t2, &*t3]
+            .into_iter()
+            .zip(out_texture.chunks_exact_mut(nb))
+        {
+            for (d, &t) in dst.iter_mut().zip(t) {
+                *d = R * t;
             }
         }
     }
@@ -377,6 +568,248 @@ mod tests {
                 sa.total_cmp(&sb)
             })
             .unwrap()
+    }
+
+    /// The cell-by-cell fHOG as first written (per pixel scatter, per cell
+    /// gathers, no vector kernel): the reference the kernels must match
+    /// bit for bit.
+    impl Fhog {
+        fn compute_reference(&mut self, patch: &[f32], out: &mut [f32]) {
+            self.gradients_reference(patch);
+            self.histograms_reference();
+            self.normalise_reference(out);
+        }
+
+        fn gradients_reference(&mut self, p: &[f32]) {
+            let (w, h) = (self.w, self.h);
+            // The nearest of the 18 directions o * 20 degrees maximises
+            // cos(theta - theta_o): the largest |g . u_o| over the 9
+            // directions of the first half circle, its sign telling the half.
+            // This is `round(18 theta / 2 pi) mod 18` without the arc tangent
+            // (the profile's largest cost); exact ties go to the lower bin.
+            let dirs: [(f32, f32); INSENSITIVE] = std::array::from_fn(|o| {
+                let a = std::f64::consts::PI * o as f64 / INSENSITIVE as f64;
+                (a.cos() as f32, a.sin() as f32)
+            });
+            // one pixel: magnitude and bin, branch-free (selects), so that the
+            // inner loop vectorises
+            #[inline(always)]
+            fn pixel(gx: f32, gy: f32, dirs: &[(f32, f32); INSENSITIVE]) -> (f32, u8) {
+                let (mut best, mut bd, mut ba) = (0u8, gx, gx.abs());
+                for (o, &(c, s)) in dirs.iter().enumerate().skip(1) {
+                    let d = gx * c + gy * s;
+                    let better = d.abs() > ba;
+                    best = if better { o as u8 } else { best };
+                    bd = if better { d } else { bd };
+                    ba = if better { d.abs() } else { ba };
+                }
+                let bin = if bd >= 0.0 {
+                    best
+                } else {
+                    best + INSENSITIVE as u8
+                };
+                ((gx * gx + gy * gy).sqrt(), bin)
+            }
+            for y in 0..h {
+                let (ya, yb, ky) = if h == 1 {
+                    (0, 0, 0.0)
+                } else if y == 0 {
+                    (0, 1, 1.0)
+                } else if y == h - 1 {
+                    (h - 2, h - 1, 1.0)
+                } else {
+                    (y - 1, y + 1, 0.5)
+                };
+                let (ra, rb, row) = (&p[ya * w..][..w], &p[yb * w..][..w], &p[y * w..][..w]);
+                let mag = &mut self.mag[y * w..][..w];
+                let bins = &mut self.bin[y * w..][..w];
+                if w == 1 {
+                    (mag[0], bins[0]) = pixel(0.0, ky * (rb[0] - ra[0]), &dirs);
+                    continue;
+                }
+                // one-sided differences at both ends, central inside
+                (mag[0], bins[0]) = pixel(row[1] - row[0], ky * (rb[0] - ra[0]), &dirs);
+                let last = w - 1;
+                (mag[last], bins[last]) =
+                    pixel(row[last] - row[last - 1], ky * (rb[last] - ra[last]), &dirs);
+                let inner = w - 2;
+                let (left, right) = (&row[..inner], &row[2..]);
+                let (ra, rb) = (&ra[1..][..inner], &rb[1..][..inner]);
+                let (mag, bins) = (&mut mag[1..][..inner], &mut bins[1..][..inner]);
+                for x in 0..inner {
+                    let gx = 0.5 * (right[x] - left[x]);
+                    let gy = ky * (rb[x] - ra[x]);
+                    (mag[x], bins[x]) = pixel(gx, gy, &dirs);
+                }
+            }
+        }
+
+        fn histograms_reference(&mut self) {
+            let (w, wb, hb, b) = (self.w, self.wb, self.hb, self.cell);
+            let nb = wb * hb;
+            // binned on a grid padded by one cell on each side (the shares
+            // that fall off the grid land there and are dropped), so the inner
+            // loop has no bounds tests
+            let (pw, ph) = (wb + 2, hb + 2);
+            let np = pw * ph;
+            self.padded.fill(0.0);
+            let inv = 1.0 / b as f32;
+            let norm = inv * inv;
+            // per axis: the lower cell (+1 for the padding) and the upper one's
+            // weight; pixel i sits at (i + 0.5) / b - 0.5 in cell units
+            let split = |i: usize| -> (usize, f32) {
+                let c = (i as f32 + 0.5) * inv - 0.5 + 1.0;
+                let c0 = c as usize; // c >= 0.5 > 0: truncation is floor
+                (c0, c - c0 as f32)
+            };
+            let cols: Vec<(usize, f32)> = (0..wb * b).map(split).collect();
+            for y in 0..hb * b {
+                let (y0, fy) = split(y);
+                let mag = &self.mag[y * w..][..wb * b];
+                let bins = &self.bin[y * w..][..wb * b];
+                for ((&m, &o), &(x0, fx)) in mag.iter().zip(bins).zip(&cols) {
+                    let m = m * norm;
+                    let hist = &mut self.padded[o as usize * np..][..np];
+                    let top = y0 * pw + x0;
+                    let (wy1, wy0) = (fy * m, (1.0 - fy) * m);
+                    hist[top] += (1.0 - fx) * wy0;
+                    hist[top + 1] += fx * wy0;
+                    hist[top + pw] += (1.0 - fx) * wy1;
+                    hist[top + pw + 1] += fx * wy1;
+                }
+            }
+            for o in 0..SENSITIVE {
+                let src = &self.padded[o * np..][..np];
+                let dst = &mut self.sensitive[o * nb..][..nb];
+                for cy in 0..hb {
+                    dst[cy * wb..][..wb].copy_from_slice(&src[(cy + 1) * pw + 1..][..wb]);
+                }
+            }
+            for o in 0..INSENSITIVE {
+                for i in 0..nb {
+                    self.insensitive[o * nb + i] =
+                        self.sensitive[o * nb + i] + self.sensitive[(o + INSENSITIVE) * nb + i];
+                }
+            }
+        }
+
+        fn normalise_reference(&mut self, out: &mut [f32]) {
+            let (wb, hb, b) = (self.wb, self.hb, self.cell as f32);
+            let nb = wb * hb;
+            if wb < 2 || hb < 2 {
+                out.fill(0.0);
+                return;
+            }
+            let eps = 1e-4 / 4.0 / (b * b * b * b);
+            let energy = |x: usize, y: usize| -> f32 {
+                (0..INSENSITIVE)
+                    .map(|o| {
+                        let v = self.insensitive[o * nb + y * wb + x];
+                        v * v
+                    })
+                    .sum()
+            };
+            let bw = wb - 1;
+            for by in 0..hb - 1 {
+                for bx in 0..bw {
+                    let e = energy(bx, by)
+                        + energy(bx + 1, by)
+                        + energy(bx, by + 1)
+                        + energy(bx + 1, by + 1);
+                    self.block[by * bw + bx] = 1.0 / (e + eps).sqrt();
+                }
+            }
+            for y in 0..hb {
+                for x in 0..wb {
+                    // the four blocks that contain cell (x, y), clamped to the grid
+                    let bxs = [x.min(bw - 1), x.saturating_sub(1).min(bw - 1)];
+                    let bys = [y.min(hb - 2), y.saturating_sub(1).min(hb - 2)];
+                    let n = [
+                        self.block[bys[0] * bw + bxs[0]],
+                        self.block[bys[1] * bw + bxs[0]],
+                        self.block[bys[0] * bw + bxs[1]],
+                        self.block[bys[1] * bw + bxs[1]],
+                    ];
+                    let i = y * wb + x;
+                    let mut texture = [0.0f32; 4];
+                    for o in 0..SENSITIVE {
+                        let v = self.sensitive[o * nb + i];
+                        let mut s = 0.0;
+                        for (t, &nk) in texture.iter_mut().zip(&n) {
+                            let c = (v * nk).min(CLIP);
+                            s += c;
+                            *t += c;
+                        }
+                        out[o * nb + i] = R * s;
+                    }
+                    for o in 0..INSENSITIVE {
+                        let v = self.insensitive[o * nb + i];
+                        let s: f32 = n.iter().map(|&nk| (v * nk).min(CLIP)).sum();
+                        out[(SENSITIVE + o) * nb + i] = R * s;
+                    }
+                    for (k, t) in texture.iter().enumerate() {
+                        out[(SENSITIVE + INSENSITIVE + k) * nb + i] = R * t;
+                    }
+                }
+            }
+        }
+    }
+
+    /// A deterministic pseudo-random patch in [0, 1] with flat stretches
+    /// (exact ties between directions and zero gradients) and steps.
+    fn random_patch(w: usize, h: usize, seed: u32) -> Vec<f32> {
+        let mut s = seed.wrapping_mul(2_654_435_761).max(1);
+        let mut next = move || {
+            s ^= s << 13;
+            s ^= s >> 17;
+            s ^= s << 5;
+            s
+        };
+        (0..w * h)
+            .map(|_| match next() % 4 {
+                0 => 0.5,
+                1 => (next() % 8) as f32 / 8.0,
+                _ => next() as f32 / u32::MAX as f32,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn kernels_match_the_reference_bit_for_bit_at_every_level() {
+        // odd sizes (partial cells, rows not a multiple of any vector
+        // width), a single row or column, grids of 1 and 2 cells
+        let sizes = [
+            (1, 4, 1),
+            (4, 1, 1),
+            (3, 3, 1),
+            (8, 8, 4),
+            (9, 13, 4),
+            (23, 17, 4),
+            (37, 29, 4),
+            (41, 40, 5),
+            (17, 31, 3),
+        ];
+        for (k, &(w, h, cell)) in sizes.iter().enumerate() {
+            let patch = random_patch(w, h, 7 + k as u32);
+            let mut reference = Fhog::new(w, h, cell).unwrap();
+            let mut want = vec![0.0; reference.len()];
+            reference.compute_reference(&patch, &mut want);
+            for level in SimdLevel::ALL {
+                let mut hog = Fhog::new(w, h, cell).unwrap();
+                let mut got = vec![f32::NAN; hog.len()];
+                // twice: scratch left by a previous patch changes nothing
+                hog.compute_at(level, &random_patch(w, h, 99), &mut got);
+                hog.compute_at(level, &patch, &mut got);
+                assert_eq!(hog.bin, reference.bin, "{w}x{h}/{cell} {level:?}: bins");
+                for (i, (a, b)) in got.iter().zip(&want).enumerate() {
+                    assert_eq!(
+                        a.to_bits(),
+                        b.to_bits(),
+                        "{w}x{h}/{cell} {level:?}: value {i}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]

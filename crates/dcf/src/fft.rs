@@ -161,10 +161,11 @@ impl Fft2 {
                 .process_with_scratch(&mut self.row_in, dst, &mut self.real_scratch)
                 .map_err(|_| DcfError::Fft)?;
         }
-        // transpose rows (h x wc) into columns (wc x h)
-        for y in 0..h {
-            for u in 0..wc {
-                out[u * h + y] = self.rows[y * wc + u];
+        // transpose rows (h x wc) into columns (wc x h): each column
+        // written in order, read down the rows with a stride
+        for (u, col) in out.chunks_exact_mut(h).enumerate() {
+            for (o, &v) in col.iter_mut().zip(self.rows[u..].iter().step_by(wc)) {
+                *o = v;
             }
         }
         self.col_fwd
@@ -183,9 +184,9 @@ impl Fft2 {
         let (w, h, wc) = (self.w, self.h, self.w / 2 + 1);
         self.col_inv
             .process_with_scratch(spectrum, &mut self.col_scratch);
-        for u in 0..wc {
-            for y in 0..h {
-                self.rows[y * wc + u] = spectrum[u * h + y];
+        for (u, col) in spectrum.chunks_exact(h).enumerate() {
+            for (o, &v) in self.rows[u..].iter_mut().step_by(wc).zip(col) {
+                *o = v;
             }
         }
         let norm = 1.0 / (w * h) as f32;
