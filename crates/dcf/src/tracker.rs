@@ -899,3 +899,95 @@ impl Staple {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use bayestrack_image::{Image, rgb_to_gray};
+
+    /// An RGB frame: a textured 24 x 30 target centred at `(cx, cy)` on a
+    /// textured background.
+    fn frame(cx: f64, cy: f64) -> Image<u8> {
+        let (w, h) = (160, 120);
+        let mut data = Vec::with_capacity(w * h * 3);
+        for y in 0..h {
+            for x in 0..w {
+                let (u, v) = (x as f64 - cx, y as f64 - cy);
+                for ch in 0..3 {
+                    let t = if u.abs() < 12.0 && v.abs() < 15.0 {
+                        128.0 + 70.0 * (0.6 * u + ch as f64).sin() * (0.5 * v).cos()
+                    } else {
+                        90.0 + 30.0 * (0.31 * x as f64 + ch as f64).sin()
+                            + 25.0 * (0.17 * y as f64).cos()
+                    };
+                    data.push(t.clamp(0.0, 255.0) as u8);
+                }
+            }
+        }
+        Image::from_vec(w, h, 3, data).unwrap()
+    }
+
+    /// `step` reads only regions of the frame, of an RGB frame converts
+    /// only them: the same steps, bit for bit, as loading the whole gray
+    /// frame and detecting, estimating the scale and updating, through a
+    /// slow drift, a jump the first load does not cover, and the edge.
+    #[test]
+    fn a_step_on_regions_is_a_step_on_the_whole_frame() {
+        let path = |k: usize| match k {
+            0..=9 => (60.0 + k as f64, 50.0 + 0.5 * k as f64),
+            10..=14 => (80.0, 62.0),
+            _ => (150.0, 100.0 + k as f64),
+        };
+        // no gate: every frame learns, the jump's too (a load the plan
+        // missed)
+        let config = DcfConfig {
+            gate: None,
+            ..DcfConfig::default()
+        };
+        let mut fast = Dcf::new(config).unwrap();
+        let mut slow = Dcf::new(config).unwrap();
+        let first = frame(path(0).0, path(0).1);
+        fast.init(first.view(), path(0), (24.0, 30.0)).unwrap();
+        slow.init(
+            rgb_to_gray(first.view()).unwrap().view(),
+            path(0),
+            (24.0, 30.0),
+        )
+        .unwrap();
+        for k in 1..20 {
+            let f = frame(path(k).0, path(k).1);
+            let got = fast.step(f.view()).unwrap();
+            // the same step on the whole gray frame
+            slow.load(rgb_to_gray(f.view()).unwrap().view()).unwrap();
+            let (c, s) = (slow.centre, slow.scale);
+            let r = slow.detect(c, s).unwrap();
+            let (peak, dx, dy, apce) = (r.max, r.dx, r.dy, r.apce);
+            let centre = slow.clamp_centre((c.0 + dx, c.1 + dy));
+            let scale = slow.scale_change(centre, s).unwrap();
+            let updated = slow.admit(peak as f64, apce);
+            if updated {
+                slow.update(centre, scale, 1.0).unwrap();
+            }
+            slow.set_state(centre, scale);
+            let bits = |v: (f64, f64)| (v.0.to_bits(), v.1.to_bits());
+            assert_eq!(bits(got.centre), bits(centre), "frame {k}");
+            assert_eq!(got.scale.to_bits(), scale.to_bits(), "frame {k}");
+            assert_eq!((got.peak, got.updated), (peak, updated), "frame {k}");
+        }
+        // a sample outside the region loaded is an error, not stale data
+        let r = fast.sampler.region();
+        assert!(r != Region::whole(160, 120), "{r:?}");
+        let far = if r.x0 > 40 {
+            (5.0, 5.0)
+        } else {
+            (150.0, 110.0)
+        };
+        assert!(matches!(
+            fast.detect(far, 1.0),
+            Err(DcfError::InvalidParameter {
+                name: "sample region",
+                ..
+            })
+        ));
+    }
+}
