@@ -23,6 +23,149 @@ pub struct PatchSampler {
     /// Scratch: the table interpolated at the column edges of two rows.
     top: Vec<f64>,
     bottom: Vec<f64>,
+    /// The loaded region (empty before a load).
+    region: Region,
+    /// Scratch for loading: one row's values, the column sums above the
+    /// region.
+    line: Vec<u8>,
+    above: Vec<u64>,
+}
+
+/// Where a plane's values come from.
+#[derive(Debug, Clone, Copy)]
+enum Source {
+    /// One channel of the frame.
+    Channel(usize),
+    /// The gray level of an RGB frame.
+    Gray,
+}
+
+/// The values of row `y` of `frame` from `src`, columns `0..line.len()`.
+fn values<'a>(frame: ImageView<'a, u8>, y: usize, src: Source, line: &'a mut [u8]) -> &'a [u8] {
+    let row = frame.row(y);
+    let n = line.len();
+    match (src, frame.channels()) {
+        (Source::Channel(_), 1) => &row[..n],
+        (Source::Channel(ch), c) => {
+            for (o, p) in line.iter_mut().zip(row.chunks_exact(c)) {
+                *o = p[ch];
+            }
+            line
+        }
+        (Source::Gray, _) => {
+            // bayestrack_image::rgb_to_gray_into's formula: the weights
+            // times 2^16, rounded
+            const W: [u32; 3] = [19595, 38470, 7471];
+            for (o, p) in line.iter_mut().zip(row.chunks_exact(3)) {
+                let acc = W[0] * u32::from(p[0]) + W[1] * u32::from(p[1]) + W[2] * u32::from(p[2]);
+                *o = ((acc + (1 << 15)) >> 16) as u8;
+            }
+            line
+        }
+    }
+}
+
+/// A pixel rectangle `[x0, x1) x [y0, y1)` of a frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Region {
+    /// First column.
+    pub x0: usize,
+    /// First row.
+    pub y0: usize,
+    /// One past the last column.
+    pub x1: usize,
+    /// One past the last row.
+    pub y1: usize,
+}
+
+impl Region {
+    /// The whole of a `w x h` frame.
+    pub fn whole(w: usize, h: usize) -> Self {
+        Self {
+            x0: 0,
+            y0: 0,
+            x1: w,
+            y1: h,
+        }
+    }
+
+    /// Whether it has no pixel.
+    pub fn is_empty(&self) -> bool {
+        self.x0 >= self.x1 || self.y0 >= self.y1
+    }
+
+    /// Whether `other` lies inside (an empty region lies nowhere).
+    pub fn contains(&self, other: &Region) -> bool {
+        !other.is_empty()
+            && self.x0 <= other.x0
+            && self.y0 <= other.y0
+            && other.x1 <= self.x1
+            && other.y1 <= self.y1
+    }
+
+    /// The smallest region holding both (an empty one adds nothing).
+    pub fn union(&self, other: &Region) -> Region {
+        if self.is_empty() {
+            return *other;
+        }
+        if other.is_empty() {
+            return *self;
+        }
+        Region {
+            x0: self.x0.min(other.x0),
+            y0: self.y0.min(other.y0),
+            x1: self.x1.max(other.x1),
+            y1: self.y1.max(other.y1),
+        }
+    }
+
+    /// Grown by `m` pixels on each side, clipped to a `w x h` frame.
+    pub fn grown(&self, m: usize, w: usize, h: usize) -> Region {
+        Region {
+            x0: self.x0.saturating_sub(m),
+            y0: self.y0.saturating_sub(m),
+            x1: self.x1.saturating_add(m).min(w),
+            y1: self.y1.saturating_add(m).min(h),
+        }
+    }
+
+    /// The pixels that [`PatchSampler::sample`] reads on a `w x h` frame
+    /// for an `ow x oh` patch from `(x0, y0)` in steps `(sx, sy)`, with two
+    /// pixels to spare on each side, clipped to the frame (outside it,
+    /// edge replication reads the frame's edge) and at least two pixels
+    /// wide and high where the frame is; `None` for an empty frame or
+    /// arguments that `sample` refuses.
+    #[allow(clippy::too_many_arguments)]
+    pub fn of_sample(
+        w: usize,
+        h: usize,
+        x0: f64,
+        y0: f64,
+        sx: f64,
+        sy: f64,
+        ow: usize,
+        oh: usize,
+    ) -> Option<Region> {
+        let finite = [x0, y0, sx, sy].iter().all(|v| v.is_finite());
+        if w == 0 || h == 0 || !finite || sx <= 0.0 || sy <= 0.0 {
+            return None;
+        }
+        // every edge (area) or sample point (bilinear) lies in [a, a + n s];
+        // the table is read at floor(edge) and the next column
+        let span = |a: f64, s: f64, n: usize, size: usize| -> (usize, usize) {
+            let lo = (a.floor() - 2.0).clamp(0.0, size.saturating_sub(2) as f64) as usize;
+            let hi = ((a + n as f64 * s).ceil() + 2.0).clamp(0.0, size as f64) as usize;
+            (lo, hi.max(lo + 2).min(size))
+        };
+        let (rx0, rx1) = span(x0, sx, ow, w);
+        let (ry0, ry1) = span(y0, sy, oh, h);
+        Some(Region {
+            x0: rx0,
+            y0: ry0,
+            x1: rx1,
+            y1: ry1,
+        })
+    }
 }
 
 impl PatchSampler {
@@ -31,11 +174,79 @@ impl PatchSampler {
         Self::default()
     }
 
-    /// Loads `frame` (interleaved `u8`): one plane per channel.
+    /// Loads `frame` (interleaved `u8`): one plane per channel, the whole
+    /// frame.
     ///
     /// # Errors
     /// [`DcfError::InvalidParameter`] for an empty frame.
     pub fn load(&mut self, frame: ImageView<'_, u8>) -> Result<()> {
+        let whole = Region::whole(frame.width(), frame.height());
+        self.load_region(frame, whole)
+    }
+
+    /// Loads the pixels of `region` of `frame` (interleaved `u8`), one plane
+    /// per channel: afterwards [`PatchSampler::sample`] returns the same
+    /// values, bit for bit, as after [`PatchSampler::load`] for every call
+    /// whose footprint ([`Region::of_sample`]) lies inside `region` (the
+    /// summed-area table keeps the whole frame's values: the sums above and
+    /// left of the region are added in, exact integers). Reads outside it
+    /// are not defined: check with [`PatchSampler::holds`].
+    ///
+    /// # Errors
+    /// [`DcfError::InvalidParameter`] for an empty frame or a region that
+    /// is empty or not inside the frame.
+    pub fn load_region(&mut self, frame: ImageView<'_, u8>, region: Region) -> Result<()> {
+        let c = frame.channels();
+        self.prepare(frame, region, c)?;
+        if (2..=4).contains(&c) {
+            self.fill_interleaved(frame);
+        } else {
+            for ch in 0..c {
+                self.fill(frame, ch, Source::Channel(ch));
+            }
+        }
+        Ok(())
+    }
+
+    /// Loads the gray levels of `region` of `frame` as one plane: a gray
+    /// frame as it is, an RGB frame converted exactly as
+    /// `bayestrack_image::rgb_to_gray_into` converts it (BT.601, 16-bit
+    /// fixed point, rounded), only in `region` and above and left of it;
+    /// otherwise as [`PatchSampler::load_region`].
+    ///
+    /// # Errors
+    /// [`DcfError::InvalidParameter`] for an empty frame, a frame of other
+    /// than 1 or 3 channels, or a region that is empty or not inside the
+    /// frame.
+    pub fn load_gray_region(&mut self, frame: ImageView<'_, u8>, region: Region) -> Result<()> {
+        let src = match frame.channels() {
+            1 => Source::Channel(0),
+            3 => Source::Gray,
+            c => {
+                return Err(DcfError::InvalidParameter {
+                    name: "frame channels",
+                    value: c as f64,
+                    reason: "gray levels are read from 1- or 3-channel frames",
+                });
+            }
+        };
+        self.prepare(frame, region, 1)?;
+        self.fill(frame, 0, src);
+        Ok(())
+    }
+
+    /// The region loaded last (empty before any load).
+    pub fn region(&self) -> Region {
+        self.region
+    }
+
+    /// Whether the loaded region holds `region`.
+    pub fn holds(&self, region: &Region) -> bool {
+        self.region.contains(region)
+    }
+
+    /// Checks the frame and region, sizes the buffers for `planes` planes.
+    fn prepare(&mut self, frame: ImageView<'_, u8>, region: Region, planes: usize) -> Result<()> {
         let (w, h, c) = (frame.width(), frame.height(), frame.channels());
         if w == 0 || h == 0 || c == 0 {
             return Err(DcfError::InvalidParameter {
@@ -44,42 +255,119 @@ impl PatchSampler {
                 reason: "is empty",
             });
         }
+        let r = region;
+        if !(r.x0 < r.x1 && r.y0 < r.y1 && r.x1 <= w && r.y1 <= h) {
+            return Err(DcfError::InvalidParameter {
+                name: "region",
+                value: r.x1.max(r.y1) as f64,
+                reason: "must be a non-empty rectangle inside the frame",
+            });
+        }
         (self.w, self.h) = (w, h);
-        self.planes.resize_with(c, Vec::new);
-        self.sums.resize_with(c, Vec::new);
-        let cols = w + 1;
-        for (ch, (plane, sum)) in self.planes.iter_mut().zip(self.sums.iter_mut()).enumerate() {
-            // every entry is written below: no clearing
+        // nothing is readable until the planes are filled
+        self.region = Region::default();
+        self.planes.resize_with(planes, Vec::new);
+        self.sums.resize_with(planes, Vec::new);
+        for (plane, sum) in self.planes.iter_mut().zip(self.sums.iter_mut()) {
+            // entries outside the region keep what they held: never read
             plane.resize(w * h, 0.0);
-            sum.resize(cols * (h + 1), 0.0);
-            sum[..cols].fill(0.0);
-            for y in 0..h {
-                let row = frame.row(y);
+            sum.resize((w + 1) * (h + 1), 0.0);
+        }
+        self.line.resize(r.x1, 0);
+        self.above.resize(r.x1 * c, 0);
+        self.region = r;
+        Ok(())
+    }
+
+    /// Fills every plane of a frame of 2 to 4 channels and its summed-area
+    /// table in the loaded region, in one pass over the frame's rows (the
+    /// same values as [`PatchSampler::fill`] per channel).
+    fn fill_interleaved(&mut self, frame: ImageView<'_, u8>) {
+        let (w, r, c) = (self.w, self.region, frame.channels());
+        let cols = w + 1;
+        // column sums of the rows above the region, interleaved as the
+        // frame (exact integers, as in `fill`)
+        let above = &mut self.above[..r.x1 * c];
+        above.fill(0);
+        for y in 0..r.y0 {
+            for (a, &p) in above.iter_mut().zip(&frame.row(y)[..r.x1 * c]) {
+                *a += u64::from(p);
+            }
+        }
+        for (ch, sum) in self.sums.iter_mut().enumerate() {
+            let top = &mut sum[r.y0 * cols..][..cols];
+            let mut t: u64 = above[..r.x0 * c].iter().skip(ch).step_by(c).sum();
+            top[r.x0] = t as f64;
+            for x in r.x0..r.x1 {
+                t += above[x * c + ch];
+                top[x + 1] = t as f64;
+            }
+        }
+        let mut left = [0u64; 4];
+        for y in r.y0..r.y1 {
+            let row = &frame.row(y)[..r.x1 * c];
+            // each channel's sum left of the region
+            left.fill(0);
+            for p in row[..r.x0 * c].chunks_exact(c) {
+                for (l, &v) in left.iter_mut().zip(p) {
+                    *l += u64::from(v);
+                }
+            }
+            for (ch, (plane, sum)) in self.planes.iter_mut().zip(self.sums.iter_mut()).enumerate() {
                 let dst = &mut plane[y * w..][..w];
-                let (above, below) = sum[y * cols..][..2 * cols].split_at_mut(cols);
-                below[0] = 0.0;
-                // the row's running sum is an exact integer, and so is every
-                // entry of the table (below 2^53 for any frame of under 2^45
-                // pixels): the same values as accumulating in f64, in a
-                // fraction of the instructions
-                let mut run = 0i64;
-                let mut put = |x: usize, v: u8| {
-                    dst[x] = f32::from(v);
-                    run += i64::from(v);
-                    below[x + 1] = above[x + 1] + run as f64;
-                };
-                if c == 1 {
-                    for (x, &v) in row[..w].iter().enumerate() {
-                        put(x, v);
-                    }
-                } else {
-                    for (x, p) in row.chunks_exact(c).enumerate() {
-                        put(x, p[ch]);
-                    }
+                let (upper, lower) = sum[y * cols..][..2 * cols].split_at_mut(cols);
+                let mut run = left[ch];
+                lower[r.x0] = upper[r.x0] + run as f64;
+                for x in r.x0..r.x1 {
+                    let p = row[x * c + ch];
+                    dst[x] = f32::from(p);
+                    run += u64::from(p);
+                    lower[x + 1] = upper[x + 1] + run as f64;
                 }
             }
         }
-        Ok(())
+    }
+
+    /// Fills plane `k` and its summed-area table in the loaded region from
+    /// `src`.
+    fn fill(&mut self, frame: ImageView<'_, u8>, k: usize, src: Source) {
+        let (w, r) = (self.w, self.region);
+        let cols = w + 1;
+        let (plane, sum) = (&mut self.planes[k], &mut self.sums[k]);
+        let (line, above) = (&mut self.line[..r.x1], &mut self.above[..r.x1]);
+        // every entry of the table is an exact integer (below 2^53 for any
+        // frame of under 2^45 pixels): integer sums in any order give the
+        // whole frame's values bit for bit. Column sums of the rows above
+        // the region (u64: any height):
+        above.fill(0);
+        for y in 0..r.y0 {
+            let v = values(frame, y, src, line);
+            for (a, &p) in above.iter_mut().zip(v) {
+                *a += u64::from(p);
+            }
+        }
+        // the table's row y0 at columns x0..=x1
+        let top = &mut sum[r.y0 * cols..][..cols];
+        let mut t: u64 = above[..r.x0].iter().sum();
+        top[r.x0] = t as f64;
+        for (x, &a) in above.iter().enumerate().skip(r.x0) {
+            t += a;
+            top[x + 1] = t as f64;
+        }
+        for y in r.y0..r.y1 {
+            let v = values(frame, y, src, line);
+            let dst = &mut plane[y * w..][..w];
+            let (upper, lower) = sum[y * cols..][..2 * cols].split_at_mut(cols);
+            // the row's sum left of the region
+            let mut run: u64 = v[..r.x0].iter().map(|&p| u64::from(p)).sum();
+            lower[r.x0] = upper[r.x0] + run as f64;
+            for x in r.x0..r.x1 {
+                let p = v[x];
+                dst[x] = f32::from(p);
+                run += u64::from(p);
+                lower[x + 1] = upper[x + 1] + run as f64;
+            }
+        }
     }
 
     /// Channels loaded.
@@ -376,5 +664,129 @@ mod tests {
             s.sample(0, f64::NAN, 0.0, 0.5, 1.0, &mut out, 2, 2)
                 .is_err()
         );
+    }
+
+    /// A frame of `c` channels with varied levels.
+    fn noisy(w: usize, h: usize, c: usize, seed: usize) -> Image<u8> {
+        let data = (0..w * h * c)
+            .map(|i| ((i * 2_654_435_761 + seed * 97) >> 7 & 0xff) as u8)
+            .collect();
+        Image::from_vec(w, h, c, data).unwrap()
+    }
+
+    /// Sample calls of every kind on a 37 x 29 frame: shrinking and
+    /// enlarging, across each edge and off the frame.
+    fn calls() -> Vec<(f64, f64, f64, f64, usize, usize)> {
+        let mut v = Vec::new();
+        for &(x0, y0) in &[
+            (3.3, 4.7),
+            (-6.2, 11.1),
+            (20.9, -3.4),
+            (30.25, 22.6),
+            (-40.0, -40.0),
+            (50.5, 12.0),
+        ] {
+            for &(sx, sy) in &[(1.0, 1.0), (1.37, 2.05), (0.6, 0.45), (2.5, 0.8)] {
+                v.push((x0, y0, sx, sy, 9, 7));
+            }
+        }
+        v
+    }
+
+    #[test]
+    fn a_region_samples_as_the_whole_frame_bit_for_bit() {
+        let (w, h) = (37, 29);
+        for c in [1, 3, 5] {
+            let f = noisy(w, h, c, c);
+            let mut whole = PatchSampler::new();
+            whole.load(f.view()).unwrap();
+            let mut part = PatchSampler::new();
+            // a previous frame's values everywhere, then a region
+            part.load(noisy(w, h, c, 9).view()).unwrap();
+            for (x0, y0, sx, sy, ow, oh) in calls() {
+                let r = Region::of_sample(w, h, x0, y0, sx, sy, ow, oh).unwrap();
+                part.load_region(f.view(), r).unwrap();
+                assert!(part.holds(&r));
+                // the table holds the whole frame's values in the region
+                // (a missing sum above or left of it mostly cancels in
+                // the samples: check the entries themselves)
+                let cols = w + 1;
+                for ch in 0..c {
+                    for y in r.y0..=r.y1 {
+                        let at = |s: &PatchSampler| {
+                            s.sums[ch][y * cols + r.x0..=y * cols + r.x1].to_vec()
+                        };
+                        assert_eq!(at(&part), at(&whole), "{c} ch {ch} row {y} of {r:?}");
+                    }
+                    for y in r.y0..r.y1 {
+                        let at =
+                            |s: &PatchSampler| s.planes[ch][y * w + r.x0..y * w + r.x1].to_vec();
+                        assert_eq!(at(&part), at(&whole), "{c} ch {ch} row {y} of {r:?}");
+                    }
+                }
+                for ch in 0..c {
+                    let (mut a, mut b) = (vec![0.0; ow * oh], vec![0.0; ow * oh]);
+                    whole.sample(ch, x0, y0, sx, sy, &mut a, ow, oh).unwrap();
+                    part.sample(ch, x0, y0, sx, sy, &mut b, ow, oh).unwrap();
+                    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                    assert_eq!(bits(&a), bits(&b), "{c} ch {ch} at {x0} {y0} {sx} {sy}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_gray_region_is_the_image_crates_gray() {
+        let (w, h) = (37, 29);
+        let rgb = noisy(w, h, 3, 4);
+        let gray = bayestrack_image::rgb_to_gray(rgb.view()).unwrap();
+        let mut want = PatchSampler::new();
+        want.load(gray.view()).unwrap();
+        let mut got = PatchSampler::new();
+        for (x0, y0, sx, sy, ow, oh) in calls() {
+            let r = Region::of_sample(w, h, x0, y0, sx, sy, ow, oh).unwrap();
+            got.load_gray_region(rgb.view(), r).unwrap();
+            for y in r.y0..=r.y1 {
+                let at =
+                    |s: &PatchSampler| s.sums[0][y * (w + 1) + r.x0..=y * (w + 1) + r.x1].to_vec();
+                assert_eq!(at(&got), at(&want), "row {y} of {r:?}");
+            }
+            let (mut a, mut b) = (vec![0.0; ow * oh], vec![0.0; ow * oh]);
+            want.sample(0, x0, y0, sx, sy, &mut a, ow, oh).unwrap();
+            got.sample(0, x0, y0, sx, sy, &mut b, ow, oh).unwrap();
+            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&a), bits(&b), "at {x0} {y0} {sx} {sy}");
+        }
+        // a gray frame is read as it is
+        got.load_gray_region(gray.view(), Region::whole(w, h))
+            .unwrap();
+        assert_eq!(got.planes[0], want.planes[0]);
+        assert_eq!(got.sums[0], want.sums[0]);
+    }
+
+    #[test]
+    fn bad_regions_and_frames_are_errors() {
+        let f = noisy(8, 6, 3, 1);
+        let mut s = PatchSampler::new();
+        let r = |x0, y0, x1, y1| Region { x0, y0, x1, y1 };
+        for bad in [r(0, 0, 9, 6), r(0, 0, 8, 7), r(3, 2, 3, 5), r(5, 4, 2, 6)] {
+            assert!(matches!(
+                s.load_region(f.view(), bad),
+                Err(DcfError::InvalidParameter { name: "region", .. })
+            ));
+            assert!(s.load_gray_region(f.view(), bad).is_err());
+        }
+        let two = noisy(8, 6, 2, 1);
+        assert!(s.load_gray_region(two.view(), r(0, 0, 2, 2)).is_err());
+        // the footprint of refused arguments is none; off the frame it
+        // is the nearest edge
+        assert_eq!(Region::of_sample(8, 6, f64::NAN, 0.0, 1.0, 1.0, 2, 2), None);
+        assert_eq!(Region::of_sample(8, 6, 0.0, 0.0, 0.0, 1.0, 2, 2), None);
+        assert_eq!(
+            Region::of_sample(8, 6, -50.0, 100.0, 1.0, 1.0, 2, 2),
+            Some(r(0, 4, 2, 6))
+        );
+        // nothing loaded holds nothing
+        assert!(!PatchSampler::new().holds(&r(0, 0, 1, 1)));
     }
 }

@@ -20,7 +20,7 @@ use crate::error::{DcfError, Result};
 use crate::features::Fhog;
 use crate::fft::C32;
 use crate::kcf::{hann, parabola_offset};
-use crate::sample::PatchSampler;
+use crate::sample::{PatchSampler, Region};
 
 /// How the scale filter is built.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -354,6 +354,28 @@ impl ScaleFilter {
         self.trained
     }
 
+    /// Sample `n`'s origin and steps around `(cx, cy)` at `scale`.
+    fn origin(&self, n: usize, cx: f64, cy: f64, scale: f64) -> (f64, f64, f64, f64) {
+        let f = scale * self.factors[n];
+        let (pw, ph) = (self.base.0 * f, self.base.1 * f);
+        let (sx, sy) = (pw / self.mw as f64, ph / self.mh as f64);
+        let (x0, y0) = (cx + 0.5 - pw / 2.0, cy + 0.5 - ph / 2.0);
+        (x0, y0, sx, sy)
+    }
+
+    /// The pixels of a `w x h` frame that the scale samples around
+    /// `(cx, cy)` at `scale` read (`None` for an empty frame or a
+    /// non-finite centre or scale).
+    pub fn region(&self, w: usize, h: usize, cx: f64, cy: f64, scale: f64) -> Option<Region> {
+        let mut out = Region::default();
+        for n in 0..self.config.scales {
+            let (x0, y0, sx, sy) = self.origin(n, cx, cy, scale);
+            let r = Region::of_sample(w, h, x0, y0, sx, sy, self.mw, self.mh)?;
+            out = out.union(&r);
+        }
+        Some(out)
+    }
+
     /// Samples the scales around `(cx, cy)` at `scale` (0-based pixel
     /// centre; `sampler` holds the frame's gray levels): the raw features
     /// of each, one row per scale.
@@ -366,11 +388,18 @@ impl ScaleFilter {
     ) -> Result<()> {
         let s = self.config.scales;
         let dims = self.hog.len();
+        let (w, h) = (sampler.width(), sampler.height());
         for n in 0..s {
-            let f = scale * self.factors[n];
-            let (pw, ph) = (self.base.0 * f, self.base.1 * f);
-            let (sx, sy) = (pw / self.mw as f64, ph / self.mh as f64);
-            let (x0, y0) = (cx + 0.5 - pw / 2.0, cy + 0.5 - ph / 2.0);
+            let (x0, y0, sx, sy) = self.origin(n, cx, cy, scale);
+            if let Some(r) = Region::of_sample(w, h, x0, y0, sx, sy, self.mw, self.mh)
+                && !sampler.holds(&r)
+            {
+                return Err(DcfError::InvalidParameter {
+                    name: "sample region",
+                    value: n as f64,
+                    reason: "reads outside the region of the frame loaded",
+                });
+            }
             sampler.sample(0, x0, y0, sx, sy, &mut self.patch, self.mw, self.mh)?;
             for v in self.patch.iter_mut() {
                 *v *= 1.0 / 255.0;

@@ -10,7 +10,7 @@ use crate::error::{DcfError, Result};
 use crate::features::{Fhog, HOG_CHANNELS};
 use crate::fft::next_smooth;
 use crate::kcf::{KcfModel, Kernel, cosine_window, subcell_peak};
-use crate::sample::PatchSampler;
+use crate::sample::{PatchSampler, Region};
 use crate::scale::{ScaleConfig, ScaleFilter};
 
 /// How much context the search window adds around the target.
@@ -243,8 +243,51 @@ struct Geometry {
     max_scale: f64,
 }
 
+impl Geometry {
+    /// The window's sampling origin and steps at `centre`, `scale`.
+    fn origin(&self, centre: (f64, f64), scale: f64) -> (f64, f64, f64, f64) {
+        let (sx, sy) = (self.rx * scale, self.ry * scale);
+        let x0 = centre.0 + 0.5 - self.pw as f64 * sx / 2.0;
+        let y0 = centre.1 + 0.5 - self.ph as f64 * sy / 2.0;
+        (x0, y0, sx, sy)
+    }
+
+    /// The pixels of a `w x h` frame the window at `centre`, `scale`
+    /// reads (`None`: nothing to load, for an empty frame or a non-finite
+    /// centre).
+    fn region(&self, w: usize, h: usize, centre: (f64, f64), scale: f64) -> Option<Region> {
+        let (x0, y0, sx, sy) = self.origin(centre, scale);
+        Region::of_sample(w, h, x0, y0, sx, sy, self.pw, self.ph)
+    }
+}
+
+/// The error of a sample that reads outside the loaded region (a frame
+/// not loaded where the filter looks).
+fn outside() -> DcfError {
+    DcfError::InvalidParameter {
+        name: "sample region",
+        value: 0.0,
+        reason: "reads outside the region of the frame loaded",
+    }
+}
+
+/// Loads `region` of `frame`'s gray levels into `sampler` unless it holds
+/// it already (`None`: the whole frame, where it reports bad frames).
+fn ensure_gray(
+    sampler: &mut PatchSampler,
+    frame: ImageView<'_, u8>,
+    region: Option<Region>,
+) -> Result<()> {
+    let r = region.unwrap_or(Region::whole(frame.width(), frame.height()));
+    if sampler.holds(&r) {
+        return Ok(());
+    }
+    sampler.load_gray_region(frame, r)
+}
+
 /// KCF translation filter on fHOG with DSST's scale filter; see
-/// [`DcfConfig`]. Feed it gray frames.
+/// [`DcfConfig`]. Feed it gray or RGB frames (the filter reads gray
+/// levels; of an RGB frame it converts only the region it reads).
 #[derive(Debug, Clone)]
 pub struct Dcf {
     config: DcfConfig,
@@ -260,6 +303,9 @@ pub struct Dcf {
     gate: ApceGate,
     centre: (f64, f64),
     scale: f64,
+    /// The last frame's displacement (largest of x and y), pixels: the
+    /// margin of the next frame's first load.
+    motion: f64,
 }
 
 impl Dcf {
@@ -284,6 +330,7 @@ impl Dcf {
             gate: ApceGate::new(a, b),
             centre: (0.0, 0.0),
             scale: 1.0,
+            motion: 0.0,
         })
     }
 
@@ -391,34 +438,61 @@ impl Dcf {
         self.gate.reset();
         self.centre = centre;
         self.scale = 1.0;
+        self.motion = 0.0;
         self.load(frame)?;
         self.update(centre, 1.0, 1.0)
     }
 
-    /// Loads a gray frame for the following `detect`, `scale_change` and
-    /// `update` calls.
+    /// Loads the gray levels of a frame (gray, or RGB converted as
+    /// `bayestrack_image::rgb_to_gray_into` does), the whole of it, for the
+    /// following `detect`, `scale_change` and `update` calls.
     ///
     /// # Errors
-    /// [`DcfError::InvalidParameter`] for a frame that is not 1-channel or
-    /// is empty.
+    /// [`DcfError::InvalidParameter`] for a frame that is not 1- or
+    /// 3-channel or is empty.
     pub fn load(&mut self, frame: ImageView<'_, u8>) -> Result<()> {
-        if frame.channels() != 1 {
-            return Err(DcfError::InvalidParameter {
-                name: "frame channels",
-                value: frame.channels() as f64,
-                reason: "the correlation filter reads gray (1-channel) frames",
-            });
-        }
-        self.sampler.load(frame)
+        let whole = Region::whole(frame.width(), frame.height());
+        self.sampler.load_gray_region(frame, whole)
+    }
+
+    /// The pixels of a `w x h` frame that the frame's translation window at
+    /// `centre`, `scale` and the scale samples there read.
+    fn needs(&self, w: usize, h: usize, centre: (f64, f64), scale: f64) -> Option<Region> {
+        let window = self.geometry?.region(w, h, centre, scale)?;
+        Some(match &self.scale_filter {
+            Some(f) => window.union(&f.region(w, h, centre.0, centre.1, scale)?),
+            None => window,
+        })
+    }
+
+    /// The scale factor a frame's scale estimate changes the scale by in
+    /// planning what to load: one scale step (larger changes load again).
+    fn plan_growth(&self) -> f64 {
+        self.config.scale.map_or(1.0, |s| s.step)
+    }
+
+    /// The region of a `w x h` frame to load before a frame's detection
+    /// from `centre`, `scale`: what detection, the scale estimate and the
+    /// update read if the target moves as far as last frame, plus four
+    /// pixels, and grows by at most one scale step. Wherever the target
+    /// goes, the later steps load what they lack ([`ensure_gray`]): the
+    /// plan changes the cost, never the result.
+    fn plan(&self, w: usize, h: usize, centre: (f64, f64), scale: f64) -> Option<Region> {
+        let r = self.needs(w, h, centre, scale * self.plan_growth())?;
+        Some(r.grown(self.motion.ceil() as usize + 4, w, h))
     }
 
     /// The windowed fHOG of the loaded frame around `centre` at `scale`.
     fn extract(&mut self, centre: (f64, f64), scale: f64) -> Result<Geometry> {
         let g = self.geometry.ok_or(DcfError::NotInitialised)?;
         let hog = self.hog.as_mut().ok_or(DcfError::NotInitialised)?;
-        let (sx, sy) = (g.rx * scale, g.ry * scale);
-        let x0 = centre.0 + 0.5 - g.pw as f64 * sx / 2.0;
-        let y0 = centre.1 + 0.5 - g.ph as f64 * sy / 2.0;
+        let (x0, y0, sx, sy) = g.origin(centre, scale);
+        let (w, h) = (self.sampler.width(), self.sampler.height());
+        if let Some(r) = g.region(w, h, centre, scale)
+            && !self.sampler.holds(&r)
+        {
+            return Err(outside());
+        }
         self.sampler
             .sample(0, x0, y0, sx, sy, &mut self.patch, g.pw, g.ph)?;
         for v in self.patch.iter_mut() {
@@ -513,21 +587,37 @@ impl Dcf {
     }
 
     /// One frame of the classical tracker: translation at the current
-    /// scale, then scale at the new centre, then a gated update.
+    /// scale, then scale at the new centre, then a gated update. Reads
+    /// only the region of `frame` around the target that these need (the
+    /// same numbers as loading all of it).
     ///
     /// # Errors
     /// As [`Dcf::load`], [`Dcf::detect`], [`Dcf::update`].
     pub fn step(&mut self, frame: ImageView<'_, u8>) -> Result<Step> {
-        self.load(frame)?;
         let (c, s) = (self.centre, self.scale);
+        let (fw, fh) = (frame.width(), frame.height());
+        let first = self.plan(fw, fh, c, s);
+        // the first load of the frame (the sampler holds the last frame)
+        self.sampler
+            .load_gray_region(frame, first.unwrap_or(Region::whole(fw, fh)))?;
         let r = self.detect(c, s)?;
         let (peak, dx, dy, p, a) = (r.max, r.dx, r.dy, r.psr, r.apce);
         let centre = self.clamp_centre((c.0 + dx, c.1 + dy));
+        if let Some(f) = &self.scale_filter
+            && f.region(fw, fh, centre.0, centre.1, s)
+                .is_some_and(|r| !self.sampler.holds(&r))
+        {
+            let later = self.needs(fw, fh, centre, s * self.plan_growth());
+            ensure_gray(&mut self.sampler, frame, later)?;
+        }
         let scale = self.scale_change(centre, s)?;
         let updated = self.admit(peak as f64, a);
         if updated {
+            let update = self.needs(fw, fh, centre, scale);
+            ensure_gray(&mut self.sampler, frame, update)?;
             self.update(centre, scale, 1.0)?;
         }
+        self.motion = (centre.0 - c.0).abs().max((centre.1 - c.1).abs());
         self.centre = centre;
         self.scale = scale;
         Ok(Step {
@@ -657,19 +747,18 @@ impl Staple {
         &self.merged
     }
 
-    /// Starts on `frame` (gray or RGB: the colour model's input) and its
-    /// gray plane `gray` (the correlation filter's).
+    /// Starts on `frame` (gray or RGB: the colour model reads it as given,
+    /// the correlation filter its gray levels).
     ///
     /// # Errors
     /// As [`Dcf::init`]; a frame of another channel count than 1 or 3.
     pub fn init(
         &mut self,
         frame: ImageView<'_, u8>,
-        gray: ImageView<'_, u8>,
         centre: (f64, f64),
         size: (f64, f64),
     ) -> Result<()> {
-        self.dcf.init(gray, centre, size)?;
+        self.dcf.init(frame, centre, size)?;
         self.colour = Some(ColourModel::new(frame.channels())?);
         let g = self.dcf.geometry.ok_or(DcfError::NotInitialised)?;
         self.planes = vec![0.0; frame.channels() * g.pw * g.ph];
@@ -688,9 +777,13 @@ impl Staple {
     /// Samples the colour patch around `centre` at `scale`.
     fn colour_patch(&mut self, centre: (f64, f64), scale: f64) -> Result<Geometry> {
         let g = self.dcf.geometry.ok_or(DcfError::NotInitialised)?;
-        let (sx, sy) = (g.rx * scale, g.ry * scale);
-        let x0 = centre.0 + 0.5 - g.pw as f64 * sx / 2.0;
-        let y0 = centre.1 + 0.5 - g.ph as f64 * sy / 2.0;
+        let (x0, y0, sx, sy) = g.origin(centre, scale);
+        let (w, h) = (self.sampler.width(), self.sampler.height());
+        if let Some(r) = g.region(w, h, centre, scale)
+            && !self.sampler.holds(&r)
+        {
+            return Err(outside());
+        }
         let n = g.pw * g.ph;
         for (ch, plane) in self.planes.chunks_exact_mut(n).enumerate() {
             self.sampler.sample(ch, x0, y0, sx, sy, plane, g.pw, g.ph)?;
@@ -724,13 +817,27 @@ impl Staple {
 
     /// One frame: the merged response gives the centre, DSST the scale;
     /// both models learn when the correlation response passes the gate.
+    /// Reads only the region of `frame` around the target that these need
+    /// (as [`Dcf::step`]).
     ///
     /// # Errors
     /// As [`Staple::init`].
-    pub fn step(&mut self, frame: ImageView<'_, u8>, gray: ImageView<'_, u8>) -> Result<Step> {
-        self.dcf.load(gray)?;
-        self.sampler.load(frame)?;
+    pub fn step(&mut self, frame: ImageView<'_, u8>) -> Result<Step> {
         let (c, s) = (self.dcf.centre, self.dcf.scale);
+        let (fw, fh) = (frame.width(), frame.height());
+        let whole = Region::whole(fw, fh);
+        let first = self.dcf.plan(fw, fh, c, s);
+        self.dcf
+            .sampler
+            .load_gray_region(frame, first.unwrap_or(whole))?;
+        // the colour patches: the window now and after the update
+        let growth = self.dcf.plan_growth();
+        let g = self.dcf.geometry.ok_or(DcfError::NotInitialised)?;
+        let margin = self.dcf.motion.ceil() as usize + 4;
+        let colour = g
+            .region(fw, fh, c, s * growth)
+            .map(|r| r.grown(margin, fw, fh));
+        self.sampler.load_region(frame, colour.unwrap_or(whole))?;
         let r = self.dcf.detect(c, s)?;
         let (cf_peak, cf_apce) = (r.max as f64, r.apce);
         let g = self.colour_patch(c, s)?;
@@ -759,12 +866,26 @@ impl Staple {
         self.merged.finish()?;
         let (dx, dy) = (self.merged.dx, self.merged.dy);
         let centre = self.dcf.clamp_centre((c.0 + dx, c.1 + dy));
+        if let Some(f) = &self.dcf.scale_filter
+            && f.region(fw, fh, centre.0, centre.1, s)
+                .is_some_and(|r| !self.dcf.sampler.holds(&r))
+        {
+            let later = self.dcf.needs(fw, fh, centre, s * growth);
+            ensure_gray(&mut self.dcf.sampler, frame, later)?;
+        }
         let scale = self.dcf.scale_change(centre, s)?;
         let updated = self.dcf.admit(cf_peak, cf_apce);
         if updated {
+            let update = self.dcf.needs(fw, fh, centre, scale);
+            ensure_gray(&mut self.dcf.sampler, frame, update)?;
             self.dcf.update(centre, scale, 1.0)?;
+            let r = g.region(fw, fh, centre, scale).unwrap_or(whole);
+            if !self.sampler.holds(&r) {
+                self.sampler.load_region(frame, r)?;
+            }
             self.learn_colour(centre, scale, 1.0)?;
         }
+        self.dcf.motion = (centre.0 - c.0).abs().max((centre.1 - c.1).abs());
         self.dcf.centre = centre;
         self.dcf.scale = scale;
         Ok(Step {
@@ -776,5 +897,97 @@ impl Staple {
             apce: self.merged.apce,
             updated,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use bayestrack_image::{Image, rgb_to_gray};
+
+    /// An RGB frame: a textured 24 x 30 target centred at `(cx, cy)` on a
+    /// textured background.
+    fn frame(cx: f64, cy: f64) -> Image<u8> {
+        let (w, h) = (160, 120);
+        let mut data = Vec::with_capacity(w * h * 3);
+        for y in 0..h {
+            for x in 0..w {
+                let (u, v) = (x as f64 - cx, y as f64 - cy);
+                for ch in 0..3 {
+                    let t = if u.abs() < 12.0 && v.abs() < 15.0 {
+                        128.0 + 70.0 * (0.6 * u + ch as f64).sin() * (0.5 * v).cos()
+                    } else {
+                        90.0 + 30.0 * (0.31 * x as f64 + ch as f64).sin()
+                            + 25.0 * (0.17 * y as f64).cos()
+                    };
+                    data.push(t.clamp(0.0, 255.0) as u8);
+                }
+            }
+        }
+        Image::from_vec(w, h, 3, data).unwrap()
+    }
+
+    /// `step` reads only regions of the frame, of an RGB frame converts
+    /// only them: the same steps, bit for bit, as loading the whole gray
+    /// frame and detecting, estimating the scale and updating, through a
+    /// slow drift, a jump the first load does not cover, and the edge.
+    #[test]
+    fn a_step_on_regions_is_a_step_on_the_whole_frame() {
+        let path = |k: usize| match k {
+            0..=9 => (60.0 + k as f64, 50.0 + 0.5 * k as f64),
+            10..=14 => (80.0, 62.0),
+            _ => (150.0, 100.0 + k as f64),
+        };
+        // no gate: every frame learns, the jump's too (a load the plan
+        // missed)
+        let config = DcfConfig {
+            gate: None,
+            ..DcfConfig::default()
+        };
+        let mut fast = Dcf::new(config).unwrap();
+        let mut slow = Dcf::new(config).unwrap();
+        let first = frame(path(0).0, path(0).1);
+        fast.init(first.view(), path(0), (24.0, 30.0)).unwrap();
+        slow.init(
+            rgb_to_gray(first.view()).unwrap().view(),
+            path(0),
+            (24.0, 30.0),
+        )
+        .unwrap();
+        for k in 1..20 {
+            let f = frame(path(k).0, path(k).1);
+            let got = fast.step(f.view()).unwrap();
+            // the same step on the whole gray frame
+            slow.load(rgb_to_gray(f.view()).unwrap().view()).unwrap();
+            let (c, s) = (slow.centre, slow.scale);
+            let r = slow.detect(c, s).unwrap();
+            let (peak, dx, dy, apce) = (r.max, r.dx, r.dy, r.apce);
+            let centre = slow.clamp_centre((c.0 + dx, c.1 + dy));
+            let scale = slow.scale_change(centre, s).unwrap();
+            let updated = slow.admit(peak as f64, apce);
+            if updated {
+                slow.update(centre, scale, 1.0).unwrap();
+            }
+            slow.set_state(centre, scale);
+            let bits = |v: (f64, f64)| (v.0.to_bits(), v.1.to_bits());
+            assert_eq!(bits(got.centre), bits(centre), "frame {k}");
+            assert_eq!(got.scale.to_bits(), scale.to_bits(), "frame {k}");
+            assert_eq!((got.peak, got.updated), (peak, updated), "frame {k}");
+        }
+        // a sample outside the region loaded is an error, not stale data
+        let r = fast.sampler.region();
+        assert!(r != Region::whole(160, 120), "{r:?}");
+        let far = if r.x0 > 40 {
+            (5.0, 5.0)
+        } else {
+            (150.0, 110.0)
+        };
+        assert!(matches!(
+            fast.detect(far, 1.0),
+            Err(DcfError::InvalidParameter {
+                name: "sample region",
+                ..
+            })
+        ));
     }
 }

@@ -8,8 +8,10 @@
 //!   linear HOG correlation filter and a colour-histogram response merged
 //!   0.7 / 0.3, DSST's scale filter, the same gate.
 //!
-//! Both work on gray and RGB video: the correlation filter reads the gray
-//! plane; Staple's colour model reads the frame as given (joint RGB
+//! Both work on gray and RGB video: the correlation filter reads gray
+//! levels (of an RGB frame, converted only in the region around the
+//! target that a frame's samples read: no whole-frame gray plane); Staple's
+//! colour model reads the frame as given (joint RGB
 //! histograms of 32^3 bins, or 32 gray bins). Deterministic: no
 //! randomness. Every default is the paper's published value (see each
 //! option); none was tuned on the evaluation sequences.
@@ -24,7 +26,7 @@ use bayestrack_image::BBox;
 use bayestrack_options::options;
 
 use crate::error::{Result, TrackerError};
-use crate::shell::{ChannelPolicy, InitialBox, Needs, Planes, Shell, TrackerCore};
+use crate::shell::{ChannelPolicy, InitialBox, Planes, Shell, TrackerCore};
 use crate::tracker::Estimate;
 
 options! {
@@ -341,13 +343,9 @@ impl TrackerCore for DcfCore {
         ChannelPolicy::GrayOrRgb
     }
 
-    fn needs(&self) -> Needs {
-        Needs::GRAY
-    }
-
     fn start(&mut self, frame: &Planes<'_>, target: InitialBox) -> Result<()> {
         let (centre, size) = start_of(&target);
-        self.dcf.init(frame.gray()?, centre, size)?;
+        self.dcf.init(frame.input(), centre, size)?;
         self.started = true;
         Ok(())
     }
@@ -356,7 +354,7 @@ impl TrackerCore for DcfCore {
         if !self.started {
             return Err(TrackerError::NotInitialised);
         }
-        Ok(estimate(self.dcf.step(frame.gray()?)?))
+        Ok(estimate(self.dcf.step(frame.input())?))
     }
 }
 
@@ -414,14 +412,9 @@ impl TrackerCore for StapleCore {
         ChannelPolicy::GrayOrRgb
     }
 
-    fn needs(&self) -> Needs {
-        Needs::GRAY
-    }
-
     fn start(&mut self, frame: &Planes<'_>, target: InitialBox) -> Result<()> {
         let (centre, size) = start_of(&target);
-        self.staple
-            .init(frame.input(), frame.gray()?, centre, size)?;
+        self.staple.init(frame.input(), centre, size)?;
         self.started = true;
         Ok(())
     }
@@ -430,7 +423,7 @@ impl TrackerCore for StapleCore {
         if !self.started {
             return Err(TrackerError::NotInitialised);
         }
-        Ok(estimate(self.staple.step(frame.input(), frame.gray()?)?))
+        Ok(estimate(self.staple.step(frame.input())?))
     }
 }
 
