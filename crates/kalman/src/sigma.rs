@@ -121,7 +121,10 @@ pub(crate) fn none<const D: usize>() -> Gaussian<D> {
 /// otherwise `err` (about `A` itself).
 #[cold]
 #[inline(never)]
-fn spread_error(err: KalmanError, a: &[f64], c: f64) -> KalmanError {
+fn spread_error<const D: usize>(err: KalmanError, a: SMatrix<f64, D, D>, c: f64) -> KalmanError {
+    // `a` by value: a reference would pin the caller's covariance to memory
+    // on the hot path too
+    let a = a.as_slice();
     let finite = a.iter().all(|x| x.is_finite());
     if finite && a.iter().any(|x| !(x * c).is_finite()) {
         return KalmanError::InvalidParameter {
@@ -369,11 +372,11 @@ impl SigmaPoints {
         // the leading coordinates and a model that reads only those is
         // evaluated once for them (identical calls are merged).
         let sp = linalg::psd_sqrt(&(prior.cov() * wt.c), "state covariance P", step)
-            .map_err(|e| spread_error(e, prior.cov().as_slice(), wt.c))?;
+            .map_err(|e| spread_error(e, *prior.cov(), wt.c))?;
         let sv = linalg::psd_sqrt(&(v.cov() * wt.c), "process noise covariance", step)
-            .map_err(|e| spread_error(e, v.cov().as_slice(), wt.c))?;
+            .map_err(|e| spread_error(e, *v.cov(), wt.c))?;
         let sw = linalg::psd_sqrt(&(w.cov() * wt.c), "measurement noise covariance", step)
-            .map_err(|e| spread_error(e, w.cov().as_slice(), wt.c))?;
+            .map_err(|e| spread_error(e, *w.cov(), wt.c))?;
         let (m, mv, mw) = (prior.mean(), v.mean(), w.mean());
 
         let xf0 = f(m, mv);

@@ -269,7 +269,7 @@ impl Ukf {
         dynamics: &D,
     ) -> Result<Gaussian<N>> {
         if self.noise == NoiseForm::Augmented {
-            return self.predict_augmented(prior, &Additive(dynamics));
+            return self.predict_additive_augmented(*prior, dynamics);
         }
         let q = model::process_noise(dynamics, Step::Predict)?;
         let mo = self.points.transform(
@@ -283,6 +283,56 @@ impl Ukf {
             Step::Predict,
         )?;
         mo.prediction(linalg::add_sym(&mo.p_xx, &q), Step::Predict)
+    }
+
+    /// [`Ukf::predict_augmented`] of `dynamics` seen through [`Additive`],
+    /// out of line and with the prior passed by value: the hot (additive)
+    /// path of [`Ukf::predict`] then keeps its belief in registers (a
+    /// reference passed to an out-of-line call pins it to memory).
+    #[inline(never)]
+    fn predict_additive_augmented<const N: usize, D: Dynamics<N>>(
+        &self,
+        prior: Gaussian<N>,
+        dynamics: &D,
+    ) -> Result<Gaussian<N>> {
+        self.predict_augmented(&prior, &Additive(dynamics))
+    }
+
+    /// [`Ukf::update_augmented`] of `measurement` seen through
+    /// [`Additive`], out of line with its inputs by value (as
+    /// [`Ukf::predict_additive_augmented`]).
+    #[inline(never)]
+    fn update_additive_augmented<const N: usize, const M: usize, H: Measurement<N, M>>(
+        &self,
+        prior: Gaussian<N>,
+        measurement: &H,
+        z: SVector<f64, M>,
+    ) -> Result<Update<N, M>> {
+        self.update_augmented(&prior, &Additive(measurement), Some(&z))
+    }
+
+    /// [`Ukf::step_augmented`] of the models seen through [`Additive`], out
+    /// of line with its inputs by value (as
+    /// [`Ukf::predict_additive_augmented`]).
+    #[inline(never)]
+    fn step_additive_augmented<
+        const N: usize,
+        const M: usize,
+        D: Dynamics<N>,
+        H: Measurement<N, M>,
+    >(
+        &self,
+        prior: Gaussian<N>,
+        dynamics: &D,
+        measurement: &H,
+        z: SVector<f64, M>,
+    ) -> Result<UkfStep<N, M>> {
+        self.step_augmented(
+            &prior,
+            &Additive(dynamics),
+            &Additive(measurement),
+            Some(&z),
+        )
     }
 
     /// Measurement update with sigma points drawn from `prior`, in the
@@ -305,7 +355,7 @@ impl Ukf {
             return Ok(Update::missing(prior));
         };
         if self.noise == NoiseForm::Augmented {
-            return self.update_augmented(prior, &Additive(measurement), Some(z));
+            return self.update_additive_augmented(*prior, measurement, *z);
         }
         let r = model::measurement_noise(measurement)?;
         let mo = self.points.transform(
@@ -358,12 +408,7 @@ impl Ukf {
             });
         };
         if self.noise == NoiseForm::Augmented {
-            return self.step_augmented(
-                prior,
-                &Additive(dynamics),
-                &Additive(measurement),
-                Some(z),
-            );
+            return self.step_additive_augmented(*prior, dynamics, measurement, *z);
         }
         let q = model::process_noise(dynamics, Step::Predict)?;
         let r = model::measurement_noise(measurement)?;
