@@ -876,6 +876,49 @@ mod tests {
         }
     }
 
+    /// Near the frame's left edge a 5 x 5 grid clamps its two left columns
+    /// of windows onto `x = 0`: 20 distinct windows, each computed once (a
+    /// lost frame costs 20 L + 1 responses, not 25 L + 1), and the target
+    /// hidden there for ten frames is still re-acquired.
+    #[test]
+    fn grid_windows_clamped_together_are_computed_once() {
+        let (mut frames, truth) = scene(40, false, 3.0, |_| (25.0, 60.0, 24.0, 30.0));
+        for f in &mut frames[15..25] {
+            for y in 30..90 {
+                for x in 0..60 {
+                    f.set(x, y, 0, 128);
+                }
+            }
+        }
+        let config = PfDcfConfig {
+            redetect_grid: 5,
+            ..PfDcfConfig::default()
+        };
+        let mut t = pf(config, 1);
+        t.init(frames[0].view(), truth[0]).unwrap();
+        let (mut boxes, mut lost) = (vec![truth[0]], vec![false]);
+        for f in &frames[1..] {
+            let e = t.step(f.view()).unwrap();
+            boxes.push(e.bbox);
+            lost.push(e.lost);
+        }
+        let d = t.diagnostics();
+        assert!(
+            d.lost_frames >= 10 && d.reacquisitions >= 1,
+            "{d:?} {lost:?}"
+        );
+        let counted: usize = lost
+            .windows(2)
+            .map(|w| if w[0] { 20 * 3 + 1 } else { 3 })
+            .sum();
+        assert_eq!(d.responses, counted, "{d:?} {lost:?}");
+        let (centre, _) = errors(&boxes[30..], &truth[30..]);
+        assert!(
+            centre < 3.0,
+            "centre error {centre:.2} px after re-detection"
+        );
+    }
+
     /// What holds today: the gate refuses every blanked frame (the model
     /// is frozen through them) and none of the 14 frames before; with the
     /// gate off (the mutation) no frame is refused and the model learns
