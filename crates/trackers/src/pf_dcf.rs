@@ -806,17 +806,28 @@ mod tests {
         (frames, truth)
     }
 
-    fn lost_run(config: PfDcfConfig, seed: u64) -> (Vec<BBox>, Vec<bool>, PfDcfDiagnostics) {
-        let (frames, truth) = jump_scene();
+    /// A run of `config` on `frames` from `first`: the boxes and lost flags
+    /// (the first frame's given) and the diagnostics.
+    fn track_run(
+        config: PfDcfConfig,
+        seed: u64,
+        frames: &[Image<u8>],
+        first: BBox,
+    ) -> (Vec<BBox>, Vec<bool>, PfDcfDiagnostics) {
         let mut t = pf(config, seed);
-        t.init(frames[0].view(), truth[0]).unwrap();
-        let (mut boxes, mut lost) = (vec![truth[0]], vec![false]);
+        t.init(frames[0].view(), first).unwrap();
+        let (mut boxes, mut lost) = (vec![first], vec![false]);
         for f in &frames[1..] {
             let e = t.step(f.view()).unwrap();
             boxes.push(e.bbox);
             lost.push(e.lost);
         }
         (boxes, lost, t.diagnostics())
+    }
+
+    fn lost_run(config: PfDcfConfig, seed: u64) -> (Vec<BBox>, Vec<bool>, PfDcfDiagnostics) {
+        let (frames, truth) = jump_scene();
+        track_run(config, seed, &frames, truth[0])
     }
 
     /// Re-detection: the blanked frames are refused (lost, model frozen),
@@ -894,15 +905,7 @@ mod tests {
             redetect_grid: 5,
             ..PfDcfConfig::default()
         };
-        let mut t = pf(config, 1);
-        t.init(frames[0].view(), truth[0]).unwrap();
-        let (mut boxes, mut lost) = (vec![truth[0]], vec![false]);
-        for f in &frames[1..] {
-            let e = t.step(f.view()).unwrap();
-            boxes.push(e.bbox);
-            lost.push(e.lost);
-        }
-        let d = t.diagnostics();
+        let (boxes, lost, d) = track_run(config, 1, &frames, truth[0]);
         assert!(
             d.lost_frames >= 10 && d.reacquisitions >= 1,
             "{d:?} {lost:?}"
