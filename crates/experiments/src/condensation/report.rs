@@ -8,20 +8,14 @@ impl CondensationResult {
         self.grid
             .iter()
             .map(|(key, runs)| {
-                let all = |f: fn(&TrackRun) -> &Vec<f64>| -> Vec<f64> {
-                    runs.iter().flat_map(|r| f(r).iter().copied()).collect()
-                };
-                let lost: Vec<f64> = runs
-                    .iter()
-                    .flat_map(|r| r.lost.iter().map(|&l| f64::from(u8::from(l))))
-                    .collect();
+                let pooled = HandSummary::of(runs);
                 let frames: usize = runs.iter().map(|r| r.centre.len()).sum();
                 let seconds: f64 = runs.iter().map(|r| r.seconds).sum();
                 GridSummary {
                     key: *key,
-                    centre: mean(&all(|r| &r.centre)),
-                    outline: mean(&all(|r| &r.outline)),
-                    loss: mean(&lost),
+                    centre: pooled.centre,
+                    outline: pooled.outline,
+                    loss: pooled.loss,
                     // no time recorded (`timing=false`): no fps, not frames / 0
                     fps: if seconds > 0.0 {
                         frames as f64 / seconds
