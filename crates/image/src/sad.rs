@@ -623,11 +623,11 @@ mod x86 {
     /// differences) and needs no horizontal sum. A row of `n` bytes takes
     /// `ceil(n / 4)` blocks; the zero padding of the last block also
     /// counts the frame bytes past the row (`|f - 0| = f`), which are
-    /// subtracted at once (one load and two widening unpacks per padded
-    /// column and row). The 16-bit sums wrap, which is exact as long as
-    /// the true sum fits: they are widened to 32 bits every
-    /// `65535 / (255 n)` rows. Returns how many windows it did (a multiple
-    /// of [`QUADS`], stopping where the reads would leave `f`).
+    /// summed down the rows with no shuffle (see [`quads_g`]) and
+    /// subtracted once per group of rows. The 16-bit sums wrap, which is
+    /// exact as long as the true sum fits: they are widened to 32 bits
+    /// every `65535 / (255 n)` rows. Returns how many windows it did (a
+    /// multiple of [`QUADS`], stopping where the reads would leave `f`).
     #[inline(always)]
     pub(super) fn quads(
         simd: V3,
@@ -641,32 +641,67 @@ mod x86 {
         if t.rows == 0 || !(1..=super::QUAD_MAX).contains(&n) {
             return 0;
         }
+        // One copy per number of 16-byte groups of a row: the group loop
+        // unrolls and a row's loads are at constant offsets into
+        // fixed-size arrays (one bounds check a row, where the general loop
+        // took three a group and kept its state on the stack).
+        match n.div_ceil(16) {
+            1 => quads_g::<1, 48, 32>(simd, t, f, stride, start, out),
+            2 => quads_g::<2, 64, 64>(simd, t, f, stride, start, out),
+            3 => quads_g::<3, 80, 96>(simd, t, f, stride, start, out),
+            4 => quads_g::<4, 96, 128>(simd, t, f, stride, start, out),
+            5 => quads_g::<5, 112, 160>(simd, t, f, stride, start, out),
+            6 => quads_g::<6, 128, 192>(simd, t, f, stride, start, out),
+            7 => quads_g::<7, 144, 224>(simd, t, f, stride, start, out),
+            8 => quads_g::<8, 160, 256>(simd, t, f, stride, start, out),
+            _ => 0,
+        }
+    }
+
+    /// [`quads`] for rows of `G` 16-byte groups (`SPAN = 16 G + 32`: the
+    /// bytes a row's loads reach past the batch's first window; `Q = 32 G`:
+    /// a row of [`SadTemplate::quads`]).
+    ///
+    /// The frame bytes under the padding (columns `n .. n + pad` of each
+    /// window) are summed without widening shuffles, which compete with
+    /// `vmpsadbw` for the same port: the 32-byte load at `n + q` is added
+    /// as sixteen 16-bit words (`raw`, wrapping: low byte plus 256 times the
+    /// high byte) and shifted right by 8 (`odd`, the high bytes, which are
+    /// the odd windows); `raw - 256 odd` is then the sum of the low bytes
+    /// (the even windows) modulo 2^16, which is all the 16-bit window sums
+    /// need. One interleave per group of rows puts the even and odd
+    /// windows back in the order of the `vmpsadbw` sums.
+    #[inline(always)]
+    fn quads_g<const G: usize, const SPAN: usize, const Q: usize>(
+        simd: V3,
+        t: &SadTemplate,
+        f: &[u8],
+        stride: usize,
+        start: usize,
+        out: &mut [u32],
+    ) -> usize {
+        debug_assert!(SPAN == 16 * G + 32 && Q == 32 * G);
         let avx2 = simd.avx2;
         let l = Avx2(simd);
+        let n = t.row_len;
         let blocks = n.div_ceil(4);
-        let (full, rest) = (blocks / 4, blocks % 4);
-        let groups = blocks.div_ceil(4);
+        // Blocks in the last group (1 to 4).
+        let last = blocks - 4 * (G - 1);
         let pad = 4 * blocks - n;
-        // The bytes a row's loads reach past the batch's first window: the
-        // last full group's load at 16 g + 16, the partial group's at
-        // 16 g + 8 (one or two blocks) or 16 g + 16, the padded columns'.
-        let reach = [
-            32 + 16 * full,
-            if rest == 0 {
-                0
-            } else {
-                16 * full + if rest <= 2 { 40 } else { 48 }
-            },
-            n + pad + 31,
-        ];
-        let span = reach.into_iter().max().unwrap_or(0);
         // Rows whose 16-bit sums cannot exceed 65535.
         let run = 65535 / (255 * n);
         let zero = l.zero();
+        macro_rules! m {
+            ($imm:literal, $f:expr, $t:expr) => {
+                avx2._mm256_mpsadbw_epu8::<$imm>($f, $t)
+            };
+        }
+        let add = |a, b| avx2._mm256_add_epi16(a, b);
+        let (tq_rows, _) = t.quads.as_chunks::<Q>();
         let mut k = 0;
         while k + QUADS <= out.len() {
             let base = start + k;
-            if base + (t.rows - 1) * stride + span > f.len() {
+            if base + (t.rows - 1) * stride + SPAN > f.len() {
                 break;
             }
             // 32-bit sums, windows [0..4 | 16..20], [4..8 | 20..24],
@@ -677,57 +712,55 @@ mod x86 {
                 let r1 = (r0 + run).min(t.rows);
                 // 16-bit sums, windows [0..8 | 16..24] and [8..16 | 24..32].
                 let (mut a, mut b) = (zero, zero);
-                for r in r0..r1 {
-                    let o = base + r * stride;
-                    let row = &f[o..o + span];
-                    let tq = &t.quads[r * groups * 32..(r + 1) * groups * 32];
+                // The padded columns' bytes: `raw` and `odd` sums.
+                let (mut raw, mut odd) = (zero, zero);
+                // The frame from the row's first byte: stepped by `stride`
+                // (two compares a row, no multiply and no overflow check).
+                let mut from = &f[base + r0 * stride..];
+                for tq in &tq_rows[r0..r1] {
+                    let row: &[u8; SPAN] = from[..SPAN].try_into().unwrap();
+                    from = from.get(stride..).unwrap_or_default();
                     let mut lo = l.ld(row, 0);
-                    for g in 0..full {
+                    for g in 0..G {
                         let tv = l.ld(tq, 32 * g);
                         let mid = l.ld(row, 16 * g + 8);
-                        let hi = l.ld(row, 16 * g + 16);
-                        let a01 = avx2._mm256_add_epi16(
-                            avx2._mm256_mpsadbw_epu8::<0o00>(lo, tv),
-                            avx2._mm256_mpsadbw_epu8::<0o55>(lo, tv),
-                        );
-                        let a23 = avx2._mm256_add_epi16(
-                            avx2._mm256_mpsadbw_epu8::<0o22>(mid, tv),
-                            avx2._mm256_mpsadbw_epu8::<0o77>(mid, tv),
-                        );
-                        let b01 = avx2._mm256_add_epi16(
-                            avx2._mm256_mpsadbw_epu8::<0o00>(mid, tv),
-                            avx2._mm256_mpsadbw_epu8::<0o55>(mid, tv),
-                        );
-                        let b23 = avx2._mm256_add_epi16(
-                            avx2._mm256_mpsadbw_epu8::<0o22>(hi, tv),
-                            avx2._mm256_mpsadbw_epu8::<0o77>(hi, tv),
-                        );
-                        a = avx2._mm256_add_epi16(a, avx2._mm256_add_epi16(a01, a23));
-                        b = avx2._mm256_add_epi16(b, avx2._mm256_add_epi16(b01, b23));
-                        lo = hi;
-                    }
-                    if rest > 0 {
-                        let tv = l.ld(tq, 32 * full);
-                        let mid = l.ld(row, 16 * full + 8);
-                        a = avx2._mm256_add_epi16(a, avx2._mm256_mpsadbw_epu8::<0o00>(lo, tv));
-                        b = avx2._mm256_add_epi16(b, avx2._mm256_mpsadbw_epu8::<0o00>(mid, tv));
-                        if rest > 1 {
-                            a = avx2._mm256_add_epi16(a, avx2._mm256_mpsadbw_epu8::<0o55>(lo, tv));
-                            b = avx2._mm256_add_epi16(b, avx2._mm256_mpsadbw_epu8::<0o55>(mid, tv));
-                        }
-                        if rest > 2 {
-                            let hi = l.ld(row, 16 * full + 16);
-                            a = avx2._mm256_add_epi16(a, avx2._mm256_mpsadbw_epu8::<0o22>(mid, tv));
-                            b = avx2._mm256_add_epi16(b, avx2._mm256_mpsadbw_epu8::<0o22>(hi, tv));
+                        if g + 1 < G || last == 4 {
+                            let hi = l.ld(row, 16 * g + 16);
+                            let a01 = add(m!(0o00, lo, tv), m!(0o55, lo, tv));
+                            let a23 = add(m!(0o22, mid, tv), m!(0o77, mid, tv));
+                            let b01 = add(m!(0o00, mid, tv), m!(0o55, mid, tv));
+                            let b23 = add(m!(0o22, hi, tv), m!(0o77, hi, tv));
+                            a = add(a, add(a01, a23));
+                            b = add(b, add(b01, b23));
+                            lo = hi;
+                        } else {
+                            a = add(a, m!(0o00, lo, tv));
+                            b = add(b, m!(0o00, mid, tv));
+                            if last > 1 {
+                                a = add(a, m!(0o55, lo, tv));
+                                b = add(b, m!(0o55, mid, tv));
+                            }
+                            if last > 2 {
+                                let hi = l.ld(row, 16 * g + 16);
+                                a = add(a, m!(0o22, mid, tv));
+                                b = add(b, m!(0o22, hi, tv));
+                            }
                         }
                     }
-                    // The frame bytes the zero padding counted: byte i of
-                    // the load at n + q is window i's column n + q.
-                    for q in 0..pad {
-                        let v = l.ld(row, n + q);
-                        a = avx2._mm256_sub_epi16(a, avx2._mm256_unpacklo_epi8(v, zero));
-                        b = avx2._mm256_sub_epi16(b, avx2._mm256_unpackhi_epi8(v, zero));
+                    // Byte i of the load at n + q is window i's column n + q
+                    // (unrolled: a loop took three more instructions a row).
+                    for q in 0..3 {
+                        if q < pad {
+                            let v = l.ld(row, n + q);
+                            raw = add(raw, v);
+                            odd = add(odd, avx2._mm256_srli_epi16::<8>(v));
+                        }
                     }
+                }
+                if pad > 0 {
+                    let even = avx2._mm256_sub_epi16(raw, avx2._mm256_slli_epi16::<8>(odd));
+                    a = avx2._mm256_sub_epi16(a, avx2._mm256_unpacklo_epi16(even, odd));
+                    b = avx2._mm256_sub_epi16(b, avx2._mm256_unpackhi_epi16(even, odd));
                 }
                 w[0] = avx2._mm256_add_epi32(w[0], avx2._mm256_unpacklo_epi16(a, zero));
                 w[1] = avx2._mm256_add_epi32(w[1], avx2._mm256_unpackhi_epi16(a, zero));
