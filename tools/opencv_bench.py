@@ -12,9 +12,13 @@ the best position, which is what mad_search returns).
 
 The script alternates: each round runs our criterion bench binary (only the
 MAD cases, short warm-up and measurement), then times OpenCV on the same
-frames, so both see the same machine load. Both sides report the median
-per-call time of a round (criterion's median for ours, read from its
-estimates.json); the script prints the median over rounds of each and the
+frames, so both see the same machine load. Both sides report the same
+statistic for a round: criterion's median per-call time for ours (read from
+its estimates.json: the median over samples of d, 2d, ... calls of each
+sample's time per call), and the same sampling for OpenCV
+(criterion_like_time; it was the median of single calls, which on a loaded
+machine leaves out the time given to other processes and so flattered
+OpenCV); the script prints the median over rounds of each and the
 ratio ours / OpenCV TM_SQDIFF. One thread for both.
 
 On a machine with AVX-512, --simd avx2 caps our kernels at AVX2 (the
@@ -53,6 +57,38 @@ def median_time(fn, min_total=1.0, min_reps=20):
         times.append(time.perf_counter() - t0)
     times.sort()
     return times[len(times) // 2]
+
+
+def criterion_like_time(fn, seconds, samples=100):
+    """Per-call time of fn() as criterion measures ours: samples of d, 2d,
+    ..., samples*d calls each (criterion's linear sampling, d chosen so that
+    they take about `seconds` in all), the median over samples of the
+    sample's time divided by its calls.
+
+    On an idle machine this equals median_time(). On a loaded one it does
+    not: a single call of a millisecond mostly runs between two preemptions,
+    so the median of single calls leaves the time given to other processes
+    out, while a sample of many calls (criterion's) takes its share in;
+    with the same statistic on both sides the ratio stays fair."""
+    fn()  # warm-up
+    t0 = time.perf_counter()
+    reps = 0
+    while reps < 5 or time.perf_counter() - t0 < 0.2:
+        fn()
+        reps += 1
+    per_call = (time.perf_counter() - t0) / reps
+    # Fewer samples (at least 10) where 100 of at least d = 1, 2, ... calls
+    # would take longer than `seconds` (criterion runs over its time then).
+    samples = max(10, min(samples, int((2 * seconds / per_call) ** 0.5)))
+    d = max(1, round(seconds / (per_call * samples * (samples + 1) / 2)))
+    times = []
+    for i in range(1, samples + 1):
+        n = i * d
+        t = time.perf_counter()
+        for _ in range(n):
+            fn()
+        times.append((time.perf_counter() - t) / n)
+    return statistics.median(times)
 
 
 def fmt(seconds):
@@ -131,7 +167,7 @@ def ours(exe, seconds, simd=None):
 
     Criterion's median of its samples' per-iteration times, read from the
     estimates.json it writes (into a fresh CRITERION_HOME), so that both
-    sides report the same statistic as median_time() does for OpenCV."""
+    sides report the same statistic (criterion_like_time for OpenCV)."""
     import tempfile
 
     env = {**os.environ}
@@ -221,7 +257,7 @@ def main():
         for k, v in ours(exe, args.seconds, args.simd).items():
             ours_t.setdefault(k, []).append(v)
         for k, fn in cv.items():
-            cv_t.setdefault(k, []).append(median_time(fn))
+            cv_t.setdefault(k, []).append(criterion_like_time(fn, args.seconds))
         print(f"round {r + 1}/{args.rounds} done", file=sys.stderr)
     med = {k: statistics.median(v) for k, v in ours_t.items()}
     cvm = {k: statistics.median(v) for k, v in cv_t.items()}
