@@ -645,22 +645,34 @@ mod x86 {
         // unrolls and a row's loads are at constant offsets into
         // fixed-size arrays (one bounds check a row, where the general loop
         // took three a group and kept its state on the stack).
+        // Sixty-four windows a batch first (the template row's loads, the
+        // row's bounds check and the loop serve twice the windows), then
+        // thirty-two.
+        macro_rules! runs {
+            ($g:literal) => {{
+                let k = quads_g::<$g, { 16 * $g + 64 }, { 32 * $g }, 2>(
+                    simd, t, f, stride, start, out, 0,
+                );
+                quads_g::<$g, { 16 * $g + 32 }, { 32 * $g }, 1>(simd, t, f, stride, start, out, k)
+            }};
+        }
         match n.div_ceil(16) {
-            1 => quads_g::<1, 48, 32>(simd, t, f, stride, start, out),
-            2 => quads_g::<2, 64, 64>(simd, t, f, stride, start, out),
-            3 => quads_g::<3, 80, 96>(simd, t, f, stride, start, out),
-            4 => quads_g::<4, 96, 128>(simd, t, f, stride, start, out),
-            5 => quads_g::<5, 112, 160>(simd, t, f, stride, start, out),
-            6 => quads_g::<6, 128, 192>(simd, t, f, stride, start, out),
-            7 => quads_g::<7, 144, 224>(simd, t, f, stride, start, out),
-            8 => quads_g::<8, 160, 256>(simd, t, f, stride, start, out),
+            1 => runs!(1),
+            2 => runs!(2),
+            3 => runs!(3),
+            4 => runs!(4),
+            5 => runs!(5),
+            6 => runs!(6),
+            7 => runs!(7),
+            8 => runs!(8),
             _ => 0,
         }
     }
 
-    /// [`quads`] for rows of `G` 16-byte groups (`SPAN = 16 G + 32`: the
-    /// bytes a row's loads reach past the batch's first window; `Q = 32 G`:
-    /// a row of [`SadTemplate::quads`]).
+    /// [`quads`] for rows of `G` 16-byte groups, `H` batches of
+    /// [`QUADS`] windows side by side (`SPAN = 16 G + 32 H`: the bytes a
+    /// row's loads reach past the first window; `Q = 32 G`: a row of
+    /// [`SadTemplate::quads`]), from window `k`; returns where it stopped.
     ///
     /// The frame bytes under the padding (columns `n .. n + pad` of each
     /// window) are summed without widening shuffles, which compete with
@@ -672,15 +684,17 @@ mod x86 {
     /// need. One interleave per group of rows puts the even and odd
     /// windows back in the order of the `vmpsadbw` sums.
     #[inline(always)]
-    fn quads_g<const G: usize, const SPAN: usize, const Q: usize>(
+    #[allow(clippy::too_many_arguments)]
+    fn quads_g<const G: usize, const SPAN: usize, const Q: usize, const H: usize>(
         simd: V3,
         t: &SadTemplate,
         f: &[u8],
         stride: usize,
         start: usize,
         out: &mut [u32],
+        mut k: usize,
     ) -> usize {
-        debug_assert!(SPAN == 16 * G + 32 && Q == 32 * G);
+        debug_assert!(SPAN == 16 * G + 32 * H && Q == 32 * G);
         let avx2 = simd.avx2;
         let l = Avx2(simd);
         let n = t.row_len;
@@ -698,52 +712,54 @@ mod x86 {
         }
         let add = |a, b| avx2._mm256_add_epi16(a, b);
         let (tq_rows, _) = t.quads.as_chunks::<Q>();
-        let mut k = 0;
-        while k + QUADS <= out.len() {
+        while k + H * QUADS <= out.len() {
             let base = start + k;
             if base + (t.rows - 1) * stride + SPAN > f.len() {
                 break;
             }
-            // 32-bit sums, windows [0..4 | 16..20], [4..8 | 20..24],
-            // [8..12 | 24..28], [12..16 | 28..32].
-            let mut w = [zero; 4];
+            // 32-bit sums of each batch, windows [0..4 | 16..20],
+            // [4..8 | 20..24], [8..12 | 24..28], [12..16 | 28..32].
+            let mut w = [[zero; 4]; H];
             let mut r0 = 0;
             while r0 < t.rows {
                 let r1 = (r0 + run).min(t.rows);
                 // 16-bit sums, windows [0..8 | 16..24] and [8..16 | 24..32].
-                let (mut a, mut b) = (zero, zero);
+                let (mut a, mut b) = ([zero; H], [zero; H]);
                 // The padded columns' bytes: `raw` and `odd` sums.
-                let (mut raw, mut odd) = (zero, zero);
+                let (mut raw, mut odd) = ([zero; H], [zero; H]);
                 // The frame from the row's first byte: stepped by `stride`
                 // (two compares a row, no multiply and no overflow check).
                 let mut from = &f[base + r0 * stride..];
                 for tq in &tq_rows[r0..r1] {
                     let row: &[u8; SPAN] = from[..SPAN].try_into().unwrap();
                     from = from.get(stride..).unwrap_or_default();
-                    let mut lo = l.ld(row, 0);
+                    let mut lo: [_; H] = core::array::from_fn(|h| l.ld(row, 32 * h));
                     for g in 0..G {
                         let tv = l.ld(tq, 32 * g);
-                        let mid = l.ld(row, 16 * g + 8);
-                        if g + 1 < G || last == 4 {
-                            let hi = l.ld(row, 16 * g + 16);
-                            let a01 = add(m!(0o00, lo, tv), m!(0o55, lo, tv));
-                            let a23 = add(m!(0o22, mid, tv), m!(0o77, mid, tv));
-                            let b01 = add(m!(0o00, mid, tv), m!(0o55, mid, tv));
-                            let b23 = add(m!(0o22, hi, tv), m!(0o77, hi, tv));
-                            a = add(a, add(a01, a23));
-                            b = add(b, add(b01, b23));
-                            lo = hi;
-                        } else {
-                            a = add(a, m!(0o00, lo, tv));
-                            b = add(b, m!(0o00, mid, tv));
-                            if last > 1 {
-                                a = add(a, m!(0o55, lo, tv));
-                                b = add(b, m!(0o55, mid, tv));
-                            }
-                            if last > 2 {
-                                let hi = l.ld(row, 16 * g + 16);
-                                a = add(a, m!(0o22, mid, tv));
-                                b = add(b, m!(0o22, hi, tv));
+                        for h in 0..H {
+                            let p = 32 * h + 16 * g;
+                            let mid = l.ld(row, p + 8);
+                            if g + 1 < G || last == 4 {
+                                let hi = l.ld(row, p + 16);
+                                let a01 = add(m!(0o00, lo[h], tv), m!(0o55, lo[h], tv));
+                                let a23 = add(m!(0o22, mid, tv), m!(0o77, mid, tv));
+                                let b01 = add(m!(0o00, mid, tv), m!(0o55, mid, tv));
+                                let b23 = add(m!(0o22, hi, tv), m!(0o77, hi, tv));
+                                a[h] = add(a[h], add(a01, a23));
+                                b[h] = add(b[h], add(b01, b23));
+                                lo[h] = hi;
+                            } else {
+                                a[h] = add(a[h], m!(0o00, lo[h], tv));
+                                b[h] = add(b[h], m!(0o00, mid, tv));
+                                if last > 1 {
+                                    a[h] = add(a[h], m!(0o55, lo[h], tv));
+                                    b[h] = add(b[h], m!(0o55, mid, tv));
+                                }
+                                if last > 2 {
+                                    let hi = l.ld(row, p + 16);
+                                    a[h] = add(a[h], m!(0o22, mid, tv));
+                                    b[h] = add(b[h], m!(0o22, hi, tv));
+                                }
                             }
                         }
                     }
@@ -751,32 +767,42 @@ mod x86 {
                     // (unrolled: a loop took three more instructions a row).
                     for q in 0..3 {
                         if q < pad {
-                            let v = l.ld(row, n + q);
-                            raw = add(raw, v);
-                            odd = add(odd, avx2._mm256_srli_epi16::<8>(v));
+                            for h in 0..H {
+                                let v = l.ld(row, 32 * h + n + q);
+                                raw[h] = add(raw[h], v);
+                                odd[h] = add(odd[h], avx2._mm256_srli_epi16::<8>(v));
+                            }
                         }
                     }
                 }
-                if pad > 0 {
-                    let even = avx2._mm256_sub_epi16(raw, avx2._mm256_slli_epi16::<8>(odd));
-                    a = avx2._mm256_sub_epi16(a, avx2._mm256_unpacklo_epi16(even, odd));
-                    b = avx2._mm256_sub_epi16(b, avx2._mm256_unpackhi_epi16(even, odd));
+                for h in 0..H {
+                    let (mut a, mut b) = (a[h], b[h]);
+                    if pad > 0 {
+                        let (raw, odd) = (raw[h], odd[h]);
+                        let even = avx2._mm256_sub_epi16(raw, avx2._mm256_slli_epi16::<8>(odd));
+                        a = avx2._mm256_sub_epi16(a, avx2._mm256_unpacklo_epi16(even, odd));
+                        b = avx2._mm256_sub_epi16(b, avx2._mm256_unpackhi_epi16(even, odd));
+                    }
+                    let w = &mut w[h];
+                    w[0] = avx2._mm256_add_epi32(w[0], avx2._mm256_unpacklo_epi16(a, zero));
+                    w[1] = avx2._mm256_add_epi32(w[1], avx2._mm256_unpackhi_epi16(a, zero));
+                    w[2] = avx2._mm256_add_epi32(w[2], avx2._mm256_unpacklo_epi16(b, zero));
+                    w[3] = avx2._mm256_add_epi32(w[3], avx2._mm256_unpackhi_epi16(b, zero));
                 }
-                w[0] = avx2._mm256_add_epi32(w[0], avx2._mm256_unpacklo_epi16(a, zero));
-                w[1] = avx2._mm256_add_epi32(w[1], avx2._mm256_unpackhi_epi16(a, zero));
-                w[2] = avx2._mm256_add_epi32(w[2], avx2._mm256_unpacklo_epi16(b, zero));
-                w[3] = avx2._mm256_add_epi32(w[3], avx2._mm256_unpackhi_epi16(b, zero));
                 r0 = r1;
             }
-            let sums: [[u32; 8]; 4] = [
-                cast(avx2._mm256_permute2x128_si256::<0x20>(w[0], w[1])),
-                cast(avx2._mm256_permute2x128_si256::<0x20>(w[2], w[3])),
-                cast(avx2._mm256_permute2x128_si256::<0x31>(w[0], w[1])),
-                cast(avx2._mm256_permute2x128_si256::<0x31>(w[2], w[3])),
-            ];
-            let sums: [u32; QUADS] = cast(sums);
-            out[k..k + QUADS].copy_from_slice(&sums);
-            k += QUADS;
+            for (h, w) in w.into_iter().enumerate() {
+                let sums: [[u32; 8]; 4] = [
+                    cast(avx2._mm256_permute2x128_si256::<0x20>(w[0], w[1])),
+                    cast(avx2._mm256_permute2x128_si256::<0x20>(w[2], w[3])),
+                    cast(avx2._mm256_permute2x128_si256::<0x31>(w[0], w[1])),
+                    cast(avx2._mm256_permute2x128_si256::<0x31>(w[2], w[3])),
+                ];
+                let sums: [u32; QUADS] = cast(sums);
+                let o = k + h * QUADS;
+                out[o..o + QUADS].copy_from_slice(&sums);
+            }
+            k += H * QUADS;
         }
         k
     }
@@ -1122,8 +1148,8 @@ pub(crate) mod tests {
     fn gray_batches_of_every_width_equal_the_reference() {
         // Every gray row length the AVX2 vmpsadbw kernel takes (1 to
         // QUAD_MAX bytes: every number of blocks and of padded columns) and
-        // a few past it; runs of 31 to 70 windows from two first windows
-        // (batches of 32 and leftovers), in a crop (stride past the width)
+        // a few past it; runs of 31 to 110 windows from two first windows
+        // (batches of 64, of 32 and leftovers), in a crop (stride past the width)
         // whose last windows reach the buffer's end (the batch stops where
         // its reads would leave it).
         for level in levels() {
@@ -1131,13 +1157,13 @@ pub(crate) mod tests {
             for tw in 1..=QUAD_MAX + 2 {
                 for th in [1, 2, 5] {
                     let seed = (tw * 10 + th) as u32;
-                    let fw = tw + 69;
+                    let fw = tw + 109;
                     let big = random(fw + 2, th + 3, 1, seed);
                     let frame = big.crop(Rect::new(2, 1, fw, th + 2)).unwrap();
                     let t_img = random(tw, th, 1, seed + 1);
                     tpl.set(t_img.view());
                     for (x0, y) in [(0, 0), (1, 2)] {
-                        for n in [31, 32, 33, 64, 70 - x0] {
+                        for n in [31, 32, 33, 64, 70, 97, 110 - x0] {
                             let mut out = vec![0u32; n];
                             tpl.sad_windows(frame, x0, y, &mut out);
                             for (i, &o) in out.iter().enumerate() {
@@ -1160,16 +1186,18 @@ pub(crate) mod tests {
     fn saturated_gray_rows_at_the_16_bit_widening_period() {
         // 255 against 0 everywhere: the vmpsadbw kernel's 16-bit sums reach
         // 65535 - (65535 mod 255 n) before they are widened (every
-        // 65535 / (255 n) rows); one row more must not wrap.
+        // 65535 / (255 n) rows); one row more must not wrap. 100 windows:
+        // a batch of 64, one of 32 and a tail, so the frame bytes under
+        // the padding are 255 in every kind of batch.
         for level in levels() {
             let mut tpl = SadTemplate::new(level);
             for tw in 1..=QUAD_MAX + 2 {
                 let run = 65535 / (255 * tw);
                 for th in [run.max(1), run + 1, 2 * run + 1] {
-                    let white = Image::new(tw + 40, th, 1, 255u8).unwrap();
+                    let white = Image::new(tw + 99, th, 1, 255u8).unwrap();
                     let black = Image::new(tw, th, 1, 0u8).unwrap();
                     tpl.set(black.view());
-                    let mut out = vec![0u32; 41];
+                    let mut out = vec![0u32; 100];
                     tpl.sad_windows(white.view(), 0, 0, &mut out);
                     assert!(
                         out.iter().all(|&o| o as usize == 255 * tw * th),
