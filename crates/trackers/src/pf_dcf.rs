@@ -63,6 +63,12 @@
 //! gate again. [`PfDcfCore::diagnostics`] counts lost frames and
 //! re-acquisitions.
 //!
+//! # Cost
+//! A frame loads (and of an RGB frame converts to gray) only the union of
+//! the windows it scores, then what the second look or the update lacks
+//! ([`Dcf::load_windows`], [`Dcf::ensure_loaded`]): the same numbers as a
+//! whole-frame load.
+//!
 //! # Randomness
 //! The engine (`bayestrack-particle`'s `Smc`, systematic resampling
 //! before each proposal, [`crate::select_predict_measure`]) is seeded
