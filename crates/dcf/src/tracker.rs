@@ -455,6 +455,50 @@ impl Dcf {
         self.sampler.load_gray_region(frame, whole)
     }
 
+    /// Loads the gray levels of only the part of `frame` that
+    /// [`Dcf::detect`] and [`Dcf::update`] read at each of `windows`
+    /// (`(centre, scale)`: their union; the whole frame before
+    /// [`Dcf::init`] or for a window with no region), replacing what was
+    /// loaded. Those calls then give the same numbers as after
+    /// [`Dcf::load`]; a call elsewhere is an error until
+    /// [`Dcf::ensure_loaded`] loads its region.
+    ///
+    /// # Errors
+    /// As [`Dcf::load`].
+    pub fn load_windows(
+        &mut self,
+        frame: ImageView<'_, u8>,
+        windows: impl IntoIterator<Item = ((f64, f64), f64)>,
+    ) -> Result<()> {
+        let (w, h) = (frame.width(), frame.height());
+        let mut region: Option<Region> = None;
+        for (centre, scale) in windows {
+            let Some(r) = self.needs(w, h, centre, scale) else {
+                region = Some(Region::whole(w, h));
+                break;
+            };
+            region = Some(region.map_or(r, |u| u.union(&r)));
+        }
+        self.sampler
+            .load_gray_region(frame, region.unwrap_or(Region::whole(w, h)))
+    }
+
+    /// Loads what [`Dcf::detect`] and [`Dcf::update`] at `centre`,
+    /// `scale` read of `frame` when the loaded region lacks it (replacing
+    /// the loaded region); nothing otherwise.
+    ///
+    /// # Errors
+    /// As [`Dcf::load`].
+    pub fn ensure_loaded(
+        &mut self,
+        frame: ImageView<'_, u8>,
+        centre: (f64, f64),
+        scale: f64,
+    ) -> Result<()> {
+        let need = self.needs(frame.width(), frame.height(), centre, scale);
+        ensure_gray(&mut self.sampler, frame, need)
+    }
+
     /// The pixels of a `w x h` frame that the frame's translation window at
     /// `centre`, `scale` and the scale samples there read.
     fn needs(&self, w: usize, h: usize, centre: (f64, f64), scale: f64) -> Option<Region> {
@@ -989,5 +1033,66 @@ mod tests {
                 ..
             })
         ));
+    }
+
+    /// `load_windows` loads the union of the windows' regions only (of an
+    /// RGB frame, converts only it): detection there and an update
+    /// `ensure_loaded` prepares give the numbers of a whole-frame load, bit
+    /// for bit; a window outside the loaded region is an error until
+    /// `ensure_loaded` loads it.
+    #[test]
+    fn loading_the_windows_is_loading_the_frame() {
+        let config = DcfConfig {
+            gate: None,
+            ..DcfConfig::default()
+        };
+        let mut part = Dcf::new(config).unwrap();
+        let mut whole = Dcf::new(config).unwrap();
+        let first = frame(50.0, 45.0);
+        part.init(first.view(), (50.0, 45.0), (24.0, 30.0)).unwrap();
+        whole
+            .init(first.view(), (50.0, 45.0), (24.0, 30.0))
+            .unwrap();
+        let f = frame(54.0, 47.0);
+        let windows = [
+            ((50.0, 45.0), 1.0),
+            ((40.0, 38.0), 0.96),
+            ((62.0, 50.0), 1.04),
+        ];
+        part.load_windows(f.view(), windows).unwrap();
+        whole.load(f.view()).unwrap();
+        assert!(part.sampler.region() != Region::whole(160, 120));
+        let bits = |d: &Dcf| {
+            d.response()
+                .data()
+                .iter()
+                .map(|v| v.to_bits())
+                .collect::<Vec<_>>()
+        };
+        for (c, s) in windows {
+            part.detect(c, s).unwrap();
+            whole.detect(c, s).unwrap();
+            assert_eq!(bits(&part), bits(&whole), "window at {c:?}, scale {s}");
+        }
+        let far = (150.0, 110.0);
+        assert!(matches!(
+            part.detect(far, 1.0),
+            Err(DcfError::InvalidParameter {
+                name: "sample region",
+                ..
+            })
+        ));
+        part.ensure_loaded(f.view(), far, 1.0).unwrap();
+        part.detect(far, 1.0).unwrap();
+        whole.detect(far, 1.0).unwrap();
+        assert_eq!(bits(&part), bits(&whole), "far window");
+        // an update where the loaded region lacks it, then detection
+        let at = (53.0, 46.5);
+        part.ensure_loaded(f.view(), at, 1.02).unwrap();
+        part.update(at, 1.02, 1.0).unwrap();
+        whole.update(at, 1.02, 1.0).unwrap();
+        part.detect(at, 1.02).unwrap();
+        whole.detect(at, 1.02).unwrap();
+        assert_eq!(bits(&part), bits(&whole), "after the update");
     }
 }

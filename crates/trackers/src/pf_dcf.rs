@@ -63,6 +63,12 @@
 //! gate again. [`PfDcfCore::diagnostics`] counts lost frames and
 //! re-acquisitions.
 //!
+//! # Cost
+//! A frame loads (and of an RGB frame converts to gray) only the union of
+//! the windows it scores, then what the second look or the update lacks
+//! ([`Dcf::load_windows`], [`Dcf::ensure_loaded`]): the same numbers as a
+//! whole-frame load.
+//!
 //! # Randomness
 //! The engine (`bayestrack-particle`'s `Smc`, systematic resampling
 //! before each proposal, [`crate::select_predict_measure`]) is seeded
@@ -74,7 +80,7 @@ use std::convert::Infallible;
 
 use bayestrack_dcf::confidence::ApceGate;
 use bayestrack_dcf::{Dcf, DcfConfig};
-use bayestrack_image::BBox;
+use bayestrack_image::{BBox, ImageView};
 use bayestrack_options::options;
 use bayestrack_particle::{ParticleSet, Proposal, Resampling, Smc, stream_seed};
 use nalgebra::SVector;
@@ -484,7 +490,13 @@ impl PfDcfCore {
     /// one window, or the re-detection grid while lost. Returns the peak
     /// and APCE of the best middle-scale response and where its peak is
     /// (frame pixels).
-    fn respond(&mut self, centre: (f64, f64), ls: f64, wide: bool) -> Result<Best> {
+    fn respond(
+        &mut self,
+        frame: ImageView<'_, u8>,
+        centre: (f64, f64),
+        ls: f64,
+        wide: bool,
+    ) -> Result<Best> {
         let c = self.config;
         let r = &mut self.responses;
         r.levels.clear();
@@ -509,6 +521,25 @@ impl PfDcfCore {
         let nl = r.levels.len();
         r.maps.resize_with(g * g * nl, Map::default);
         let half = (g / 2) as f64;
+        let fsize = self.frame;
+        let window = |i: usize, j: usize| {
+            in_frame(
+                (
+                    centre.0 + (i as f64 - half) * stride.0,
+                    centre.1 + (j as f64 - half) * stride.1,
+                ),
+                fsize,
+            )
+        };
+        // the frame's gray levels where the windows read, once
+        let levels = &r.levels;
+        self.dcf.load_windows(
+            frame,
+            (0..g * g).flat_map(|k| {
+                let wc = window(k % g, k / g);
+                levels.iter().map(move |&l| (wc, l.exp()))
+            }),
+        )?;
         let mut best = Best {
             peak: f64::NEG_INFINITY,
             apce: 0.0,
@@ -516,13 +547,7 @@ impl PfDcfCore {
         };
         for j in 0..g {
             for i in 0..g {
-                let wc = in_frame(
-                    (
-                        centre.0 + (i as f64 - half) * stride.0,
-                        centre.1 + (j as f64 - half) * stride.1,
-                    ),
-                    self.frame,
-                );
+                let wc = window(i, j);
                 // a window clamped onto the frame's edge can fall where an
                 // earlier one did: its maps are copied, not computed again
                 let k = j * g + i;
@@ -568,8 +593,9 @@ impl PfDcfCore {
     /// window), so the grid's own peaks rarely pass the gate; centred, the
     /// peak is what tracking would see. Returns the peak, APCE and the
     /// refined position.
-    fn second_look(&mut self, at: (f64, f64), ls: f64) -> Result<Best> {
+    fn second_look(&mut self, frame: ImageView<'_, u8>, at: (f64, f64), ls: f64) -> Result<Best> {
         let at = in_frame(at, self.frame);
+        self.dcf.ensure_loaded(frame, at, ls.exp())?;
         let resp = self.dcf.detect(at, ls.exp())?;
         self.diagnostics.responses += 1;
         Ok(Best {
@@ -603,12 +629,14 @@ impl TrackerCore for PfDcfCore {
         ChannelPolicy::GrayOrRgb
     }
 
+    /// The input as given: the filter converts an RGB frame to gray only
+    /// in the regions its windows read.
     fn needs(&self) -> Needs {
-        Needs::GRAY
+        Needs::INPUT
     }
 
     fn start(&mut self, planes: &Planes<'_>, target: InitialBox) -> Result<()> {
-        let gray = planes.gray()?;
+        let gray = planes.input();
         let (cx, cy) = target.bbox.center();
         let (cx, cy) = (cx - 1.0, cy - 1.0);
         let (w, h) = (target.bbox.width, target.bbox.height);
@@ -639,7 +667,7 @@ impl TrackerCore for PfDcfCore {
     }
 
     fn track(&mut self, planes: &Planes<'_>) -> Result<Estimate> {
-        let gray = planes.gray()?;
+        let frame = planes.input();
         let c = self.config;
         let prior: State = self
             .smc
@@ -649,7 +677,6 @@ impl TrackerCore for PfDcfCore {
             .mean();
         // E[c + v] and E[ln s] of the particles the step will select from
         let predicted = [prior[0] + prior[2], prior[1] + prior[3], prior[4]];
-        self.dcf.load(gray)?;
         let wide = self.lost && c.redetect;
         // a lost search stays where the target was last learnt (the
         // particle mean would follow the clutter's response)
@@ -659,12 +686,12 @@ impl TrackerCore for PfDcfCore {
             (predicted[0], predicted[1], predicted[2])
         };
         let centre = in_frame((px, py), self.frame);
-        let best = self.respond(centre, pl, wide)?;
+        let best = self.respond(frame, centre, pl, wide)?;
         // while lost, a centred second look at the grid's best peak decides
         // re-acquisition: when the gate would learn it, the particles
         // restart there
         let found = if wide {
-            let look = self.second_look(best.at, pl)?;
+            let look = self.second_look(frame, best.at, pl)?;
             self.gate.would_admit(look.peak, look.apce).then_some(look)
         } else {
             None
@@ -703,7 +730,9 @@ impl TrackerCore for PfDcfCore {
             if self.lost {
                 self.diagnostics.reacquisitions += 1;
             }
-            self.dcf.update((mean[0], mean[1]), mean[4].exp(), 1.0)?;
+            let (at, scale) = ((mean[0], mean[1]), mean[4].exp());
+            self.dcf.ensure_loaded(frame, at, scale)?;
+            self.dcf.update(at, scale, 1.0)?;
             self.anchor = (mean[0], mean[1], mean[4]);
             self.peaks.0 += peak;
             self.peaks.1 += 1;
