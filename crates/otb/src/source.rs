@@ -946,7 +946,7 @@ mod tests {
         /// Taken undecoded (a folder): decoded where `PendingFrame::decode`
         /// runs.
         Later,
-        /// As `Later`, and frames `1..k` wait (up to a minute) until frame
+        /// As `Later`, and frames `1..k` wait (up to 20 s) until frame
         /// `k` has started decoding: `k` threads must decode at once, and
         /// frame `k` ends first.
         Together(usize),
@@ -1002,11 +1002,11 @@ mod tests {
         }
     }
 
-    /// Waits (sleeping, up to a minute) until `done` holds; whether it did.
+    /// Waits (sleeping, up to 20 s) until `done` holds; whether it did.
     fn wait_for(done: impl Fn() -> bool) -> bool {
         let start = Instant::now();
         while !done() {
-            if start.elapsed() > Duration::from_secs(60) {
+            if start.elapsed() > Duration::from_secs(20) {
                 return false;
             }
             std::thread::sleep(Duration::from_millis(1));
