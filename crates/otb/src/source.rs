@@ -1107,12 +1107,14 @@ mod tests {
                 }
             }
         }
-        // Through a selection, as the CLI runs it.
+        // Through a selection, as the CLI runs it: frames 7 and 11 run and
+        // fail, frame 5 fails as it is passed over.
         let pick = FrameSelection::parse(Some("3..20"), 4).unwrap();
-        let want = drain(&mut Select::new(Counted::new(30, &[7, 11]), pick));
+        let want = drain(&mut Select::new(Counted::new(30, &[5, 7, 11]), pick));
+        assert_eq!(want.iter().filter(|s| s.contains("error")).count(), 3);
         for threads in [1, 2, 3] {
             let got = std::thread::scope(|scope| {
-                let inner = Select::new(Counted::decoded(30, &[7, 11], Decoding::Later), pick);
+                let inner = Select::new(Counted::decoded(30, &[5, 7, 11], Decoding::Later), pick);
                 drain(&mut DecodeAhead::with_threads(scope, inner, 2, threads))
             });
             assert_eq!(got, want, "{threads} threads");
@@ -1123,21 +1125,50 @@ mod tests {
     fn several_threads_decode_several_frames_at_once_and_hand_them_over_in_order() {
         for threads in [2, 3] {
             for depth in [1, 4] {
-                let source = Counted::decoded(12, &[threads], Decoding::Together(threads));
-                let vain = Arc::clone(&source.waited_in_vain);
                 let want = drain(&mut Counted::new(12, &[threads]));
-                let got = std::thread::scope(|scope| {
-                    drain(&mut DecodeAhead::with_threads(
-                        scope, source, depth, threads,
-                    ))
-                });
-                assert_eq!(got, want, "{threads} threads, depth {depth}");
-                assert_eq!(
-                    vain.load(Ordering::SeqCst),
-                    0,
-                    "{threads} threads, depth {depth}: frames 1..{threads} were not decoded at \
-                     once"
-                );
+                // alone, and boxed behind a selection as the CLI runs it
+                for boxed in [false, true] {
+                    let source = Counted::decoded(12, &[threads], Decoding::Together(threads));
+                    let vain = Arc::clone(&source.waited_in_vain);
+                    let source: Box<dyn FrameSource + Send> = if boxed {
+                        Box::new(Select::new(source, FrameSelection::default()))
+                    } else {
+                        Box::new(source)
+                    };
+                    let got = std::thread::scope(|scope| {
+                        drain(&mut DecodeAhead::with_threads(
+                            scope, source, depth, threads,
+                        ))
+                    });
+                    let case = format!("{threads} threads, depth {depth}, boxed {boxed}");
+                    assert_eq!(got, want, "{case}");
+                    assert_eq!(
+                        vain.load(Ordering::SeqCst),
+                        0,
+                        "{case}: frames 1..{threads} were not decoded at once"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_folder_hands_its_frames_over_undecoded() {
+        let dir = Path::new("no-such-folder");
+        let frames = [dir.join("0001.jpg"), dir.join("0002.jpg")];
+        let mut folder = FolderSource::new(dir, &frames);
+        let first = folder.next_pending().unwrap();
+        // nothing read yet: the file is opened where it is decoded
+        assert_eq!(format!("{first:?}"), "PendingFrame::later(..)");
+        assert_eq!(folder.remaining(), Some(1));
+        let second = folder.next_pending().unwrap();
+        assert!(folder.next_pending().is_none());
+        for (index, pending) in [(1, second), (0, first)] {
+            match pending.decode() {
+                Err(OtbError::Frame { index: i, path, .. }) => {
+                    assert_eq!((i, path), (index, frames[index].clone()));
+                }
+                other => panic!("frame {index}: {other:?}"),
             }
         }
     }
