@@ -29,8 +29,11 @@ const DEFAULT_TRACKER: &str = "ncc-scale";
 /// Frames `track` decodes ahead of the tracker by default (`--decode-ahead`).
 const DEFAULT_DECODE_AHEAD: usize = 4;
 
-/// Threads that decode a folder's frames by default (`--decode-threads`).
-const DEFAULT_DECODE_THREADS: usize = 2;
+/// Threads that decode a folder's frames by default (`--decode-threads`):
+/// one, the fastest measured so far (2026-12-03, 2-core machine under load:
+/// 2 threads took 1.3-2.1x the wall time of 1 on David with `mad`, and
+/// pinned to one core 1.1-1.4x on Crossing; the same CPU time).
+const DEFAULT_DECODE_THREADS: usize = 1;
 
 #[derive(Parser)]
 #[command(
