@@ -29,6 +29,12 @@ const DEFAULT_TRACKER: &str = "ncc-scale";
 /// Frames `track` decodes ahead of the tracker by default (`--decode-ahead`).
 const DEFAULT_DECODE_AHEAD: usize = 4;
 
+/// Threads that decode a folder's frames by default (`--decode-threads`):
+/// one, the fastest measured so far (2026-12-03, 2-core machine under load:
+/// 2 threads took 1.3-2.1x the wall time of 1 on David with `mad`, and
+/// pinned to one core 1.1-1.4x on Crossing; the same CPU time).
+const DEFAULT_DECODE_THREADS: usize = 1;
+
 #[derive(Parser)]
 #[command(
     name = "bayestrack",
@@ -76,9 +82,10 @@ refused. Scores (with ground truth): success AUC
 20 px centre error, mean IoU; unlabelled rows (0,0,0,0) and frames past the
 last ground-truth row are not scored. fps counts only the tracker's own time
 (not decoding frames or writing files); the whole run's fps counts everything
-from the first frame to the last box. Frames are decoded on a second thread,
---decode-ahead frames ahead of the tracker (0: in turn with it); the boxes
-are the same either way. Progress goes to standard error when it is a
+from the first frame to the last box. Frames are decoded on other threads,
+--decode-ahead frames ahead of the tracker (0: in turn with it), a folder's
+frames on --decode-threads threads at once (a video or a stream on one); the
+boxes are the same either way. Progress goes to standard error when it is a
 terminal.
 
 Exit status: 0 on success, 1 when the run failed (the message names the file
@@ -137,6 +144,12 @@ struct TrackArgs {
     /// thread). Same boxes, same errors either way.
     #[arg(long, value_name = "N", default_value_t = DEFAULT_DECODE_AHEAD)]
     decode_ahead: usize,
+    /// Threads that decode a folder's frames at once, each its own frame
+    /// (with --decode-ahead 1 or more; a video or a Y4M stream is decoded
+    /// on one). Same boxes, same errors whatever the number.
+    #[arg(long, value_name = "K", default_value_t = DEFAULT_DECODE_THREADS,
+          value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=64))]
+    decode_threads: usize,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -572,6 +585,12 @@ fn track(args: &TrackArgs, stdout_closed: bool) -> Result<(), String> {
         (None, Some(stream)) => Box::new(Select::new(stream, selection)),
         (None, None) => unreachable!("the input is a folder or a stream"),
     };
+    // a stream is read in order: more threads would only wait their turn
+    let decode_threads = if folder.is_some() {
+        args.decode_threads
+    } else {
+        1
+    };
     let init = match args.init {
         Some(b) => b,
         None => truth
@@ -648,7 +667,8 @@ fn track(args: &TrackArgs, stdout_closed: bool) -> Result<(), String> {
         // the scope ends when the decoding thread has: at the end of the
         // source, or at its next frame once the run stopped
         std::thread::scope(|scope| {
-            let mut ahead = DecodeAhead::new(scope, source, args.decode_ahead);
+            let mut ahead =
+                DecodeAhead::with_threads(scope, source, args.decode_ahead, decode_threads);
             track_stream(tracker.as_mut(), &mut ahead, init, on_bad_frame, &mut sink)
         })
     };

@@ -1165,6 +1165,18 @@ fn unclear_errors_name_the_real_cause() {
     assert!(!err.contains("0000000000"), "{err}");
 }
 
+/// `--decode-ahead` and `--decode-threads` pairs a run must not depend on:
+/// in turn, one thread ahead, several threads.
+const DECODE_SETTINGS: [(&str, &str); 7] = [
+    ("0", "1"),
+    ("1", "1"),
+    ("4", "1"),
+    ("64", "1"),
+    ("1", "2"),
+    ("4", "2"),
+    ("4", "3"),
+];
+
 #[test]
 fn decoding_ahead_or_in_turn_writes_the_same_boxes() {
     let dir = tmpdir("ahead");
@@ -1173,8 +1185,8 @@ fn decoding_ahead_or_in_turn_writes_the_same_boxes() {
     let seq = dir.to_str().unwrap();
     for tracker in ["mad", "ncc-scale", "pf-correlation"] {
         let mut first: Option<(String, String)> = None;
-        for depth in ["0", "1", "4", "64"] {
-            let out = dir.join(format!("{tracker}-{depth}.txt"));
+        for (depth, threads) in DECODE_SETTINGS {
+            let out = dir.join(format!("{tracker}-{depth}-{threads}.txt"));
             let o = bayestrack(&[
                 "track",
                 "--seq",
@@ -1187,11 +1199,13 @@ fn decoding_ahead_or_in_turn_writes_the_same_boxes() {
                 "skip",
                 "--decode-ahead",
                 depth,
+                "--decode-threads",
+                threads,
                 "--out",
                 out.to_str().unwrap(),
             ]);
             let err = stderr(&o);
-            assert!(o.status.success(), "{tracker} {depth}: {err}");
+            assert!(o.status.success(), "{tracker} {depth} {threads}: {err}");
             assert!(err.contains("skipped frame 9"), "{err}");
             assert!(err.contains("fps whole run"), "{err}");
             let boxes = fs::read_to_string(&out).unwrap();
@@ -1205,11 +1219,17 @@ fn decoding_ahead_or_in_turn_writes_the_same_boxes() {
             match &first {
                 None => first = Some((boxes, score)),
                 Some((b, s)) => {
-                    assert_eq!(&boxes, b, "{tracker}: boxes with --decode-ahead {depth}");
-                    assert_eq!(&score, s, "{tracker}: messages with --decode-ahead {depth}");
+                    let with = format!("--decode-ahead {depth} --decode-threads {threads}");
+                    assert_eq!(&boxes, b, "{tracker}: boxes with {with}");
+                    assert_eq!(&score, s, "{tracker}: messages with {with}");
                 }
             }
         }
+    }
+    for threads in ["0", "65", "two"] {
+        let o = bayestrack(&["track", "--seq", seq, "--decode-threads", threads]);
+        assert_eq!(o.status.code(), Some(2), "--decode-threads {threads}");
+        assert!(stderr(&o).contains("--decode-threads"), "{}", stderr(&o));
     }
 }
 
@@ -1219,14 +1239,16 @@ fn a_bad_frame_stops_at_the_same_box_whether_decoded_ahead_or_not() {
     write_sequence(&dir, 40, 40);
     fs::write(dir.join("img/0017.png"), b"not a png at all").unwrap();
     let seq = dir.to_str().unwrap();
-    for depth in ["0", "1", "4"] {
-        let out = dir.join(format!("boxes-{depth}.txt"));
+    for (depth, threads) in DECODE_SETTINGS {
+        let out = dir.join(format!("boxes-{depth}-{threads}.txt"));
         let o = bayestrack(&[
             "track",
             "--seq",
             seq,
             "--decode-ahead",
             depth,
+            "--decode-threads",
+            threads,
             "--out",
             out.to_str().unwrap(),
         ]);
@@ -1234,7 +1256,11 @@ fn a_bad_frame_stops_at_the_same_box_whether_decoded_ahead_or_not() {
         assert_eq!(o.status.code(), Some(1), "{err}");
         assert!(err.contains("0017.png"), "{err}");
         assert!(err.contains("the 16 boxes before it are in"), "{err}");
-        assert_eq!(lines(&out), 16, "--decode-ahead {depth}");
+        assert_eq!(
+            lines(&out),
+            16,
+            "--decode-ahead {depth} --decode-threads {threads}"
+        );
     }
 }
 
@@ -1250,7 +1276,7 @@ fn a_tracker_that_fails_early_ends_the_run_while_frames_are_decoded_ahead() {
         write_png(dir.join(format!("img/{k:04}.png")), later.view()).unwrap();
     }
     let out = dir.join("boxes.txt");
-    for depth in ["1", "4"] {
+    for (depth, threads) in [("1", "1"), ("4", "1"), ("1", "2"), ("4", "3")] {
         let o = bayestrack(&[
             "track",
             "--seq",
@@ -1259,6 +1285,8 @@ fn a_tracker_that_fails_early_ends_the_run_while_frames_are_decoded_ahead() {
             "11,21,12,12",
             "--decode-ahead",
             depth,
+            "--decode-threads",
+            threads,
             "--out",
             out.to_str().unwrap(),
         ]);

@@ -22,8 +22,8 @@ pub mod y4m;
 pub use error::{OtbError, WriteError};
 pub use sequence::{Sequence, frame_number, list_sequences, order_frames};
 pub use source::{
-    DecodeAhead, FFMPEG_ENV, FolderSource, Frame, FrameSelection, FrameSource, Select, VideoSource,
-    Y4mSource,
+    DecodeAhead, FFMPEG_ENV, FolderSource, Frame, FrameSelection, FrameSource, PendingFrame,
+    Select, VideoSource, Y4mSource,
 };
 pub use table::Table;
 #[cfg(feature = "track")]

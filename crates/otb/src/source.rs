@@ -15,10 +15,11 @@
 //! thread a few frames ahead of the loop, so that decoding overlaps
 //! tracking (same frames, same order, same errors).
 
+use std::collections::VecDeque;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStdout, Command, Stdio};
-use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard, PoisonError};
 use std::thread::{JoinHandle, Scope};
 
 use bayestrack_image::{Image, ImageError};
@@ -57,6 +58,57 @@ pub trait FrameSource: Iterator<Item = Result<Frame, OtbError>> {
     /// Those of reading the frame, where it has to be read.
     fn skip_frame(&mut self) -> Option<Result<(), OtbError>> {
         self.next().map(|r| r.map(|_| ()))
+    }
+
+    /// Takes the next frame without decoding it yet, where the source can
+    /// (a folder: each frame is its own file), so that [`DecodeAhead`]
+    /// decodes several at once on as many threads; `None` at the end.
+    /// [`PendingFrame::decode`] gives what [`Iterator::next`] would have.
+    /// The default decodes now (a stream has to be read in order).
+    fn next_pending(&mut self) -> Option<PendingFrame> {
+        self.next().map(PendingFrame::ready)
+    }
+}
+
+/// A frame taken from a [`FrameSource`] ([`FrameSource::next_pending`]),
+/// decoded by [`PendingFrame::decode`] on whatever thread calls it.
+pub struct PendingFrame(Pending);
+
+enum Pending {
+    Ready(Result<Frame, OtbError>),
+    Later(Box<dyn FnOnce() -> Result<Frame, OtbError> + Send>),
+}
+
+impl std::fmt::Debug for PendingFrame {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match &self.0 {
+            Pending::Ready(item) => f.debug_tuple("PendingFrame::ready").field(item).finish(),
+            Pending::Later(_) => f.write_str("PendingFrame::later(..)"),
+        }
+    }
+}
+
+impl PendingFrame {
+    /// A frame (or the error of reading it) already decoded.
+    pub fn ready(item: Result<Frame, OtbError>) -> Self {
+        Self(Pending::Ready(item))
+    }
+
+    /// A frame that `decode` decodes when asked (it must not depend on the
+    /// frames taken after it: they may be decoded first).
+    pub fn later(decode: impl FnOnce() -> Result<Frame, OtbError> + Send + 'static) -> Self {
+        Self(Pending::Later(Box::new(decode)))
+    }
+
+    /// The frame, or the error of decoding it.
+    ///
+    /// # Errors
+    /// Those of reading the frame.
+    pub fn decode(self) -> Result<Frame, OtbError> {
+        match self.0 {
+            Pending::Ready(item) => item,
+            Pending::Later(decode) => decode(),
+        }
     }
 }
 
@@ -108,20 +160,24 @@ impl Iterator for FolderSource<'_> {
     type Item = Result<Frame, OtbError>;
 
     fn next(&mut self) -> Option<Self::Item> {
-        let index = self.next;
-        let path = self.frames.get(index)?;
-        self.next += 1;
-        Some(
-            decode_numbered(index, path, |p| bayestrack_image::read_frame(p)).map(|image| Frame {
-                number: index + 1,
-                name: file_name(path),
-                image,
-            }),
-        )
+        self.next_pending().map(PendingFrame::decode)
     }
 }
 
 impl FrameSource for FolderSource<'_> {
+    fn next_pending(&mut self) -> Option<PendingFrame> {
+        let index = self.next;
+        let path = self.frames.get(index)?.clone();
+        self.next += 1;
+        Some(PendingFrame::later(move || {
+            decode_numbered(index, &path, |p| bayestrack_image::read_frame(p)).map(|image| Frame {
+                number: index + 1,
+                name: file_name(&path),
+                image,
+            })
+        }))
+    }
+
     fn describe(&self) -> String {
         format!("folder {}", self.dir.display())
     }
@@ -511,10 +567,11 @@ impl<S: FrameSource> Select<S> {
     }
 }
 
-impl<S: FrameSource> Iterator for Select<S> {
-    type Item = Result<Frame, OtbError>;
-
-    fn next(&mut self) -> Option<Self::Item> {
+impl<S: FrameSource> Select<S> {
+    /// Passes over the frames before the next selected one: `Some(Ok(()))`
+    /// when the inner source's next frame is that one, the error of passing
+    /// over a frame, or `None` after the last.
+    fn pass_unselected(&mut self) -> Option<Result<(), OtbError>> {
         loop {
             let number = self.position + 1;
             if self.selection.last.is_some_and(|b| number > b) {
@@ -522,7 +579,7 @@ impl<S: FrameSource> Iterator for Select<S> {
             }
             if self.selection.contains(number) {
                 self.position += 1;
-                return self.inner.next();
+                return Some(Ok(()));
             }
             match self.inner.skip_frame()? {
                 Ok(()) => self.position += 1,
@@ -531,6 +588,17 @@ impl<S: FrameSource> Iterator for Select<S> {
                     return Some(Err(e));
                 }
             }
+        }
+    }
+}
+
+impl<S: FrameSource> Iterator for Select<S> {
+    type Item = Result<Frame, OtbError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        match self.pass_unselected()? {
+            Ok(()) => self.inner.next(),
+            Err(e) => Some(Err(e)),
         }
     }
 }
@@ -550,6 +618,13 @@ impl<S: FrameSource> FrameSource for Select<S> {
         .count(total);
         Some(all - done.min(all))
     }
+
+    fn next_pending(&mut self) -> Option<PendingFrame> {
+        match self.pass_unselected()? {
+            Ok(()) => self.inner.next_pending(),
+            Err(e) => Some(PendingFrame::ready(Err(e))),
+        }
+    }
 }
 
 impl<S: FrameSource + ?Sized> FrameSource for Box<S> {
@@ -564,6 +639,10 @@ impl<S: FrameSource + ?Sized> FrameSource for Box<S> {
     fn skip_frame(&mut self) -> Option<Result<(), OtbError>> {
         (**self).skip_frame()
     }
+
+    fn next_pending(&mut self) -> Option<PendingFrame> {
+        (**self).next_pending()
+    }
 }
 
 /// One item a [`DecodeAhead`] thread hands over: what the source's `next`
@@ -573,24 +652,84 @@ struct Ahead {
     remaining: Option<usize>,
 }
 
-/// A source decoded on a second thread, up to `depth` frames ahead of the
-/// loop that pulls them (a bounded queue: memory stays at `depth + 2`
-/// frames whatever the length of the source).
+/// The source, shared by the decoding threads: one at a time takes the
+/// next frame from it, in order.
+struct Feed<S> {
+    source: S,
+    /// Frames (and the end) taken from the source so far.
+    taken: usize,
+    /// The source has ended: nothing more to take.
+    ended: bool,
+}
+
+/// What the decoding threads hand over, and to whom.
+struct Handover {
+    queue: Mutex<Queue>,
+    /// The consumer waits here for the next item in order.
+    ready: Condvar,
+    /// The thread that holds the source waits here for room.
+    room: Condvar,
+    /// Items taken from the source and not yet handed to the consumer, at
+    /// most (queued, or being decoded).
+    limit: usize,
+}
+
+struct Queue {
+    /// Items from number `delivered` on, in source order; `None` where
+    /// that frame is still being decoded.
+    items: VecDeque<Option<Ahead>>,
+    /// Items handed to the consumer so far.
+    delivered: usize,
+    /// The consumer dropped the [`DecodeAhead`]: stop.
+    gone: bool,
+    /// A decoding thread panicked (the scope passes the panic on).
+    failed: bool,
+}
+
+impl Handover {
+    fn queue(&self) -> MutexGuard<'_, Queue> {
+        // Nothing panics while holding this lock; a poisoned one still has
+        // consistent contents.
+        self.queue.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+}
+
+/// Marks a decoding thread's panic in the hand-over, so that the consumer
+/// and the other threads stop waiting for it.
+struct PanicGuard<'a>(&'a Handover);
+
+impl Drop for PanicGuard<'_> {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            self.0.queue().failed = true;
+            self.0.ready.notify_all();
+            self.0.room.notify_all();
+        }
+    }
+}
+
+/// A source decoded on other threads, up to `depth` frames ahead of the
+/// loop that pulls them, on `threads` threads at once (memory stays at
+/// `depth + threads + 1` frames whatever the length of the source: those
+/// queued or being decoded, and the one the loop holds).
 ///
 /// The frames, their order, their errors and the end of the stream are
-/// those of the wrapped source, item for item: a frame that does not
-/// decode comes out as the same error at the same place, after the frames
-/// before it. Only the time moves: the next frames are decoded while the
-/// caller tracks this one, so on a machine with two cores decoding no
-/// longer adds to the time of a run.
+/// those of the wrapped source, item for item, whatever the number of
+/// threads: a frame that does not decode comes out as the same error at
+/// the same place, after the frames before it. Only the time moves: the
+/// next frames are decoded while the caller tracks this one, so on a
+/// machine with two cores decoding no longer adds to the time of a run.
+/// Several threads decode several frames at once only for a source that
+/// takes its frames undecoded ([`FrameSource::next_pending`]: a folder of
+/// frame files); a stream is read by one thread at a time, in order.
 ///
-/// The thread is scoped ([`std::thread::scope`]), so the source may borrow
-/// (a [`FolderSource`] borrows its sequence). When the `DecodeAhead` is
-/// dropped (the run ended, failed or stopped early) the thread stops at
-/// its next hand-over: after the frame it is decoding, with at most
-/// `depth + 1` frames decoded for nothing. A source that blocks (standard
+/// The threads are scoped ([`std::thread::scope`]), so the source may
+/// borrow (a [`FolderSource`] borrows its sequence). When the
+/// `DecodeAhead` is dropped (the run ended, failed or stopped early) the
+/// threads stop after the frame each is decoding, with at most `depth +
+/// threads` frames decoded for nothing. A source that blocks (standard
 /// input with no writer) holds the end of the scope until it delivers or
-/// ends.
+/// ends. Waiting threads sleep (no busy-waiting).
 ///
 /// ```
 /// use bayestrack_otb::{DecodeAhead, Frame, FrameSource, OtbError};
@@ -611,13 +750,13 @@ struct Ahead {
 /// #     fn remaining(&self) -> Option<usize> { Some(5 - self.0) }
 /// # }
 /// let numbers: Vec<usize> = std::thread::scope(|scope| {
-///     let ahead = DecodeAhead::new(scope, Numbers(0), 2);
+///     let ahead = DecodeAhead::with_threads(scope, Numbers(0), 2, 2);
 ///     ahead.map(|f| f.unwrap().number).collect()
 /// });
 /// assert_eq!(numbers, [1, 2, 3, 4, 5]);
 /// ```
 pub struct DecodeAhead {
-    frames: Receiver<Ahead>,
+    handover: Arc<Handover>,
     describe: String,
     remaining: Option<usize>,
     ended: bool,
@@ -633,23 +772,52 @@ impl std::fmt::Debug for DecodeAhead {
 }
 
 impl DecodeAhead {
-    /// Starts decoding `source` on a thread of `scope`, at most `depth`
-    /// frames ahead (a `depth` of 0 counts as 1: the thread decodes the
-    /// next frame while the caller works on this one).
-    pub fn new<'scope, 'env, S>(
+    /// Starts decoding `source` on one thread of `scope`, at most `depth`
+    /// frames ahead ([`DecodeAhead::with_threads`] with 1 thread).
+    pub fn new<'scope, 'env, S>(scope: &'scope Scope<'scope, 'env>, source: S, depth: usize) -> Self
+    where
+        S: FrameSource + Send + 'scope,
+    {
+        Self::with_threads(scope, source, depth, 1)
+    }
+
+    /// Starts decoding `source` on `threads` threads of `scope` (0 counts
+    /// as 1), at most `depth` frames ahead (a `depth` of 0 counts as 1: the
+    /// threads decode the next frames while the caller works on this one).
+    pub fn with_threads<'scope, 'env, S>(
         scope: &'scope Scope<'scope, 'env>,
-        mut source: S,
+        source: S,
         depth: usize,
+        threads: usize,
     ) -> Self
     where
         S: FrameSource + Send + 'scope,
     {
         let describe = source.describe();
         let remaining = source.remaining();
-        let (tx, rx) = sync_channel(depth.max(1));
-        scope.spawn(move || decode_into(&mut source, &tx));
+        let threads = threads.max(1);
+        let handover = Arc::new(Handover {
+            queue: Mutex::new(Queue {
+                items: VecDeque::new(),
+                delivered: 0,
+                gone: false,
+                failed: false,
+            }),
+            ready: Condvar::new(),
+            room: Condvar::new(),
+            limit: depth.max(1) + threads,
+        });
+        let feed = Arc::new(Mutex::new(Feed {
+            source,
+            taken: 0,
+            ended: false,
+        }));
+        for _ in 0..threads {
+            let (feed, handover) = (Arc::clone(&feed), Arc::clone(&handover));
+            scope.spawn(move || decode_into(&feed, &handover));
+        }
         Self {
-            frames: rx,
+            handover,
             describe,
             remaining,
             ended: false,
@@ -657,14 +825,54 @@ impl DecodeAhead {
     }
 }
 
-/// The decoding thread's loop: every item of `source` into `tx`, up to
-/// the end of the source or until the receiver is gone.
-fn decode_into(source: &mut dyn FrameSource, tx: &SyncSender<Ahead>) {
+/// A decoding thread's loop: takes the next frame from the source (in
+/// turn with the other threads, when there is room), decodes it and puts
+/// it in its place, up to the end of the source or until the consumer is
+/// gone.
+fn decode_into<S: FrameSource>(feed: &Mutex<Feed<S>>, handover: &Handover) {
+    let _guard = PanicGuard(handover);
     loop {
-        let item = source.next();
+        let (number, pending, remaining) = {
+            // poisoned: another thread panicked in the source
+            let Ok(mut feed) = feed.lock() else { return };
+            if feed.ended {
+                return;
+            }
+            let mut queue = handover.queue();
+            while !queue.gone && !queue.failed && feed.taken >= queue.delivered + handover.limit {
+                queue = handover
+                    .room
+                    .wait(queue)
+                    .unwrap_or_else(PoisonError::into_inner);
+            }
+            if queue.gone || queue.failed {
+                return;
+            }
+            drop(queue);
+            let pending = feed.source.next_pending();
+            let number = feed.taken;
+            feed.taken += 1;
+            feed.ended = pending.is_none();
+            (number, pending, feed.source.remaining())
+        };
+        let item = pending.map(PendingFrame::decode);
         let end = item.is_none();
-        let remaining = source.remaining();
-        if tx.send(Ahead { item, remaining }).is_err() || end {
+        let mut queue = handover.queue();
+        if queue.gone {
+            return;
+        }
+        // `number` is not handed over before it is here: at or after `delivered`
+        let slot = number - queue.delivered;
+        if queue.items.len() <= slot {
+            queue.items.resize_with(slot + 1, || None);
+        }
+        queue.items[slot] = Some(Ahead { item, remaining });
+        let next_is_here = slot == 0;
+        drop(queue);
+        if next_is_here {
+            handover.ready.notify_one();
+        }
+        if end {
             return;
         }
     }
@@ -677,12 +885,26 @@ impl Iterator for DecodeAhead {
         if self.ended {
             return None;
         }
-        // The thread ends only after handing over the end of the source,
-        // or by panicking (which the scope passes on when it joins).
-        let Ok(Ahead { item, remaining }) = self.frames.recv() else {
-            self.ended = true;
-            return None;
+        let mut queue = self.handover.queue();
+        let Ahead { item, remaining } = loop {
+            if let Some(ahead) = queue.items.front_mut().and_then(Option::take) {
+                break ahead;
+            }
+            if queue.failed {
+                // the scope passes the thread's panic on when it joins
+                self.ended = true;
+                return None;
+            }
+            queue = self
+                .handover
+                .ready
+                .wait(queue)
+                .unwrap_or_else(PoisonError::into_inner);
         };
+        queue.items.pop_front();
+        queue.delivered += 1;
+        drop(queue);
+        self.handover.room.notify_one();
         self.remaining = remaining;
         self.ended = item.is_none();
         item
@@ -699,60 +921,104 @@ impl FrameSource for DecodeAhead {
     }
 }
 
+impl Drop for DecodeAhead {
+    fn drop(&mut self) {
+        let mut queue = self.handover.queue();
+        queue.gone = true;
+        queue.items.clear();
+        drop(queue);
+        self.handover.room.notify_all();
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use std::sync::Arc;
     use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::time::{Duration, Instant};
 
     use super::*;
 
+    /// How a [`Counted`] source hands its frames over.
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    enum Decoding {
+        /// Decoded in `next` (a stream).
+        Now,
+        /// Taken undecoded (a folder): decoded where `PendingFrame::decode`
+        /// runs.
+        Later,
+        /// As `Later`, and frames `1..k` wait (up to 20 s) until frame
+        /// `k` has started decoding: `k` threads must decode at once, and
+        /// frame `k` ends first.
+        Together(usize),
+    }
+
     /// Frames `1..=len` (4x3 gray, every pixel its number), a decode error
-    /// at the numbers in `bad`; counts the items it produced.
+    /// at the numbers in `bad`; counts the frames decoded (or started).
     struct Counted {
         len: usize,
         bad: Vec<usize>,
         next: usize,
+        decoding: Decoding,
         made: Arc<AtomicUsize>,
+        /// A frame of `Together` gave up waiting.
+        waited_in_vain: Arc<AtomicUsize>,
     }
 
     impl Counted {
         fn new(len: usize, bad: &[usize]) -> Self {
+            Self::decoded(len, bad, Decoding::Now)
+        }
+
+        fn decoded(len: usize, bad: &[usize], decoding: Decoding) -> Self {
             Self {
                 len,
                 bad: bad.to_vec(),
                 next: 0,
+                decoding,
                 made: Arc::new(AtomicUsize::new(0)),
+                waited_in_vain: Arc::new(AtomicUsize::new(0)),
             }
         }
+    }
+
+    /// Frame `n` of a [`Counted`] source, or its error.
+    fn counted_frame(n: usize, bad: bool) -> Result<Frame, OtbError> {
+        let path = PathBuf::from(format!("{n:04}.png"));
+        if bad {
+            Err(OtbError::Frame {
+                index: n - 1,
+                path: path.clone(),
+                source: Box::new(ImageError::Truncated {
+                    path,
+                    format: "PNG".to_string(),
+                }),
+            })
+        } else {
+            Ok(Frame {
+                number: n,
+                name: format!("{n:04}.png"),
+                image: Image::new(4, 3, 1, n as u8).unwrap(),
+            })
+        }
+    }
+
+    /// Waits (sleeping, up to 20 s) until `done` holds; whether it did.
+    fn wait_for(done: impl Fn() -> bool) -> bool {
+        let start = Instant::now();
+        while !done() {
+            if start.elapsed() > Duration::from_secs(20) {
+                return false;
+            }
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        true
     }
 
     impl Iterator for Counted {
         type Item = Result<Frame, OtbError>;
 
         fn next(&mut self) -> Option<Self::Item> {
-            if self.next == self.len {
-                return None;
-            }
-            self.next += 1;
-            self.made.fetch_add(1, Ordering::SeqCst);
-            let n = self.next;
-            let path = PathBuf::from(format!("{n:04}.png"));
-            Some(if self.bad.contains(&n) {
-                Err(OtbError::Frame {
-                    index: n - 1,
-                    path,
-                    source: Box::new(ImageError::Truncated {
-                        path: format!("{n:04}.png").into(),
-                        format: "PNG".to_string(),
-                    }),
-                })
-            } else {
-                Ok(Frame {
-                    number: n,
-                    name: format!("{n:04}.png"),
-                    image: Image::new(4, 3, 1, n as u8).unwrap(),
-                })
-            })
+            self.next_pending().map(PendingFrame::decode)
         }
     }
 
@@ -763,6 +1029,33 @@ mod tests {
 
         fn remaining(&self) -> Option<usize> {
             Some(self.len - self.next)
+        }
+
+        fn next_pending(&mut self) -> Option<PendingFrame> {
+            if self.next == self.len {
+                return None;
+            }
+            self.next += 1;
+            let (n, bad) = (self.next, self.bad.contains(&self.next));
+            let made = Arc::clone(&self.made);
+            let decode = move || {
+                made.fetch_add(1, Ordering::SeqCst);
+                counted_frame(n, bad)
+            };
+            Some(match self.decoding {
+                Decoding::Now => PendingFrame::ready(decode()),
+                Decoding::Later => PendingFrame::later(decode),
+                Decoding::Together(k) => {
+                    let (made, vain) = (Arc::clone(&self.made), Arc::clone(&self.waited_in_vain));
+                    PendingFrame::later(move || {
+                        let frame = decode();
+                        if n < k && !wait_for(|| made.load(Ordering::SeqCst) >= k) {
+                            vain.fetch_add(1, Ordering::SeqCst);
+                        }
+                        frame
+                    })
+                }
+            })
         }
     }
 
@@ -795,41 +1088,156 @@ mod tests {
         ] {
             let want = drain(&mut Counted::new(len, &bad));
             assert_eq!(want.len(), len + 2);
-            for depth in [0, 1, 2, 8, 100] {
-                let got = std::thread::scope(|scope| {
-                    drain(&mut DecodeAhead::new(scope, Counted::new(len, &bad), depth))
-                });
-                assert_eq!(got, want, "{len} frames, bad {bad:?}, depth {depth}");
+            for decoding in [Decoding::Now, Decoding::Later] {
+                assert_eq!(drain(&mut Counted::decoded(len, &bad, decoding)), want);
+                for depth in [0, 1, 2, 8, 100] {
+                    for threads in [0, 1, 2, 3] {
+                        let got = std::thread::scope(|scope| {
+                            let source = Counted::decoded(len, &bad, decoding);
+                            drain(&mut DecodeAhead::with_threads(
+                                scope, source, depth, threads,
+                            ))
+                        });
+                        assert_eq!(
+                            got, want,
+                            "{len} frames, bad {bad:?}, {decoding:?}, depth {depth}, \
+                             {threads} threads"
+                        );
+                    }
+                }
             }
         }
-        // Through a selection, as the CLI runs it.
+        // Through a selection, as the CLI runs it: frames 7 and 11 run and
+        // fail, frame 5 fails as it is passed over.
         let pick = FrameSelection::parse(Some("3..20"), 4).unwrap();
-        let want = drain(&mut Select::new(Counted::new(30, &[7, 11]), pick));
-        let got = std::thread::scope(|scope| {
-            let inner = Select::new(Counted::new(30, &[7, 11]), pick);
-            drain(&mut DecodeAhead::new(scope, inner, 2))
-        });
-        assert_eq!(got, want);
+        let want = drain(&mut Select::new(Counted::new(30, &[5, 7, 11]), pick));
+        assert_eq!(want.iter().filter(|s| s.contains("error")).count(), 3);
+        for threads in [1, 2, 3] {
+            let got = std::thread::scope(|scope| {
+                let inner = Select::new(Counted::decoded(30, &[5, 7, 11], Decoding::Later), pick);
+                drain(&mut DecodeAhead::with_threads(scope, inner, 2, threads))
+            });
+            assert_eq!(got, want, "{threads} threads");
+        }
     }
 
     #[test]
-    fn a_loop_that_stops_early_stops_the_decoding_thread() {
-        for depth in [1, 3] {
-            let source = Counted::new(10_000, &[]);
-            let made = Arc::clone(&source.made);
-            std::thread::scope(|scope| {
-                let mut ahead = DecodeAhead::new(scope, source, depth);
-                for n in 1..=3 {
-                    assert_eq!(ahead.next().unwrap().unwrap().number, n);
+    fn several_threads_decode_several_frames_at_once_and_hand_them_over_in_order() {
+        for threads in [2, 3] {
+            for depth in [1, 4] {
+                let want = drain(&mut Counted::new(12, &[threads]));
+                // alone, and boxed behind a selection as the CLI runs it
+                for boxed in [false, true] {
+                    let source = Counted::decoded(12, &[threads], Decoding::Together(threads));
+                    let vain = Arc::clone(&source.waited_in_vain);
+                    let source: Box<dyn FrameSource + Send> = if boxed {
+                        Box::new(Select::new(source, FrameSelection::default()))
+                    } else {
+                        Box::new(source)
+                    };
+                    let got = std::thread::scope(|scope| {
+                        drain(&mut DecodeAhead::with_threads(
+                            scope, source, depth, threads,
+                        ))
+                    });
+                    let case = format!("{threads} threads, depth {depth}, boxed {boxed}");
+                    assert_eq!(got, want, "{case}");
+                    assert_eq!(
+                        vain.load(Ordering::SeqCst),
+                        0,
+                        "{case}: frames 1..{threads} were not decoded at once"
+                    );
                 }
-                // dropped here: the scope joins the thread, which must end
-            });
-            // three taken, `depth` queued, one decoded and refused
-            let made = made.load(Ordering::SeqCst);
-            assert!(
-                made <= 3 + depth + 1,
-                "depth {depth}: {made} frames decoded"
-            );
+            }
+        }
+    }
+
+    #[test]
+    fn a_folder_hands_its_frames_over_undecoded() {
+        let dir = Path::new("no-such-folder");
+        let frames = [dir.join("0001.jpg"), dir.join("0002.jpg")];
+        let mut folder = FolderSource::new(dir, &frames);
+        let first = folder.next_pending().unwrap();
+        // nothing read yet: the file is opened where it is decoded
+        assert_eq!(format!("{first:?}"), "PendingFrame::later(..)");
+        assert_eq!(folder.remaining(), Some(1));
+        let second = folder.next_pending().unwrap();
+        assert!(folder.next_pending().is_none());
+        for (index, pending) in [(1, second), (0, first)] {
+            match pending.decode() {
+                Err(OtbError::Frame { index: i, path, .. }) => {
+                    assert_eq!((i, path), (index, frames[index].clone()));
+                }
+                other => panic!("frame {index}: {other:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn a_loop_that_stops_early_stops_the_decoding_threads() {
+        for decoding in [Decoding::Now, Decoding::Later] {
+            for depth in [1, 3] {
+                for threads in [1, 2, 3] {
+                    let source = Counted::decoded(10_000, &[], decoding);
+                    let made = Arc::clone(&source.made);
+                    // three taken, `depth` queued and one being decoded by
+                    // each thread: never more, and the threads get there
+                    let most = 3 + depth + threads;
+                    let reached = std::thread::scope(|scope| {
+                        let mut ahead = DecodeAhead::with_threads(scope, source, depth, threads);
+                        for n in 1..=3 {
+                            assert_eq!(ahead.next().unwrap().unwrap().number, n);
+                        }
+                        wait_for(|| made.load(Ordering::SeqCst) >= most)
+                        // dropped here: the scope joins the threads, which must end
+                    });
+                    let made = made.load(Ordering::SeqCst);
+                    let case = format!("{decoding:?}, depth {depth}, {threads} threads");
+                    assert!(reached, "{case}: only {made} frames decoded ahead");
+                    assert_eq!(made, most, "{case}: {made} frames decoded");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_decoding_thread_that_panics_ends_the_stream_and_the_scope_passes_the_panic_on() {
+        /// Frames 1..=9 of which frame 5 panics when decoded.
+        struct Panics(usize);
+        impl Iterator for Panics {
+            type Item = Result<Frame, OtbError>;
+            fn next(&mut self) -> Option<Self::Item> {
+                self.next_pending().map(PendingFrame::decode)
+            }
+        }
+        impl FrameSource for Panics {
+            fn describe(&self) -> String {
+                "panics".to_string()
+            }
+            fn remaining(&self) -> Option<usize> {
+                Some(9 - self.0)
+            }
+            fn next_pending(&mut self) -> Option<PendingFrame> {
+                (self.0 < 9).then(|| {
+                    self.0 += 1;
+                    let n = self.0;
+                    PendingFrame::later(move || {
+                        assert!(n != 5, "frame 5 does not decode");
+                        counted_frame(n, false)
+                    })
+                })
+            }
+        }
+        for threads in [1, 2, 3] {
+            let mut numbers = Vec::new();
+            let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                std::thread::scope(|scope| {
+                    let ahead = DecodeAhead::with_threads(scope, Panics(0), 2, threads);
+                    numbers.extend(ahead.map(|f| f.unwrap().number));
+                });
+            }));
+            assert!(run.is_err(), "{threads} threads: the panic was lost");
+            assert_eq!(numbers, [1, 2, 3, 4], "{threads} threads");
         }
     }
 }
