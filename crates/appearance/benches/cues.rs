@@ -3,7 +3,8 @@
 //! frame (runs of equal pixels, where increments of one counter serialise),
 //! their L2 and Bhattacharyya distances, the HSV skin map of eq. 8 (Lee, Jo
 //! and Kang (paper 003)), the interframe difference of eq. 7, and the HSV bin
-//! map with a kernel histogram and a ring, and the exhaustive L2
+//! map with a kernel histogram and a ring (on the smooth frame and on
+//! Couple's first frame, hist-pf-scale's case), and the exhaustive L2
 //! `histogram_search` of the ball trackers (tall and wide windows).
 //!
 //! `CUES_COUNT=<iterations> cargo bench --bench cues -- <substring>` skips
@@ -186,6 +187,45 @@ fn kernels<'a>(data: &'a Data) -> Vec<Kernel<'a>> {
             black_box(ring.total());
         }),
     ));
+    // hist-pf-scale's case on real video: Couple's first frame binned, the
+    // first box (25 x 62, centre (62, 76.5) 0-based) at 16 positions a few
+    // pixels apart, one per call (as particles): its ellipse and
+    // Bhattacharyya, and its ring (x1.5). Skipped without the data folder.
+    let couple = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/sequences/Couple/img/0001.jpg");
+    if let Ok(frame) = bayestrack_image::read_frame_rgb(couple) {
+        let mut map = BinMap::new();
+        binning
+            .bin_map_into(frame.view(), Rect::new(0, 0, 320, 240), &mut map)
+            .unwrap();
+        let ring_map = map.clone();
+        let mut reference = KernelHistogram::new(binning.len());
+        reference.ellipse(&map, 62.0, 76.5, 12.5, 31.0, 1).unwrap();
+        let at = |k: usize| (60.0 + (k % 4) as f64 * 1.3, 74.0 + (k / 4 % 4) as f64 * 1.7);
+        let (mut h, mut k) = (KernelHistogram::new(binning.len()), 0);
+        v.push((
+            "KernelHistogram ellipse 25x62 + Bhattacharyya (Couple frame 1)".to_string(),
+            25 * 62,
+            Box::new(move || {
+                k += 1;
+                let (cx, cy) = at(k);
+                h.ellipse(&map, black_box(cx), cy, 12.5, 31.0, 1).unwrap();
+                black_box(h.bhattacharyya(&reference).unwrap());
+            }),
+        ));
+        let (mut ring, mut k) = (KernelHistogram::new(binning.len()), 0);
+        v.push((
+            "KernelHistogram ring 25x62 x1.5 (Couple frame 1)".to_string(),
+            38 * 93 - 25 * 62,
+            Box::new(move || {
+                k += 1;
+                let (cx, cy) = at(k);
+                ring.ring(&ring_map, black_box(cx), cy, 12.5, 31.0, 1.5, 1)
+                    .unwrap();
+                black_box(ring.total());
+            }),
+        ));
+    }
     // The ball trackers' exhaustive search: a tall 20x48 window (as on
     // Crossing) over a region with 41x41 positions, and a wide 48x20 one.
     for (w, h, label) in [(20, 48, "tall"), (48, 20, "wide")] {
