@@ -82,8 +82,8 @@ impl Centred {
 /// The same operations in the same order as the two-pass loop (the patch
 /// sum, then `sab` and `saa` each in one accumulator in pixel order), so
 /// the same bits; the patch sum is taken in independent lanes when that
-/// sum is exact ([`exact_sum`]), and the products `da db` and `da da` are
-/// formed four pixels at a time before their sequential sums.
+/// sum is exact ([`exact_sum`]), which shortens the chain of dependent
+/// additions by a third.
 fn ncc_centred(a: ImageView<'_, f32>, b: &Centred) -> Result<f64> {
     let (w, h) = (b.width, b.height);
     let n = (w * h) as f64;
@@ -103,16 +103,16 @@ fn ncc_centred(a: ImageView<'_, f32>, b: &Centred) -> Result<f64> {
         return Err(AppearanceError::NonFinite { what: "patch" });
     }
     let ma = sa / n;
-    let (sab, saa) = if w > 0 {
-        dispatch(Products {
-            a,
-            dev: &b.dev,
-            w,
-            ma,
-        })
-    } else {
-        (0.0, 0.0)
-    };
+    let (mut sab, mut saa) = (0f64, 0f64);
+    if w > 0 {
+        for (y, dev) in b.dev.chunks_exact(w).enumerate() {
+            for (&p, &db) in a.row(y)[..w].iter().zip(dev) {
+                let da = f64::from(p) - ma;
+                sab += da * db;
+                saa += da * da;
+            }
+        }
+    }
     let den = (saa * b.ss).sqrt();
     if den <= 1e-12 * n {
         return Ok(0.0);
@@ -161,73 +161,46 @@ fn exact_sum(a: ImageView<'_, f32>, w: usize, h: usize) -> Option<f64> {
     let mut acc = [0f64; SUM_LANES];
     let mut hi = [0f32; SUM_LANES];
     let mut lo = [f32::INFINITY; SUM_LANES];
-    let mut fold = |l: usize, v: f32, acc: &mut [f64; SUM_LANES]| {
-        acc[l] += f64::from(v);
-        let t = v.abs();
-        hi[l] = if t > hi[l] { t } else { hi[l] };
-        lo[l] = if t < lo[l] && t != 0.0 { t } else { lo[l] };
-    };
-    for y in 0..h {
-        let row = &a.row(y)[..w];
-        let mut chunks = row.chunks_exact(SUM_LANES);
-        for c in &mut chunks {
-            for (l, &v) in c.iter().enumerate() {
-                fold(l, v, &mut acc);
+    // Pixels one at a time (row tails), into lane 0.
+    let (mut acc1, mut hi1, mut lo1) = (0f64, 0f32, f32::INFINITY);
+    let mut lanes = |c: &[f32]| {
+        for c in c.chunks_exact(SUM_LANES) {
+            for l in 0..SUM_LANES {
+                acc[l] += f64::from(c[l]);
+                let t = c[l].abs();
+                hi[l] = if t > hi[l] { t } else { hi[l] };
+                lo[l] = if t < lo[l] && t != 0.0 { t } else { lo[l] };
             }
         }
-        for (l, &v) in chunks.remainder().iter().enumerate() {
-            fold(l, v, &mut acc);
+    };
+    let mut one = |v: f32| {
+        acc1 += f64::from(v);
+        let t = v.abs();
+        hi1 = if t > hi1 { t } else { hi1 };
+        lo1 = if t < lo1 && t != 0.0 { t } else { lo1 };
+    };
+    if a.stride() == w {
+        // Rows back to back (the trackers' patches): one run.
+        let all = &a.as_slice()[..w * h];
+        let split = all.len() / SUM_LANES * SUM_LANES;
+        lanes(&all[..split]);
+        all[split..].iter().for_each(|&v| one(v));
+    } else {
+        for y in 0..h {
+            let row = &a.row(y)[..w];
+            let split = w / SUM_LANES * SUM_LANES;
+            lanes(&row[..split]);
+            row[split..].iter().for_each(|&v| one(v));
         }
     }
-    let m_hi = hi.iter().fold(0f32, |m, &v| if v > m { v } else { m });
-    let m_lo = lo
-        .iter()
-        .fold(f32::INFINITY, |m, &v| if v < m { v } else { m });
+    let m_hi = hi.iter().fold(hi1, |m, &v| if v > m { v } else { m });
+    let m_lo = lo.iter().fold(lo1, |m, &v| if v < m { v } else { m });
     let n = (w * h) as f64;
     if n * f64::from(m_hi) <= f64::from(m_lo) * (1u64 << 29) as f64 {
         let s = ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7]));
-        Some(s)
+        Some(s + acc1)
     } else {
         None
-    }
-}
-
-/// `(sum da db, sum da da)` over the patch, `da = a - ma`, `db` the
-/// template's deviations: each sum in one accumulator in pixel order (as
-/// [`ncc_centred`] always summed), the products four pixels at a time.
-struct Products<'a, 'b> {
-    a: ImageView<'a, f32>,
-    dev: &'b [f64],
-    w: usize,
-    ma: f64,
-}
-
-impl Kernel for Products<'_, '_> {
-    type Output = (f64, f64);
-    #[inline(always)]
-    fn run<K: Token>(self, _: K) -> (f64, f64) {
-        let Products { a, dev, w, ma } = self;
-        let (mut sab, mut saa) = (0f64, 0f64);
-        for (y, dev) in dev.chunks_exact(w).enumerate() {
-            let row = &a.row(y)[..w];
-            let mut pc = row.chunks_exact(4);
-            let mut dc = dev.chunks_exact(4);
-            for (p, d) in (&mut pc).zip(&mut dc) {
-                let da: [f64; 4] = core::array::from_fn(|l| f64::from(p[l]) - ma);
-                let ab: [f64; 4] = core::array::from_fn(|l| da[l] * d[l]);
-                let aa: [f64; 4] = core::array::from_fn(|l| da[l] * da[l]);
-                for l in 0..4 {
-                    sab += ab[l];
-                    saa += aa[l];
-                }
-            }
-            for (&p, &db) in pc.remainder().iter().zip(dc.remainder()) {
-                let da = f64::from(p) - ma;
-                sab += da * db;
-                saa += da * da;
-            }
-        }
-        (sab, saa)
     }
 }
 
