@@ -161,38 +161,24 @@ fn exact_sum(a: ImageView<'_, f32>, w: usize, h: usize) -> Option<f64> {
     let mut acc = [0f64; SUM_LANES];
     let mut hi = [0f32; SUM_LANES];
     let mut lo = [f32::INFINITY; SUM_LANES];
-    // Pixels one at a time (row tails), into lane 0.
-    let (mut acc1, mut hi1, mut lo1) = (0f64, 0f32, f32::INFINITY);
-    let mut lanes = |c: &[f32]| {
-        for c in c.chunks_exact(SUM_LANES) {
-            for l in 0..SUM_LANES {
-                acc[l] += f64::from(c[l]);
-                let t = c[l].abs();
-                hi[l] = if t > hi[l] { t } else { hi[l] };
-                lo[l] = if t < lo[l] && t != 0.0 { t } else { lo[l] };
-            }
-        }
-    };
-    let mut one = |v: f32| {
-        acc1 += f64::from(v);
-        let t = v.abs();
-        hi1 = if t > hi1 { t } else { hi1 };
-        lo1 = if t < lo1 && t != 0.0 { t } else { lo1 };
-    };
+    // Pixels one at a time (row tails): their sum, largest and smallest
+    // non-zero magnitude.
+    let mut tail = (0f64, 0f32, f32::INFINITY);
     if a.stride() == w {
         // Rows back to back (the trackers' patches): one run.
         let all = &a.as_slice()[..w * h];
         let split = all.len() / SUM_LANES * SUM_LANES;
-        lanes(&all[..split]);
-        all[split..].iter().for_each(|&v| one(v));
+        sum_lanes(&all[..split], &mut acc, &mut hi, &mut lo);
+        all[split..].iter().for_each(|&v| sum_one(v, &mut tail));
     } else {
         for y in 0..h {
             let row = &a.row(y)[..w];
             let split = w / SUM_LANES * SUM_LANES;
-            lanes(&row[..split]);
-            row[split..].iter().for_each(|&v| one(v));
+            sum_lanes(&row[..split], &mut acc, &mut hi, &mut lo);
+            row[split..].iter().for_each(|&v| sum_one(v, &mut tail));
         }
     }
+    let (acc1, hi1, lo1) = tail;
     let m_hi = hi.iter().fold(hi1, |m, &v| if v > m { v } else { m });
     let m_lo = lo.iter().fold(lo1, |m, &v| if v < m { v } else { m });
     let n = (w * h) as f64;
@@ -202,6 +188,33 @@ fn exact_sum(a: ImageView<'_, f32>, w: usize, h: usize) -> Option<f64> {
     } else {
         None
     }
+}
+
+/// [`exact_sum`]'s lanes over whole chunks of [`SUM_LANES`] pixels.
+#[inline(always)]
+fn sum_lanes(
+    c: &[f32],
+    acc: &mut [f64; SUM_LANES],
+    hi: &mut [f32; SUM_LANES],
+    lo: &mut [f32; SUM_LANES],
+) {
+    for c in c.chunks_exact(SUM_LANES) {
+        for l in 0..SUM_LANES {
+            acc[l] += f64::from(c[l]);
+            let t = c[l].abs();
+            hi[l] = if t > hi[l] { t } else { hi[l] };
+            lo[l] = if t < lo[l] && t != 0.0 { t } else { lo[l] };
+        }
+    }
+}
+
+/// [`exact_sum`]'s one pixel at a time: `(sum, largest, smallest non-zero)`.
+#[inline(always)]
+fn sum_one(v: f32, (acc, hi, lo): &mut (f64, f32, f32)) {
+    *acc += f64::from(v);
+    let t = v.abs();
+    *hi = if t > *hi { t } else { *hi };
+    *lo = if t < *lo && t != 0.0 { t } else { *lo };
 }
 
 /// A 1-D Gaussian learnt online with exponential forgetting.
