@@ -13,6 +13,7 @@
 //! Algorithm 1 step 7 prints `mu_B - sigma_B`), and pose tuning stops once a
 //! particle reaches `mu_T - sigma_T` ([`TargetModel::stop_threshold`]).
 
+use bayestrack_image::simd::{Kernel, Token, dispatch};
 use bayestrack_image::{Image, ImageView};
 
 use crate::{AppearanceError, Result};
@@ -77,15 +78,27 @@ impl Centred {
 
 /// [`ncc`] of patch `a` against a centred side `b` of the same shape
 /// (checked by the callers).
+///
+/// The same operations in the same order as the two-pass loop (the patch
+/// sum, then `sab` and `saa` each in one accumulator in pixel order), so
+/// the same bits; the patch sum is taken in independent lanes when that
+/// sum is exact ([`exact_sum`]), which shortens the chain of dependent
+/// additions by a third.
 fn ncc_centred(a: ImageView<'_, f32>, b: &Centred) -> Result<f64> {
     let (w, h) = (b.width, b.height);
     let n = (w * h) as f64;
-    let mut sa = 0f64;
-    for y in 0..h {
-        for &p in &a.row(y)[..w] {
-            sa += f64::from(p);
+    let sa = match dispatch(ExactSum { a, w, h }) {
+        Some(s) => s,
+        None => {
+            let mut sa = 0f64;
+            for y in 0..h {
+                for &p in &a.row(y)[..w] {
+                    sa += f64::from(p);
+                }
+            }
+            sa
         }
-    }
+    };
     if !sa.is_finite() || !b.finite {
         return Err(AppearanceError::NonFinite { what: "patch" });
     }
@@ -105,6 +118,103 @@ fn ncc_centred(a: ImageView<'_, f32>, b: &Centred) -> Result<f64> {
         return Ok(0.0);
     }
     Ok((sab / den).clamp(-1.0, 1.0))
+}
+
+/// Lanes of [`ExactSum`].
+const SUM_LANES: usize = 8;
+
+/// The sum of a patch's pixels in `f64` when it is exact, else `None`
+/// ([`exact_sum`]).
+struct ExactSum<'a> {
+    a: ImageView<'a, f32>,
+    w: usize,
+    h: usize,
+}
+
+impl Kernel for ExactSum<'_> {
+    type Output = Option<f64>;
+    #[inline(always)]
+    fn run<K: Token>(self, _: K) -> Option<f64> {
+        exact_sum(self.a, self.w, self.h)
+    }
+}
+
+/// The sum of the `w x h` pixels of `a` in `f64`, taken in
+/// [`SUM_LANES`] independent accumulators, when that sum is exact: then
+/// every partial sum in any order is exact, so it equals the sum in pixel
+/// order bit for bit (one accumulator from `+0.0`; an exact zero is `+0.0`
+/// either way). `None` when exactness is not shown (the caller then sums in
+/// pixel order).
+///
+/// Exactness: an `f32` value `v != 0` is a multiple of
+/// `2^(floor(log2 |v|) - 23)`, so every pixel, and every partial sum, is
+/// a multiple of `q = 2^(floor(log2 m) - 23)` with `m` the smallest
+/// non-zero `|v|`, and `q > m 2^-24`. Every partial sum is at most
+/// `n M` in magnitude (`M` the largest `|v|`, `n` the pixel count), and a
+/// multiple of `q` below `2^53 q` is an `f64`: so `n M <= 2^29 m` (which
+/// gives `n M < 2^53 q`) makes every sum exact. Gray patches in `[0, 1]`
+/// of 36 x 36 pixels pass unless a pixel is non-zero and below `2.4e-6`.
+/// A NaN or an infinite pixel makes this sum and the pixel-order one
+/// non-finite alike (the caller's error), whether or not the test passes.
+#[inline(always)]
+fn exact_sum(a: ImageView<'_, f32>, w: usize, h: usize) -> Option<f64> {
+    let mut acc = [0f64; SUM_LANES];
+    let mut hi = [0f32; SUM_LANES];
+    let mut lo = [f32::INFINITY; SUM_LANES];
+    // Pixels one at a time (row tails): their sum, largest and smallest
+    // non-zero magnitude.
+    let mut tail = (0f64, 0f32, f32::INFINITY);
+    if a.stride() == w {
+        // Rows back to back (the trackers' patches): one run.
+        let all = &a.as_slice()[..w * h];
+        let split = all.len() / SUM_LANES * SUM_LANES;
+        sum_lanes(&all[..split], &mut acc, &mut hi, &mut lo);
+        all[split..].iter().for_each(|&v| sum_one(v, &mut tail));
+    } else {
+        for y in 0..h {
+            let row = &a.row(y)[..w];
+            let split = w / SUM_LANES * SUM_LANES;
+            sum_lanes(&row[..split], &mut acc, &mut hi, &mut lo);
+            row[split..].iter().for_each(|&v| sum_one(v, &mut tail));
+        }
+    }
+    let (acc1, hi1, lo1) = tail;
+    let m_hi = hi.iter().fold(hi1, |m, &v| if v > m { v } else { m });
+    let m_lo = lo.iter().fold(lo1, |m, &v| if v < m { v } else { m });
+    let n = (w * h) as f64;
+    if n * f64::from(m_hi) <= f64::from(m_lo) * (1u64 << 29) as f64 {
+        let s = ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7]));
+        Some(s + acc1)
+    } else {
+        None
+    }
+}
+
+/// [`exact_sum`]'s lanes over whole chunks of [`SUM_LANES`] pixels.
+#[inline(always)]
+fn sum_lanes(
+    c: &[f32],
+    acc: &mut [f64; SUM_LANES],
+    hi: &mut [f32; SUM_LANES],
+    lo: &mut [f32; SUM_LANES],
+) {
+    for c in c.chunks_exact(SUM_LANES) {
+        for l in 0..SUM_LANES {
+            acc[l] += f64::from(c[l]);
+            let t = c[l].abs();
+            hi[l] = if t > hi[l] { t } else { hi[l] };
+            lo[l] = if t < lo[l] && t != 0.0 { t } else { lo[l] };
+        }
+    }
+}
+
+/// [`exact_sum`]'s one pixel at a time: `(sum, largest, smallest non-zero)`.
+#[inline(always)]
+fn sum_one(v: f32, (acc, hi, lo): &mut (f64, f32, f32)) {
+    *acc += f64::from(v);
+    let t = v.abs();
+    *hi = if t > *hi { t } else { *hi };
+    *lo = if t < *lo && t != 0.0 { t } else { *lo };
 }
 
 /// A 1-D Gaussian learnt online with exponential forgetting.
@@ -463,6 +573,73 @@ mod tests {
                 assert_eq!(got.to_bits(), want.to_bits(), "{w}x{h}: {got} vs {want}");
             }
         }
+    }
+
+    /// The patch sum one pixel at a time in row-major order.
+    fn sequential_sum(a: ImageView<'_, f32>) -> f64 {
+        let mut s = 0f64;
+        for y in 0..a.height() {
+            for &p in a.row(y) {
+                s += f64::from(p);
+            }
+        }
+        s
+    }
+
+    #[test]
+    fn the_lane_sum_is_taken_only_when_exact() {
+        let mut lcg = bayestrack_testkit::Lcg64(3);
+        let mut gray_taken = 0;
+        for trial in 0..400 {
+            let (w, h) = [(36, 36), (37, 5), (7, 3), (1, 9), (16, 2)][trial % 5];
+            // Gray values in [0, 1] (bilinear-like: any f32 bits); or ones
+            // mixed with tiny values whose low bits fall below the ulp of
+            // the running sum, so that the order of the additions shows.
+            let kind = trial % 4;
+            let img = Image::from_fn(w, h, |_, _| {
+                let u = lcg.unit() as f32;
+                match kind {
+                    0 | 1 => u,
+                    2 => {
+                        if u < 0.5 {
+                            1.0 + u
+                        } else {
+                            (u - 0.5) * 1e-8
+                        }
+                    }
+                    _ => (u - 0.5) * 1e3 + if u < 0.1 { 1e-7 } else { 0.0 },
+                }
+            })
+            .unwrap();
+            let want = sequential_sum(img.view());
+            let got = exact_sum(img.view(), w, h);
+            if let Some(s) = got {
+                assert_eq!(s.to_bits(), want.to_bits(), "trial {trial}, {w}x{h}");
+            }
+            if kind < 2 && w * h >= 32 {
+                gray_taken += usize::from(got.is_some());
+            }
+            if kind == 2 && w * h >= 32 {
+                assert!(got.is_none(), "trial {trial}: tiny values must not pass");
+            }
+            // And the NCC against any side is the two-pass one.
+            let t = texture(w, h, trial as u32);
+            let (got, want) = (
+                ncc(img.view(), t.view()).unwrap(),
+                ncc_sequential(img.view(), t.view()),
+            );
+            assert_eq!(got.to_bits(), want.to_bits(), "trial {trial}");
+        }
+        // Gray patches (no pixel non-zero below about 1e-6) take the lanes.
+        assert!(gray_taken > 100, "{gray_taken} of 120");
+        // Zeros, a NaN, an infinity.
+        let mut z = Image::new(9, 4, 1, 0f32).unwrap();
+        assert_eq!(exact_sum(z.view(), 9, 4).map(f64::to_bits), Some(0));
+        z.as_mut_slice()[5] = f32::NAN;
+        assert!(exact_sum(z.view(), 9, 4).is_none_or(f64::is_nan));
+        z.as_mut_slice()[5] = f32::INFINITY;
+        assert!(exact_sum(z.view(), 9, 4).is_none_or(|s| !s.is_finite()));
+        assert!(ncc(z.view(), texture(9, 4, 1).view()).is_err());
     }
 
     #[test]

@@ -70,24 +70,6 @@ fn floor_small(v: f32) -> (i32, f32) {
     (n, if down { rf - 1.0 } else { rf })
 }
 
-/// `max(m u + o, 0)` in eight `f32` lanes from `u` in two `f64` halves
-/// (`m u + o` in `f64`, then rounded to `f32`, as the scalar loop).
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn affine_avx2(
-    simd: pulp::x86::V3,
-    m: f64,
-    o: f64,
-    lo: core::arch::x86_64::__m256d,
-    hi: core::arch::x86_64::__m256d,
-) -> core::arch::x86_64::__m256 {
-    let f = simd.avx;
-    let (m, o) = (f._mm256_set1_pd(m), f._mm256_set1_pd(o));
-    let l = f._mm256_cvtpd_ps(f._mm256_add_pd(f._mm256_mul_pd(m, lo), o));
-    let h = f._mm256_cvtpd_ps(f._mm256_add_pd(f._mm256_mul_pd(m, hi), o));
-    f._mm256_max_ps(f._mm256_set_m128(h, l), f._mm256_setzero_ps())
-}
-
 /// `top + fy (bot - top)` with `top = p00 + fx (p01 - p00)` and
 /// `bot = p10 + fx (p11 - p10)`, lane by lane over the shortest input.
 #[inline(always)]
@@ -143,6 +125,9 @@ impl<T: Pixel, const CH: usize> Kernel for Rows<'_, '_, '_, T, CH> {
         let Rows { warp, out } = self;
         #[cfg(target_arch = "x86_64")]
         if let Some(v3) = token.avx2() {
+            if CH == 1 {
+                return warp.rows_window_avx2(v3, out);
+            }
             return warp.rows::<CH>(
                 out,
                 #[inline(always)]
@@ -273,17 +258,7 @@ impl<T: Pixel> InsideWarp<'_, T> {
     ) -> Cells {
         use pulp::bytemuck::cast;
         let (f, i) = (simd.avx, simd.avx2);
-        let [a, _, _, c, _, _] = self.m;
-        let u = f._mm256_set1_pd(u0 as f64);
-        let lo = f._mm256_add_pd(u, cast([0.0f64, 1.0, 2.0, 3.0]));
-        let hi = f._mm256_add_pd(u, cast([4.0f64, 5.0, 6.0, 7.0]));
-        let x = affine_avx2(simd, a, bx, lo, hi);
-        let y = affine_avx2(simd, c, by, lo, hi);
-        let one = f._mm256_set1_ps(1.0);
-        let xi = f._mm256_cvttps_epi32(f._mm256_min_ps(f._mm256_set1_ps(self.xmax), x));
-        let yi = f._mm256_cvttps_epi32(f._mm256_min_ps(f._mm256_set1_ps(self.ymax), y));
-        let fx = f._mm256_min_ps(f._mm256_sub_ps(x, f._mm256_cvtepi32_ps(xi)), one);
-        let fy = f._mm256_min_ps(f._mm256_sub_ps(y, f._mm256_cvtepi32_ps(yi)), one);
+        let (xi, yi, fx, fy) = self.cell_lanes_avx2(simd, bx, by, u0);
         let row = i._mm256_mullo_epi32(yi, f._mm256_set1_epi32(self.stride as i32));
         let col = i._mm256_mullo_epi32(xi, f._mm256_set1_epi32(CH as i32));
         Cells {
@@ -291,6 +266,207 @@ impl<T: Pixel> InsideWarp<'_, T> {
             fy: cast(fy),
             idx: cast(i._mm256_add_epi32(row, col)),
         }
+    }
+
+    /// The cells of [`Self::cells_avx2`] left in registers: `(xi, yi, fx,
+    /// fy)`.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn cell_lanes_avx2(
+        &self,
+        simd: pulp::x86::V3,
+        bx: f64,
+        by: f64,
+        u0: usize,
+    ) -> (
+        core::arch::x86_64::__m256i,
+        core::arch::x86_64::__m256i,
+        core::arch::x86_64::__m256,
+        core::arch::x86_64::__m256,
+    ) {
+        use pulp::bytemuck::cast;
+        let f = simd.avx;
+        let [a, _, _, c, _, _] = self.m;
+        let u = f._mm256_set1_pd(u0 as f64);
+        let lo = f._mm256_add_pd(u, cast([0.0f64, 1.0, 2.0, 3.0]));
+        let hi = f._mm256_add_pd(u, cast([4.0f64, 5.0, 6.0, 7.0]));
+        let (a, c) = (f._mm256_set1_pd(a), f._mm256_set1_pd(c));
+        let au = [f._mm256_mul_pd(a, lo), f._mm256_mul_pd(a, hi)];
+        let cu = [f._mm256_mul_pd(c, lo), f._mm256_mul_pd(c, hi)];
+        self.cell_lanes_from_avx2(simd, bx, by, au, cu)
+    }
+
+    /// [`Self::cell_lanes_avx2`] from the products `a u` and `c u` of the
+    /// batch's eight `u` (in two halves).
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn cell_lanes_from_avx2(
+        &self,
+        simd: pulp::x86::V3,
+        bx: f64,
+        by: f64,
+        au: [core::arch::x86_64::__m256d; 2],
+        cu: [core::arch::x86_64::__m256d; 2],
+    ) -> (
+        core::arch::x86_64::__m256i,
+        core::arch::x86_64::__m256i,
+        core::arch::x86_64::__m256,
+        core::arch::x86_64::__m256,
+    ) {
+        let f = simd.avx;
+        // `max(p + o, 0)` in eight `f32` lanes (`p + o` in `f64`, then
+        // rounded, as the scalar loop).
+        let shift = |p: [core::arch::x86_64::__m256d; 2], o: f64| {
+            let o = f._mm256_set1_pd(o);
+            let l = f._mm256_cvtpd_ps(f._mm256_add_pd(p[0], o));
+            let h = f._mm256_cvtpd_ps(f._mm256_add_pd(p[1], o));
+            f._mm256_max_ps(f._mm256_set_m128(h, l), f._mm256_setzero_ps())
+        };
+        let x = shift(au, bx);
+        let y = shift(cu, by);
+        let one = f._mm256_set1_ps(1.0);
+        let xi = f._mm256_cvttps_epi32(f._mm256_min_ps(f._mm256_set1_ps(self.xmax), x));
+        let yi = f._mm256_cvttps_epi32(f._mm256_min_ps(f._mm256_set1_ps(self.ymax), y));
+        let fx = f._mm256_min_ps(f._mm256_sub_ps(x, f._mm256_cvtepi32_ps(xi)), one);
+        let fy = f._mm256_min_ps(f._mm256_sub_ps(y, f._mm256_cvtepi32_ps(yi)), one);
+        (xi, yi, fx, fy)
+    }
+
+    /// One channel with AVX2: every patch row [`LANES`] pixels at a time,
+    /// the neighbours of a batch picked from source windows in registers
+    /// ([`Self::window_avx2`]) when its cells fit in one, else loaded one
+    /// by one as [`Self::rows`] does.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn rows_window_avx2(&self, simd: pulp::x86::V3, out: &mut ImageViewMut<'_, f32>) {
+        use pulp::bytemuck::cast;
+        let [a, b, tx, c, d, ty] = self.m;
+        let pw = out.width();
+        // `a u` and `c u` for every `u` of a patch row (the same in every
+        // row), when the row is at most `MAX_PW` wide.
+        const MAX_PW: usize = 64;
+        let mut au = [0f64; MAX_PW];
+        let mut cu = [0f64; MAX_PW];
+        if pw <= MAX_PW {
+            for (u, (x, y)) in au.iter_mut().zip(cu.iter_mut()).enumerate().take(pw) {
+                let uf = u as f64;
+                (*x, *y) = (a * uf, c * uf);
+            }
+        }
+        let half = |p: &[f64], k: usize| -> core::arch::x86_64::__m256d {
+            cast::<[f64; 4], _>(p[k..k + 4].try_into().expect("four lanes"))
+        };
+        for v in 0..out.height() {
+            let row = &mut out.row_mut(v)[..pw];
+            let vf = v as f64;
+            let (bx, by) = (b * vf + tx, d * vf + ty);
+            if pw < LANES {
+                for (u, px) in row.chunks_exact_mut(1).enumerate() {
+                    self.pixel(bx, by, u, px);
+                }
+                continue;
+            }
+            let mut u0 = 0;
+            loop {
+                let s = u0.min(pw - LANES);
+                let (xi, yi, fx, fy) = if pw <= MAX_PW {
+                    let ap = [half(&au, s), half(&au, s + 4)];
+                    let cp = [half(&cu, s), half(&cu, s + 4)];
+                    self.cell_lanes_from_avx2(simd, bx, by, ap, cp)
+                } else {
+                    self.cell_lanes_avx2(simd, bx, by, s)
+                };
+                let dst = &mut row[s..s + LANES];
+                if let Some(p) = self.window_avx2(simd, xi, yi, fx, fy) {
+                    dst.copy_from_slice(&cast::<_, [f32; LANES]>(p));
+                } else {
+                    let i = simd.avx2;
+                    let idx = i._mm256_add_epi32(
+                        i._mm256_mullo_epi32(yi, simd.avx._mm256_set1_epi32(self.stride as i32)),
+                        xi,
+                    );
+                    let cells = Cells {
+                        fx: cast(fx),
+                        fy: cast(fy),
+                        idx: cast(idx),
+                    };
+                    let buf: &mut [f32; LANES * MAX_CH] = &mut [0.0; LANES * MAX_CH];
+                    self.interpolate::<1>(&cells, buf);
+                    dst.copy_from_slice(&buf[..LANES]);
+                }
+                if s == pw - LANES {
+                    break;
+                }
+                u0 += LANES;
+            }
+        }
+    }
+
+    /// The bilinear values of one batch of one-channel pixels from source
+    /// windows, or `None` when the batch does not fit them.
+    ///
+    /// Along a batch the cells move monotonically (the map is affine in
+    /// `u`, and rounding, clamping and truncation keep the order), so the
+    /// first and last lanes hold the smallest and largest `xi` and `yi`.
+    /// When the columns span at most 7 (`xi` within `xlo..=xlo + 6`, so
+    /// that `xi + 1 <= xlo + 7`) and the rows at most 2 (`yi` in
+    /// `ylo..=ylo + 1`), the eight source values `xlo..xlo + 8` of rows
+    /// `ylo`, `ylo + 1` (and `ylo + 2`) are loaded as vectors and each
+    /// neighbour picked by a lane permutation (`vpermps`, by `xi - xlo`
+    /// and `xi - xlo + 1`) and, over two rows, a blend by `yi > ylo`.
+    /// The values are the buffer's own, converted by `to_f32` as the
+    /// scalar loads do; the lerps are the same operations in the same
+    /// order, so the result is bit for bit that of [`Self::rows`]. A
+    /// window running past the end of the buffer (a cell at the bottom
+    /// right of a frame narrower than 8) falls back too.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn window_avx2(
+        &self,
+        simd: pulp::x86::V3,
+        xi: core::arch::x86_64::__m256i,
+        yi: core::arch::x86_64::__m256i,
+        fx: core::arch::x86_64::__m256,
+        fy: core::arch::x86_64::__m256,
+    ) -> Option<core::arch::x86_64::__m256> {
+        use pulp::bytemuck::cast;
+        let (f, i) = (simd.avx, simd.avx2);
+        let xa: [i32; LANES] = cast(xi);
+        let ya: [i32; LANES] = cast(yi);
+        let (xlo, xhi) = (xa[0].min(xa[LANES - 1]), xa[0].max(xa[LANES - 1]));
+        let (ylo, yhi) = (ya[0].min(ya[LANES - 1]), ya[0].max(ya[LANES - 1]));
+        if xhi - xlo > 6 || yhi - ylo > 1 {
+            return None;
+        }
+        let rows = if yhi > ylo { 3 } else { 2 };
+        let base = ylo as usize * self.stride + xlo as usize;
+        if base + (rows - 1) * self.stride + LANES > self.data.len() {
+            return None;
+        }
+        let load = |r: usize| -> core::arch::x86_64::__m256 {
+            let w = &self.data[base + r * self.stride..][..LANES];
+            cast::<[f32; LANES], _>(core::array::from_fn(|k| w[k].to_f32()))
+        };
+        let dx = i._mm256_sub_epi32(xi, f._mm256_set1_epi32(xlo));
+        let dx1 = i._mm256_add_epi32(dx, f._mm256_set1_epi32(1));
+        let (w0, w1) = (load(0), load(1));
+        let pick = |w, d| i._mm256_permutevar8x32_ps(w, d);
+        let (p00, p01, p10, p11) = if rows == 2 {
+            (pick(w0, dx), pick(w0, dx1), pick(w1, dx), pick(w1, dx1))
+        } else {
+            let w2 = load(2);
+            let second = f._mm256_castsi256_ps(i._mm256_cmpgt_epi32(yi, f._mm256_set1_epi32(ylo)));
+            let (a0, a1) = (pick(w1, dx), pick(w1, dx1));
+            (
+                f._mm256_blendv_ps(pick(w0, dx), a0, second),
+                f._mm256_blendv_ps(pick(w0, dx1), a1, second),
+                f._mm256_blendv_ps(a0, pick(w2, dx), second),
+                f._mm256_blendv_ps(a1, pick(w2, dx1), second),
+            )
+        };
+        let top = f._mm256_add_ps(p00, f._mm256_mul_ps(fx, f._mm256_sub_ps(p01, p00)));
+        let bot = f._mm256_add_ps(p10, f._mm256_mul_ps(fx, f._mm256_sub_ps(p11, p10)));
+        Some(f._mm256_add_ps(top, f._mm256_mul_ps(fy, f._mm256_sub_ps(bot, top))))
     }
 
     /// The four neighbours of every pixel and channel of a batch, and the
@@ -618,6 +794,97 @@ mod tests {
         for (w, h) in [(2, 40), (40, 2), (2, 2)] {
             let img = random_u8(w, h, 3, &mut rng);
             check_levels(img.view(), &mut rng, 30, (0.001, 0.02), "u8 thin");
+        }
+    }
+
+    /// One channel with AVX2 picks the neighbours from source windows
+    /// when a batch's cells span at most 7 columns and 2 rows: maps that
+    /// mostly do (horizontal scales up to 1.2, spans of 7 and more included, small vertical slopes,
+    /// mirrored too), placed anywhere or flush with the right and bottom
+    /// edges (where a window would run past the buffer's end), patch rows
+    /// narrower and wider than the 64 whose products are precomputed.
+    #[test]
+    fn window_batches_equal_the_per_pixel_loop_bit_for_bit() {
+        let mut rng = Lcg(23);
+        let big = random_u8(90, 40, 1, &mut rng);
+        for src in [big.view(), big.crop(Rect::new(3, 2, 80, 35)).unwrap()] {
+            let srcf = src.to_image().map(|v| f32::from(v) * 0.37 - 11.0);
+            let (w, h) = (src.width(), src.height());
+            for trial in 0..300 {
+                let (pw, ph) = [(36, 36), (9, 4), (17, 5), (8, 3), (70, 2)][trial % 5];
+                let a = rng.range(0.05, 1.2) * if trial % 7 == 0 { -1.0 } else { 1.0 };
+                let c = rng.range(-0.16, 0.16);
+                let (b, d) = (rng.range(-0.2, 0.2), rng.range(0.1, 0.8));
+                let (pu, pv) = ((pw - 1) as f64, (ph - 1) as f64);
+                let xs = [0.0, a * pu, b * pv, a * pu + b * pv];
+                let ys = [0.0, c * pu, d * pv, c * pu + d * pv];
+                let lo = |v: &[f64; 4]| v.iter().copied().fold(f64::INFINITY, f64::min);
+                let hi = |v: &[f64; 4]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                let (wx, wy) = (
+                    (w - 1) as f64 - (hi(&xs) - lo(&xs)),
+                    (h - 1) as f64 - (hi(&ys) - lo(&ys)),
+                );
+                if wx < 0.0 || wy < 0.0 {
+                    continue;
+                }
+                let tx = -lo(&xs)
+                    + if trial % 3 == 0 {
+                        wx
+                    } else {
+                        rng.range(0.0, wx)
+                    };
+                let ty = -lo(&ys)
+                    + if trial % 4 == 0 {
+                        wy
+                    } else {
+                        rng.range(0.0, wy)
+                    };
+                let m = [a, b, tx, c, d, ty];
+                for (what, iw) in [("u8", None), ("f32", Some(&srcf))] {
+                    let mut want = vec![0f32; pw * ph];
+                    let mut got = vec![0f32; pw * ph];
+                    let run = |level: Option<SimdLevel>, out: &mut [f32]| {
+                        let mut view = ImageViewMut::from_slice(out, pw, ph, 1, pw).unwrap();
+                        match iw {
+                            None => {
+                                let iw = InsideWarp {
+                                    data: src.as_slice(),
+                                    stride: src.stride(),
+                                    xmax: (w - 2) as f32,
+                                    ymax: (h - 2) as f32,
+                                    m,
+                                };
+                                match level {
+                                    None => today_any(&iw, &mut view, 1),
+                                    Some(l) => iw.run(l, &mut view, 1),
+                                }
+                            }
+                            Some(f) => {
+                                let iw = InsideWarp {
+                                    data: f.as_slice(),
+                                    stride: f.stride(),
+                                    xmax: (w - 2) as f32,
+                                    ymax: (h - 2) as f32,
+                                    m,
+                                };
+                                match level {
+                                    None => today_any(&iw, &mut view, 1),
+                                    Some(l) => iw.run(l, &mut view, 1),
+                                }
+                            }
+                        }
+                    };
+                    run(None, &mut want);
+                    for level in crate::sad::tests::levels() {
+                        run(Some(level), &mut got);
+                        assert_eq!(
+                            bits(&got),
+                            bits(&want),
+                            "{what}, {level:?}, trial {trial}, map {m:?}, {pw}x{ph}"
+                        );
+                    }
+                }
+            }
         }
     }
 

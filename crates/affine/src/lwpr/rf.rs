@@ -44,32 +44,19 @@ pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
     s
 }
 
+// The fused kernels below write their vector first (an element-wise loop
+// the compiler vectorises), then take [`dot`] of it: the same values summed
+// in the same order as one fused loop with `dot`'s accumulators.
+
 /// `dot(u, v)` with `v = a - b`, which is written into `out`.
 #[inline(always)]
 fn dot_diff(u: &[f64], a: &[f64], b: &[f64], out: &mut [f64]) -> f64 {
     let n = u.len();
-    let split = n / 4 * 4;
     let (a, b, out) = (&a[..n], &b[..n], &mut out[..n]);
-    let mut acc = [0.0f64; 4];
-    for (((uc, ac), bc), oc) in u[..split]
-        .chunks_exact(4)
-        .zip(a[..split].chunks_exact(4))
-        .zip(b[..split].chunks_exact(4))
-        .zip(out[..split].chunks_exact_mut(4))
-    {
-        for l in 0..4 {
-            let v = ac[l] - bc[l];
-            oc[l] = v;
-            acc[l] += uc[l] * v;
-        }
+    for ((o, a), b) in out.iter_mut().zip(a).zip(b) {
+        *o = a - b;
     }
-    let mut s = (acc[0] + acc[1]) + (acc[2] + acc[3]);
-    for i in split..n {
-        let v = a[i] - b[i];
-        out[i] = v;
-        s += u[i] * v;
-    }
-    s
+    dot(u, out)
 }
 
 /// `dot(u, v)` with the deflated residual `v = a - p t`, which is written
@@ -77,138 +64,40 @@ fn dot_diff(u: &[f64], a: &[f64], b: &[f64], out: &mut [f64]) -> f64 {
 #[inline(always)]
 fn dot_axpy(u: &[f64], a: &[f64], p: &[f64], t: f64, out: &mut [f64]) -> f64 {
     let n = u.len();
-    let split = n / 4 * 4;
     let (a, p, out) = (&a[..n], &p[..n], &mut out[..n]);
-    let mut acc = [0.0f64; 4];
-    for (((uc, ac), pc), oc) in u[..split]
-        .chunks_exact(4)
-        .zip(a[..split].chunks_exact(4))
-        .zip(p[..split].chunks_exact(4))
-        .zip(out[..split].chunks_exact_mut(4))
-    {
-        for l in 0..4 {
-            let v = ac[l] - pc[l] * t;
-            oc[l] = v;
-            acc[l] += uc[l] * v;
-        }
+    for ((o, a), p) in out.iter_mut().zip(a).zip(p) {
+        *o = a - p * t;
     }
-    let mut s = (acc[0] + acc[1]) + (acc[2] + acc[3]);
-    for i in split..n {
-        let v = a[i] - p[i] * t;
-        out[i] = v;
-        s += u[i] * v;
-    }
-    s
+    dot(u, out)
 }
 
 /// `dot(u, x)` after deflating `x` in place: `x <- x - p t`.
 #[inline(always)]
 fn dot_deflate(u: &[f64], x: &mut [f64], p: &[f64], t: f64) -> f64 {
     let n = u.len();
-    let split = n / 4 * 4;
     let (x, p) = (&mut x[..n], &p[..n]);
-    let mut acc = [0.0f64; 4];
-    for ((uc, xc), pc) in u[..split]
-        .chunks_exact(4)
-        .zip(x[..split].chunks_exact_mut(4))
-        .zip(p[..split].chunks_exact(4))
-    {
-        for l in 0..4 {
-            let v = xc[l] - pc[l] * t;
-            xc[l] = v;
-            acc[l] += uc[l] * v;
-        }
+    for (x, p) in x.iter_mut().zip(p) {
+        *x -= p * t;
     }
-    let mut s = (acc[0] + acc[1]) + (acc[2] + acc[3]);
-    for i in split..n {
-        let v = x[i] - p[i] * t;
-        x[i] = v;
-        s += u[i] * v;
-    }
-    s
+    dot(u, x)
 }
 
 /// [`dot_diff`] for two fields at once (`out_k = a - b_k`), the same
-/// operations in the same order per field; the two sums are independent
-/// chains.
+/// operations in the same order per field.
 #[inline(always)]
 fn dot_diff2(u: [&[f64]; 2], a: &[f64], b: [&[f64]; 2], out: [&mut [f64]; 2]) -> [f64; 2] {
-    let n = a.len();
-    let split = n / 4 * 4;
     let [o0, o1] = out;
-    let (mut acc0, mut acc1) = ([0.0f64; 4], [0.0f64; 4]);
-    for (((((ac, u0), u1), b0), b1), (o0, o1)) in a[..split]
-        .chunks_exact(4)
-        .zip(u[0][..split].chunks_exact(4))
-        .zip(u[1][..split].chunks_exact(4))
-        .zip(b[0][..split].chunks_exact(4))
-        .zip(b[1][..split].chunks_exact(4))
-        .zip(
-            o0[..split]
-                .chunks_exact_mut(4)
-                .zip(o1[..split].chunks_exact_mut(4)),
-        )
-    {
-        for l in 0..4 {
-            let v0 = ac[l] - b0[l];
-            o0[l] = v0;
-            acc0[l] += u0[l] * v0;
-            let v1 = ac[l] - b1[l];
-            o1[l] = v1;
-            acc1[l] += u1[l] * v1;
-        }
-    }
-    let mut s0 = (acc0[0] + acc0[1]) + (acc0[2] + acc0[3]);
-    let mut s1 = (acc1[0] + acc1[1]) + (acc1[2] + acc1[3]);
-    for i in split..n {
-        let v0 = a[i] - b[0][i];
-        o0[i] = v0;
-        s0 += u[0][i] * v0;
-        let v1 = a[i] - b[1][i];
-        o1[i] = v1;
-        s1 += u[1][i] * v1;
-    }
-    [s0, s1]
+    [dot_diff(u[0], a, b[0], o0), dot_diff(u[1], a, b[1], o1)]
 }
 
 /// [`dot_deflate`] for two fields at once.
 #[inline(always)]
 fn dot_deflate2(u: [&[f64]; 2], x: [&mut [f64]; 2], p: [&[f64]; 2], t: [f64; 2]) -> [f64; 2] {
-    let n = u[0].len();
-    let split = n / 4 * 4;
     let [x0, x1] = x;
-    let (mut acc0, mut acc1) = ([0.0f64; 4], [0.0f64; 4]);
-    for ((((u0, u1), p0), p1), (x0, x1)) in u[0][..split]
-        .chunks_exact(4)
-        .zip(u[1][..split].chunks_exact(4))
-        .zip(p[0][..split].chunks_exact(4))
-        .zip(p[1][..split].chunks_exact(4))
-        .zip(
-            x0[..split]
-                .chunks_exact_mut(4)
-                .zip(x1[..split].chunks_exact_mut(4)),
-        )
-    {
-        for l in 0..4 {
-            let v0 = x0[l] - p0[l] * t[0];
-            x0[l] = v0;
-            acc0[l] += u0[l] * v0;
-            let v1 = x1[l] - p1[l] * t[1];
-            x1[l] = v1;
-            acc1[l] += u1[l] * v1;
-        }
-    }
-    let mut s0 = (acc0[0] + acc0[1]) + (acc0[2] + acc0[3]);
-    let mut s1 = (acc1[0] + acc1[1]) + (acc1[2] + acc1[3]);
-    for i in split..n {
-        let v0 = x0[i] - p[0][i] * t[0];
-        x0[i] = v0;
-        s0 += u[0][i] * v0;
-        let v1 = x1[i] - p[1][i] * t[1];
-        x1[i] = v1;
-        s1 += u[1][i] * v1;
-    }
-    [s0, s1]
+    [
+        dot_deflate(u[0], x0, p[0], t[0]),
+        dot_deflate(u[1], x1, p[1], t[1]),
+    ]
 }
 
 /// `max_i |m_i|` (0 for none; NaNs ignored, as `f64::max` does). The
@@ -289,22 +178,29 @@ type DirScalars = (f64, f64, f64, f64, f64);
 /// One pass of a PLS direction's update over the inputs `x` (its residual):
 /// `SXresYres <- lambda_slow SXresYres + w ytarget x`, whose squared norm is
 /// returned (summed in index order), `SSXres <- lambda SSXres + w s x` and
-/// `p = SSXres / SSs2`.
+/// `p = SSXres / SSs2`. The element-wise updates run first (a loop the
+/// compiler vectorises), then the norm's sum in index order over the
+/// stored values: the same operations as one fused loop, so the same bits.
 #[inline(always)]
 fn fused_sums(sxy: &mut [f64], ssx: &mut [f64], p: &mut [f64], x: &[f64], sc: DirScalars) -> f64 {
     let (lambda_slow, wyt, lj, wsj, inv_ss_s2) = sc;
-    let mut unorm = 0.0;
+    let n = sxy.len().min(x.len()).min(ssx.len()).min(p.len());
+    let (sxy, ssx, p, x) = (&mut sxy[..n], &mut ssx[..n], &mut p[..n], &x[..n]);
     for (((a, x), sx), p) in sxy.iter_mut().zip(x).zip(ssx.iter_mut()).zip(p.iter_mut()) {
         *a = *a * lambda_slow + wyt * x;
-        unorm += *a * *a;
         *sx = lj * *sx + wsj * x;
         *p = *sx * inv_ss_s2;
+    }
+    let mut unorm = 0.0;
+    for a in sxy.iter() {
+        unorm += *a * *a;
     }
     unorm
 }
 
-/// [`fused_sums`] for two directions in one loop (the same operations, so
-/// the same results; the two norms' sums are independent chains).
+/// [`fused_sums`] for two directions (the same operations, so the same
+/// results): the element-wise updates of both in one loop, then the two
+/// norms' sums, each in index order, side by side.
 #[inline(always)]
 fn fused_sums_pair(
     sxy: [&mut [f64]; 2],
@@ -326,20 +222,20 @@ fn fused_sums_pair(
     let (p0, p1, x0, x1) = (&mut p0[..n], &mut p1[..n], x[0], &x[1][..n]);
     let (ls0, wyt0, l0, ws0, inv0) = sc[0];
     let (ls1, wyt1, l1, ws1, inv1) = sc[1];
-    let (mut un0, mut un1) = (0.0, 0.0);
     for i in 0..n {
-        let a0 = sxy0[i] * ls0 + wyt0 * x0[i];
-        sxy0[i] = a0;
-        un0 += a0 * a0;
-        let a1 = sxy1[i] * ls1 + wyt1 * x1[i];
-        sxy1[i] = a1;
-        un1 += a1 * a1;
+        sxy0[i] = sxy0[i] * ls0 + wyt0 * x0[i];
+        sxy1[i] = sxy1[i] * ls1 + wyt1 * x1[i];
         let s0 = l0 * ssx0[i] + ws0 * x0[i];
         ssx0[i] = s0;
         p0[i] = s0 * inv0;
         let s1 = l1 * ssx1[i] + ws1 * x1[i];
         ssx1[i] = s1;
         p1[i] = s1 * inv1;
+    }
+    let (mut un0, mut un1) = (0.0, 0.0);
+    for (a0, a1) in sxy0.iter().zip(sxy1.iter()) {
+        un0 += a0 * a0;
+        un1 += a1 * a1;
     }
     (un0, un1)
 }
@@ -673,8 +569,8 @@ impl ReceptiveField {
     }
 
     /// [`ReceptiveField::predict_local`] of two fields (of the same input
-    /// dimension) at once: the same operations per field, the two fields'
-    /// passes over the input fused so that their sums run side by side.
+    /// dimension) at once: the same operations per field, direction by
+    /// direction for both fields.
     #[inline(always)]
     pub(super) fn predict_local_pair(
         a: &Self,
