@@ -30,9 +30,10 @@ const DEFAULT_TRACKER: &str = "ncc-scale";
 const DEFAULT_DECODE_AHEAD: usize = 4;
 
 /// Threads that decode a folder's frames by default (`--decode-threads`):
-/// one, the fastest measured so far (2026-12-03, 2-core machine under load:
-/// 2 threads took 1.3-2.1x the wall time of 1 on David with `mad`, and
-/// pinned to one core 1.1-1.4x on Crossing; the same CPU time).
+/// one. On the idle 2-core machine (2026-12-03) 2 threads make the fast
+/// trackers 1.1-1.3x faster (mad, ball-kf) but ncc-scale 5-10 % slower
+/// (three busy threads on two cores), under load they took 1.3-2.1x the
+/// wall time of 1 (mad on David), and pinned to one core 1.1-1.4x.
 const DEFAULT_DECODE_THREADS: usize = 1;
 
 #[derive(Parser)]
