@@ -655,6 +655,18 @@ mod tests {
         }
     }
 
+    /// One channel at `level`, or by the per-pixel loop (`None`).
+    fn warp_at<T: Pixel>(
+        w: &InsideWarp<'_, T>,
+        level: Option<SimdLevel>,
+        out: &mut ImageViewMut<'_, f32>,
+    ) {
+        match level {
+            None => today_any(w, out, 1),
+            Some(l) => w.run(l, out, 1),
+        }
+    }
+
     use bayestrack_testkit::Lcg64 as Lcg;
 
     /// A map sending the `pw x ph` patch inside `[0, w-1] x [0, h-1]`:
@@ -845,33 +857,30 @@ mod tests {
                     let mut got = vec![0f32; pw * ph];
                     let run = |level: Option<SimdLevel>, out: &mut [f32]| {
                         let mut view = ImageViewMut::from_slice(out, pw, ph, 1, pw).unwrap();
+                        let (xmax, ymax) = ((w - 2) as f32, (h - 2) as f32);
                         match iw {
-                            None => {
-                                let iw = InsideWarp {
+                            None => warp_at(
+                                &InsideWarp {
                                     data: src.as_slice(),
                                     stride: src.stride(),
-                                    xmax: (w - 2) as f32,
-                                    ymax: (h - 2) as f32,
+                                    xmax,
+                                    ymax,
                                     m,
-                                };
-                                match level {
-                                    None => today_any(&iw, &mut view, 1),
-                                    Some(l) => iw.run(l, &mut view, 1),
-                                }
-                            }
-                            Some(f) => {
-                                let iw = InsideWarp {
+                                },
+                                level,
+                                &mut view,
+                            ),
+                            Some(f) => warp_at(
+                                &InsideWarp {
                                     data: f.as_slice(),
                                     stride: f.stride(),
-                                    xmax: (w - 2) as f32,
-                                    ymax: (h - 2) as f32,
+                                    xmax,
+                                    ymax,
                                     m,
-                                };
-                                match level {
-                                    None => today_any(&iw, &mut view, 1),
-                                    Some(l) => iw.run(l, &mut view, 1),
-                                }
-                            }
+                                },
+                                level,
+                                &mut view,
+                            ),
                         }
                     };
                     run(None, &mut want);
