@@ -153,6 +153,16 @@ struct Cells {
     idx: [i32; LANES],
 }
 
+/// A batch's eight cells in registers, `(xi, yi, fx, fy)`: the integer
+/// corners and the fractional offsets.
+#[cfg(target_arch = "x86_64")]
+type CellLanes = (
+    core::arch::x86_64::__m256i,
+    core::arch::x86_64::__m256i,
+    core::arch::x86_64::__m256,
+    core::arch::x86_64::__m256,
+);
+
 impl<T: Pixel> InsideWarp<'_, T> {
     /// Fills `out` (same channel count as the source, `ch`) at `level`
     /// (the best available one if `level` is not).
@@ -272,18 +282,7 @@ impl<T: Pixel> InsideWarp<'_, T> {
     /// fy)`.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    fn cell_lanes_avx2(
-        &self,
-        simd: pulp::x86::V3,
-        bx: f64,
-        by: f64,
-        u0: usize,
-    ) -> (
-        core::arch::x86_64::__m256i,
-        core::arch::x86_64::__m256i,
-        core::arch::x86_64::__m256,
-        core::arch::x86_64::__m256,
-    ) {
+    fn cell_lanes_avx2(&self, simd: pulp::x86::V3, bx: f64, by: f64, u0: usize) -> CellLanes {
         use pulp::bytemuck::cast;
         let f = simd.avx;
         let [a, _, _, c, _, _] = self.m;
@@ -307,12 +306,7 @@ impl<T: Pixel> InsideWarp<'_, T> {
         by: f64,
         au: [core::arch::x86_64::__m256d; 2],
         cu: [core::arch::x86_64::__m256d; 2],
-    ) -> (
-        core::arch::x86_64::__m256i,
-        core::arch::x86_64::__m256i,
-        core::arch::x86_64::__m256,
-        core::arch::x86_64::__m256,
-    ) {
+    ) -> CellLanes {
         let f = simd.avx;
         // `max(p + o, 0)` in eight `f32` lanes (`p + o` in `f64`, then
         // rounded, as the scalar loop).
