@@ -173,9 +173,9 @@ fn check_update<const N: usize, const M: usize>(
             let s_min = inn.covariance.diagonal().min();
             let tol = TOL * ll.abs().max(1.0) * (1.0 / s_min).max(1.0);
             assert!(
-                (inn.log_likelihood - ll).abs() <= tol,
+                (inn.log_likelihood() - ll).abs() <= tol,
                 "{case} step {k}: log-likelihood {} vs {ll}",
-                inn.log_likelihood
+                inn.log_likelihood()
             );
         }
         _ => panic!("{case} step {k}: missing-measurement mismatch"),

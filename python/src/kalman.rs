@@ -170,7 +170,7 @@ fn upd_out<const N: usize, const M: usize>(u: &Update<N, M>) -> UpdOut {
         innovation: u
             .innovation
             .as_ref()
-            .map(|i| (dv(&i.residual), dm(&i.covariance), i.log_likelihood)),
+            .map(|i| (dv(&i.residual), dm(&i.covariance), i.log_likelihood())),
         iterations: u.iterations,
     }
 }

@@ -39,7 +39,7 @@ impl<const N: usize, const M: usize, B: Belief<N>> Batch<N, M, B> {
         self.innovations
             .iter()
             .flatten()
-            .map(|i| i.log_likelihood)
+            .map(|i| i.log_likelihood())
             .sum()
     }
 }

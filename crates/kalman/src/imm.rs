@@ -383,7 +383,7 @@ impl<'a, const N: usize, const M: usize> Imm<'a, N, M> {
         *log_likelihood = if z.is_some() {
             // ln cbar_j + ln L_j, normalised by log-sum-exp
             for (l, i) in probabilities.iter_mut().zip(innovations.iter()) {
-                *l = l.ln() + i.as_ref().map_or(0.0, |i| i.log_likelihood);
+                *l = l.ln() + i.as_ref().map_or(0.0, |i| i.log_likelihood());
             }
             let top = probabilities
                 .iter()

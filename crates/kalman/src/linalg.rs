@@ -613,16 +613,10 @@ impl<const D: usize> Ldl<D> {
         x
     }
 
-    /// `log det A = log prod D_jj`, one logarithm when the product is
-    /// representable.
+    /// The pivots `D_jj` (positive and finite).
     #[inline(always)]
-    pub(crate) fn log_det(&self) -> f64 {
-        let prod: f64 = (0..D).map(|i| self.d[i]).product();
-        if prod.is_normal() {
-            prod.ln()
-        } else {
-            (0..D).map(|i| self.d[i].ln()).sum::<f64>()
-        }
+    pub(crate) fn d(&self) -> &SVector<f64, D> {
+        &self.d
     }
 }
 
@@ -1343,7 +1337,7 @@ mod tests {
         let l = ldl.l + nalgebra::Matrix3::identity();
         let d = nalgebra::Matrix3::from_diagonal(&ldl.d);
         assert!((l * d * l.transpose() - a).amax() < 1e-14);
-        assert!((ldl.log_det() - a.determinant().ln()).abs() < 1e-13);
+        assert!((ldl.d().iter().product::<f64>().ln() - a.determinant().ln()).abs() < 1e-13);
         // B A^{-1} = B L^{-T} D^{-1} L^{-1}
         let b = nalgebra::Matrix2x3::new(1.0, 2.0, 3.0, 4.0, 5.0, 6.0);
         let x = ldl.right_solve_l(&ldl.scale_columns(&ldl.right_solve_lt(&b)));

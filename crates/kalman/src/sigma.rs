@@ -505,10 +505,8 @@ impl SigmaPoints {
         // the checks of the outputs in one test (as the KF's gain step):
         // the exact checks, in order, name a failure
         let fast_ok = linalg::min_diagonal(&cov) >= 0.0
-            && (linalg::sym_sum(&mean, &cov)
-                + innovation.log_likelihood
-                + (pending_sum + linalg::vec_sum(z)))
-            .is_finite();
+            && (linalg::sym_sum(&mean, &cov) + innovation.nis + (pending_sum + linalg::vec_sum(z)))
+                .is_finite();
         if !fast_ok {
             inputs()?;
             linalg::check_variances(

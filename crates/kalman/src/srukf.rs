@@ -42,7 +42,7 @@
 use nalgebra::{SMatrix, SVector};
 
 use crate::error::{KalmanError, Result, Step};
-use crate::gaussian::{FactoredGaussian, Gaussian, LN_2PI};
+use crate::gaussian::{FactoredGaussian, Gaussian};
 use crate::linalg;
 use crate::model::{self, Dynamics, Manifold, Measurement};
 use crate::ukf::Ukf;
@@ -438,23 +438,11 @@ pub(crate) fn joint_posterior<const N: usize, const M: usize>(
     let mean = m + linalg::mul(&joint.b, &w);
     let l = joint.a;
     let nis = w.norm_squared();
-    let prod: f64 = (0..M).map(|i| sy[(i, i)]).product();
-    let log_det = if prod.is_normal() {
-        2.0 * prod.ln()
-    } else {
-        2.0 * (0..M).map(|i| sy[(i, i)].ln()).sum::<f64>()
-    };
-    let log_likelihood = -0.5 * (nis + log_det + M as f64 * LN_2PI);
     let zero = SMatrix::<f64, M, M>::zeros();
     let covariance = linalg::mirror_lower(linalg::lower_mul_t_add(&zero, 1.0, &sy, &sy));
     linalg::check_finite_vec(&mean, "posterior mean", step)?;
     linalg::check_finite_mat(&l, "posterior covariance factor", step)?;
-    let innovation = Innovation {
-        residual,
-        covariance,
-        log_likelihood,
-        nis,
-    };
+    let innovation = Innovation::from_sqrt(residual, covariance, nis, &sy);
     innovation.check()?;
     Ok(SqrtUpdate {
         posterior: SqrtGaussian { mean, l },

@@ -22,25 +22,31 @@ pub enum CovarianceUpdate {
 }
 
 /// The innovation of an update and the statistics derived from it.
+///
+/// The log-likelihood is computed when asked for
+/// ([`Innovation::log_likelihood`]): its logarithm is about a twentieth of a
+/// small filter's step, and most steps never read it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Innovation<const M: usize> {
     /// `nu = z - z_hat`.
     pub residual: SVector<f64, M>,
     /// `S`, the innovation covariance.
     pub covariance: SMatrix<f64, M, M>,
-    /// `log N(nu; 0, S)`, from the Cholesky factor of `S`.
-    pub log_likelihood: f64,
     /// Normalised innovation squared `nu^T S^{-1} nu` (chi-square with `M`
     /// degrees of freedom for a consistent filter).
     pub nis: f64,
+    /// `det S = (prod det_factors)^det_power`: the pivots `D_jj` of
+    /// `S = L D L^T` (power 1) or the diagonal of a Cholesky factor of `S`
+    /// (power 2), positive and finite.
+    det_factors: SVector<f64, M>,
+    det_power: f64,
 }
 
 impl<const M: usize> Innovation<M> {
-    /// Derives NIS and log-likelihood from the residual, the factorisation
-    /// `S = L D L^T` and the whitened residual `y = L^{-1} nu`
-    /// (`nu^T S^{-1} nu = sum y_j^2 / D_jj`), unchecked: the caller runs [`Innovation::check`] (or
-    /// folds `log_likelihood` into its own test: it is finite exactly when
-    /// both statistics are).
+    /// Derives the NIS from the residual, the factorisation `S = L D L^T`
+    /// and the whitened residual `y = L^{-1} nu`
+    /// (`nu^T S^{-1} nu = sum y_j^2 / D_jj`), unchecked: the caller runs
+    /// [`Innovation::check`] (or folds `nis` into its own test).
     #[inline(always)]
     pub(crate) fn unchecked(
         residual: SVector<f64, M>,
@@ -52,22 +58,59 @@ impl<const M: usize> Innovation<M> {
         for j in 0..M {
             nis += whitened[j] * whitened[j] * ldl.inv_d()[j];
         }
-        let log_likelihood = -0.5 * (nis + ldl.log_det() + M as f64 * LN_2PI);
         Self {
             residual,
             covariance,
-            log_likelihood,
             nis,
+            det_factors: *ldl.d(),
+            det_power: 1.0,
         }
     }
 
-    /// A residual of 1e155 or more squares past the largest f64: the
-    /// statistics would be inf and -inf, not numbers. `log_likelihood` is
-    /// `-(nis + ..) / 2`, finite only when the NIS is, so one test covers
-    /// both.
+    /// The innovation of a square-root filter: `S = S_y S_y^T` with `S_y`
+    /// lower triangular with a positive diagonal, `nis` from the whitened
+    /// residual, unchecked.
+    #[inline(always)]
+    pub(crate) fn from_sqrt(
+        residual: SVector<f64, M>,
+        covariance: SMatrix<f64, M, M>,
+        nis: f64,
+        sy: &SMatrix<f64, M, M>,
+    ) -> Self {
+        Self {
+            residual,
+            covariance,
+            nis,
+            det_factors: sy.diagonal(),
+            det_power: 2.0,
+        }
+    }
+
+    /// `log det S`, with one logarithm when the product of the factors is
+    /// representable.
+    #[must_use]
+    pub fn log_det(&self) -> f64 {
+        let prod: f64 = self.det_factors.iter().product();
+        if prod.is_normal() {
+            self.det_power * prod.ln()
+        } else {
+            self.det_power * self.det_factors.iter().map(|f| f.ln()).sum::<f64>()
+        }
+    }
+
+    /// `log N(nu; 0, S) = -(nis + log det S + M log 2 pi) / 2`: finite,
+    /// since an update with a non-finite NIS is an error.
+    #[must_use]
+    pub fn log_likelihood(&self) -> f64 {
+        -0.5 * (self.nis + self.log_det() + M as f64 * LN_2PI)
+    }
+
+    /// A residual of 1e155 or more squares past the largest f64: the NIS
+    /// would be inf, not a number (and the log-likelihood with it: `log det
+    /// S` is finite, its factors positive and finite).
     #[inline(always)]
     pub(crate) fn check(&self) -> Result<()> {
-        if !self.log_likelihood.is_finite() {
+        if !self.nis.is_finite() {
             return Err(KalmanError::NonFinite {
                 what: "normalised innovation squared (NIS) and log-likelihood",
                 step: Step::Update,
@@ -162,10 +205,10 @@ pub(crate) fn gain_step<const N: usize, const M: usize>(
     let innovation = Innovation::unchecked(residual, &y, s, &ldl);
     // every check of the outputs in one test: the variances against their
     // floor, and one sum that is finite only when the mean, the covariance
-    // and the log-likelihood are (the latter only when the NIS is); the
-    // exact checks, in order, name the failure
+    // and the NIS are (the log-likelihood is when the NIS is); the exact
+    // checks, in order, name the failure
     let fast_ok = linalg::min_diagonal(&new_cov) >= 0.0
-        && (linalg::sym_sum(&new_mean, &new_cov) + innovation.log_likelihood).is_finite();
+        && (linalg::sym_sum(&new_mean, &new_cov) + innovation.nis).is_finite();
     if !fast_ok {
         linalg::check_variances(&mut new_cov, p, "posterior covariance", Step::Update)?;
         linalg::check_finite_sym_belief(

@@ -345,7 +345,7 @@ fn a_measurement_too_large_for_its_statistics_is_an_error() {
     let z = Vector2::new(1e100, 0.0);
     let u = Kf::default().update(&prior, &sensor, Some(&z)).unwrap();
     let inn = u.innovation.unwrap();
-    assert!(inn.nis.is_finite() && inn.log_likelihood.is_finite());
+    assert!(inn.nis.is_finite() && inn.log_likelihood().is_finite());
     assert!(u.posterior.mean().iter().all(|v| v.is_finite()));
 }
 

@@ -69,7 +69,7 @@ fn valid_innovation(i: &Option<bayestrack_kalman::Innovation<1>>) -> bool {
     i.as_ref().is_none_or(|i| {
         i.nis.is_finite()
             && i.nis >= 0.0
-            && i.log_likelihood.is_finite()
+            && i.log_likelihood().is_finite()
             && i.residual.iter().all(|v| v.is_finite())
             && i.covariance.iter().all(|v| v.is_finite())
     })

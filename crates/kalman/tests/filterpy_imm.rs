@@ -157,7 +157,7 @@ fn check_update<const N: usize, const M: usize>(
     close(&innovation.covariance, &mat(s, "S"), tol, &format!("S {k}"));
     let ll = s["loglik"][0];
     assert!(
-        (innovation.log_likelihood - ll).abs() <= tol * ll.abs().max(1.0),
+        (innovation.log_likelihood() - ll).abs() <= tol * ll.abs().max(1.0),
         "loglik {k}"
     );
 }

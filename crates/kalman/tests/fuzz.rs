@@ -59,7 +59,7 @@ fn finite_update<const N: usize, const M: usize>(u: &Update<N, M>, scale: f64) -
         && u.innovation.as_ref().is_none_or(|i| {
             i.nis.is_finite()
                 && i.nis >= 0.0
-                && i.log_likelihood.is_finite()
+                && i.log_likelihood().is_finite()
                 && i.residual.iter().all(|v| v.is_finite())
         })
 }
@@ -198,7 +198,7 @@ proptest! {
                 prop_assert!(finite_factor(&u.posterior), "{u:?}");
                 let i = u.innovation.unwrap();
                 prop_assert!(
-                    i.nis.is_finite() && i.nis >= 0.0 && i.log_likelihood.is_finite()
+                    i.nis.is_finite() && i.nis >= 0.0 && i.log_likelihood().is_finite()
                         && i.residual.iter().all(|v| v.is_finite()),
                     "{u:?}"
                 );

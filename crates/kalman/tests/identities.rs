@@ -63,10 +63,10 @@ fn ukf_equals_kf_on_a_linear_gaussian_model() {
             if let (Some(ia), Some(ib)) = (ua.innovation, ub.innovation) {
                 let tol = 1e-9 * ia.nis.abs().max(1.0);
                 assert!(
-                    (ia.log_likelihood - ib.log_likelihood).abs() < tol,
+                    (ia.log_likelihood() - ib.log_likelihood()).abs() < tol,
                     "alpha {alpha}: {} {}",
-                    ia.log_likelihood,
-                    ib.log_likelihood
+                    ia.log_likelihood(),
+                    ib.log_likelihood()
                 );
                 assert!(
                     (ia.nis - ib.nis).abs() < tol,

@@ -150,7 +150,10 @@ fn one_model_is_its_filter() {
             .unwrap();
         g = u.posterior;
         assert_eq!(step.belief.estimate().unwrap(), g);
-        assert_eq!(step.log_likelihood, u.innovation.map(|i| i.log_likelihood));
+        assert_eq!(
+            step.log_likelihood,
+            u.innovation.map(|i| i.log_likelihood())
+        );
         belief = step.belief;
     }
 }

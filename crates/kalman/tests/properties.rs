@@ -51,7 +51,7 @@ proptest! {
             prop_assert!(u.posterior.cov().symmetric_eigenvalues().min() > -1e-9 * p.amax());
             prop_assert_eq!(u.posterior.cov(), &u.posterior.cov().transpose());
             let inn = u.innovation.unwrap();
-            prop_assert!(inn.nis >= 0.0 && inn.log_likelihood.is_finite());
+            prop_assert!(inn.nis >= 0.0 && inn.log_likelihood().is_finite());
         }
     }
 

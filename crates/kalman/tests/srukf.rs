@@ -95,10 +95,10 @@ fn compare<const N: usize, const M: usize, D: Dynamics<N>, H: Measurement<N, M>>
             (Some(a), Some(b)) => {
                 close(&a.residual, &b.residual, tol_stats, "innovation");
                 close(&a.covariance, &b.covariance, tol, "S");
-                let ll = Vector2::new(a.nis, a.log_likelihood);
+                let ll = Vector2::new(a.nis, a.log_likelihood());
                 close(
                     &ll,
-                    &Vector2::new(b.nis, b.log_likelihood),
+                    &Vector2::new(b.nis, b.log_likelihood()),
                     tol_stats,
                     "NIS, log-likelihood",
                 );

@@ -247,7 +247,7 @@ where
                 step: Step::Update,
             });
         }
-        let lw = update.innovation.map_or(0.0, |i| i.log_likelihood);
+        let lw = update.innovation.map_or(0.0, |i| i.log_likelihood());
         Ok((
             RbParticle {
                 xn,

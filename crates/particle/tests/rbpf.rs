@@ -68,7 +68,7 @@ fn rbpf_equals_the_kalman_filter_when_the_nonlinear_part_is_degenerate() {
         let u = kf
             .update(&prior, &m.sensor, Some(&(z - Vector1::new(clock.sin()))))
             .unwrap();
-        ll_kf += u.innovation.unwrap().log_likelihood;
+        ll_kf += u.innovation.unwrap().log_likelihood();
         belief = u.posterior;
         let r = pf
             .step(&mut set, &RaoBlackwellised::new(&m), &z, &[2, k])

@@ -95,7 +95,7 @@ fn kalman(m: &Ar1, m0: f64, p0: f64, zs: &[f64]) -> (Vec<f64>, Vec<f64>, f64) {
     for z in zs {
         let prior = kf.predict(&b, &dynamics).unwrap();
         let u = kf.update(&prior, &sensor, Some(&Vector1::new(*z))).unwrap();
-        ll += u.innovation.unwrap().log_likelihood;
+        ll += u.innovation.unwrap().log_likelihood();
         b = u.posterior;
         means.push(b.mean()[0]);
         vars.push(b.cov()[(0, 0)]);
