@@ -320,15 +320,18 @@ def main():
             m, least = table[k]
             print(f"  {fmt(m):>12} {fmt(least):>12}  {k}")
     print("\nratio ours / OpenCV TM_SQDIFF (same frames, same run; < 1: ours faster),"
-          " of the medians and of the least disturbed samples:")
+          " of the medians and of the least disturbed samples (medians over rounds;"
+          " in brackets the range of the rounds' own ratios):")
     for k, t in sorted(med.items()):
         kind = "RGB" if " RGB " in k else "gray"
         which = "SAME-frame" if "SAME-frame" in k else "next-frame"
         if "white noise" in k:
             continue
-        ref = [v for c, v in cvm.items() if "TM_SQDIFF" in c and f" {kind} " in c and which in c]
+        ref = [c for c in cvm if "TM_SQDIFF" in c and f" {kind} " in c and which in c]
         if ref:
-            print(f"  {t[0] / ref[0][0]:6.2f}x {t[1] / ref[0][1]:6.2f}x  {k}")
+            rounds = [[o[i] / c[i] for o, c in zip(ours_t[k], cv_t[ref[0]])] for i in (0, 1)]
+            span = "  ".join(f"[{min(r):.2f}-{max(r):.2f}]" for r in rounds)
+            print(f"  {t[0] / cvm[ref[0]][0]:6.2f}x {t[1] / cvm[ref[0]][1]:6.2f}x  {span}  {k}")
     print("\nother OpenCV references (histogram and frame-difference benches):")
     other_references()
 
