@@ -10,16 +10,43 @@ nearly everything), and the full MAD surface. OpenCV has no absolute-
 difference mode: its closest are TM_SQDIFF and TM_CCORR (+ cv2.minMaxLoc for
 the best position, which is what mad_search returns).
 
-The script alternates: each round runs our criterion bench binary (only the
-MAD cases, short warm-up and measurement), then times OpenCV on the same
-frames, so both see the same machine load. Both sides report the same
-statistic for a round: criterion's median per-call time for ours (read from
-its estimates.json: the median over samples of d, 2d, ... calls of each
-sample's time per call), and the same sampling for OpenCV
-(criterion_like_time; it was the median of single calls, which on a loaded
-machine leaves out the time given to other processes and so flattered
-OpenCV); the script prints the median over rounds of each and the
-ratio ours / OpenCV TM_SQDIFF. One thread for both.
+The script alternates: each round runs our criterion bench binary on the
+gray MAD cases, then times OpenCV's gray cases, then the same for RGB (one
+kind at a time, so that each pair is timed within some 20 seconds and sees
+the same machine load). Both sides report the same statistics for a round,
+from the same kind of samples: flat sampling, 100 samples of a fixed
+number of calls each, about 20 ms a sample whatever the time of a call
+(ours: criterion, its estimates.json and sample.json; OpenCV:
+criterion_like_time, the same sampling in Python):
+
+- median: the median over samples of each sample's time per call. On a
+  loaded machine it includes the time given to other processes, the same
+  share on both sides since the samples are equally long;
+- least disturbed: the smallest per-call time of any sample, the closest
+  to a run nobody interrupted.
+
+The load of this 2-core machine and what the host runs beside it move both
+figures by up to 2-3x between minutes (the same surface binary took
+0.40 ms and 1.10 ms a call a few seconds apart), which is why both sides
+are timed close together, on the same CPU, with samples of the same length.
+Until 2026-12-03 OpenCV's samples were d, 2d, ... calls (criterion's
+linear sampling) while criterion chose flat samples of ours on the loaded
+machine, and before that OpenCV's figure was a median of single calls:
+either way the two sides took different shares of the preemptions.
+
+Both sides run pinned to one CPU (--cpu, default 0): the two virtual CPUs
+of the project's 2-core machine ran the same code at speeds up to 1.6x
+apart (2026-12-03: a scalar loop 41 us on CPU 0 and 55-68 us on CPU 1, the
+gray MAD surface 0.35-0.39 ms and 0.48-0.55 ms, in the same minute), and
+unpinned, the bench (a subprocess started while the script waits) and
+OpenCV (in the script's process) could each land on either.
+
+OpenCV writes into a preallocated result (matchTemplate's `result`
+argument), as ours writes into a reused surface: a fresh 257 KB result
+costs OpenCV some 76 page faults a call (glibc maps and unmaps it every
+call), which is an allocation cost, not the matching. The script prints the
+median over rounds of each statistic, the ratios ours / OpenCV TM_SQDIFF,
+and the load average at each round's start. One thread for both.
 
 On a machine with AVX-512, --simd avx2 caps our kernels at AVX2 (the
 bench reads BAYESTRACK_SIMD; OpenCV keeps its own dispatch) to time the
@@ -35,6 +62,7 @@ and runs the executable cargo reports.
 
 import argparse
 import json
+import math
 import os
 import statistics
 import subprocess
@@ -59,36 +87,33 @@ def median_time(fn, min_total=1.0, min_reps=20):
     return times[len(times) // 2]
 
 
-def criterion_like_time(fn, seconds, samples=100):
-    """Per-call time of fn() as criterion measures ours: samples of d, 2d,
-    ..., samples*d calls each (criterion's linear sampling, d chosen so that
-    they take about `seconds` in all), the median over samples of the
-    sample's time divided by its calls.
+def criterion_like_time(fn, seconds, samples=100, warm_up=0.5):
+    """Per-call time of fn() as criterion measures ours (the MAD benches
+    use criterion's flat sampling): a warm-up of `warm_up` seconds gives
+    the mean time of a call, then `samples` samples of the same number of
+    calls each, as many as make all of them take about `seconds`; returns
+    (median, least) over samples of the sample's time divided by its calls.
 
-    On an idle machine this equals median_time(). On a loaded one it does
-    not: a single call of a millisecond mostly runs between two preemptions,
-    so the median of single calls leaves the time given to other processes
-    out, while a sample of many calls (criterion's) takes its share in;
-    with the same statistic on both sides the ratio stays fair."""
-    fn()  # warm-up
+    Samples of equal length (seconds / samples, 20 ms by default) on both
+    sides: on a loaded machine a sample takes its share of the time given
+    to other processes, the same share on both sides (the median), and the
+    least of them is as likely to have escaped every interruption on both
+    sides; the median of single calls, which this replaced, left the
+    preemption out of OpenCV's time only."""
     t0 = time.perf_counter()
     reps = 0
-    while reps < 5 or time.perf_counter() - t0 < 0.2:
+    while reps < 5 or time.perf_counter() - t0 < warm_up:
         fn()
         reps += 1
     per_call = (time.perf_counter() - t0) / reps
-    # Fewer samples (at least 10) where 100 of at least d = 1, 2, ... calls
-    # would take longer than `seconds` (criterion runs over its time then).
-    samples = max(10, min(samples, int((2 * seconds / per_call) ** 0.5)))
-    d = max(1, round(seconds / (per_call * samples * (samples + 1) / 2)))
+    n = max(1, math.ceil(seconds / (samples * per_call)))
     times = []
-    for i in range(1, samples + 1):
-        n = i * d
+    for _ in range(samples):
         t = time.perf_counter()
         for _ in range(n):
             fn()
         times.append((time.perf_counter() - t) / n)
-    return statistics.median(times)
+    return statistics.median(times), min(times)
 
 
 def fmt(seconds):
@@ -162,44 +187,59 @@ def bench_exe():
     sys.exit("could not find the appearance bench executable in cargo's output")
 
 
-def ours(exe, seconds, simd=None):
-    """One run of our MAD benches: {case name: criterion's median (s)}.
+def ours(exe, seconds, simd=None, kind=None):
+    """One run of our MAD benches (those of one kind, "gray" or "RGB", if
+    given): {case name: (median, least) per-call time (s)}.
 
     Criterion's median of its samples' per-iteration times, read from the
-    estimates.json it writes (into a fresh CRITERION_HOME), so that both
-    sides report the same statistic (criterion_like_time for OpenCV)."""
+    estimates.json it writes (into a fresh CRITERION_HOME), and the
+    smallest per-iteration time of a sample (its sample.json), so that both
+    sides report the same statistics (criterion_like_time for OpenCV)."""
     import tempfile
 
     env = {**os.environ}
     if simd:
         env["BAYESTRACK_SIMD"] = simd
+    cases = "^mad/(mad_search|MadSearch|mad_map_into|sad_windows)"
+    if kind:
+        cases += f".* {kind} "
     with tempfile.TemporaryDirectory() as home:
         subprocess.run(
-            [exe, "--bench", "--warm-up-time", "0.5", "--measurement-time", str(seconds),
-             "mad_search|MadSearch|mad_map_into"],
+            [exe, "--bench", "--warm-up-time", "0.5", "--measurement-time", str(seconds), cases],
             cwd=ROOT / "crates" / "appearance", check=True, capture_output=True, text=True,
             env={**env, "CRITERION_HOME": home})
         times = {}
-        for bench in Path(home).glob("*/new/benchmark.json"):
-            name = json.loads(bench.read_text())["full_id"]
+        # <home>/mad/<case>/new/: the cases are in criterion group "mad"
+        for bench in Path(home).glob("*/*/new/benchmark.json"):
+            name = json.loads(bench.read_text())["full_id"].removeprefix("mad/")
             est = json.loads((bench.parent / "estimates.json").read_text())
-            times[name] = est["median"]["point_estimate"] * 1e-9
+            sample = json.loads((bench.parent / "sample.json").read_text())
+            least = min(t / n for n, t in zip(sample["iters"], sample["times"]))
+            times[name] = (est["median"]["point_estimate"] * 1e-9, least * 1e-9)
     if not times:
         sys.exit("no criterion estimates were written by the bench")
     return times
 
 
-def opencv_cases():
+def opencv_cases(kinds=("gray", "RGB"), reuse=True):
+    """{case name: callable} for OpenCV, writing into a preallocated result
+    unless `reuse` is false."""
     import cv2
+    import numpy as np
 
     cases = {}
-    for rgb in (False, True):
-        label, first, nxt, tpl = frames(rgb)
-        kind = "RGB" if rgb else "gray"
+    for kind in kinds:
+        label, first, nxt, tpl = frames(kind == "RGB")
+        shape = (first.shape[0] - tpl.shape[0] + 1, first.shape[1] - tpl.shape[1] + 1)
+        out = np.empty(shape, np.float32)
         for mname, method in (("TM_SQDIFF", cv2.TM_SQDIFF), ("TM_CCORR", cv2.TM_CCORR)):
             for which, frame in (("next-frame", nxt), ("SAME-frame", first)):
-                def run(frame=frame, method=method, tpl=tpl):
-                    return cv2.minMaxLoc(cv2.matchTemplate(frame, tpl, method))
+                if reuse:
+                    def run(frame=frame, method=method, tpl=tpl, out=out):
+                        return cv2.minMaxLoc(cv2.matchTemplate(frame, tpl, method, result=out))
+                else:
+                    def run(frame=frame, method=method, tpl=tpl):
+                        return cv2.minMaxLoc(cv2.matchTemplate(frame, tpl, method))
                 cases[f"matchTemplate {mname} {kind} {which} ({label}) + minMaxLoc"] = run
     return cases
 
@@ -237,44 +277,61 @@ def main():
                     help="cap our kernels at this level (BAYESTRACK_SIMD)")
     ap.add_argument("--opencv-only", action="store_true",
                     help="time OpenCV alone (no cargo needed)")
+    ap.add_argument("--cpu", type=int, default=0,
+                    help="pin both sides to this CPU (default 0; -1: leave unpinned)")
+    ap.add_argument("--fresh-result", action="store_true",
+                    help="let OpenCV allocate its result every call (as before 2026-12-03)")
     args = ap.parse_args()
     try:
         import cv2
     except ImportError:
         sys.exit("OpenCV is not installed: pip install opencv-python-headless numpy")
     cv2.setNumThreads(1)
+    if args.cpu >= 0:
+        # the bench subprocesses inherit the affinity
+        os.sched_setaffinity(0, {args.cpu})
     if args.opencv_only:
-        for k, fn in opencv_cases().items():
+        for k, fn in opencv_cases(reuse=not args.fresh_result).items():
             print(f"  {fmt(median_time(fn)):>12}  {k}")
         other_references()
         return
     exe = os.path.abspath(args.bench_exe) if args.bench_exe else bench_exe()
     print(f"OpenCV {cv2.__version__}, threads = {cv2.getNumThreads()}; ours: {os.path.basename(exe)}"
-          f" (kernels: {args.simd or 'best level'})")
-    cv = opencv_cases()
+          f" (kernels: {args.simd or 'best level'}); OpenCV's result "
+          f"{'allocated every call' if args.fresh_result else 'preallocated'}; "
+          f"{f'both on CPU {args.cpu}' if args.cpu >= 0 else 'unpinned'}")
+    kinds = ("gray", "RGB")
+    cv = {kind: opencv_cases((kind,), reuse=not args.fresh_result) for kind in kinds}
     ours_t, cv_t = {}, {}
     for r in range(args.rounds):
-        for k, v in ours(exe, args.seconds, args.simd).items():
-            ours_t.setdefault(k, []).append(v)
-        for k, fn in cv.items():
-            cv_t.setdefault(k, []).append(criterion_like_time(fn, args.seconds))
-        print(f"round {r + 1}/{args.rounds} done", file=sys.stderr)
-    med = {k: statistics.median(v) for k, v in ours_t.items()}
-    cvm = {k: statistics.median(v) for k, v in cv_t.items()}
-    print("\nmedian over rounds:")
-    for k in sorted(cvm):
-        print(f"  {fmt(cvm[k]):>12}  {k}")
-    for k in sorted(med):
-        print(f"  {fmt(med[k]):>12}  {k}")
-    print("\nratio ours / OpenCV TM_SQDIFF (same frames, same run; < 1: ours faster):")
+        print(f"round {r + 1}/{args.rounds}: load average {os.getloadavg()[0]:.2f}", file=sys.stderr)
+        for kind in kinds:
+            for k, v in ours(exe, args.seconds, args.simd, kind).items():
+                ours_t.setdefault(k, []).append(v)
+            for k, fn in cv[kind].items():
+                cv_t.setdefault(k, []).append(criterion_like_time(fn, args.seconds))
+    print(f"load average at the end: {os.getloadavg()[0]:.2f}")
+    # (median, least disturbed), each the median over rounds
+    med = {k: tuple(statistics.median(x) for x in zip(*v)) for k, v in ours_t.items()}
+    cvm = {k: tuple(statistics.median(x) for x in zip(*v)) for k, v in cv_t.items()}
+    print("\nmedian over rounds (median per-call time; least disturbed sample's):")
+    for table in (cvm, med):
+        for k in sorted(table):
+            m, least = table[k]
+            print(f"  {fmt(m):>12} {fmt(least):>12}  {k}")
+    print("\nratio ours / OpenCV TM_SQDIFF (same frames, same run; < 1: ours faster),"
+          " of the medians and of the least disturbed samples (medians over rounds;"
+          " in brackets the range of the rounds' own ratios):")
     for k, t in sorted(med.items()):
         kind = "RGB" if " RGB " in k else "gray"
         which = "SAME-frame" if "SAME-frame" in k else "next-frame"
         if "white noise" in k:
             continue
-        ref = [v for c, v in cvm.items() if "TM_SQDIFF" in c and f" {kind} " in c and which in c]
+        ref = [c for c in cvm if "TM_SQDIFF" in c and f" {kind} " in c and which in c]
         if ref:
-            print(f"  {t / ref[0]:6.2f}x  {k}")
+            rounds = [[o[i] / c[i] for o, c in zip(ours_t[k], cv_t[ref[0]])] for i in (0, 1)]
+            span = "  ".join(f"[{min(r):.2f}-{max(r):.2f}]" for r in rounds)
+            print(f"  {t[0] / cvm[ref[0]][0]:6.2f}x {t[1] / cvm[ref[0]][1]:6.2f}x  {span}  {k}")
     print("\nother OpenCV references (histogram and frame-difference benches):")
     other_references()
 

@@ -6,8 +6,8 @@ use bayestrack_appearance::{
     Candidate, Cue, Frame, HistogramDistance, IfdCue, MadSearch, RgbHistogram, Scratch, SkinModel,
     histogram_search, interframe_difference_into, mad_map_into, mad_search,
 };
-use bayestrack_image::{Image, Rect, rgb_to_gray};
-use criterion::{Criterion, criterion_group, criterion_main};
+use bayestrack_image::{Image, Rect, SadTemplate, SimdLevel, rgb_to_gray};
+use criterion::{Criterion, SamplingMode, criterion_group, criterion_main};
 
 use bayestrack_testkit::noise;
 
@@ -72,7 +72,7 @@ fn simd_cap() {
 }
 
 fn simd_cap_once() {
-    use bayestrack_image::{SimdLevel, simd};
+    use bayestrack_image::simd;
     let Some(v) = std::env::var_os("BAYESTRACK_SIMD") else {
         return;
     };
@@ -92,18 +92,23 @@ fn simd_cap_once() {
 
 fn bench_mad(c: &mut Criterion) {
     simd_cap();
+    // Flat sampling (every sample the same number of calls, about 20 ms of
+    // them), as tools/opencv_bench.py times OpenCV: samples of equal length
+    // on both sides take the same share of a loaded machine's preemptions.
+    let mut g = c.benchmark_group("mad");
+    g.sampling_mode(SamplingMode::Flat);
     let full = Rect::new(0, 0, 320, 240);
     let mut searcher = MadSearch::new();
     let mut map = Image::new(291, 221, 1, 0f32).unwrap();
     for rgb in [false, true] {
         let (label, first, next, template) = template_pair(rgb);
         let kind = if rgb { "RGB" } else { "gray" };
-        c.bench_function(
-            &format!("mad_search {kind} 30x20 over 320x240, next-frame template ({label})"),
+        g.bench_function(
+            format!("mad_search {kind} 30x20 over 320x240, next-frame template ({label})"),
             |b| b.iter(|| mad_search(black_box(next.view()), template.view(), full).unwrap()),
         );
-        c.bench_function(
-            &format!("MadSearch (reused) {kind} 30x20 over 320x240, next-frame template ({label})"),
+        g.bench_function(
+            format!("MadSearch (reused) {kind} 30x20 over 320x240, next-frame template ({label})"),
             |b| {
                 b.iter(|| {
                     searcher
@@ -112,14 +117,14 @@ fn bench_mad(c: &mut Criterion) {
                 })
             },
         );
-        c.bench_function(
-            &format!(
+        g.bench_function(
+            format!(
                 "mad_search {kind} 30x20 over 320x240, SAME-frame template ({label}, exact match)"
             ),
             |b| b.iter(|| mad_search(black_box(first.view()), template.view(), full).unwrap()),
         );
-        c.bench_function(
-            &format!("mad_map_into {kind} full 291x221 MAD surface ({label})"),
+        g.bench_function(
+            format!("mad_map_into {kind} full 291x221 MAD surface ({label})"),
             |b| {
                 b.iter(|| {
                     mad_map_into(
@@ -132,13 +137,35 @@ fn bench_mad(c: &mut Criterion) {
                 })
             },
         );
+        if !rgb {
+            // The surface's SAD kernel alone (integer sums, no scaling to
+            // MADs), row by row as mad_map_into runs it: the rest of the
+            // surface's time is the scaling and the calls around it.
+            let mut sad = SadTemplate::new(SimdLevel::detect());
+            sad.set(template.view());
+            let mut sums = vec![0u32; 291];
+            g.bench_function(
+                format!(
+                    "sad_windows {kind} 30x20, 221 rows of 291 windows: the surface's kernel \
+                     alone ({label})"
+                ),
+                |b| {
+                    b.iter(|| {
+                        for y in 0..221 {
+                            sad.sad_windows(black_box(next.view()), 0, y, &mut sums);
+                        }
+                    })
+                },
+            );
+        }
     }
     let white = noise(320, 240, 1, 3);
     let tpl_noise = white.crop(Rect::new(201, 117, 30, 20)).unwrap().to_image();
-    c.bench_function(
+    g.bench_function(
         "mad_search gray 30x20 over 320x240, SAME-frame template (white noise)",
         |b| b.iter(|| mad_search(black_box(white.view()), tpl_noise.view(), full).unwrap()),
     );
+    g.finish();
 }
 
 fn bench_histogram(c: &mut Criterion) {
