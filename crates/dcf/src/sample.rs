@@ -27,9 +27,6 @@ pub struct PatchSampler {
     /// weight; two source rows interpolated along x.
     columns: Vec<(usize, usize, f32)>,
     lines: [Vec<f32>; 2],
-    /// Scratch (area averaging): two rows of the table interpolated along
-    /// x.
-    lines64: [Vec<f64>; 2],
     /// Scratch: the table interpolated at the column edges of two rows.
     top: Vec<f64>,
     bottom: Vec<f64>,
@@ -632,38 +629,17 @@ impl PatchSampler {
             self.spans.push((ia, self.xs.len() - 1, b - a));
             self.widths.push(b - a);
         }
-        // a row of the table interpolated along x at every column edge
-        let along = |j: usize, out: &mut Vec<f64>, xs: &[(usize, f64)]| {
-            let r = &sum[j * cols..][..cols];
-            out.resize(xs.len(), 0.0);
-            for (o, &(i, g)) in out.iter_mut().zip(xs) {
-                let [a0, a1]: [f64; 2] = r[i..i + 2].try_into().unwrap_or_default();
-                *o = a0 + g * (a1 - a0);
-            }
-        };
-        // the table at row coordinate y, at every column edge: its rows j
-        // and j + 1 along x (kept while later edges read them: the same
-        // values), then between them
-        let [mut upper, mut lower] = std::mem::take(&mut self.lines64);
-        let (mut at_upper, mut at_lower) = (usize::MAX, usize::MAX);
-        let mut row_at = |y: f64, out: &mut Vec<f64>, xs: &[(usize, f64)]| {
+        // the table at row coordinate y, at every column edge
+        let row_at = |y: f64, out: &mut Vec<f64>, xs: &[(usize, f64)]| {
             let j = (y as usize).min(h - 1);
             let f = y - j as f64;
-            if at_upper != j {
-                if at_lower == j {
-                    std::mem::swap(&mut upper, &mut lower);
-                    std::mem::swap(&mut at_upper, &mut at_lower);
-                } else {
-                    along(j, &mut upper, xs);
-                    at_upper = j;
-                }
-            }
-            if at_lower != j + 1 {
-                along(j + 1, &mut lower, xs);
-                at_lower = j + 1;
-            }
+            let (ra, rb) = (&sum[j * cols..][..cols], &sum[(j + 1) * cols..][..cols]);
             out.resize(xs.len(), 0.0);
-            for ((o, &a), &b) in out.iter_mut().zip(&upper).zip(&lower) {
+            for (o, &(i, g)) in out.iter_mut().zip(xs) {
+                let [a0, a1]: [f64; 2] = ra[i..i + 2].try_into().unwrap_or_default();
+                let [b0, b1]: [f64; 2] = rb[i..i + 2].try_into().unwrap_or_default();
+                let a = a0 + g * (a1 - a0);
+                let b = b0 + g * (b1 - b0);
                 *o = a + f * (b - a);
             }
         };
@@ -703,7 +679,6 @@ impl PatchSampler {
         }
         self.top = top;
         self.bottom = bottom;
-        self.lines64 = [upper, lower];
     }
 }
 
