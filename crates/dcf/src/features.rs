@@ -62,11 +62,22 @@ pub struct Fhog {
     bin: Vec<u8>,
     sensitive: Vec<f32>,
     padded: Vec<f32>,
-    /// Per pixel column: its lower cell (+1 for the padding) and the
-    /// weights of that cell and the next.
-    col_cell: Vec<u32>,
-    col_lo: Vec<f32>,
-    col_hi: Vec<f32>,
+    /// Per pixel of the whole cells' rows (`hb * cell` rows of `w`): the
+    /// offset of its upper-left cell in a padded histogram (row and
+    /// column, +1 for the padding), the weights of the left and right
+    /// cells (0 past the last whole cell), of the upper and lower cells.
+    px_cell: Vec<u32>,
+    px_lo: Vec<f32>,
+    px_hi: Vec<f32>,
+    px_up: Vec<f32>,
+    px_down: Vec<f32>,
+    /// Scratch of the histograms: each pixel's four shares (upper-left,
+    /// upper-right, lower-left, lower-right cell, plane after plane) and
+    /// its offset in the padded histograms.
+    shares: Vec<f32>,
+    tops: Vec<u32>,
+    /// The offsets of the grid's cells in a padded histogram.
+    interior: Vec<u32>,
     insensitive: Vec<f32>,
     block: Vec<f32>,
     /// Per cell: its energy, then the norms of its four blocks and its
@@ -92,12 +103,25 @@ impl Fhog {
         }
         let (wb, hb) = (w / cell, h / cell);
         let nb = wb * hb;
-        let (col_cell, (col_lo, col_hi)) = (0..wb * cell)
-            .map(|x| {
-                let (c0, f) = split(x, cell);
-                (c0 as u32, (1.0 - f, f))
-            })
-            .unzip();
+        let (pw, rows) = (wb + 2, hb * cell);
+        let px = rows * w;
+        let (mut px_cell, mut px_lo, mut px_hi) = (vec![0; px], vec![0.0; px], vec![0.0; px]);
+        let (mut px_up, mut px_down) = (vec![0.0; px], vec![0.0; px]);
+        for y in 0..rows {
+            let (y0, fy) = split(y, cell);
+            for x in 0..wb * cell {
+                let (c0, fx) = split(x, cell);
+                let i = y * w + x;
+                px_cell[i] = (y0 * pw + c0) as u32;
+                (px_lo[i], px_hi[i]) = (1.0 - fx, fx);
+            }
+            for i in y * w..(y + 1) * w {
+                (px_up[i], px_down[i]) = (1.0 - fy, fy);
+            }
+        }
+        let interior = (0..hb)
+            .flat_map(|cy| (0..wb).map(move |cx| ((cy + 1) * pw + cx + 1) as u32))
+            .collect();
         Ok(Self {
             w,
             h,
@@ -110,9 +134,14 @@ impl Fhog {
             bin: vec![0; w * h],
             sensitive: vec![0.0; SENSITIVE * nb],
             padded: vec![0.0; SENSITIVE * (wb + 2) * (hb + 2)],
-            col_cell,
-            col_lo,
-            col_hi,
+            px_cell,
+            px_lo,
+            px_hi,
+            px_up,
+            px_down,
+            shares: vec![0.0; 4 * px],
+            tops: vec![0; px],
+            interior,
             insensitive: vec![0.0; INSENSITIVE * nb],
             block: vec![0.0; wb.saturating_sub(1).max(1) * hb.saturating_sub(1).max(1)],
             energy: vec![0.0; nb],
@@ -180,32 +209,42 @@ impl Fhog {
     #[inline(never)]
     fn gradients(&mut self, level: SimdLevel, p: &[f32]) {
         let (w, h) = (self.w, self.h);
-        for y in 0..h {
-            let (ya, yb, ky) = if h == 1 {
-                (0, 0, 0.0)
-            } else if y == 0 {
-                (0, 1, 1.0)
-            } else if y == h - 1 {
-                (h - 2, h - 1, 1.0)
-            } else {
-                (y - 1, y + 1, 0.5)
-            };
-            let (ra, rb, row) = (&p[ya * w..][..w], &p[yb * w..][..w], &p[y * w..][..w]);
-            let gy = &mut self.gy[y * w..][..w];
-            for ((g, &a), &b) in gy.iter_mut().zip(ra).zip(rb) {
-                *g = ky * (b - a);
+        let n = w * h;
+        let (p, gx, gy) = (&p[..n], &mut self.gx[..n], &mut self.gy[..n]);
+        // along y: central differences on the inner rows in one flat pass
+        // (row y at index i: rows y - 1 and y + 1 at i - w and i + w),
+        // one-sided on the first and last rows
+        if h == 1 {
+            // rows 0 and 0, weight 0 (as the row-by-row definition)
+            for ((g, &a), &b) in gy.iter_mut().zip(p).zip(p) {
+                *g = 0.0 * (b - a);
             }
-            let gx = &mut self.gx[y * w..][..w];
-            if w == 1 {
-                gx[0] = 0.0;
-                continue;
+        } else {
+            let (first, rest) = gy.split_at_mut(w);
+            let (inner, last) = rest.split_at_mut(n - 2 * w);
+            for ((g, &a), &b) in first.iter_mut().zip(&p[..w]).zip(&p[w..]) {
+                *g = 1.0 * (b - a);
             }
-            // one-sided differences at both ends, central inside
-            gx[0] = row[1] - row[0];
-            let last = w - 1;
-            gx[last] = row[last] - row[last - 1];
-            for ((g, &l), &r) in gx[1..last].iter_mut().zip(row).zip(&row[2..]) {
+            for ((g, &a), &b) in inner.iter_mut().zip(&p[..n - 2 * w]).zip(&p[2 * w..]) {
+                *g = 0.5 * (b - a);
+            }
+            for ((g, &a), &b) in last.iter_mut().zip(&p[n - 2 * w..]).zip(&p[n - w..]) {
+                *g = 1.0 * (b - a);
+            }
+        }
+        // along x: central differences in one flat pass (the values that
+        // straddle two rows are overwritten), one-sided at both ends of
+        // each row
+        if w == 1 {
+            gx.fill(0.0);
+        } else {
+            for ((g, &l), &r) in gx[1..n - 1].iter_mut().zip(p).zip(&p[2..]) {
                 *g = 0.5 * (r - l);
+            }
+            for (g, row) in gx.chunks_exact_mut(w).zip(p.chunks_exact(w)) {
+                let last = w - 1;
+                g[0] = row[1] - row[0];
+                g[last] = row[last] - row[last - 1];
             }
         }
         level.run(GradientBins {
@@ -217,7 +256,9 @@ impl Fhog {
     }
 
     /// Each pixel's four shares added into the padded histograms in pixel
-    /// order (one slice per pixel: no bounds test per share).
+    /// order (one slice per pixel: no bounds test per share); every
+    /// pixel's shares and histogram offset are computed first in one
+    /// vector pass, then added row by row, one pixel after the other.
     #[inline(never)]
     fn histograms(&mut self, level: SimdLevel) {
         let (wb, hb) = (self.wb, self.hb);
@@ -227,31 +268,28 @@ impl Fhog {
         // loop has no bounds tests
         let (pw, ph) = (wb + 2, hb + 2);
         let np = pw * ph;
-        self.padded.fill(0.0);
         level.run(Histograms {
             w: self.w,
             cell: self.cell,
             rows: hb * self.cell,
+            wb,
+            hb,
             pw,
             np,
             mag: &self.mag,
             bin: &self.bin,
-            col_cell: &self.col_cell,
-            col_lo: &self.col_lo,
-            col_hi: &self.col_hi,
+            px_cell: &self.px_cell,
+            px_lo: &self.px_lo,
+            px_hi: &self.px_hi,
+            px_up: &self.px_up,
+            px_down: &self.px_down,
+            shares: &mut self.shares,
+            tops: &mut self.tops,
+            interior: &self.interior,
             padded: &mut self.padded,
+            sensitive: &mut self.sensitive[..SENSITIVE * nb],
+            insensitive: &mut self.insensitive[..INSENSITIVE * nb],
         });
-        for o in 0..SENSITIVE {
-            let src = &self.padded[o * np..][..np];
-            let dst = &mut self.sensitive[o * nb..][..nb];
-            for cy in 0..hb {
-                dst[cy * wb..][..wb].copy_from_slice(&src[(cy + 1) * pw + 1..][..wb]);
-            }
-        }
-        let (lo, hi) = self.sensitive.split_at(INSENSITIVE * nb);
-        for ((d, &a), &b) in self.insensitive.iter_mut().zip(lo).zip(hi) {
-            *d = a + b;
-        }
     }
 
     /// Channel-major: the cells' energies, the blocks' norms, each cell's
@@ -329,14 +367,72 @@ struct Histograms<'a> {
     w: usize,
     cell: usize,
     rows: usize,
+    wb: usize,
+    hb: usize,
     pw: usize,
     np: usize,
     mag: &'a [f32],
     bin: &'a [u8],
-    col_cell: &'a [u32],
-    col_lo: &'a [f32],
-    col_hi: &'a [f32],
+    px_cell: &'a [u32],
+    px_lo: &'a [f32],
+    px_hi: &'a [f32],
+    px_up: &'a [f32],
+    px_down: &'a [f32],
+    shares: &'a mut [f32],
+    tops: &'a mut [u32],
+    interior: &'a [u32],
     padded: &'a mut [f32],
+    sensitive: &'a mut [f32],
+    insensitive: &'a mut [f32],
+}
+
+/// Every pixel's four shares and offset (one flat pass: vectorises).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn shares(
+    norm: f32,
+    np: u32,
+    mag: &[f32],
+    bin: &[u8],
+    (cell, lo, hi): (&[u32], &[f32], &[f32]),
+    (up, down): (&[f32], &[f32]),
+    (s00, s01, s10, s11): (&mut [f32], &mut [f32], &mut [f32], &mut [f32]),
+    tops: &mut [u32],
+) {
+    let n = tops.len();
+    let (mag, bin, cell, lo, hi) = (&mag[..n], &bin[..n], &cell[..n], &lo[..n], &hi[..n]);
+    let (up, down) = (&up[..n], &down[..n]);
+    let (s00, s01, s10, s11) = (&mut s00[..n], &mut s01[..n], &mut s10[..n], &mut s11[..n]);
+    for i in 0..n {
+        let m = mag[i] * norm;
+        let (wy1, wy0) = (down[i] * m, up[i] * m);
+        s00[i] = lo[i] * wy0;
+        s01[i] = hi[i] * wy0;
+        s10[i] = lo[i] * wy1;
+        s11[i] = hi[i] * wy1;
+        tops[i] = u32::from(bin[i]) * np + cell[i];
+    }
+}
+
+/// One row's shares added into the padded histograms, pixel after pixel.
+#[inline(always)]
+fn scatter(
+    padded: &mut [f32],
+    pw: usize,
+    tops: &[u32],
+    (s00, s01, s10, s11): (&[f32], &[f32], &[f32], &[f32]),
+) {
+    let n = tops.len();
+    let (s00, s01, s10, s11) = (&s00[..n], &s01[..n], &s10[..n], &s11[..n]);
+    for x in 0..n {
+        // the 2x2 cells the pixel's shares go to, one slice
+        let top = tops[x] as usize;
+        let quad = &mut padded[top..top + pw + 2];
+        quad[0] += s00[x];
+        quad[1] += s01[x];
+        quad[pw] += s10[x];
+        quad[pw + 1] += s11[x];
+    }
 }
 
 impl Kernel for Histograms<'_> {
@@ -344,25 +440,58 @@ impl Kernel for Histograms<'_> {
     #[inline(always)]
     fn run<T: Token>(self, _: T) {
         let (w, pw, np) = (self.w, self.pw, self.np);
-        let n = self.col_cell.len();
         let inv = 1.0 / self.cell as f32;
         let norm = inv * inv;
-        let (cells, lo, hi) = (&self.col_cell[..n], &self.col_lo[..n], &self.col_hi[..n]);
+        let px = self.rows * w;
+        // cleared to -0.0 (vector stores rather than a byte fill): every
+        // share is +0.0 or positive, so a cell that receives one holds
+        // the same bits as when cleared to +0.0, and one that receives
+        // none is read back below as -0.0 + 0.0 = +0.0
+        let padded = &mut self.padded[..SENSITIVE * np];
+        padded.fill(-0.0);
+        let (s00, rest) = self.shares[..4 * px].split_at_mut(px);
+        let (s01, rest) = rest.split_at_mut(px);
+        let (s10, s11) = rest.split_at_mut(px);
+        let tops = &mut self.tops[..px];
+        shares(
+            norm,
+            np as u32,
+            self.mag,
+            self.bin,
+            (self.px_cell, self.px_lo, self.px_hi),
+            (self.px_up, self.px_down),
+            (&mut *s00, &mut *s01, &mut *s10, &mut *s11),
+            tops,
+        );
+        // pixels past the last whole cell are left out
+        let n = self.wb * self.cell;
         for y in 0..self.rows {
-            let (y0, fy) = split(y, self.cell);
-            let mag = &self.mag[y * w..][..n];
-            let bins = &self.bin[y * w..][..n];
-            let row = y0 * pw;
-            for x in 0..n {
-                let m = mag[x] * norm;
-                // the 2x2 cells the pixel's shares go to, one slice
-                let top = usize::from(bins[x]) * np + row + cells[x] as usize;
-                let quad = &mut self.padded[top..top + pw + 2];
-                let (wy1, wy0) = (fy * m, (1.0 - fy) * m);
-                quad[0] += lo[x] * wy0;
-                quad[1] += hi[x] * wy0;
-                quad[pw] += lo[x] * wy1;
-                quad[pw + 1] += hi[x] * wy1;
+            let r = y * w..y * w + n;
+            scatter(
+                padded,
+                pw,
+                &tops[r.clone()],
+                (&s00[r.clone()], &s01[r.clone()], &s10[r.clone()], &s11[r]),
+            );
+        }
+        // the grid without its padding; the insensitive bins the sums of
+        // opposite sensitive ones
+        let nb = self.wb * self.hb;
+        let interior = &self.interior[..nb];
+        let (lo_bins, hi_bins) = self.sensitive.split_at_mut(INSENSITIVE * nb);
+        for o in 0..INSENSITIVE {
+            let (pa, pb) = (
+                &padded[o * np..][..np],
+                &padded[(o + INSENSITIVE) * np..][..np],
+            );
+            let (da, db) = (&mut lo_bins[o * nb..][..nb], &mut hi_bins[o * nb..][..nb]);
+            let di = &mut self.insensitive[o * nb..][..nb];
+            for (k, &j) in interior.iter().enumerate() {
+                let j = j as usize;
+                let (a, b) = (pa[j] + 0.0, pb[j] + 0.0);
+                da[k] = a;
+                db[k] = b;
+                di[k] = a + b;
             }
         }
     }

@@ -4,6 +4,7 @@
 //! the frame (as KCF's and DSST's patch extraction does).
 
 use bayestrack_image::ImageView;
+use bayestrack_image::simd::{Kernel, Token, dispatch};
 
 use crate::error::{DcfError, Result};
 
@@ -17,9 +18,15 @@ pub struct PatchSampler {
     sums: Vec<Vec<f64>>,
     /// Scratch: the distinct column edges of a patch.
     xs: Vec<(usize, f64)>,
-    /// Scratch: per output column, its edges' indices in `xs` and width
-    /// (area averaging), or its two source columns and weight (bilinear).
+    /// Scratch (area averaging): per output column, its edges' indices in
+    /// `xs` and width.
     spans: Vec<(usize, usize, f64)>,
+    /// Scratch: per output column, its width (area averaging).
+    widths: Vec<f64>,
+    /// Scratch (bilinear): per output column its two source columns and
+    /// weight; two source rows interpolated along x.
+    columns: Vec<(usize, usize, f32)>,
+    lines: [Vec<f32>; 2],
     /// Scratch: the table interpolated at the column edges of two rows.
     top: Vec<f64>,
     bottom: Vec<f64>,
@@ -29,6 +36,8 @@ pub struct PatchSampler {
     /// region.
     line: Vec<u8>,
     above: Vec<u64>,
+    /// Scratch for loading: partial column sums.
+    part: Vec<u32>,
 }
 
 /// Where a plane's values come from.
@@ -53,14 +62,86 @@ fn values<'a>(frame: ImageView<'a, u8>, y: usize, src: Source, line: &'a mut [u8
             line
         }
         (Source::Gray, _) => {
-            // bayestrack_image::rgb_to_gray_into's formula: the weights
-            // times 2^16, rounded
-            const W: [u32; 3] = [19595, 38470, 7471];
-            for (o, p) in line.iter_mut().zip(row.chunks_exact(3)) {
-                let acc = W[0] * u32::from(p[0]) + W[1] * u32::from(p[1]) + W[2] * u32::from(p[2]);
-                *o = ((acc + (1 << 15)) >> 16) as u8;
-            }
+            dispatch(GrayLine {
+                row: &row[..3 * n],
+                line: &mut *line,
+            });
             line
+        }
+    }
+}
+
+/// One pixel's gray level: bayestrack_image::rgb_to_gray_into's formula
+/// (the weights times 2^16, rounded).
+#[inline(always)]
+fn gray(p: &[u8]) -> u32 {
+    const W: [u32; 3] = [19595, 38470, 7471];
+    let acc = W[0] * u32::from(p[0]) + W[1] * u32::from(p[1]) + W[2] * u32::from(p[2]);
+    (acc + (1 << 15)) >> 16
+}
+
+/// The gray levels of one RGB row.
+struct GrayLine<'a> {
+    row: &'a [u8],
+    line: &'a mut [u8],
+}
+
+impl Kernel for GrayLine<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        for (o, p) in self.line.iter_mut().zip(self.row.chunks_exact(3)) {
+            *o = gray(p) as u8;
+        }
+    }
+}
+
+/// The column sums of rows `0..rows` of `frame` from `src` over the
+/// columns of `above`, added into it (exact integers: partial sums in
+/// `u32` over at most 2^24 rows at a time, then added to the `u64`s).
+struct ColumnSums<'a> {
+    frame: ImageView<'a, u8>,
+    rows: usize,
+    src: Source,
+    above: &'a mut [u64],
+    part: &'a mut [u32],
+}
+
+impl Kernel for ColumnSums<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        let n = self.above.len();
+        let part = &mut self.part[..n];
+        let c = self.frame.channels();
+        let mut y = 0;
+        while y < self.rows {
+            let end = self.rows.min(y + (1 << 24));
+            part.fill(0);
+            for y in y..end {
+                let row = self.frame.row(y);
+                match (self.src, c) {
+                    (Source::Channel(_), 1) => {
+                        for (a, &p) in part.iter_mut().zip(&row[..n]) {
+                            *a += u32::from(p);
+                        }
+                    }
+                    (Source::Channel(ch), c) => {
+                        for (a, p) in part.iter_mut().zip(row.chunks_exact(c)) {
+                            *a += u32::from(p[ch]);
+                        }
+                    }
+                    (Source::Gray, _) => {
+                        for (a, p) in part.iter_mut().zip(row[..3 * n].chunks_exact(3)) {
+                            *a += gray(p);
+                        }
+                    }
+                }
+            }
+            for (a, &p) in self.above.iter_mut().zip(&*part) {
+                *a += u64::from(p);
+            }
+            y = end;
         }
     }
 }
@@ -275,6 +356,7 @@ impl PatchSampler {
         }
         self.line.resize(r.x1, 0);
         self.above.resize(r.x1 * c, 0);
+        self.part.resize(r.x1, 0);
         self.region = r;
         Ok(())
     }
@@ -340,12 +422,13 @@ impl PatchSampler {
         // whole frame's values bit for bit. Column sums of the rows above
         // the region (u64: any height):
         above.fill(0);
-        for y in 0..r.y0 {
-            let v = values(frame, y, src, line);
-            for (a, &p) in above.iter_mut().zip(v) {
-                *a += u64::from(p);
-            }
-        }
+        dispatch(ColumnSums {
+            frame,
+            rows: r.y0,
+            src,
+            above: &mut *above,
+            part: &mut self.part,
+        });
         // the table's row y0 at columns x0..=x1
         let top = &mut sum[r.y0 * cols..][..cols];
         let mut t: u64 = above[..r.x0].iter().sum();
@@ -404,6 +487,28 @@ impl PatchSampler {
         ow: usize,
         oh: usize,
     ) -> Result<()> {
+        self.sample_scaled(ch, x0, y0, sx, sy, out, ow, oh, 1.0)
+    }
+
+    /// [`PatchSampler::sample`] with every output value times `gain` (in
+    /// `f32`, as the same multiplication in a pass over the patch
+    /// afterwards gives, bit for bit; a gain of 1 changes nothing).
+    ///
+    /// # Errors
+    /// As [`PatchSampler::sample`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn sample_scaled(
+        &mut self,
+        ch: usize,
+        x0: f64,
+        y0: f64,
+        sx: f64,
+        sy: f64,
+        out: &mut [f32],
+        ow: usize,
+        oh: usize,
+        gain: f32,
+    ) -> Result<()> {
         if ch >= self.planes.len() {
             return Err(DcfError::InvalidParameter {
                 name: "channel",
@@ -424,7 +529,7 @@ impl PatchSampler {
             });
         }
         if sx >= 1.0 && sy >= 1.0 {
-            self.area(ch, x0, y0, sx, sy, out, ow);
+            self.area(ch, (x0, y0, sx, sy), out, ow, gain);
             return Ok(());
         }
         let (w, h) = (self.w, self.h);
@@ -436,21 +541,41 @@ impl PatchSampler {
             let j = (i + 1).min(n - 1);
             (i, j, (c - i as f64) as f32)
         };
-        self.spans.clear();
-        self.spans.extend((0..ow).map(|u| {
-            let (a, b, f) = split(x0 + (u as f64 + 0.5) * sx - 0.5, w);
-            (a, b, f64::from(f))
-        }));
+        self.columns.clear();
+        self.columns
+            .extend((0..ow).map(|u| split(x0 + (u as f64 + 0.5) * sx - 0.5, w)));
+        // a source row interpolated along x at every output column
+        let along = |row: &[f32], out: &mut [f32], columns: &[(usize, usize, f32)]| {
+            for (o, &(xa, xb, fx)) in out.iter_mut().zip(columns) {
+                *o = row[xa] + fx * (row[xb] - row[xa]);
+            }
+        };
+        // the source rows interpolated along x, kept while output rows
+        // read them (the same values: each is interpolated the same way)
+        let [mut top, mut bottom] = std::mem::take(&mut self.lines);
+        top.resize(ow, 0.0);
+        bottom.resize(ow, 0.0);
+        let (mut at_top, mut at_bottom) = (usize::MAX, usize::MAX);
         for (v, orow) in out.chunks_exact_mut(ow).enumerate() {
             let (ya, yb, fy) = split(y0 + (v as f64 + 0.5) * sy - 0.5, h);
-            let (ra, rb) = (&plane[ya * w..(ya + 1) * w], &plane[yb * w..(yb + 1) * w]);
-            for (o, &(xa, xb, fx)) in orow.iter_mut().zip(&self.spans) {
-                let fx = fx as f32;
-                let top = ra[xa] + fx * (ra[xb] - ra[xa]);
-                let bot = rb[xa] + fx * (rb[xb] - rb[xa]);
-                *o = top + fy * (bot - top);
+            if at_top != ya {
+                if at_bottom == ya {
+                    std::mem::swap(&mut top, &mut bottom);
+                    std::mem::swap(&mut at_top, &mut at_bottom);
+                } else {
+                    along(&plane[ya * w..][..w], &mut top, &self.columns);
+                    at_top = ya;
+                }
+            }
+            if at_bottom != yb {
+                along(&plane[yb * w..][..w], &mut bottom, &self.columns);
+                at_bottom = yb;
+            }
+            for ((o, &top), &bot) in orow.iter_mut().zip(&top).zip(&bottom) {
+                *o = (top + fy * (bot - top)) * gain;
             }
         }
+        self.lines = [top, bottom];
         Ok(())
     }
 }
@@ -464,8 +589,8 @@ impl PatchSampler {
     /// Neighbouring rectangles share their edges: the table is interpolated
     /// once per distinct edge (about one corner per output pixel instead of
     /// four), the same values bit for bit.
-    #[allow(clippy::too_many_arguments)]
-    fn area(&mut self, ch: usize, x0: f64, y0: f64, sx: f64, sy: f64, out: &mut [f32], ow: usize) {
+    fn area(&mut self, ch: usize, at: (f64, f64, f64, f64), out: &mut [f32], ow: usize, gain: f32) {
+        let (x0, y0, sx, sy) = at;
         let (w, h) = (self.w, self.h);
         let cols = w + 1;
         let sum = &self.sums[ch];
@@ -484,6 +609,7 @@ impl PatchSampler {
         // them with its width
         self.xs.clear();
         self.spans.clear();
+        self.widths.clear();
         let at = |x: f64| -> (usize, f64) {
             // x >= 0: truncation is the floor
             let i = (x as usize).min(w - 1);
@@ -501,6 +627,7 @@ impl PatchSampler {
             self.xs.push(at(b));
             last = b;
             self.spans.push((ia, self.xs.len() - 1, b - a));
+            self.widths.push(b - a);
         }
         // the table at row coordinate y, at every column edge
         let row_at = |y: f64, out: &mut Vec<f64>, xs: &[(usize, f64)]| {
@@ -538,14 +665,15 @@ impl PatchSampler {
                 // column u spans edges u and u + 1: no gather
                 let (tl, tr) = (&top[..ow], &top[1..=ow]);
                 let (bl, br) = (&bottom[..ow], &bottom[1..=ow]);
-                for (u, (o, &(_, _, cw))) in row.iter_mut().zip(&self.spans).enumerate() {
+                let cw = &self.widths[..ow];
+                for (u, o) in row.iter_mut().enumerate() {
                     let s = br[u] - bl[u] - tr[u] + tl[u];
-                    *o = (s * inv_h / cw) as f32;
+                    *o = (s * inv_h / cw[u]) as f32 * gain;
                 }
             } else {
                 for (o, &(ia, ib, cw)) in row.iter_mut().zip(&self.spans) {
                     let s = bottom[ib] - bottom[ia] - top[ib] + top[ia];
-                    *o = (s * inv_h / cw) as f32;
+                    *o = (s * inv_h / cw) as f32 * gain;
                 }
             }
         }
@@ -631,6 +759,92 @@ mod area_tests {
                     b.to_bits(),
                     "{x0},{y0} {sx}x{sy}: pixel {i}: {a} vs {b}"
                 );
+            }
+            // a gain: the same values times it, as a pass afterwards
+            let gain = 1.0f32 / 255.0;
+            s.sample_scaled(0, x0, y0, sx, sy, &mut got, ow, oh, gain)
+                .unwrap();
+            for (i, (a, b)) in got.iter().zip(&want).enumerate() {
+                assert_eq!(a.to_bits(), (b * gain).to_bits(), "gain: pixel {i}");
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod bilinear_tests {
+    use super::*;
+    use bayestrack_image::Image;
+
+    /// Bilinear interpolation as first written (both source rows
+    /// interpolated along x for every output pixel): the reference the
+    /// row-caching path must match bit for bit.
+    #[allow(clippy::too_many_arguments)]
+    fn reference(
+        s: &PatchSampler,
+        x0: f64,
+        y0: f64,
+        sx: f64,
+        sy: f64,
+        ow: usize,
+        oh: usize,
+        gain: f32,
+    ) -> Vec<f32> {
+        let (w, h) = (s.w, s.h);
+        let plane = &s.planes[0];
+        let split = |c: f64, n: usize| -> (usize, usize, f32) {
+            let c = c.clamp(0.0, (n - 1) as f64);
+            let i = (c as usize).min(n - 1);
+            let j = (i + 1).min(n - 1);
+            (i, j, (c - i as f64) as f32)
+        };
+        let mut out = Vec::with_capacity(ow * oh);
+        for v in 0..oh {
+            let (ya, yb, fy) = split(y0 + (v as f64 + 0.5) * sy - 0.5, h);
+            let (ra, rb) = (&plane[ya * w..(ya + 1) * w], &plane[yb * w..(yb + 1) * w]);
+            for u in 0..ow {
+                let (xa, xb, fx) = split(x0 + (u as f64 + 0.5) * sx - 0.5, w);
+                let top = ra[xa] + fx * (ra[xb] - ra[xa]);
+                let bot = rb[xa] + fx * (rb[xb] - rb[xa]);
+                out.push(top + fy * (bot - top));
+            }
+        }
+        for v in &mut out {
+            *v *= gain;
+        }
+        out
+    }
+
+    #[test]
+    fn bilinear_matches_the_reference_inside_and_off_the_frame() {
+        let img = Image::from_fn(37, 23, |x, y| ((x * 37 + y * 101 + x * y) % 251) as u8).unwrap();
+        let mut s = PatchSampler::new();
+        s.load(img.view()).unwrap();
+        // enlarging (rows read by several output rows), one axis only,
+        // across each edge and far off the frame, a single row or column
+        let cases = [
+            (2.3, 1.7, 0.37, 0.21, 13, 11),
+            (-5.5, 3.0, 0.5, 1.0, 17, 9),
+            (20.25, -4.75, 1.125, 0.5, 19, 12),
+            (-40.0, -30.0, 0.3, 0.9, 31, 23),
+            (30.9, 19.1, 0.61, 0.19, 7, 25),
+            (10.0, 5.0, 0.25, 0.25, 1, 9),
+            (10.0, 5.0, 0.25, 3.5, 9, 1),
+            (-3.0, 20.0, 0.8, 0.8, 50, 30),
+        ];
+        for (x0, y0, sx, sy, ow, oh) in cases {
+            for gain in [1.0, 1.0 / 255.0] {
+                let mut got = vec![f32::NAN; ow * oh];
+                s.sample_scaled(0, x0, y0, sx, sy, &mut got, ow, oh, gain)
+                    .unwrap();
+                let want = reference(&s, x0, y0, sx, sy, ow, oh, gain);
+                for (i, (a, b)) in got.iter().zip(&want).enumerate() {
+                    assert_eq!(
+                        a.to_bits(),
+                        b.to_bits(),
+                        "{x0},{y0} {sx}x{sy} gain {gain}: pixel {i}: {a} vs {b}"
+                    );
+                }
             }
         }
     }

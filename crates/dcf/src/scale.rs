@@ -14,6 +14,7 @@
 
 use std::sync::Arc;
 
+use bayestrack_image::simd::{Kernel, Token, dispatch};
 use rustfft::{Fft, FftPlanner};
 
 use crate::error::{DcfError, Result};
@@ -400,10 +401,18 @@ impl ScaleFilter {
                     reason: "reads outside the region of the frame loaded",
                 });
             }
-            sampler.sample(0, x0, y0, sx, sy, &mut self.patch, self.mw, self.mh)?;
-            for v in self.patch.iter_mut() {
-                *v *= 1.0 / 255.0;
-            }
+            // the gray levels in [0, 1]
+            sampler.sample_scaled(
+                0,
+                x0,
+                y0,
+                sx,
+                sy,
+                &mut self.patch,
+                self.mw,
+                self.mh,
+                1.0 / 255.0,
+            )?;
             self.hog
                 .compute(&self.patch, &mut self.raw[n * dims..][..dims])?;
         }
@@ -411,16 +420,18 @@ impl ScaleFilter {
     }
 
     /// The windowed raw samples' spectra along the scale axis, per feature
-    /// (`xs`).
+    /// (`xs`). The transpose goes eight features at a time (one load of
+    /// eight values per scale, eight rows written), the values as before.
     fn spectra(&mut self) {
         let s = self.config.scales;
         let dims = self.hog.len();
-        for n in 0..s {
-            let w = self.window[n];
-            for (d, &v) in self.raw[n * dims..][..dims].iter().enumerate() {
-                self.xs[d * s + n] = C32::new(v * w, 0.0);
-            }
-        }
+        dispatch(Transpose {
+            s,
+            dims,
+            raw: &self.raw[..s * dims],
+            window: &self.window[..s],
+            xs: &mut self.xs[..dims * s],
+        });
         self.fwd
             .process_with_scratch(&mut self.xs, &mut self.scratch);
     }
@@ -492,15 +503,17 @@ impl ScaleFilter {
         self.spectra();
         let s = self.config.scales;
         let r = if self.trained { rate as f32 } else { 1.0 };
-        for n in 0..s {
-            self.den[n] *= 1.0 - r;
-        }
-        for row in self.xs.chunks_exact(s) {
-            for (den, x) in self.den.iter_mut().zip(row) {
-                *den += r * x.norm_sqr();
-            }
-        }
-        if self.interp_inv.is_some() {
+        let fdsst = self.interp_inv.is_some();
+        dispatch(Learn {
+            s,
+            r,
+            xs: &self.xs,
+            ysf: &self.ysf[..s],
+            den: &mut self.den[..s],
+            // DSST learns the numerator in the same pass
+            num: (!fdsst).then_some(&mut self.num[..]),
+        });
+        if fdsst {
             // fDSST: learn the sample matrix, then the filter of its
             // projection on its own basis
             for (m, &x) in self.snum.iter_mut().zip(&self.raw) {
@@ -511,13 +524,6 @@ impl ScaleFilter {
             for (num, p) in self.num.chunks_exact_mut(s).zip(self.proj.chunks_exact(s)) {
                 for n in 0..s {
                     num[n] = self.ysf[n] * p[n].conj();
-                }
-            }
-        } else {
-            for (d, row) in self.xs.chunks_exact(s).enumerate() {
-                let num = &mut self.num[d * s..(d + 1) * s];
-                for n in 0..s {
-                    num[n] = num[n] * (1.0 - r) + self.ysf[n] * row[n].conj() * r;
                 }
             }
         }
@@ -554,11 +560,11 @@ impl ScaleFilter {
             }
         } else {
             self.spectra();
-            for (row, num) in self.xs.chunks_exact(s).zip(self.num.chunks_exact(s)) {
-                for n in 0..s {
-                    self.resp[n] += num[n] * row[n];
-                }
-            }
+            dispatch(Respond {
+                xs: &self.xs,
+                num: &self.num,
+                resp: &mut self.resp[..s],
+            });
         }
         let lambda = self.config.lambda as f32;
         for n in 0..s {
@@ -611,6 +617,107 @@ impl ScaleFilter {
             n as f64 - ni as f64
         };
         Ok((self.config.step.powf(e + off), best / ni as f32))
+    }
+}
+
+/// The windowed samples transposed into the spectra's rows (`xs`: row
+/// `d` holds feature `d` of every scale), eight features at a time (one
+/// load of eight values per scale, eight rows written).
+struct Transpose<'a> {
+    s: usize,
+    dims: usize,
+    raw: &'a [f32],
+    window: &'a [f32],
+    xs: &'a mut [C32],
+}
+
+impl Kernel for Transpose<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        const B: usize = 8;
+        let (s, dims, raw) = (self.s, self.dims, self.raw);
+        let window = &self.window[..s];
+        let full = dims / B * B;
+        let (head, tail) = self.xs.split_at_mut(full * s);
+        for (b, block) in head.chunks_exact_mut(B * s).enumerate() {
+            let mut rows = block.chunks_exact_mut(s);
+            let mut rows: [&mut [C32]; B] =
+                std::array::from_fn(|_| rows.next().unwrap_or_default());
+            for (n, &w) in window.iter().enumerate() {
+                let v = &raw[n * dims + b * B..][..B];
+                for (row, &v) in rows.iter_mut().zip(v) {
+                    row[n] = C32::new(v * w, 0.0);
+                }
+            }
+        }
+        for (k, row) in tail.chunks_exact_mut(s).enumerate() {
+            for (n, (o, &w)) in row.iter_mut().zip(window).enumerate() {
+                *o = C32::new(raw[n * dims + full + k] * w, 0.0);
+            }
+        }
+    }
+}
+
+/// The learning step over the spectra: the denominator decayed by `r` and
+/// each row's energy added (in row order), and for DSST the numerator
+/// interpolated towards the label times each row's conjugate.
+struct Learn<'a> {
+    s: usize,
+    r: f32,
+    xs: &'a [C32],
+    ysf: &'a [C32],
+    den: &'a mut [f32],
+    num: Option<&'a mut [C32]>,
+}
+
+impl Kernel for Learn<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        let (s, r) = (self.s, self.r);
+        let (den, ysf) = (&mut self.den[..s], &self.ysf[..s]);
+        for d in den.iter_mut() {
+            *d *= 1.0 - r;
+        }
+        match self.num {
+            Some(num) => {
+                for (row, num) in self.xs.chunks_exact(s).zip(num.chunks_exact_mut(s)) {
+                    for ((d, x), (m, &y)) in den.iter_mut().zip(row).zip(num.iter_mut().zip(ysf)) {
+                        *d += r * x.norm_sqr();
+                        *m = *m * (1.0 - r) + y * x.conj() * r;
+                    }
+                }
+            }
+            None => {
+                for row in self.xs.chunks_exact(s) {
+                    for (d, x) in den.iter_mut().zip(row) {
+                        *d += r * x.norm_sqr();
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// DSST's response spectrum: the sum over the rows of the numerator times
+/// the sample's spectrum (row after row, per scale).
+struct Respond<'a> {
+    xs: &'a [C32],
+    num: &'a [C32],
+    resp: &'a mut [C32],
+}
+
+impl Kernel for Respond<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        let s = self.resp.len();
+        for (row, num) in self.xs.chunks_exact(s).zip(self.num.chunks_exact(s)) {
+            for ((r, &a), &b) in self.resp.iter_mut().zip(num).zip(row) {
+                *r += a * b;
+            }
+        }
     }
 }
 
@@ -708,6 +815,116 @@ mod tests {
                 let want = if i == j { 1.0 } else { 0.0 };
                 assert!((d - want).abs() < 1e-4, "q{i} . q{j} = {d}");
             }
+        }
+    }
+
+    /// Pseudo-random values in [-1, 1).
+    fn noise(n: usize, seed: u32) -> Vec<f32> {
+        let mut s = seed.wrapping_mul(2_654_435_761).max(1);
+        (0..n)
+            .map(|_| {
+                s ^= s << 13;
+                s ^= s >> 17;
+                s ^= s << 5;
+                (s >> 8) as f32 / (1u32 << 23) as f32 - 1.0
+            })
+            .collect()
+    }
+
+    #[test]
+    fn kernels_match_the_loops_as_first_written() {
+        // feature counts with and without a partial block of eight
+        for (dims, s) in [(837, 33), (31, 33), (5, 7), (16, 17)] {
+            let raw = noise(dims * s, 1);
+            let window = noise(s, 2);
+            // the transpose: feature d of scale n at xs[d * s + n]
+            let mut got = vec![C32::default(); dims * s];
+            dispatch(Transpose {
+                s,
+                dims,
+                raw: &raw,
+                window: &window,
+                xs: &mut got,
+            });
+            for d in 0..dims {
+                for n in 0..s {
+                    let want = raw[n * dims + d] * window[n];
+                    let g = got[d * s + n];
+                    assert_eq!((g.re.to_bits(), g.im), (want.to_bits(), 0.0), "{d} {n}");
+                }
+            }
+            let xs: Vec<C32> = noise(2 * dims * s, 3)
+                .chunks_exact(2)
+                .map(|p| C32::new(p[0], p[1]))
+                .collect();
+            let ysf: Vec<C32> = noise(2 * s, 4)
+                .chunks_exact(2)
+                .map(|p| C32::new(p[0], p[1]))
+                .collect();
+            let num0: Vec<C32> = noise(2 * dims * s, 5)
+                .chunks_exact(2)
+                .map(|p| C32::new(p[0], p[1]))
+                .collect();
+            let den0: Vec<f32> = noise(s, 6).iter().map(|v| v.abs()).collect();
+            let r = 0.025f32;
+            // learning: the denominator, then the numerator, as written first
+            let mut den = den0.clone();
+            for d in den.iter_mut() {
+                *d *= 1.0 - r;
+            }
+            for row in xs.chunks_exact(s) {
+                for (d, x) in den.iter_mut().zip(row) {
+                    *d += r * x.norm_sqr();
+                }
+            }
+            let mut num = num0.clone();
+            for d in 0..dims {
+                for n in 0..s {
+                    num[d * s + n] = num[d * s + n] * (1.0 - r) + ysf[n] * xs[d * s + n].conj() * r;
+                }
+            }
+            let (mut got_den, mut got_num) = (den0.clone(), num0.clone());
+            dispatch(Learn {
+                s,
+                r,
+                xs: &xs,
+                ysf: &ysf,
+                den: &mut got_den,
+                num: Some(&mut got_num),
+            });
+            let bits = |v: &[C32]| {
+                v.iter()
+                    .map(|c| (c.re.to_bits(), c.im.to_bits()))
+                    .collect::<Vec<_>>()
+            };
+            let fbits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(fbits(&got_den), fbits(&den));
+            assert_eq!(bits(&got_num), bits(&num));
+            // fDSST's call: the denominator alone
+            let mut only_den = den0.clone();
+            dispatch(Learn {
+                s,
+                r,
+                xs: &xs,
+                ysf: &ysf,
+                den: &mut only_den,
+                num: None,
+            });
+            assert_eq!(fbits(&only_den), fbits(&den));
+            // the response: rows summed in order
+            let mut resp = vec![C32::default(); s];
+            for d in 0..dims {
+                for n in 0..s {
+                    resp[n] += num[d * s + n] * xs[d * s + n];
+                }
+            }
+            let mut got_resp = vec![C32::default(); s];
+            dispatch(Respond {
+                xs: &xs,
+                num: &num,
+                resp: &mut got_resp,
+            });
+            assert_eq!(bits(&got_resp), bits(&resp));
         }
     }
 
