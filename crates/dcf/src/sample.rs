@@ -379,10 +379,10 @@ impl PatchSampler {
         for (ch, sum) in self.sums.iter_mut().enumerate() {
             let top = &mut sum[r.y0 * cols..][..cols];
             let mut t: u64 = above[..r.x0 * c].iter().skip(ch).step_by(c).sum();
-            top[r.x0] = t as f64;
+            top[r.x0] = t as i64 as f64;
             for x in r.x0..r.x1 {
                 t += above[x * c + ch];
-                top[x + 1] = t as f64;
+                top[x + 1] = t as i64 as f64;
             }
         }
         let mut left = [0u64; 4];
@@ -399,12 +399,12 @@ impl PatchSampler {
                 let dst = &mut plane[y * w..][..w];
                 let (upper, lower) = sum[y * cols..][..2 * cols].split_at_mut(cols);
                 let mut run = left[ch];
-                lower[r.x0] = upper[r.x0] + run as f64;
+                lower[r.x0] = upper[r.x0] + run as i64 as f64;
                 for x in r.x0..r.x1 {
                     let p = row[x * c + ch];
                     dst[x] = f32::from(p);
                     run += u64::from(p);
-                    lower[x + 1] = upper[x + 1] + run as f64;
+                    lower[x + 1] = upper[x + 1] + run as i64 as f64;
                 }
             }
         }
@@ -419,7 +419,9 @@ impl PatchSampler {
         let (line, above) = (&mut self.line[..r.x1], &mut self.above[..r.x1]);
         // every entry of the table is an exact integer (below 2^53 for any
         // frame of under 2^45 pixels): integer sums in any order give the
-        // whole frame's values bit for bit. Column sums of the rows above
+        // whole frame's values bit for bit (converted through i64, the
+        // same value: u64 -> f64 has no one-instruction form before
+        // AVX-512). Column sums of the rows above
         // the region (u64: any height):
         above.fill(0);
         dispatch(ColumnSums {
@@ -432,10 +434,10 @@ impl PatchSampler {
         // the table's row y0 at columns x0..=x1
         let top = &mut sum[r.y0 * cols..][..cols];
         let mut t: u64 = above[..r.x0].iter().sum();
-        top[r.x0] = t as f64;
+        top[r.x0] = t as i64 as f64;
         for (x, &a) in above.iter().enumerate().skip(r.x0) {
             t += a;
-            top[x + 1] = t as f64;
+            top[x + 1] = t as i64 as f64;
         }
         for y in r.y0..r.y1 {
             let v = values(frame, y, src, line);
@@ -443,12 +445,12 @@ impl PatchSampler {
             let (upper, lower) = sum[y * cols..][..2 * cols].split_at_mut(cols);
             // the row's sum left of the region
             let mut run: u64 = v[..r.x0].iter().map(|&p| u64::from(p)).sum();
-            lower[r.x0] = upper[r.x0] + run as f64;
+            lower[r.x0] = upper[r.x0] + run as i64 as f64;
             for x in r.x0..r.x1 {
                 let p = v[x];
                 dst[x] = f32::from(p);
                 run += u64::from(p);
-                lower[x + 1] = upper[x + 1] + run as f64;
+                lower[x + 1] = upper[x + 1] + run as i64 as f64;
             }
         }
     }
