@@ -131,16 +131,21 @@ impl EvenRows {
                     .extend(row.chunks_exact(2).map(|p| C32::new(p[0], p[1])));
             }
         }
-        self.out.resize(self.packed.len(), C32::default());
-        if !self.packed.is_empty() {
+        // grown only: calls alternate between many arrays and one, and
+        // clearing the tail again each time would cost more than the rest
+        let len = self.packed.len();
+        if self.out.len() < len {
+            self.out.resize(len, C32::default());
+        }
+        if len > 0 {
             self.fft.process_outofplace_with_scratch(
                 &mut self.packed,
-                &mut self.out,
+                &mut self.out[..len],
                 &mut self.scratch,
             );
         }
         let s = (m + 1) * h;
-        let mut rows = self.out.chunks_exact(m);
+        let mut rows = self.out[..len].chunks_exact(m);
         for (r, &nz) in self.nonzero.iter().enumerate() {
             let (a, y) = (r / h, r % h);
             let dst = &mut spectra[a * s + y..];
