@@ -57,6 +57,9 @@ pub fn next_smooth(n: usize) -> usize {
 pub struct Fft2 {
     w: usize,
     h: usize,
+    /// The row transforms of an even width, all rows of a call at once
+    /// (`None`: an odd width, row by row through [`realfft`]).
+    rows_even: Option<EvenRows>,
     r2c: Arc<dyn RealToComplex<f32>>,
     c2r: Arc<dyn ComplexToReal<f32>>,
     col_fwd: Arc<dyn Fft<f32>>,
@@ -65,6 +68,129 @@ pub struct Fft2 {
     rows: Vec<C32>,
     real_scratch: Vec<C32>,
     col_scratch: Vec<C32>,
+}
+
+/// `realfft`'s real-to-complex transform of an even length `w`, batched:
+/// the rows, read as `w / 2` complex numbers, go through the inner complex
+/// FFT of length `w / 2` in one call (one plan look-up and one call instead
+/// of one per row), then each is untangled into its `w / 2 + 1` bins with
+/// `realfft`'s twiddles and the very arithmetic of its
+/// `RealToComplexEven` (same operations, same order: the same bits), written
+/// straight into the column-major spectrum. Rows that are all zero (a
+/// cosine-windowed patch's first and last) are not transformed: their bins
+/// are zero.
+#[derive(Clone)]
+struct EvenRows {
+    fft: Arc<dyn Fft<f32>>,
+    /// `realfft`'s `compute_twiddle(i, w) * 0.5`, `i = 1..`.
+    twiddles: Vec<C32>,
+    /// The packed non-zero rows as complex pairs, then their transforms.
+    packed: Vec<C32>,
+    out: Vec<C32>,
+    scratch: Vec<C32>,
+    /// Which rows (over all arrays of a call) were packed.
+    nonzero: Vec<bool>,
+}
+
+impl EvenRows {
+    fn new(w: usize, planner: &mut FftPlanner<f32>) -> Self {
+        let twiddle_count = if w.is_multiple_of(4) {
+            w / 4
+        } else {
+            w / 4 + 1
+        };
+        let twiddles = (1..twiddle_count)
+            .map(|i| {
+                let angle = -2f64 * std::f64::consts::PI / w as f64 * i as f64;
+                C32::new(angle.cos() as f32, angle.sin() as f32) * 0.5f32
+            })
+            .collect();
+        let fft = planner.plan_fft_forward(w / 2);
+        let scratch = vec![C32::default(); fft.get_outofplace_scratch_len()];
+        Self {
+            fft,
+            twiddles,
+            packed: Vec::new(),
+            out: Vec::new(),
+            scratch,
+            nonzero: Vec::new(),
+        }
+    }
+
+    /// The row spectra of `input` (`k` arrays of `h` rows of `w`) into
+    /// `spectra` (`k` column-major half spectra of `(w / 2 + 1) h`).
+    fn forward(&mut self, w: usize, h: usize, input: &[f32], spectra: &mut [C32]) {
+        let m = w / 2;
+        self.nonzero.clear();
+        self.packed.clear();
+        for row in input.chunks_exact(w) {
+            let nz = row.iter().any(|&v| v != 0.0);
+            self.nonzero.push(nz);
+            if nz {
+                self.packed
+                    .extend(row.chunks_exact(2).map(|p| C32::new(p[0], p[1])));
+            }
+        }
+        // grown only: calls alternate between many arrays and one, and
+        // clearing the tail again each time would cost more than the rest
+        let len = self.packed.len();
+        if self.out.len() < len {
+            self.out.resize(len, C32::default());
+        }
+        if len > 0 {
+            self.fft.process_outofplace_with_scratch(
+                &mut self.packed,
+                &mut self.out[..len],
+                &mut self.scratch,
+            );
+        }
+        let s = (m + 1) * h;
+        let mut rows = self.out[..len].chunks_exact(m);
+        for (r, &nz) in self.nonzero.iter().enumerate() {
+            let (a, y) = (r / h, r % h);
+            let dst = &mut spectra[a * s + y..];
+            let at = |u: usize| u * h;
+            if !nz {
+                for u in 0..=m {
+                    dst[at(u)] = C32::default();
+                }
+                continue;
+            }
+            let Some(o) = rows.next() else { break };
+            // realfft's RealToComplexEven, term for term
+            let first = o[0];
+            dst[at(0)] = C32::new(first.re + first.im, 0.0);
+            dst[at(m)] = C32::new(first.re - first.im, 0.0);
+            for (i, tw) in self.twiddles.iter().enumerate() {
+                let (k, kr) = (i + 1, m - i - 1);
+                let (out, out_rev) = (o[k], o[kr]);
+                let sum = out + out_rev;
+                let diff = out - out_rev;
+                let half = 0.5f32;
+                let twiddled_re_sum = sum * tw.re;
+                let twiddled_im_sum = sum * tw.im;
+                let twiddled_re_diff = diff * tw.re;
+                let twiddled_im_diff = diff * tw.im;
+                let half_sum_re = half * sum.re;
+                let half_diff_im = half * diff.im;
+                let output_twiddled_real = twiddled_re_sum.im + twiddled_im_diff.re;
+                let output_twiddled_im = twiddled_im_sum.im - twiddled_re_diff.re;
+                dst[at(k)] = C32::new(
+                    half_sum_re + output_twiddled_real,
+                    half_diff_im + output_twiddled_im,
+                );
+                dst[at(kr)] = C32::new(
+                    half_sum_re - output_twiddled_real,
+                    output_twiddled_im - half_diff_im,
+                );
+            }
+            // an odd number of bins leaves the middle one: conjugated
+            if m.is_multiple_of(2) && m >= 2 {
+                let c = o[m / 2];
+                dst[at(m / 2)] = C32::new(c.re, -c.im);
+            }
+        }
+    }
 }
 
 impl std::fmt::Debug for Fft2 {
@@ -94,6 +220,7 @@ impl Fft2 {
         let r2c = real.plan_fft_forward(w);
         let c2r = real.plan_fft_inverse(w);
         let mut cplx = FftPlanner::<f32>::new();
+        let rows_even = w.is_multiple_of(2).then(|| EvenRows::new(w, &mut cplx));
         let col_fwd = cplx.plan_fft_forward(h);
         let col_inv = cplx.plan_fft_inverse(h);
         let wc = w / 2 + 1;
@@ -104,6 +231,7 @@ impl Fft2 {
         Ok(Self {
             w,
             h,
+            rows_even,
             r2c,
             c2r,
             col_fwd,
@@ -153,19 +281,50 @@ impl Fft2 {
     /// [`DcfError::Size`] for buffers of another size.
     pub fn forward(&mut self, input: &[f32], out: &mut [C32]) -> Result<()> {
         self.check(input.len(), out.len())?;
-        let (w, h, wc) = (self.w, self.h, self.w / 2 + 1);
-        for (y, row) in input.chunks_exact(w).enumerate() {
-            self.row_in.copy_from_slice(row);
-            let dst = &mut self.rows[y * wc..(y + 1) * wc];
-            self.r2c
-                .process_with_scratch(&mut self.row_in, dst, &mut self.real_scratch)
-                .map_err(|_| DcfError::Fft)?;
+        self.forward_many(input, out)
+    }
+
+    /// The half spectra of `k` arrays (`input`: `k` times `w x h`
+    /// row-major, one after the other) into `out` (`k` spectra of
+    /// [`Fft2::spectrum_len`], one after the other): the same numbers as
+    /// `k` calls of [`Fft2::forward`], the transforms of all the arrays
+    /// batched (one call of the row FFT over every row, for an even `w`,
+    /// and one of the column FFT over every column).
+    ///
+    /// # Errors
+    /// [`DcfError::Size`] for buffers of other sizes or counts.
+    pub fn forward_many(&mut self, input: &[f32], out: &mut [C32]) -> Result<()> {
+        let (n, s) = (self.real_len(), self.spectrum_len());
+        let k = input.len() / n;
+        if input.len() != k * n || out.len() != k * s {
+            return Err(DcfError::Size {
+                what: "fft buffers",
+                expected: k.max(1) * n,
+                got: input.len(),
+            });
         }
-        // transpose rows (h x wc) into columns (wc x h): each column
-        // written in order, read down the rows with a stride
-        for (u, col) in out.chunks_exact_mut(h).enumerate() {
-            for (o, &v) in col.iter_mut().zip(self.rows[u..].iter().step_by(wc)) {
-                *o = v;
+        if k == 0 {
+            return Ok(());
+        }
+        let (w, h, wc) = (self.w, self.h, self.w / 2 + 1);
+        if let Some(rows) = self.rows_even.as_mut() {
+            rows.forward(w, h, input, out);
+        } else {
+            for (a, dst) in input.chunks_exact(n).zip(out.chunks_exact_mut(s)) {
+                for (y, row) in a.chunks_exact(w).enumerate() {
+                    self.row_in.copy_from_slice(row);
+                    let r = &mut self.rows[y * wc..(y + 1) * wc];
+                    self.r2c
+                        .process_with_scratch(&mut self.row_in, r, &mut self.real_scratch)
+                        .map_err(|_| DcfError::Fft)?;
+                }
+                // transpose rows (h x wc) into columns (wc x h): each
+                // column written in order, read down the rows with a stride
+                for (u, col) in dst.chunks_exact_mut(h).enumerate() {
+                    for (o, &v) in col.iter_mut().zip(self.rows[u..].iter().step_by(wc)) {
+                        *o = v;
+                    }
+                }
             }
         }
         self.col_fwd
@@ -292,6 +451,82 @@ mod tests {
                 let got = corr[dy * w + dx] as f64;
                 assert!((got - s).abs() < 1e-4, "({dx},{dy}): {got} vs {s}");
             }
+        }
+    }
+
+    /// The spectrum as the plain recipe computes it: `realfft` on each row,
+    /// then `rustfft` on each column.
+    fn reference(w: usize, h: usize, x: &[f32]) -> Vec<C32> {
+        let r2c = RealFftPlanner::<f32>::new().plan_fft_forward(w);
+        let col = FftPlanner::<f32>::new().plan_fft_forward(h);
+        let wc = w / 2 + 1;
+        let mut out = vec![C32::default(); wc * h];
+        for y in 0..h {
+            let mut row = x[y * w..(y + 1) * w].to_vec();
+            let mut spec = vec![C32::default(); wc];
+            r2c.process(&mut row, &mut spec).unwrap();
+            for u in 0..wc {
+                out[u * h + y] = spec[u];
+            }
+        }
+        col.process(&mut out);
+        out
+    }
+
+    #[test]
+    fn batched_transforms_are_realfft_bit_for_bit() {
+        // even widths take the batched rows (with zero rows skipped), odd
+        // ones realfft row by row: both give the plain recipe's bits
+        for (w, h) in [
+            (16, 40),
+            (2, 3),
+            (4, 5),
+            (6, 4),
+            (10, 9),
+            (12, 8),
+            (30, 20),
+            (9, 6),
+            (15, 10),
+        ] {
+            let mut f = Fft2::new(w, h).unwrap();
+            let (n, s) = (f.real_len(), f.spectrum_len());
+            let mut x = Vec::new();
+            for k in 0..3 {
+                let mut a = signal(w, h, (w * 7 + h * 3 + k) as u32);
+                // zero rows: the first and last (a cosine window's) and,
+                // in the middle array, every other one
+                a[..w].fill(0.0);
+                a[(h - 1) * w..].fill(0.0);
+                if k == 1 {
+                    for y in (0..h).step_by(2) {
+                        a[y * w..(y + 1) * w].fill(0.0);
+                    }
+                }
+                x.extend(a);
+            }
+            // output buffers hold stale values (as a model's reused ones
+            // do): every bin must be written
+            let stale = C32::new(f32::NAN, 7.0);
+            let mut many = vec![stale; 3 * s];
+            f.forward_many(&x, &mut many).unwrap();
+            for k in 0..3 {
+                let a = &x[k * n..(k + 1) * n];
+                let want = reference(w, h, a);
+                let mut one = vec![stale; s];
+                f.forward(a, &mut one).unwrap();
+                for (i, ((m, o), r)) in many[k * s..].iter().zip(&one).zip(&want).enumerate() {
+                    let same = |p: &C32, q: &C32| {
+                        p.re.to_bits() == q.re.to_bits() && p.im.to_bits() == q.im.to_bits()
+                            || p == q
+                    };
+                    assert!(
+                        same(m, r) && same(o, r),
+                        "{w}x{h} array {k} bin {i}: {m} {o} vs {r}"
+                    );
+                }
+            }
+            // a partial count is an error
+            assert!(f.forward_many(&x[..n + 1], &mut many).is_err());
         }
     }
 

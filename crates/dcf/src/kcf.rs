@@ -132,9 +132,7 @@ impl Correlator {
                 got: features.len(),
             });
         }
-        for (f, out) in features.chunks_exact(n).zip(spectra.chunks_exact_mut(s)) {
-            self.fft.forward(f, out)?;
-        }
+        self.fft.forward_many(features, spectra)?;
         Ok(features.iter().map(|&v| v as f64 * v as f64).sum())
     }
 
