@@ -537,11 +537,18 @@ impl Dcf {
         {
             return Err(outside());
         }
-        self.sampler
-            .sample(0, x0, y0, sx, sy, &mut self.patch, g.pw, g.ph)?;
-        for v in self.patch.iter_mut() {
-            *v *= 1.0 / 255.0;
-        }
+        // gray levels to [0, 1] in the sampler's output pass
+        self.sampler.sample_scaled(
+            0,
+            x0,
+            y0,
+            sx,
+            sy,
+            &mut self.patch,
+            g.pw,
+            g.ph,
+            1.0 / 255.0,
+        )?;
         hog.compute(&self.patch, &mut self.features)?;
         let n = g.nx * g.ny;
         for ch in self.features.chunks_exact_mut(n) {
