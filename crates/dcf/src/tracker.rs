@@ -538,17 +538,8 @@ impl Dcf {
             return Err(outside());
         }
         // gray levels to [0, 1] in the sampler's output pass
-        self.sampler.sample_scaled(
-            0,
-            x0,
-            y0,
-            sx,
-            sy,
-            &mut self.patch,
-            g.pw,
-            g.ph,
-            1.0 / 255.0,
-        )?;
+        self.sampler
+            .sample_scaled(0, x0, y0, sx, sy, &mut self.patch, g.pw, g.ph, 1.0 / 255.0)?;
         hog.compute(&self.patch, &mut self.features)?;
         let n = g.nx * g.ny;
         for ch in self.features.chunks_exact_mut(n) {
