@@ -19,9 +19,9 @@ pub struct PatchSampler {
     /// Scratch: the distinct column edges of a patch.
     xs: Vec<(usize, f64)>,
     /// Scratch (area averaging): per output column, its edges' indices in
-    /// `xs` and width.
-    spans: Vec<(usize, usize, f64)>,
-    /// Scratch: per output column, its width (area averaging).
+    /// `xs` ...
+    spans: Vec<(usize, usize)>,
+    /// ... and its width.
     widths: Vec<f64>,
     /// Scratch (bilinear): per output column its two source columns and
     /// weight; two source rows interpolated along x.
@@ -96,13 +96,36 @@ impl Kernel for GrayLine<'_> {
     }
 }
 
-/// The column sums of rows `0..rows` of `frame` from `src` over the
-/// columns of `above`, added into it (exact integers: partial sums in
-/// `u32` over at most 2^24 rows at a time, then added to the `u64`s).
+/// What a column of [`ColumnSums`] adds up.
+#[derive(Debug, Clone, Copy)]
+enum Columns {
+    /// The row's bytes: a one-channel frame, or every channel of an
+    /// interleaved one in place.
+    Bytes,
+    /// One channel of an interleaved frame.
+    Channel(usize),
+    /// The gray level of an RGB frame.
+    Gray,
+}
+
+impl Columns {
+    /// The columns of plane source `src` of a frame of `c` channels.
+    fn of(src: Source, c: usize) -> Self {
+        match (src, c) {
+            (Source::Channel(_), 1) => Self::Bytes,
+            (Source::Channel(ch), _) => Self::Channel(ch),
+            (Source::Gray, _) => Self::Gray,
+        }
+    }
+}
+
+/// The column sums of rows `0..rows` of `frame` over the columns of
+/// `above`, added into it (exact integers: partial sums in `u32` over at
+/// most 2^24 rows at a time, then added to the `u64`s).
 struct ColumnSums<'a> {
     frame: ImageView<'a, u8>,
     rows: usize,
-    src: Source,
+    columns: Columns,
     above: &'a mut [u64],
     part: &'a mut [u32],
 }
@@ -120,18 +143,18 @@ impl Kernel for ColumnSums<'_> {
             part.fill(0);
             for y in y..end {
                 let row = self.frame.row(y);
-                match (self.src, c) {
-                    (Source::Channel(_), 1) => {
+                match self.columns {
+                    Columns::Bytes => {
                         for (a, &p) in part.iter_mut().zip(&row[..n]) {
                             *a += u32::from(p);
                         }
                     }
-                    (Source::Channel(ch), c) => {
+                    Columns::Channel(ch) => {
                         for (a, p) in part.iter_mut().zip(row.chunks_exact(c)) {
                             *a += u32::from(p[ch]);
                         }
                     }
-                    (Source::Gray, _) => {
+                    Columns::Gray => {
                         for (a, p) in part.iter_mut().zip(row[..3 * n].chunks_exact(3)) {
                             *a += gray(p);
                         }
@@ -356,7 +379,7 @@ impl PatchSampler {
         }
         self.line.resize(r.x1, 0);
         self.above.resize(r.x1 * c, 0);
-        self.part.resize(r.x1, 0);
+        self.part.resize(r.x1 * c, 0);
         self.region = r;
         Ok(())
     }
@@ -371,11 +394,13 @@ impl PatchSampler {
         // frame (exact integers, as in `fill`)
         let above = &mut self.above[..r.x1 * c];
         above.fill(0);
-        for y in 0..r.y0 {
-            for (a, &p) in above.iter_mut().zip(&frame.row(y)[..r.x1 * c]) {
-                *a += u64::from(p);
-            }
-        }
+        dispatch(ColumnSums {
+            frame,
+            rows: r.y0,
+            columns: Columns::Bytes,
+            above: &mut *above,
+            part: &mut self.part,
+        });
         for (ch, sum) in self.sums.iter_mut().enumerate() {
             let top = &mut sum[r.y0 * cols..][..cols];
             let mut t: u64 = above[..r.x0 * c].iter().skip(ch).step_by(c).sum();
@@ -427,7 +452,7 @@ impl PatchSampler {
         dispatch(ColumnSums {
             frame,
             rows: r.y0,
-            src,
+            columns: Columns::of(src, frame.channels()),
             above: &mut *above,
             part: &mut self.part,
         });
@@ -628,7 +653,7 @@ impl PatchSampler {
             };
             self.xs.push(at(b));
             last = b;
-            self.spans.push((ia, self.xs.len() - 1, b - a));
+            self.spans.push((ia, self.xs.len() - 1));
             self.widths.push(b - a);
         }
         // the table at row coordinate y, at every column edge
@@ -673,7 +698,7 @@ impl PatchSampler {
                     *o = (s * inv_h / cw[u]) as f32 * gain;
                 }
             } else {
-                for (o, &(ia, ib, cw)) in row.iter_mut().zip(&self.spans) {
+                for ((o, &(ia, ib)), &cw) in row.iter_mut().zip(&self.spans).zip(&self.widths) {
                     let s = bottom[ib] - bottom[ia] - top[ib] + top[ia];
                     *o = (s * inv_h / cw) as f32 * gain;
                 }
