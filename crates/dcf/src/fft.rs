@@ -369,11 +369,12 @@ impl Fft2 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn signal(w: usize, h: usize, seed: u32) -> Vec<f32> {
-        // a deterministic pseudo-random signal in [-1, 1]
+    /// A deterministic pseudo-random signal in [-1, 1] (also the other
+    /// modules' test noise).
+    pub(crate) fn signal(w: usize, h: usize, seed: u32) -> Vec<f32> {
         let mut s = seed.wrapping_mul(2_654_435_761).max(1);
         (0..w * h)
             .map(|_| {

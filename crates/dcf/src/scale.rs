@@ -818,17 +818,9 @@ mod tests {
         }
     }
 
-    /// Pseudo-random values in [-1, 1).
+    /// Pseudo-random values in [-1, 1].
     fn noise(n: usize, seed: u32) -> Vec<f32> {
-        let mut s = seed.wrapping_mul(2_654_435_761).max(1);
-        (0..n)
-            .map(|_| {
-                s ^= s << 13;
-                s ^= s >> 17;
-                s ^= s << 5;
-                (s >> 8) as f32 / (1u32 << 23) as f32 - 1.0
-            })
-            .collect()
+        crate::fft::tests::signal(n, 1, seed)
     }
 
     #[test]
