@@ -9,6 +9,8 @@
 //! `f(z) = F^-1(k_hat^{xz} . alpha_hat)`; the model is interpolated from
 //! frame to frame with a learning rate.
 
+use bayestrack_image::simd::{Kernel as SimdKernel, Token, dispatch};
+
 use crate::error::{DcfError, Result};
 use crate::fft::{C32, Fft2};
 
@@ -162,11 +164,11 @@ impl Correlator {
         // sum over channels of z_hat . conj(x_hat): the cross-correlation
         // whose value at d is sum_p z(p + d) x(p)
         self.accum.fill(C32::default());
-        for (xc, zc) in xf.chunks_exact(s).zip(zf.chunks_exact(s)) {
-            for ((a, x), z) in self.accum.iter_mut().zip(xc).zip(zc) {
-                *a += z * x.conj();
-            }
-        }
+        dispatch(ChannelSum {
+            xf,
+            zf,
+            accum: &mut self.accum,
+        });
         match kernel {
             Kernel::Linear => {
                 let k = (1.0 / numel) as f32;
@@ -203,6 +205,29 @@ impl Correlator {
             *a = k * al;
         }
         self.fft.inverse(&mut self.accum, out)
+    }
+}
+
+/// `accum += sum over channels of z_hat . conj(x_hat)`, bin by bin, the
+/// channels in order: the same sums as the scalar loop, compiled for the
+/// machine's vector width (each bin's products and additions stay in the
+/// same order, so every level gives the same bits).
+struct ChannelSum<'a> {
+    xf: &'a [C32],
+    zf: &'a [C32],
+    accum: &'a mut [C32],
+}
+
+impl SimdKernel for ChannelSum<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        let s = self.accum.len();
+        for (xc, zc) in self.xf.chunks_exact(s).zip(self.zf.chunks_exact(s)) {
+            for ((a, x), z) in self.accum.iter_mut().zip(xc).zip(zc) {
+                *a += z * x.conj();
+            }
+        }
     }
 }
 
@@ -616,5 +641,41 @@ mod tests {
         let before = m.alphaf.clone();
         m.train(&texture(w, h, 1, 6), 0.0).unwrap();
         assert_eq!(before, m.alphaf);
+    }
+
+    #[test]
+    fn channel_sum_is_the_scalar_loop_at_every_level() {
+        use bayestrack_image::simd::SimdLevel;
+        // bin counts that are not a multiple of any vector width, one
+        // channel and many; the accumulator starts non-zero
+        for (s, channels) in [(1, 1), (7, 3), (33, 31), (131, 5)] {
+            let c32 = |v: Vec<f32>| -> Vec<C32> {
+                v.chunks_exact(2).map(|p| C32::new(p[0], p[1])).collect()
+            };
+            let xf = c32(crate::fft::tests::signal(2 * s, channels, 3));
+            let zf = c32(crate::fft::tests::signal(2 * s, channels, 4));
+            let start = c32(crate::fft::tests::signal(2 * s, 1, 5));
+            let mut want = start.clone();
+            for (xc, zc) in xf.chunks_exact(s).zip(zf.chunks_exact(s)) {
+                for ((a, x), z) in want.iter_mut().zip(xc).zip(zc) {
+                    *a += z * x.conj();
+                }
+            }
+            for level in SimdLevel::ALL {
+                let mut got = start.clone();
+                level.run(ChannelSum {
+                    xf: &xf,
+                    zf: &zf,
+                    accum: &mut got,
+                });
+                for (i, (a, b)) in got.iter().zip(&want).enumerate() {
+                    assert_eq!(
+                        (a.re.to_bits(), a.im.to_bits()),
+                        (b.re.to_bits(), b.im.to_bits()),
+                        "{s} bins, {channels} channels, {level:?}: bin {i}"
+                    );
+                }
+            }
+        }
     }
 }
