@@ -788,8 +788,8 @@ impl Kernel for Transpose<'_> {
     }
 }
 
-/// The learning step over the spectra: the denominator decayed by `r` and
-/// each row's energy added (in row order), and for DSST the numerator
+/// DSST's learning step over the spectra: the denominator decayed by `r` and
+/// each row's energy added (in row order), and (with `num`) the numerator
 /// interpolated towards the label times each row's conjugate.
 struct Learn<'a> {
     s: usize,
@@ -1247,7 +1247,7 @@ mod tests {
             let fbits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(fbits(&got_den), fbits(&den));
             assert_eq!(bits(&got_num), bits(&num));
-            // fDSST's call: the denominator alone
+            // the denominator alone (the projected fDSST reference's call)
             let mut only_den = den0.clone();
             dispatch(Learn {
                 s,
