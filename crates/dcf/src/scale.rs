@@ -11,6 +11,19 @@
 //! a Gaussian label over the scales of standard deviation
 //! `sqrt(S) * scale_sigma_factor`. The scale of the new frame is the one
 //! with the highest response.
+//!
+//! fDSST ([`ScaleMethod::Fdsst`]) compresses the features on the QR basis
+//! of the learnt samples; with the full basis (`S` vectors, as fDSST's
+//! code uses) the projection keeps every inner product of the learnt
+//! samples with a new one, so the filter's sums reduce to the `S x S`
+//! products of the samples' columns (`u'z` for the response, `x'x` for
+//! the denominator: the `R'R` of the training sample's own QR), summed
+//! along each cyclic lag and transformed by an `S`-point DFT. Per frame
+//! that is about `1.4 S^2` dot products of the feature length in `f64`
+//! and two small DFTs, instead of a Gram-Schmidt, `2 S^2` projections and
+//! the raw features' spectra (about a thousand `S`-point FFTs); the
+//! numbers are the projected form's to rounding (a test keeps the
+//! projected form as first written and compares).
 
 use std::sync::Arc;
 
@@ -22,6 +35,7 @@ use crate::features::Fhog;
 use crate::fft::C32;
 use crate::kcf::{hann, parabola_offset};
 use crate::sample::{PatchSampler, Region};
+use rustfft::num_complex::Complex64 as C64;
 
 /// How the scale filter is built.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -34,10 +48,13 @@ pub enum ScaleMethod {
     /// over the range of `interpolated` scales (exponents
     /// `(n - floor((S - 1) / 2)) * interpolated / S` of the step), their
     /// features projected on an orthonormal basis of the learnt sample
-    /// matrix (its QR factor: `S` dimensions instead of thousands), the
-    /// label `interpolated * sigma_factor` steps wide, and the response
+    /// matrix (its QR factor: `S` dimensions instead of thousands; the
+    /// denominator from the training sample projected on its own basis),
+    /// the label `interpolated * sigma_factor` steps wide, and the response
     /// interpolated in the Fourier domain to `interpolated` scales one step
-    /// apart (fDSST: 17 sampled, 33 interpolated).
+    /// apart (fDSST: 17 sampled, 33 interpolated). Computed in an
+    /// equivalent form that needs no basis: the `S x S` products of the
+    /// samples' columns (see the module's notes on fDSST).
     Fdsst {
         /// Scales of the interpolated response (fDSST: 33).
         interpolated: usize,
@@ -173,20 +190,14 @@ pub struct ScaleFilter {
     patch: Vec<f32>,
     /// The raw samples, `S` rows of `dims` features.
     raw: Vec<f32>,
+    /// DSST: the samples' spectra, per feature `dims x S`.
     xs: Vec<C32>,
-    /// DSST: per feature `dims x S`; fDSST: per basis vector `S x S`.
+    /// DSST: per feature `dims x S`.
     num: Vec<C32>,
     den: Vec<f32>,
     resp: Vec<C32>,
-    /// fDSST: the learnt sample matrix (`S x dims`), its orthonormal basis
-    /// (`S x dims`, rows), the projected samples' spectra (`S x S`), and
-    /// the inverse FFT of the interpolated response.
-    snum: Vec<f32>,
-    basis: Vec<f32>,
-    proj: Vec<C32>,
-    gs: Vec<f64>,
-    interp_inv: Option<Arc<dyn Fft<f32>>>,
-    interp: Vec<C32>,
+    /// fDSST's model and buffers (`None` for DSST).
+    fd: Option<Box<Fdsst>>,
     trained: bool,
 }
 
@@ -199,22 +210,259 @@ impl std::fmt::Debug for ScaleFilter {
     }
 }
 
-/// `a . b` in eight lanes (vectorises; a fixed order, so the same bits on
-/// any machine for a given build).
-fn dot(a: &[f32], b: &[f32]) -> f32 {
-    let mut acc = [0.0f32; 8];
-    let (ca, cb) = (a.chunks_exact(8), b.chunks_exact(8));
-    let (ra, rb) = (ca.remainder(), cb.remainder());
-    for (x, y) in ca.zip(cb) {
+/// fDSST's model (Danelljan et al. 2017, sec. 4.3, and its code with the
+/// full `S`-dimensional basis), in the form that needs no basis.
+///
+/// fDSST learns the sample matrix `u = (1 - r) u + r x` (columns: the
+/// `S` scales' features), takes an orthonormal basis `P` of its columns
+/// (a QR factor), and filters the projections: the numerator
+/// `conj(Y) F(W P'u)` per basis vector, the denominator `(1 - r) B + r
+/// sum_k |F(W Q'x)_k|^2` with `Q` the QR basis of the training sample `x`
+/// itself, and the response of a new sample `z` is `sum_k A_k F(W P'z)_k
+/// / (B + lambda)` (`W` the Hann window over the scales, `F` the DFT along
+/// them). The basis spans `u` whole, so `P P'u = u` and `(P'u)'(P'z) =
+/// u'z`; likewise `(Q'x)'(Q'x) = x'x` (`R'R` of the QR). Both sums are
+/// therefore quadratic forms of `S x S` products of columns:
+/// `sum_{n,m} w_n w_m (u_n . z_m) e^(-2 pi i f (m - n) / S)`, the DFT over
+/// the cyclic lag `m - n` of the products summed along each lag. That is
+/// what this computes (the products in `f64` from the `f32` features,
+/// exact products and eight-lane sums in a fixed order; the lag sums and
+/// the `S`-point DFTs in `f64` from tables): the same numbers as projecting
+/// on the basis up to rounding, without a Gram-Schmidt, a projection or
+/// the raw features' spectra. (A basis of fewer than `S` vectors, which
+/// fDSST's code allows with PCA, would not reduce to this; it is not
+/// offered.)
+#[derive(Clone)]
+struct Fdsst {
+    s: usize,
+    /// Row length of the sample matrices: the features, zero-padded to a
+    /// multiple of eight.
+    stride: usize,
+    /// The learnt samples `u`, one row of `stride` per scale.
+    learnt: Vec<f64>,
+    /// The last samples (`x` or `z`), one row per scale.
+    sample: Vec<f64>,
+    /// `S x S` products of rows.
+    prod: Vec<f64>,
+    /// Windowed products summed along each cyclic lag.
+    lags: Vec<f64>,
+    window: Vec<f64>,
+    /// The label's DFT.
+    ysf: Vec<C64>,
+    den: Vec<f64>,
+    /// `e^(-2 pi i k / S)`, `k < S`.
+    twiddle: Vec<C64>,
+    resp: Vec<C64>,
+    /// Interpolated scales: `e^(2 pi i k / I)`, `k < I`, and the response.
+    itwiddle: Vec<C64>,
+    interp: Vec<f64>,
+}
+
+impl Fdsst {
+    fn new(dims: usize, window: &[f32], ys: &[f64], interpolated: usize) -> Self {
+        let s = window.len();
+        let stride = dims.next_multiple_of(8);
+        let unit = |k: usize, n: usize, sign: f64| {
+            let t = std::f64::consts::TAU * k as f64 / n as f64;
+            C64::new(t.cos(), sign * t.sin())
+        };
+        let twiddle: Vec<C64> = (0..s).map(|k| unit(k, s, -1.0)).collect();
+        let ysf = (0..s)
+            .map(|f| {
+                ys.iter()
+                    .enumerate()
+                    .map(|(n, &y)| twiddle[f * n % s] * y)
+                    .fold(C64::default(), |a, b| a + b)
+            })
+            .collect();
+        Self {
+            s,
+            stride,
+            learnt: vec![0.0; s * stride],
+            sample: vec![0.0; s * stride],
+            prod: vec![0.0; s * s],
+            lags: vec![0.0; s],
+            window: window.iter().map(|&w| f64::from(w)).collect(),
+            ysf,
+            den: vec![0.0; s],
+            twiddle,
+            resp: vec![C64::default(); s],
+            itwiddle: (0..interpolated)
+                .map(|k| unit(k, interpolated, 1.0))
+                .collect(),
+            interp: vec![0.0; interpolated],
+        }
+    }
+
+    /// The raw features (`S` rows of `dims`) into `sample`, in `f64`.
+    fn load(&mut self, raw: &[f32], dims: usize) {
+        for (row, r) in self
+            .sample
+            .chunks_exact_mut(self.stride)
+            .zip(raw.chunks_exact(dims))
+        {
+            for (o, &v) in row.iter_mut().zip(r) {
+                *o = f64::from(v);
+            }
+        }
+    }
+
+    /// `lags[L] = sum_n w_n w_(n+L) prod[n][n+L]` (indices mod `S`).
+    fn lag_sums(&mut self) {
+        let s = self.s;
+        let w = &self.window;
+        for (l, out) in self.lags.iter_mut().enumerate() {
+            let mut acc = 0.0;
+            for n in 0..s {
+                let m = (n + l) % s;
+                acc += w[n] * w[m] * self.prod[n * s + m];
+            }
+            *out = acc;
+        }
+    }
+
+    /// The lag sums' DFT at frequency `f`.
+    fn dft(&self, f: usize) -> C64 {
+        let s = self.s;
+        let mut acc = C64::default();
+        for (l, &g) in self.lags.iter().enumerate() {
+            acc += self.twiddle[f * l % s] * g;
+        }
+        acc
+    }
+
+    /// Learns the training sample `raw` with rate `r`: the sample matrix
+    /// interpolated, the denominator from the sample's own products.
+    fn learn(&mut self, raw: &[f32], dims: usize, r: f64) {
+        self.load(raw, dims);
+        for (u, &x) in self.learnt.iter_mut().zip(&self.sample) {
+            *u = *u * (1.0 - r) + r * x;
+        }
+        dispatch(Products {
+            s: self.s,
+            stride: self.stride,
+            a: &self.sample,
+            b: None,
+            out: &mut self.prod,
+        });
+        self.lag_sums();
+        for f in 0..self.s {
+            // real: the lag sums of x'x are symmetric
+            let e = self.dft(f).re;
+            self.den[f] = self.den[f] * (1.0 - r) + r * e;
+        }
+    }
+
+    /// The scale change from the new sample `raw` (see
+    /// [`ScaleFilter::detect`]): the response's spectrum, zero-padded to
+    /// the interpolated scales (fDSST's `resizeDFT`), back to scales one
+    /// step apart; the peak's index (cyclic, 0 = no change) is the
+    /// exponent of the step.
+    fn detect(&mut self, raw: &[f32], dims: usize, config: &ScaleConfig) -> Result<(f64, f32)> {
+        let s = self.s;
+        self.load(raw, dims);
+        dispatch(Products {
+            s,
+            stride: self.stride,
+            a: &self.learnt,
+            b: Some(&self.sample),
+            out: &mut self.prod,
+        });
+        self.lag_sums();
+        for f in 0..s {
+            self.resp[f] = self.ysf[f] * self.dft(f) / (self.den[f] + config.lambda);
+        }
+        // the spectrum's bins at their places in the longer one (the
+        // middle bin of an even `S` dropped, as `resizeDFT` does), scaled
+        // by I / S; the real part of the inverse DFT
+        let ni = self.interp.len();
+        let k = ni as f64 / s as f64;
+        let mids = s.div_ceil(2);
+        for (j, out) in self.interp.iter_mut().enumerate() {
+            let mut acc = 0.0;
+            for (i, r) in self.resp.iter().enumerate() {
+                let at = if i < mids {
+                    i
+                } else if i > s / 2 {
+                    i + ni - s
+                } else {
+                    continue;
+                };
+                let t = self.itwiddle[j * at % ni];
+                acc += r.re * t.re - r.im * t.im;
+            }
+            *out = acc * k;
+        }
+        let mut best = (f64::NEG_INFINITY, 0usize);
+        for (n, &v) in self.interp.iter().enumerate() {
+            if !v.is_finite() {
+                return Err(DcfError::NonFinite {
+                    what: "scale response",
+                });
+            }
+            if v > best.0 {
+                best = (v, n);
+            }
+        }
+        let (peak, n) = best;
+        let at = |i: usize| self.interp[i % ni] as f32;
+        let off = if ni >= 3 {
+            parabola_offset(at(n + ni - 1), peak as f32, at(n + 1))
+        } else {
+            0.0
+        };
+        let e = if n <= (ni - 1) / 2 {
+            n as f64
+        } else {
+            n as f64 - ni as f64
+        };
+        Ok((config.step.powf(e + off), (peak / ni as f64) as f32))
+    }
+}
+
+/// `out[i * S + j] = a_i . b_j` over rows of `stride` values (a multiple
+/// of eight), in `f64`: eight lanes summed in a fixed order, so the same
+/// bits at every SIMD level. `b: None` is `a` itself (the symmetric
+/// products, each computed once).
+struct Products<'a> {
+    s: usize,
+    stride: usize,
+    a: &'a [f64],
+    b: Option<&'a [f64]>,
+    out: &'a mut [f64],
+}
+
+impl Kernel for Products<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        let (s, st) = (self.s, self.stride);
+        let sym = self.b.is_none();
+        let b = self.b.unwrap_or(self.a);
+        for i in 0..s {
+            let a = &self.a[i * st..][..st];
+            for j in if sym { i } else { 0 }..s {
+                let v = dot8(a, &b[j * st..][..st]);
+                self.out[i * s + j] = v;
+                if sym {
+                    self.out[j * s + i] = v;
+                }
+            }
+        }
+    }
+}
+
+/// `a . b` in eight lanes (lengths a multiple of eight), the lanes summed
+/// in a fixed order.
+#[inline(always)]
+fn dot8(a: &[f64], b: &[f64]) -> f64 {
+    let mut acc = [0.0f64; 8];
+    for (x, y) in a.chunks_exact(8).zip(b.chunks_exact(8)) {
         for k in 0..8 {
             acc[k] += x[k] * y[k];
         }
     }
-    let mut tail = 0.0;
-    for (x, y) in ra.iter().zip(rb) {
-        tail += x * y;
-    }
-    ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7])) + tail
+    ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7]))
 }
 
 impl ScaleFilter {
@@ -271,14 +519,11 @@ impl ScaleFilter {
         let mut planner = FftPlanner::<f32>::new();
         let fwd = planner.plan_fft_forward(s);
         let inv = planner.plan_fft_inverse(s);
-        let interp_inv = (interpolated > 0).then(|| planner.plan_fft_inverse(interpolated));
-        let mut scratch_len = fwd
-            .get_inplace_scratch_len()
-            .max(inv.get_inplace_scratch_len());
-        if let Some(p) = &interp_inv {
-            scratch_len = scratch_len.max(p.get_inplace_scratch_len());
-        }
-        let mut scratch = vec![C32::default(); scratch_len];
+        let mut scratch = vec![
+            C32::default();
+            fwd.get_inplace_scratch_len()
+                .max(inv.get_inplace_scratch_len())
+        ];
         let mut ysf: Vec<C32> = ys.iter().map(|&v| C32::new(v as f32, 0.0)).collect();
         fwd.process_with_scratch(&mut ysf, &mut scratch);
         // model size: the target shrunk to at most model_max_area pixels,
@@ -298,7 +543,9 @@ impl ScaleFilter {
         } else {
             hann(s + 1)[1..].to_vec()
         };
-        let fdsst = interpolated > 0;
+        let fd = (interpolated > 0).then(|| Box::new(Fdsst::new(dims, &window, &ys, interpolated)));
+        // DSST's spectra and filter (fDSST keeps its own, much smaller)
+        let per_feature = if fd.is_some() { 0 } else { dims * s };
         Ok(Self {
             config,
             factors,
@@ -313,28 +560,11 @@ impl ScaleFilter {
             patch: vec![0.0; mw * mh],
             raw: vec![0.0; dims * s],
             hog,
-            xs: vec![C32::default(); dims * s],
-            num: vec![C32::default(); if fdsst { s * s } else { dims * s }],
+            xs: vec![C32::default(); per_feature],
+            num: vec![C32::default(); per_feature],
             den: vec![0.0; s],
             resp: vec![C32::default(); s],
-            snum: if fdsst {
-                vec![0.0; dims * s]
-            } else {
-                Vec::new()
-            },
-            basis: if fdsst {
-                vec![0.0; dims * s]
-            } else {
-                Vec::new()
-            },
-            proj: if fdsst {
-                vec![C32::default(); s * s]
-            } else {
-                Vec::new()
-            },
-            gs: if fdsst { vec![0.0; dims] } else { Vec::new() },
-            interp_inv,
-            interp: vec![C32::default(); interpolated],
+            fd,
             trained: false,
         })
     }
@@ -436,56 +666,6 @@ impl ScaleFilter {
             .process_with_scratch(&mut self.xs, &mut self.scratch);
     }
 
-    /// fDSST: the rows of `src` (`S x dims`) projected on the basis,
-    /// windowed, transformed along the scales into `proj` (`S x S`: basis
-    /// vector by frequency).
-    fn project(&mut self, learnt: bool) {
-        let s = self.config.scales;
-        let dims = self.hog.len();
-        let src = if learnt { &self.snum } else { &self.raw };
-        for k in 0..s {
-            let q = &self.basis[k * dims..][..dims];
-            for n in 0..s {
-                let v = dot(q, &src[n * dims..][..dims]) * self.window[n];
-                self.proj[k * s + n] = C32::new(v, 0.0);
-            }
-        }
-        self.fwd
-            .process_with_scratch(&mut self.proj, &mut self.scratch);
-    }
-
-    /// fDSST: an orthonormal basis of the learnt samples' span (modified
-    /// Gram-Schmidt in f64 on the rows of `snum`: the QR factor of fDSST's
-    /// code up to signs, which cancel in the filter); a row dependent on
-    /// the earlier ones gets a zero basis vector.
-    fn orthonormalise(&mut self) {
-        let s = self.config.scales;
-        let dims = self.hog.len();
-        for j in 0..s {
-            let (done, rest) = self.basis.split_at_mut(j * dims);
-            let row = &self.snum[j * dims..][..dims];
-            for (g, &v) in self.gs.iter_mut().zip(row) {
-                *g = f64::from(v);
-            }
-            let norm0 = self.gs.iter().map(|v| v * v).sum::<f64>().sqrt();
-            for q in done.chunks_exact(dims) {
-                let r: f64 = q.iter().zip(&self.gs).map(|(&a, b)| f64::from(a) * b).sum();
-                for (g, &a) in self.gs.iter_mut().zip(q) {
-                    *g -= r * f64::from(a);
-                }
-            }
-            let norm = self.gs.iter().map(|v| v * v).sum::<f64>().sqrt();
-            let out = &mut rest[..dims];
-            if norm > 1e-6 * norm0 && norm > 1e-30 {
-                for (o, g) in out.iter_mut().zip(&self.gs) {
-                    *o = (g / norm) as f32;
-                }
-            } else {
-                out.fill(0.0);
-            }
-        }
-    }
-
     /// Learns the scale model at `(cx, cy)` and `scale` with `rate` (the
     /// first call takes the sample whole).
     ///
@@ -500,32 +680,21 @@ impl ScaleFilter {
         rate: f64,
     ) -> Result<()> {
         self.sample_raw(sampler, cx, cy, scale)?;
-        self.spectra();
-        let s = self.config.scales;
-        let r = if self.trained { rate as f32 } else { 1.0 };
-        let fdsst = self.interp_inv.is_some();
-        dispatch(Learn {
-            s,
-            r,
-            xs: &self.xs,
-            ysf: &self.ysf[..s],
-            den: &mut self.den[..s],
-            // DSST learns the numerator in the same pass
-            num: (!fdsst).then_some(&mut self.num[..]),
-        });
-        if fdsst {
-            // fDSST: learn the sample matrix, then the filter of its
-            // projection on its own basis
-            for (m, &x) in self.snum.iter_mut().zip(&self.raw) {
-                *m = *m * (1.0 - r) + r * x;
-            }
-            self.orthonormalise();
-            self.project(true);
-            for (num, p) in self.num.chunks_exact_mut(s).zip(self.proj.chunks_exact(s)) {
-                for n in 0..s {
-                    num[n] = self.ysf[n] * p[n].conj();
-                }
-            }
+        if let Some(fd) = self.fd.as_mut() {
+            let r = if self.trained { rate } else { 1.0 };
+            fd.learn(&self.raw, self.hog.len(), r);
+        } else {
+            self.spectra();
+            let s = self.config.scales;
+            let r = if self.trained { rate as f32 } else { 1.0 };
+            dispatch(Learn {
+                s,
+                r,
+                xs: &self.xs,
+                ysf: &self.ysf[..s],
+                den: &mut self.den[..s],
+                num: Some(&mut self.num[..]),
+            });
         }
         self.trained = true;
         Ok(())
@@ -549,29 +718,20 @@ impl ScaleFilter {
             return Err(DcfError::NotInitialised);
         }
         self.sample_raw(sampler, cx, cy, scale)?;
+        if let Some(fd) = self.fd.as_mut() {
+            return fd.detect(&self.raw, self.hog.len(), &self.config);
+        }
         let s = self.config.scales;
         self.resp.fill(C32::default());
-        if self.interp_inv.is_some() {
-            self.project(false);
-            for (p, num) in self.proj.chunks_exact(s).zip(self.num.chunks_exact(s)) {
-                for n in 0..s {
-                    self.resp[n] += num[n] * p[n];
-                }
-            }
-        } else {
-            self.spectra();
-            dispatch(Respond {
-                xs: &self.xs,
-                num: &self.num,
-                resp: &mut self.resp[..s],
-            });
-        }
+        self.spectra();
+        dispatch(Respond {
+            xs: &self.xs,
+            num: &self.num,
+            resp: &mut self.resp[..s],
+        });
         let lambda = self.config.lambda as f32;
         for n in 0..s {
             self.resp[n] /= self.den[n] + lambda;
-        }
-        if let Some(interp_inv) = &self.interp_inv {
-            return self.interpolated(interp_inv.clone());
         }
         self.inv
             .process_with_scratch(&mut self.resp, &mut self.scratch);
@@ -586,37 +746,6 @@ impl ScaleFilter {
         // sample n has the factor step^(floor(S/2) - n)
         let factor = self.config.step.powf((s / 2) as f64 - (n as f64 + off));
         Ok((factor, best / s as f32))
-    }
-
-    /// fDSST: the response's spectrum zero-padded to the interpolated
-    /// scales (fDSST's `resizeDFT`), back to scales one step apart; the
-    /// peak's index (cyclic, 0 = no change) is the exponent of the step.
-    fn interpolated(&mut self, inv: Arc<dyn Fft<f32>>) -> Result<(f64, f32)> {
-        let (s, ni) = (self.config.scales, self.interp.len());
-        let k = ni as f32 / s as f32;
-        let mids = s.div_ceil(2);
-        let mide = (s - 1) / 2;
-        self.interp.fill(C32::default());
-        for i in 0..mids {
-            self.interp[i] = self.resp[i] * k;
-        }
-        for i in 0..mide {
-            self.interp[ni - mide + i] = self.resp[s - mide + i] * k;
-        }
-        inv.process_with_scratch(&mut self.interp, &mut self.scratch);
-        let (n, best) = argmax(&self.interp)?;
-        let at = |i: usize| self.interp[i % ni].re;
-        let off = if ni >= 3 {
-            parabola_offset(at(n + ni - 1), best, at(n + 1))
-        } else {
-            0.0
-        };
-        let e = if n <= (ni - 1) / 2 {
-            n as f64
-        } else {
-            n as f64 - ni as f64
-        };
-        Ok((self.config.step.powf(e + off), best / ni as f32))
     }
 }
 
@@ -659,8 +788,8 @@ impl Kernel for Transpose<'_> {
     }
 }
 
-/// The learning step over the spectra: the denominator decayed by `r` and
-/// each row's energy added (in row order), and for DSST the numerator
+/// DSST's learning step over the spectra: the denominator decayed by `r` and
+/// each row's energy added (in row order), and (with `num`) the numerator
 /// interpolated towards the label times each row's conjugate.
 struct Learn<'a> {
     s: usize,
@@ -741,6 +870,7 @@ fn argmax(v: &[C32]) -> Result<(usize, f32)> {
 mod tests {
     use super::*;
     use bayestrack_image::Image;
+    use bayestrack_image::simd::SimdLevel;
 
     fn sampler(z: f64) -> PatchSampler {
         let mut s = PatchSampler::new();
@@ -803,17 +933,242 @@ mod tests {
         assert!((factor - 1.0).abs() < 0.02, "{factor}");
     }
 
+    /// fDSST as first written here, kept as the reference of the fast
+    /// form: the learnt samples' QR basis by modified Gram-Schmidt in
+    /// `f64`, the projections as `f32` dot products and their spectra by
+    /// rustfft, the denominator from the raw features' spectra. `carrier`
+    /// (an fDSST filter) samples the scales and lends its label, window and
+    /// FFT plan.
+    struct Reference {
+        snum: Vec<f32>,
+        basis: Vec<f32>,
+        proj: Vec<C32>,
+        xs: Vec<C32>,
+        num: Vec<C32>,
+        den: Vec<f32>,
+        resp: Vec<C32>,
+        interp: Vec<C32>,
+        interp_inv: Arc<dyn Fft<f32>>,
+        trained: bool,
+    }
+
+    fn dot32(a: &[f32], b: &[f32]) -> f32 {
+        a.iter().zip(b).map(|(x, y)| x * y).sum()
+    }
+
+    impl Reference {
+        fn new(c: &ScaleFilter) -> Self {
+            let (s, dims) = (c.config.scales, c.hog.len());
+            let ScaleMethod::Fdsst { interpolated } = c.config.method else {
+                panic!("an fDSST carrier")
+            };
+            Self {
+                snum: vec![0.0; s * dims],
+                basis: vec![0.0; s * dims],
+                proj: vec![C32::default(); s * s],
+                xs: vec![C32::default(); s * dims],
+                num: vec![C32::default(); s * s],
+                den: vec![0.0; s],
+                resp: vec![C32::default(); s],
+                interp: vec![C32::default(); interpolated],
+                interp_inv: FftPlanner::new().plan_fft_inverse(interpolated),
+                trained: false,
+            }
+        }
+
+        fn project(&mut self, c: &mut ScaleFilter, learnt: bool) {
+            let (s, dims) = (c.config.scales, c.hog.len());
+            let src = if learnt { &self.snum } else { &c.raw };
+            for k in 0..s {
+                let q = &self.basis[k * dims..][..dims];
+                for n in 0..s {
+                    let v = dot32(q, &src[n * dims..][..dims]) * c.window[n];
+                    self.proj[k * s + n] = C32::new(v, 0.0);
+                }
+            }
+            c.fwd.process_with_scratch(&mut self.proj, &mut c.scratch);
+        }
+
+        fn orthonormalise(&mut self, dims: usize, s: usize) {
+            let mut gs = vec![0.0f64; dims];
+            for j in 0..s {
+                let (done, rest) = self.basis.split_at_mut(j * dims);
+                let row = &self.snum[j * dims..][..dims];
+                for (g, &v) in gs.iter_mut().zip(row) {
+                    *g = f64::from(v);
+                }
+                let norm0 = gs.iter().map(|v| v * v).sum::<f64>().sqrt();
+                for q in done.chunks_exact(dims) {
+                    let r: f64 = q.iter().zip(&gs).map(|(&a, b)| f64::from(a) * b).sum();
+                    for (g, &a) in gs.iter_mut().zip(q) {
+                        *g -= r * f64::from(a);
+                    }
+                }
+                let norm = gs.iter().map(|v| v * v).sum::<f64>().sqrt();
+                let out = &mut rest[..dims];
+                if norm > 1e-6 * norm0 && norm > 1e-30 {
+                    for (o, g) in out.iter_mut().zip(&gs) {
+                        *o = (g / norm) as f32;
+                    }
+                } else {
+                    out.fill(0.0);
+                }
+            }
+        }
+
+        fn train(
+            &mut self,
+            c: &mut ScaleFilter,
+            sampler: &mut PatchSampler,
+            at: (f64, f64, f64),
+            rate: f64,
+        ) {
+            let (s, dims) = (c.config.scales, c.hog.len());
+            c.sample_raw(sampler, at.0, at.1, at.2).unwrap();
+            dispatch(Transpose {
+                s,
+                dims,
+                raw: &c.raw,
+                window: &c.window,
+                xs: &mut self.xs,
+            });
+            c.fwd.process_with_scratch(&mut self.xs, &mut c.scratch);
+            let r = if self.trained { rate as f32 } else { 1.0 };
+            dispatch(Learn {
+                s,
+                r,
+                xs: &self.xs,
+                ysf: &c.ysf,
+                den: &mut self.den,
+                num: None,
+            });
+            for (m, &x) in self.snum.iter_mut().zip(&c.raw) {
+                *m = *m * (1.0 - r) + r * x;
+            }
+            self.orthonormalise(dims, s);
+            self.project(c, true);
+            for (num, p) in self.num.chunks_exact_mut(s).zip(self.proj.chunks_exact(s)) {
+                for n in 0..s {
+                    num[n] = c.ysf[n] * p[n].conj();
+                }
+            }
+            self.trained = true;
+        }
+
+        fn detect(
+            &mut self,
+            c: &mut ScaleFilter,
+            sampler: &mut PatchSampler,
+            at: (f64, f64, f64),
+        ) -> (f64, f32) {
+            let s = c.config.scales;
+            c.sample_raw(sampler, at.0, at.1, at.2).unwrap();
+            self.project(c, false);
+            self.resp.fill(C32::default());
+            for (p, num) in self.proj.chunks_exact(s).zip(self.num.chunks_exact(s)) {
+                for n in 0..s {
+                    self.resp[n] += num[n] * p[n];
+                }
+            }
+            for n in 0..s {
+                self.resp[n] /= self.den[n] + c.config.lambda as f32;
+            }
+            let ni = self.interp.len();
+            let k = ni as f32 / s as f32;
+            let (mids, mide) = (s.div_ceil(2), (s - 1) / 2);
+            self.interp.fill(C32::default());
+            for i in 0..mids {
+                self.interp[i] = self.resp[i] * k;
+            }
+            for i in 0..mide {
+                self.interp[ni - mide + i] = self.resp[s - mide + i] * k;
+            }
+            let mut scratch = vec![C32::default(); self.interp_inv.get_inplace_scratch_len()];
+            self.interp_inv
+                .process_with_scratch(&mut self.interp, &mut scratch);
+            let (n, best) = argmax(&self.interp).unwrap();
+            let at = |i: usize| self.interp[i % ni].re;
+            let off = parabola_offset(at(n + ni - 1), best, at(n + 1));
+            let e = if n <= (ni - 1) / 2 {
+                n as f64
+            } else {
+                n as f64 - ni as f64
+            };
+            (c.config.step.powf(e + off), best / ni as f32)
+        }
+    }
+
+    /// The fast fDSST follows the reference (the projected form, as first
+    /// written) on a zooming sequence, each tracking its own scale: the
+    /// same scale estimates to 1e-6 relative, the same peaks to 1e-5 (they
+    /// differ by about 1e-8 and 1e-6: the reference's `f32` projections).
     #[test]
-    fn fdsst_basis_is_orthonormal() {
-        let mut f = ScaleFilter::new(ScaleConfig::fdsst(), 40.0, 28.0).unwrap();
+    fn fdsst_matches_the_projected_form() {
+        let config = ScaleConfig {
+            learning_rate: 0.2,
+            ..ScaleConfig::fdsst()
+        };
+        let mut fast = ScaleFilter::new(config, 40.0, 28.0).unwrap();
+        let mut carrier = ScaleFilter::new(config, 40.0, 28.0).unwrap();
+        let mut reference = Reference::new(&carrier);
+        let (cx, cy) = (79.5, 59.5);
         let mut s0 = sampler(1.0);
-        f.train(&mut s0, 79.5, 59.5, 1.0, 0.025).unwrap();
-        let dims = f.hog.len();
-        for i in 0..17 {
-            for j in 0..17 {
-                let d = dot(&f.basis[i * dims..][..dims], &f.basis[j * dims..][..dims]);
-                let want = if i == j { 1.0 } else { 0.0 };
-                assert!((d - want).abs() < 1e-4, "q{i} . q{j} = {d}");
+        fast.train(&mut s0, cx, cy, 1.0, 1.0).unwrap();
+        reference.train(&mut carrier, &mut s0, (cx, cy, 1.0), 1.0);
+        let (mut a, mut b) = (1.0, 1.0);
+        let zooms = [1.02, 1.05, 1.08, 1.1, 1.09, 1.05, 1.0, 0.96, 0.93, 0.92];
+        for zoom in zooms {
+            let mut sz = sampler(zoom);
+            let (fa, pa) = fast.detect(&mut sz, cx, cy, a).unwrap();
+            let (fb, pb) = reference.detect(&mut carrier, &mut sz, (cx, cy, b));
+            assert!((fa / fb - 1.0).abs() < 1e-6, "zoom {zoom}: {fa} vs {fb}");
+            assert!(
+                (pa / pb - 1.0).abs() < 1e-3,
+                "zoom {zoom}: peak {pa} vs {pb}"
+            );
+            (a, b) = (a * fa, b * fb);
+            assert!((a / b - 1.0).abs() < 1e-6, "zoom {zoom}: scale {a} vs {b}");
+            fast.train(&mut sz, cx, cy, a, config.learning_rate)
+                .unwrap();
+            reference.train(&mut carrier, &mut sz, (cx, cy, b), config.learning_rate);
+        }
+        // and both follow the zoom
+        assert!((a.ln() - 0.92f64.ln()).abs() < 2.0 * 1.02f64.ln(), "{a}");
+    }
+
+    /// The products of rows: the same bits at every SIMD level, and the
+    /// values of a plain loop (to rounding).
+    #[test]
+    fn products_are_the_same_at_every_level() {
+        let (s, stride) = (5, 24);
+        let a: Vec<f64> = noise(s * stride, 7).iter().map(|&v| f64::from(v)).collect();
+        let b: Vec<f64> = noise(s * stride, 8).iter().map(|&v| f64::from(v)).collect();
+        for sym in [false, true] {
+            let run = |level: SimdLevel| {
+                let mut out = vec![0.0; s * s];
+                level.run(Products {
+                    s,
+                    stride,
+                    a: &a,
+                    b: (!sym).then_some(&b[..]),
+                    out: &mut out,
+                });
+                out
+            };
+            let want = run(SimdLevel::Scalar);
+            for level in SimdLevel::ALL {
+                let got = run(level);
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&got), bits(&want), "{level:?}");
+            }
+            let other = if sym { &a } else { &b };
+            for i in 0..s {
+                for j in 0..s {
+                    let plain: f64 = (0..stride)
+                        .map(|k| a[i * stride + k] * other[j * stride + k])
+                        .sum();
+                    assert!((want[i * s + j] - plain).abs() < 1e-12, "{i} {j}");
+                }
             }
         }
     }
@@ -892,7 +1247,7 @@ mod tests {
             let fbits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(fbits(&got_den), fbits(&den));
             assert_eq!(bits(&got_num), bits(&num));
-            // fDSST's call: the denominator alone
+            // the denominator alone (the projected fDSST reference's call)
             let mut only_den = den0.clone();
             dispatch(Learn {
                 s,
