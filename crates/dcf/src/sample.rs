@@ -30,8 +30,8 @@ pub struct PatchSampler {
     /// Scratch: the table interpolated at the column edges of two rows.
     top: Vec<f64>,
     bottom: Vec<f64>,
-    /// Scratch: two rows of the table interpolated at the column edges.
-    rows: [Vec<f64>; 2],
+    /// Scratch: three rows of the table interpolated at the column edges.
+    rows: [Vec<f64>; 3],
     /// The loaded region (empty before a load).
     region: Region,
     /// Scratch for loading: one row's values, the column sums above the
@@ -760,6 +760,20 @@ fn edges(a: f64, b: f64, n: usize) -> (f64, f64) {
     }
 }
 
+/// Two rows of a summed-area table interpolated along x at the column
+/// edges `xs`, in one pass (the same values as [`along_edges`] on each).
+#[inline(always)]
+fn along_edges2(rows: [&[f64]; 2], xs: &[(usize, f64)], out: [&mut Vec<f64>; 2]) {
+    let [ra, rb] = rows;
+    let [oa, ob] = out;
+    for ((oa, ob), &(i, g)) in oa.iter_mut().zip(ob.iter_mut()).zip(xs) {
+        let [a0, a1]: [f64; 2] = ra[i..i + 2].try_into().unwrap_or_default();
+        let [b0, b1]: [f64; 2] = rb[i..i + 2].try_into().unwrap_or_default();
+        *oa = a0 + g * (a1 - a0);
+        *ob = b0 + g * (b1 - b0);
+    }
+}
+
 /// Row `j` of a summed-area table interpolated along x at the column
 /// edges `xs` (each its table column and the fraction to the next).
 #[inline(always)]
@@ -779,31 +793,63 @@ struct Table<'a> {
 }
 
 impl Table<'_> {
+    /// Row `j` of the table.
+    #[inline(always)]
+    fn row(&self, j: usize) -> &[f64] {
+        &self.sum[j * self.cols..][..self.cols]
+    }
+
     /// The table at row coordinate `y` at every column edge, into `o`,
     /// from table rows interpolated along x kept in `rows` (`held`: which
     /// rows they are): the same values as interpolating both rows along x
     /// for each edge (each table row is interpolated the same way
-    /// whichever edge reads it).
+    /// whichever edge reads it). Where the row below is missing and
+    /// `ahead`, the one after it is interpolated in the same pass (the
+    /// next edge reads it when the step is under 2).
     #[inline(always)]
-    fn row_at(&self, y: f64, rows: &mut [Vec<f64>; 2], held: &mut [usize; 2], o: &mut [f64]) {
-        let (cols, xs) = (self.cols, self.xs);
+    fn row_at(
+        &self,
+        y: f64,
+        ahead: bool,
+        rows: &mut [Vec<f64>; 3],
+        held: &mut [usize; 3],
+        o: &mut [f64],
+    ) {
+        let xs = self.xs;
         let j = (y as usize).min(self.h - 1);
         let f = y - j as f64;
-        if held[0] == j + 1 || held[1] == j {
-            rows.swap(0, 1);
-            held.swap(0, 1);
-        }
-        let [ra, rb] = rows;
-        if held[0] != j {
-            along_edges(&self.sum[j * cols..][..cols], xs, ra);
-            held[0] = j;
-        }
-        if held[1] != j + 1 {
-            along_edges(&self.sum[(j + 1) * cols..][..cols], xs, rb);
-            held[1] = j + 1;
-        }
+        let slot = |k: usize| held.iter().position(|&r| r == k);
+        let (a, b) = match (slot(j), slot(j + 1)) {
+            (Some(a), Some(b)) => (a, b),
+            (Some(a), None) => {
+                let (p, q) = [(1, 2), (0, 2), (0, 1)][a];
+                if let Ok([rp, rq]) = rows.get_disjoint_mut([p, q]) {
+                    if ahead && j + 2 <= self.h {
+                        along_edges2([self.row(j + 1), self.row(j + 2)], xs, [rp, rq]);
+                        held[q] = j + 2;
+                    } else {
+                        along_edges(self.row(j + 1), xs, rp);
+                    }
+                }
+                held[p] = j + 1;
+                (a, p)
+            }
+            (None, Some(b)) => {
+                let p = if b == 0 { 1 } else { 0 };
+                along_edges(self.row(j), xs, &mut rows[p]);
+                held[p] = j;
+                (p, b)
+            }
+            (None, None) => {
+                let [ra, rb, _] = rows;
+                along_edges2([self.row(j), self.row(j + 1)], xs, [ra, rb]);
+                *held = [j, j + 1, usize::MAX];
+                (0, 1)
+            }
+        };
         let n = xs.len();
-        for ((o, &a), &b) in o[..n].iter_mut().zip(&ra[..n]).zip(&rb[..n]) {
+        let (ra, rb) = (&rows[a][..n], &rows[b][..n]);
+        for ((o, &a), &b) in o[..n].iter_mut().zip(ra).zip(rb) {
             *o = a + f * (b - a);
         }
     }
@@ -825,8 +871,8 @@ struct AreaRows<'a> {
     /// The table at the row edges above and below an output row.
     top: &'a mut Vec<f64>,
     bottom: &'a mut Vec<f64>,
-    /// Two table rows interpolated along x.
-    rows: &'a mut [Vec<f64>; 2],
+    /// Three table rows interpolated along x.
+    rows: &'a mut [Vec<f64>; 3],
     out: &'a mut [f32],
     ow: usize,
     gain: f32,
@@ -860,7 +906,10 @@ impl Kernel for AreaRows<'_> {
             r.resize(n, 0.0);
         }
         // the table rows held in `rows`
-        let mut held = [usize::MAX; 2];
+        let mut held = [usize::MAX; 3];
+        // consecutive row edges a step under 2 apart read the table row
+        // after the one below the first
+        let ahead = sy < 2.0;
         let table = Table { sum, cols, h, xs };
         // every column's left edge the previous one's right edge (all but
         // patches running off the frame's side)
@@ -871,9 +920,9 @@ impl Kernel for AreaRows<'_> {
             if a == bottom_at {
                 std::mem::swap(top, bottom);
             } else {
-                table.row_at(a, rows, &mut held, top);
+                table.row_at(a, ahead, rows, &mut held, top);
             }
-            table.row_at(b, rows, &mut held, bottom);
+            table.row_at(b, ahead, rows, &mut held, bottom);
             bottom_at = b;
             let inv_h = 1.0 / (b - a);
             if contiguous {
@@ -1031,6 +1080,9 @@ mod area_tests {
             (3.6, 2.2, 1.0375, 1.0375, 25, 17),
             (-2.5, 5.5, 1.0, 1.0, 20, 21),
             (4.25, 0.75, 1.0, 1.0 / 1.0375 + 0.05, 30, 20),
+            // the scale filter's small patches, steps either side of 2
+            (5.3, -1.2, 1.8, 1.6, 14, 36),
+            (11.7, 2.4, 2.2, 1.45, 9, 14),
         ];
         for (x0, y0, sx, sy, ow, oh) in cases {
             let want = reference(&s, x0, y0, sx, sy, ow, oh);
