@@ -4,7 +4,7 @@
 //! the frame (as KCF's and DSST's patch extraction does).
 
 use bayestrack_image::ImageView;
-use bayestrack_image::simd::{Kernel, Token, dispatch};
+use bayestrack_image::simd::{Kernel, SimdLevel, Token, dispatch};
 
 use crate::error::{DcfError, Result};
 
@@ -30,6 +30,8 @@ pub struct PatchSampler {
     /// Scratch: the table interpolated at the column edges of two rows.
     top: Vec<f64>,
     bottom: Vec<f64>,
+    /// Scratch: three rows of the table interpolated at the column edges.
+    rows: [Vec<f64>; 3],
     /// The loaded region (empty before a load).
     region: Region,
     /// Scratch for loading: one row's values, the column sums above the
@@ -38,6 +40,8 @@ pub struct PatchSampler {
     above: Vec<u64>,
     /// Scratch for loading: partial column sums.
     part: Vec<u32>,
+    /// Scratch for loading: a row's running sums in the region.
+    prefix: Vec<i32>,
 }
 
 /// Where a plane's values come from.
@@ -165,6 +169,66 @@ impl Kernel for ColumnSums<'_> {
                 *a += u64::from(p);
             }
             y = end;
+        }
+    }
+}
+
+/// One row of a plane and of its summed-area table in a region: the
+/// values as `f32`, and each table entry the one above plus the row's sum
+/// up to it (`left`, the sum left of the region, plus the running sum of
+/// `v`): an exact integer, whatever way it is added up (the running sums
+/// in `i32` where they fit, converted and added to `left` in `f64`: the
+/// same value as the `u64` sum converted).
+struct TableRow<'a> {
+    left: u64,
+    v: &'a [u8],
+    /// The table's row above and this row, from the region's first column
+    /// to one past its last.
+    upper: &'a [f64],
+    lower: &'a mut [f64],
+    dst: &'a mut [f32],
+    prefix: &'a mut [i32],
+}
+
+impl Kernel for TableRow<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        let Self {
+            left,
+            v,
+            upper,
+            lower,
+            dst,
+            prefix,
+        } = self;
+        for (d, &p) in dst.iter_mut().zip(v) {
+            *d = f32::from(p);
+        }
+        let (Some((&u0, upper)), Some((l0, lower))) =
+            (upper.split_first(), lower.split_first_mut())
+        else {
+            return;
+        };
+        *l0 = u0 + left as i64 as f64;
+        let n = v.len();
+        if n < 1 << 23 && prefix.len() >= n {
+            // below 2^31: 255 n < 2^31
+            let mut t = 0i32;
+            for (r, &p) in prefix.iter_mut().zip(v) {
+                t += i32::from(p);
+                *r = t;
+            }
+            let l = left as i64 as f64;
+            for ((o, &u), &r) in lower.iter_mut().zip(upper).zip(&prefix[..n]) {
+                *o = u + (l + f64::from(r));
+            }
+        } else {
+            let mut run = left;
+            for ((o, &u), &p) in lower.iter_mut().zip(upper).zip(v) {
+                run += u64::from(p);
+                *o = u + run as i64 as f64;
+            }
         }
     }
 }
@@ -390,6 +454,7 @@ impl PatchSampler {
     fn fill_interleaved(&mut self, frame: ImageView<'_, u8>) {
         let (w, r, c) = (self.w, self.region, frame.channels());
         let cols = w + 1;
+        self.prefix.resize(r.x1 - r.x0, 0);
         // column sums of the rows above the region, interleaved as the
         // frame (exact integers, as in `fill`)
         let above = &mut self.above[..r.x1 * c];
@@ -421,16 +486,20 @@ impl PatchSampler {
                 }
             }
             for (ch, (plane, sum)) in self.planes.iter_mut().zip(self.sums.iter_mut()).enumerate() {
-                let dst = &mut plane[y * w..][..w];
                 let (upper, lower) = sum[y * cols..][..2 * cols].split_at_mut(cols);
-                let mut run = left[ch];
-                lower[r.x0] = upper[r.x0] + run as i64 as f64;
-                for x in r.x0..r.x1 {
-                    let p = row[x * c + ch];
-                    dst[x] = f32::from(p);
-                    run += u64::from(p);
-                    lower[x + 1] = upper[x + 1] + run as i64 as f64;
+                // the channel's values in the region
+                let v = &mut self.line[..r.x1 - r.x0];
+                for (o, p) in v.iter_mut().zip(row[r.x0 * c..].chunks_exact(c)) {
+                    *o = p[ch];
                 }
+                dispatch(TableRow {
+                    left: left[ch],
+                    v,
+                    upper: &upper[r.x0..=r.x1],
+                    lower: &mut lower[r.x0..=r.x1],
+                    dst: &mut plane[y * w..][r.x0..r.x1],
+                    prefix: &mut self.prefix,
+                });
             }
         }
     }
@@ -442,6 +511,7 @@ impl PatchSampler {
         let cols = w + 1;
         let (plane, sum) = (&mut self.planes[k], &mut self.sums[k]);
         let (line, above) = (&mut self.line[..r.x1], &mut self.above[..r.x1]);
+        self.prefix.resize(r.x1 - r.x0, 0);
         // every entry of the table is an exact integer (below 2^53 for any
         // frame of under 2^45 pixels): integer sums in any order give the
         // whole frame's values bit for bit (converted through i64, the
@@ -466,17 +536,16 @@ impl PatchSampler {
         }
         for y in r.y0..r.y1 {
             let v = values(frame, y, src, line);
-            let dst = &mut plane[y * w..][..w];
             let (upper, lower) = sum[y * cols..][..2 * cols].split_at_mut(cols);
-            // the row's sum left of the region
-            let mut run: u64 = v[..r.x0].iter().map(|&p| u64::from(p)).sum();
-            lower[r.x0] = upper[r.x0] + run as i64 as f64;
-            for x in r.x0..r.x1 {
-                let p = v[x];
-                dst[x] = f32::from(p);
-                run += u64::from(p);
-                lower[x + 1] = upper[x + 1] + run as i64 as f64;
-            }
+            dispatch(TableRow {
+                // the row's sum left of the region
+                left: v[..r.x0].iter().map(|&p| u64::from(p)).sum(),
+                v: &v[r.x0..r.x1],
+                upper: &upper[r.x0..=r.x1],
+                lower: &mut lower[r.x0..=r.x1],
+                dst: &mut plane[y * w..][r.x0..r.x1],
+                prefix: &mut self.prefix,
+            });
         }
     }
 
@@ -536,6 +605,23 @@ impl PatchSampler {
         oh: usize,
         gain: f32,
     ) -> Result<()> {
+        self.sample_at(SimdLevel::Avx512, ch, (x0, y0, sx, sy), out, ow, oh, gain)
+    }
+
+    /// [`PatchSampler::sample_scaled`] with the kernels at `level` (or the
+    /// best level below it this CPU runs): the same bits at every level.
+    #[allow(clippy::too_many_arguments)]
+    fn sample_at(
+        &mut self,
+        level: SimdLevel,
+        ch: usize,
+        at: (f64, f64, f64, f64),
+        out: &mut [f32],
+        ow: usize,
+        oh: usize,
+        gain: f32,
+    ) -> Result<()> {
+        let (x0, y0, sx, sy) = at;
         if ch >= self.planes.len() {
             return Err(DcfError::InvalidParameter {
                 name: "channel",
@@ -556,30 +642,85 @@ impl PatchSampler {
             });
         }
         if sx >= 1.0 && sy >= 1.0 {
-            self.area(ch, (x0, y0, sx, sy), out, ow, gain);
+            self.area(level, ch, at, out, ow, gain);
             return Ok(());
         }
         let (w, h) = (self.w, self.h);
-        let plane = &self.planes[ch];
-        let split = |c: f64, n: usize| -> (usize, usize, f32) {
-            let c = c.clamp(0.0, (n - 1) as f64);
-            // c >= 0: truncation is the floor
-            let i = (c as usize).min(n - 1);
-            let j = (i + 1).min(n - 1);
-            (i, j, (c - i as f64) as f32)
-        };
         self.columns.clear();
         self.columns
             .extend((0..ow).map(|u| split(x0 + (u as f64 + 0.5) * sx - 0.5, w)));
-        // a source row interpolated along x at every output column
-        let along = |row: &[f32], out: &mut [f32], columns: &[(usize, usize, f32)]| {
-            for (o, &(xa, xb, fx)) in out.iter_mut().zip(columns) {
-                *o = row[xa] + fx * (row[xb] - row[xa]);
-            }
-        };
-        // the source rows interpolated along x, kept while output rows
-        // read them (the same values: each is interpolated the same way)
-        let [mut top, mut bottom] = std::mem::take(&mut self.lines);
+        let [top, bottom] = &mut self.lines;
+        level.run(BilinearRows {
+            plane: &self.planes[ch],
+            w,
+            h,
+            y0,
+            sy,
+            columns: &self.columns,
+            top,
+            bottom,
+            out,
+            ow,
+            gain,
+        });
+        Ok(())
+    }
+}
+
+/// A sample coordinate `c` on an axis of `n` pixels: the pixels either
+/// side (the edge pixel twice outside) and the fraction between them.
+#[inline(always)]
+fn split(c: f64, n: usize) -> (usize, usize, f32) {
+    let c = c.clamp(0.0, (n - 1) as f64);
+    // c >= 0: truncation is the floor
+    let i = (c as usize).min(n - 1);
+    let j = (i + 1).min(n - 1);
+    (i, j, (c - i as f64) as f32)
+}
+
+/// A source row interpolated along x at every output column.
+#[inline(always)]
+fn along_columns(row: &[f32], columns: &[(usize, usize, f32)], out: &mut [f32]) {
+    for (o, &(xa, xb, fx)) in out.iter_mut().zip(columns) {
+        *o = row[xa] + fx * (row[xb] - row[xa]);
+    }
+}
+
+/// The rows of a bilinearly interpolated patch: each source row
+/// interpolated along x at every output column, kept while output rows
+/// read it (the same values: each is interpolated the same way), then
+/// each output row between two of them.
+struct BilinearRows<'a> {
+    plane: &'a [f32],
+    w: usize,
+    h: usize,
+    y0: f64,
+    sy: f64,
+    columns: &'a [(usize, usize, f32)],
+    top: &'a mut Vec<f32>,
+    bottom: &'a mut Vec<f32>,
+    out: &'a mut [f32],
+    ow: usize,
+    gain: f32,
+}
+
+impl Kernel for BilinearRows<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        let Self {
+            plane,
+            w,
+            h,
+            y0,
+            sy,
+            columns,
+            top,
+            bottom,
+            out,
+            ow,
+            gain,
+        } = self;
         top.resize(ow, 0.0);
         bottom.resize(ow, 0.0);
         let (mut at_top, mut at_bottom) = (usize::MAX, usize::MAX);
@@ -587,23 +728,220 @@ impl PatchSampler {
             let (ya, yb, fy) = split(y0 + (v as f64 + 0.5) * sy - 0.5, h);
             if at_top != ya {
                 if at_bottom == ya {
-                    std::mem::swap(&mut top, &mut bottom);
+                    std::mem::swap(top, bottom);
                     std::mem::swap(&mut at_top, &mut at_bottom);
                 } else {
-                    along(&plane[ya * w..][..w], &mut top, &self.columns);
+                    along_columns(&plane[ya * w..][..w], columns, top);
                     at_top = ya;
                 }
             }
             if at_bottom != yb {
-                along(&plane[yb * w..][..w], &mut bottom, &self.columns);
+                along_columns(&plane[yb * w..][..w], columns, bottom);
                 at_bottom = yb;
             }
-            for ((o, &top), &bot) in orow.iter_mut().zip(&top).zip(&bottom) {
+            for ((o, &top), &bot) in orow.iter_mut().zip(&top[..ow]).zip(&bottom[..ow]) {
                 *o = (top + fy * (bot - top)) * gain;
             }
         }
-        self.lines = [top, bottom];
-        Ok(())
+    }
+}
+
+/// A rectangle's edges `[a, b]` along an axis of `n` pixels: clipped to
+/// it, or, with no area left, the nearest pixel (edge replication).
+#[inline(always)]
+fn edges(a: f64, b: f64, n: usize) -> (f64, f64) {
+    let (lo, hi) = (a.clamp(0.0, n as f64), b.clamp(0.0, n as f64));
+    if hi - lo > 1e-9 {
+        (lo, hi)
+    } else {
+        // lo >= 0: truncation is the floor
+        let p = (lo.min(n as f64 - 0.5) as usize) as f64;
+        (p, p + 1.0)
+    }
+}
+
+/// Two rows of a summed-area table interpolated along x at the column
+/// edges `xs`, in one pass (the same values as [`along_edges`] on each).
+#[inline(always)]
+fn along_edges2(rows: [&[f64]; 2], xs: &[(usize, f64)], out: [&mut Vec<f64>; 2]) {
+    let [ra, rb] = rows;
+    let [oa, ob] = out;
+    for ((oa, ob), &(i, g)) in oa.iter_mut().zip(ob.iter_mut()).zip(xs) {
+        let [a0, a1]: [f64; 2] = ra[i..i + 2].try_into().unwrap_or_default();
+        let [b0, b1]: [f64; 2] = rb[i..i + 2].try_into().unwrap_or_default();
+        *oa = a0 + g * (a1 - a0);
+        *ob = b0 + g * (b1 - b0);
+    }
+}
+
+/// Row `j` of a summed-area table interpolated along x at the column
+/// edges `xs` (each its table column and the fraction to the next).
+#[inline(always)]
+fn along_edges(row: &[f64], xs: &[(usize, f64)], out: &mut [f64]) {
+    for (o, &(i, g)) in out.iter_mut().zip(xs) {
+        let [a0, a1]: [f64; 2] = row[i..i + 2].try_into().unwrap_or_default();
+        *o = a0 + g * (a1 - a0);
+    }
+}
+
+/// A summed-area table read at the column edges `xs`.
+struct Table<'a> {
+    sum: &'a [f64],
+    cols: usize,
+    h: usize,
+    xs: &'a [(usize, f64)],
+}
+
+impl Table<'_> {
+    /// Row `j` of the table.
+    #[inline(always)]
+    fn row(&self, j: usize) -> &[f64] {
+        &self.sum[j * self.cols..][..self.cols]
+    }
+
+    /// The table at row coordinate `y` at every column edge, into `o`,
+    /// from table rows interpolated along x kept in `rows` (`held`: which
+    /// rows they are): the same values as interpolating both rows along x
+    /// for each edge (each table row is interpolated the same way
+    /// whichever edge reads it). Where the row below is missing and
+    /// `ahead`, the one after it is interpolated in the same pass (the
+    /// next edge reads it when the step is under 2).
+    #[inline(always)]
+    fn row_at(
+        &self,
+        y: f64,
+        ahead: bool,
+        rows: &mut [Vec<f64>; 3],
+        held: &mut [usize; 3],
+        o: &mut [f64],
+    ) {
+        let xs = self.xs;
+        let j = (y as usize).min(self.h - 1);
+        let f = y - j as f64;
+        let slot = |k: usize| held.iter().position(|&r| r == k);
+        let (a, b) = match (slot(j), slot(j + 1)) {
+            (Some(a), Some(b)) => (a, b),
+            (Some(a), None) => {
+                let (p, q) = [(1, 2), (0, 2), (0, 1)][a];
+                if let Ok([rp, rq]) = rows.get_disjoint_mut([p, q]) {
+                    if ahead && j + 2 <= self.h {
+                        along_edges2([self.row(j + 1), self.row(j + 2)], xs, [rp, rq]);
+                        held[q] = j + 2;
+                    } else {
+                        along_edges(self.row(j + 1), xs, rp);
+                    }
+                }
+                held[p] = j + 1;
+                (a, p)
+            }
+            (None, Some(b)) => {
+                let p = if b == 0 { 1 } else { 0 };
+                along_edges(self.row(j), xs, &mut rows[p]);
+                held[p] = j;
+                (p, b)
+            }
+            (None, None) => {
+                let [ra, rb, _] = rows;
+                along_edges2([self.row(j), self.row(j + 1)], xs, [ra, rb]);
+                *held = [j, j + 1, usize::MAX];
+                (0, 1)
+            }
+        };
+        let n = xs.len();
+        let (ra, rb) = (&rows[a][..n], &rows[b][..n]);
+        for ((o, &a), &b) in o[..n].iter_mut().zip(ra).zip(rb) {
+            *o = a + f * (b - a);
+        }
+    }
+}
+
+/// The rows of an area-averaged patch (see [`PatchSampler::area`]): the
+/// table interpolated along x at the column edges once per table row
+/// (kept while the next edge reads it), then along y at each row edge,
+/// then each output pixel from its four corners.
+struct AreaRows<'a> {
+    sum: &'a [f64],
+    w: usize,
+    h: usize,
+    y0: f64,
+    sy: f64,
+    xs: &'a [(usize, f64)],
+    spans: &'a [(usize, usize)],
+    widths: &'a [f64],
+    /// The table at the row edges above and below an output row.
+    top: &'a mut Vec<f64>,
+    bottom: &'a mut Vec<f64>,
+    /// Three table rows interpolated along x.
+    rows: &'a mut [Vec<f64>; 3],
+    out: &'a mut [f32],
+    ow: usize,
+    gain: f32,
+}
+
+impl Kernel for AreaRows<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        let Self {
+            sum,
+            w,
+            h,
+            y0,
+            sy,
+            xs,
+            spans,
+            widths,
+            top,
+            bottom,
+            rows,
+            out,
+            ow,
+            gain,
+        } = self;
+        let cols = w + 1;
+        let n = xs.len();
+        top.resize(n, 0.0);
+        bottom.resize(n, 0.0);
+        for r in rows.iter_mut() {
+            r.resize(n, 0.0);
+        }
+        // the table rows held in `rows`
+        let mut held = [usize::MAX; 3];
+        // consecutive row edges a step under 2 apart read the table row
+        // after the one below the first
+        let ahead = sy < 2.0;
+        let table = Table { sum, cols, h, xs };
+        // every column's left edge the previous one's right edge (all but
+        // patches running off the frame's side)
+        let contiguous = n == ow + 1;
+        let mut bottom_at = f64::NAN;
+        for (v, row) in out.chunks_exact_mut(ow).enumerate() {
+            let (a, b) = edges(y0 + v as f64 * sy, y0 + (v + 1) as f64 * sy, h);
+            if a == bottom_at {
+                std::mem::swap(top, bottom);
+            } else {
+                table.row_at(a, ahead, rows, &mut held, top);
+            }
+            table.row_at(b, ahead, rows, &mut held, bottom);
+            bottom_at = b;
+            let inv_h = 1.0 / (b - a);
+            if contiguous {
+                // column u spans edges u and u + 1: no gather
+                let (tl, tr) = (&top[..ow], &top[1..=ow]);
+                let (bl, br) = (&bottom[..ow], &bottom[1..=ow]);
+                let corners = tl.iter().zip(tr).zip(bl.iter().zip(br));
+                for ((o, ((&tl, &tr), (&bl, &br))), &cw) in row.iter_mut().zip(corners).zip(widths)
+                {
+                    let s = br - bl - tr + tl;
+                    *o = (s * inv_h / cw) as f32 * gain;
+                }
+            } else {
+                for ((o, &(ia, ib)), &cw) in row.iter_mut().zip(spans).zip(widths) {
+                    let s = bottom[ib] - bottom[ia] - top[ib] + top[ia];
+                    *o = (s * inv_h / cw) as f32 * gain;
+                }
+            }
+        }
     }
 }
 
@@ -615,22 +953,18 @@ impl PatchSampler {
     ///
     /// Neighbouring rectangles share their edges: the table is interpolated
     /// once per distinct edge (about one corner per output pixel instead of
-    /// four), the same values bit for bit.
-    fn area(&mut self, ch: usize, at: (f64, f64, f64, f64), out: &mut [f32], ow: usize, gain: f32) {
+    /// four), and along x once per table row, the same values bit for bit.
+    fn area(
+        &mut self,
+        level: SimdLevel,
+        ch: usize,
+        at: (f64, f64, f64, f64),
+        out: &mut [f32],
+        ow: usize,
+        gain: f32,
+    ) {
         let (x0, y0, sx, sy) = at;
         let (w, h) = (self.w, self.h);
-        let cols = w + 1;
-        let sum = &self.sums[ch];
-        let edges = |a: f64, b: f64, n: usize| -> (f64, f64) {
-            let (lo, hi) = (a.clamp(0.0, n as f64), b.clamp(0.0, n as f64));
-            if hi - lo > 1e-9 {
-                (lo, hi)
-            } else {
-                // lo >= 0: truncation is the floor
-                let p = (lo.min(n as f64 - 0.5) as usize) as f64;
-                (p, p + 1.0)
-            }
-        };
         // the distinct column edges (xs: each as its table column and the
         // fraction to the next one) and each column's pair of indices into
         // them with its width
@@ -656,56 +990,22 @@ impl PatchSampler {
             self.spans.push((ia, self.xs.len() - 1));
             self.widths.push(b - a);
         }
-        // the table at row coordinate y, at every column edge
-        let row_at = |y: f64, out: &mut Vec<f64>, xs: &[(usize, f64)]| {
-            let j = (y as usize).min(h - 1);
-            let f = y - j as f64;
-            let (ra, rb) = (&sum[j * cols..][..cols], &sum[(j + 1) * cols..][..cols]);
-            out.resize(xs.len(), 0.0);
-            for (o, &(i, g)) in out.iter_mut().zip(xs) {
-                let [a0, a1]: [f64; 2] = ra[i..i + 2].try_into().unwrap_or_default();
-                let [b0, b1]: [f64; 2] = rb[i..i + 2].try_into().unwrap_or_default();
-                let a = a0 + g * (a1 - a0);
-                let b = b0 + g * (b1 - b0);
-                *o = a + f * (b - a);
-            }
-        };
-        // every column's left edge the previous one's right edge (all but
-        // patches running off the frame's side)
-        let contiguous = self.xs.len() == ow + 1;
-        let (mut top, mut bottom) = (
-            std::mem::take(&mut self.top),
-            std::mem::take(&mut self.bottom),
-        );
-        let mut bottom_at = f64::NAN;
-        for (v, row) in out.chunks_exact_mut(ow).enumerate() {
-            let (a, b) = edges(y0 + v as f64 * sy, y0 + (v + 1) as f64 * sy, h);
-            if a == bottom_at {
-                std::mem::swap(&mut top, &mut bottom);
-            } else {
-                row_at(a, &mut top, &self.xs);
-            }
-            row_at(b, &mut bottom, &self.xs);
-            bottom_at = b;
-            let inv_h = 1.0 / (b - a);
-            if contiguous {
-                // column u spans edges u and u + 1: no gather
-                let (tl, tr) = (&top[..ow], &top[1..=ow]);
-                let (bl, br) = (&bottom[..ow], &bottom[1..=ow]);
-                let cw = &self.widths[..ow];
-                for (u, o) in row.iter_mut().enumerate() {
-                    let s = br[u] - bl[u] - tr[u] + tl[u];
-                    *o = (s * inv_h / cw[u]) as f32 * gain;
-                }
-            } else {
-                for ((o, &(ia, ib)), &cw) in row.iter_mut().zip(&self.spans).zip(&self.widths) {
-                    let s = bottom[ib] - bottom[ia] - top[ib] + top[ia];
-                    *o = (s * inv_h / cw) as f32 * gain;
-                }
-            }
-        }
-        self.top = top;
-        self.bottom = bottom;
+        level.run(AreaRows {
+            sum: &self.sums[ch],
+            w,
+            h,
+            y0,
+            sy,
+            xs: &self.xs,
+            spans: &self.spans,
+            widths: &self.widths,
+            top: &mut self.top,
+            bottom: &mut self.bottom,
+            rows: &mut self.rows,
+            out,
+            ow,
+            gain,
+        });
     }
 }
 
@@ -775,11 +1075,32 @@ mod area_tests {
             (-40.0, -30.0, 3.3, 2.9, 31, 23),
             (30.9, 19.1, 1.01, 1.9, 7, 5),
             (0.0, 0.0, 37.0, 23.0, 1, 1),
+            // steps near 1 (table rows shared by consecutive edges), and
+            // unit steps running off the bottom (edges in one table row)
+            (3.6, 2.2, 1.0375, 1.0375, 25, 17),
+            (-2.5, 5.5, 1.0, 1.0, 20, 21),
+            (4.25, 0.75, 1.0, 1.0 / 1.0375 + 0.05, 30, 20),
+            // the scale filter's small patches, steps either side of 2
+            (5.3, -1.2, 1.8, 1.6, 14, 36),
+            (11.7, 2.4, 2.2, 1.45, 9, 14),
         ];
         for (x0, y0, sx, sy, ow, oh) in cases {
-            let mut got = vec![f32::NAN; ow * oh];
-            s.sample(0, x0, y0, sx, sy, &mut got, ow, oh).unwrap();
             let want = reference(&s, x0, y0, sx, sy, ow, oh);
+            let mut got = vec![f32::NAN; ow * oh];
+            // the kernels at every level (the public call at the best)
+            for level in SimdLevel::ALL {
+                got.fill(f32::NAN);
+                s.sample_at(level, 0, (x0, y0, sx, sy), &mut got, ow, oh, 1.0)
+                    .unwrap();
+                for (i, (a, b)) in got.iter().zip(&want).enumerate() {
+                    assert_eq!(
+                        a.to_bits(),
+                        b.to_bits(),
+                        "{level:?} {x0},{y0} {sx}x{sy}: pixel {i}: {a} vs {b}"
+                    );
+                }
+            }
+            s.sample(0, x0, y0, sx, sy, &mut got, ow, oh).unwrap();
             for (i, (a, b)) in got.iter().zip(&want).enumerate() {
                 assert_eq!(
                     a.to_bits(),
@@ -858,19 +1179,29 @@ mod bilinear_tests {
             (10.0, 5.0, 0.25, 0.25, 1, 9),
             (10.0, 5.0, 0.25, 3.5, 9, 1),
             (-3.0, 20.0, 0.8, 0.8, 50, 30),
+            (3.6, 2.2, 1.0 / 1.0375, 1.0 / 1.0375, 25, 21),
         ];
         for (x0, y0, sx, sy, ow, oh) in cases {
             for gain in [1.0, 1.0 / 255.0] {
+                let want = reference(&s, x0, y0, sx, sy, ow, oh, gain);
                 let mut got = vec![f32::NAN; ow * oh];
                 s.sample_scaled(0, x0, y0, sx, sy, &mut got, ow, oh, gain)
                     .unwrap();
-                let want = reference(&s, x0, y0, sx, sy, ow, oh, gain);
                 for (i, (a, b)) in got.iter().zip(&want).enumerate() {
                     assert_eq!(
                         a.to_bits(),
                         b.to_bits(),
                         "{x0},{y0} {sx}x{sy} gain {gain}: pixel {i}: {a} vs {b}"
                     );
+                }
+                // the kernels at every level
+                for level in SimdLevel::ALL {
+                    got.fill(f32::NAN);
+                    s.sample_at(level, 0, (x0, y0, sx, sy), &mut got, ow, oh, gain)
+                        .unwrap();
+                    for (i, (a, b)) in got.iter().zip(&want).enumerate() {
+                        assert_eq!(a.to_bits(), b.to_bits(), "{level:?} pixel {i}");
+                    }
                 }
             }
         }
@@ -1029,5 +1360,51 @@ mod tests {
         );
         // nothing loaded holds nothing
         assert!(!PatchSampler::new().holds(&r(0, 0, 1, 1)));
+    }
+}
+
+#[cfg(test)]
+mod table_row_tests {
+    use super::*;
+
+    #[test]
+    fn the_running_sums_in_i32_are_the_u64_sums_bit_for_bit() {
+        let n = 300;
+        let v: Vec<u8> = (0..n)
+            .map(|i| ((i * 2_654_435_761usize) >> 9) as u8)
+            .collect();
+        let upper: Vec<f64> = (0..=n)
+            .map(|i| (i * 1_000_003 % 7919) as f64 * 255.0)
+            .collect();
+        for left in [0u64, 255, 123_456_789, (1 << 40) + 17] {
+            let row = |level: SimdLevel, prefix: &mut [i32]| {
+                let (mut lower, mut dst) = (vec![f64::NAN; n + 1], vec![f32::NAN; n]);
+                level.run(TableRow {
+                    left,
+                    v: &v,
+                    upper: &upper,
+                    lower: &mut lower,
+                    dst: &mut dst,
+                    prefix,
+                });
+                (lower, dst)
+            };
+            // no scratch: the u64 running sum (the path for rows of 2^23
+            // pixels or more)
+            let (want, values) = row(SimdLevel::Scalar, &mut []);
+            let mut run = left;
+            for (x, &p) in v.iter().enumerate() {
+                assert_eq!(values[x], f32::from(p));
+                run += u64::from(p);
+                assert_eq!(want[x + 1], upper[x + 1] + run as i64 as f64);
+            }
+            assert_eq!(want[0], upper[0] + left as f64);
+            for level in SimdLevel::ALL {
+                let (got, dst) = row(level, &mut vec![0; n]);
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&got), bits(&want), "{level:?} left {left}");
+                assert_eq!(dst, values);
+            }
+        }
     }
 }
