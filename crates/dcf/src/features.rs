@@ -59,7 +59,9 @@ pub struct Fhog {
     gx: Vec<f32>,
     gy: Vec<f32>,
     mag: Vec<f32>,
-    bin: Vec<u8>,
+    /// Each pixel's bin (as wide as the gradients: the vector loop that
+    /// finds them keeps its lanes that wide).
+    bin: Vec<u32>,
     sensitive: Vec<f32>,
     padded: Vec<f32>,
     /// Per pixel of the whole cells' rows (`hb * cell` rows of `w`): the
@@ -71,13 +73,11 @@ pub struct Fhog {
     px_hi: Vec<f32>,
     px_up: Vec<f32>,
     px_down: Vec<f32>,
-    /// Scratch of the histograms: each pixel's four shares (upper-left,
-    /// upper-right, lower-left, lower-right cell, plane after plane) and
-    /// its offset in the padded histograms.
+    /// Scratch of the histograms: each pixel's four shares (two planes
+    /// of pairs: upper-left and upper-right cell, then lower-left and
+    /// lower-right) and its offset in the padded histograms.
     shares: Vec<f32>,
     tops: Vec<u32>,
-    /// The offsets of the grid's cells in a padded histogram.
-    interior: Vec<u32>,
     insensitive: Vec<f32>,
     block: Vec<f32>,
     /// Per cell: its energy, then the norms of its four blocks and its
@@ -119,9 +119,6 @@ impl Fhog {
                 (px_up[i], px_down[i]) = (1.0 - fy, fy);
             }
         }
-        let interior = (0..hb)
-            .flat_map(|cy| (0..wb).map(move |cx| ((cy + 1) * pw + cx + 1) as u32))
-            .collect();
         Ok(Self {
             w,
             h,
@@ -141,7 +138,6 @@ impl Fhog {
             px_down,
             shares: vec![0.0; 4 * px],
             tops: vec![0; px],
-            interior,
             insensitive: vec![0.0; INSENSITIVE * nb],
             block: vec![0.0; wb.saturating_sub(1).max(1) * hb.saturating_sub(1).max(1)],
             energy: vec![0.0; nb],
@@ -285,7 +281,6 @@ impl Fhog {
             px_down: &self.px_down,
             shares: &mut self.shares,
             tops: &mut self.tops,
-            interior: &self.interior,
             padded: &mut self.padded,
             sensitive: &mut self.sensitive[..SENSITIVE * nb],
             insensitive: &mut self.insensitive[..INSENSITIVE * nb],
@@ -333,21 +328,24 @@ fn directions() -> [(f32, f32); INSENSITIVE] {
 /// maximises `cos(theta - theta_o)`: the largest `|g . u_o|` over the 9
 /// directions of the first half circle, its sign telling the half. This
 /// is `round(18 theta / 2 pi) mod 18` without the arc tangent; exact ties
-/// go to the lower bin.
+/// go to the lower bin. The bin is carried as a `u32` (as wide as the
+/// gradients) so that a vector loop keeps the running best in lanes of
+/// the comparisons' width (one blend per direction, no narrowing of each
+/// comparison's mask to bytes; the bins narrowed once at the end).
 #[inline(always)]
-fn pixel(gx: f32, gy: f32, dirs: &[(f32, f32); INSENSITIVE]) -> (f32, u8) {
-    let (mut best, mut bd, mut ba) = (0u8, gx, gx.abs());
+fn pixel(gx: f32, gy: f32, dirs: &[(f32, f32); INSENSITIVE]) -> (f32, u32) {
+    let (mut best, mut bd, mut ba) = (0u32, gx, gx.abs());
     for (o, &(c, s)) in dirs.iter().enumerate().skip(1) {
         let d = gx * c + gy * s;
         let better = d.abs() > ba;
-        best = if better { o as u8 } else { best };
+        best = if better { o as u32 } else { best };
         bd = if better { d } else { bd };
         ba = if better { d.abs() } else { ba };
     }
     let bin = if bd >= 0.0 {
         best
     } else {
-        best + INSENSITIVE as u8
+        best + INSENSITIVE as u32
     };
     ((gx * gx + gy * gy).sqrt(), bin)
 }
@@ -372,7 +370,7 @@ struct Histograms<'a> {
     pw: usize,
     np: usize,
     mag: &'a [f32],
-    bin: &'a [u8],
+    bin: &'a [u32],
     px_cell: &'a [u32],
     px_lo: &'a [f32],
     px_hi: &'a [f32],
@@ -380,58 +378,66 @@ struct Histograms<'a> {
     px_down: &'a [f32],
     shares: &'a mut [f32],
     tops: &'a mut [u32],
-    interior: &'a [u32],
     padded: &'a mut [f32],
     sensitive: &'a mut [f32],
     insensitive: &'a mut [f32],
 }
 
 /// Every pixel's four shares and offset (one flat pass: vectorises).
+/// The shares are stored in pairs, the two upper cells' in `upper`, the
+/// two lower cells' in `lower`, so that the scatter loads each pair at
+/// once.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn shares(
     norm: f32,
     np: u32,
     mag: &[f32],
-    bin: &[u8],
+    bin: &[u32],
     (cell, lo, hi): (&[u32], &[f32], &[f32]),
     (up, down): (&[f32], &[f32]),
-    (s00, s01, s10, s11): (&mut [f32], &mut [f32], &mut [f32], &mut [f32]),
+    (upper, lower): (&mut [f32], &mut [f32]),
     tops: &mut [u32],
 ) {
     let n = tops.len();
     let (mag, bin, cell, lo, hi) = (&mag[..n], &bin[..n], &cell[..n], &lo[..n], &hi[..n]);
     let (up, down) = (&up[..n], &down[..n]);
-    let (s00, s01, s10, s11) = (&mut s00[..n], &mut s01[..n], &mut s10[..n], &mut s11[..n]);
-    for i in 0..n {
+    let (upper, lower) = (&mut upper[..2 * n], &mut lower[..2 * n]);
+    for (i, (u, l)) in upper
+        .chunks_exact_mut(2)
+        .zip(lower.chunks_exact_mut(2))
+        .enumerate()
+    {
         let m = mag[i] * norm;
         let (wy1, wy0) = (down[i] * m, up[i] * m);
-        s00[i] = lo[i] * wy0;
-        s01[i] = hi[i] * wy0;
-        s10[i] = lo[i] * wy1;
-        s11[i] = hi[i] * wy1;
-        tops[i] = u32::from(bin[i]) * np + cell[i];
+        u[0] = lo[i] * wy0;
+        u[1] = hi[i] * wy0;
+        l[0] = lo[i] * wy1;
+        l[1] = hi[i] * wy1;
+        tops[i] = bin[i] * np + cell[i];
     }
 }
 
 /// One row's shares added into the padded histograms, pixel after pixel.
-#[inline(always)]
-fn scatter(
-    padded: &mut [f32],
-    pw: usize,
-    tops: &[u32],
-    (s00, s01, s10, s11): (&[f32], &[f32], &[f32], &[f32]),
-) {
-    let n = tops.len();
-    let (s00, s01, s10, s11) = (&s00[..n], &s01[..n], &s10[..n], &s11[..n]);
-    for x in 0..n {
+/// Scalar code (the baseline's two-wide adds at most, the same at every
+/// level), kept out of line so that the kernel's live values leave it
+/// all the registers.
+#[inline(never)]
+fn scatter(padded: &mut [f32], pw: u32, tops: &[u32], (upper, lower): (&[f32], &[f32])) {
+    // (both under 2^32: their sum cannot overflow, one bounds test less)
+    let pw = pw as usize;
+    for ((&top, u), l) in tops
+        .iter()
+        .zip(upper.chunks_exact(2))
+        .zip(lower.chunks_exact(2))
+    {
         // the 2x2 cells the pixel's shares go to, one slice
-        let top = tops[x] as usize;
+        let top = top as usize;
         let quad = &mut padded[top..top + pw + 2];
-        quad[0] += s00[x];
-        quad[1] += s01[x];
-        quad[pw] += s10[x];
-        quad[pw + 1] += s11[x];
+        quad[0] += u[0];
+        quad[1] += u[1];
+        quad[pw] += l[0];
+        quad[pw + 1] += l[1];
     }
 }
 
@@ -449,9 +455,7 @@ impl Kernel for Histograms<'_> {
         // none is read back below as -0.0 + 0.0 = +0.0
         let padded = &mut self.padded[..SENSITIVE * np];
         padded.fill(-0.0);
-        let (s00, rest) = self.shares[..4 * px].split_at_mut(px);
-        let (s01, rest) = rest.split_at_mut(px);
-        let (s10, s11) = rest.split_at_mut(px);
+        let (upper, lower) = self.shares[..4 * px].split_at_mut(2 * px);
         let tops = &mut self.tops[..px];
         shares(
             norm,
@@ -460,24 +464,24 @@ impl Kernel for Histograms<'_> {
             self.bin,
             (self.px_cell, self.px_lo, self.px_hi),
             (self.px_up, self.px_down),
-            (&mut *s00, &mut *s01, &mut *s10, &mut *s11),
+            (&mut *upper, &mut *lower),
             tops,
         );
         // pixels past the last whole cell are left out
         let n = self.wb * self.cell;
         for y in 0..self.rows {
             let r = y * w..y * w + n;
+            let pairs = 2 * r.start..2 * r.end;
             scatter(
                 padded,
-                pw,
-                &tops[r.clone()],
-                (&s00[r.clone()], &s01[r.clone()], &s10[r.clone()], &s11[r]),
+                pw as u32,
+                &tops[r],
+                (&upper[pairs.clone()], &lower[pairs]),
             );
         }
         // the grid without its padding; the insensitive bins the sums of
         // opposite sensitive ones
-        let nb = self.wb * self.hb;
-        let interior = &self.interior[..nb];
+        let (wb, nb) = (self.wb, self.wb * self.hb);
         let (lo_bins, hi_bins) = self.sensitive.split_at_mut(INSENSITIVE * nb);
         for o in 0..INSENSITIVE {
             let (pa, pb) = (
@@ -486,12 +490,21 @@ impl Kernel for Histograms<'_> {
             );
             let (da, db) = (&mut lo_bins[o * nb..][..nb], &mut hi_bins[o * nb..][..nb]);
             let di = &mut self.insensitive[o * nb..][..nb];
-            for (k, &j) in interior.iter().enumerate() {
-                let j = j as usize;
-                let (a, b) = (pa[j] + 0.0, pb[j] + 0.0);
-                da[k] = a;
-                db[k] = b;
-                di[k] = a + b;
+            // row by row: each row of cells is contiguous in both layouts
+            for (cy, ((da, db), di)) in da
+                .chunks_exact_mut(wb)
+                .zip(db.chunks_exact_mut(wb))
+                .zip(di.chunks_exact_mut(wb))
+                .enumerate()
+            {
+                let j = (cy + 1) * pw + 1;
+                let (ra, rb) = (&pa[j..][..wb], &pb[j..][..wb]);
+                for k in 0..wb {
+                    let (a, b) = (ra[k] + 0.0, rb[k] + 0.0);
+                    da[k] = a;
+                    db[k] = b;
+                    di[k] = a + b;
+                }
             }
         }
     }
@@ -502,7 +515,7 @@ struct GradientBins<'a> {
     gx: &'a [f32],
     gy: &'a [f32],
     mag: &'a mut [f32],
-    bin: &'a mut [u8],
+    bin: &'a mut [u32],
 }
 
 impl Kernel for GradientBins<'_> {
@@ -561,16 +574,26 @@ impl Kernel for Normalise<'_> {
         let (n0, rest) = self.norms.split_at_mut(nb);
         let (n1, rest) = rest.split_at_mut(nb);
         let (n2, n3) = rest.split_at_mut(nb);
+        // (row by row: block column min(x, bw - 1) is the block row and its
+        // last value again, column min(x - 1, bw - 1) its first value then
+        // the block row)
         for y in 0..hb {
             let bys = [y.min(hb - 2), y.saturating_sub(1).min(hb - 2)];
-            for x in 0..wb {
-                let bxs = [x.min(bw - 1), x.saturating_sub(1).min(bw - 1)];
-                let i = y * wb + x;
-                n0[i] = self.block[bys[0] * bw + bxs[0]];
-                n1[i] = self.block[bys[1] * bw + bxs[0]];
-                n2[i] = self.block[bys[0] * bw + bxs[1]];
-                n3[i] = self.block[bys[1] * bw + bxs[1]];
-            }
+            let (b0, b1) = (
+                &self.block[bys[0] * bw..][..bw],
+                &self.block[bys[1] * bw..][..bw],
+            );
+            let r = y * wb..(y + 1) * wb;
+            let (r0, r1) = (&mut n0[r.clone()], &mut n1[r.clone()]);
+            let (r2, r3) = (&mut n2[r.clone()], &mut n3[r]);
+            r0[..bw].copy_from_slice(b0);
+            r0[bw] = b0[bw - 1];
+            r1[..bw].copy_from_slice(b1);
+            r1[bw] = b1[bw - 1];
+            r2[0] = b0[0];
+            r2[1..].copy_from_slice(b0);
+            r3[0] = b1[0];
+            r3[1..].copy_from_slice(b1);
         }
         let (n0, n1, n2, n3) = (&n0[..nb], &n1[..nb], &n2[..nb], &n3[..nb]);
         let (t0, rest) = self.texture.split_at_mut(nb);
@@ -723,7 +746,7 @@ mod tests {
             // one pixel: magnitude and bin, branch-free (selects), so that the
             // inner loop vectorises
             #[inline(always)]
-            fn pixel(gx: f32, gy: f32, dirs: &[(f32, f32); INSENSITIVE]) -> (f32, u8) {
+            fn pixel_u8(gx: f32, gy: f32, dirs: &[(f32, f32); INSENSITIVE]) -> (f32, u8) {
                 let (mut best, mut bd, mut ba) = (0u8, gx, gx.abs());
                 for (o, &(c, s)) in dirs.iter().enumerate().skip(1) {
                     let d = gx * c + gy * s;
@@ -738,6 +761,11 @@ mod tests {
                     best + INSENSITIVE as u8
                 };
                 ((gx * gx + gy * gy).sqrt(), bin)
+            }
+            // (the kernels keep the bins as u32)
+            fn pixel(gx: f32, gy: f32, dirs: &[(f32, f32); INSENSITIVE]) -> (f32, u32) {
+                let (m, b) = pixel_u8(gx, gy, dirs);
+                (m, u32::from(b))
             }
             for y in 0..h {
                 let (ya, yb, ky) = if h == 1 {
