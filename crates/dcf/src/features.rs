@@ -66,18 +66,22 @@ pub struct Fhog {
     padded: Vec<f32>,
     /// Per pixel of the whole cells' rows (`hb * cell` rows of `w`): the
     /// offset of its upper-left cell in a padded histogram (row and
-    /// column, +1 for the padding), the weights of the left and right
-    /// cells (0 past the last whole cell), of the upper and lower cells.
+    /// column, +1 for the padding; past the last whole cell, a corner of
+    /// the padding whose 2x2 cells are all padding), the weights of the
+    /// left and right cells (0 past the last whole cell), of the upper and
+    /// lower cells.
     px_cell: Vec<u32>,
     px_lo: Vec<f32>,
     px_hi: Vec<f32>,
     px_up: Vec<f32>,
     px_down: Vec<f32>,
-    /// Scratch of the histograms: each pixel's four shares (two planes
-    /// of pairs: upper-left and upper-right cell, then lower-left and
-    /// lower-right) and its offset in the padded histograms.
+    /// Scratch of the histograms: each pixel's four shares (side by side:
+    /// upper-left, upper-right, lower-left, lower-right cell) and its
+    /// offset in the padded histograms.
     shares: Vec<f32>,
     tops: Vec<u32>,
+    /// The offsets of the grid's cells in a padded histogram.
+    interior: Vec<u32>,
     insensitive: Vec<f32>,
     block: Vec<f32>,
     /// Per cell: its energy, then the norms of its four blocks and its
@@ -105,8 +109,16 @@ impl Fhog {
         let nb = wb * hb;
         let (pw, rows) = (wb + 2, hb * cell);
         let px = rows * w;
-        let (mut px_cell, mut px_lo, mut px_hi) = (vec![0; px], vec![0.0; px], vec![0.0; px]);
+        // a pixel past the last whole cell gets the padding's upper-right
+        // corner: its 2x2 cells (row 0, columns pw - 1 and pw = row 1's
+        // first; row 1's last, row 2's first) are all padding, so the
+        // scatter goes over whole rows and what it adds is dropped
+        let past = (pw - 1) as u32;
+        let (mut px_cell, mut px_lo, mut px_hi) = (vec![past; px], vec![0.0; px], vec![0.0; px]);
         let (mut px_up, mut px_down) = (vec![0.0; px], vec![0.0; px]);
+        let interior = (0..hb)
+            .flat_map(|cy| (0..wb).map(move |cx| ((cy + 1) * pw + cx + 1) as u32))
+            .collect();
         for y in 0..rows {
             let (y0, fy) = split(y, cell);
             for x in 0..wb * cell {
@@ -138,6 +150,7 @@ impl Fhog {
             px_down,
             shares: vec![0.0; 4 * px],
             tops: vec![0; px],
+            interior,
             insensitive: vec![0.0; INSENSITIVE * nb],
             block: vec![0.0; wb.saturating_sub(1).max(1) * hb.saturating_sub(1).max(1)],
             energy: vec![0.0; nb],
@@ -281,6 +294,7 @@ impl Fhog {
             px_down: &self.px_down,
             shares: &mut self.shares,
             tops: &mut self.tops,
+            interior: &self.interior,
             padded: &mut self.padded,
             sensitive: &mut self.sensitive[..SENSITIVE * nb],
             insensitive: &mut self.insensitive[..INSENSITIVE * nb],
@@ -378,15 +392,16 @@ struct Histograms<'a> {
     px_down: &'a [f32],
     shares: &'a mut [f32],
     tops: &'a mut [u32],
+    interior: &'a [u32],
     padded: &'a mut [f32],
     sensitive: &'a mut [f32],
     insensitive: &'a mut [f32],
 }
 
 /// Every pixel's four shares and offset (one flat pass: vectorises).
-/// The shares are stored in pairs, the two upper cells' in `upper`, the
-/// two lower cells' in `lower`, so that the scatter loads each pair at
-/// once.
+/// A pixel's four shares are stored side by side (one output stream, so
+/// that the scatter loads each pair of neighbouring cells' shares at
+/// once).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn shares(
@@ -396,24 +411,19 @@ fn shares(
     bin: &[u32],
     (cell, lo, hi): (&[u32], &[f32], &[f32]),
     (up, down): (&[f32], &[f32]),
-    (upper, lower): (&mut [f32], &mut [f32]),
+    quads: &mut [f32],
     tops: &mut [u32],
 ) {
     let n = tops.len();
     let (mag, bin, cell, lo, hi) = (&mag[..n], &bin[..n], &cell[..n], &lo[..n], &hi[..n]);
     let (up, down) = (&up[..n], &down[..n]);
-    let (upper, lower) = (&mut upper[..2 * n], &mut lower[..2 * n]);
-    for (i, (u, l)) in upper
-        .chunks_exact_mut(2)
-        .zip(lower.chunks_exact_mut(2))
-        .enumerate()
-    {
+    for (i, q) in quads[..4 * n].chunks_exact_mut(4).enumerate() {
         let m = mag[i] * norm;
         let (wy1, wy0) = (down[i] * m, up[i] * m);
-        u[0] = lo[i] * wy0;
-        u[1] = hi[i] * wy0;
-        l[0] = lo[i] * wy1;
-        l[1] = hi[i] * wy1;
+        q[0] = lo[i] * wy0;
+        q[1] = hi[i] * wy0;
+        q[2] = lo[i] * wy1;
+        q[3] = hi[i] * wy1;
         tops[i] = bin[i] * np + cell[i];
     }
 }
@@ -423,21 +433,17 @@ fn shares(
 /// level), kept out of line so that the kernel's live values leave it
 /// all the registers.
 #[inline(never)]
-fn scatter(padded: &mut [f32], pw: u32, tops: &[u32], (upper, lower): (&[f32], &[f32])) {
+fn scatter(padded: &mut [f32], pw: u32, tops: &[u32], quads: &[f32]) {
     // (both under 2^32: their sum cannot overflow, one bounds test less)
     let pw = pw as usize;
-    for ((&top, u), l) in tops
-        .iter()
-        .zip(upper.chunks_exact(2))
-        .zip(lower.chunks_exact(2))
-    {
+    for (&top, q) in tops.iter().zip(quads.chunks_exact(4)) {
         // the 2x2 cells the pixel's shares go to, one slice
         let top = top as usize;
-        let quad = &mut padded[top..top + pw + 2];
-        quad[0] += u[0];
-        quad[1] += u[1];
-        quad[pw] += l[0];
-        quad[pw + 1] += l[1];
+        let cells = &mut padded[top..top + pw + 2];
+        cells[0] += q[0];
+        cells[1] += q[1];
+        cells[pw] += q[2];
+        cells[pw + 1] += q[3];
     }
 }
 
@@ -455,7 +461,7 @@ impl Kernel for Histograms<'_> {
         // none is read back below as -0.0 + 0.0 = +0.0
         let padded = &mut self.padded[..SENSITIVE * np];
         padded.fill(-0.0);
-        let (upper, lower) = self.shares[..4 * px].split_at_mut(2 * px);
+        let quads = &mut self.shares[..4 * px];
         let tops = &mut self.tops[..px];
         shares(
             norm,
@@ -464,24 +470,16 @@ impl Kernel for Histograms<'_> {
             self.bin,
             (self.px_cell, self.px_lo, self.px_hi),
             (self.px_up, self.px_down),
-            (&mut *upper, &mut *lower),
+            quads,
             tops,
         );
-        // pixels past the last whole cell are left out
-        let n = self.wb * self.cell;
-        for y in 0..self.rows {
-            let r = y * w..y * w + n;
-            let pairs = 2 * r.start..2 * r.end;
-            scatter(
-                padded,
-                pw as u32,
-                &tops[r],
-                (&upper[pairs.clone()], &lower[pairs]),
-            );
-        }
+        // in one pass over the whole rows: the pixels past the last whole
+        // cell add into the padding (see `px_cell`), which is dropped
+        scatter(padded, pw as u32, tops, quads);
         // the grid without its padding; the insensitive bins the sums of
         // opposite sensitive ones
-        let (wb, nb) = (self.wb, self.wb * self.hb);
+        let nb = self.wb * self.hb;
+        let interior = &self.interior[..nb];
         let (lo_bins, hi_bins) = self.sensitive.split_at_mut(INSENSITIVE * nb);
         for o in 0..INSENSITIVE {
             let (pa, pb) = (
@@ -490,21 +488,14 @@ impl Kernel for Histograms<'_> {
             );
             let (da, db) = (&mut lo_bins[o * nb..][..nb], &mut hi_bins[o * nb..][..nb]);
             let di = &mut self.insensitive[o * nb..][..nb];
-            // row by row: each row of cells is contiguous in both layouts
-            for (cy, ((da, db), di)) in da
-                .chunks_exact_mut(wb)
-                .zip(db.chunks_exact_mut(wb))
-                .zip(di.chunks_exact_mut(wb))
-                .enumerate()
-            {
-                let j = (cy + 1) * pw + 1;
-                let (ra, rb) = (&pa[j..][..wb], &pb[j..][..wb]);
-                for k in 0..wb {
-                    let (a, b) = (ra[k] + 0.0, rb[k] + 0.0);
-                    da[k] = a;
-                    db[k] = b;
-                    di[k] = a + b;
-                }
+            // one gather over the cells (rows of a few cells cost more in
+            // per-row set-up than a vector loop saves)
+            for (((&j, da), db), di) in interior.iter().zip(da).zip(db).zip(di) {
+                let j = j as usize;
+                let (a, b) = (pa[j] + 0.0, pb[j] + 0.0);
+                *da = a;
+                *db = b;
+                *di = a + b;
             }
         }
     }
@@ -945,6 +936,10 @@ mod tests {
             (37, 29, 4),
             (41, 40, 5),
             (17, 31, 3),
+            // the trackers' sizes: a search window, scale-filter patches
+            (62, 155, 4),
+            (14, 36, 4),
+            (15, 35, 4),
         ];
         for (k, &(w, h, cell)) in sizes.iter().enumerate() {
             let patch = random_patch(w, h, 7 + k as u32);
