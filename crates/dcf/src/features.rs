@@ -80,8 +80,6 @@ pub struct Fhog {
     /// offset in the padded histograms.
     shares: Vec<f32>,
     tops: Vec<u32>,
-    /// The offsets of the grid's cells in a padded histogram.
-    interior: Vec<u32>,
     insensitive: Vec<f32>,
     block: Vec<f32>,
     /// Per cell: its energy, then the norms of its four blocks and its
@@ -107,25 +105,26 @@ impl Fhog {
         }
         let (wb, hb) = (w / cell, h / cell);
         let nb = wb * hb;
-        let (pw, rows) = (wb + 2, hb * cell);
+        let rows = hb * cell;
         let px = rows * w;
-        // a pixel past the last whole cell gets the padding's upper-right
-        // corner: its 2x2 cells (row 0, columns pw - 1 and pw = row 1's
-        // first; row 1's last, row 2's first) are all padding, so the
+        // a pixel past the last whole cell goes to the last plane's bottom
+        // padding row (and the guard row after it) with weights 0, so the
         // scatter goes over whole rows and what it adds is dropped
-        let past = (pw - 1) as u32;
+        let past = ((hb + 1) * wb + 1) as u32;
         let (mut px_cell, mut px_lo, mut px_hi) = (vec![past; px], vec![0.0; px], vec![0.0; px]);
         let (mut px_up, mut px_down) = (vec![0.0; px], vec![0.0; px]);
-        let interior = (0..hb)
-            .flat_map(|cy| (0..wb).map(move |cx| ((cy + 1) * pw + cx + 1) as u32))
-            .collect();
         for y in 0..rows {
             let (y0, fy) = split(y, cell);
             for x in 0..wb * cell {
                 let (c0, fx) = split(x, cell);
                 let i = y * w + x;
-                px_cell[i] = (y0 * pw + c0) as u32;
-                (px_lo[i], px_hi[i]) = (1.0 - fx, fx);
+                px_cell[i] = (y0 * wb + c0) as u32;
+                // a column off the grid (left of the first cell, right of
+                // the last) gets weight 0: its share, +0.0, lands on the
+                // neighbouring row's edge cell and changes no value there
+                let lo = if c0 == 0 { 0.0 } else { 1.0 - fx };
+                let hi = if c0 == wb { 0.0 } else { fx };
+                (px_lo[i], px_hi[i]) = (lo, hi);
             }
             for i in y * w..(y + 1) * w {
                 (px_up[i], px_down[i]) = (1.0 - fy, fy);
@@ -142,7 +141,7 @@ impl Fhog {
             mag: vec![0.0; w * h],
             bin: vec![0; w * h],
             sensitive: vec![0.0; SENSITIVE * nb],
-            padded: vec![0.0; SENSITIVE * (wb + 2) * (hb + 2)],
+            padded: vec![0.0; SENSITIVE * wb * (hb + 2) + wb + 2],
             px_cell,
             px_lo,
             px_hi,
@@ -150,7 +149,6 @@ impl Fhog {
             px_down,
             shares: vec![0.0; 4 * px],
             tops: vec![0; px],
-            interior,
             insensitive: vec![0.0; INSENSITIVE * nb],
             block: vec![0.0; wb.saturating_sub(1).max(1) * hb.saturating_sub(1).max(1)],
             energy: vec![0.0; nb],
@@ -272,18 +270,18 @@ impl Fhog {
     fn histograms(&mut self, level: SimdLevel) {
         let (wb, hb) = (self.wb, self.hb);
         let nb = wb * hb;
-        // binned on a grid padded by one cell on each side (the shares
-        // that fall off the grid land there and are dropped), so the inner
-        // loop has no bounds tests
-        let (pw, ph) = (wb + 2, hb + 2);
-        let np = pw * ph;
+        // binned on planes of hb + 2 rows of wb cells (a padding row above
+        // and below the grid), one value before the first plane and a row
+        // after the last: the shares that fall off the grid above or below
+        // land in padding and are dropped, those left or right of it have
+        // weight 0 (see `Fhog::new`), so the inner loop has no bounds tests
+        let np = wb * (hb + 2);
         level.run(Histograms {
             w: self.w,
             cell: self.cell,
             rows: hb * self.cell,
             wb,
             hb,
-            pw,
             np,
             mag: &self.mag,
             bin: &self.bin,
@@ -294,7 +292,6 @@ impl Fhog {
             px_down: &self.px_down,
             shares: &mut self.shares,
             tops: &mut self.tops,
-            interior: &self.interior,
             padded: &mut self.padded,
             sensitive: &mut self.sensitive[..SENSITIVE * nb],
             insensitive: &mut self.insensitive[..INSENSITIVE * nb],
@@ -381,7 +378,6 @@ struct Histograms<'a> {
     rows: usize,
     wb: usize,
     hb: usize,
-    pw: usize,
     np: usize,
     mag: &'a [f32],
     bin: &'a [u32],
@@ -392,7 +388,6 @@ struct Histograms<'a> {
     px_down: &'a [f32],
     shares: &'a mut [f32],
     tops: &'a mut [u32],
-    interior: &'a [u32],
     padded: &'a mut [f32],
     sensitive: &'a mut [f32],
     insensitive: &'a mut [f32],
@@ -433,9 +428,9 @@ fn shares(
 /// level), kept out of line so that the kernel's live values leave it
 /// all the registers.
 #[inline(never)]
-fn scatter(padded: &mut [f32], pw: u32, tops: &[u32], quads: &[f32]) {
+fn scatter(padded: &mut [f32], stride: u32, tops: &[u32], quads: &[f32]) {
     // (both under 2^32: their sum cannot overflow, one bounds test less)
-    let pw = pw as usize;
+    let pw = stride as usize;
     for (&top, q) in tops.iter().zip(quads.chunks_exact(4)) {
         // the 2x2 cells the pixel's shares go to, one slice
         let top = top as usize;
@@ -451,7 +446,7 @@ impl Kernel for Histograms<'_> {
     type Output = ();
     #[inline(always)]
     fn run<T: Token>(self, _: T) {
-        let (w, pw, np) = (self.w, self.pw, self.np);
+        let (w, wb, np) = (self.w, self.wb, self.np);
         let inv = 1.0 / self.cell as f32;
         let norm = inv * inv;
         let px = self.rows * w;
@@ -459,7 +454,7 @@ impl Kernel for Histograms<'_> {
         // share is +0.0 or positive, so a cell that receives one holds
         // the same bits as when cleared to +0.0, and one that receives
         // none is read back below as -0.0 + 0.0 = +0.0
-        let padded = &mut self.padded[..SENSITIVE * np];
+        let padded = &mut self.padded[..SENSITIVE * np + wb + 2];
         padded.fill(-0.0);
         let quads = &mut self.shares[..4 * px];
         let tops = &mut self.tops[..px];
@@ -475,27 +470,22 @@ impl Kernel for Histograms<'_> {
         );
         // in one pass over the whole rows: the pixels past the last whole
         // cell add into the padding (see `px_cell`), which is dropped
-        scatter(padded, pw as u32, tops, quads);
+        scatter(padded, wb as u32, tops, quads);
         // the grid without its padding; the insensitive bins the sums of
         // opposite sensitive ones
-        let nb = self.wb * self.hb;
-        let interior = &self.interior[..nb];
+        // (each plane's grid is one contiguous run: one flat loop)
+        let nb = wb * self.hb;
         let (lo_bins, hi_bins) = self.sensitive.split_at_mut(INSENSITIVE * nb);
         for o in 0..INSENSITIVE {
-            let (pa, pb) = (
-                &padded[o * np..][..np],
-                &padded[(o + INSENSITIVE) * np..][..np],
-            );
+            let grid = |o: usize| 1 + o * np + wb..1 + o * np + wb + nb;
+            let (pa, pb) = (&padded[grid(o)], &padded[grid(o + INSENSITIVE)]);
             let (da, db) = (&mut lo_bins[o * nb..][..nb], &mut hi_bins[o * nb..][..nb]);
             let di = &mut self.insensitive[o * nb..][..nb];
-            // one gather over the cells (rows of a few cells cost more in
-            // per-row set-up than a vector loop saves)
-            for (((&j, da), db), di) in interior.iter().zip(da).zip(db).zip(di) {
-                let j = j as usize;
-                let (a, b) = (pa[j] + 0.0, pb[j] + 0.0);
-                *da = a;
-                *db = b;
-                *di = a + b;
+            for i in 0..nb {
+                let (a, b) = (pa[i] + 0.0, pb[i] + 0.0);
+                da[i] = a;
+                db[i] = b;
+                di[i] = a + b;
             }
         }
     }
@@ -800,7 +790,7 @@ mod tests {
             // loop has no bounds tests
             let (pw, ph) = (wb + 2, hb + 2);
             let np = pw * ph;
-            self.padded.fill(0.0);
+            let mut padded = vec![0.0f32; SENSITIVE * np];
             let inv = 1.0 / b as f32;
             let norm = inv * inv;
             // per axis: the lower cell (+1 for the padding) and the upper one's
@@ -817,7 +807,7 @@ mod tests {
                 let bins = &self.bin[y * w..][..wb * b];
                 for ((&m, &o), &(x0, fx)) in mag.iter().zip(bins).zip(&cols) {
                     let m = m * norm;
-                    let hist = &mut self.padded[o as usize * np..][..np];
+                    let hist = &mut padded[o as usize * np..][..np];
                     let top = y0 * pw + x0;
                     let (wy1, wy0) = (fy * m, (1.0 - fy) * m);
                     hist[top] += (1.0 - fx) * wy0;
@@ -827,7 +817,7 @@ mod tests {
                 }
             }
             for o in 0..SENSITIVE {
-                let src = &self.padded[o * np..][..np];
+                let src = &padded[o * np..][..np];
                 let dst = &mut self.sensitive[o * nb..][..nb];
                 for cy in 0..hb {
                     dst[cy * wb..][..wb].copy_from_slice(&src[(cy + 1) * pw + 1..][..wb]);
