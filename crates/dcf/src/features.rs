@@ -577,6 +577,25 @@ impl Kernel for Normalise<'_> {
             r3[1..].copy_from_slice(b1);
         }
         let (n0, n1, n2, n3) = (&n0[..nb], &n1[..nb], &n2[..nb], &n3[..nb]);
+        if nb >= LANES {
+            // chunks of LANES cells, all 27 channels of a chunk at once
+            // (the texture sums stay in registers); the last chunk ends at
+            // the last cell and may overlap the one before: every value a
+            // chunk writes depends on its cells only, so writing it twice
+            // writes the same bits
+            let last = nb - LANES;
+            for i0 in (0..last).step_by(LANES).chain([last]) {
+                cells(
+                    i0,
+                    nb,
+                    [&n0[i0..], &n1[i0..], &n2[i0..], &n3[i0..]],
+                    self.sensitive,
+                    self.insensitive,
+                    self.out,
+                );
+            }
+            return;
+        }
         let (t0, rest) = self.texture.split_at_mut(nb);
         let (t1, rest) = rest.split_at_mut(nb);
         let (t2, t3) = rest.split_at_mut(nb);
@@ -639,6 +658,81 @@ impl Kernel for Normalise<'_> {
             for (d, &t) in dst.iter_mut().zip(t) {
                 *d = R * t;
             }
+        }
+    }
+}
+
+/// Cells per chunk of [`cells`] (one AVX2 vector of `f32`).
+const LANES: usize = 8;
+
+/// The 31 channels of the `LANES` cells from `i0`, with the arithmetic of
+/// the channel-by-channel loops (the same sums in the same order): the
+/// four clipped values of each sensitive channel summed from `0.0` in
+/// block order and each added to its block's texture sum (from `0.0`, in
+/// channel order), the insensitive ones' summed as `Iterator::sum`.
+#[inline(always)]
+fn cells(
+    i0: usize,
+    nb: usize,
+    norms: [&[f32]; 4],
+    sensitive: &[f32],
+    insensitive: &[f32],
+    out: &mut [f32],
+) {
+    // (whole-array steps over the lanes: straight-line code the compiler
+    // turns into one vector operation each)
+    type V = [f32; LANES];
+    let [n0, n1, n2, n3] = norms.map(|n| -> V {
+        let n = &n[..LANES];
+        std::array::from_fn(|l| n[l])
+    });
+    let clip = |v: &V, n: &V| -> V { std::array::from_fn(|l| (v[l] * n[l]).min(CLIP)) };
+    let (mut t0, mut t1, mut t2, mut t3) =
+        ([0.0f32; LANES], [0.0; LANES], [0.0; LANES], [0.0; LANES]);
+    // (channel after channel as slices of the grid's length: the bounds
+    // tests of a chunk do not depend on the channel, so they leave the loop)
+    let (out, texture) = out.split_at_mut((SENSITIVE + INSENSITIVE) * nb);
+    let (out_sensitive, out_insensitive) = out.split_at_mut(SENSITIVE * nb);
+    for (src, dst) in sensitive
+        .chunks_exact(nb)
+        .zip(out_sensitive.chunks_exact_mut(nb))
+    {
+        let v = &src[i0..][..LANES];
+        let v: V = std::array::from_fn(|l| v[l]);
+        let (c0, c1, c2, c3) = (clip(&v, &n0), clip(&v, &n1), clip(&v, &n2), clip(&v, &n3));
+        let s: V = std::array::from_fn(|l| {
+            let mut s = 0.0;
+            for c in [c0[l], c1[l], c2[l], c3[l]] {
+                s += c;
+            }
+            s
+        });
+        t0 = std::array::from_fn(|l| t0[l] + c0[l]);
+        t1 = std::array::from_fn(|l| t1[l] + c1[l]);
+        t2 = std::array::from_fn(|l| t2[l] + c2[l]);
+        t3 = std::array::from_fn(|l| t3[l] + c3[l]);
+        let d = &mut dst[i0..][..LANES];
+        for l in 0..LANES {
+            d[l] = R * s[l];
+        }
+    }
+    for (src, dst) in insensitive
+        .chunks_exact(nb)
+        .zip(out_insensitive.chunks_exact_mut(nb))
+    {
+        let v = &src[i0..][..LANES];
+        let v: V = std::array::from_fn(|l| v[l]);
+        let (c0, c1, c2, c3) = (clip(&v, &n0), clip(&v, &n1), clip(&v, &n2), clip(&v, &n3));
+        let s: V = std::array::from_fn(|l| [c0[l], c1[l], c2[l], c3[l]].iter().sum());
+        let d = &mut dst[i0..][..LANES];
+        for l in 0..LANES {
+            d[l] = R * s[l];
+        }
+    }
+    for (t, dst) in [t0, t1, t2, t3].iter().zip(texture.chunks_exact_mut(nb)) {
+        let d = &mut dst[i0..][..LANES];
+        for l in 0..LANES {
+            d[l] = R * t[l];
         }
     }
 }
