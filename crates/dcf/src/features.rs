@@ -65,11 +65,11 @@ pub struct Fhog {
     sensitive: Vec<f32>,
     padded: Vec<f32>,
     /// Per pixel of the whole cells' rows (`hb * cell` rows of `w`): the
-    /// offset of its upper-left cell in a padded histogram (row and
-    /// column, +1 for the padding; past the last whole cell, a corner of
-    /// the padding whose 2x2 cells are all padding), the weights of the
-    /// left and right cells (0 past the last whole cell), of the upper and
-    /// lower cells.
+    /// offset of its upper-left cell in a histogram plane (see
+    /// [`Fhog::histograms`]; past the last whole cell, the bottom padding
+    /// row, whose 2x2 cells are all padding), the weights of the left and
+    /// right cells (0 off the grid and past the last whole cell), of the
+    /// upper and lower cells.
     px_cell: Vec<u32>,
     px_lo: Vec<f32>,
     px_hi: Vec<f32>,
@@ -265,7 +265,11 @@ impl Fhog {
     /// Each pixel's four shares added into the padded histograms in pixel
     /// order (one slice per pixel: no bounds test per share); every
     /// pixel's shares and histogram offset are computed first in one
-    /// vector pass, then added row by row, one pixel after the other.
+    /// vector pass, then added in one scalar pass, one pixel after the
+    /// other. Each cell's sum is the same as on a grid padded on all four
+    /// sides for finite gradients: the shares of the columns off the grid
+    /// are +0.0 there, and `x + 0.0` is `x` (or +0.0 for -0.0, which the
+    /// read-back gives anyway).
     #[inline(never)]
     fn histograms(&mut self, level: SimdLevel) {
         let (wb, hb) = (self.wb, self.hb);
