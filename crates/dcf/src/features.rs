@@ -59,25 +59,27 @@ pub struct Fhog {
     gx: Vec<f32>,
     gy: Vec<f32>,
     mag: Vec<f32>,
-    bin: Vec<u8>,
+    /// Each pixel's bin (as wide as the gradients: the vector loop that
+    /// finds them keeps its lanes that wide).
+    bin: Vec<u32>,
     sensitive: Vec<f32>,
     padded: Vec<f32>,
     /// Per pixel of the whole cells' rows (`hb * cell` rows of `w`): the
-    /// offset of its upper-left cell in a padded histogram (row and
-    /// column, +1 for the padding), the weights of the left and right
-    /// cells (0 past the last whole cell), of the upper and lower cells.
+    /// offset of its upper-left cell in a histogram plane (see
+    /// [`Fhog::histograms`]; past the last whole cell, the bottom padding
+    /// row, whose 2x2 cells are all padding), the weights of the left and
+    /// right cells (0 off the grid and past the last whole cell), of the
+    /// upper and lower cells.
     px_cell: Vec<u32>,
     px_lo: Vec<f32>,
     px_hi: Vec<f32>,
     px_up: Vec<f32>,
     px_down: Vec<f32>,
-    /// Scratch of the histograms: each pixel's four shares (upper-left,
-    /// upper-right, lower-left, lower-right cell, plane after plane) and
-    /// its offset in the padded histograms.
+    /// Scratch of the histograms: each pixel's four shares (side by side:
+    /// upper-left, upper-right, lower-left, lower-right cell) and its
+    /// offset in the padded histograms.
     shares: Vec<f32>,
     tops: Vec<u32>,
-    /// The offsets of the grid's cells in a padded histogram.
-    interior: Vec<u32>,
     insensitive: Vec<f32>,
     block: Vec<f32>,
     /// Per cell: its energy, then the norms of its four blocks and its
@@ -103,25 +105,31 @@ impl Fhog {
         }
         let (wb, hb) = (w / cell, h / cell);
         let nb = wb * hb;
-        let (pw, rows) = (wb + 2, hb * cell);
+        let rows = hb * cell;
         let px = rows * w;
-        let (mut px_cell, mut px_lo, mut px_hi) = (vec![0; px], vec![0.0; px], vec![0.0; px]);
+        // a pixel past the last whole cell goes to the last plane's bottom
+        // padding row (and the guard row after it) with weights 0, so the
+        // scatter goes over whole rows and what it adds is dropped
+        let past = ((hb + 1) * wb + 1) as u32;
+        let (mut px_cell, mut px_lo, mut px_hi) = (vec![past; px], vec![0.0; px], vec![0.0; px]);
         let (mut px_up, mut px_down) = (vec![0.0; px], vec![0.0; px]);
         for y in 0..rows {
             let (y0, fy) = split(y, cell);
             for x in 0..wb * cell {
                 let (c0, fx) = split(x, cell);
                 let i = y * w + x;
-                px_cell[i] = (y0 * pw + c0) as u32;
-                (px_lo[i], px_hi[i]) = (1.0 - fx, fx);
+                px_cell[i] = (y0 * wb + c0) as u32;
+                // a column off the grid (left of the first cell, right of
+                // the last) gets weight 0: its share, +0.0, lands on the
+                // neighbouring row's edge cell and changes no value there
+                let lo = if c0 == 0 { 0.0 } else { 1.0 - fx };
+                let hi = if c0 == wb { 0.0 } else { fx };
+                (px_lo[i], px_hi[i]) = (lo, hi);
             }
             for i in y * w..(y + 1) * w {
                 (px_up[i], px_down[i]) = (1.0 - fy, fy);
             }
         }
-        let interior = (0..hb)
-            .flat_map(|cy| (0..wb).map(move |cx| ((cy + 1) * pw + cx + 1) as u32))
-            .collect();
         Ok(Self {
             w,
             h,
@@ -133,7 +141,7 @@ impl Fhog {
             mag: vec![0.0; w * h],
             bin: vec![0; w * h],
             sensitive: vec![0.0; SENSITIVE * nb],
-            padded: vec![0.0; SENSITIVE * (wb + 2) * (hb + 2)],
+            padded: vec![0.0; SENSITIVE * wb * (hb + 2) + wb + 2],
             px_cell,
             px_lo,
             px_hi,
@@ -141,7 +149,6 @@ impl Fhog {
             px_down,
             shares: vec![0.0; 4 * px],
             tops: vec![0; px],
-            interior,
             insensitive: vec![0.0; INSENSITIVE * nb],
             block: vec![0.0; wb.saturating_sub(1).max(1) * hb.saturating_sub(1).max(1)],
             energy: vec![0.0; nb],
@@ -258,23 +265,27 @@ impl Fhog {
     /// Each pixel's four shares added into the padded histograms in pixel
     /// order (one slice per pixel: no bounds test per share); every
     /// pixel's shares and histogram offset are computed first in one
-    /// vector pass, then added row by row, one pixel after the other.
+    /// vector pass, then added in one scalar pass, one pixel after the
+    /// other. Each cell's sum is the same as on a grid padded on all four
+    /// sides for finite gradients: the shares of the columns off the grid
+    /// are +0.0 there, and `x + 0.0` is `x` (or +0.0 for -0.0, which the
+    /// read-back gives anyway).
     #[inline(never)]
     fn histograms(&mut self, level: SimdLevel) {
         let (wb, hb) = (self.wb, self.hb);
         let nb = wb * hb;
-        // binned on a grid padded by one cell on each side (the shares
-        // that fall off the grid land there and are dropped), so the inner
-        // loop has no bounds tests
-        let (pw, ph) = (wb + 2, hb + 2);
-        let np = pw * ph;
+        // binned on planes of hb + 2 rows of wb cells (a padding row above
+        // and below the grid), one value before the first plane and a row
+        // after the last: the shares that fall off the grid above or below
+        // land in padding and are dropped, those left or right of it have
+        // weight 0 (see `Fhog::new`), so the inner loop has no bounds tests
+        let np = wb * (hb + 2);
         level.run(Histograms {
             w: self.w,
             cell: self.cell,
             rows: hb * self.cell,
             wb,
             hb,
-            pw,
             np,
             mag: &self.mag,
             bin: &self.bin,
@@ -285,7 +296,6 @@ impl Fhog {
             px_down: &self.px_down,
             shares: &mut self.shares,
             tops: &mut self.tops,
-            interior: &self.interior,
             padded: &mut self.padded,
             sensitive: &mut self.sensitive[..SENSITIVE * nb],
             insensitive: &mut self.insensitive[..INSENSITIVE * nb],
@@ -333,21 +343,24 @@ fn directions() -> [(f32, f32); INSENSITIVE] {
 /// maximises `cos(theta - theta_o)`: the largest `|g . u_o|` over the 9
 /// directions of the first half circle, its sign telling the half. This
 /// is `round(18 theta / 2 pi) mod 18` without the arc tangent; exact ties
-/// go to the lower bin.
+/// go to the lower bin. The bin is carried as a `u32` (as wide as the
+/// gradients) so that a vector loop keeps the running best in lanes of
+/// the comparisons' width (one blend per direction, no narrowing of each
+/// comparison's mask to bytes; the bins narrowed once at the end).
 #[inline(always)]
-fn pixel(gx: f32, gy: f32, dirs: &[(f32, f32); INSENSITIVE]) -> (f32, u8) {
-    let (mut best, mut bd, mut ba) = (0u8, gx, gx.abs());
+fn pixel(gx: f32, gy: f32, dirs: &[(f32, f32); INSENSITIVE]) -> (f32, u32) {
+    let (mut best, mut bd, mut ba) = (0u32, gx, gx.abs());
     for (o, &(c, s)) in dirs.iter().enumerate().skip(1) {
         let d = gx * c + gy * s;
         let better = d.abs() > ba;
-        best = if better { o as u8 } else { best };
+        best = if better { o as u32 } else { best };
         bd = if better { d } else { bd };
         ba = if better { d.abs() } else { ba };
     }
     let bin = if bd >= 0.0 {
         best
     } else {
-        best + INSENSITIVE as u8
+        best + INSENSITIVE as u32
     };
     ((gx * gx + gy * gy).sqrt(), bin)
 }
@@ -369,10 +382,9 @@ struct Histograms<'a> {
     rows: usize,
     wb: usize,
     hb: usize,
-    pw: usize,
     np: usize,
     mag: &'a [f32],
-    bin: &'a [u8],
+    bin: &'a [u32],
     px_cell: &'a [u32],
     px_lo: &'a [f32],
     px_hi: &'a [f32],
@@ -380,58 +392,57 @@ struct Histograms<'a> {
     px_down: &'a [f32],
     shares: &'a mut [f32],
     tops: &'a mut [u32],
-    interior: &'a [u32],
     padded: &'a mut [f32],
     sensitive: &'a mut [f32],
     insensitive: &'a mut [f32],
 }
 
 /// Every pixel's four shares and offset (one flat pass: vectorises).
+/// A pixel's four shares are stored side by side (one output stream, so
+/// that the scatter loads each pair of neighbouring cells' shares at
+/// once).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn shares(
     norm: f32,
     np: u32,
     mag: &[f32],
-    bin: &[u8],
+    bin: &[u32],
     (cell, lo, hi): (&[u32], &[f32], &[f32]),
     (up, down): (&[f32], &[f32]),
-    (s00, s01, s10, s11): (&mut [f32], &mut [f32], &mut [f32], &mut [f32]),
+    quads: &mut [f32],
     tops: &mut [u32],
 ) {
     let n = tops.len();
     let (mag, bin, cell, lo, hi) = (&mag[..n], &bin[..n], &cell[..n], &lo[..n], &hi[..n]);
     let (up, down) = (&up[..n], &down[..n]);
-    let (s00, s01, s10, s11) = (&mut s00[..n], &mut s01[..n], &mut s10[..n], &mut s11[..n]);
-    for i in 0..n {
+    for (i, q) in quads[..4 * n].chunks_exact_mut(4).enumerate() {
         let m = mag[i] * norm;
         let (wy1, wy0) = (down[i] * m, up[i] * m);
-        s00[i] = lo[i] * wy0;
-        s01[i] = hi[i] * wy0;
-        s10[i] = lo[i] * wy1;
-        s11[i] = hi[i] * wy1;
-        tops[i] = u32::from(bin[i]) * np + cell[i];
+        q[0] = lo[i] * wy0;
+        q[1] = hi[i] * wy0;
+        q[2] = lo[i] * wy1;
+        q[3] = hi[i] * wy1;
+        tops[i] = bin[i] * np + cell[i];
     }
 }
 
 /// One row's shares added into the padded histograms, pixel after pixel.
-#[inline(always)]
-fn scatter(
-    padded: &mut [f32],
-    pw: usize,
-    tops: &[u32],
-    (s00, s01, s10, s11): (&[f32], &[f32], &[f32], &[f32]),
-) {
-    let n = tops.len();
-    let (s00, s01, s10, s11) = (&s00[..n], &s01[..n], &s10[..n], &s11[..n]);
-    for x in 0..n {
+/// Scalar code (the baseline's two-wide adds at most, the same at every
+/// level), kept out of line so that the kernel's live values leave it
+/// all the registers.
+#[inline(never)]
+fn scatter(padded: &mut [f32], stride: u32, tops: &[u32], quads: &[f32]) {
+    // (both under 2^32: their sum cannot overflow, one bounds test less)
+    let pw = stride as usize;
+    for (&top, q) in tops.iter().zip(quads.chunks_exact(4)) {
         // the 2x2 cells the pixel's shares go to, one slice
-        let top = tops[x] as usize;
-        let quad = &mut padded[top..top + pw + 2];
-        quad[0] += s00[x];
-        quad[1] += s01[x];
-        quad[pw] += s10[x];
-        quad[pw + 1] += s11[x];
+        let top = top as usize;
+        let cells = &mut padded[top..top + pw + 2];
+        cells[0] += q[0];
+        cells[1] += q[1];
+        cells[pw] += q[2];
+        cells[pw + 1] += q[3];
     }
 }
 
@@ -439,7 +450,7 @@ impl Kernel for Histograms<'_> {
     type Output = ();
     #[inline(always)]
     fn run<T: Token>(self, _: T) {
-        let (w, pw, np) = (self.w, self.pw, self.np);
+        let (w, wb, np) = (self.w, self.wb, self.np);
         let inv = 1.0 / self.cell as f32;
         let norm = inv * inv;
         let px = self.rows * w;
@@ -447,11 +458,9 @@ impl Kernel for Histograms<'_> {
         // share is +0.0 or positive, so a cell that receives one holds
         // the same bits as when cleared to +0.0, and one that receives
         // none is read back below as -0.0 + 0.0 = +0.0
-        let padded = &mut self.padded[..SENSITIVE * np];
+        let padded = &mut self.padded[..SENSITIVE * np + wb + 2];
         padded.fill(-0.0);
-        let (s00, rest) = self.shares[..4 * px].split_at_mut(px);
-        let (s01, rest) = rest.split_at_mut(px);
-        let (s10, s11) = rest.split_at_mut(px);
+        let quads = &mut self.shares[..4 * px];
         let tops = &mut self.tops[..px];
         shares(
             norm,
@@ -460,38 +469,27 @@ impl Kernel for Histograms<'_> {
             self.bin,
             (self.px_cell, self.px_lo, self.px_hi),
             (self.px_up, self.px_down),
-            (&mut *s00, &mut *s01, &mut *s10, &mut *s11),
+            quads,
             tops,
         );
-        // pixels past the last whole cell are left out
-        let n = self.wb * self.cell;
-        for y in 0..self.rows {
-            let r = y * w..y * w + n;
-            scatter(
-                padded,
-                pw,
-                &tops[r.clone()],
-                (&s00[r.clone()], &s01[r.clone()], &s10[r.clone()], &s11[r]),
-            );
-        }
+        // in one pass over the whole rows: the pixels past the last whole
+        // cell add into the padding (see `px_cell`), which is dropped
+        scatter(padded, wb as u32, tops, quads);
         // the grid without its padding; the insensitive bins the sums of
         // opposite sensitive ones
-        let nb = self.wb * self.hb;
-        let interior = &self.interior[..nb];
+        // (each plane's grid is one contiguous run: one flat loop)
+        let nb = wb * self.hb;
         let (lo_bins, hi_bins) = self.sensitive.split_at_mut(INSENSITIVE * nb);
         for o in 0..INSENSITIVE {
-            let (pa, pb) = (
-                &padded[o * np..][..np],
-                &padded[(o + INSENSITIVE) * np..][..np],
-            );
+            let grid = |o: usize| 1 + o * np + wb..1 + o * np + wb + nb;
+            let (pa, pb) = (&padded[grid(o)], &padded[grid(o + INSENSITIVE)]);
             let (da, db) = (&mut lo_bins[o * nb..][..nb], &mut hi_bins[o * nb..][..nb]);
             let di = &mut self.insensitive[o * nb..][..nb];
-            for (k, &j) in interior.iter().enumerate() {
-                let j = j as usize;
-                let (a, b) = (pa[j] + 0.0, pb[j] + 0.0);
-                da[k] = a;
-                db[k] = b;
-                di[k] = a + b;
+            for i in 0..nb {
+                let (a, b) = (pa[i] + 0.0, pb[i] + 0.0);
+                da[i] = a;
+                db[i] = b;
+                di[i] = a + b;
             }
         }
     }
@@ -502,7 +500,7 @@ struct GradientBins<'a> {
     gx: &'a [f32],
     gy: &'a [f32],
     mag: &'a mut [f32],
-    bin: &'a mut [u8],
+    bin: &'a mut [u32],
 }
 
 impl Kernel for GradientBins<'_> {
@@ -561,18 +559,47 @@ impl Kernel for Normalise<'_> {
         let (n0, rest) = self.norms.split_at_mut(nb);
         let (n1, rest) = rest.split_at_mut(nb);
         let (n2, n3) = rest.split_at_mut(nb);
+        // (row by row: block column min(x, bw - 1) is the block row and its
+        // last value again, column min(x - 1, bw - 1) its first value then
+        // the block row)
         for y in 0..hb {
             let bys = [y.min(hb - 2), y.saturating_sub(1).min(hb - 2)];
-            for x in 0..wb {
-                let bxs = [x.min(bw - 1), x.saturating_sub(1).min(bw - 1)];
-                let i = y * wb + x;
-                n0[i] = self.block[bys[0] * bw + bxs[0]];
-                n1[i] = self.block[bys[1] * bw + bxs[0]];
-                n2[i] = self.block[bys[0] * bw + bxs[1]];
-                n3[i] = self.block[bys[1] * bw + bxs[1]];
-            }
+            let (b0, b1) = (
+                &self.block[bys[0] * bw..][..bw],
+                &self.block[bys[1] * bw..][..bw],
+            );
+            let r = y * wb..(y + 1) * wb;
+            let (r0, r1) = (&mut n0[r.clone()], &mut n1[r.clone()]);
+            let (r2, r3) = (&mut n2[r.clone()], &mut n3[r]);
+            r0[..bw].copy_from_slice(b0);
+            r0[bw] = b0[bw - 1];
+            r1[..bw].copy_from_slice(b1);
+            r1[bw] = b1[bw - 1];
+            r2[0] = b0[0];
+            r2[1..].copy_from_slice(b0);
+            r3[0] = b1[0];
+            r3[1..].copy_from_slice(b1);
         }
         let (n0, n1, n2, n3) = (&n0[..nb], &n1[..nb], &n2[..nb], &n3[..nb]);
+        if nb >= LANES {
+            // chunks of LANES cells, all 27 channels of a chunk at once
+            // (the texture sums stay in registers); the last chunk ends at
+            // the last cell and may overlap the one before: every value a
+            // chunk writes depends on its cells only, so writing it twice
+            // writes the same bits
+            let last = nb - LANES;
+            for i0 in (0..last).step_by(LANES).chain([last]) {
+                cells(
+                    i0,
+                    nb,
+                    [&n0[i0..], &n1[i0..], &n2[i0..], &n3[i0..]],
+                    self.sensitive,
+                    self.insensitive,
+                    self.out,
+                );
+            }
+            return;
+        }
         let (t0, rest) = self.texture.split_at_mut(nb);
         let (t1, rest) = rest.split_at_mut(nb);
         let (t2, t3) = rest.split_at_mut(nb);
@@ -635,6 +662,81 @@ impl Kernel for Normalise<'_> {
             for (d, &t) in dst.iter_mut().zip(t) {
                 *d = R * t;
             }
+        }
+    }
+}
+
+/// Cells per chunk of [`cells`] (one AVX2 vector of `f32`).
+const LANES: usize = 8;
+
+/// The 31 channels of the `LANES` cells from `i0`, with the arithmetic of
+/// the channel-by-channel loops (the same sums in the same order): the
+/// four clipped values of each sensitive channel summed from `0.0` in
+/// block order and each added to its block's texture sum (from `0.0`, in
+/// channel order), the insensitive ones' summed as `Iterator::sum`.
+#[inline(always)]
+fn cells(
+    i0: usize,
+    nb: usize,
+    norms: [&[f32]; 4],
+    sensitive: &[f32],
+    insensitive: &[f32],
+    out: &mut [f32],
+) {
+    // (whole-array steps over the lanes: straight-line code the compiler
+    // turns into one vector operation each)
+    type V = [f32; LANES];
+    let [n0, n1, n2, n3] = norms.map(|n| -> V {
+        let n = &n[..LANES];
+        std::array::from_fn(|l| n[l])
+    });
+    let clip = |v: &V, n: &V| -> V { std::array::from_fn(|l| (v[l] * n[l]).min(CLIP)) };
+    let (mut t0, mut t1, mut t2, mut t3) =
+        ([0.0f32; LANES], [0.0; LANES], [0.0; LANES], [0.0; LANES]);
+    // (channel after channel as slices of the grid's length: the bounds
+    // tests of a chunk do not depend on the channel, so they leave the loop)
+    let (out, texture) = out.split_at_mut((SENSITIVE + INSENSITIVE) * nb);
+    let (out_sensitive, out_insensitive) = out.split_at_mut(SENSITIVE * nb);
+    for (src, dst) in sensitive
+        .chunks_exact(nb)
+        .zip(out_sensitive.chunks_exact_mut(nb))
+    {
+        let v = &src[i0..][..LANES];
+        let v: V = std::array::from_fn(|l| v[l]);
+        let (c0, c1, c2, c3) = (clip(&v, &n0), clip(&v, &n1), clip(&v, &n2), clip(&v, &n3));
+        let s: V = std::array::from_fn(|l| {
+            let mut s = 0.0;
+            for c in [c0[l], c1[l], c2[l], c3[l]] {
+                s += c;
+            }
+            s
+        });
+        t0 = std::array::from_fn(|l| t0[l] + c0[l]);
+        t1 = std::array::from_fn(|l| t1[l] + c1[l]);
+        t2 = std::array::from_fn(|l| t2[l] + c2[l]);
+        t3 = std::array::from_fn(|l| t3[l] + c3[l]);
+        let d = &mut dst[i0..][..LANES];
+        for l in 0..LANES {
+            d[l] = R * s[l];
+        }
+    }
+    for (src, dst) in insensitive
+        .chunks_exact(nb)
+        .zip(out_insensitive.chunks_exact_mut(nb))
+    {
+        let v = &src[i0..][..LANES];
+        let v: V = std::array::from_fn(|l| v[l]);
+        let (c0, c1, c2, c3) = (clip(&v, &n0), clip(&v, &n1), clip(&v, &n2), clip(&v, &n3));
+        let s: V = std::array::from_fn(|l| [c0[l], c1[l], c2[l], c3[l]].iter().sum());
+        let d = &mut dst[i0..][..LANES];
+        for l in 0..LANES {
+            d[l] = R * s[l];
+        }
+    }
+    for (t, dst) in [t0, t1, t2, t3].iter().zip(texture.chunks_exact_mut(nb)) {
+        let d = &mut dst[i0..][..LANES];
+        for l in 0..LANES {
+            d[l] = R * t[l];
         }
     }
 }
@@ -723,7 +825,7 @@ mod tests {
             // one pixel: magnitude and bin, branch-free (selects), so that the
             // inner loop vectorises
             #[inline(always)]
-            fn pixel(gx: f32, gy: f32, dirs: &[(f32, f32); INSENSITIVE]) -> (f32, u8) {
+            fn pixel_u8(gx: f32, gy: f32, dirs: &[(f32, f32); INSENSITIVE]) -> (f32, u8) {
                 let (mut best, mut bd, mut ba) = (0u8, gx, gx.abs());
                 for (o, &(c, s)) in dirs.iter().enumerate().skip(1) {
                     let d = gx * c + gy * s;
@@ -738,6 +840,11 @@ mod tests {
                     best + INSENSITIVE as u8
                 };
                 ((gx * gx + gy * gy).sqrt(), bin)
+            }
+            // (the kernels keep the bins as u32)
+            fn pixel(gx: f32, gy: f32, dirs: &[(f32, f32); INSENSITIVE]) -> (f32, u32) {
+                let (m, b) = pixel_u8(gx, gy, dirs);
+                (m, u32::from(b))
             }
             for y in 0..h {
                 let (ya, yb, ky) = if h == 1 {
@@ -781,7 +888,7 @@ mod tests {
             // loop has no bounds tests
             let (pw, ph) = (wb + 2, hb + 2);
             let np = pw * ph;
-            self.padded.fill(0.0);
+            let mut padded = vec![0.0f32; SENSITIVE * np];
             let inv = 1.0 / b as f32;
             let norm = inv * inv;
             // per axis: the lower cell (+1 for the padding) and the upper one's
@@ -798,7 +905,7 @@ mod tests {
                 let bins = &self.bin[y * w..][..wb * b];
                 for ((&m, &o), &(x0, fx)) in mag.iter().zip(bins).zip(&cols) {
                     let m = m * norm;
-                    let hist = &mut self.padded[o as usize * np..][..np];
+                    let hist = &mut padded[o as usize * np..][..np];
                     let top = y0 * pw + x0;
                     let (wy1, wy0) = (fy * m, (1.0 - fy) * m);
                     hist[top] += (1.0 - fx) * wy0;
@@ -808,7 +915,7 @@ mod tests {
                 }
             }
             for o in 0..SENSITIVE {
-                let src = &self.padded[o * np..][..np];
+                let src = &padded[o * np..][..np];
                 let dst = &mut self.sensitive[o * nb..][..nb];
                 for cy in 0..hb {
                     dst[cy * wb..][..wb].copy_from_slice(&src[(cy + 1) * pw + 1..][..wb]);
@@ -917,6 +1024,10 @@ mod tests {
             (37, 29, 4),
             (41, 40, 5),
             (17, 31, 3),
+            // the trackers' sizes: a search window, scale-filter patches
+            (62, 155, 4),
+            (14, 36, 4),
+            (15, 35, 4),
         ];
         for (k, &(w, h, cell)) in sizes.iter().enumerate() {
             let patch = random_patch(w, h, 7 + k as u32);
