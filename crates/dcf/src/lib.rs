@@ -32,4 +32,6 @@ pub mod scale;
 mod tracker;
 
 pub use error::{DcfError, Result};
-pub use tracker::{Dcf, DcfConfig, Padding, Response, Staple, StapleConfig, Step};
+pub use tracker::{
+    Dcf, DcfConfig, Padding, Response, SharedFeatures, SharedGrid, Staple, StapleConfig, Step,
+};

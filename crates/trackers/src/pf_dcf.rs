@@ -79,9 +79,9 @@
 use std::convert::Infallible;
 
 use bayestrack_dcf::confidence::ApceGate;
-use bayestrack_dcf::{Dcf, DcfConfig};
+use bayestrack_dcf::{Dcf, DcfConfig, SharedFeatures, SharedGrid};
 use bayestrack_image::{BBox, ImageView};
-use bayestrack_options::options;
+use bayestrack_options::{choice, options};
 use bayestrack_particle::{ParticleSet, Proposal, Resampling, Smc, stream_seed};
 use nalgebra::SVector;
 use rand::{Rng, RngExt};
@@ -149,6 +149,18 @@ options! {
         /// mean SR@0.5 on tracker seeds 0, 1 and 2 (docs/results.md);
         /// searching the grid a share per lost frame scored lower still.
         pub redetect_levels: usize = 3;
+        /// How a lost frame computes its grid's features:
+        /// `per-window` (each window sampled and its fHOG computed on its
+        /// own, clamped to the frame one by one) or `shared` (one patch
+        /// and fHOG per scale covering the whole grid, each window's cells
+        /// cut out of it, the window centres rounded to whole cells: about
+        /// 4/9 of the features' cost for the 3 x 3 grid; border cells see
+        /// the pixels beyond their window, so not the same numbers). The
+        /// default, `per-window`, is the stress set's choice: `shared`
+        /// scored up to 0.032 lower mean SR@0.5 on set seed 1 and higher
+        /// on set seed 2, which fails the rule that a cheaper search must
+        /// stay within 0.005 on every seed pair (docs/results.md).
+        pub redetect_features: RedetectFeatures = RedetectFeatures::PerWindow;
     }
     groups {
         /// The correlation filter (KCF's published values).
@@ -157,6 +169,22 @@ options! {
         pub gate: GateOptions = GateOptions::default();
     }
     check check_pf_dcf;
+}
+
+/// How a lost frame computes the features of its grid of windows
+/// ([`PfDcfConfig::redetect_features`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RedetectFeatures {
+    /// Each window sampled and its fHOG computed on its own
+    /// ([`Dcf::detect`]).
+    PerWindow,
+    /// One patch per scale covering the grid, each window cut out of its
+    /// fHOG ([`Dcf::extract_shared`], [`Dcf::detect_cut`]).
+    Shared,
+}
+
+choice! {
+    RedetectFeatures { PerWindow = "per-window", Shared = "shared" }
 }
 
 fn check_pf_dcf(c: &PfDcfConfig) -> std::result::Result<(), String> {
@@ -410,6 +438,10 @@ pub struct PfDcfCore {
     smc: Option<Smc<State>>,
     chunks: Vec<()>,
     responses: Responses,
+    /// The shared grid's features and each window's offset (cells) per
+    /// scale, `offsets[l * windows + k]` (scratch of a lost frame).
+    shared: SharedFeatures,
+    offsets: Vec<(isize, isize)>,
     lost: bool,
     /// The last learnt estimate `(cx, cy, ln s)`: where a lost search is
     /// centred.
@@ -447,6 +479,8 @@ impl PfDcfCore {
             smc: None,
             chunks: Vec::new(),
             responses: Responses::default(),
+            shared: SharedFeatures::new(),
+            offsets: Vec::new(),
             lost: false,
             anchor: (0.0, 0.0, 0.0),
             diagnostics: PfDcfDiagnostics::default(),
@@ -534,6 +568,9 @@ impl PfDcfCore {
                 fsize,
             )
         };
+        if wide && c.redetect_features == RedetectFeatures::Shared {
+            return self.respond_shared(frame, centre, g);
+        }
         // the frame's gray levels where the windows read, once
         let levels = &r.levels;
         self.dcf.load_windows(
@@ -581,12 +618,126 @@ impl PfDcfCore {
                 }
             }
         }
+        self.set_gain(best.peak);
+        Ok(best)
+    }
+
+    /// `lambda / R_bar` of the frame's responses (the best peak standing
+    /// for `R_bar` before any is learnt).
+    fn set_gain(&mut self, peak: f64) {
         let mean_peak = if self.peaks.1 > 0 {
             self.peaks.0 / self.peaks.1 as f64
         } else {
-            best.peak
+            peak
         };
-        r.gain = c.likelihood / mean_peak.max(1e-3);
+        self.responses.gain = self.config.likelihood / mean_peak.max(1e-3);
+    }
+
+    /// [`PfDcfCore::respond`]'s lost search with shared features
+    /// ([`RedetectFeatures::Shared`]): the `g x g` grid's windows half a
+    /// window apart around `centre`, in whole cells of each scale (a
+    /// window the frame's edge moves at the cell nearest its moved
+    /// centre); one patch per scale covers them all, and each distinct
+    /// window is cut out of it.
+    fn respond_shared(
+        &mut self,
+        frame: ImageView<'_, u8>,
+        centre: (f64, f64),
+        g: usize,
+    ) -> Result<Best> {
+        let r = &mut self.responses;
+        let nl = r.levels.len();
+        let half = (g / 2) as isize;
+        let n = g * g;
+        // half a window is `cells / 2` cells at the anchor's scale (`ls`,
+        // the middle level), `cells / 2 * exp(ls - l)` at level `l`: the
+        // stride is that rounded to whole cells, halves away from the
+        // centre (the grid reaches at least half a window); a window the
+        // frame's edge moves is rounded to the cell nearest its moved
+        // centre
+        let (nx, ny) = self.dcf.cells();
+        let ls = r.levels[nl / 2];
+        self.offsets.clear();
+        for &l in &r.levels {
+            let cp = self.dcf.cell_pixels(l.exp());
+            let f = (ls - l).exp();
+            let kx = (nx as f64 / 2.0 * f + 0.5).floor() as isize;
+            let ky = (ny as f64 / 2.0 * f + 0.5).floor() as isize;
+            for k in 0..n {
+                let (i, j) = ((k % g) as isize - half, (k / g) as isize - half);
+                let axis = |o: isize, c: f64, p: f64, size: f64| {
+                    let x = c + o as f64 * p;
+                    if (0.0..=size - 1.0).contains(&x) {
+                        o
+                    } else {
+                        ((x.clamp(0.0, size - 1.0) - c) / p).round() as isize
+                    }
+                };
+                self.offsets.push((
+                    axis(i * kx, centre.0, cp.0, self.frame.0),
+                    axis(j * ky, centre.1, cp.1, self.frame.1),
+                ));
+            }
+        }
+        let grid = |l: usize, offsets: &[(isize, isize)], levels: &[f64]| {
+            let o = &offsets[l * n..(l + 1) * n];
+            SharedGrid {
+                centre,
+                scale: levels[l].exp(),
+                lo: (
+                    o.iter().map(|p| p.0).min().unwrap_or(0),
+                    o.iter().map(|p| p.1).min().unwrap_or(0),
+                ),
+                hi: (
+                    o.iter().map(|p| p.0).max().unwrap_or(0),
+                    o.iter().map(|p| p.1).max().unwrap_or(0),
+                ),
+            }
+        };
+        let (offsets, levels) = (&self.offsets, &r.levels);
+        self.dcf
+            .load_shared(frame, (0..nl).map(|l| grid(l, offsets, levels)))?;
+        let mut best = Best {
+            peak: f64::NEG_INFINITY,
+            apce: 0.0,
+            at: centre,
+        };
+        for l in 0..nl {
+            let sg = grid(l, &self.offsets, &r.levels);
+            self.dcf.extract_shared(&mut self.shared, sg)?;
+            let cp = self.dcf.cell_pixels(sg.scale);
+            for k in 0..n {
+                let off = self.offsets[l * n + k];
+                // windows the frame's edge moved onto the same cell are
+                // computed once
+                if let Some(e) = (0..k).find(|&e| self.offsets[l * n + e] == off) {
+                    let (done, rest) = r.maps.split_at_mut(k * nl);
+                    rest[l].clone_from(&done[e * nl + l]);
+                    continue;
+                }
+                let resp = self.dcf.detect_cut(&self.shared, off)?;
+                let wc = (
+                    centre.0 + off.0 as f64 * cp.0,
+                    centre.1 + off.1 as f64 * cp.1,
+                );
+                let m = &mut r.maps[k * nl + l];
+                m.centre = wc;
+                m.w = resp.width();
+                m.h = resp.height();
+                m.px = resp.pixels_per_cell();
+                m.data.clear();
+                m.data.extend_from_slice(resp.data());
+                if l == nl / 2 && (resp.max as f64) > best.peak {
+                    best = Best {
+                        peak: resp.max as f64,
+                        apce: resp.apce,
+                        at: (wc.0 + resp.dx, wc.1 + resp.dy),
+                    };
+                }
+                self.diagnostics.responses += 1;
+            }
+        }
+        self.set_gain(best.peak);
         Ok(best)
     }
 
@@ -919,10 +1070,40 @@ mod tests {
         }
     }
 
+    /// The shared-feature grid ([`RedetectFeatures::Shared`]) at one and
+    /// three scales: a lost frame costs the same responses as the
+    /// per-window grid (9 L + 1), and the target that moved 45 px while
+    /// hidden is re-acquired (seeds 1-3: centre error under 3 px over
+    /// frames 35-49, every frame from 30 on tracked).
+    #[test]
+    fn the_shared_feature_grid_re_detects() {
+        let (_, truth) = jump_scene();
+        for seed in [1, 2, 3] {
+            for levels in [1, 3] {
+                let config = PfDcfConfig {
+                    redetect_levels: levels,
+                    redetect_features: RedetectFeatures::Shared,
+                    ..PfDcfConfig::default()
+                };
+                let (boxes, lost, d) = lost_run(config, seed);
+                let (centre, _) = errors(&boxes[35..], &truth[35..]);
+                eprintln!("seed {seed} levels {levels}: {d:?}, centre error after {centre:.2}");
+                assert_eq!(d.responses, responses_of(&lost, levels), "{d:?}");
+                assert!(lost[15..25].iter().all(|&l| l), "seed {seed}: {lost:?}");
+                let late = lost[30..].iter().filter(|&&l| l).count();
+                assert!(late <= 1, "seed {seed}: {lost:?}");
+                assert!(d.reacquisitions >= 1, "{d:?}");
+                assert!(centre < 3.0, "seed {seed}, levels {levels}: {centre:.2} px");
+            }
+        }
+    }
+
     /// Near the frame's left edge a 5 x 5 grid clamps its two left columns
     /// of windows onto `x = 0`: 20 distinct windows, each computed once (a
     /// lost frame costs 20 L + 1 responses, not 25 L + 1), and the target
-    /// hidden there for ten frames is still re-acquired.
+    /// hidden there for ten frames is still re-acquired; the same with
+    /// the shared-feature grid (the clamped windows round to the same
+    /// cells).
     #[test]
     fn grid_windows_clamped_together_are_computed_once() {
         let (mut frames, truth) = scene(40, false, 3.0, |_| (25.0, 60.0, 24.0, 30.0));
@@ -933,25 +1114,28 @@ mod tests {
                 }
             }
         }
-        let config = PfDcfConfig {
-            redetect_grid: 5,
-            ..PfDcfConfig::default()
-        };
-        let (boxes, lost, d) = track_run(config, 1, &frames, truth[0]);
-        assert!(
-            d.lost_frames >= 10 && d.reacquisitions >= 1,
-            "{d:?} {lost:?}"
-        );
-        let counted: usize = lost
-            .windows(2)
-            .map(|w| if w[0] { 20 * 3 + 1 } else { 3 })
-            .sum();
-        assert_eq!(d.responses, counted, "{d:?} {lost:?}");
-        let (centre, _) = errors(&boxes[30..], &truth[30..]);
-        assert!(
-            centre < 3.0,
-            "centre error {centre:.2} px after re-detection"
-        );
+        for features in [RedetectFeatures::PerWindow, RedetectFeatures::Shared] {
+            let config = PfDcfConfig {
+                redetect_grid: 5,
+                redetect_features: features,
+                ..PfDcfConfig::default()
+            };
+            let (boxes, lost, d) = track_run(config, 1, &frames, truth[0]);
+            assert!(
+                d.lost_frames >= 10 && d.reacquisitions >= 1,
+                "{features:?}: {d:?} {lost:?}"
+            );
+            let counted: usize = lost
+                .windows(2)
+                .map(|w| if w[0] { 20 * 3 + 1 } else { 3 })
+                .sum();
+            assert_eq!(d.responses, counted, "{features:?}: {d:?} {lost:?}");
+            let (centre, _) = errors(&boxes[30..], &truth[30..]);
+            assert!(
+                centre < 3.0,
+                "{features:?}: centre error {centre:.2} px after re-detection"
+            );
+        }
     }
 
     /// What holds today: the gate refuses every blanked frame (the model
