@@ -79,7 +79,7 @@
 use std::convert::Infallible;
 
 use bayestrack_dcf::confidence::ApceGate;
-use bayestrack_dcf::{Dcf, DcfConfig, SharedFeatures, SharedGrid};
+use bayestrack_dcf::{Dcf, DcfConfig, Response, SharedFeatures, SharedGrid};
 use bayestrack_image::{BBox, ImageView};
 use bayestrack_options::{choice, options};
 use bayestrack_particle::{ParticleSet, Proposal, Resampling, Smc, stream_seed};
@@ -600,20 +600,7 @@ impl PfDcfCore {
                 }
                 for l in 0..nl {
                     let resp = self.dcf.detect(wc, r.levels[l].exp())?;
-                    let m = &mut r.maps[k * nl + l];
-                    m.centre = wc;
-                    m.w = resp.width();
-                    m.h = resp.height();
-                    m.px = resp.pixels_per_cell();
-                    m.data.clear();
-                    m.data.extend_from_slice(resp.data());
-                    if l == nl / 2 && (resp.max as f64) > best.peak {
-                        best = Best {
-                            peak: resp.max as f64,
-                            apce: resp.apce,
-                            at: (wc.0 + resp.dx, wc.1 + resp.dy),
-                        };
-                    }
+                    keep(&mut r.maps[k * nl + l], &mut best, wc, resp, l == nl / 2);
                     self.diagnostics.responses += 1;
                 }
             }
@@ -720,20 +707,7 @@ impl PfDcfCore {
                     centre.0 + off.0 as f64 * cp.0,
                     centre.1 + off.1 as f64 * cp.1,
                 );
-                let m = &mut r.maps[k * nl + l];
-                m.centre = wc;
-                m.w = resp.width();
-                m.h = resp.height();
-                m.px = resp.pixels_per_cell();
-                m.data.clear();
-                m.data.extend_from_slice(resp.data());
-                if l == nl / 2 && (resp.max as f64) > best.peak {
-                    best = Best {
-                        peak: resp.max as f64,
-                        apce: resp.apce,
-                        at: (wc.0 + resp.dx, wc.1 + resp.dy),
-                    };
-                }
+                keep(&mut r.maps[k * nl + l], &mut best, wc, resp, l == nl / 2);
                 self.diagnostics.responses += 1;
             }
         }
@@ -757,6 +731,24 @@ impl PfDcfCore {
             apce: resp.apce,
             at: (at.0 + resp.dx, at.1 + resp.dy),
         })
+    }
+}
+
+/// Keeps a window's response (centred at `wc`) in `m` and, at the middle
+/// scale, in `best` when its peak is the highest so far.
+fn keep(m: &mut Map, best: &mut Best, wc: (f64, f64), resp: &Response, middle: bool) {
+    m.centre = wc;
+    m.w = resp.width();
+    m.h = resp.height();
+    m.px = resp.pixels_per_cell();
+    m.data.clear();
+    m.data.extend_from_slice(resp.data());
+    if middle && (resp.max as f64) > best.peak {
+        *best = Best {
+            peak: resp.max as f64,
+            apce: resp.apce,
+            at: (wc.0 + resp.dx, wc.1 + resp.dy),
+        };
     }
 }
 
