@@ -115,19 +115,37 @@ impl ScaleOptions {
     /// The scale filter's configuration for HOG cells of `cell` pixels, or
     /// `None` without scale estimation.
     pub fn to_scale(&self, cell: usize) -> Option<ScaleConfig> {
-        self.scale.then_some(scale_config(
-            self.fdsst,
-            ScaleConfig {
-                scales: self.scales,
-                step: self.scale_step,
-                sigma_factor: self.scale_sigma_factor,
-                lambda: self.scale_lambda,
-                learning_rate: self.scale_learning_rate,
-                model_max_area: self.scale_model_max_area,
-                cell,
-                method: ScaleMethod::Dsst,
-            },
-        ))
+        self.scale
+            .then_some(scale_config(self.fdsst, self.dsst(cell)))
+    }
+
+    /// DSST's configuration as the options give it (what `fdsst=false`
+    /// runs).
+    fn dsst(&self, cell: usize) -> ScaleConfig {
+        ScaleConfig {
+            scales: self.scales,
+            step: self.scale_step,
+            sigma_factor: self.scale_sigma_factor,
+            lambda: self.scale_lambda,
+            learning_rate: self.scale_learning_rate,
+            model_max_area: self.scale_model_max_area,
+            cell,
+            method: ScaleMethod::Dsst,
+        }
+    }
+
+    /// Checks every option, also those fDSST leaves unused (`scales`,
+    /// `scale_sigma_factor`): a bad value is an error whichever filter
+    /// runs, not ignored.
+    ///
+    /// # Errors
+    /// [`bayestrack_dcf::DcfError::InvalidParameter`] naming the first bad
+    /// one.
+    pub fn validate(&self, cell: usize) -> bayestrack_dcf::Result<()> {
+        if self.scale {
+            self.dsst(cell).validate()?;
+        }
+        Ok(())
     }
 }
 
@@ -180,7 +198,10 @@ options! {
 }
 
 fn check_dcf(c: &DcfTrackerConfig) -> std::result::Result<(), String> {
-    c.to_dcf().validate().map_err(|e| e.to_string())
+    c.scale
+        .validate(c.kcf.cell)
+        .and_then(|()| c.to_dcf().validate())
+        .map_err(|e| e.to_string())
 }
 
 impl DcfTrackerConfig {
@@ -242,7 +263,10 @@ options! {
 }
 
 fn check_staple(c: &StapleTrackerConfig) -> std::result::Result<(), String> {
-    c.to_staple().validate().map_err(|e| e.to_string())
+    c.scale
+        .validate(c.cell)
+        .and_then(|()| c.to_staple().validate())
+        .map_err(|e| e.to_string())
 }
 
 impl StapleTrackerConfig {
@@ -336,6 +360,7 @@ impl DcfCore {
     /// # Errors
     /// [`TrackerError::Dcf`] for a bad parameter.
     pub fn new(config: DcfTrackerConfig) -> Result<Self> {
+        config.scale.validate(config.kcf.cell)?;
         Ok(Self {
             dcf: Dcf::new(config.to_dcf())?,
             config,
@@ -405,6 +430,7 @@ impl StapleCore {
     /// # Errors
     /// [`TrackerError::Dcf`] for a bad parameter.
     pub fn new(config: StapleTrackerConfig) -> Result<Self> {
+        config.scale.validate(config.cell)?;
         Ok(Self {
             staple: Staple::new(config.to_staple())?,
             config,
@@ -677,10 +703,12 @@ mod tests {
 
     #[test]
     fn bad_input_is_an_error() {
-        let edits: [fn(&mut DcfTrackerConfig); 5] = [
+        let edits: [fn(&mut DcfTrackerConfig); 6] = [
             |c| c.kcf.padding = f64::NAN,
             |c| c.kcf.cell = 0,
-            // DSST's scale count (unused by fDSST, the default)
+            // DSST's scale count: an error with fDSST too (which does
+            // not use it)
+            |c| c.scale.scales = 0,
             |c| {
                 c.scale.fdsst = false;
                 c.scale.scales = 0;
@@ -702,6 +730,9 @@ mod tests {
             })
             .is_err()
         );
+        let mut c = StapleTrackerConfig::default();
+        c.scale.scale_sigma_factor = 0.0;
+        assert!(matches!(StapleTracker::new(c), Err(TrackerError::Dcf(_))));
         let gray = Image::from_fn(40, 30, |x, y| ((x * 7 + y * 3) % 50) as u8).unwrap();
         let two = Image::new(40, 30, 2, 0u8).unwrap();
         for mut t in [
