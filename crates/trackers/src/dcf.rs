@@ -104,9 +104,10 @@ options! {
         /// fDSST's scale filter (Danelljan et al. 2017): 17 scales
         /// interpolated to 33, label factor 1/16, features compressed on the
         /// learnt samples' basis, instead of DSST's 33 (`scales` and
-        /// `scale_sigma_factor` then unused); the step, lambda, rate and area
-        /// above still apply. False here (DSST's values above); `dcf` and
-        /// `dcf-staple` default to true (see their configurations).
+        /// `scale_sigma_factor` then unused, but still checked); the step,
+        /// lambda, rate and area above still apply. False here (DSST's
+        /// values above); `dcf` and `dcf-staple` default to true (see their
+        /// configurations).
         pub fdsst: bool = false;
     }
 }
