@@ -1014,6 +1014,15 @@ mod area_tests {
     use super::*;
     use bayestrack_image::Image;
 
+    /// Asserts `got` is `want` bit for bit, pixel by pixel (`what` says
+    /// which case and path).
+    pub(super) fn assert_bits(got: &[f32], want: &[f32], what: &str) {
+        assert_eq!(got.len(), want.len(), "{what}: length");
+        for (i, (a, b)) in got.iter().zip(want).enumerate() {
+            assert_eq!(a.to_bits(), b.to_bits(), "{what}: pixel {i}: {a} vs {b}");
+        }
+    }
+
     /// The area averaging as first written (the table interpolated at
     /// each edge from its coordinate, every column through its two edge
     /// indices): the reference the faster paths must match bit for bit.
@@ -1092,35 +1101,23 @@ mod area_tests {
                 got.fill(f32::NAN);
                 s.sample_at(level, 0, (x0, y0, sx, sy), &mut got, ow, oh, 1.0)
                     .unwrap();
-                for (i, (a, b)) in got.iter().zip(&want).enumerate() {
-                    assert_eq!(
-                        a.to_bits(),
-                        b.to_bits(),
-                        "{level:?} {x0},{y0} {sx}x{sy}: pixel {i}: {a} vs {b}"
-                    );
-                }
+                assert_bits(&got, &want, &format!("{level:?} {x0},{y0} {sx}x{sy}"));
             }
             s.sample(0, x0, y0, sx, sy, &mut got, ow, oh).unwrap();
-            for (i, (a, b)) in got.iter().zip(&want).enumerate() {
-                assert_eq!(
-                    a.to_bits(),
-                    b.to_bits(),
-                    "{x0},{y0} {sx}x{sy}: pixel {i}: {a} vs {b}"
-                );
-            }
+            assert_bits(&got, &want, &format!("{x0},{y0} {sx}x{sy}"));
             // a gain: the same values times it, as a pass afterwards
             let gain = 1.0f32 / 255.0;
             s.sample_scaled(0, x0, y0, sx, sy, &mut got, ow, oh, gain)
                 .unwrap();
-            for (i, (a, b)) in got.iter().zip(&want).enumerate() {
-                assert_eq!(a.to_bits(), (b * gain).to_bits(), "gain: pixel {i}");
-            }
+            let scaled: Vec<f32> = want.iter().map(|b| b * gain).collect();
+            assert_bits(&got, &scaled, &format!("gain {x0},{y0} {sx}x{sy}"));
         }
     }
 }
 
 #[cfg(test)]
 mod bilinear_tests {
+    use super::area_tests::assert_bits;
     use super::*;
     use bayestrack_image::Image;
 
@@ -1187,21 +1184,14 @@ mod bilinear_tests {
                 let mut got = vec![f32::NAN; ow * oh];
                 s.sample_scaled(0, x0, y0, sx, sy, &mut got, ow, oh, gain)
                     .unwrap();
-                for (i, (a, b)) in got.iter().zip(&want).enumerate() {
-                    assert_eq!(
-                        a.to_bits(),
-                        b.to_bits(),
-                        "{x0},{y0} {sx}x{sy} gain {gain}: pixel {i}: {a} vs {b}"
-                    );
-                }
+                let what = format!("{x0},{y0} {sx}x{sy} gain {gain}");
+                assert_bits(&got, &want, &what);
                 // the kernels at every level
                 for level in SimdLevel::ALL {
                     got.fill(f32::NAN);
                     s.sample_at(level, 0, (x0, y0, sx, sy), &mut got, ow, oh, gain)
                         .unwrap();
-                    for (i, (a, b)) in got.iter().zip(&want).enumerate() {
-                        assert_eq!(a.to_bits(), b.to_bits(), "{level:?} pixel {i}");
-                    }
+                    assert_bits(&got, &want, &format!("{level:?} {what}"));
                 }
             }
         }
