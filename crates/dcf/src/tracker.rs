@@ -593,11 +593,17 @@ impl Dcf {
     /// [`DcfError::NotInitialised`]; [`DcfError::NonFinite`] for a NaN
     /// response.
     pub fn detect(&mut self, centre: (f64, f64), scale: f64) -> Result<&Response> {
-        let g = self.extract(centre, scale)?;
+        self.extract(centre, scale)?;
+        self.respond(scale)
+    }
+
+    /// The response of the windowed features in `self.features` (a window
+    /// at `scale`): [`Dcf::detect`]'s and [`Dcf::detect_cut`]'s last step.
+    fn respond(&mut self, scale: f64) -> Result<&Response> {
+        let px = self.cell_pixels(scale);
         let model = self.model.as_mut().ok_or(DcfError::NotInitialised)?;
         model.detect(&self.features, &mut self.response.data)?;
-        let k = g.pw as f64 / g.nx as f64;
-        self.response.px = (k * g.rx * scale, k * g.ry * scale);
+        self.response.px = px;
         self.response.finish()?;
         Ok(&self.response)
     }
@@ -775,11 +781,7 @@ impl Dcf {
                 }
             }
         }
-        let model = self.model.as_mut().ok_or(DcfError::NotInitialised)?;
-        model.detect(&self.features, &mut self.response.data)?;
-        self.response.px = self.cell_pixels(grid.scale);
-        self.response.finish()?;
-        Ok(&self.response)
+        self.respond(grid.scale)
     }
 
     /// DSST's estimate of the scale at `centre` in the loaded frame, from
