@@ -20,7 +20,7 @@
 
 use std::sync::Arc;
 
-use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
+use realfft::{ComplexToReal, RealFftPlanner};
 use rustfft::num_complex::Complex32;
 use rustfft::{Fft, FftPlanner};
 
@@ -57,17 +57,22 @@ pub fn next_smooth(n: usize) -> usize {
 pub struct Fft2 {
     w: usize,
     h: usize,
-    /// The row transforms of an even width, all rows of a call at once
-    /// (`None`: an odd width, row by row through [`realfft`]).
-    rows_even: Option<EvenRows>,
-    r2c: Arc<dyn RealToComplex<f32>>,
+    /// The row transforms, all rows of a call at once.
+    rows_fwd: Rows,
     c2r: Arc<dyn ComplexToReal<f32>>,
     col_fwd: Arc<dyn Fft<f32>>,
     col_inv: Arc<dyn Fft<f32>>,
-    row_in: Vec<f32>,
     rows: Vec<C32>,
     real_scratch: Vec<C32>,
     col_scratch: Vec<C32>,
+}
+
+/// The batched row transforms of [`Fft2::forward_many`], by parity of the
+/// width.
+#[derive(Clone)]
+enum Rows {
+    Even(EvenRows),
+    Odd(OddRows),
 }
 
 /// `realfft`'s real-to-complex transform of an even length `w`, batched:
@@ -193,6 +198,75 @@ impl EvenRows {
     }
 }
 
+/// `realfft`'s real-to-complex transform of an odd length `w`, batched:
+/// `RealToComplexOdd` is a complex FFT of the row with zero imaginary
+/// parts, of which it keeps the first `w / 2 + 1` bins and zeroes the DC
+/// bin's imaginary part; here every non-zero row of a call goes through
+/// one in-place call of the same complex plan (the same arithmetic row by
+/// row: the same bits), written straight into the column-major spectrum.
+/// Rows that are all zero are not transformed: their bins are zero.
+#[derive(Clone)]
+struct OddRows {
+    fft: Arc<dyn Fft<f32>>,
+    /// The non-zero rows as complex numbers, then their transforms.
+    buffer: Vec<C32>,
+    scratch: Vec<C32>,
+    /// Which rows (over all arrays of a call) were transformed.
+    nonzero: Vec<bool>,
+}
+
+impl OddRows {
+    fn new(w: usize, planner: &mut FftPlanner<f32>) -> Self {
+        let fft = planner.plan_fft_forward(w);
+        let scratch = vec![C32::default(); fft.get_inplace_scratch_len()];
+        Self {
+            fft,
+            buffer: Vec::new(),
+            scratch,
+            nonzero: Vec::new(),
+        }
+    }
+
+    /// The row spectra of `input` (`k` arrays of `h` rows of `w`) into
+    /// `spectra` (`k` column-major half spectra of `(w / 2 + 1) h`).
+    fn forward(&mut self, w: usize, h: usize, input: &[f32], spectra: &mut [C32]) {
+        let wc = w / 2 + 1;
+        self.nonzero.clear();
+        self.buffer.clear();
+        for row in input.chunks_exact(w) {
+            let nz = row.iter().any(|&v| v != 0.0);
+            self.nonzero.push(nz);
+            if nz {
+                self.buffer.extend(row.iter().map(|&v| C32::new(v, 0.0)));
+            }
+        }
+        if !self.buffer.is_empty() {
+            self.fft
+                .process_with_scratch(&mut self.buffer, &mut self.scratch);
+        }
+        let s = wc * h;
+        let mut rows = self.buffer.chunks_exact(w);
+        for (r, &nz) in self.nonzero.iter().enumerate() {
+            let (a, y) = (r / h, r % h);
+            let dst = &mut spectra[a * s + y..];
+            let o = if nz { rows.next() } else { None };
+            match o {
+                Some(o) => {
+                    dst[0] = C32::new(o[0].re, 0.0);
+                    for u in 1..wc {
+                        dst[u * h] = o[u];
+                    }
+                }
+                None => {
+                    for u in 0..wc {
+                        dst[u * h] = C32::default();
+                    }
+                }
+            }
+        }
+    }
+}
+
 impl std::fmt::Debug for Fft2 {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Fft2")
@@ -217,26 +291,27 @@ impl Fft2 {
             });
         }
         let mut real = RealFftPlanner::<f32>::new();
-        let r2c = real.plan_fft_forward(w);
         let c2r = real.plan_fft_inverse(w);
         let mut cplx = FftPlanner::<f32>::new();
-        let rows_even = w.is_multiple_of(2).then(|| EvenRows::new(w, &mut cplx));
+        let rows_fwd = if w.is_multiple_of(2) {
+            Rows::Even(EvenRows::new(w, &mut cplx))
+        } else {
+            Rows::Odd(OddRows::new(w, &mut cplx))
+        };
         let col_fwd = cplx.plan_fft_forward(h);
         let col_inv = cplx.plan_fft_inverse(h);
         let wc = w / 2 + 1;
-        let real_scratch_len = r2c.get_scratch_len().max(c2r.get_scratch_len());
+        let real_scratch_len = c2r.get_scratch_len();
         let col_scratch_len = col_fwd
             .get_inplace_scratch_len()
             .max(col_inv.get_inplace_scratch_len());
         Ok(Self {
             w,
             h,
-            rows_even,
-            r2c,
+            rows_fwd,
             c2r,
             col_fwd,
             col_inv,
-            row_in: vec![0.0; w],
             rows: vec![C32::default(); wc * h],
             real_scratch: vec![C32::default(); real_scratch_len],
             col_scratch: vec![C32::default(); col_scratch_len],
@@ -288,8 +363,8 @@ impl Fft2 {
     /// row-major, one after the other) into `out` (`k` spectra of
     /// [`Fft2::spectrum_len`], one after the other): the same numbers as
     /// `k` calls of [`Fft2::forward`], the transforms of all the arrays
-    /// batched (one call of the row FFT over every row, for an even `w`,
-    /// and one of the column FFT over every column).
+    /// batched (one call of the row FFT over every non-zero row, and one
+    /// of the column FFT over every column).
     ///
     /// # Errors
     /// [`DcfError::Size`] for buffers of other sizes or counts.
@@ -306,26 +381,10 @@ impl Fft2 {
         if k == 0 {
             return Ok(());
         }
-        let (w, h, wc) = (self.w, self.h, self.w / 2 + 1);
-        if let Some(rows) = self.rows_even.as_mut() {
-            rows.forward(w, h, input, out);
-        } else {
-            for (a, dst) in input.chunks_exact(n).zip(out.chunks_exact_mut(s)) {
-                for (y, row) in a.chunks_exact(w).enumerate() {
-                    self.row_in.copy_from_slice(row);
-                    let r = &mut self.rows[y * wc..(y + 1) * wc];
-                    self.r2c
-                        .process_with_scratch(&mut self.row_in, r, &mut self.real_scratch)
-                        .map_err(|_| DcfError::Fft)?;
-                }
-                // transpose rows (h x wc) into columns (wc x h): each
-                // column written in order, read down the rows with a stride
-                for (u, col) in dst.chunks_exact_mut(h).enumerate() {
-                    for (o, &v) in col.iter_mut().zip(self.rows[u..].iter().step_by(wc)) {
-                        *o = v;
-                    }
-                }
-            }
+        let (w, h) = (self.w, self.h);
+        match &mut self.rows_fwd {
+            Rows::Even(rows) => rows.forward(w, h, input, out),
+            Rows::Odd(rows) => rows.forward(w, h, input, out),
         }
         self.col_fwd
             .process_with_scratch(out, &mut self.col_scratch);
@@ -476,8 +535,8 @@ pub(crate) mod tests {
 
     #[test]
     fn batched_transforms_are_realfft_bit_for_bit() {
-        // even widths take the batched rows (with zero rows skipped), odd
-        // ones realfft row by row: both give the plain recipe's bits
+        // even and odd widths take their batched rows (zero rows skipped):
+        // both give the plain recipe's (realfft row by row) bits
         for (w, h) in [
             (16, 40),
             (2, 3),
