@@ -24,6 +24,8 @@ use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 use rustfft::num_complex::Complex32;
 use rustfft::{Fft, FftPlanner};
 
+use bayestrack_image::simd::{Kernel, SimdLevel, Token};
+
 use crate::error::{DcfError, Result};
 
 /// The complex type of the spectra.
@@ -76,21 +78,35 @@ pub struct Fft2 {
 /// of one per row), then each is untangled into its `w / 2 + 1` bins with
 /// `realfft`'s twiddles and the very arithmetic of its
 /// `RealToComplexEven` (same operations, same order: the same bits), written
-/// straight into the column-major spectrum. Rows that are all zero (a
-/// cosine-windowed patch's first and last) are not transformed: their bins
-/// are zero.
+/// straight into the column-major spectrum. The bins of a row that is all
+/// zero (a cosine-windowed patch's first and last) are written as zeros.
+///
+/// The untangling takes [`LANES`] consecutive rows of an array at a time,
+/// one per vector lane ([`untangle_block`]): a bin's outputs for those rows
+/// are next to each other in the column-major spectrum, so each step of the
+/// scalar recipe is one vector operation and each bin one contiguous store;
+/// arrays of fewer rows go row by row ([`untangle_row`]).
 #[derive(Clone)]
 struct EvenRows {
     fft: Arc<dyn Fft<f32>>,
     /// `realfft`'s `compute_twiddle(i, w) * 0.5`, `i = 1..`.
     twiddles: Vec<C32>,
-    /// The packed non-zero rows as complex pairs, then their transforms.
+    /// The rows as complex pairs, then their transforms.
     packed: Vec<C32>,
     out: Vec<C32>,
     scratch: Vec<C32>,
-    /// Which rows (over all arrays of a call) were packed.
+    /// Which rows (over all arrays of a call) are not all zero.
     nonzero: Vec<bool>,
+    /// One block of [`LANES`] rows' transforms, bin-major: `block[k][r]`
+    /// is row `r`'s bin `k`.
+    block: Vec<[C32; LANES]>,
 }
+
+/// Rows untangled at once (one AVX2 vector of `f32`).
+const LANES: usize = 8;
+
+/// One value per row of a block.
+type Lanes = [f32; LANES];
 
 impl EvenRows {
     fn new(w: usize, planner: &mut FftPlanner<f32>) -> Self {
@@ -114,82 +130,245 @@ impl EvenRows {
             out: Vec::new(),
             scratch,
             nonzero: Vec::new(),
+            block: vec![[C32::default(); LANES]; w / 2],
         }
     }
 
     /// The row spectra of `input` (`k` arrays of `h` rows of `w`) into
-    /// `spectra` (`k` column-major half spectra of `(w / 2 + 1) h`).
-    fn forward(&mut self, w: usize, h: usize, input: &[f32], spectra: &mut [C32]) {
-        let m = w / 2;
+    /// `spectra` (`k` column-major half spectra of `(w / 2 + 1) h`), the
+    /// packing and untangling compiled for `level` (every level gives the
+    /// same bits).
+    fn forward(
+        &mut self,
+        level: SimdLevel,
+        w: usize,
+        h: usize,
+        input: &[f32],
+        spectra: &mut [C32],
+    ) {
+        let (m, count) = (w / 2, input.len() / w);
+        let len = count * m;
         self.nonzero.clear();
-        self.packed.clear();
-        for row in input.chunks_exact(w) {
-            let nz = row.iter().any(|&v| v != 0.0);
-            self.nonzero.push(nz);
-            if nz {
-                self.packed
-                    .extend(row.chunks_exact(2).map(|p| C32::new(p[0], p[1])));
-            }
-        }
+        self.nonzero.resize(count, false);
         // grown only: calls alternate between many arrays and one, and
         // clearing the tail again each time would cost more than the rest
-        let len = self.packed.len();
-        if self.out.len() < len {
+        if self.packed.len() < len {
+            self.packed.resize(len, C32::default());
             self.out.resize(len, C32::default());
         }
-        if len > 0 {
-            self.fft.process_outofplace_with_scratch(
-                &mut self.packed,
-                &mut self.out[..len],
-                &mut self.scratch,
-            );
+        level.run(Pack {
+            w,
+            input,
+            nonzero: &mut self.nonzero,
+            packed: &mut self.packed[..len],
+        });
+        // (zero rows too: testing each row before packing it cost more
+        // than their transforms)
+        self.fft.process_outofplace_with_scratch(
+            &mut self.packed[..len],
+            &mut self.out[..len],
+            &mut self.scratch,
+        );
+        level.run(Untangle {
+            h,
+            twiddles: &self.twiddles,
+            nonzero: &self.nonzero,
+            rows: &self.out[..len],
+            block: &mut self.block,
+            spectra,
+        });
+    }
+}
+
+/// The packing of [`EvenRows::forward`]: the rows of `input` (of `w`) as
+/// complex pairs into `packed`, and which ones are not all zero into
+/// `nonzero`.
+struct Pack<'a> {
+    w: usize,
+    input: &'a [f32],
+    nonzero: &'a mut [bool],
+    packed: &'a mut [C32],
+}
+
+impl Kernel for Pack<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        for (d, pair) in self.packed.iter_mut().zip(self.input.chunks_exact(2)) {
+            *d = C32::new(pair[0], pair[1]);
         }
-        let s = (m + 1) * h;
-        let mut rows = self.out[..len].chunks_exact(m);
-        for (r, &nz) in self.nonzero.iter().enumerate() {
-            let (a, y) = (r / h, r % h);
-            let dst = &mut spectra[a * s + y..];
-            let at = |u: usize| u * h;
-            if !nz {
-                for u in 0..=m {
-                    dst[at(u)] = C32::default();
+        // the whole row tested, LANES samples at a time (no early exit:
+        // vector compares)
+        for (row, nz) in self.input.chunks_exact(self.w).zip(self.nonzero.iter_mut()) {
+            let mut lanes = [0u32; LANES];
+            let chunks = row.chunks_exact(LANES);
+            let tail = chunks.remainder();
+            for c in chunks {
+                for (a, &v) in lanes.iter_mut().zip(c) {
+                    *a |= u32::from(v != 0.0);
                 }
-                continue;
             }
-            let Some(o) = rows.next() else { break };
-            // realfft's RealToComplexEven, term for term
-            let first = o[0];
-            dst[at(0)] = C32::new(first.re + first.im, 0.0);
-            dst[at(m)] = C32::new(first.re - first.im, 0.0);
-            for (i, tw) in self.twiddles.iter().enumerate() {
-                let (k, kr) = (i + 1, m - i - 1);
-                let (out, out_rev) = (o[k], o[kr]);
-                let sum = out + out_rev;
-                let diff = out - out_rev;
-                let half = 0.5f32;
-                let twiddled_re_sum = sum * tw.re;
-                let twiddled_im_sum = sum * tw.im;
-                let twiddled_re_diff = diff * tw.re;
-                let twiddled_im_diff = diff * tw.im;
-                let half_sum_re = half * sum.re;
-                let half_diff_im = half * diff.im;
-                let output_twiddled_real = twiddled_re_sum.im + twiddled_im_diff.re;
-                let output_twiddled_im = twiddled_im_sum.im - twiddled_re_diff.re;
-                dst[at(k)] = C32::new(
-                    half_sum_re + output_twiddled_real,
-                    half_diff_im + output_twiddled_im,
-                );
-                dst[at(kr)] = C32::new(
-                    half_sum_re - output_twiddled_real,
-                    output_twiddled_im - half_diff_im,
-                );
+            let any = lanes.iter().fold(0, |a, &b| a | b) != 0;
+            *nz = any || tail.iter().any(|&v| v != 0.0);
+        }
+    }
+}
+
+/// The untangling of [`EvenRows::forward`]: the row transforms `rows` into
+/// the column-major `spectra`, zeros for the rows that are all zero (not
+/// their transforms' untangling, which may hold `-0.0`).
+struct Untangle<'a> {
+    h: usize,
+    twiddles: &'a [C32],
+    nonzero: &'a [bool],
+    rows: &'a [C32],
+    block: &'a mut [[C32; LANES]],
+    spectra: &'a mut [C32],
+}
+
+impl Kernel for Untangle<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        let (h, m) = (self.h, self.block.len());
+        let s = (m + 1) * h;
+        for ((nonzero, rows), dst) in self
+            .nonzero
+            .chunks_exact(h)
+            .zip(self.rows.chunks_exact(h * m))
+            .zip(self.spectra.chunks_exact_mut(s))
+        {
+            if h >= LANES {
+                // blocks of LANES rows, the last one flush with the end
+                // (overlapping the one before: the same rows again give
+                // the same bins)
+                let last = h - LANES;
+                for y in (0..last).step_by(LANES).chain([last]) {
+                    untangle_block(
+                        h,
+                        self.twiddles,
+                        &rows[y * m..][..LANES * m],
+                        self.block,
+                        &mut dst[y..],
+                    );
+                }
+            } else {
+                for (y, o) in rows.chunks_exact(m).enumerate() {
+                    untangle_row(h, self.twiddles, o, &mut dst[y..]);
+                }
             }
-            // an odd number of bins leaves the middle one: conjugated
-            if m.is_multiple_of(2) && m >= 2 {
-                let c = o[m / 2];
-                dst[at(m / 2)] = C32::new(c.re, -c.im);
+            for (y, _) in nonzero.iter().enumerate().filter(|(_, nz)| !**nz) {
+                for d in dst[y..].iter_mut().step_by(h) {
+                    *d = C32::default();
+                }
             }
         }
+    }
+}
+
+/// One row transform `o` (`m` bins) untangled into its `m + 1` bins
+/// `dst[u h]`: `realfft`'s `RealToComplexEven`, term for term.
+#[inline(always)]
+fn untangle_row(h: usize, twiddles: &[C32], o: &[C32], dst: &mut [C32]) {
+    let m = o.len();
+    let at = |u: usize| u * h;
+    let first = o[0];
+    dst[at(0)] = C32::new(first.re + first.im, 0.0);
+    dst[at(m)] = C32::new(first.re - first.im, 0.0);
+    for (i, tw) in twiddles.iter().enumerate() {
+        let (k, kr) = (i + 1, m - i - 1);
+        let (out, out_rev) = (o[k], o[kr]);
+        let sum = out + out_rev;
+        let diff = out - out_rev;
+        let half = 0.5f32;
+        let twiddled_re_sum = sum * tw.re;
+        let twiddled_im_sum = sum * tw.im;
+        let twiddled_re_diff = diff * tw.re;
+        let twiddled_im_diff = diff * tw.im;
+        let half_sum_re = half * sum.re;
+        let half_diff_im = half * diff.im;
+        let output_twiddled_real = twiddled_re_sum.im + twiddled_im_diff.re;
+        let output_twiddled_im = twiddled_im_sum.im - twiddled_re_diff.re;
+        dst[at(k)] = C32::new(
+            half_sum_re + output_twiddled_real,
+            half_diff_im + output_twiddled_im,
+        );
+        dst[at(kr)] = C32::new(
+            half_sum_re - output_twiddled_real,
+            output_twiddled_im - half_diff_im,
+        );
+    }
+    // an odd number of bins leaves the middle one: conjugated
+    if m.is_multiple_of(2) && m >= 2 {
+        let c = o[m / 2];
+        dst[at(m / 2)] = C32::new(c.re, -c.im);
+    }
+}
+
+/// [`untangle_row`] for the [`LANES`] consecutive rows of `o` (`LANES`
+/// row transforms of `m` bins) at once, row `r` into `dst[u h + r]`: each
+/// lane does a row's arithmetic, the same operations in the same order
+/// (separate multiplications and additions: the same bits), so each step
+/// is one vector operation and each bin's `LANES` outputs one store.
+#[inline(always)]
+fn untangle_block(
+    h: usize,
+    twiddles: &[C32],
+    o: &[C32],
+    block: &mut [[C32; LANES]],
+    dst: &mut [C32],
+) {
+    let m = block.len();
+    // rows into lanes: block[k] holds bin k of every row
+    for (r, row) in o.chunks_exact(m).enumerate() {
+        for (b, &c) in block.iter_mut().zip(row) {
+            b[r] = c;
+        }
+    }
+    let split = |b: &[C32; LANES]| -> (Lanes, Lanes) {
+        (
+            std::array::from_fn(|l| b[l].re),
+            std::array::from_fn(|l| b[l].im),
+        )
+    };
+    let mut store = |u: usize, re: Lanes, im: Lanes| {
+        let d = &mut dst[u * h..][..LANES];
+        for l in 0..LANES {
+            d[l] = C32::new(re[l], im[l]);
+        }
+    };
+    let (re, im) = split(&block[0]);
+    let zero = [0.0f32; LANES];
+    store(0, std::array::from_fn(|l| re[l] + im[l]), zero);
+    store(m, std::array::from_fn(|l| re[l] - im[l]), zero);
+    let half = 0.5f32;
+    for (i, tw) in twiddles.iter().enumerate() {
+        let (k, kr) = (i + 1, m - i - 1);
+        let ((out_re, out_im), (rev_re, rev_im)) = (split(&block[k]), split(&block[kr]));
+        let sum_re: Lanes = std::array::from_fn(|l| out_re[l] + rev_re[l]);
+        let sum_im: Lanes = std::array::from_fn(|l| out_im[l] + rev_im[l]);
+        let diff_re: Lanes = std::array::from_fn(|l| out_re[l] - rev_re[l]);
+        let diff_im: Lanes = std::array::from_fn(|l| out_im[l] - rev_im[l]);
+        let half_sum_re: Lanes = std::array::from_fn(|l| half * sum_re[l]);
+        let half_diff_im: Lanes = std::array::from_fn(|l| half * diff_im[l]);
+        // twiddled_re_sum.im + twiddled_im_diff.re
+        let real: Lanes = std::array::from_fn(|l| sum_im[l] * tw.re + diff_re[l] * tw.im);
+        // twiddled_im_sum.im - twiddled_re_diff.re
+        let imag: Lanes = std::array::from_fn(|l| sum_im[l] * tw.im - diff_re[l] * tw.re);
+        store(
+            k,
+            std::array::from_fn(|l| half_sum_re[l] + real[l]),
+            std::array::from_fn(|l| half_diff_im[l] + imag[l]),
+        );
+        store(
+            kr,
+            std::array::from_fn(|l| half_sum_re[l] - real[l]),
+            std::array::from_fn(|l| imag[l] - half_diff_im[l]),
+        );
+    }
+    if m.is_multiple_of(2) && m >= 2 {
+        let (re, im) = split(&block[m / 2]);
+        store(m / 2, re, std::array::from_fn(|l| -im[l]));
     }
 }
 
@@ -308,7 +487,8 @@ impl Fft2 {
         }
         let (w, h, wc) = (self.w, self.h, self.w / 2 + 1);
         if let Some(rows) = self.rows_even.as_mut() {
-            rows.forward(w, h, input, out);
+            // the best level this CPU has (as `dispatch`)
+            rows.forward(SimdLevel::Avx512, w, h, input, out);
         } else {
             for (a, dst) in input.chunks_exact(n).zip(out.chunks_exact_mut(s)) {
                 for (y, row) in a.chunks_exact(w).enumerate() {
