@@ -20,7 +20,7 @@
 
 use std::sync::Arc;
 
-use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
+use realfft::{ComplexToReal, RealFftPlanner};
 use rustfft::num_complex::Complex32;
 use rustfft::{Fft, FftPlanner};
 
@@ -59,17 +59,75 @@ pub fn next_smooth(n: usize) -> usize {
 pub struct Fft2 {
     w: usize,
     h: usize,
-    /// The row transforms of an even width, all rows of a call at once
-    /// (`None`: an odd width, row by row through [`realfft`]).
-    rows_even: Option<EvenRows>,
-    r2c: Arc<dyn RealToComplex<f32>>,
+    /// The row transforms, all rows of a call at once.
+    row_fwd: Rows,
     c2r: Arc<dyn ComplexToReal<f32>>,
     col_fwd: Arc<dyn Fft<f32>>,
     col_inv: Arc<dyn Fft<f32>>,
-    row_in: Vec<f32>,
     rows: Vec<C32>,
     real_scratch: Vec<C32>,
     col_scratch: Vec<C32>,
+}
+
+/// The forward row transforms of a width.
+#[derive(Clone)]
+enum Rows {
+    Even(EvenRows),
+    Odd(OddRows),
+}
+
+/// `realfft`'s real-to-complex transform of an odd length `w`, batched:
+/// the rows as complex numbers of zero imaginary part through one call of
+/// the complex FFT of length `w` (the FFT `realfft` plans, one call over
+/// every row instead of one per row), the first `w / 2 + 1` bins kept, the
+/// DC bin's imaginary part set to zero: `RealToComplexOdd`'s steps, so its
+/// bits.
+#[derive(Clone)]
+struct OddRows {
+    fft: Arc<dyn Fft<f32>>,
+    /// The rows as complex numbers, then their transforms.
+    buffer: Vec<C32>,
+    scratch: Vec<C32>,
+}
+
+impl OddRows {
+    fn new(w: usize, planner: &mut FftPlanner<f32>) -> Self {
+        let fft = planner.plan_fft_forward(w);
+        let scratch = vec![C32::default(); fft.get_inplace_scratch_len()];
+        Self {
+            fft,
+            buffer: Vec::new(),
+            scratch,
+        }
+    }
+
+    /// The row spectra of `input` (`k` arrays of `h` rows of `w`) into
+    /// `spectra` (`k` column-major half spectra of `(w / 2 + 1) h`).
+    fn forward(&mut self, w: usize, h: usize, input: &[f32], spectra: &mut [C32]) {
+        let len = input.len();
+        // grown only, as EvenRows' buffers
+        if self.buffer.len() < len {
+            self.buffer.resize(len, C32::default());
+        }
+        let buffer = &mut self.buffer[..len];
+        for (b, &v) in buffer.iter_mut().zip(input) {
+            *b = C32::new(v, 0.0);
+        }
+        self.fft.process_with_scratch(buffer, &mut self.scratch);
+        let s = (w / 2 + 1) * h;
+        for (rows, dst) in buffer.chunks_exact(h * w).zip(spectra.chunks_exact_mut(s)) {
+            // transpose rows (h x w, the first w / 2 + 1 of each kept) into
+            // columns: each column written in order, read down the rows
+            for (u, col) in dst.chunks_exact_mut(h).enumerate() {
+                for (o, row) in col.iter_mut().zip(rows.chunks_exact(w)) {
+                    *o = row[u];
+                }
+            }
+            for dc in &mut dst[..h] {
+                dc.im = 0.0;
+            }
+        }
+    }
 }
 
 /// `realfft`'s real-to-complex transform of an even length `w`, batched:
@@ -396,26 +454,27 @@ impl Fft2 {
             });
         }
         let mut real = RealFftPlanner::<f32>::new();
-        let r2c = real.plan_fft_forward(w);
         let c2r = real.plan_fft_inverse(w);
         let mut cplx = FftPlanner::<f32>::new();
-        let rows_even = w.is_multiple_of(2).then(|| EvenRows::new(w, &mut cplx));
+        let row_fwd = if w.is_multiple_of(2) {
+            Rows::Even(EvenRows::new(w, &mut cplx))
+        } else {
+            Rows::Odd(OddRows::new(w, &mut cplx))
+        };
         let col_fwd = cplx.plan_fft_forward(h);
         let col_inv = cplx.plan_fft_inverse(h);
         let wc = w / 2 + 1;
-        let real_scratch_len = r2c.get_scratch_len().max(c2r.get_scratch_len());
+        let real_scratch_len = c2r.get_scratch_len();
         let col_scratch_len = col_fwd
             .get_inplace_scratch_len()
             .max(col_inv.get_inplace_scratch_len());
         Ok(Self {
             w,
             h,
-            rows_even,
-            r2c,
+            row_fwd,
             c2r,
             col_fwd,
             col_inv,
-            row_in: vec![0.0; w],
             rows: vec![C32::default(); wc * h],
             real_scratch: vec![C32::default(); real_scratch_len],
             col_scratch: vec![C32::default(); col_scratch_len],
@@ -485,27 +544,11 @@ impl Fft2 {
         if k == 0 {
             return Ok(());
         }
-        let (w, h, wc) = (self.w, self.h, self.w / 2 + 1);
-        if let Some(rows) = self.rows_even.as_mut() {
+        let (w, h) = (self.w, self.h);
+        match &mut self.row_fwd {
             // the best level this CPU has (as `dispatch`)
-            rows.forward(SimdLevel::Avx512, w, h, input, out);
-        } else {
-            for (a, dst) in input.chunks_exact(n).zip(out.chunks_exact_mut(s)) {
-                for (y, row) in a.chunks_exact(w).enumerate() {
-                    self.row_in.copy_from_slice(row);
-                    let r = &mut self.rows[y * wc..(y + 1) * wc];
-                    self.r2c
-                        .process_with_scratch(&mut self.row_in, r, &mut self.real_scratch)
-                        .map_err(|_| DcfError::Fft)?;
-                }
-                // transpose rows (h x wc) into columns (wc x h): each
-                // column written in order, read down the rows with a stride
-                for (u, col) in dst.chunks_exact_mut(h).enumerate() {
-                    for (o, &v) in col.iter_mut().zip(self.rows[u..].iter().step_by(wc)) {
-                        *o = v;
-                    }
-                }
-            }
+            Rows::Even(rows) => rows.forward(SimdLevel::Avx512, w, h, input, out),
+            Rows::Odd(rows) => rows.forward(w, h, input, out),
         }
         self.col_fwd
             .process_with_scratch(out, &mut self.col_scratch);
