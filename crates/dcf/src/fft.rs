@@ -699,8 +699,9 @@ pub(crate) mod tests {
 
     #[test]
     fn batched_transforms_are_realfft_bit_for_bit() {
-        // even widths take the batched rows (with zero rows skipped), odd
-        // ones realfft row by row: both give the plain recipe's bits
+        // even widths take the batched rows (zero rows' bins written as
+        // zeros), odd ones one complex FFT over every row: both give the
+        // plain recipe's bits
         for (w, h) in [
             (16, 40),
             (2, 3),
@@ -711,6 +712,10 @@ pub(crate) mod tests {
             (30, 20),
             (9, 6),
             (15, 10),
+            (1, 5),
+            (3, 1),
+            (7, 9),
+            (25, 45),
         ] {
             let mut f = Fft2::new(w, h).unwrap();
             let (n, s) = (f.real_len(), f.spectrum_len());
@@ -751,6 +756,85 @@ pub(crate) mod tests {
             }
             // a partial count is an error
             assert!(f.forward_many(&x[..n + 1], &mut many).is_err());
+        }
+    }
+
+    /// The row spectra of `x` (arrays of `h` rows of an even `w`) as the
+    /// scalar code computes them, row by row: each row packed and
+    /// transformed alone, untangled by [`untangle_row`], zeros for a row
+    /// that is all zero.
+    fn scalar_rows(w: usize, h: usize, x: &[f32]) -> Vec<C32> {
+        let mut even = EvenRows::new(w, &mut FftPlanner::new());
+        let m = w / 2;
+        let s = (m + 1) * h;
+        let mut out = vec![C32::new(f32::NAN, 7.0); x.len() / (w * h) * s];
+        for (r, row) in x.chunks_exact(w).enumerate() {
+            let (a, y) = (r / h, r % h);
+            let dst = &mut out[a * s + y..];
+            if row.iter().all(|&v| v == 0.0) {
+                for u in 0..=m {
+                    dst[u * h] = C32::default();
+                }
+                continue;
+            }
+            let mut packed: Vec<C32> = row.chunks_exact(2).map(|p| C32::new(p[0], p[1])).collect();
+            let mut o = vec![C32::default(); m];
+            even.fft
+                .process_outofplace_with_scratch(&mut packed, &mut o, &mut even.scratch);
+            untangle_row(h, &even.twiddles, &o, dst);
+        }
+        out
+    }
+
+    #[test]
+    fn row_lanes_are_the_scalar_rows_at_every_level() {
+        // every even width to 40, heights below, at and around multiples
+        // of the 8 lanes; three arrays with zero rows (the first and last,
+        // every third of the second array) and, in the third, rows that
+        // are zero but for their last or first sample (a vector test's
+        // tail and head)
+        for w in (2..=40).step_by(2) {
+            for h in [1, 2, 5, 7, 8, 9, 15, 16, 17, 24, 33, 40, 45] {
+                let mut x = Vec::new();
+                for k in 0..3 {
+                    let mut a = signal(w, h, (w * 131 + h * 17 + k) as u32);
+                    a[..w].fill(0.0);
+                    a[(h - 1) * w..].fill(0.0);
+                    if k == 1 {
+                        for y in (1..h).step_by(3) {
+                            a[y * w..(y + 1) * w].fill(0.0);
+                        }
+                    }
+                    if k == 2 && h >= 4 {
+                        a[w..2 * w - 1].fill(0.0);
+                        a[2 * w + 1..3 * w].fill(0.0);
+                    }
+                    x.extend(a);
+                }
+                let want = scalar_rows(w, h, &x);
+                let s = (w / 2 + 1) * h;
+                for level in SimdLevel::ALL {
+                    let mut rows = EvenRows::new(w, &mut FftPlanner::new());
+                    // stale output (every bin must be written); three
+                    // arrays, then one (the buffers are grown only)
+                    let mut got = vec![C32::new(f32::NAN, 7.0); want.len()];
+                    rows.forward(level, w, h, &x, &mut got);
+                    let mut one = vec![C32::new(f32::NAN, 7.0); s];
+                    rows.forward(level, w, h, &x[..w * h], &mut one);
+                    for (i, (g, e)) in got
+                        .iter()
+                        .chain(&one)
+                        .zip(want.iter().chain(&want[..s]))
+                        .enumerate()
+                    {
+                        assert_eq!(
+                            (g.re.to_bits(), g.im.to_bits()),
+                            (e.re.to_bits(), e.im.to_bits()),
+                            "{w}x{h} {level:?}: bin {i} {g} vs {e}"
+                        );
+                    }
+                }
+            }
         }
     }
 
