@@ -744,9 +744,11 @@ pub(crate) mod tests {
                 let mut one = vec![stale; s];
                 f.forward(a, &mut one).unwrap();
                 for (i, ((m, o), r)) in many[k * s..].iter().zip(&one).zip(&want).enumerate() {
+                    // (an even width's zero row has zero bins where
+                    // realfft's may hold -0.0; an odd width's are its bits)
                     let same = |p: &C32, q: &C32| {
                         p.re.to_bits() == q.re.to_bits() && p.im.to_bits() == q.im.to_bits()
-                            || p == q
+                            || w % 2 == 0 && p == q
                     };
                     assert!(
                         same(m, r) && same(o, r),
