@@ -10,7 +10,8 @@
 //! care about the layout.
 //!
 //! The plans and every scratch buffer are made once, by [`Fft2::new`]; the
-//! transforms then allocate nothing.
+//! transforms then allocate nothing (but for the row buffers of
+//! [`Fft2::forward_many`], which grow to the most arrays a call has had).
 //!
 //! **Float type: `f32`.** The filters' inputs are 8-bit pixels and
 //! features clipped at 0.2 (fHOG), with about 3 significant digits; `f32`
@@ -526,8 +527,9 @@ impl Fft2 {
     /// row-major, one after the other) into `out` (`k` spectra of
     /// [`Fft2::spectrum_len`], one after the other): the same numbers as
     /// `k` calls of [`Fft2::forward`], the transforms of all the arrays
-    /// batched (one call of the row FFT over every row, for an even `w`,
-    /// and one of the column FFT over every column).
+    /// batched (one call of the row FFT over every row, an even width's
+    /// rows untangled eight at a time in vector lanes, and one call of the
+    /// column FFT over every column).
     ///
     /// # Errors
     /// [`DcfError::Size`] for buffers of other sizes or counts.
