@@ -1,6 +1,7 @@
 //! Criterion benchmarks of the correlation-filter kernels: the 2-D real
 //! FFT round trip at 2,3,5-smooth and prime sizes (what the padding to
-//! smooth sizes buys), fHOG of a search window and of a scale sample (the
+//! smooth sizes buys), the batched forward FFT of a filter's 31 feature
+//! channels, fHOG of a search window and of a scale sample (the
 //! scale filter computes 17-33 of them a frame), and the area sampling of
 //! a patch from a frame.
 
@@ -27,6 +28,31 @@ fn bench_fft(c: &mut Criterion) {
                 f.forward(black_box(&x), &mut spec).unwrap();
                 f.inverse(&mut spec, &mut back).unwrap();
                 black_box(back[0])
+            })
+        });
+    }
+    group.finish();
+    // a correlation filter's features: 31 fHOG channels of 16 x 40 cells
+    // (even rows, zero first and last rows as after a cosine window) and
+    // 31 of 15 x 24 (odd rows), transformed in one call
+    let mut group = c.benchmark_group("fft2 forward_many 31 channels (cells)");
+    for (w, h) in [(16usize, 40usize), (15, 24)] {
+        let mut f = Fft2::new(w, h).unwrap();
+        let x: Vec<f32> = (0..31 * w * h)
+            .map(|i| {
+                let y = (i / w) % h;
+                if y == 0 || y == h - 1 {
+                    0.0
+                } else {
+                    ((i * 7919) % 101) as f32 / 101.0
+                }
+            })
+            .collect();
+        let mut spec = vec![C32::default(); 31 * f.spectrum_len()];
+        group.bench_function(format!("{w}x{h}"), |b| {
+            b.iter(|| {
+                f.forward_many(black_box(&x), &mut spec).unwrap();
+                black_box(spec[0])
             })
         });
     }
