@@ -46,7 +46,9 @@ pub use multi_target::{
     measurement_matrix, transition_matrix,
 };
 pub use ncc_scale::{NccScaleConfig, NccScaleCore, NccScaleTracker};
-pub use pf_dcf::{PfDcfConfig, PfDcfCore, PfDcfDiagnostics, PfDcfTracker};
+pub use pf_dcf::{
+    OuterScales, PfDcfConfig, PfDcfCore, PfDcfDiagnostics, PfDcfTracker, RedetectFeatures,
+};
 pub use registry::{REGISTRY, TrackerInfo, build_tracker, tracker_info};
 pub use shell::{ChannelPolicy, InitialBox, Needs, PlaneBuffers, Planes, Shell, TrackerCore};
 pub use tracker::{Estimate, FrameGuard, Tracker, check_initial_box};
