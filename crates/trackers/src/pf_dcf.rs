@@ -1135,6 +1135,50 @@ mod tests {
         }
     }
 
+    /// While lost, the outer scales are computed at the window whose
+    /// middle-scale map peaks highest; every other window's outer maps are
+    /// its middle one. Checked on every lost frame of the jump scene whose
+    /// best middle map is not flat (the blanked frames' are; 11 frames
+    /// checked with seed 1, at least 5 required); with the
+    /// outer scales always at the first window (the mutation) it fails.
+    #[test]
+    fn a_lost_frame_computes_the_outer_scales_at_the_best_window() {
+        let (frames, truth) = jump_scene();
+        let mut t = pf(PfDcfConfig::default(), 1);
+        t.init(frames[0].view(), truth[0]).unwrap();
+        let peak = |m: &Map| m.data.iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b));
+        let mut checked = 0;
+        for f in &frames[1..] {
+            let searching = t.is_lost();
+            t.step(f.view()).unwrap();
+            let r = &t.core().responses;
+            if !searching {
+                assert_eq!(r.maps.len(), 3);
+                continue;
+            }
+            assert_eq!(r.maps.len(), 27);
+            let best = (0..9)
+                .rev()
+                .max_by(|&a, &b| peak(&r.maps[a * 3 + 1]).total_cmp(&peak(&r.maps[b * 3 + 1])))
+                .unwrap();
+            let m = &r.maps[best * 3..best * 3 + 3];
+            let flat = m[1].data.iter().all(|&v| v == m[1].data[0]);
+            if flat {
+                continue;
+            }
+            assert!(m[0].data != m[1].data && m[2].data != m[1].data);
+            for k in (0..9).filter(|&k| r.maps[k * 3 + 1].centre != m[1].centre) {
+                let o = &r.maps[k * 3..k * 3 + 3];
+                assert!(
+                    o[0].data == o[1].data && o[2].data == o[1].data,
+                    "window {k}"
+                );
+            }
+            checked += 1;
+        }
+        assert!(checked >= 5, "{checked} lost frames with a response");
+    }
+
     /// The shared-feature grid ([`RedetectFeatures::Shared`]) at one and
     /// three scales: a lost frame costs the same responses as the
     /// per-window grid (9 L + 1), and the target that moved 45 px while
