@@ -1,7 +1,7 @@
 #!/bin/bash
 # Tracker-only fps (best of REPEATS native runs), box digest, and callgrind
 # instructions per frame (tracker calls only) for each tracker on Crossing and Couple.
-# usage: tools/tracker_speed.sh OUTFILE [trackers...]  (after `cargo build --release -p bayestrack-trackers --example profile_tracker`; NOCG=1 skips callgrind, REPEATS=n runs)
+# usage: tools/tracker_speed.sh OUTFILE [trackers...]  (after `cargo build --release -p bayestrack-trackers --example profile_tracker`; NOCG=1 skips callgrind, REPEATS=n runs, BAYESTRACK_SIMD=avx2 caps the native runs at the AVX2 paths)
 cd "$(dirname "$0")/.."
 out=$1; shift
 bin=target/release/examples/profile_tracker

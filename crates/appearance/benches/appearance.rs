@@ -72,22 +72,13 @@ fn simd_cap() {
 }
 
 fn simd_cap_once() {
-    use bayestrack_image::simd;
-    let Some(v) = std::env::var_os("BAYESTRACK_SIMD") else {
-        return;
-    };
-    let level = match v.to_str() {
-        Some("scalar") => SimdLevel::Scalar,
-        Some("sse2") => SimdLevel::Sse2,
-        Some("avx2") => SimdLevel::Avx2,
-        Some("avx512") => SimdLevel::Avx512,
-        _ => panic!("BAYESTRACK_SIMD={v:?}: expected scalar, sse2, avx2 or avx512"),
-    };
-    simd::set_max_level(level);
-    eprintln!(
-        "kernels capped at {level:?}: running at {:?}",
-        SimdLevel::detect()
-    );
+    let level = bayestrack_image::simd::cap_from_env().unwrap_or_else(|e| panic!("{e}"));
+    if let Some(level) = level {
+        eprintln!(
+            "kernels capped at {level:?}: running at {:?}",
+            SimdLevel::detect()
+        );
+    }
 }
 
 fn bench_mad(c: &mut Criterion) {

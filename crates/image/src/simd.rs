@@ -157,6 +157,32 @@ pub fn set_max_level(level: SimdLevel) {
     MAX_LEVEL.store(level.rank(), Ordering::Relaxed);
 }
 
+/// Caps the level as [`set_max_level`] from the `BAYESTRACK_SIMD`
+/// environment variable (`scalar`, `sse2`, `avx2` or `avx512`), for
+/// benches and profiling programs that time the lower levels' paths on a
+/// machine with AVX-512; nothing when it is unset. Returns the cap set.
+///
+/// # Errors
+/// The variable's value when it names no level.
+pub fn cap_from_env() -> Result<Option<SimdLevel>, String> {
+    let Some(v) = std::env::var_os("BAYESTRACK_SIMD") else {
+        return Ok(None);
+    };
+    let level = match v.to_str() {
+        Some("scalar") => SimdLevel::Scalar,
+        Some("sse2") => SimdLevel::Sse2,
+        Some("avx2") => SimdLevel::Avx2,
+        Some("avx512") => SimdLevel::Avx512,
+        _ => {
+            return Err(format!(
+                "BAYESTRACK_SIMD={v:?}: expected scalar, sse2, avx2 or avx512"
+            ));
+        }
+    };
+    set_max_level(level);
+    Ok(Some(level))
+}
+
 /// The cap [`set_max_level`] set ([`SimdLevel::Avx512`] if none).
 pub fn max_level() -> SimdLevel {
     match MAX_LEVEL.load(Ordering::Relaxed) {

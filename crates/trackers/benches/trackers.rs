@@ -553,8 +553,18 @@ fn bench_pf_dcf(c: &mut Criterion) {
     }
 }
 
+/// `BAYESTRACK_SIMD=avx2` (or `scalar`, `sse2`) caps the kernels' level for
+/// the whole run (to time the AVX2 paths on a machine with AVX-512): first
+/// in the group, it runs before any bench, whatever the filter.
+fn simd_cap(_: &mut Criterion) {
+    if let Some(level) = bayestrack_image::simd::cap_from_env().expect("BAYESTRACK_SIMD") {
+        eprintln!("kernels capped at {level:?}");
+    }
+}
+
 criterion_group!(
     benches,
+    simd_cap,
     bench_dcf,
     bench_pf_dcf,
     bench_registry,

@@ -4,6 +4,8 @@
 //!
 //! `cargo run --release -p bayestrack-trackers --example profile_tracker -- Crossing hkpf [repeats] [key=value ...]`
 //! (options as `--set` takes them, e.g. `dcf 1 fdsst=true`).
+//! `BAYESTRACK_SIMD=avx2` (or `scalar`, `sse2`) caps the kernels' level, to
+//! time the AVX2 paths on a machine with AVX-512 (the boxes are the same).
 
 use bayestrack_image::{BBox, Image};
 use bayestrack_trackers::{Tracker, tracker_info};
@@ -62,6 +64,9 @@ fn run_tracker(
 }
 
 fn main() {
+    if let Some(level) = bayestrack_image::simd::cap_from_env().expect("BAYESTRACK_SIMD") {
+        eprintln!("kernels capped at {level:?}");
+    }
     let mut args = std::env::args().skip(1);
     let seq = args.next().unwrap_or_else(|| "Crossing".into());
     let name = args.next().unwrap_or_else(|| "hkpf".into());
