@@ -26,7 +26,8 @@
 //! the similarity of two is the Bhattacharyya coefficient
 //! `rho = sum_u sqrt(p_u q_u)` in `[0, 1]`.
 
-use bayestrack_image::{Hsv, ImageView, Rect, Rgb};
+use bayestrack_image::simd::{Kernel, Token};
+use bayestrack_image::{Hsv, ImageView, Rect, Rgb, SimdLevel};
 
 use crate::error::check_window;
 use crate::{AppearanceError, Result};
@@ -38,9 +39,10 @@ pub struct HsvBinning {
     v_bins: usize,
     s_min: f32,
     v_min: f32,
-    /// Bin of each RGB colour quantised to 5 bits per channel.
-    /// (A fixed array: a 15-bit index needs no bounds test.)
-    rgb_lut: Box<[u16; 1 << 15]>,
+    /// Bin of each RGB colour quantised to 5 bits per channel (the first
+    /// 2^15 entries; a fixed array of 2^16, so that any `u16` index needs
+    /// no bounds test or mask).
+    rgb_lut: Box<[u16; 1 << 16]>,
     /// Bin of each gray level (always a value bin).
     gray_lut: Box<[u16; 256]>,
 }
@@ -83,7 +85,10 @@ impl HsvBinning {
             v_bins,
             s_min,
             v_min,
-            rgb_lut: Box::new([0; 1 << 15]),
+            rgb_lut: vec![0; 1 << 16]
+                .into_boxed_slice()
+                .try_into()
+                .expect("2^16 entries"),
             gray_lut: Box::new([0; 256]),
         };
         for v in 0..256u32 {
@@ -149,6 +154,18 @@ impl HsvBinning {
         rect: Rect,
         map: &mut BinMap,
     ) -> Result<()> {
+        self.bin_map_at(SimdLevel::Avx512, frame, rect, map)
+    }
+
+    /// [`HsvBinning::bin_map_into`] with its RGB kernel run at `level` (or
+    /// the best this CPU has below it; every level gives the same bins).
+    fn bin_map_at(
+        &self,
+        level: SimdLevel,
+        frame: ImageView<'_, u8>,
+        rect: Rect,
+        map: &mut BinMap,
+    ) -> Result<()> {
         let ch = frame.channels();
         if ch != 1 && ch != 3 {
             return Err(bayestrack_image::ImageError::Channels {
@@ -161,7 +178,7 @@ impl HsvBinning {
         check_window("bin map", rect, frame.width(), frame.height())?;
         map.rect = rect;
         map.limit = self.len();
-        map.bins.clear();
+        // Every entry is written below: no zeroing beyond a growth.
         map.bins.resize(rect.area(), 0);
         if rect.width == 0 {
             return Ok(());
@@ -174,12 +191,38 @@ impl HsvBinning {
                     *o = self.bin_gray(v);
                 }
             } else {
-                for (o, p) in out.iter_mut().zip(row.chunks_exact(3)) {
-                    *o = self.bin_rgb(p[0], p[1], p[2]);
-                }
+                level.run(RgbBins {
+                    lut: &self.rgb_lut,
+                    row,
+                    out,
+                });
             }
         }
         Ok(())
+    }
+}
+
+/// [`HsvBinning::bin_rgb`] of each pixel of an RGB row into `out`, in two
+/// passes: the table indices of the whole row first (a loop the compiler
+/// vectorises), then the lookups. The same bins at every level.
+struct RgbBins<'a> {
+    lut: &'a [u16; 1 << 16],
+    row: &'a [u8],
+    out: &'a mut [u16],
+}
+
+impl Kernel for RgbBins<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        let RgbBins { lut, row, out } = self;
+        for (o, p) in out.iter_mut().zip(row.chunks_exact(3)) {
+            let (r, g, b) = (u16::from(p[0]), u16::from(p[1]), u16::from(p[2]));
+            *o = ((r >> 3) << 10) | ((g >> 3) << 5) | (b >> 3);
+        }
+        for o in out.iter_mut() {
+            *o = lut[usize::from(*o)];
+        }
     }
 }
 
@@ -321,6 +364,19 @@ impl KernelHistogram {
         b: f64,
         step: usize,
     ) -> Result<()> {
+        self.ellipse_at(SimdLevel::Avx512, map, (cx, cy), (a, b), step)
+    }
+
+    /// [`KernelHistogram::ellipse`] with its kernel run at `level` (or the
+    /// best this CPU has below it; every level gives the same bits).
+    fn ellipse_at(
+        &mut self,
+        level: SimdLevel,
+        map: &BinMap,
+        (cx, cy): (f64, f64),
+        (a, b): (f64, f64),
+        step: usize,
+    ) -> Result<()> {
         Self::check_params(cx, cy, a, b, step)?;
         self.weights.fill(0.0);
         self.total = 0.0;
@@ -362,7 +418,14 @@ impl KernelHistogram {
                 start: (y_start as usize - r.y) * r.width + x_start as usize - r.x,
                 stride: r.width * step,
             };
-            self.total = ellipse_fast(&map.bins, rows, dx2, kmin, step, &mut self.weights);
+            self.total = level.run(EllipseFast {
+                bins: &map.bins,
+                rows,
+                dx2,
+                kmin,
+                step,
+                weights: &mut self.weights,
+            });
             return Ok(());
         }
         let mut total = 0f32;
@@ -757,20 +820,42 @@ struct Rows {
 /// (`BinMap::fits`) with unimodal column offsets (`unimodal`). The same
 /// weights added in the same order as the checked loop (so the same bits),
 /// into a fixed table with no bin check; each row's span is found by
-/// moving the previous row's ends (the threshold `1 - dy2` rises, then
-/// falls). Leaves the normalised weights in `weights` and returns the
-/// total weight.
-fn ellipse_fast(
-    bins: &[u16],
+/// moving the previous row's ends, out where the threshold `1 - dy2`
+/// rises and in where it falls. Leaves the normalised weights in `weights` and returns the
+/// total weight. A [`Kernel`]: the same scalar operations at every level
+/// (no vectors, no fused multiply-add), compiled with the level's
+/// instruction encoding (AVX's three-operand forms save a copy a pixel).
+struct EllipseFast<'a> {
+    bins: &'a [u16],
     rows: Rows,
-    dx2: &[f32],
+    dx2: &'a [f32],
     kmin: usize,
     step: usize,
-    weights: &mut [f32],
-) -> f32 {
+    weights: &'a mut [f32],
+}
+
+impl Kernel for EllipseFast<'_> {
+    type Output = f32;
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) -> f32 {
+        ellipse_fast(self)
+    }
+}
+
+#[inline(always)]
+fn ellipse_fast(k: EllipseFast<'_>) -> f32 {
+    let EllipseFast {
+        bins,
+        rows,
+        dx2,
+        kmin,
+        step,
+        weights,
+    } = k;
     let mut acc = [0f32; FAST_BINS];
     let mut total = 0f32;
-    let (mut lo, mut hi) = (kmin + 1, kmin);
+    // The empty span, inside every row's.
+    let (mut lo, mut hi, mut t_span) = (kmin + 1, kmin, f32::NEG_INFINITY);
     let Rows {
         y: (mut y, y_end),
         cy,
@@ -789,20 +874,27 @@ fn ellipse_fast(
             continue;
         }
         let t = 1.0 - dy2;
-        // lo: the first k <= kmin with dx2[k] < t (kmin + 1 if none)
-        while lo > 0 && dx2[lo - 1] < t {
-            lo -= 1;
+        // lo: the first k <= kmin with dx2[k] < t (kmin + 1 if none);
+        // hi: the first k >= kmin with dx2[k] >= t (the length if none).
+        // The span of the last row counted (threshold `t_span`) lies
+        // inside this row's when `t >= t_span` (the ends only move out)
+        // and holds it otherwise (they only move in).
+        if t >= t_span {
+            while lo > 0 && dx2[lo - 1] < t {
+                lo -= 1;
+            }
+            while hi < dx2.len() && dx2[hi] < t {
+                hi += 1;
+            }
+        } else {
+            while lo <= kmin && dx2[lo] >= t {
+                lo += 1;
+            }
+            while hi > kmin && dx2[hi - 1] >= t {
+                hi -= 1;
+            }
         }
-        while lo <= kmin && dx2[lo] >= t {
-            lo += 1;
-        }
-        // hi: the first k >= kmin with dx2[k] >= t (the length if none)
-        while hi > kmin && dx2[hi - 1] >= t {
-            hi -= 1;
-        }
-        while hi < dx2.len() && dx2[hi] < t {
-            hi += 1;
-        }
+        t_span = t;
         if lo >= hi {
             continue;
         }
@@ -818,8 +910,11 @@ fn ellipse_fast(
                 add(bin, d);
             }
         } else {
-            for (&bin, &d) in bins[first..].iter().step_by(step).zip(dxs) {
-                add(bin, d);
+            let span = &bins[first..first + (dxs.len() - 1) * step + 1];
+            let mut i = 0;
+            for &d in dxs {
+                add(span[i], d);
+                i += step;
             }
         }
     }
@@ -914,7 +1009,10 @@ struct Block {
 
 /// Counts the counted pixels `k0..k1` (every `step`-th bin) of each row of
 /// `b` into the four tables with no bin check (`BinMap::fits`); returns
-/// the number counted.
+/// the number counted. Rows go four at a time, row `i` of a group into
+/// table `i` (pixels next to each other, along a row or down a column,
+/// never wait on each other's stores; one loop of any step and width, no
+/// remainder per row); the last `rows % 4` rows one by one.
 #[inline(never)]
 fn count_block(
     t: &mut [&mut [u32; FAST_BINS]; 4],
@@ -929,14 +1027,28 @@ fn count_block(
     }
     let (first, len) = (b.start + k0 * step, (k1 - k0 - 1) * step + 1);
     let block = &bins[first..first + (b.rows - 1) * b.stride + len];
-    if step == 1 {
-        for row in block.chunks(b.stride) {
-            count_unchecked(t, &row[..len]);
+    let stride = b.stride;
+    let quads = b.rows / 4;
+    for g in 0..quads {
+        let at = 4 * g * stride;
+        let rows = &block[at..at + 3 * stride + len];
+        let (r0, rows) = rows.split_at(stride);
+        let (r1, rows) = rows.split_at(stride);
+        let (r2, r3) = rows.split_at(stride);
+        let (r0, r1, r2, r3) = (&r0[..len], &r1[..len], &r2[..len], &r3[..len]);
+        let [t0, t1, t2, t3] = &mut *t;
+        let mut i = 0;
+        while i < len {
+            t0[usize::from(r0[i] as u8)] += 1;
+            t1[usize::from(r1[i] as u8)] += 1;
+            t2[usize::from(r2[i] as u8)] += 1;
+            t3[usize::from(r3[i] as u8)] += 1;
+            i += step;
         }
-    } else {
-        for row in block.chunks(b.stride) {
-            count_span(t, row, 0, k1 - k0, step);
-        }
+    }
+    for r in 4 * quads..b.rows {
+        let row = &block[r * stride..r * stride + len];
+        count_span(t, row, 0, k1 - k0, step);
     }
     b.rows * (k1 - k0)
 }
@@ -1248,6 +1360,42 @@ mod tests {
     }
 
     proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(128))]
+        /// The bin map of an RGB region at every SIMD level is the table
+        /// lookup pixel by pixel: regions of every width (odd, below and
+        /// above a vector) and place.
+        #[test]
+        fn rgb_bin_map_matches_the_per_pixel_lookup(
+            seed in 0u32..1000,
+            x in 0usize..36,
+            y in 0usize..28,
+            w in 1usize..37,
+            h in 1usize..29,
+        ) {
+            let img = test_image(seed, false);
+            let (w, h) = (w.min(36 - x), h.min(28 - y));
+            let rect = Rect::new(x, y, w, h);
+            let binning = HsvBinning::perez();
+            let mut map = BinMap::new();
+            let other = test_image(seed + 1, false);
+            for level in SimdLevel::ALL {
+                // a map that held another frame first: every entry rewritten
+                binning.bin_map_into(other.view(), Rect::new(0, 0, 36, 28), &mut map).unwrap();
+                binning.bin_map_at(level, img.view(), rect, &mut map).unwrap();
+                proptest::prop_assert_eq!(map.rect(), rect);
+                proptest::prop_assert_eq!(map.bins.len(), w * h);
+                for v in y..y + h {
+                    for u in x..x + w {
+                        let p = img.view().pixel(u, v).unwrap();
+                        let want = binning.bin_rgb(p[0], p[1], p[2]);
+                        proptest::prop_assert_eq!(map.get(u, v), Some(want), "{:?} at {} {}", level, u, v);
+                    }
+                }
+            }
+        }
+    }
+
+    proptest::proptest! {
         #![proptest_config(proptest::prelude::ProptestConfig::with_cases(256))]
         /// The Bhattacharyya coefficient in blocks of terms is the filtered
         /// sum bit for bit: empty and sparse histograms, more bins than a
@@ -1321,7 +1469,8 @@ mod tests {
         /// Ellipses by row spans give the per-pixel histograms bit for bit:
         /// every step, ellipses partly or wholly off the map, centres on
         /// pixel centres and between them, thin and round ones, noise and
-        /// runs of one bin (summed in a register).
+        /// runs of one bin (summed in a register); the kernel at every
+        /// SIMD level.
         #[test]
         fn ellipse_spans_match_the_per_pixel_reference(
             seed in 0u32..1000,
@@ -1346,11 +1495,19 @@ mod tests {
                 1 => (cx.round(), cy.round(), a.round().max(1.0), b.round().max(1.0)),
                 _ => (cx.round() + 0.5, cy.round() + 0.5, a.round() + 0.5, b.round() + 0.5),
             };
+            let (w, total) = ellipse_reference(&map, (cx, cy), (a, b), step, binning.len());
             let mut h = KernelHistogram::new(binning.len());
             h.ellipse(&map, cx, cy, a, b, step).unwrap();
-            let (w, total) = ellipse_reference(&map, (cx, cy), (a, b), step, binning.len());
             proptest::prop_assert_eq!(h.total().to_bits(), total.to_bits());
             proptest::prop_assert!(h.weights().iter().zip(&w).all(|(p, q)| p.to_bits() == q.to_bits()));
+            // the kernel at every level (each this CPU runs; the others run
+            // at the best it has)
+            for level in SimdLevel::ALL {
+                let mut h = KernelHistogram::new(binning.len());
+                h.ellipse_at(level, &map, (cx, cy), (a, b), step).unwrap();
+                proptest::prop_assert_eq!(h.total().to_bits(), total.to_bits(), "{:?}", level);
+                proptest::prop_assert!(h.weights().iter().zip(&w).all(|(p, q)| p.to_bits() == q.to_bits()), "{:?}", level);
+            }
         }
     }
 
