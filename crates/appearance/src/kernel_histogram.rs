@@ -650,10 +650,13 @@ impl KernelHistogram {
         if count < 1 << 24 {
             // Every bin's count is below 2^24: its four parts add in `u32`
             // and convert to `f32` exactly, no clamp (vector lanes); times
-            // `1 / total` as `finish` would.
-            for (u, w) in self.weights.iter_mut().enumerate() {
-                *w = (c0[u] + c1[u] + c2[u] + c3[u]) as f32 * scale;
-            }
+            // `1 / total` as `finish` would (a kernel: vector lanes of the
+            // best level, exact at every one).
+            SimdLevel::Avx512.run(CountWeights {
+                counts: [c0, c1, c2, c3],
+                scale,
+                weights: &mut self.weights,
+            });
         } else {
             for (u, w) in self.weights.iter_mut().enumerate() {
                 let c = [c0[u], c1[u], c2[u], c3[u]]
@@ -742,23 +745,10 @@ impl KernelHistogram {
                 detail: format!("{} vs {} bins", self.weights.len(), other.weights.len()),
             });
         }
-        // The terms `sqrt(p_u q_u)` of the bins with `p_u > 0` summed in bin
-        // order; a left-out bin's term is -0, which adds nothing to any sum
-        // (`x + -0 == x`, zeros included), so the terms come in blocks
-        // (vector lanes) and the sum is that of the filtered terms, bit for
-        // bit.
-        let mut terms = [0f32; 64];
-        let mut rho = std::iter::empty::<f32>().sum::<f32>();
-        for (p, q) in self.weights.chunks(64).zip(other.weights.chunks(64)) {
-            let terms = &mut terms[..p.len()];
-            for ((t, &p), &q) in terms.iter_mut().zip(p).zip(q) {
-                let term = (p * q).sqrt();
-                *t = if p > 0.0 { term } else { -0.0 };
-            }
-            for &t in terms.iter() {
-                rho += t;
-            }
-        }
+        let rho = SimdLevel::Avx512.run(Bhattacharyya {
+            p: &self.weights,
+            q: &other.weights,
+        });
         Ok(f64::from(rho).min(1.0))
     }
 
@@ -794,6 +784,57 @@ impl KernelHistogram {
             self.total = self.total.max(1.0);
         }
         Ok(())
+    }
+}
+
+/// The weights `(c0 + c1 + c2 + c3) as f32 * scale` of four count tables
+/// (each sum below 2^24: exact in `f32` at every level).
+struct CountWeights<'a> {
+    counts: [&'a [u32]; 4],
+    scale: f32,
+    weights: &'a mut [f32],
+}
+
+impl Kernel for CountWeights<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        let [c0, c1, c2, c3] = self.counts;
+        let parts = c0.iter().zip(c1).zip(c2).zip(c3);
+        for (w, (((&a, &b), &c), &d)) in self.weights.iter_mut().zip(parts) {
+            *w = (a + b + c + d) as f32 * self.scale;
+        }
+    }
+}
+
+/// `sum_u sqrt(p_u q_u)` over the bins with `p_u > 0`, in bin order.
+struct Bhattacharyya<'a> {
+    p: &'a [f32],
+    q: &'a [f32],
+}
+
+impl Kernel for Bhattacharyya<'_> {
+    type Output = f32;
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) -> f32 {
+        // The terms `sqrt(p_u q_u)` of the bins with `p_u > 0` summed in bin
+        // order; a left-out bin's term is -0, which adds nothing to any sum
+        // (`x + -0 == x`, zeros included), so the terms come in blocks
+        // (vector lanes of the level; a square root is exact in every
+        // lane) and the sum is that of the filtered terms, bit for bit.
+        let mut terms = [0f32; 64];
+        let mut rho = std::iter::empty::<f32>().sum::<f32>();
+        for (p, q) in self.p.chunks(64).zip(self.q.chunks(64)) {
+            let terms = &mut terms[..p.len()];
+            for ((t, &p), &q) in terms.iter_mut().zip(p).zip(q) {
+                let term = (p * q).sqrt();
+                *t = if p > 0.0 { term } else { -0.0 };
+            }
+            for &t in terms.iter() {
+                rho += t;
+            }
+        }
+        rho
     }
 }
 
@@ -1391,6 +1432,56 @@ mod tests {
                         proptest::prop_assert_eq!(map.get(u, v), Some(want), "{:?} at {} {}", level, u, v);
                     }
                 }
+            }
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(256))]
+        /// The count and Bhattacharyya kernels at every SIMD level give the
+        /// plain loops' bits: lengths below, at and above a vector and a
+        /// block, empty and zero bins, sums of 0 and -0.
+        #[test]
+        fn count_and_bhattacharyya_kernels_match_at_every_level(
+            seed in 0u32..1000,
+            n in 0usize..140,
+            sparse in proptest::bool::ANY,
+        ) {
+            let bytes = bayestrack_testkit::noise_bytes(16 * n, seed);
+            // bytes 0..8n: the counts (two bytes each); 8n..: p and q
+            let byte = |k: usize| u32::from(bytes[k]);
+            let counts: Vec<Vec<u32>> = (0..4)
+                .map(|t| {
+                    (0..n)
+                        .map(|u| {
+                            let k = 2 * (t * n + u);
+                            if sparse && byte(k) % 3 > 0 { 0 } else { byte(k) * 20 + byte(k + 1) }
+                        })
+                        .collect()
+                })
+                .collect();
+            let p: Vec<f32> = (0..n)
+                .map(|u| {
+                    let b = byte(8 * n + u);
+                    if sparse && b % 2 > 0 { 0.0 } else { b as f32 / 997.0 }
+                })
+                .collect();
+            let q: Vec<f32> = (0..n).map(|u| byte(12 * n + u) as f32 / 991.0).collect();
+            let scale = 1.0 / 12345.0f32;
+            let want_w: Vec<f32> = (0..n)
+                .map(|u| (counts[0][u] + counts[1][u] + counts[2][u] + counts[3][u]) as f32 * scale)
+                .collect();
+            let want_rho = bhattacharyya_reference(&p, &q);
+            for level in SimdLevel::ALL {
+                let mut w = vec![f32::NAN; n];
+                level.run(CountWeights {
+                    counts: [&counts[0], &counts[1], &counts[2], &counts[3]],
+                    scale,
+                    weights: &mut w,
+                });
+                proptest::prop_assert!(w.iter().zip(&want_w).all(|(a, b)| a.to_bits() == b.to_bits()), "{:?}", level);
+                let rho = level.run(Bhattacharyya { p: &p, q: &q });
+                proptest::prop_assert_eq!(f64::from(rho).min(1.0).to_bits(), want_rho.to_bits(), "{:?}", level);
             }
         }
     }
