@@ -879,12 +879,19 @@ impl Kernel for EllipseFast<'_> {
     type Output = f32;
     #[inline(always)]
     fn run<T: Token>(self, _: T) -> f32 {
-        ellipse_fast(self)
+        // A copy of the loop for step 1 (the common one), its step a
+        // constant.
+        if self.step == 1 {
+            ellipse_fast::<true>(self)
+        } else {
+            ellipse_fast::<false>(self)
+        }
     }
 }
 
+/// The loop of [`EllipseFast`]; `STEP1`: `k.step` is 1.
 #[inline(always)]
-fn ellipse_fast(k: EllipseFast<'_>) -> f32 {
+fn ellipse_fast<const STEP1: bool>(k: EllipseFast<'_>) -> f32 {
     let EllipseFast {
         bins,
         rows,
@@ -893,6 +900,7 @@ fn ellipse_fast(k: EllipseFast<'_>) -> f32 {
         step,
         weights,
     } = k;
+    let step = if STEP1 { 1 } else { step };
     let mut acc = [0f32; FAST_BINS];
     let mut total = 0f32;
     // The empty span, inside every row's.
@@ -946,7 +954,7 @@ fn ellipse_fast(k: EllipseFast<'_>) -> f32 {
             acc[usize::from(bin as u8)] += w;
             total += w;
         };
-        if step == 1 {
+        if STEP1 {
             for (&bin, &d) in bins[first..first + dxs.len()].iter().zip(dxs) {
                 add(bin, d);
             }
