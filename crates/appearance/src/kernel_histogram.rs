@@ -905,6 +905,7 @@ fn ellipse_fast<const STEP1: bool>(k: EllipseFast<'_>) -> f32 {
     let mut total = 0f32;
     // The empty span, inside every row's.
     let (mut lo, mut hi, mut t_span) = (kmin + 1, kmin, f32::NEG_INFINITY);
+    let left = &dx2[..=kmin];
     let Rows {
         y: (mut y, y_end),
         cy,
@@ -928,18 +929,28 @@ fn ellipse_fast<const STEP1: bool>(k: EllipseFast<'_>) -> f32 {
         // The span of the last row counted (threshold `t_span`) lies
         // inside this row's when `t >= t_span` (the ends only move out)
         // and holds it otherwise (they only move in).
+        // (`get` is the bound test: `lo - 1` wraps past the end at 0.)
         if t >= t_span {
-            while lo > 0 && dx2[lo - 1] < t {
+            while let Some(&d) = dx2.get(lo.wrapping_sub(1))
+                && d < t
+            {
                 lo -= 1;
             }
-            while hi < dx2.len() && dx2[hi] < t {
+            while let Some(&d) = dx2.get(hi)
+                && d < t
+            {
                 hi += 1;
             }
         } else {
-            while lo <= kmin && dx2[lo] >= t {
+            while let Some(&d) = left.get(lo)
+                && d >= t
+            {
                 lo += 1;
             }
-            while hi > kmin && dx2[hi - 1] >= t {
+            while hi > kmin
+                && let Some(&d) = dx2.get(hi - 1)
+                && d >= t
+            {
                 hi -= 1;
             }
         }
