@@ -393,10 +393,12 @@ impl KernelHistogram {
             return Ok(());
         }
         let (ia2, ib2) = (1.0 / (a * a), 1.0 / (b * b));
-        self.dx2.clear();
+        // The columns x_start, x_start + step, ..= x_hi (no push: the
+        // length is known).
+        self.dx2.resize((x_hi - x_start) as usize / step + 1, 0.0);
         let mut x = x_start;
-        while x <= x_hi {
-            self.dx2.push(((x as f64 - cx).powi(2) * ia2) as f32);
+        for d in self.dx2.iter_mut() {
+            *d = ((x as f64 - cx).powi(2) * ia2) as f32;
             x += step as i64;
         }
         let nbins = self.weights.len();
