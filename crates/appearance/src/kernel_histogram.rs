@@ -26,7 +26,8 @@
 //! the similarity of two is the Bhattacharyya coefficient
 //! `rho = sum_u sqrt(p_u q_u)` in `[0, 1]`.
 
-use bayestrack_image::{Hsv, ImageView, Rect, Rgb};
+use bayestrack_image::simd::{Kernel, Token};
+use bayestrack_image::{Hsv, ImageView, Rect, Rgb, SimdLevel};
 
 use crate::error::check_window;
 use crate::{AppearanceError, Result};
@@ -38,9 +39,10 @@ pub struct HsvBinning {
     v_bins: usize,
     s_min: f32,
     v_min: f32,
-    /// Bin of each RGB colour quantised to 5 bits per channel.
-    /// (A fixed array: a 15-bit index needs no bounds test.)
-    rgb_lut: Box<[u16; 1 << 15]>,
+    /// Bin of each RGB colour quantised to 5 bits per channel (the first
+    /// 2^15 entries; a fixed array of 2^16, so that any `u16` index needs
+    /// no bounds test or mask).
+    rgb_lut: Box<[u16; 1 << 16]>,
     /// Bin of each gray level (always a value bin).
     gray_lut: Box<[u16; 256]>,
 }
@@ -83,7 +85,10 @@ impl HsvBinning {
             v_bins,
             s_min,
             v_min,
-            rgb_lut: Box::new([0; 1 << 15]),
+            rgb_lut: vec![0; 1 << 16]
+                .into_boxed_slice()
+                .try_into()
+                .expect("2^16 entries"),
             gray_lut: Box::new([0; 256]),
         };
         for v in 0..256u32 {
@@ -149,6 +154,18 @@ impl HsvBinning {
         rect: Rect,
         map: &mut BinMap,
     ) -> Result<()> {
+        self.bin_map_at(SimdLevel::Avx512, frame, rect, map)
+    }
+
+    /// [`HsvBinning::bin_map_into`] with its RGB kernel run at `level` (or
+    /// the best this CPU has below it; every level gives the same bins).
+    fn bin_map_at(
+        &self,
+        level: SimdLevel,
+        frame: ImageView<'_, u8>,
+        rect: Rect,
+        map: &mut BinMap,
+    ) -> Result<()> {
         let ch = frame.channels();
         if ch != 1 && ch != 3 {
             return Err(bayestrack_image::ImageError::Channels {
@@ -161,7 +178,7 @@ impl HsvBinning {
         check_window("bin map", rect, frame.width(), frame.height())?;
         map.rect = rect;
         map.limit = self.len();
-        map.bins.clear();
+        // Every entry is written below: no zeroing beyond a growth.
         map.bins.resize(rect.area(), 0);
         if rect.width == 0 {
             return Ok(());
@@ -174,12 +191,38 @@ impl HsvBinning {
                     *o = self.bin_gray(v);
                 }
             } else {
-                for (o, p) in out.iter_mut().zip(row.chunks_exact(3)) {
-                    *o = self.bin_rgb(p[0], p[1], p[2]);
-                }
+                level.run(RgbBins {
+                    lut: &self.rgb_lut,
+                    row,
+                    out,
+                });
             }
         }
         Ok(())
+    }
+}
+
+/// [`HsvBinning::bin_rgb`] of each pixel of an RGB row into `out`, in two
+/// passes: the table indices of the whole row first (a loop the compiler
+/// vectorises), then the lookups. The same bins at every level.
+struct RgbBins<'a> {
+    lut: &'a [u16; 1 << 16],
+    row: &'a [u8],
+    out: &'a mut [u16],
+}
+
+impl Kernel for RgbBins<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        let RgbBins { lut, row, out } = self;
+        for (o, p) in out.iter_mut().zip(row.chunks_exact(3)) {
+            let (r, g, b) = (u16::from(p[0]), u16::from(p[1]), u16::from(p[2]));
+            *o = ((r >> 3) << 10) | ((g >> 3) << 5) | (b >> 3);
+        }
+        for o in out.iter_mut() {
+            *o = lut[usize::from(*o)];
+        }
     }
 }
 
@@ -321,6 +364,19 @@ impl KernelHistogram {
         b: f64,
         step: usize,
     ) -> Result<()> {
+        self.ellipse_at(SimdLevel::Avx512, map, (cx, cy), (a, b), step)
+    }
+
+    /// [`KernelHistogram::ellipse`] with its kernel run at `level` (or the
+    /// best this CPU has below it; every level gives the same bits).
+    fn ellipse_at(
+        &mut self,
+        level: SimdLevel,
+        map: &BinMap,
+        (cx, cy): (f64, f64),
+        (a, b): (f64, f64),
+        step: usize,
+    ) -> Result<()> {
         Self::check_params(cx, cy, a, b, step)?;
         self.weights.fill(0.0);
         self.total = 0.0;
@@ -337,10 +393,12 @@ impl KernelHistogram {
             return Ok(());
         }
         let (ia2, ib2) = (1.0 / (a * a), 1.0 / (b * b));
-        self.dx2.clear();
+        // The columns x_start, x_start + step, ..= x_hi (no push: the
+        // length is known).
+        self.dx2.resize((x_hi - x_start) as usize / step + 1, 0.0);
         let mut x = x_start;
-        while x <= x_hi {
-            self.dx2.push(((x as f64 - cx).powi(2) * ia2) as f32);
+        for d in self.dx2.iter_mut() {
+            *d = ((x as f64 - cx).powi(2) * ia2) as f32;
             x += step as i64;
         }
         let nbins = self.weights.len();
@@ -362,7 +420,14 @@ impl KernelHistogram {
                 start: (y_start as usize - r.y) * r.width + x_start as usize - r.x,
                 stride: r.width * step,
             };
-            self.total = ellipse_fast(&map.bins, rows, dx2, kmin, step, &mut self.weights);
+            self.total = level.run(EllipseFast {
+                bins: &map.bins,
+                rows,
+                dx2,
+                kmin,
+                step,
+                weights: &mut self.weights,
+            });
             return Ok(());
         }
         let mut total = 0f32;
@@ -587,10 +652,13 @@ impl KernelHistogram {
         if count < 1 << 24 {
             // Every bin's count is below 2^24: its four parts add in `u32`
             // and convert to `f32` exactly, no clamp (vector lanes); times
-            // `1 / total` as `finish` would.
-            for (u, w) in self.weights.iter_mut().enumerate() {
-                *w = (c0[u] + c1[u] + c2[u] + c3[u]) as f32 * scale;
-            }
+            // `1 / total` as `finish` would (a kernel: vector lanes of the
+            // best level, exact at every one).
+            SimdLevel::Avx512.run(CountWeights {
+                counts: [c0, c1, c2, c3],
+                scale,
+                weights: &mut self.weights,
+            });
         } else {
             for (u, w) in self.weights.iter_mut().enumerate() {
                 let c = [c0[u], c1[u], c2[u], c3[u]]
@@ -679,23 +747,10 @@ impl KernelHistogram {
                 detail: format!("{} vs {} bins", self.weights.len(), other.weights.len()),
             });
         }
-        // The terms `sqrt(p_u q_u)` of the bins with `p_u > 0` summed in bin
-        // order; a left-out bin's term is -0, which adds nothing to any sum
-        // (`x + -0 == x`, zeros included), so the terms come in blocks
-        // (vector lanes) and the sum is that of the filtered terms, bit for
-        // bit.
-        let mut terms = [0f32; 64];
-        let mut rho = std::iter::empty::<f32>().sum::<f32>();
-        for (p, q) in self.weights.chunks(64).zip(other.weights.chunks(64)) {
-            let terms = &mut terms[..p.len()];
-            for ((t, &p), &q) in terms.iter_mut().zip(p).zip(q) {
-                let term = (p * q).sqrt();
-                *t = if p > 0.0 { term } else { -0.0 };
-            }
-            for &t in terms.iter() {
-                rho += t;
-            }
-        }
+        let rho = SimdLevel::Avx512.run(Bhattacharyya {
+            p: &self.weights,
+            q: &other.weights,
+        });
         Ok(f64::from(rho).min(1.0))
     }
 
@@ -734,6 +789,57 @@ impl KernelHistogram {
     }
 }
 
+/// The weights `(c0 + c1 + c2 + c3) as f32 * scale` of four count tables
+/// (each sum below 2^24: exact in `f32` at every level).
+struct CountWeights<'a> {
+    counts: [&'a [u32]; 4],
+    scale: f32,
+    weights: &'a mut [f32],
+}
+
+impl Kernel for CountWeights<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        let [c0, c1, c2, c3] = self.counts;
+        let parts = c0.iter().zip(c1).zip(c2).zip(c3);
+        for (w, (((&a, &b), &c), &d)) in self.weights.iter_mut().zip(parts) {
+            *w = (a + b + c + d) as f32 * self.scale;
+        }
+    }
+}
+
+/// `sum_u sqrt(p_u q_u)` over the bins with `p_u > 0`, in bin order.
+struct Bhattacharyya<'a> {
+    p: &'a [f32],
+    q: &'a [f32],
+}
+
+impl Kernel for Bhattacharyya<'_> {
+    type Output = f32;
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) -> f32 {
+        // The terms `sqrt(p_u q_u)` of the bins with `p_u > 0` summed in bin
+        // order; a left-out bin's term is -0, which adds nothing to any sum
+        // (`x + -0 == x`, zeros included), so the terms come in blocks
+        // (vector lanes of the level; a square root is exact in every
+        // lane) and the sum is that of the filtered terms, bit for bit.
+        let mut terms = [0f32; 64];
+        let mut rho = std::iter::empty::<f32>().sum::<f32>();
+        for (p, q) in self.p.chunks(64).zip(self.q.chunks(64)) {
+            let terms = &mut terms[..p.len()];
+            for ((t, &p), &q) in terms.iter_mut().zip(p).zip(q) {
+                let term = (p * q).sqrt();
+                *t = if p > 0.0 { term } else { -0.0 };
+            }
+            for &t in terms.iter() {
+                rho += t;
+            }
+        }
+        rho
+    }
+}
+
 /// Whether `dx2` does not rise up to `kmin` and does not fall after it
 /// (false with a NaN): the span of a row is then exactly the entries below
 /// its threshold, and every one of them has a positive weight.
@@ -757,20 +863,51 @@ struct Rows {
 /// (`BinMap::fits`) with unimodal column offsets (`unimodal`). The same
 /// weights added in the same order as the checked loop (so the same bits),
 /// into a fixed table with no bin check; each row's span is found by
-/// moving the previous row's ends (the threshold `1 - dy2` rises, then
-/// falls). Leaves the normalised weights in `weights` and returns the
-/// total weight.
-fn ellipse_fast(
-    bins: &[u16],
+/// moving the previous row's ends, out where the threshold `1 - dy2`
+/// rises and in where it falls. Leaves the normalised weights in `weights` and returns the
+/// total weight. A [`Kernel`]: the same scalar operations at every level
+/// (no vectors, no fused multiply-add), compiled with the level's
+/// instruction encoding (AVX's three-operand forms save a copy a pixel).
+struct EllipseFast<'a> {
+    bins: &'a [u16],
     rows: Rows,
-    dx2: &[f32],
+    dx2: &'a [f32],
     kmin: usize,
     step: usize,
-    weights: &mut [f32],
-) -> f32 {
+    weights: &'a mut [f32],
+}
+
+impl Kernel for EllipseFast<'_> {
+    type Output = f32;
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) -> f32 {
+        // A copy of the loop for step 1 (the common one), its step a
+        // constant.
+        if self.step == 1 {
+            ellipse_fast::<true>(self)
+        } else {
+            ellipse_fast::<false>(self)
+        }
+    }
+}
+
+/// The loop of [`EllipseFast`]; `STEP1`: `k.step` is 1.
+#[inline(always)]
+fn ellipse_fast<const STEP1: bool>(k: EllipseFast<'_>) -> f32 {
+    let EllipseFast {
+        bins,
+        rows,
+        dx2,
+        kmin,
+        step,
+        weights,
+    } = k;
+    let step = if STEP1 { 1 } else { step };
     let mut acc = [0f32; FAST_BINS];
     let mut total = 0f32;
-    let (mut lo, mut hi) = (kmin + 1, kmin);
+    // The empty span, inside every row's.
+    let (mut lo, mut hi, mut t_span) = (kmin + 1, kmin, f32::NEG_INFINITY);
+    let left = &dx2[..=kmin];
     let Rows {
         y: (mut y, y_end),
         cy,
@@ -789,20 +926,37 @@ fn ellipse_fast(
             continue;
         }
         let t = 1.0 - dy2;
-        // lo: the first k <= kmin with dx2[k] < t (kmin + 1 if none)
-        while lo > 0 && dx2[lo - 1] < t {
-            lo -= 1;
+        // lo: the first k <= kmin with dx2[k] < t (kmin + 1 if none);
+        // hi: the first k >= kmin with dx2[k] >= t (the length if none).
+        // The span of the last row counted (threshold `t_span`) lies
+        // inside this row's when `t >= t_span` (the ends only move out)
+        // and holds it otherwise (they only move in).
+        // (`get` is the bound test: `lo - 1` wraps past the end at 0.)
+        if t >= t_span {
+            while let Some(&d) = dx2.get(lo.wrapping_sub(1))
+                && d < t
+            {
+                lo -= 1;
+            }
+            while let Some(&d) = dx2.get(hi)
+                && d < t
+            {
+                hi += 1;
+            }
+        } else {
+            while let Some(&d) = left.get(lo)
+                && d >= t
+            {
+                lo += 1;
+            }
+            while hi > kmin
+                && let Some(&d) = dx2.get(hi - 1)
+                && d >= t
+            {
+                hi -= 1;
+            }
         }
-        while lo <= kmin && dx2[lo] >= t {
-            lo += 1;
-        }
-        // hi: the first k >= kmin with dx2[k] >= t (the length if none)
-        while hi > kmin && dx2[hi - 1] >= t {
-            hi -= 1;
-        }
-        while hi < dx2.len() && dx2[hi] < t {
-            hi += 1;
-        }
+        t_span = t;
         if lo >= hi {
             continue;
         }
@@ -813,13 +967,16 @@ fn ellipse_fast(
             acc[usize::from(bin as u8)] += w;
             total += w;
         };
-        if step == 1 {
+        if STEP1 {
             for (&bin, &d) in bins[first..first + dxs.len()].iter().zip(dxs) {
                 add(bin, d);
             }
         } else {
-            for (&bin, &d) in bins[first..].iter().step_by(step).zip(dxs) {
-                add(bin, d);
+            let span = &bins[first..first + (dxs.len() - 1) * step + 1];
+            let mut i = 0;
+            for &d in dxs {
+                add(span[i], d);
+                i += step;
             }
         }
     }
@@ -914,7 +1071,10 @@ struct Block {
 
 /// Counts the counted pixels `k0..k1` (every `step`-th bin) of each row of
 /// `b` into the four tables with no bin check (`BinMap::fits`); returns
-/// the number counted.
+/// the number counted. Rows go four at a time, row `i` of a group into
+/// table `i` (pixels next to each other, along a row or down a column,
+/// never wait on each other's stores; one loop of any step and width, no
+/// remainder per row); the last `rows % 4` rows one by one.
 #[inline(never)]
 fn count_block(
     t: &mut [&mut [u32; FAST_BINS]; 4],
@@ -929,14 +1089,28 @@ fn count_block(
     }
     let (first, len) = (b.start + k0 * step, (k1 - k0 - 1) * step + 1);
     let block = &bins[first..first + (b.rows - 1) * b.stride + len];
-    if step == 1 {
-        for row in block.chunks(b.stride) {
-            count_unchecked(t, &row[..len]);
+    let stride = b.stride;
+    let quads = b.rows / 4;
+    for g in 0..quads {
+        let at = 4 * g * stride;
+        let rows = &block[at..at + 3 * stride + len];
+        let (r0, rows) = rows.split_at(stride);
+        let (r1, rows) = rows.split_at(stride);
+        let (r2, r3) = rows.split_at(stride);
+        let (r0, r1, r2, r3) = (&r0[..len], &r1[..len], &r2[..len], &r3[..len]);
+        let [t0, t1, t2, t3] = &mut *t;
+        let mut i = 0;
+        while i < len {
+            t0[usize::from(r0[i] as u8)] += 1;
+            t1[usize::from(r1[i] as u8)] += 1;
+            t2[usize::from(r2[i] as u8)] += 1;
+            t3[usize::from(r3[i] as u8)] += 1;
+            i += step;
         }
-    } else {
-        for row in block.chunks(b.stride) {
-            count_span(t, row, 0, k1 - k0, step);
-        }
+    }
+    for r in 4 * quads..b.rows {
+        let row = &block[r * stride..r * stride + len];
+        count_span(t, row, 0, k1 - k0, step);
     }
     b.rows * (k1 - k0)
 }
@@ -1248,6 +1422,92 @@ mod tests {
     }
 
     proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(128))]
+        /// The bin map of an RGB region at every SIMD level is the table
+        /// lookup pixel by pixel: regions of every width (odd, below and
+        /// above a vector) and place.
+        #[test]
+        fn rgb_bin_map_matches_the_per_pixel_lookup(
+            seed in 0u32..1000,
+            x in 0usize..36,
+            y in 0usize..28,
+            w in 1usize..37,
+            h in 1usize..29,
+        ) {
+            let img = test_image(seed, false);
+            let (w, h) = (w.min(36 - x), h.min(28 - y));
+            let rect = Rect::new(x, y, w, h);
+            let binning = HsvBinning::perez();
+            let mut map = BinMap::new();
+            let other = test_image(seed + 1, false);
+            for level in SimdLevel::ALL {
+                // a map that held another frame first: every entry rewritten
+                binning.bin_map_into(other.view(), Rect::new(0, 0, 36, 28), &mut map).unwrap();
+                binning.bin_map_at(level, img.view(), rect, &mut map).unwrap();
+                proptest::prop_assert_eq!(map.rect(), rect);
+                proptest::prop_assert_eq!(map.bins.len(), w * h);
+                for v in y..y + h {
+                    for u in x..x + w {
+                        let p = img.view().pixel(u, v).unwrap();
+                        let want = binning.bin_rgb(p[0], p[1], p[2]);
+                        proptest::prop_assert_eq!(map.get(u, v), Some(want), "{:?} at {} {}", level, u, v);
+                    }
+                }
+            }
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(256))]
+        /// The count and Bhattacharyya kernels at every SIMD level give the
+        /// plain loops' bits: lengths below, at and above a vector and a
+        /// block, empty and zero bins, sums of 0 and -0.
+        #[test]
+        fn count_and_bhattacharyya_kernels_match_at_every_level(
+            seed in 0u32..1000,
+            n in 0usize..140,
+            sparse in proptest::bool::ANY,
+        ) {
+            let bytes = bayestrack_testkit::noise_bytes(16 * n, seed);
+            // bytes 0..8n: the counts (two bytes each); 8n..: p and q
+            let byte = |k: usize| u32::from(bytes[k]);
+            let counts: Vec<Vec<u32>> = (0..4)
+                .map(|t| {
+                    (0..n)
+                        .map(|u| {
+                            let k = 2 * (t * n + u);
+                            if sparse && byte(k) % 3 > 0 { 0 } else { byte(k) * 20 + byte(k + 1) }
+                        })
+                        .collect()
+                })
+                .collect();
+            let p: Vec<f32> = (0..n)
+                .map(|u| {
+                    let b = byte(8 * n + u);
+                    if sparse && b % 2 > 0 { 0.0 } else { b as f32 / 997.0 }
+                })
+                .collect();
+            let q: Vec<f32> = (0..n).map(|u| byte(12 * n + u) as f32 / 991.0).collect();
+            let scale = 1.0 / 12345.0f32;
+            let want_w: Vec<f32> = (0..n)
+                .map(|u| (counts[0][u] + counts[1][u] + counts[2][u] + counts[3][u]) as f32 * scale)
+                .collect();
+            let want_rho = bhattacharyya_reference(&p, &q);
+            for level in SimdLevel::ALL {
+                let mut w = vec![f32::NAN; n];
+                level.run(CountWeights {
+                    counts: [&counts[0], &counts[1], &counts[2], &counts[3]],
+                    scale,
+                    weights: &mut w,
+                });
+                proptest::prop_assert!(w.iter().zip(&want_w).all(|(a, b)| a.to_bits() == b.to_bits()), "{:?}", level);
+                let rho = level.run(Bhattacharyya { p: &p, q: &q });
+                proptest::prop_assert_eq!(f64::from(rho).min(1.0).to_bits(), want_rho.to_bits(), "{:?}", level);
+            }
+        }
+    }
+
+    proptest::proptest! {
         #![proptest_config(proptest::prelude::ProptestConfig::with_cases(256))]
         /// The Bhattacharyya coefficient in blocks of terms is the filtered
         /// sum bit for bit: empty and sparse histograms, more bins than a
@@ -1321,7 +1581,8 @@ mod tests {
         /// Ellipses by row spans give the per-pixel histograms bit for bit:
         /// every step, ellipses partly or wholly off the map, centres on
         /// pixel centres and between them, thin and round ones, noise and
-        /// runs of one bin (summed in a register).
+        /// runs of one bin (summed in a register); the kernel at every
+        /// SIMD level.
         #[test]
         fn ellipse_spans_match_the_per_pixel_reference(
             seed in 0u32..1000,
@@ -1346,11 +1607,19 @@ mod tests {
                 1 => (cx.round(), cy.round(), a.round().max(1.0), b.round().max(1.0)),
                 _ => (cx.round() + 0.5, cy.round() + 0.5, a.round() + 0.5, b.round() + 0.5),
             };
+            let (w, total) = ellipse_reference(&map, (cx, cy), (a, b), step, binning.len());
             let mut h = KernelHistogram::new(binning.len());
             h.ellipse(&map, cx, cy, a, b, step).unwrap();
-            let (w, total) = ellipse_reference(&map, (cx, cy), (a, b), step, binning.len());
             proptest::prop_assert_eq!(h.total().to_bits(), total.to_bits());
             proptest::prop_assert!(h.weights().iter().zip(&w).all(|(p, q)| p.to_bits() == q.to_bits()));
+            // the kernel at every level (each this CPU runs; the others run
+            // at the best it has)
+            for level in SimdLevel::ALL {
+                let mut h = KernelHistogram::new(binning.len());
+                h.ellipse_at(level, &map, (cx, cy), (a, b), step).unwrap();
+                proptest::prop_assert_eq!(h.total().to_bits(), total.to_bits(), "{:?}", level);
+                proptest::prop_assert!(h.weights().iter().zip(&w).all(|(p, q)| p.to_bits() == q.to_bits()), "{:?}", level);
+            }
         }
     }
 

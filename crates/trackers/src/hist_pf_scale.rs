@@ -413,8 +413,11 @@ impl HistProposal<'_> {
     /// to a `fw x fh` frame.
     fn reachable(&self, particles: &[State], fw: usize, fh: usize) -> Rect {
         let c = self.config;
-        let (lo, hi) = (c.min_scale.ln(), c.max_scale.ln());
         let z0 = (self.size0.0 * self.size0.1).sqrt();
+        // One exponential a particle: the scale after the noise's reach is
+        // `exp(ln s) exp(3 sigma_s)` (an ulp off `exp(ln s + 3 sigma_s)` at
+        // most, which moves the bound, never the numbers).
+        let grow = (REACH_SIGMAS * c.scale_noise).exp();
         let (xmax, ymax) = (fw as f64 - 1.0, fh as f64 - 1.0);
         let mut r = [
             f64::INFINITY,
@@ -422,8 +425,8 @@ impl HistProposal<'_> {
             f64::INFINITY,
             f64::NEG_INFINITY,
         ];
-        let mut take = |cx: (f64, f64), cy: (f64, f64), ls: f64| {
-            let s = ls.clamp(lo, hi).exp();
+        let mut take = |cx: (f64, f64), cy: (f64, f64), s: f64| {
+            let s = s.clamp(c.min_scale, c.max_scale);
             let (w, h) = (self.size0.0 * s, self.size0.1 * s);
             let a = reach(cx.0.clamp(0.0, xmax), cy.0.clamp(0.0, ymax), w, h, c.ring);
             let b = reach(cx.1.clamp(0.0, xmax), cy.1.clamp(0.0, ymax), w, h, c.ring);
@@ -435,19 +438,17 @@ impl HistProposal<'_> {
             ];
         };
         for x in particles {
-            let z = z0 * x[4].exp();
+            let s = x[4].exp();
+            let z = z0 * s;
             // constant velocity: the centre moves by v and the noise, the
             // scale by its noise
-            let (dp, ds) = (
-                REACH_SIGMAS * c.position_noise * z,
-                REACH_SIGMAS * c.scale_noise,
-            );
+            let dp = REACH_SIGMAS * c.position_noise * z;
             let (mx, my) = (x[0] + x[2], x[1] + x[3]);
-            take((mx - dp, mx + dp), (my - dp, my + dp), x[4] + ds);
+            take((mx - dp, mx + dp), (my - dp, my + dp), s * grow);
             // a jump: around the centre, the scale kept
             if c.jump_fraction > 0.0 {
                 let dj = REACH_SIGMAS * c.jump_spread * z;
-                take((x[0] - dj, x[0] + dj), (x[1] - dj, x[1] + dj), x[4]);
+                take((x[0] - dj, x[0] + dj), (x[1] - dj, x[1] + dj), s);
             }
         }
         clamped_rect(r, fw, fh)
