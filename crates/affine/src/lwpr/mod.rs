@@ -556,7 +556,8 @@ impl Lwpr {
             loop {
                 match (rfs.next(), rfs.next(), rfs.next(), rfs.next()) {
                     (Some(a), Some(b), Some(c), Some(d)) => {
-                        self.q.extend(distances4(xn, [a, b, c, d]));
+                        self.q
+                            .extend(distances4(xn, [a, b, c, d], &mut self.ws.terms));
                     }
                     (a, b, c, _) => {
                         for rf in [a, b, c].into_iter().flatten() {

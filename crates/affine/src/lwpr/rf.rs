@@ -152,23 +152,39 @@ pub(super) fn derivs(kernel: Kernel, q: f64) -> (f64, f64, f64) {
 
 /// The squared distances of `x` to four diagonal-metric fields, each summed
 /// in index order as [`ReceptiveField::distance`] does (identical results);
-/// the four independent sums run side by side.
+/// the four independent sums run side by side. The terms `d_i e_i e_i`
+/// (`e = x - c`) are taken first, field by field in vector lanes (the same
+/// operations), into `terms` (at least `4 N` long), then added to the four
+/// running sums one by one: the same additions in the same order.
 #[inline(always)]
-pub(super) fn distances4(x: &[f64], rfs: [&ReceptiveField; 4]) -> [f64; 4] {
+pub(super) fn distances4(x: &[f64], rfs: [&ReceptiveField; 4], terms: &mut [f64]) -> [f64; 4] {
     let n = x.len();
-    let [a, b, c, d] = rfs;
-    let (ca, cb, cc, cd) = (&a.c[..n], &b.c[..n], &c.c[..n], &d.c[..n]);
-    let (da, db, dc, dd) = (&a.d[..n], &b.d[..n], &c.d[..n], &d.d[..n]);
+    let (t01, t23) = terms[..4 * n].split_at_mut(2 * n);
+    let ((t0, t1), (t2, t3)) = (t01.split_at_mut(n), t23.split_at_mut(n));
+    for (t, rf) in [&mut *t0, &mut *t1, &mut *t2, &mut *t3]
+        .into_iter()
+        .zip(rfs)
+    {
+        distance_terms(t, x, &rf.c[..n], &rf.d[..n]);
+    }
     let mut q = [0.0f64; 4];
-    for i in 0..n {
-        let xi = x[i];
-        let (ea, eb, ec, ed) = (xi - ca[i], xi - cb[i], xi - cc[i], xi - cd[i]);
-        q[0] += da[i] * ea * ea;
-        q[1] += db[i] * eb * eb;
-        q[2] += dc[i] * ec * ec;
-        q[3] += dd[i] * ed * ed;
+    for (((a, b), c), d) in t0.iter().zip(&*t1).zip(&*t2).zip(&*t3) {
+        q[0] += a;
+        q[1] += b;
+        q[2] += c;
+        q[3] += d;
     }
     q
+}
+
+/// `t_i = d_i (x_i - c_i)^2`, as `(d e) e` (the slices as separate
+/// arguments, so that the compiler knows they do not overlap).
+#[inline(always)]
+fn distance_terms(t: &mut [f64], x: &[f64], c: &[f64], d: &[f64]) {
+    for (((t, x), c), d) in t.iter_mut().zip(x).zip(c).zip(d) {
+        let e = x - c;
+        *t = d * e * e;
+    }
 }
 
 /// Scalars of one PLS direction's update: (lambda_slow, w ytarget, lambda,
@@ -178,24 +194,53 @@ type DirScalars = (f64, f64, f64, f64, f64);
 /// One pass of a PLS direction's update over the inputs `x` (its residual):
 /// `SXresYres <- lambda_slow SXresYres + w ytarget x`, whose squared norm is
 /// returned (summed in index order), `SSXres <- lambda SSXres + w s x` and
-/// `p = SSXres / SSs2`. The element-wise updates run first (a loop the
-/// compiler vectorises), then the norm's sum in index order over the
-/// stored values: the same operations as one fused loop, so the same bits.
+/// `p = SSXres / SSs2`. The element-wise updates, with the squares of the
+/// new `SXresYres` into `sq`, run first (a loop the compiler vectorises),
+/// then the squares are added to the norm one by one in index order: the
+/// same operations as one fused loop, so the same bits.
 #[inline(always)]
-fn fused_sums(sxy: &mut [f64], ssx: &mut [f64], p: &mut [f64], x: &[f64], sc: DirScalars) -> f64 {
-    let (lambda_slow, wyt, lj, wsj, inv_ss_s2) = sc;
+fn fused_sums(
+    sxy: &mut [f64],
+    ssx: &mut [f64],
+    p: &mut [f64],
+    x: &[f64],
+    sc: DirScalars,
+    sq: &mut [f64],
+) -> f64 {
     let n = sxy.len().min(x.len()).min(ssx.len()).min(p.len());
-    let (sxy, ssx, p, x) = (&mut sxy[..n], &mut ssx[..n], &mut p[..n], &x[..n]);
-    for (((a, x), sx), p) in sxy.iter_mut().zip(x).zip(ssx.iter_mut()).zip(p.iter_mut()) {
+    let sq = &mut sq[..n];
+    single_pass(&mut sxy[..n], &mut ssx[..n], &mut p[..n], sq, &x[..n], sc);
+    let mut unorm = 0.0;
+    for q in sq.iter() {
+        unorm += q;
+    }
+    unorm
+}
+
+/// The element-wise part of [`fused_sums`] (the slices as separate
+/// arguments, so that the compiler knows they do not overlap).
+#[inline(always)]
+fn single_pass(
+    sxy: &mut [f64],
+    ssx: &mut [f64],
+    p: &mut [f64],
+    sq: &mut [f64],
+    x: &[f64],
+    sc: DirScalars,
+) {
+    let (lambda_slow, wyt, lj, wsj, inv_ss_s2) = sc;
+    for ((((a, x), sx), p), q) in sxy
+        .iter_mut()
+        .zip(x)
+        .zip(ssx.iter_mut())
+        .zip(p.iter_mut())
+        .zip(sq.iter_mut())
+    {
         *a = *a * lambda_slow + wyt * x;
+        *q = *a * *a;
         *sx = lj * *sx + wsj * x;
         *p = *sx * inv_ss_s2;
     }
-    let mut unorm = 0.0;
-    for a in sxy.iter() {
-        unorm += *a * *a;
-    }
-    unorm
 }
 
 /// [`fused_sums`] for two directions (the same operations, so the same
@@ -208,23 +253,69 @@ fn fused_sums_pair(
     p: [&mut [f64]; 2],
     x: [&[f64]; 2],
     sc: [DirScalars; 2],
+    sq: &mut [f64],
 ) -> (f64, f64) {
     let n = x[0].len();
     let [sxy0, sxy1] = sxy;
     let [ssx0, ssx1] = ssx;
     let [p0, p1] = p;
-    let (sxy0, sxy1, ssx0, ssx1) = (
-        &mut sxy0[..n],
-        &mut sxy1[..n],
-        &mut ssx0[..n],
-        &mut ssx1[..n],
+    let (q0, q1) = sq[..2 * n].split_at_mut(n);
+    pair_block(
+        [sxy0, sxy1, ssx0, ssx1, p0, p1, &mut *q0, &mut *q1],
+        [x[0], x[1]],
+        sc,
     );
-    let (p0, p1, x0, x1) = (&mut p0[..n], &mut p1[..n], x[0], &x[1][..n]);
+    let (mut un0, mut un1) = (0.0, 0.0);
+    for (a0, a1) in q0.iter().zip(q1.iter()) {
+        un0 += a0;
+        un1 += a1;
+    }
+    (un0, un1)
+}
+
+/// The element-wise part of [`fused_sums_pair`], with the
+/// squares of the new `SXresYres` into `q0`, `q1`. The slices arrive as
+/// separate arguments (of equal length), which tells the compiler they do
+/// not overlap: it then vectorises the loop without run-time overlap
+/// checks between the eight written and two read slices.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn pair_block_parts(
+    sxy0: &mut [f64],
+    sxy1: &mut [f64],
+    ssx0: &mut [f64],
+    ssx1: &mut [f64],
+    p0: &mut [f64],
+    p1: &mut [f64],
+    q0: &mut [f64],
+    q1: &mut [f64],
+    x0: &[f64],
+    x1: &[f64],
+    sc: [DirScalars; 2],
+) {
     let (ls0, wyt0, l0, ws0, inv0) = sc[0];
     let (ls1, wyt1, l1, ws1, inv1) = sc[1];
-    for i in 0..n {
-        sxy0[i] = sxy0[i] * ls0 + wyt0 * x0[i];
-        sxy1[i] = sxy1[i] * ls1 + wyt1 * x1[i];
+    let m = x0.len();
+    let (sxy0, sxy1, ssx0, ssx1) = (
+        &mut sxy0[..m],
+        &mut sxy1[..m],
+        &mut ssx0[..m],
+        &mut ssx1[..m],
+    );
+    let (p0, p1, q0, q1, x1) = (
+        &mut p0[..m],
+        &mut p1[..m],
+        &mut q0[..m],
+        &mut q1[..m],
+        &x1[..m],
+    );
+    for i in 0..m {
+        let a0 = sxy0[i] * ls0 + wyt0 * x0[i];
+        sxy0[i] = a0;
+        q0[i] = a0 * a0;
+        let a1 = sxy1[i] * ls1 + wyt1 * x1[i];
+        sxy1[i] = a1;
+        q1[i] = a1 * a1;
         let s0 = l0 * ssx0[i] + ws0 * x0[i];
         ssx0[i] = s0;
         p0[i] = s0 * inv0;
@@ -232,17 +323,21 @@ fn fused_sums_pair(
         ssx1[i] = s1;
         p1[i] = s1 * inv1;
     }
-    let (mut un0, mut un1) = (0.0, 0.0);
-    for (a0, a1) in sxy0.iter().zip(sxy1.iter()) {
-        un0 += a0 * a0;
-        un1 += a1 * a1;
-    }
-    (un0, un1)
+}
+
+/// [`pair_block_parts`] with its slices in arrays.
+#[inline(always)]
+fn pair_block(w: [&mut [f64]; 8], x: [&[f64]; 2], sc: [DirScalars; 2]) {
+    let [sxy0, sxy1, ssx0, ssx1, p0, p1, q0, q1] = w;
+    pair_block_parts(sxy0, sxy1, ssx0, ssx1, p0, p1, q0, q1, x[0], x[1], sc);
 }
 
 /// Scratch buffers shared by all RFs of a model.
 #[derive(Debug, Clone)]
 pub(super) struct Workspace {
+    /// The terms of [`distances4`] (`4 N`) and the squares of
+    /// [`fused_sums`] and [`fused_sums_pair`] (`2 N`).
+    pub(super) terms: Vec<f64>,
     xc: Vec<f64>,
     /// The second field's residual and projections in
     /// [`ReceptiveField::predict_local_pair`].
@@ -267,6 +362,7 @@ impl Workspace {
     pub(super) fn new(n: usize, full: bool) -> Self {
         let nm = if full { n * n } else { n };
         Self {
+            terms: vec![0.0; 4 * n],
             xc: vec![0.0; n],
             xc_b: vec![0.0; n],
             s_b: Vec::new(),
@@ -740,6 +836,7 @@ impl ReceptiveField {
                     [p0, p1],
                     [xres(j), xres(j + 1)],
                     scal,
+                    &mut ws.terms,
                 );
                 [u0, u1]
             } else {
@@ -749,6 +846,7 @@ impl ReceptiveField {
                     &mut self.p[range],
                     xres(j),
                     scal[0],
+                    &mut ws.terms,
                 );
                 [u0, 0.0]
             };
@@ -1143,6 +1241,127 @@ mod faer_tests {
                 assert!((fast[row + col * n] - md).abs() <= 1e-12 * md.abs().max(1.0));
                 let mtm: f64 = (0..n).map(|k| m[k + row * n] * m[k + col * n]).sum();
                 assert!((gram[row + col * n] - mtm).abs() <= 1e-12 * mtm.abs().max(1.0));
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod term_first_tests {
+    use super::*;
+    use bayestrack_image::simd::{Kernel as SimdKernel, SimdLevel, Token};
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, StandardNormal};
+    use rand_xoshiro::Xoshiro256PlusPlus;
+
+    fn normals(rng: &mut Xoshiro256PlusPlus, n: usize) -> Vec<f64> {
+        (0..n).map(|_| StandardNormal.sample(&mut *rng)).collect()
+    }
+
+    /// The three kernels on fixed inputs, as a dispatched kernel.
+    struct Blocks<'a> {
+        x: &'a [f64],
+        rfs: [&'a ReceptiveField; 4],
+        state: &'a [Vec<f64>; 6],
+        sc: [DirScalars; 2],
+    }
+
+    /// `(distances, single norm and its vectors, pair norms and vectors)`.
+    type Out = ([f64; 4], f64, [Vec<f64>; 3], (f64, f64), [Vec<f64>; 6]);
+
+    impl SimdKernel for Blocks<'_> {
+        type Output = Out;
+        #[inline(always)]
+        fn run<T: Token>(self, _: T) -> Out {
+            let n = self.x.len();
+            let mut terms = vec![0.0; 4 * n];
+            let q = distances4(self.x, self.rfs, &mut terms);
+            let [a0, a1, s0, s1, p0, p1] = self.state.clone();
+            let (mut sxy, mut ssx, mut p) = (a0.clone(), s0.clone(), p0.clone());
+            let single = fused_sums(&mut sxy, &mut ssx, &mut p, self.x, self.sc[0], &mut terms);
+            let (mut b0, mut b1, mut t0, mut t1, mut r0, mut r1) = (a0, a1, s0, s1, p0, p1);
+            let x1: Vec<f64> = self.x.iter().map(|v| 0.5 - v).collect();
+            let pair = fused_sums_pair(
+                [&mut b0, &mut b1],
+                [&mut t0, &mut t1],
+                [&mut r0, &mut r1],
+                [self.x, &x1],
+                self.sc,
+                &mut terms,
+            );
+            (q, single, [sxy, ssx, p], pair, [b0, b1, t0, t1, r0, r1])
+        }
+    }
+
+    fn bits(v: &[f64]) -> Vec<u64> {
+        v.iter().map(|x| x.to_bits()).collect()
+    }
+
+    /// The kernels that take their terms ahead of their sums equal the
+    /// plain one-loop computations bit for bit at every SIMD level, for
+    /// lengths around the vector widths and the pose estimator's 144.
+    #[test]
+    fn term_first_kernels_equal_the_plain_loops_at_every_level() {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(5);
+        for n in (1..=9).chain([63, 64, 65, 127, 128, 144, 150]) {
+            let cfg = LwprConfig::new(n, 1);
+            let init_m = cfg.validate().unwrap();
+            let x = normals(&mut rng, n);
+            let rfs: Vec<ReceptiveField> = (0..4)
+                .map(|_| {
+                    let mut rf =
+                        ReceptiveField::new(&cfg, &init_m, None, &normals(&mut rng, n), 0.0);
+                    rf.d = normals(&mut rng, n).iter().map(|v| v.abs() * 3.0).collect();
+                    rf
+                })
+                .collect();
+            let state: [Vec<f64>; 6] = core::array::from_fn(|_| normals(&mut rng, n));
+            let sc = [(0.95, 0.3, 0.999, -0.7, 1.3), (0.91, -1.2, 0.99, 0.4, 0.6)];
+            // The plain loops.
+            let mut want_q = [0.0f64; 4];
+            for (q, rf) in want_q.iter_mut().zip(&rfs) {
+                for i in 0..n {
+                    let e = x[i] - rf.c[i];
+                    *q += rf.d[i] * e * e;
+                }
+            }
+            let x1: Vec<f64> = x.iter().map(|v| 0.5 - v).collect();
+            let plain = |k: usize, xs: &[f64]| {
+                let (ls, wyt, l, ws, inv) = sc[k];
+                let (mut a, mut s, mut p) =
+                    (state[k].clone(), state[2 + k].clone(), state[4 + k].clone());
+                for i in 0..n {
+                    a[i] = a[i] * ls + wyt * xs[i];
+                    s[i] = l * s[i] + ws * xs[i];
+                    p[i] = s[i] * inv;
+                }
+                let mut un = 0.0;
+                for v in &a {
+                    un += v * v;
+                }
+                (un, a, s, p)
+            };
+            let (u0, a0, s0, p0) = plain(0, &x);
+            let (u1, a1, s1, p1) = plain(1, &x1);
+            for level in SimdLevel::ALL {
+                let (q, single, vecs, pair, pvecs) = level.run(Blocks {
+                    x: &x,
+                    rfs: [&rfs[0], &rfs[1], &rfs[2], &rfs[3]],
+                    state: &state,
+                    sc,
+                });
+                assert_eq!(bits(&q), bits(&want_q), "{level:?} n {n}: distances");
+                assert_eq!(single.to_bits(), u0.to_bits(), "{level:?} n {n}: single");
+                assert_eq!(vecs.map(|v| bits(&v)), [&a0, &s0, &p0].map(|v| bits(v)));
+                assert_eq!(
+                    [pair.0.to_bits(), pair.1.to_bits()],
+                    [u0.to_bits(), u1.to_bits()]
+                );
+                assert_eq!(
+                    pvecs.map(|v| bits(&v)),
+                    [&a0, &a1, &s0, &s1, &p0, &p1].map(|v| bits(v)),
+                    "{level:?} n {n}: pair"
+                );
             }
         }
     }
