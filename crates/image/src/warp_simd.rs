@@ -237,8 +237,8 @@ impl<T: Pixel> InsideWarp<'_, T> {
         };
         for (j, &off) in LANE_OFFSETS.iter().enumerate() {
             let uf = u0f + off;
-            let x = ((a * uf + bx) as f32).max(0.0);
-            let y = ((c * uf + by) as f32).max(0.0);
+            let x = at_least_zero((a * uf + bx) as f32);
+            let y = at_least_zero((c * uf + by) as f32);
             let (xi, xf) = floor_small(x.min(self.xmax));
             let (yi, yf) = floor_small(y.min(self.ymax));
             out.fx[j] = (x - xf).min(1.0);
@@ -252,11 +252,11 @@ impl<T: Pixel> InsideWarp<'_, T> {
 
     /// [`Self::cells`] in AVX2 intrinsics: `f64` lanes for the map, `f32`
     /// and `i32` lanes for the cells. `max_ps(x, 0)` returns its second
-    /// operand (+0) when `x` is 0 of either sign, `min_ps(xmax, x)` its
-    /// second (`x`) on ties, `min_ps(d, 1)` its second: exactly the
-    /// scalar `x.max(0.0)`, `x.min(xmax)` and `d.min(1.0)` as the compiler
-    /// lowers them (`maxss`/`minss` with the same operand order; no NaN
-    /// reaches them).
+    /// operand (+0) when `x` is 0 of either sign, as [`at_least_zero`]
+    /// does; `min_ps(xmax, x)` returns its second (`x`) on ties and
+    /// `min_ps(d, 1)` its second: the same bits as the scalar
+    /// `x.min(xmax)` and `d.min(1.0)` whichever operand those return on
+    /// ties (equal values, both non-negative; no NaN reaches them).
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     fn cells_avx2<const CH: usize>(
@@ -560,8 +560,8 @@ impl<T: Pixel> InsideWarp<'_, T> {
         let ch = px.len();
         let [a, _, _, c, _, _] = self.m;
         let uf = u as f64;
-        let x = ((a * uf + bx) as f32).max(0.0);
-        let y = ((c * uf + by) as f32).max(0.0);
+        let x = at_least_zero((a * uf + bx) as f32);
+        let y = at_least_zero((c * uf + by) as f32);
         // Cells are [x0, x0 + 1] with x0 <= w - 2; on the right edge fx = 1.
         // Truncation is floor here (x, y >= 0).
         let xi = x.min(self.xmax) as i32;
@@ -597,6 +597,15 @@ impl<T: Pixel> InsideWarp<'_, T> {
     }
 }
 
+/// `x` where it is above 0, else +0 (also for -0 and NaN): `maxss(x, 0)`
+/// and `max_ps(x, 0)` bit for bit. Not `x.max(0.0)`, whose result for
+/// -0 is unspecified and did differ between builds (the release scalar
+/// loop returned -0 where the vector kernels return +0).
+#[inline(always)]
+fn at_least_zero(x: f32) -> f32 {
+    if x > 0.0 { x } else { 0.0 }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -619,8 +628,8 @@ mod tests {
             let (bx, by) = (b * vf + tx, d * vf + ty);
             for (u, px) in row.chunks_exact_mut(ch).enumerate() {
                 let uf = u as f64;
-                let x = ((a * uf + bx) as f32).max(0.0);
-                let y = ((c * uf + by) as f32).max(0.0);
+                let x = at_least_zero((a * uf + bx) as f32);
+                let y = at_least_zero((c * uf + by) as f32);
                 let xi = x.min(w.xmax) as i32;
                 let yi = y.min(w.ymax) as i32;
                 let fx = (x - xi as f32).min(1.0);
