@@ -132,8 +132,7 @@ impl HsvBinning {
     /// The bin of an RGB pixel through the table (5 bits per channel).
     #[inline]
     pub fn bin_rgb(&self, r: u8, g: u8, b: u8) -> u16 {
-        let q = (usize::from(r >> 3) << 10) | (usize::from(g >> 3) << 5) | usize::from(b >> 3);
-        self.rgb_lut[q]
+        self.rgb_lut[usize::from(rgb_index(r, g, b))]
     }
 
     /// The bin of a gray pixel (a value bin).
@@ -202,6 +201,14 @@ impl HsvBinning {
     }
 }
 
+/// The index of an RGB colour in [`HsvBinning`]'s table: 5 bits a channel,
+/// red highest (`u16` arithmetic, which vectorises).
+#[inline(always)]
+fn rgb_index(r: u8, g: u8, b: u8) -> u16 {
+    let (r, g, b) = (u16::from(r), u16::from(g), u16::from(b));
+    ((r >> 3) << 10) | ((g >> 3) << 5) | (b >> 3)
+}
+
 /// [`HsvBinning::bin_rgb`] of each pixel of an RGB row into `out`, in two
 /// passes: the table indices of the whole row first (a loop the compiler
 /// vectorises), then the lookups. The same bins at every level.
@@ -217,8 +224,7 @@ impl Kernel for RgbBins<'_> {
     fn run<T: Token>(self, _: T) {
         let RgbBins { lut, row, out } = self;
         for (o, p) in out.iter_mut().zip(row.chunks_exact(3)) {
-            let (r, g, b) = (u16::from(p[0]), u16::from(p[1]), u16::from(p[2]));
-            *o = ((r >> 3) << 10) | ((g >> 3) << 5) | (b >> 3);
+            *o = rgb_index(p[0], p[1], p[2]);
         }
         for o in out.iter_mut() {
             *o = lut[usize::from(*o)];

@@ -635,9 +635,7 @@ impl PfDcfCore {
                 }
                 for l in first.clone() {
                     let resp = self.dcf.detect(wc, r.levels[l].exp())?;
-                    let peak = best.peak;
-                    keep(&mut r.maps[k * nl + l], &mut best, wc, resp, l == nl / 2);
-                    if best.peak > peak {
+                    if keep(&mut r.maps[k * nl + l], &mut best, wc, resp, l == nl / 2) {
                         best_k = k;
                     }
                     self.diagnostics.responses += 1;
@@ -797,21 +795,24 @@ impl PfDcfCore {
 }
 
 /// Keeps a window's response (centred at `wc`) in `m` and, at the middle
-/// scale, in `best` when its peak is the highest so far.
-fn keep(m: &mut Map, best: &mut Best, wc: (f64, f64), resp: &Response, middle: bool) {
+/// scale, in `best` when its peak is the highest so far; returns whether
+/// it was.
+fn keep(m: &mut Map, best: &mut Best, wc: (f64, f64), resp: &Response, middle: bool) -> bool {
     m.centre = wc;
     m.w = resp.width();
     m.h = resp.height();
     m.px = resp.pixels_per_cell();
     m.data.clear();
     m.data.extend_from_slice(resp.data());
-    if middle && (resp.max as f64) > best.peak {
+    let highest = middle && (resp.max as f64) > best.peak;
+    if highest {
         *best = Best {
             peak: resp.max as f64,
             apce: resp.apce,
             at: (wc.0 + resp.dx, wc.1 + resp.dy),
         };
     }
+    highest
 }
 
 /// `p` moved into a frame of `(width, height)` pixels (0-based centres).
