@@ -260,10 +260,8 @@ fn fused_sums_pair(
     let [ssx0, ssx1] = ssx;
     let [p0, p1] = p;
     let (q0, q1) = sq[..2 * n].split_at_mut(n);
-    pair_block(
-        [sxy0, sxy1, ssx0, ssx1, p0, p1, &mut *q0, &mut *q1],
-        [x[0], x[1]],
-        sc,
+    pair_block_parts(
+        sxy0, sxy1, ssx0, ssx1, p0, p1, &mut *q0, &mut *q1, x[0], x[1], sc,
     );
     let (mut un0, mut un1) = (0.0, 0.0);
     for (a0, a1) in q0.iter().zip(q1.iter()) {
@@ -323,13 +321,6 @@ fn pair_block_parts(
         ssx1[i] = s1;
         p1[i] = s1 * inv1;
     }
-}
-
-/// [`pair_block_parts`] with its slices in arrays.
-#[inline(always)]
-fn pair_block(w: [&mut [f64]; 8], x: [&[f64]; 2], sc: [DirScalars; 2]) {
-    let [sxy0, sxy1, ssx0, ssx1, p0, p1, q0, q1] = w;
-    pair_block_parts(sxy0, sxy1, ssx0, ssx1, p0, p1, q0, q1, x[0], x[1], sc);
 }
 
 /// Scratch buffers shared by all RFs of a model.
