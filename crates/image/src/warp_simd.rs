@@ -341,8 +341,7 @@ impl<T: Pixel> InsideWarp<'_, T> {
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     fn rows_window_avx2(&self, simd: pulp::x86::V3, out: &mut ImageViewMut<'_, f32>) {
-        use pulp::bytemuck::cast;
-        let [a, b, tx, c, d, ty] = self.m;
+        let [a, _, _, c, _, _] = self.m;
         let pw = out.width();
         // `a u` and `c u` for every `u` of a patch row (the same in every
         // row), when the row is at most `MAX_PW` wide.
@@ -358,9 +357,48 @@ impl<T: Pixel> InsideWarp<'_, T> {
         // The lanes of the smallest `xi` and `yi` of a batch (see
         // `window_avx2`).
         let first = [a, c].map(|m| simd.avx._mm256_set1_epi32(if m < 0.0 { 7 } else { 0 }));
-        let half = |p: &[f64], k: usize| -> core::arch::x86_64::__m256d {
-            cast::<[f64; 4], _>(p[k..k + 4].try_into().expect("four lanes"))
-        };
+        #[inline(always)]
+        fn half(p: &[f64], k: usize) -> core::arch::x86_64::__m256d {
+            pulp::bytemuck::cast::<[f64; 4], _>(p[k..k + 4].try_into().expect("four lanes"))
+        }
+        // Two instances of the loop (not a test of the width every batch).
+        if pw <= MAX_PW {
+            self.window_rows(
+                simd,
+                out,
+                first,
+                #[inline(always)]
+                |bx, by, s| {
+                    let ap = [half(&au, s), half(&au, s + 4)];
+                    let cp = [half(&cu, s), half(&cu, s + 4)];
+                    self.cell_lanes_from_avx2(simd, bx, by, ap, cp)
+                },
+            );
+        } else {
+            self.window_rows(
+                simd,
+                out,
+                first,
+                #[inline(always)]
+                |bx, by, s| self.cell_lanes_avx2(simd, bx, by, s),
+            );
+        }
+    }
+
+    /// The rows of [`Self::rows_window_avx2`], the cells of a batch from
+    /// `cells(bx, by, u0)`.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn window_rows(
+        &self,
+        simd: pulp::x86::V3,
+        out: &mut ImageViewMut<'_, f32>,
+        first: [core::arch::x86_64::__m256i; 2],
+        cells: impl Fn(f64, f64, usize) -> CellLanes,
+    ) {
+        use pulp::bytemuck::cast;
+        let [_, b, tx, _, d, ty] = self.m;
+        let pw = out.width();
         for v in 0..out.height() {
             let row = &mut out.row_mut(v)[..pw];
             let vf = v as f64;
@@ -374,13 +412,7 @@ impl<T: Pixel> InsideWarp<'_, T> {
             let mut u0 = 0;
             loop {
                 let s = u0.min(pw - LANES);
-                let (xi, yi, fx, fy) = if pw <= MAX_PW {
-                    let ap = [half(&au, s), half(&au, s + 4)];
-                    let cp = [half(&cu, s), half(&cu, s + 4)];
-                    self.cell_lanes_from_avx2(simd, bx, by, ap, cp)
-                } else {
-                    self.cell_lanes_avx2(simd, bx, by, s)
-                };
+                let (xi, yi, fx, fy) = cells(bx, by, s);
                 let dst = &mut row[s..s + LANES];
                 if let Some(p) = self.window_avx2(simd, (xi, yi, fx, fy), first) {
                     dst.copy_from_slice(&cast::<_, [f32; LANES]>(p));
@@ -456,19 +488,19 @@ impl<T: Pixel> InsideWarp<'_, T> {
             return None;
         }
         let (xlo, ylo) = (i._mm256_cvtsi256_si32(xlo), i._mm256_cvtsi256_si32(ylo));
-        let src = self.data.get(ylo as usize * self.stride + xlo as usize..)?;
-        let load = |o: usize| -> Option<core::arch::x86_64::__m256> {
-            let w = src.get(o..o + LANES)?;
-            Some(cast::<[f32; LANES], _>(core::array::from_fn(|k| {
-                w[k].to_f32()
-            })))
+        let base = ylo as usize * self.stride + xlo as usize;
+        // The first two rows with one bounds check, the others one each.
+        let two = self.data.get(base..base + self.stride + LANES)?;
+        let vector = |w: &[T]| -> Option<core::arch::x86_64::__m256> {
+            let w: &[T; LANES] = w.try_into().ok()?;
+            Some(cast::<[f32; LANES], _>(w.map(|v| v.to_f32())))
         };
         let dx1 = i._mm256_add_epi32(dx, f._mm256_set1_epi32(1));
         let pick = |w, d| i._mm256_permutevar8x32_ps(w, d);
-        let w0 = load(0)?;
+        let w0 = vector(&two[..LANES])?;
         let (mut p00, mut p01) = (pick(w0, dx), pick(w0, dx1));
-        let mut o = self.stride;
-        let w1 = load(o)?;
+        let mut o = base + self.stride;
+        let w1 = vector(&two[self.stride..])?;
         let (mut a, mut b) = (pick(w1, dx), pick(w1, dx1));
         let (mut p10, mut p11) = (a, b);
         // `r - 1 - dy` in each lane while placing row `ylo + r`: its sign
@@ -481,7 +513,7 @@ impl<T: Pixel> InsideWarp<'_, T> {
             p00 = f._mm256_blendv_ps(p00, a, lower);
             p01 = f._mm256_blendv_ps(p01, b, lower);
             o += self.stride;
-            let w = load(o)?;
+            let w = vector(self.data.get(o..o + LANES)?)?;
             (a, b) = (pick(w, dx), pick(w, dx1));
             p10 = f._mm256_blendv_ps(p10, a, lower);
             p11 = f._mm256_blendv_ps(p11, b, lower);
