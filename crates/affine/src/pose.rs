@@ -10,6 +10,7 @@
 //! `-delta`. "Tuning a particle to its best neighbour" (Algorithm 1 step 2)
 //! applies `M <- M exp(f(O(M)))` iteratively and keeps the best-scoring pose.
 
+use bayestrack_image::simd::{self, Token, dispatch};
 use bayestrack_image::{Border, ImageView, ImageViewMut, Pixel, warp_into};
 use nalgebra::{Matrix3, Vector2};
 use rand::Rng;
@@ -79,6 +80,57 @@ pub struct PoseEstimator {
     patch: Vec<f32>,
     feat: Vec<f64>,
     pred: Vec<f64>,
+}
+
+/// The cell sums of a `ps x ps` patch pooled by 3 (row-major cells,
+/// `(ps / 3)^2` of them into `feat`) as a dispatched kernel: four cells of
+/// a band at a time in vector lanes, lane `l` summing its own cell in the
+/// order of [`pool_band`] (rows top to bottom, each left to right, from
+/// `0.0`), the band's last `cells % 4` one at a time in that order: the
+/// same bits at every level.
+struct PoolCells3<'a> {
+    patch: &'a [f32],
+    ps: usize,
+    feat: &'a mut [f64],
+}
+
+impl simd::Kernel for PoolCells3<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<K: Token>(self, _: K) {
+        let (ps, cells) = (self.ps, self.ps / 3);
+        for (band, feat) in self
+            .patch
+            .chunks_exact(3 * ps)
+            .zip(self.feat.chunks_exact_mut(cells))
+        {
+            let (four, rest) = feat.split_at_mut(cells / 4 * 4);
+            for (g, f) in four.chunks_exact_mut(4).enumerate() {
+                let mut s = [0f64; 4];
+                for r in 0..3 {
+                    let w: &[f32; 12] = band[r * ps + 12 * g..][..12]
+                        .try_into()
+                        .expect("twelve pixels");
+                    for k in 0..3 {
+                        for (l, s) in s.iter_mut().enumerate() {
+                            *s += f64::from(w[3 * l + k]);
+                        }
+                    }
+                }
+                f.copy_from_slice(&s);
+            }
+            for (cx, f) in rest.iter_mut().enumerate() {
+                let cx = cx + cells / 4 * 4;
+                let mut s = 0.0;
+                for r in 0..3 {
+                    for v in &band[r * ps + 3 * cx..][..3] {
+                        s += f64::from(*v);
+                    }
+                }
+                *f = s;
+            }
+        }
+    }
 }
 
 /// The cell sums of one band of `P` patch rows (`ps` wide) into `feat`
@@ -220,7 +272,15 @@ impl PoseEstimator {
                 }
             }
             FeatureKind::Gray => {
-                // Cell sums over the cell's rows, each row left to right.
+                // Cell sums over the cell's rows, each row left to right
+                // (pooled by 3, all at once, vectorised across cells).
+                if pool == 3 {
+                    dispatch(PoolCells3 {
+                        patch: &self.patch,
+                        ps,
+                        feat: &mut self.feat,
+                    });
+                }
                 for (band, feat) in self
                     .patch
                     .chunks_exact(pool * ps)
@@ -228,7 +288,7 @@ impl PoseEstimator {
                 {
                     match pool {
                         2 => pool_band::<2>(band, ps, feat),
-                        3 => pool_band::<3>(band, ps, feat),
+                        3 => {}
                         4 => pool_band::<4>(band, ps, feat),
                         _ => {
                             for (cx, f) in feat.iter_mut().enumerate() {
@@ -439,6 +499,43 @@ mod tests {
     use bayestrack_image::Image;
     use rand::SeedableRng;
     use rand_xoshiro::Xoshiro256PlusPlus;
+
+    /// The vectorised pooling by 3 equals `pool_band::<3>` band by band,
+    /// bit for bit, at every level: patch sides whose bands have a multiple
+    /// of four cells and others (remainders 1 to 3, bands of fewer than four
+    /// cells), values of mixed signs and magnitudes (so that the order of
+    /// the additions shows in the bits), zeros of both signs.
+    #[test]
+    fn pooling_by_three_equals_the_band_loop_bit_for_bit_at_every_level() {
+        use bayestrack_image::SimdLevel;
+        use rand::RngExt;
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(3);
+        for ps in [3, 6, 9, 12, 15, 21, 24, 27, 36, 39, 48] {
+            let patch: Vec<f32> = (0..ps * ps)
+                .map(|i| match i % 11 {
+                    0 => 0.0,
+                    1 => -0.0,
+                    2 => rng.random_range(-1e6f32..1e6),
+                    _ => rng.random_range(-1f32..1.0) * 10f32.powi(rng.random_range(-8..3)),
+                })
+                .collect();
+            let cells = ps / 3;
+            let mut want = vec![0f64; cells * cells];
+            for (band, feat) in patch.chunks_exact(3 * ps).zip(want.chunks_exact_mut(cells)) {
+                pool_band::<3>(band, ps, feat);
+            }
+            for level in SimdLevel::ALL {
+                let mut got = vec![f64::NAN; cells * cells];
+                level.run(PoolCells3 {
+                    patch: &patch,
+                    ps,
+                    feat: &mut got,
+                });
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&got), bits(&want), "{level:?} side {ps}");
+            }
+        }
+    }
 
     /// A smooth random texture: a sum of Gaussian blobs.
     fn texture(w: usize, h: usize, seed: u64) -> Image<f32> {

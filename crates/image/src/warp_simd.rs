@@ -24,6 +24,9 @@
 //!    instead of assembling the vectors in registers with long chains of
 //!    byte and lane shuffles, which all queue on the one shuffle port
 //!    (measured: the gray `u8` warp takes half the time this way).
+//!    One channel with AVX2 picks them from source rows loaded as vectors
+//!    instead, when a batch's cells fit such a window
+//!    (`InsideWarp::window_avx2`: at most 7 cell columns and 13 cell rows).
 //! 3. **Lerps.** `top = p00 + fx (p01 - p00)`, `bot = p10 + fx (p11 - p10)`,
 //!    `top + fy (bot - top)` in vector lanes (`fx`, `fy` repeated over the
 //!    channels), and one contiguous store into the patch row.
@@ -91,6 +94,11 @@ fn lerp(
         dst[l] = top + fy[l] * (bot - top);
     }
 }
+
+/// Most cell rows past the first a batch of [`InsideWarp::window_avx2`]
+/// may span (its window then holds `MAX_WINDOW_SPAN + 2` source rows):
+/// beyond it the row-by-row blends cost more than the one-by-one loads.
+const MAX_WINDOW_SPAN: usize = 12;
 
 /// Most channels with a vectorised instance.
 const MAX_CH: usize = 4;
@@ -333,8 +341,7 @@ impl<T: Pixel> InsideWarp<'_, T> {
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     fn rows_window_avx2(&self, simd: pulp::x86::V3, out: &mut ImageViewMut<'_, f32>) {
-        use pulp::bytemuck::cast;
-        let [a, b, tx, c, d, ty] = self.m;
+        let [a, _, _, c, _, _] = self.m;
         let pw = out.width();
         // `a u` and `c u` for every `u` of a patch row (the same in every
         // row), when the row is at most `MAX_PW` wide.
@@ -347,9 +354,51 @@ impl<T: Pixel> InsideWarp<'_, T> {
                 (*x, *y) = (a * uf, c * uf);
             }
         }
-        let half = |p: &[f64], k: usize| -> core::arch::x86_64::__m256d {
-            cast::<[f64; 4], _>(p[k..k + 4].try_into().expect("four lanes"))
-        };
+        // The lanes of the smallest `xi` and `yi` of a batch (see
+        // `window_avx2`).
+        let first = [a, c].map(|m| simd.avx._mm256_set1_epi32(if m < 0.0 { 7 } else { 0 }));
+        #[inline(always)]
+        fn half(p: &[f64], k: usize) -> core::arch::x86_64::__m256d {
+            pulp::bytemuck::cast::<[f64; 4], _>(p[k..k + 4].try_into().expect("four lanes"))
+        }
+        // Two instances of the loop (not a test of the width every batch).
+        if pw <= MAX_PW {
+            self.window_rows(
+                simd,
+                out,
+                first,
+                #[inline(always)]
+                |bx, by, s| {
+                    let ap = [half(&au, s), half(&au, s + 4)];
+                    let cp = [half(&cu, s), half(&cu, s + 4)];
+                    self.cell_lanes_from_avx2(simd, bx, by, ap, cp)
+                },
+            );
+        } else {
+            self.window_rows(
+                simd,
+                out,
+                first,
+                #[inline(always)]
+                |bx, by, s| self.cell_lanes_avx2(simd, bx, by, s),
+            );
+        }
+    }
+
+    /// The rows of [`Self::rows_window_avx2`], the cells of a batch from
+    /// `cells(bx, by, u0)`.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn window_rows(
+        &self,
+        simd: pulp::x86::V3,
+        out: &mut ImageViewMut<'_, f32>,
+        first: [core::arch::x86_64::__m256i; 2],
+        cells: impl Fn(f64, f64, usize) -> CellLanes,
+    ) {
+        use pulp::bytemuck::cast;
+        let [_, b, tx, _, d, ty] = self.m;
+        let pw = out.width();
         for v in 0..out.height() {
             let row = &mut out.row_mut(v)[..pw];
             let vf = v as f64;
@@ -363,15 +412,9 @@ impl<T: Pixel> InsideWarp<'_, T> {
             let mut u0 = 0;
             loop {
                 let s = u0.min(pw - LANES);
-                let (xi, yi, fx, fy) = if pw <= MAX_PW {
-                    let ap = [half(&au, s), half(&au, s + 4)];
-                    let cp = [half(&cu, s), half(&cu, s + 4)];
-                    self.cell_lanes_from_avx2(simd, bx, by, ap, cp)
-                } else {
-                    self.cell_lanes_avx2(simd, bx, by, s)
-                };
+                let (xi, yi, fx, fy) = cells(bx, by, s);
                 let dst = &mut row[s..s + LANES];
-                if let Some(p) = self.window_avx2(simd, xi, yi, fx, fy) {
+                if let Some(p) = self.window_avx2(simd, (xi, yi, fx, fy), first) {
                     dst.copy_from_slice(&cast::<_, [f32; LANES]>(p));
                 } else {
                     let i = simd.avx2;
@@ -400,64 +443,84 @@ impl<T: Pixel> InsideWarp<'_, T> {
     /// windows, or `None` when the batch does not fit them.
     ///
     /// Along a batch the cells move monotonically (the map is affine in
-    /// `u`, and rounding, clamping and truncation keep the order), so the
-    /// first and last lanes hold the smallest and largest `xi` and `yi`.
-    /// When the columns span at most 7 (`xi` within `xlo..=xlo + 6`, so
-    /// that `xi + 1 <= xlo + 7`) and the rows at most 2 (`yi` in
-    /// `ylo..=ylo + 1`), the eight source values `xlo..xlo + 8` of rows
-    /// `ylo`, `ylo + 1` (and `ylo + 2`) are loaded as vectors and each
-    /// neighbour picked by a lane permutation (`vpermps`, by `xi - xlo`
-    /// and `xi - xlo + 1`) and, over two rows, a blend by `yi > ylo`.
-    /// The values are the buffer's own, converted by `to_f32` as the
-    /// scalar loads do; the lerps are the same operations in the same
-    /// order, so the result is bit for bit that of [`Self::rows`]. A
-    /// window running past the end of the buffer (a cell at the bottom
-    /// right of a frame narrower than 8) falls back too.
+    /// `u`, and rounding, clamping and truncation keep the order): `xi`
+    /// and `yi` are smallest in the first lane where `a`, resp. `c`, is
+    /// at least 0 (or NaN: every coordinate is then clamped to 0), in the
+    /// last where it is negative, the lanes of `first` (set by
+    /// [`Self::rows_window_avx2`] once a warp). So `xlo`, `ylo` are those
+    /// lanes' values and `dx = xi - xlo`, `dy = yi - ylo` at least 0 in
+    /// every lane. When the columns span at most 7 (`dx` at most 6, so that
+    /// `xi + 1 <= xlo + 7`) and the rows at most [`MAX_WINDOW_SPAN`] + 1
+    /// (`dy` at most `MAX_WINDOW_SPAN`), the eight source values
+    /// `xlo..xlo + 8` of rows `ylo`, `ylo + 1`, ... are loaded as vectors
+    /// and each neighbour picked by a lane permutation (`vpermps`, by `dx`
+    /// and `dx + 1`). Over several rows, row by row (`r = 1, 2, ...` while
+    /// some lane has `dy >= r`), the lanes with `dy >= r` take row
+    /// `ylo + r` on top and row `ylo + r + 1` at the bottom (blends), so
+    /// that each lane ends with its own rows `yi` and `yi + 1` (a patch
+    /// turned across the frame's rows, as a rotated target's is, spans
+    /// several rows a batch). The values are the buffer's own, converted by
+    /// `to_f32` as the scalar loads do; the lerps are the same operations
+    /// in the same order, so the result is bit for bit that of
+    /// [`Self::rows`]. A window running past the end of the buffer (a cell
+    /// at the bottom right of a frame narrower than 8) falls back too.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     fn window_avx2(
         &self,
         simd: pulp::x86::V3,
-        xi: core::arch::x86_64::__m256i,
-        yi: core::arch::x86_64::__m256i,
-        fx: core::arch::x86_64::__m256,
-        fy: core::arch::x86_64::__m256,
+        (xi, yi, fx, fy): CellLanes,
+        first: [core::arch::x86_64::__m256i; 2],
     ) -> Option<core::arch::x86_64::__m256> {
         use pulp::bytemuck::cast;
         let (f, i) = (simd.avx, simd.avx2);
-        let xa: [i32; LANES] = cast(xi);
-        let ya: [i32; LANES] = cast(yi);
-        let (xlo, xhi) = (xa[0].min(xa[LANES - 1]), xa[0].max(xa[LANES - 1]));
-        let (ylo, yhi) = (ya[0].min(ya[LANES - 1]), ya[0].max(ya[LANES - 1]));
-        if xhi - xlo > 6 || yhi - ylo > 1 {
+        let (xlo, ylo) = (
+            i._mm256_permutevar8x32_epi32(xi, first[0]),
+            i._mm256_permutevar8x32_epi32(yi, first[1]),
+        );
+        let dx = i._mm256_sub_epi32(xi, xlo);
+        let dy = i._mm256_sub_epi32(yi, ylo);
+        let wide = i._mm256_or_si256(
+            i._mm256_cmpgt_epi32(dx, f._mm256_set1_epi32(6)),
+            i._mm256_cmpgt_epi32(dy, f._mm256_set1_epi32(MAX_WINDOW_SPAN as i32)),
+        );
+        if f._mm256_testz_si256(wide, wide) == 0 {
             return None;
         }
-        let rows = if yhi > ylo { 3 } else { 2 };
+        let (xlo, ylo) = (i._mm256_cvtsi256_si32(xlo), i._mm256_cvtsi256_si32(ylo));
         let base = ylo as usize * self.stride + xlo as usize;
-        if base + (rows - 1) * self.stride + LANES > self.data.len() {
-            return None;
-        }
-        let load = |r: usize| -> core::arch::x86_64::__m256 {
-            let w = &self.data[base + r * self.stride..][..LANES];
-            cast::<[f32; LANES], _>(core::array::from_fn(|k| w[k].to_f32()))
+        // The first two rows with one bounds check, the others one each.
+        let two = self.data.get(base..base + self.stride + LANES)?;
+        let vector = |w: &[T]| -> Option<core::arch::x86_64::__m256> {
+            let w: &[T; LANES] = w.try_into().ok()?;
+            Some(cast::<[f32; LANES], _>(w.map(|v| v.to_f32())))
         };
-        let dx = i._mm256_sub_epi32(xi, f._mm256_set1_epi32(xlo));
         let dx1 = i._mm256_add_epi32(dx, f._mm256_set1_epi32(1));
-        let (w0, w1) = (load(0), load(1));
         let pick = |w, d| i._mm256_permutevar8x32_ps(w, d);
-        let (p00, p01, p10, p11) = if rows == 2 {
-            (pick(w0, dx), pick(w0, dx1), pick(w1, dx), pick(w1, dx1))
-        } else {
-            let w2 = load(2);
-            let second = f._mm256_castsi256_ps(i._mm256_cmpgt_epi32(yi, f._mm256_set1_epi32(ylo)));
-            let (a0, a1) = (pick(w1, dx), pick(w1, dx1));
-            (
-                f._mm256_blendv_ps(pick(w0, dx), a0, second),
-                f._mm256_blendv_ps(pick(w0, dx1), a1, second),
-                f._mm256_blendv_ps(a0, pick(w2, dx), second),
-                f._mm256_blendv_ps(a1, pick(w2, dx1), second),
-            )
-        };
+        let w0 = vector(&two[..LANES])?;
+        let (mut p00, mut p01) = (pick(w0, dx), pick(w0, dx1));
+        let mut o = base + self.stride;
+        let w1 = vector(&two[self.stride..])?;
+        let (mut a, mut b) = (pick(w1, dx), pick(w1, dx1));
+        let (mut p10, mut p11) = (a, b);
+        // `r - 1 - dy` in each lane while placing row `ylo + r`: its sign
+        // bit (all that `blendv` and `testz_ps` read) is set in the lanes
+        // with `dy >= r`. (A subtraction rather than a comparison: the
+        // compiler keeps a comparison's mask across the loop as packed
+        // bits, unpacked again every round.)
+        let mut lower = f._mm256_castsi256_ps(i._mm256_sub_epi32(f._mm256_setzero_si256(), dy));
+        while f._mm256_testz_ps(lower, lower) == 0 {
+            p00 = f._mm256_blendv_ps(p00, a, lower);
+            p01 = f._mm256_blendv_ps(p01, b, lower);
+            o += self.stride;
+            let w = vector(self.data.get(o..o + LANES)?)?;
+            (a, b) = (pick(w, dx), pick(w, dx1));
+            p10 = f._mm256_blendv_ps(p10, a, lower);
+            p11 = f._mm256_blendv_ps(p11, b, lower);
+            lower = f._mm256_castsi256_ps(
+                i._mm256_add_epi32(f._mm256_castps_si256(lower), f._mm256_set1_epi32(1)),
+            );
+        }
         let top = f._mm256_add_ps(p00, f._mm256_mul_ps(fx, f._mm256_sub_ps(p01, p00)));
         let bot = f._mm256_add_ps(p10, f._mm256_mul_ps(fx, f._mm256_sub_ps(p11, p10)));
         Some(f._mm256_add_ps(top, f._mm256_mul_ps(fy, f._mm256_sub_ps(bot, top))))
@@ -813,11 +876,15 @@ mod tests {
     }
 
     /// One channel with AVX2 picks the neighbours from source windows
-    /// when a batch's cells span at most 7 columns and 2 rows: maps that
-    /// mostly do (horizontal scales up to 1.2, spans of 7 and more included, small vertical slopes,
-    /// mirrored too), placed anywhere or flush with the right and bottom
-    /// edges (where a window would run past the buffer's end), patch rows
-    /// narrower and wider than the 64 whose products are precomputed.
+    /// when a batch's cells span at most 7 columns and
+    /// `MAX_WINDOW_SPAN + 1` rows: maps that mostly do (horizontal scales
+    /// up to 1.2, spans of 7 and more included, small vertical slopes and
+    /// every other map steep ones, spans of more rows included, mirrored
+    /// and sloping either way, so that the smallest cell is in the first
+    /// lane or the last), placed anywhere or flush with the right and
+    /// bottom edges (where a window would run past the buffer's end),
+    /// patch rows narrower and wider than the 64 whose products are
+    /// precomputed.
     #[test]
     fn window_batches_equal_the_per_pixel_loop_bit_for_bit() {
         let mut rng = Lcg(23);
@@ -828,7 +895,14 @@ mod tests {
             for trial in 0..300 {
                 let (pw, ph) = [(36, 36), (9, 4), (17, 5), (8, 3), (70, 2)][trial % 5];
                 let a = rng.range(0.05, 1.2) * if trial % 7 == 0 { -1.0 } else { 1.0 };
-                let c = rng.range(-0.16, 0.16);
+                // Every other map steep: a batch across up to 15 rows
+                // (more than `MAX_WINDOW_SPAN` + 1 in the narrow patches).
+                let steep = (2.0f64).min(30.0 / (pw - 1) as f64);
+                let c = if trial % 2 == 0 {
+                    rng.range(-0.16, 0.16)
+                } else {
+                    rng.range(-steep, steep)
+                };
                 let (b, d) = (rng.range(-0.2, 0.2), rng.range(0.1, 0.8));
                 let (pu, pv) = ((pw - 1) as f64, (ph - 1) as f64);
                 let xs = [0.0, a * pu, b * pv, a * pu + b * pv];
