@@ -47,15 +47,26 @@ pub struct SadTemplate {
     /// Under AVX-512 with one 32-byte chunk per row: each padded row twice
     /// (64 bytes), for the kernel that runs two windows per `vpsadbw`.
     doubled: Vec<u8>,
-    /// Under AVX2, gray rows of 1 to [`QUAD_MAX`] bytes: each row cut into
-    /// groups of four 4-byte blocks (zero-padded), each group's 16 bytes
-    /// stored twice (32 bytes, one copy per 128-bit lane), for the
-    /// `vmpsadbw` kernel ([`x86::quads`]).
+    /// Under AVX2, gray rows of 1 to [`QUAD_MAX`] bytes but those
+    /// [`narrow_takes`]: each row cut into groups of four 4-byte blocks
+    /// (zero-padded), each group's 16 bytes stored twice (32 bytes, one copy
+    /// per 128-bit lane), for the `vmpsadbw` kernel ([`x86::quads`]).
     quads: Vec<u8>,
 }
 
 /// The longest gray row (bytes) the AVX2 `vmpsadbw` kernel takes.
 const QUAD_MAX: usize = 128;
+
+/// Whether the AVX2 `vpsadbw` batches of gray windows ([`x86::narrow`])
+/// take a template of `rows` rows of `n` bytes: rows of 11 to 32 bytes (the
+/// column sums of the bytes past the row need at most 32 columns), at most
+/// 257 of them (those 16-bit column sums cannot wrap). They run in about
+/// 0.9 the time of the `vmpsadbw` kernel on Zen 3 (which then is not
+/// used): two `vpsadbw` a cycle against one `vmpsadbw` every two cycles,
+/// which does half the absolute differences.
+fn narrow_takes(n: usize, rows: usize) -> bool {
+    (11..=32).contains(&n) && (1..=257).contains(&rows)
+}
 
 impl Default for SadTemplate {
     fn default() -> Self {
@@ -124,7 +135,10 @@ impl SadTemplate {
             self.masks.extend_from_within(..32);
         }
         self.quads.clear();
-        if self.level == SimdLevel::Avx2 && template.channels() == 1 && (1..=QUAD_MAX).contains(&n)
+        if self.level == SimdLevel::Avx2
+            && template.channels() == 1
+            && (1..=QUAD_MAX).contains(&n)
+            && !narrow_takes(n, self.rows)
         {
             let groups = n.div_ceil(16);
             self.quads.resize(self.rows * groups * 32, 0);
@@ -312,8 +326,9 @@ impl Kernel for &mut Windows<'_> {
 }
 
 /// Gray [`Windows`] under AVX2 with rows of at most [`QUAD_MAX`] bytes:
-/// the `vmpsadbw` batches of [`x86::quads`] first, then (rows of one
-/// 32-byte chunk) the unmasked batches of [`x86::narrow`].
+/// the unmasked `vpsadbw` batches of [`x86::narrow`] for the templates it
+/// takes ([`narrow_takes`]), the `vmpsadbw` batches of [`x86::quads`] for
+/// the others.
 struct Narrow<'a>(Windows<'a>);
 
 impl Kernel for &mut Narrow<'_> {
@@ -581,9 +596,11 @@ mod x86 {
     }
 
     /// [`windows_avx2`] for gray windows (`step` 1) with rows of at most
-    /// [`super::QUAD_MAX`] bytes: thirty-two windows at a time by
-    /// `vmpsadbw` ([`quads`]), then rows of 11 to 32 bytes twelve windows
-    /// at a time with no mask ([`narrow`]), the rest as [`windows_avx2`].
+    /// [`super::QUAD_MAX`] bytes: sixty-four then thirty-two windows at a
+    /// time by `vmpsadbw` ([`quads`]) or, for the templates
+    /// [`super::narrow_takes`] (which have no `quads` rows), [`NARROW`]
+    /// windows at a time by `vpsadbw` ([`narrow`]); the rest as
+    /// [`windows_avx2`].
     #[inline(always)]
     pub(super) fn windows_avx2_narrow(
         simd: V3,
@@ -807,20 +824,30 @@ mod x86 {
         k
     }
 
-    /// Windows per batch of [`narrow`].
-    const NARROW: usize = 12;
+    /// Windows per batch of [`narrow`] (at most 16: the `vpalignr` shifts
+    /// stay within 16-byte lanes). Ten measured best on Zen 3: twelve
+    /// accumulators spilled two to the stack, eight paid the row's loads,
+    /// bounds check and column sums for fewer windows.
+    const NARROW: usize = 10;
+    const _: () = assert!(NARROW <= 16);
 
-    /// Gray windows with rows of 11 to 32 bytes under AVX2, [`NARROW`]
-    /// consecutive ones at a time, with no mask: each window's 32-byte
-    /// `vpsadbw` against the zero-padded row also counts the `32 - n`
-    /// frame bytes past the row's end (`|f - 0| = f`), and those are taken
-    /// off afterwards from column sums of the frame (one 32-byte load and
-    /// two widening adds a row for the whole batch, where the mask cost an
-    /// `and` a window and row). Exact: the integer sums are the same.
-    /// Returns how many windows it did (a multiple of [`NARROW`], stopping
-    /// where the reads would leave `f`); none for rows shorter than 11
-    /// bytes (the column sums would need more than 32 columns) or more
-    /// than 257 rows (their 16-bit column sums could wrap).
+    /// Gray windows with rows of 11 to 32 bytes under AVX2 (the templates
+    /// [`super::narrow_takes`]), [`NARROW`] consecutive ones at a time,
+    /// with no mask: each window's 32-byte `vpsadbw` against the
+    /// zero-padded row also counts the `32 - n` frame bytes past the row's
+    /// end (`|f - 0| = f`), and those are taken off afterwards from column
+    /// sums of the frame (one 32-byte load, two 16-bit adds and a shift a
+    /// row for the whole batch, where the mask cost an `and` a window and
+    /// row).
+    /// Exact: the integer sums are the same. A row's window `j` is
+    /// `vpalignr` by `j` of the frame's 32 bytes at the batch's first
+    /// window and the 32 bytes 16 further (per 128-bit lane, the bytes
+    /// `j .. j + 16` of the lanes' concatenation): two loads a row for
+    /// the batch, where a load per window, unaligned, crossed a cache line
+    /// for about half of the windows, and such loads ran at a fraction of
+    /// the rate of the others (Zen 3). Returns how many windows it did (a
+    /// multiple of [`NARROW`], stopping where the reads would leave `f`);
+    /// none for the templates it does not take.
     #[inline(always)]
     fn narrow(
         simd: V3,
@@ -831,30 +858,9 @@ mod x86 {
         out: &mut [u32],
     ) -> usize {
         let n = t.row_len;
-        if !(11..=32).contains(&n) || t.rows == 0 || t.rows > 257 {
+        if !super::narrow_takes(n, t.rows) {
             return 0;
         }
-        // Sixteen column sums cover the batch where its last window's
-        // bytes past the row (columns NARROW - 1 + n .. NARROW - 1 + 32)
-        // end within them: one accumulator less (no register spilled).
-        if NARROW - 1 + (32 - n) <= 16 {
-            narrow_cols::<false>(simd, t, f, stride, start, out)
-        } else {
-            narrow_cols::<true>(simd, t, f, stride, start, out)
-        }
-    }
-
-    /// [`narrow`] with 16 column sums, or 32 when `WIDE`.
-    #[inline(always)]
-    fn narrow_cols<const WIDE: bool>(
-        simd: V3,
-        t: &SadTemplate,
-        f: &[u8],
-        stride: usize,
-        start: usize,
-        out: &mut [u32],
-    ) -> usize {
-        let n = t.row_len;
         // The bytes each window counts past its row: columns j + n .. j + 32.
         let pad = 32 - n;
         let l = Avx2(simd);
@@ -867,26 +873,44 @@ mod x86 {
                 break;
             }
             let mut acc = [l.zero(); NARROW];
-            let (mut lo, mut hi) = (l.zero(), l.zero());
+            // Column sums of the bytes n .. n + 32 past the first window's
+            // row, as quads_g sums its padded columns (no widening
+            // shuffle): `raw` adds the 32 bytes as sixteen 16-bit words
+            // (wrapping), `odd` their high bytes (the odd columns).
+            let (mut raw, mut odd) = (l.zero(), l.zero());
             for r in 0..t.rows {
                 let o = base + r * stride;
                 let blk: &[u8; 64] = f[o..o + 64].try_into().unwrap();
                 let tv = l.ld(&t.padded, r * 32);
-                for (j, a) in acc.iter_mut().enumerate() {
-                    *a = l.add(*a, l.sad(l.ld(blk, j), tv));
+                // Window j's 32 bytes from f0 and f16 (the immediate is a
+                // constant: one arm a window, unrolled).
+                let (f0, f16) = (l.ld(blk, 0), l.ld(blk, 16));
+                macro_rules! each_window {
+                    ($($j:literal)*) => {$(
+                        if $j < NARROW {
+                            let v = if $j == 0 {
+                                f0
+                            } else {
+                                avx2._mm256_alignr_epi8::<$j>(f16, f0)
+                            };
+                            acc[$j] = l.add(acc[$j], l.sad(v, tv));
+                        }
+                    )*};
                 }
-                // Column sums of bytes n .. n + 32 (16 bits each).
-                let past: [__m128i; 2] = cast(l.ld(&blk[n..], 0));
-                lo = avx2._mm256_add_epi16(lo, avx2._mm256_cvtepu8_epi16(past[0]));
-                if WIDE {
-                    hi = avx2._mm256_add_epi16(hi, avx2._mm256_cvtepu8_epi16(past[1]));
-                }
+                each_window!(0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15);
+                let past = l.ld(blk, n);
+                raw = avx2._mm256_add_epi16(raw, past);
+                odd = avx2._mm256_add_epi16(odd, avx2._mm256_srli_epi16::<8>(past));
             }
-            // Prefix sums of the columns the batch's windows count.
-            let cols: [u16; 32] = cast([lo, hi]);
+            // The even columns: raw - 256 odd, modulo 2^16, which is exact
+            // (at most 257 rows of 255). Prefix sums of the columns the
+            // batch's windows count.
+            let even = avx2._mm256_sub_epi16(raw, avx2._mm256_slli_epi16::<8>(odd));
+            let (even, odd): ([u16; 16], [u16; 16]) = (cast(even), cast(odd));
             let mut sum = [0u32; 33];
             for c in 0..NARROW - 1 + pad {
-                sum[c + 1] = sum[c] + u32::from(cols[c]);
+                let col = if c % 2 == 0 { even[c / 2] } else { odd[c / 2] };
+                sum[c + 1] = sum[c] + u32::from(col);
             }
             for (j, (o, a)) in out[k..k + NARROW].iter_mut().zip(acc).enumerate() {
                 *o = l.hsum(a) - (sum[j + pad] - sum[j]);
