@@ -962,10 +962,15 @@ mod x86 {
         // shuffle): `raw` adds the 32 bytes as sixteen 16-bit words
         // (wrapping), `odd` their high bytes (the odd columns).
         let (mut raw, mut odd) = (l.zero(), l.zero());
-        for r in 0..t.rows {
-            let o = base + r * stride;
-            let blk: &[u8; 64] = f[o..o + 64].try_into().unwrap();
-            let tv = l.ld(&t.padded, r * 32);
+        // The template's rows as arrays and the frame from the row's first
+        // byte, stepped by `stride`, as in quads_g: two compares a row, no
+        // multiply (the loop is bound by the instructions it issues).
+        let (t_rows, _) = t.padded.as_chunks::<32>();
+        let mut from = &f[base..];
+        for tq in &t_rows[..t.rows] {
+            let blk: &[u8; 64] = from[..64].try_into().unwrap();
+            from = from.get(stride..).unwrap_or_default();
+            let tv = l.ld(tq, 0);
             // Window j's 32 bytes (vpalignr's shift is an immediate: one
             // arm a window, unrolled).
             let (f0, f16) = (l.ld(blk, 0), l.ld(blk, 16));
