@@ -62,8 +62,11 @@ const QUAD_MAX: usize = 128;
 /// column sums of the bytes past the row need at most 32 columns), at most
 /// 257 of them (those 16-bit column sums cannot wrap). They run in about
 /// 0.9 the time of the `vmpsadbw` kernel on Zen 3 (which then is not
-/// used): two `vpsadbw` a cycle against one `vmpsadbw` every two cycles,
-/// which does half the absolute differences.
+/// used): there `vmpsadbw` issues on one pipe only, one every two cycles
+/// (64 absolute differences), and bounds that kernel, where `vpsadbw`
+/// (32) issues on two pipes, two a cycle, and the batches are bound by
+/// the accumulating adds, the `vpalignr` or the loads beside it (about 8
+/// cycles a row of ten windows, against 10 for the `vmpsadbw` kernel).
 fn narrow_takes(n: usize, rows: usize) -> bool {
     (11..=32).contains(&n) && (1..=257).contains(&rows)
 }
