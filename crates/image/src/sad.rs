@@ -47,15 +47,29 @@ pub struct SadTemplate {
     /// Under AVX-512 with one 32-byte chunk per row: each padded row twice
     /// (64 bytes), for the kernel that runs two windows per `vpsadbw`.
     doubled: Vec<u8>,
-    /// Under AVX2, gray rows of 1 to [`QUAD_MAX`] bytes: each row cut into
-    /// groups of four 4-byte blocks (zero-padded), each group's 16 bytes
-    /// stored twice (32 bytes, one copy per 128-bit lane), for the
-    /// `vmpsadbw` kernel ([`x86::quads`]).
+    /// Under AVX2, gray rows of 1 to [`QUAD_MAX`] bytes but those
+    /// [`narrow_takes`]: each row cut into groups of four 4-byte blocks
+    /// (zero-padded), each group's 16 bytes stored twice (32 bytes, one copy
+    /// per 128-bit lane), for the `vmpsadbw` kernel ([`x86::quads`]).
     quads: Vec<u8>,
 }
 
 /// The longest gray row (bytes) the AVX2 `vmpsadbw` kernel takes.
 const QUAD_MAX: usize = 128;
+
+/// Whether the AVX2 `vpsadbw` batches of gray windows ([`x86::narrow`])
+/// take a template of `rows` rows of `n` bytes: rows of 11 to 32 bytes (the
+/// column sums of the bytes past the row need at most 32 columns), at most
+/// 257 of them (those 16-bit column sums cannot wrap). They run in about
+/// 0.9 the time of the `vmpsadbw` kernel on Zen 3 (which then is not
+/// used): there `vmpsadbw` issues on one pipe only, one every two cycles
+/// (64 absolute differences), and bounds that kernel, where `vpsadbw`
+/// (32) issues on two pipes, two a cycle, and the batches are bound by
+/// the accumulating adds, the `vpalignr` or the loads beside it (about 8
+/// cycles a row of ten windows, against 10 for the `vmpsadbw` kernel).
+fn narrow_takes(n: usize, rows: usize) -> bool {
+    (11..=32).contains(&n) && (1..=257).contains(&rows)
+}
 
 impl Default for SadTemplate {
     fn default() -> Self {
@@ -124,7 +138,10 @@ impl SadTemplate {
             self.masks.extend_from_within(..32);
         }
         self.quads.clear();
-        if self.level == SimdLevel::Avx2 && template.channels() == 1 && (1..=QUAD_MAX).contains(&n)
+        if self.level == SimdLevel::Avx2
+            && template.channels() == 1
+            && (1..=QUAD_MAX).contains(&n)
+            && !narrow_takes(n, self.rows)
         {
             let groups = n.div_ceil(16);
             self.quads.resize(self.rows * groups * 32, 0);
@@ -312,8 +329,9 @@ impl Kernel for &mut Windows<'_> {
 }
 
 /// Gray [`Windows`] under AVX2 with rows of at most [`QUAD_MAX`] bytes:
-/// the `vmpsadbw` batches of [`x86::quads`] first, then (rows of one
-/// 32-byte chunk) the unmasked batches of [`x86::narrow`].
+/// the unmasked `vpsadbw` batches of [`x86::narrow`] for the templates it
+/// takes ([`narrow_takes`]), the `vmpsadbw` batches of [`x86::quads`] for
+/// the others.
 struct Narrow<'a>(Windows<'a>);
 
 impl Kernel for &mut Narrow<'_> {
@@ -581,9 +599,11 @@ mod x86 {
     }
 
     /// [`windows_avx2`] for gray windows (`step` 1) with rows of at most
-    /// [`super::QUAD_MAX`] bytes: thirty-two windows at a time by
-    /// `vmpsadbw` ([`quads`]), then rows of 11 to 32 bytes twelve windows
-    /// at a time with no mask ([`narrow`]), the rest as [`windows_avx2`].
+    /// [`super::QUAD_MAX`] bytes: sixty-four then thirty-two windows at a
+    /// time by `vmpsadbw` ([`quads`]) or, for the templates
+    /// [`super::narrow_takes`] (which have no `quads` rows), [`NARROW`]
+    /// windows at a time by `vpsadbw` ([`narrow`]); the rest as
+    /// [`windows_avx2`].
     #[inline(always)]
     pub(super) fn windows_avx2_narrow(
         simd: V3,
@@ -807,20 +827,30 @@ mod x86 {
         k
     }
 
-    /// Windows per batch of [`narrow`].
-    const NARROW: usize = 12;
+    /// Windows per batch of [`narrow`] (the windows `narrow_rows` unrolls;
+    /// at most 16, as the `vpalignr` shifts stay within 16-byte lanes).
+    /// Ten measured best on Zen 3: twelve accumulators spilled two to the
+    /// stack, eight paid the row's loads, bounds check and column sums for
+    /// fewer windows.
+    const NARROW: usize = 10;
 
-    /// Gray windows with rows of 11 to 32 bytes under AVX2, [`NARROW`]
-    /// consecutive ones at a time, with no mask: each window's 32-byte
-    /// `vpsadbw` against the zero-padded row also counts the `32 - n`
-    /// frame bytes past the row's end (`|f - 0| = f`), and those are taken
-    /// off afterwards from column sums of the frame (one 32-byte load and
-    /// two widening adds a row for the whole batch, where the mask cost an
-    /// `and` a window and row). Exact: the integer sums are the same.
-    /// Returns how many windows it did (a multiple of [`NARROW`], stopping
-    /// where the reads would leave `f`); none for rows shorter than 11
-    /// bytes (the column sums would need more than 32 columns) or more
-    /// than 257 rows (their 16-bit column sums could wrap).
+    /// Gray windows with rows of 11 to 32 bytes under AVX2 (the templates
+    /// [`super::narrow_takes`]), [`NARROW`] consecutive ones at a time,
+    /// with no mask: each window's 32-byte `vpsadbw` against the
+    /// zero-padded row also counts the `32 - n` frame bytes past the row's
+    /// end (`|f - 0| = f`), and those are taken off afterwards from column
+    /// sums of the frame (one 32-byte load, two 16-bit adds and a shift a
+    /// row for the whole batch, where the mask cost an `and` a window and
+    /// row).
+    /// Exact: the integer sums are the same. Each window's bytes are
+    /// loaded where rows are a multiple of 64 bytes apart and none of the
+    /// batch's loads crosses a cache line (about a third of the batches);
+    /// elsewhere they are built with `vpalignr` ([`narrow_rows`]), since
+    /// a load per window, unaligned, crossed a line for about half of the
+    /// windows, and such loads ran at a fraction of the rate of the others
+    /// (Zen 3). Returns how many windows it did (a multiple of [`NARROW`],
+    /// stopping where the reads would leave `f`); none for the templates
+    /// it does not take.
     #[inline(always)]
     fn narrow(
         simd: V3,
@@ -831,34 +861,15 @@ mod x86 {
         out: &mut [u32],
     ) -> usize {
         let n = t.row_len;
-        if !(11..=32).contains(&n) || t.rows == 0 || t.rows > 257 {
+        if !super::narrow_takes(n, t.rows) {
             return 0;
         }
-        // Sixteen column sums cover the batch where its last window's
-        // bytes past the row (columns NARROW - 1 + n .. NARROW - 1 + 32)
-        // end within them: one accumulator less (no register spilled).
-        if NARROW - 1 + (32 - n) <= 16 {
-            narrow_cols::<false>(simd, t, f, stride, start, out)
-        } else {
-            narrow_cols::<true>(simd, t, f, stride, start, out)
-        }
-    }
-
-    /// [`narrow`] with 16 column sums, or 32 when `WIDE`.
-    #[inline(always)]
-    fn narrow_cols<const WIDE: bool>(
-        simd: V3,
-        t: &SadTemplate,
-        f: &[u8],
-        stride: usize,
-        start: usize,
-        out: &mut [u32],
-    ) -> usize {
-        let n = t.row_len;
         // The bytes each window counts past its row: columns j + n .. j + 32.
         let pad = 32 - n;
         let l = Avx2(simd);
         let avx2 = simd.avx2;
+        // Where the frame lies in memory: which loads cross a cache line.
+        let addr = f.as_ptr() as usize;
         let mut k = 0;
         while k + NARROW <= out.len() {
             let base = start + k;
@@ -866,34 +877,127 @@ mod x86 {
             if base + (t.rows - 1) * stride + 64 > f.len() {
                 break;
             }
-            let mut acc = [l.zero(); NARROW];
-            let (mut lo, mut hi) = (l.zero(), l.zero());
-            for r in 0..t.rows {
-                let o = base + r * stride;
-                let blk: &[u8; 64] = f[o..o + 64].try_into().unwrap();
-                let tv = l.ld(&t.padded, r * 32);
-                for (j, a) in acc.iter_mut().enumerate() {
-                    *a = l.add(*a, l.sad(l.ld(blk, j), tv));
-                }
-                // Column sums of bytes n .. n + 32 (16 bits each).
-                let past: [__m128i; 2] = cast(l.ld(&blk[n..], 0));
-                lo = avx2._mm256_add_epi16(lo, avx2._mm256_cvtepu8_epi16(past[0]));
-                if WIDE {
-                    hi = avx2._mm256_add_epi16(hi, avx2._mm256_cvtepu8_epi16(past[1]));
-                }
+            // Every row of the batch at the same place in its cache line
+            // (rows a multiple of 64 bytes apart), and every window's load
+            // inside one line: loads, no vpalignr.
+            let direct = stride.is_multiple_of(64) && (addr + base) % 64 <= 32 - (NARROW - 1);
+            let (acc, raw, odd) = if direct {
+                narrow_rows::<true>(simd, t, f, stride, base)
+            } else {
+                narrow_rows::<false>(simd, t, f, stride, base)
+            };
+            // Each window's sum: four accumulators' 64-bit lanes added up
+            // at a time (six shuffles and three adds, where each alone took
+            // three extractions and three adds).
+            let mut quad = [l.zero(); NARROW.div_ceil(4) * 4];
+            quad[..NARROW].copy_from_slice(&acc);
+            let mut sums = [l.zero(); NARROW.div_ceil(4)];
+            for (s, q) in sums.iter_mut().zip(quad.as_chunks::<4>().0) {
+                let [a, b, c, d] = *q;
+                // [a0 + a1, b0 + b1 | a2 + a3, b2 + b3], the same of c, d.
+                let ab = avx2._mm256_add_epi64(
+                    avx2._mm256_unpacklo_epi64(a, b),
+                    avx2._mm256_unpackhi_epi64(a, b),
+                );
+                let cd = avx2._mm256_add_epi64(
+                    avx2._mm256_unpacklo_epi64(c, d),
+                    avx2._mm256_unpackhi_epi64(c, d),
+                );
+                *s = avx2._mm256_add_epi64(
+                    avx2._mm256_permute2x128_si256::<0x20>(ab, cd),
+                    avx2._mm256_permute2x128_si256::<0x31>(ab, cd),
+                );
             }
-            // Prefix sums of the columns the batch's windows count.
-            let cols: [u16; 32] = cast([lo, hi]);
-            let mut sum = [0u32; 33];
-            for c in 0..NARROW - 1 + pad {
-                sum[c + 1] = sum[c] + u32::from(cols[c]);
-            }
-            for (j, (o, a)) in out[k..k + NARROW].iter_mut().zip(acc).enumerate() {
-                *o = l.hsum(a) - (sum[j + pad] - sum[j]);
+            let sums: [[u64; 4]; NARROW.div_ceil(4)] = cast(sums);
+            // The even columns: raw - 256 odd, modulo 2^16, which is exact
+            // (at most 257 rows of 255); interleaved with the odd ones into
+            // column order. Window j counts columns j .. j + pad (a sliding
+            // sum).
+            let even = avx2._mm256_sub_epi16(raw, avx2._mm256_slli_epi16::<8>(odd));
+            // Columns 0..8 | 16..24 and 8..16 | 24..32.
+            let (c0, c1) = (
+                avx2._mm256_unpacklo_epi16(even, odd),
+                avx2._mm256_unpackhi_epi16(even, odd),
+            );
+            let cols: [u16; 32] = cast([
+                avx2._mm256_permute2x128_si256::<0x20>(c0, c1),
+                avx2._mm256_permute2x128_si256::<0x31>(c0, c1),
+            ]);
+            let sums: [[u64; 4]; NARROW.div_ceil(4)] = cast(sums);
+            let mut past: u32 = cols[..pad].iter().map(|&c| u32::from(c)).sum();
+            for (j, (o, s)) in out[k..k + NARROW]
+                .iter_mut()
+                .zip(sums.as_flattened())
+                .enumerate()
+            {
+                *o = *s as u32 - past;
+                past = past + u32::from(cols[j + pad]) - u32::from(cols[j]);
             }
             k += NARROW;
         }
         k
+    }
+
+    /// The row loop of a [`narrow`] batch from `f[base]`: the windows'
+    /// `vpsadbw` sums, and the `raw` and `odd` sums of the bytes past the
+    /// first window's row. `DIRECT`: each window's 32 bytes loaded
+    /// (where no load crosses a cache line); otherwise window `j` is
+    /// `vpalignr` by `j` of the 32 bytes at the first window and those 16
+    /// further (per 128-bit lane, the bytes `j .. j + 16` of the lanes'
+    /// concatenation), two loads a row for the batch. The loads are about
+    /// as fast as `vpalignr` where none crosses a line: the direct batches
+    /// took some 4% less time over the surface (mixing the two in one
+    /// batch, five windows loaded and four shifted, took more).
+    #[inline(always)]
+    fn narrow_rows<const DIRECT: bool>(
+        simd: V3,
+        t: &SadTemplate,
+        f: &[u8],
+        stride: usize,
+        base: usize,
+    ) -> ([__m256i; NARROW], __m256i, __m256i) {
+        let n = t.row_len;
+        let l = Avx2(simd);
+        let avx2 = simd.avx2;
+        let mut acc = [l.zero(); NARROW];
+        // Column sums of the bytes n .. n + 32 past the first window's
+        // row, as quads_g sums its padded columns (no widening
+        // shuffle): `raw` adds the 32 bytes as sixteen 16-bit words
+        // (wrapping), `odd` their high bytes (the odd columns).
+        let (mut raw, mut odd) = (l.zero(), l.zero());
+        // The template's rows as arrays and the frame from the row's first
+        // byte, stepped by `stride`, as in quads_g: two compares a row, no
+        // multiply (the loop is bound by the instructions it issues).
+        let (t_rows, _) = t.padded.as_chunks::<32>();
+        let mut from = &f[base..];
+        for tq in &t_rows[..t.rows] {
+            let blk: &[u8; 64] = from[..64].try_into().unwrap();
+            from = from.get(stride..).unwrap_or_default();
+            let tv = l.ld(tq, 0);
+            // Window j's 32 bytes (vpalignr's shift is an immediate: one
+            // arm a window, unrolled).
+            let (f0, f16) = (l.ld(blk, 0), l.ld(blk, 16));
+            macro_rules! each_window {
+                ($($j:literal)*) => {$(
+                    {
+                        let v = if DIRECT {
+                            l.ld(blk, $j)
+                        } else if $j == 0 {
+                            f0
+                        } else {
+                            avx2._mm256_alignr_epi8::<$j>(f16, f0)
+                        };
+                        acc[$j] = l.add(acc[$j], l.sad(v, tv));
+                    }
+                )*};
+            }
+            const _: () = assert!(NARROW == 10, "one window a literal below");
+            each_window!(0 1 2 3 4 5 6 7 8 9);
+            let past = l.ld(blk, n);
+            raw = avx2._mm256_add_epi16(raw, past);
+            odd = avx2._mm256_add_epi16(odd, avx2._mm256_srli_epi16::<8>(past));
+        }
+        (acc, raw, odd)
     }
 
     /// [`windows!`] under AVX-512: 64-byte chunks eight windows at a time;
@@ -1174,6 +1278,49 @@ pub(crate) mod tests {
                                     "{level:?} {tw}x{th} at ({}, {y}) of {n}",
                                     x0 + i
                                 );
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn gray_batches_at_every_cache_line_offset_equal_the_reference() {
+        // Rows 64 and 128 bytes apart (the vpsadbw batches load each
+        // window's bytes where no load crosses a cache line, and build the
+        // windows with vpalignr elsewhere): crops from every offset of a
+        // line, so that every batch kind runs at every place in it, for
+        // every row length those batches take, with runs of 10 to 41
+        // windows (whole batches and leftovers) up to the buffer's end.
+        for level in levels() {
+            let mut tpl = SadTemplate::new(level);
+            for stride in [64, 128] {
+                for tw in 11..=32 {
+                    for th in [1, 3, 20] {
+                        let seed = (stride + tw * 10 + th) as u32;
+                        let big = random(stride, th + 1, 1, seed);
+                        let t_img = random(tw, th, 1, seed + 1);
+                        tpl.set(t_img.view());
+                        for left in 0..=64.min(stride - tw - 9) {
+                            let fw = stride - left;
+                            let frame = big.crop(Rect::new(left, 0, fw, th + 1)).unwrap();
+                            let npx = fw - tw + 1;
+                            for (x0, y) in [(0, 0), (npx.saturating_sub(41), 1)] {
+                                let n = (npx - x0).min(41);
+                                let mut out = vec![0u32; n];
+                                tpl.sad_windows(frame, x0, y, &mut out);
+                                for (i, &o) in out.iter().enumerate() {
+                                    let want = reference(frame, t_img.view(), x0 + i, y);
+                                    assert_eq!(
+                                        o,
+                                        want,
+                                        "{level:?} {tw}x{th} stride {stride} from {left}: \
+                                         ({}, {y}) of {n}",
+                                        x0 + i
+                                    );
+                                }
                             }
                         }
                     }
