@@ -1098,6 +1098,24 @@ pub(crate) mod tests {
         Image::from_vec(w, h, ch, bayestrack_testkit::noise_bytes(w * h * ch, seed)).unwrap()
     }
 
+    /// Asserts that `n` consecutive windows from `(x0, y)` are the
+    /// reference's SADs (`what` names the case).
+    fn windows_match(
+        tpl: &SadTemplate,
+        frame: ImageView<'_, u8>,
+        t: ImageView<'_, u8>,
+        (x0, y): (usize, usize),
+        n: usize,
+        what: &str,
+    ) {
+        let mut out = vec![0u32; n];
+        tpl.sad_windows(frame, x0, y, &mut out);
+        for (i, &o) in out.iter().enumerate() {
+            let want = reference(frame, t, x0 + i, y);
+            assert_eq!(o, want, "{what}: ({}, {y}) of {n}", x0 + i);
+        }
+    }
+
     fn reference(f: ImageView<'_, u8>, t: ImageView<'_, u8>, x: usize, y: usize) -> u32 {
         let ch = f.channels();
         let n = t.width() * ch;
@@ -1268,17 +1286,8 @@ pub(crate) mod tests {
                     tpl.set(t_img.view());
                     for (x0, y) in [(0, 0), (1, 2)] {
                         for n in [31, 32, 33, 64, 70, 97, 110 - x0] {
-                            let mut out = vec![0u32; n];
-                            tpl.sad_windows(frame, x0, y, &mut out);
-                            for (i, &o) in out.iter().enumerate() {
-                                let want = reference(frame, t_img.view(), x0 + i, y);
-                                assert_eq!(
-                                    o,
-                                    want,
-                                    "{level:?} {tw}x{th} at ({}, {y}) of {n}",
-                                    x0 + i
-                                );
-                            }
+                            let what = format!("{level:?} {tw}x{th}");
+                            windows_match(&tpl, frame, t_img.view(), (x0, y), n, &what);
                         }
                     }
                 }
@@ -1309,18 +1318,9 @@ pub(crate) mod tests {
                             let npx = fw - tw + 1;
                             for (x0, y) in [(0, 0), (npx.saturating_sub(41), 1)] {
                                 let n = (npx - x0).min(41);
-                                let mut out = vec![0u32; n];
-                                tpl.sad_windows(frame, x0, y, &mut out);
-                                for (i, &o) in out.iter().enumerate() {
-                                    let want = reference(frame, t_img.view(), x0 + i, y);
-                                    assert_eq!(
-                                        o,
-                                        want,
-                                        "{level:?} {tw}x{th} stride {stride} from {left}: \
-                                         ({}, {y}) of {n}",
-                                        x0 + i
-                                    );
-                                }
+                                let what =
+                                    format!("{level:?} {tw}x{th} stride {stride} from {left}");
+                                windows_match(&tpl, frame, t_img.view(), (x0, y), n, &what);
                             }
                         }
                     }
