@@ -288,6 +288,7 @@ impl PoseEstimator {
                 {
                     match pool {
                         2 => pool_band::<2>(band, ps, feat),
+                        // summed above by the dispatched kernel
                         3 => {}
                         4 => pool_band::<4>(band, ps, feat),
                         _ => {
