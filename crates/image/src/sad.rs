@@ -689,20 +689,42 @@ mod x86 {
         }
     }
 
+    /// Adds the 32 bytes `v` (byte `i` to sum `i`) to 32 sums of 16 bits
+    /// kept without widening shuffles: `raw` adds them as sixteen 16-bit
+    /// words (wrapping: low byte plus 256 times the high byte), `odd`
+    /// their high bytes (the odd sums). [`columns`] separates them.
+    #[inline(always)]
+    fn add_columns(simd: V3, raw: &mut __m256i, odd: &mut __m256i, v: __m256i) {
+        let avx2 = simd.avx2;
+        *raw = avx2._mm256_add_epi16(*raw, v);
+        *odd = avx2._mm256_add_epi16(*odd, avx2._mm256_srli_epi16::<8>(v));
+    }
+
+    /// The 32 sums of [`add_columns`], modulo 2^16: the even ones are
+    /// `raw - 256 odd`, interleaved with the odd ones into sums
+    /// `0..8 | 16..24` and `8..16 | 24..32` (the order of the `vmpsadbw`
+    /// window sums).
+    #[inline(always)]
+    fn columns(simd: V3, raw: __m256i, odd: __m256i) -> (__m256i, __m256i) {
+        let avx2 = simd.avx2;
+        let even = avx2._mm256_sub_epi16(raw, avx2._mm256_slli_epi16::<8>(odd));
+        (
+            avx2._mm256_unpacklo_epi16(even, odd),
+            avx2._mm256_unpackhi_epi16(even, odd),
+        )
+    }
+
     /// [`quads`] for rows of `G` 16-byte groups, `H` batches of
     /// [`QUADS`] windows side by side (`SPAN = 16 G + 32 H`: the bytes a
     /// row's loads reach past the first window; `Q = 32 G`: a row of
     /// [`SadTemplate::quads`]), from window `k`; returns where it stopped.
     ///
     /// The frame bytes under the padding (columns `n .. n + pad` of each
-    /// window) are summed without widening shuffles, which compete with
-    /// `vmpsadbw` for the same port: the 32-byte load at `n + q` is added
-    /// as sixteen 16-bit words (`raw`, wrapping: low byte plus 256 times the
-    /// high byte) and shifted right by 8 (`odd`, the high bytes, which are
-    /// the odd windows); `raw - 256 odd` is then the sum of the low bytes
-    /// (the even windows) modulo 2^16, which is all the 16-bit window sums
-    /// need. One interleave per group of rows puts the even and odd
-    /// windows back in the order of the `vmpsadbw` sums.
+    /// window; byte `i` of the 32-byte load at `n + q` is window `i`'s) are
+    /// summed without widening shuffles, which compete with `vmpsadbw` for
+    /// the same port ([`add_columns`]); modulo 2^16 is all the 16-bit
+    /// window sums need, and one interleave per group of rows
+    /// ([`columns`]) puts them in the order of the `vmpsadbw` sums.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     fn quads_g<const G: usize, const SPAN: usize, const Q: usize, const H: usize>(
@@ -745,7 +767,7 @@ mod x86 {
                 let r1 = (r0 + run).min(t.rows);
                 // 16-bit sums, windows [0..8 | 16..24] and [8..16 | 24..32].
                 let (mut a, mut b) = ([zero; H], [zero; H]);
-                // The padded columns' bytes: `raw` and `odd` sums.
+                // The padded columns' bytes ([`add_columns`]).
                 let (mut raw, mut odd) = ([zero; H], [zero; H]);
                 // The frame from the row's first byte: stepped by `stride`
                 // (two compares a row, no multiply and no overflow check).
@@ -787,10 +809,8 @@ mod x86 {
                     // (unrolled: a loop took three more instructions a row).
                     for q in 0..3 {
                         if q < pad {
-                            for h in 0..H {
-                                let v = l.ld(row, 32 * h + n + q);
-                                raw[h] = add(raw[h], v);
-                                odd[h] = add(odd[h], avx2._mm256_srli_epi16::<8>(v));
+                            for (h, (raw, odd)) in raw.iter_mut().zip(&mut odd).enumerate() {
+                                add_columns(simd, raw, odd, l.ld(row, 32 * h + n + q));
                             }
                         }
                     }
@@ -798,10 +818,9 @@ mod x86 {
                 for h in 0..H {
                     let (mut a, mut b) = (a[h], b[h]);
                     if pad > 0 {
-                        let (raw, odd) = (raw[h], odd[h]);
-                        let even = avx2._mm256_sub_epi16(raw, avx2._mm256_slli_epi16::<8>(odd));
-                        a = avx2._mm256_sub_epi16(a, avx2._mm256_unpacklo_epi16(even, odd));
-                        b = avx2._mm256_sub_epi16(b, avx2._mm256_unpackhi_epi16(even, odd));
+                        let (pa, pb) = columns(simd, raw[h], odd[h]);
+                        a = avx2._mm256_sub_epi16(a, pa);
+                        b = avx2._mm256_sub_epi16(b, pb);
                     }
                     let w = &mut w[h];
                     w[0] = avx2._mm256_add_epi32(w[0], avx2._mm256_unpacklo_epi16(a, zero));
@@ -909,21 +928,14 @@ mod x86 {
                 );
             }
             let sums: [[u64; 4]; NARROW.div_ceil(4)] = cast(sums);
-            // The even columns: raw - 256 odd, modulo 2^16, which is exact
-            // (at most 257 rows of 255); interleaved with the odd ones into
-            // column order. Window j counts columns j .. j + pad (a sliding
-            // sum).
-            let even = avx2._mm256_sub_epi16(raw, avx2._mm256_slli_epi16::<8>(odd));
-            // Columns 0..8 | 16..24 and 8..16 | 24..32.
-            let (c0, c1) = (
-                avx2._mm256_unpacklo_epi16(even, odd),
-                avx2._mm256_unpackhi_epi16(even, odd),
-            );
+            // The column sums, exact modulo 2^16 (at most 257 rows of 255),
+            // in column order. Window j counts columns j .. j + pad (a
+            // sliding sum).
+            let (c0, c1) = columns(simd, raw, odd);
             let cols: [u16; 32] = cast([
                 avx2._mm256_permute2x128_si256::<0x20>(c0, c1),
                 avx2._mm256_permute2x128_si256::<0x31>(c0, c1),
             ]);
-            let sums: [[u64; 4]; NARROW.div_ceil(4)] = cast(sums);
             let mut past: u32 = cols[..pad].iter().map(|&c| u32::from(c)).sum();
             for (j, (o, s)) in out[k..k + NARROW]
                 .iter_mut()
@@ -939,8 +951,8 @@ mod x86 {
     }
 
     /// The row loop of a [`narrow`] batch from `f[base]`: the windows'
-    /// `vpsadbw` sums, and the `raw` and `odd` sums of the bytes past the
-    /// first window's row. `DIRECT`: each window's 32 bytes loaded
+    /// `vpsadbw` sums, and the column sums ([`add_columns`]) of the bytes
+    /// past the first window's row. `DIRECT`: each window's 32 bytes loaded
     /// (where no load crosses a cache line); otherwise window `j` is
     /// `vpalignr` by `j` of the 32 bytes at the first window and those 16
     /// further (per 128-bit lane, the bytes `j .. j + 16` of the lanes'
@@ -960,10 +972,7 @@ mod x86 {
         let l = Avx2(simd);
         let avx2 = simd.avx2;
         let mut acc = [l.zero(); NARROW];
-        // Column sums of the bytes n .. n + 32 past the first window's
-        // row, as quads_g sums its padded columns (no widening
-        // shuffle): `raw` adds the 32 bytes as sixteen 16-bit words
-        // (wrapping), `odd` their high bytes (the odd columns).
+        // Column sums of the bytes n .. n + 32 past the first window's row.
         let (mut raw, mut odd) = (l.zero(), l.zero());
         // The template's rows as arrays and the frame from the row's first
         // byte, stepped by `stride`, as in quads_g: two compares a row, no
@@ -993,9 +1002,7 @@ mod x86 {
             }
             const _: () = assert!(NARROW == 10, "one window a literal below");
             each_window!(0 1 2 3 4 5 6 7 8 9);
-            let past = l.ld(blk, n);
-            raw = avx2._mm256_add_epi16(raw, past);
-            odd = avx2._mm256_add_epi16(odd, avx2._mm256_srli_epi16::<8>(past));
+            add_columns(simd, &mut raw, &mut odd, l.ld(blk, n));
         }
         (acc, raw, odd)
     }
