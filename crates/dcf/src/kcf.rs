@@ -676,9 +676,19 @@ mod tests {
     #[test]
     fn energy_is_the_partial_sums_at_every_level_and_near_the_running_sum() {
         use bayestrack_image::simd::SimdLevel;
-        // lengths below, at and past the lanes, with a remainder
-        for n in [0, 1, 7, 8, 9, 31, 640 * 31 + 5] {
-            let x = crate::fft::tests::signal(n, 1, 6);
+        // lengths below, at and past the lanes, with a remainder; values
+        // over eight orders of magnitude, so that the sums round at almost
+        // every addition and another order of them gives other bits
+        let scales = [1e-4f32, 3e-3, 0.1, 1.0, 7.0, 300.0];
+        for (n, seed) in [0, 1, 7, 8, 9, 31, 640 * 31 + 5]
+            .into_iter()
+            .flat_map(|n| (6..9).map(move |s| (n, s)))
+        {
+            let x: Vec<f32> = crate::fft::tests::signal(n, 1, seed)
+                .iter()
+                .enumerate()
+                .map(|(i, &v)| v * scales[i * 7 % scales.len()])
+                .collect();
             // the definition: value i into sum i mod 8, added pairwise
             let mut acc = [0.0f64; ENERGY_LANES];
             for (i, &v) in x.iter().enumerate() {
