@@ -142,8 +142,6 @@ pub struct Response {
     pub dx: f64,
     /// Vertical displacement of the peak, frame pixels.
     pub dy: f64,
-    /// Peak-to-sidelobe ratio (MOSSE's 11x11 exclusion).
-    pub psr: f64,
     /// Average peak-to-correlation energy.
     pub apce: f64,
 }
@@ -168,6 +166,13 @@ impl Response {
     /// Frame pixels per cell along x and y.
     pub fn pixels_per_cell(&self) -> (f64, f64) {
         self.px
+    }
+
+    /// Peak-to-sidelobe ratio (MOSSE's 11x11 exclusion), computed when
+    /// asked (a search that weighs many windows by their peak and APCE,
+    /// as pf-dcf's, never needs it).
+    pub fn psr(&self) -> f64 {
+        psr(&self.data, self.w, self.h, PSR_EXCLUDE)
     }
 
     /// The response at a displacement `(dx, dy)` frame pixels from the
@@ -199,7 +204,6 @@ impl Response {
         self.max = max;
         self.dx = dx * self.px.0;
         self.dy = dy * self.px.1;
-        self.psr = psr(&self.data, self.w, self.h, PSR_EXCLUDE);
         self.apce = apce(&self.data);
         Ok(())
     }
@@ -861,7 +865,7 @@ impl Dcf {
         self.sampler
             .load_gray_region(frame, first.unwrap_or(Region::whole(fw, fh)))?;
         let r = self.detect(c, s)?;
-        let (peak, dx, dy, p, a) = (r.max, r.dx, r.dy, r.psr, r.apce);
+        let (peak, dx, dy, p, a) = (r.max, r.dx, r.dy, r.psr(), r.apce);
         let centre = self.clamp_centre((c.0 + dx, c.1 + dy));
         if let Some(f) = &self.scale_filter
             && f.region(fw, fh, centre.0, centre.1, s)
@@ -1153,7 +1157,7 @@ impl Staple {
             scale,
             size: self.dcf.size(),
             peak: self.merged.max,
-            psr: self.merged.psr,
+            psr: self.merged.psr(),
             apce: self.merged.apce,
             updated,
         })
