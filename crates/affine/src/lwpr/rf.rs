@@ -974,6 +974,9 @@ impl ReceptiveField {
             // (or the halved learning rate) and D_jj = M_jj^2 (each element
             // depends on its own index and max |M| alone).
             let lim = 0.1 * max_abs(&self.m);
+            // The factors of the step below, opaque to the compiler (see
+            // there).
+            let (half, one, zero) = core::hint::black_box((0.5f64, 1.0f64, 0.0f64));
             for ((((m, d), alpha), x), c) in self
                 .m
                 .iter_mut()
@@ -990,10 +993,16 @@ impl ReceptiveField {
                 let djdm = w_w * (penalty2 * *d * aux) + dwdm * dj1dw;
                 let delta = *alpha * trans_mul * djdm;
                 // A step larger than a tenth of max |M| halves the rate
-                // instead (written as selects, so the loop vectorises).
+                // instead. Written as arithmetic on selected factors (`x * 1`
+                // and `x - 0` are `x` exactly), both stored every time. As
+                // selects between the old and the new value (or with the
+                // factors known, which the compiler turns back into such
+                // selects) the compiler stored only the changed lanes
+                // (`vmaskmovpd`, slow on AMD cores: this loop took a tenth
+                // of an `ispf` run).
                 let too_big = delta > lim;
-                *alpha = if too_big { *alpha * 0.5 } else { *alpha };
-                *m = if too_big { *m } else { *m - delta };
+                *alpha *= if too_big { half } else { one };
+                *m -= if too_big { zero } else { delta };
                 *d = *m * *m;
             }
         } else if !self.full {
