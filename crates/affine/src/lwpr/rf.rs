@@ -248,9 +248,17 @@ fn single_pass(
     }
 }
 
+/// Elements per block of [`fused_sums_pair`].
+const SQ_BLOCK: usize = 16;
+
 /// [`fused_sums`] for two directions (the same operations, so the same
-/// results): the element-wise updates of both in one loop, then the two
-/// norms' sums, each in index order, side by side.
+/// results): the element-wise updates of both, a block of [`SQ_BLOCK`]
+/// elements at a time (in vector lanes, the squares of the new `SXresYres`
+/// into two small arrays), then that block's squares added to the two
+/// norms, each in index order, side by side. The additions are one long
+/// chain of dependent operations per norm; block by block, the next block's
+/// updates run while a block's additions wait on each other (a pass over
+/// all the squares after all the updates waited on the chains alone).
 #[inline(always)]
 fn fused_sums_pair(
     sxy: [&mut [f64]; 2],
@@ -258,21 +266,43 @@ fn fused_sums_pair(
     p: [&mut [f64]; 2],
     x: [&[f64]; 2],
     sc: [DirScalars; 2],
-    sq: &mut [f64],
 ) -> (f64, f64) {
     let n = x[0].len();
-    let [sxy0, sxy1] = sxy;
-    let [ssx0, ssx1] = ssx;
-    let [p0, p1] = p;
-    let (q0, q1) = sq[..2 * n].split_at_mut(n);
-    pair_block_parts(
-        sxy0, sxy1, ssx0, ssx1, p0, p1, &mut *q0, &mut *q1, x[0], x[1], sc,
-    );
+    let full = n / SQ_BLOCK * SQ_BLOCK;
+    let [sxy0, sxy1] = sxy.map(|v| v[..n].split_at_mut(full));
+    let [ssx0, ssx1] = ssx.map(|v| v[..n].split_at_mut(full));
+    let [p0, p1] = p.map(|v| v[..n].split_at_mut(full));
+    let [x0, x1] = x.map(|v| v[..n].split_at(full));
+    let mut q = [[0f64; SQ_BLOCK]; 2];
     let (mut un0, mut un1) = (0.0, 0.0);
-    for (a0, a1) in q0.iter().zip(q1.iter()) {
-        un0 += a0;
-        un1 += a1;
+    let mut sums = |q0: &[f64], q1: &[f64]| {
+        for (a0, a1) in q0.iter().zip(q1) {
+            un0 += a0;
+            un1 += a1;
+        }
+    };
+    for (((((((a0, a1), s0), s1), r0), r1), y0), y1) in sxy0
+        .0
+        .chunks_exact_mut(SQ_BLOCK)
+        .zip(sxy1.0.chunks_exact_mut(SQ_BLOCK))
+        .zip(ssx0.0.chunks_exact_mut(SQ_BLOCK))
+        .zip(ssx1.0.chunks_exact_mut(SQ_BLOCK))
+        .zip(p0.0.chunks_exact_mut(SQ_BLOCK))
+        .zip(p1.0.chunks_exact_mut(SQ_BLOCK))
+        .zip(x0.0.chunks_exact(SQ_BLOCK))
+        .zip(x1.0.chunks_exact(SQ_BLOCK))
+    {
+        let [q0, q1] = &mut q;
+        pair_block_parts(a0, a1, s0, s1, r0, r1, q0, q1, y0, y1, sc);
+        sums(q0, q1);
     }
+    let t = n - full;
+    let [q0, q1] = &mut q;
+    let (q0, q1) = (&mut q0[..t], &mut q1[..t]);
+    pair_block_parts(
+        sxy0.1, sxy1.1, ssx0.1, ssx1.1, p0.1, p1.1, q0, q1, x0.1, x1.1, sc,
+    );
+    sums(q0, q1);
     (un0, un1)
 }
 
@@ -332,7 +362,7 @@ fn pair_block_parts(
 #[derive(Debug, Clone)]
 pub(super) struct Workspace {
     /// The terms of [`distances4`] (`4 N`) and the squares of
-    /// [`fused_sums`] and [`fused_sums_pair`] (`2 N`).
+    /// [`fused_sums`] (`N`).
     pub(super) terms: Vec<f64>,
     xc: Vec<f64>,
     /// The second field's residual and projections in
@@ -832,7 +862,6 @@ impl ReceptiveField {
                     [p0, p1],
                     [xres(j), xres(j + 1)],
                     scal,
-                    &mut ws.terms,
                 );
                 [u0, u1]
             } else {
@@ -974,6 +1003,9 @@ impl ReceptiveField {
             // (or the halved learning rate) and D_jj = M_jj^2 (each element
             // depends on its own index and max |M| alone).
             let lim = 0.1 * max_abs(&self.m);
+            // The factors of the step below, opaque to the compiler (see
+            // there).
+            let (half, one, zero) = core::hint::black_box((0.5f64, 1.0f64, 0.0f64));
             for ((((m, d), alpha), x), c) in self
                 .m
                 .iter_mut()
@@ -990,10 +1022,16 @@ impl ReceptiveField {
                 let djdm = w_w * (penalty2 * *d * aux) + dwdm * dj1dw;
                 let delta = *alpha * trans_mul * djdm;
                 // A step larger than a tenth of max |M| halves the rate
-                // instead (written as selects, so the loop vectorises).
+                // instead. Written as arithmetic on selected factors (`x * 1`
+                // and `x - 0` are `x` exactly), both stored every time. As
+                // selects between the old and the new value (or with the
+                // factors known, which the compiler turns back into such
+                // selects) the compiler stored only the changed lanes
+                // (`vmaskmovpd`, slow on AMD cores: this loop took a tenth
+                // of an `ispf` run).
                 let too_big = delta > lim;
-                *alpha = if too_big { *alpha * 0.5 } else { *alpha };
-                *m = if too_big { *m } else { *m - delta };
+                *alpha *= if too_big { half } else { one };
+                *m -= if too_big { zero } else { delta };
                 *d = *m * *m;
             }
         } else if !self.full {
@@ -1283,7 +1321,6 @@ mod term_first_tests {
                 [&mut r0, &mut r1],
                 [self.x, &x1],
                 self.sc,
-                &mut terms,
             );
             (q, single, [sxy, ssx, p], pair, [b0, b1, t0, t1, r0, r1])
         }

@@ -665,3 +665,52 @@ fn results_with_three_directions_equal_the_reference_bit_for_bit() {
     let (out, _) = mixed_run(1e5, 600);
     assert_eq!(fnv(&out), 0x3690_8cea_f493_45bf, "{} values", out.len());
 }
+
+/// The direct path of `cholesky_upper` for diagonal metrics (every
+/// off-diagonal `+0.0`) gives the general loop's factor bit for bit, and
+/// its error for a non-positive diagonal entry; a `-0.0` off the diagonal
+/// takes the general loop.
+#[test]
+fn diagonal_cholesky_equals_the_general_loop_bit_for_bit() {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(9);
+    for n in [1, 2, 3, 4, 5, 7, 16, 33, 144] {
+        let mut d = vec![0.0; n * n];
+        for i in 0..n {
+            let v: f64 = <StandardNormal as Distribution<f64>>::sample(&StandardNormal, &mut rng);
+            d[i * n + i] = match i % 4 {
+                0 => 25.0,
+                1 => v.abs() * 3.0 + 1e-300,
+                2 => v.exp(),
+                _ => 1e-310,
+            };
+        }
+        let fast = super::cholesky_upper(&d, n).unwrap();
+        let general = super::cholesky_upper_general(&d, n).unwrap();
+        assert_eq!(
+            fast.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            general.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            "n {n}"
+        );
+        for bad in [0.0, -0.0, -1.0] {
+            let mut e = d.clone();
+            e[(n - 1) * n + n - 1] = bad;
+            assert!(super::cholesky_upper(&e, n).is_err(), "n {n}, {bad}");
+            assert!(
+                super::cholesky_upper_general(&e, n).is_err(),
+                "n {n}, {bad}"
+            );
+        }
+        if n > 1 {
+            let mut e = d.clone();
+            e[1] = -0.0;
+            e[n] = -0.0;
+            let fast = super::cholesky_upper(&e, n).unwrap();
+            let general = super::cholesky_upper_general(&e, n).unwrap();
+            assert_eq!(
+                fast.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                general.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                "n {n}, -0.0 off the diagonal"
+            );
+        }
+    }
+}
