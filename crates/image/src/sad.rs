@@ -220,9 +220,9 @@ impl SadTemplate {
     /// corners `(x0 + k, y + r)` for `k < width` and `r < out.len() /
     /// width`, into `out[r * width + k]`: [`SadTemplate::sad_windows`] for
     /// several rows at once (the same sums). Under AVX2, gray templates of
-    /// rows of 11 to 32 bytes (at most 257 of them) share the work of each
-    /// frame row between two rows of windows, which takes some 7% less
-    /// time than row by row on Zen 3.
+    /// rows of 11 to 32 bytes (at most 257 of them) share each frame row's
+    /// loads between two rows of windows, which takes about 0.9 the time of
+    /// row by row on Zen 3.
     ///
     /// # Panics
     /// If `width` is 0 or does not divide `out.len()`, or as
@@ -1134,13 +1134,16 @@ mod x86 {
         }
     }
 
-    /// Windows per row of a [`multi`] batch built by `vpalignr` (with two
-    /// rows of windows: six accumulators, the two loads, two template rows
-    /// and the shifted windows fill the 16 vector registers).
+    /// Windows per row of a [`multi`] batch built by `vpalignr` (a piece's
+    /// last windows; with two rows of windows: six accumulators, the two
+    /// loads, two template rows and the shifted windows fill the 16 vector
+    /// registers: four windows spilled an accumulator).
     const MULTI_W: usize = 3;
 
-    /// Windows per row of a [`multi`] batch whose windows are loaded.
-    const MULTI_DW: usize = 4;
+    /// Windows per row of a [`multi`] batch whose windows are loaded
+    /// (twelve accumulators and two template rows; seven windows spilled
+    /// an accumulator and took 1.2 times as long over the surface).
+    const MULTI_DW: usize = 6;
 
     /// Most windows per row of a [`multi`] piece (whole batches): the
     /// column sums of its frame bytes past the rows (columns `n .. piece +
@@ -1158,10 +1161,10 @@ mod x86 {
     /// that many rows: [`narrow`]'s unmasked `vpsadbw` sums, in batches of
     /// consecutive windows of each row where a frame row's windows serve
     /// every row of windows that meets it (against the template row each
-    /// needs), so that building them is shared ([`multi_rows`]): batches
-    /// of [`MULTI_DW`] windows loaded where rows are a multiple of 64 bytes
-    /// apart and none of the loads crosses a cache line (as in [`narrow`]),
-    /// of [`MULTI_W`] built by `vpalignr` elsewhere. Pieces of at most
+    /// needs), so that loading them is shared ([`multi_rows`]): batches
+    /// of [`MULTI_DW`] windows, each window's 32 bytes loaded (a load
+    /// serves two `vpsadbw`), then batches of [`MULTI_W`] built by
+    /// `vpalignr` for the piece's last windows. Pieces of at most
     /// [`MULTI_PIECE`] windows: the frame bytes past the rows (`|f - 0| =
     /// f`) are taken off from their column sums, summed once a piece (the
     /// frame rows all rows of windows share once for all of them), and the
@@ -1171,14 +1174,16 @@ mod x86 {
     /// `f`).
     ///
     /// On Zen 3 (2026-12-04) the gray MAD surface of a 30x20 template
-    /// over 320x240 took about 0.40 ms this way against 0.43 ms row by row
-    /// ([`narrow`]); the row loop is bound by the front end (about six
-    /// instructions a cycle: a frame row's two `vpalignr`, six `vpsadbw`,
-    /// six `vpaddq`, its loads and the loop's bounds checks), the rest is
-    /// the first and last frame rows, the column sums and the last pass.
-    /// More windows a batch ran out of the 16 vector registers (four or
-    /// five `vpalignr` windows a row of windows spilled an accumulator and
-    /// were slower), and three rows of windows took as long as two.
+    /// over 320x240 took about 0.38 ms this way against 0.43 ms row by row
+    /// ([`narrow`]). Unlike there, the loads that cross a cache line did
+    /// not slow the batches down (loaded batches of four only where none
+    /// crossed, `vpalignr` batches elsewhere, took as long as loaded
+    /// batches of four everywhere, and the batches of six are faster
+    /// still): the loop is bound by the front end (about six instructions
+    /// a cycle: a frame row's `vpsadbw` and `vpaddq`, its loads and the
+    /// loop's bounds checks). The rest is the first and last frame rows,
+    /// the column sums and the last pass. Three rows of windows (batches
+    /// of three windows) took as long as two.
     #[inline(always)]
     fn multi(
         simd: V3,
@@ -1207,8 +1212,6 @@ mod x86 {
         // end; past the piece's windows, stale or zero lanes nobody reads.
         let mut accs = [[zero; P8]; S];
         const DW: usize = MULTI_DW;
-        let aligned = stride.is_multiple_of(64);
-        let addr = f.as_ptr() as usize;
         let mut k = 0;
         while k + W <= width {
             let len = (width - k).min(P);
@@ -1219,12 +1222,11 @@ mod x86 {
             if base + (th + S - 2) * stride + 96 > f.len() {
                 break;
             }
-            // Batches of DW windows loaded where no load crosses a cache
-            // line (rows a multiple of 64 bytes apart, all at the same
-            // place in their lines), of W built by vpalignr elsewhere.
+            // Batches of DW windows loaded, then W built by vpalignr for
+            // the piece's last windows.
             let mut b = 0;
             while b < len {
-                if aligned && (addr + base + b) % 64 <= 32 - (DW - 1) && b + DW <= len {
+                if b + DW <= len {
                     let acc = multi_rows::<DW, true>(simd, t_rows, f, stride, base + b);
                     for (accs, acc) in accs.iter_mut().zip(acc) {
                         accs[b..b + DW].copy_from_slice(&acc);
@@ -1865,13 +1867,11 @@ pub(crate) mod tests {
 
     #[test]
     fn window_rows_at_every_cache_line_offset_equal_the_reference() {
-        // Rows 64 and 320 bytes apart (the shared-row batches load each
-        // window's bytes where no load crosses a cache line, and build the
-        // windows with vpalignr elsewhere, batches of both widths mixed in
-        // a piece): crops from every offset of a line (every fourth one 320
-        // apart), so that every batch kind runs at every place in it, for
-        // every row length those batches take, with runs of windows up to
-        // the buffer's right and bottom edges.
+        // Rows 64 and 320 bytes apart: crops from every offset of a cache
+        // line (every fourth one 320 apart), so that the shared-row
+        // batches (windows loaded, and vpalignr for a piece's last ones)
+        // run at every place in it, for every row length they take, with
+        // runs of windows up to the buffer's right and bottom edges.
         for level in levels() {
             let mut tpl = SadTemplate::new(level);
             for (stride, step) in [(64, 1), (320, 4)] {
@@ -1911,7 +1911,7 @@ pub(crate) mod tests {
     fn saturated_window_rows_of_every_narrow_width() {
         // 255 against 0 in every byte: the largest column sums (16 bits
         // at 257 rows) and window sums the shared-row batches take off and
-        // add up, in loaded and vpalignr batches (rows 64 bytes apart).
+        // add up, in loaded and vpalignr batches.
         for level in levels() {
             for tw in 10..=33 {
                 for th in [2, 20, 256, 257, 258] {
