@@ -17,6 +17,11 @@ use crate::{AppearanceError, Result};
 /// Most positions one call of [`MadPixel::sad_positions`] handles.
 pub const SAD_CHUNK: usize = 512;
 
+/// Rows of the MAD surface [`mad_map_into`] asks of the SAD kernel at once
+/// ([`SadTemplate::sad_window_rows`]: its AVX2 gray kernel shares frame
+/// rows between pairs of rows of windows).
+const MAP_ROWS: usize = 6;
+
 /// Scalars MAD can be computed on, with fast kernels.
 pub trait MadPixel: Pixel {
     /// `sum |a_k - b_k|` over two rows of equal length.
@@ -651,18 +656,24 @@ pub fn mad_map_into<T: MadPixel>(
     if let (Some(f), Some(t)) = (T::as_bytes(&frame), T::as_bytes(&template))
         && fits_u32(&t)
     {
-        let mut sums = [0u32; SAD_CHUNK];
+        // MAP_ROWS rows of the surface a call: the kernel may share each
+        // frame row between rows of windows (SadTemplate::sad_window_rows).
+        let mut sums = [0u32; SAD_CHUNK * MAP_ROWS];
         with_thread_template(t, |sad| {
-            for j in 0..oh {
+            for j in (0..oh).step_by(MAP_ROWS) {
+                let rows = (oh - j).min(MAP_ROWS);
                 let mut i0 = 0;
                 while i0 < ow {
                     let n = (ow - i0).min(SAD_CHUNK);
-                    sad.sad_windows(f, region.x + i0, region.y + j, &mut sums[..n]);
-                    dispatch(ScaleSums {
-                        sums: &sums[..n],
-                        out: &mut out.row_mut(j)[i0..i0 + n],
-                        norm,
-                    });
+                    let sums = &mut sums[..n * rows];
+                    sad.sad_window_rows(f, region.x + i0, region.y + j, n, sums);
+                    for (r, sums) in sums.chunks_exact(n).enumerate() {
+                        dispatch(ScaleSums {
+                            sums,
+                            out: &mut out.row_mut(j + r)[i0..i0 + n],
+                            norm,
+                        });
+                    }
                     i0 += n;
                 }
             }
@@ -998,6 +1009,41 @@ mod tests {
                             "{tw}x{th} at ({x}, {y})"
                         );
                     }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn wide_gray_surfaces_are_the_sads_of_each_window() {
+        // Surfaces wider than SAD_CHUNK windows and of every height from 1
+        // to 2 MAP_ROWS + 1: several kernel calls a row, groups of rows of
+        // every size, against the integer SADs scaled.
+        let frame = textured(SAD_CHUNK + 80, 40, 5);
+        let tpl = textured(30, 20, 6);
+        for oh in 1..=2 * MAP_ROWS + 1 {
+            let region = Rect::new(3, 1, SAD_CHUNK + 70, oh + 19);
+            let ow = region.width - 29;
+            let mut out = Image::new(ow, oh, 1, 0f32).unwrap();
+            mad_map_into(frame.view(), tpl.view(), region, &mut out.view_mut()).unwrap();
+            for j in 0..oh {
+                for i in (0..ow).step_by(7).chain(ow - 12..ow) {
+                    let (x, y) = (region.x + i, region.y + j);
+                    let sad: u32 = (0..20)
+                        .map(|r| {
+                            tpl.row(r)
+                                .iter()
+                                .zip(&frame.row(y + r)[x..x + 30])
+                                .map(|(&a, &b)| u32::from(a.abs_diff(b)))
+                                .sum::<u32>()
+                        })
+                        .sum();
+                    let want = (f64::from(sad) * (1.0 / 600.0)) as f32;
+                    assert_eq!(
+                        out.get(i, j, 0).unwrap().to_bits(),
+                        want.to_bits(),
+                        "height {oh} at ({x}, {y})"
+                    );
                 }
             }
         }

@@ -216,6 +216,56 @@ impl SadTemplate {
         }
     }
 
+    /// SADs between the template and the windows of `frame` with top-left
+    /// corners `(x0 + k, y + r)` for `k < width` and `r < out.len() /
+    /// width`, into `out[r * width + k]`: [`SadTemplate::sad_windows`] for
+    /// several rows at once (the same sums). Under AVX2, gray templates of
+    /// rows of 11 to 32 bytes (at most 257 of them) share each frame row's
+    /// loads between two rows of windows, which takes about 0.9 the time of
+    /// row by row on Zen 3.
+    ///
+    /// # Panics
+    /// If `width` is 0 or does not divide `out.len()`, or as
+    /// [`SadTemplate::sad_windows`] for any of the rows.
+    pub fn sad_window_rows(
+        &self,
+        frame: ImageView<'_, u8>,
+        x0: usize,
+        y: usize,
+        width: usize,
+        out: &mut [u32],
+    ) {
+        assert!(
+            width > 0 && out.len().is_multiple_of(width),
+            "sad_window_rows: out is not whole rows of width {width}"
+        );
+        let rows = out.len() / width;
+        if rows == 0 {
+            return;
+        }
+        let ch = frame.channels();
+        assert!(
+            (x0 + width) * ch + self.row_len <= frame.width() * ch + ch
+                && y + rows - 1 + self.rows <= frame.height(),
+            "sad_window_rows: a window leaves the frame"
+        );
+        if self.level == SimdLevel::Avx2 && ch == 1 && narrow_takes(self.row_len, self.rows) {
+            let stride = frame.stride();
+            self.level.run(&mut Rows {
+                t: self,
+                f: frame.as_slice(),
+                stride,
+                start: y * stride + x0,
+                width,
+                out,
+            });
+        } else {
+            for (r, o) in out.chunks_exact_mut(width).enumerate() {
+                self.sad_windows(frame, x0, y + r, o);
+            }
+        }
+    }
+
     /// Whether the padded rows of the window at `start` stay inside `frame`
     /// (the bytes past each row's end are read, then masked off).
     #[inline(always)]
@@ -346,6 +396,38 @@ impl Kernel for &mut Narrow<'_> {
         (&mut self.0).run(token)
     }
 }
+
+/// Rows of windows of width `width` for [`SadTemplate::sad_window_rows`]
+/// (gray, under AVX2, templates [`narrow_takes`]).
+struct Rows<'a> {
+    t: &'a SadTemplate,
+    f: &'a [u8],
+    stride: usize,
+    start: usize,
+    width: usize,
+    out: &'a mut [u32],
+}
+
+impl Kernel for &mut Rows<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, token: T) {
+        let (t, f, stride, start, width) = (self.t, self.f, self.stride, self.start, self.width);
+        #[cfg(target_arch = "x86_64")]
+        if let (None, Some(s)) = (token.avx512(), token.avx2()) {
+            return x86::windows_avx2_rows(s, t, f, stride, start, width, self.out);
+        }
+        let _ = token;
+        for (r, o) in self.out.chunks_exact_mut(width).enumerate() {
+            for (k, o) in o.iter_mut().enumerate() {
+                *o = t.sad_scalar(f, stride, start + r * stride + k, u32::MAX);
+            }
+        }
+    }
+}
+
+/// Rows of windows [`x86::multi`] runs at once.
+const MULTI_ROWS: usize = 2;
 
 /// The SAD of two equal-length slices ([`sad_u8_at`]).
 struct Slices<'a> {
@@ -1007,6 +1089,357 @@ mod x86 {
         (acc, raw, odd)
     }
 
+    /// [`super::SadTemplate::sad_window_rows`] under AVX2 for the
+    /// templates [`super::narrow_takes`]: each group of
+    /// [`super::MULTI_ROWS`] rows of windows by [`multi`] (for templates of
+    /// at least that many rows), then the windows it left in each row, and
+    /// the rows of a last, smaller group, as [`windows_avx2_narrow`].
+    #[inline(always)]
+    pub(super) fn windows_avx2_rows(
+        simd: V3,
+        t: &SadTemplate,
+        f: &[u8],
+        stride: usize,
+        start: usize,
+        width: usize,
+        out: &mut [u32],
+    ) {
+        const S: usize = super::MULTI_ROWS;
+        let rows = out.len() / width;
+        for r in (0..rows).step_by(S) {
+            let done = if r + S <= rows && t.rows >= S {
+                multi(
+                    simd,
+                    t,
+                    f,
+                    stride,
+                    start + r * stride,
+                    width,
+                    &mut out[r * width..][..S * width],
+                )
+            } else {
+                0
+            };
+            for rr in r..(r + S).min(rows) {
+                let o = &mut out[rr * width..(rr + 1) * width];
+                windows_avx2_narrow(
+                    simd,
+                    t,
+                    f,
+                    stride,
+                    start + rr * stride + done,
+                    &mut o[done..],
+                );
+            }
+        }
+    }
+
+    /// Windows per row of a [`multi`] batch built by `vpalignr` (a piece's
+    /// last windows; with two rows of windows: six accumulators, the two
+    /// loads, two template rows and the shifted windows fill the 16 vector
+    /// registers: four windows spilled an accumulator).
+    const MULTI_W: usize = 3;
+
+    /// Windows per row of a [`multi`] batch whose windows are loaded
+    /// (twelve accumulators and two template rows; seven windows spilled
+    /// an accumulator and took 1.2 times as long over the surface).
+    const MULTI_DW: usize = 6;
+
+    /// Most windows per row of a [`multi`] piece (whole batches): the
+    /// column sums of its frame bytes past the rows (columns `n .. piece +
+    /// 31` of the piece's first window, `n >= 11`) fit in two 32-byte
+    /// loads.
+    const MULTI_PIECE: usize = 44;
+
+    /// [`MULTI_PIECE`] rounded up to whole groups of eight windows (the
+    /// vectors of [`multi`]'s last pass).
+    const MULTI_PIECE8: usize = MULTI_PIECE.div_ceil(8) * 8;
+
+    /// [`super::MULTI_ROWS`] rows of gray windows (rows `stride` apart
+    /// from `start`, `width` windows a row, into `out[r * width + k]`)
+    /// under AVX2, for the templates [`super::narrow_takes`] with at least
+    /// that many rows: [`narrow`]'s unmasked `vpsadbw` sums, in batches of
+    /// consecutive windows of each row where a frame row's windows serve
+    /// every row of windows that meets it (against the template row each
+    /// needs), so that loading them is shared ([`multi_rows`]): batches
+    /// of [`MULTI_DW`] windows, each window's 32 bytes loaded (a load
+    /// serves two `vpsadbw`), then batches of [`MULTI_W`] built by
+    /// `vpalignr` for the piece's last windows. Pieces of at most
+    /// [`MULTI_PIECE`] windows: the frame bytes past the rows (`|f - 0| =
+    /// f`) are taken off from their column sums, summed once a piece (the
+    /// frame rows all rows of windows share once for all of them), and the
+    /// batches' accumulators are kept until the piece's end, then added up
+    /// and corrected eight windows a vector. Returns how many windows of
+    /// each row it did (whole batches, stopping where the reads would leave
+    /// `f`).
+    ///
+    /// On Zen 3 (2026-12-04) the gray MAD surface of a 30x20 template
+    /// over 320x240 took about 0.38 ms this way against 0.43 ms row by row
+    /// ([`narrow`]). Unlike there, the loads that cross a cache line did
+    /// not slow the batches down (loaded batches of four only where none
+    /// crossed, `vpalignr` batches elsewhere, took as long as loaded
+    /// batches of four everywhere, and the batches of six are faster
+    /// still): the loop is bound by the front end (about six instructions
+    /// a cycle: a frame row's `vpsadbw` and `vpaddq`, its loads and the
+    /// loop's bounds checks). The rest is the first and last frame rows,
+    /// the column sums and the last pass. Three rows of windows were
+    /// slower (loaded batches of three windows 0.40 ms, of four 0.46 ms:
+    /// out of registers).
+    #[inline(always)]
+    fn multi(
+        simd: V3,
+        t: &SadTemplate,
+        f: &[u8],
+        stride: usize,
+        start: usize,
+        width: usize,
+        out: &mut [u32],
+    ) -> usize {
+        const S: usize = super::MULTI_ROWS;
+        const W: usize = MULTI_W;
+        const P: usize = MULTI_PIECE;
+        const P8: usize = MULTI_PIECE8;
+        let (n, th) = (t.row_len, t.rows);
+        if !super::narrow_takes(n, th) || th < S {
+            return 0;
+        }
+        let pad = 32 - n;
+        let l = Avx2(simd);
+        let avx2 = simd.avx2;
+        let zero = l.zero();
+        let (t_rows, _) = t.padded.as_chunks::<32>();
+        let t_rows = &t_rows[..th];
+        // Each window's accumulator (four 64-bit lanes) until the piece's
+        // end; past the piece's windows, stale or zero lanes nobody reads.
+        let mut accs = [[zero; P8]; S];
+        const DW: usize = MULTI_DW;
+        let mut k = 0;
+        while k + W <= width {
+            let len = (width - k).min(P);
+            let base = start + k;
+            // The last frame row's reads: the column loads reach n + 64
+            // bytes (at most 96) from the piece's first window, the
+            // batches' 48 bytes from the last batch's.
+            if base + (th + S - 2) * stride + 96 > f.len() {
+                break;
+            }
+            // Batches of DW windows loaded, then W built by vpalignr for
+            // the piece's last windows.
+            let mut b = 0;
+            while b < len {
+                if b + DW <= len {
+                    let acc = multi_rows::<DW, true>(simd, t_rows, f, stride, base + b);
+                    for (accs, acc) in accs.iter_mut().zip(acc) {
+                        accs[b..b + DW].copy_from_slice(&acc);
+                    }
+                    b += DW;
+                } else if b + W <= len {
+                    let acc = multi_rows::<W, false>(simd, t_rows, f, stride, base + b);
+                    for (accs, acc) in accs.iter_mut().zip(acc) {
+                        accs[b..b + W].copy_from_slice(&acc);
+                    }
+                    b += W;
+                } else {
+                    break;
+                }
+            }
+            let len = b;
+            // Column sums of the bytes n .. n + 64 from the piece's first
+            // window: the frame rows every row of windows has (S - 1 ..
+            // th), then each row's own. (A macro: a closure is not compiled
+            // for AVX2.)
+            macro_rules! col_row {
+                ($raw:ident, $odd:ident, $r:expr) => {{
+                    let o = base + $r * stride + n;
+                    let blk: &[u8; 64] = f[o..o + 64].try_into().unwrap();
+                    add_columns(simd, &mut $raw[0], &mut $odd[0], l.ld(blk, 0));
+                    add_columns(simd, &mut $raw[1], &mut $odd[1], l.ld(blk, 32));
+                }};
+            }
+            let (mut raw, mut odd) = ([zero; 2], [zero; 2]);
+            for r in S - 1..th {
+                col_row!(raw, odd, r);
+            }
+            for s in 0..S {
+                let (mut raw, mut odd) = (raw, odd);
+                for r in (s..S - 1).chain(th..th + s) {
+                    col_row!(raw, odd, r);
+                }
+                let (c0, c1) = columns(simd, raw[0], odd[0]);
+                let (c2, c3) = columns(simd, raw[1], odd[1]);
+                // In column order, and zeros past them: window j counts
+                // columns j .. j + pad.
+                let cols: [[u16; 8]; 12] = cast([
+                    avx2._mm256_permute2x128_si256::<0x20>(c0, c1),
+                    avx2._mm256_permute2x128_si256::<0x31>(c0, c1),
+                    avx2._mm256_permute2x128_si256::<0x20>(c2, c3),
+                    avx2._mm256_permute2x128_si256::<0x31>(c2, c3),
+                    zero,
+                    zero,
+                ]);
+                let cols = cols.as_flattened();
+                let o = &mut out[s * width + k..][..len];
+                let accs = &accs[s];
+                for g in (0..len).step_by(8) {
+                    // Windows g .. g + 8: their columns' sums, 32 bits.
+                    let mut past = zero;
+                    for q in 0..pad {
+                        let c: [u16; 8] = cols[g + q..g + q + 8].try_into().unwrap();
+                        past = avx2._mm256_add_epi32(past, avx2._mm256_cvtepu16_epi32(cast(c)));
+                    }
+                    // The windows' sums: four accumulators' lanes added up
+                    // at a time (windows g, g + 2, g + 4, g + 6 and the
+                    // odd ones), then interleaved into 32-bit lanes (each
+                    // sum is below 2^32).
+                    let a: &[__m256i; 8] = accs[g..g + 8].try_into().unwrap();
+                    let even = sum4(simd, a[0], a[2], a[4], a[6]);
+                    let odd = sum4(simd, a[1], a[3], a[5], a[7]);
+                    let sums = avx2._mm256_or_si256(even, avx2._mm256_slli_epi64::<32>(odd));
+                    let res: [u32; 8] = cast(avx2._mm256_sub_epi32(sums, past));
+                    let m = (len - g).min(8);
+                    o[g..g + m].copy_from_slice(&res[..m]);
+                }
+            }
+            k += len;
+        }
+        k
+    }
+
+    /// The sums of the 64-bit lanes of `a`, `b`, `c`, `d`, in that order.
+    #[inline(always)]
+    fn sum4(simd: V3, a: __m256i, b: __m256i, c: __m256i, d: __m256i) -> __m256i {
+        let avx2 = simd.avx2;
+        // [a0 + a1, b0 + b1 | a2 + a3, b2 + b3], the same of c, d.
+        let ab = avx2._mm256_add_epi64(
+            avx2._mm256_unpacklo_epi64(a, b),
+            avx2._mm256_unpackhi_epi64(a, b),
+        );
+        let cd = avx2._mm256_add_epi64(
+            avx2._mm256_unpacklo_epi64(c, d),
+            avx2._mm256_unpackhi_epi64(c, d),
+        );
+        avx2._mm256_add_epi64(
+            avx2._mm256_permute2x128_si256::<0x20>(ab, cd),
+            avx2._mm256_permute2x128_si256::<0x31>(ab, cd),
+        )
+    }
+
+    /// The frame rows of a [`multi`] batch from `f[base]`: `S` rows of `W`
+    /// windows' `vpsadbw` sums (row `s` of windows meets template row
+    /// `r - s` in frame row `r`). Each frame row's windows are built once,
+    /// as in [`narrow_rows`] (`DIRECT`: loaded; otherwise `vpalignr` of two
+    /// loads), and summed against the template row of each row of windows
+    /// that meets it.
+    #[inline(always)]
+    fn multi_rows<const W: usize, const DIRECT: bool>(
+        simd: V3,
+        t_rows: &[[u8; 32]],
+        f: &[u8],
+        stride: usize,
+        base: usize,
+    ) -> [[__m256i; W]; super::MULTI_ROWS] {
+        const S: usize = super::MULTI_ROWS;
+        let l = Avx2(simd);
+        let th = t_rows.len();
+        let zero = l.zero();
+        let mut acc = [[zero; W]; S];
+        // Frame row `r`'s windows against the template rows `r - s` of
+        // the rows of windows `s` in LO..HI.
+        #[inline(always)]
+        fn step<const W: usize, const DIRECT: bool, const LO: usize, const HI: usize>(
+            simd: V3,
+            acc: &mut [[__m256i; W]; super::MULTI_ROWS],
+            blk: &[u8; 48],
+            tv: [__m256i; super::MULTI_ROWS],
+        ) {
+            let l = Avx2(simd);
+            let avx2 = simd.avx2;
+            let (f0, f16) = (l.ld(blk, 0), l.ld(blk, 16));
+            macro_rules! each_window {
+                ($($j:literal)*) => {$(
+                    if $j < W {
+                        let v = if DIRECT {
+                            l.ld(blk, $j)
+                        } else if $j == 0 {
+                            f0
+                        } else {
+                            avx2._mm256_alignr_epi8::<$j>(f16, f0)
+                        };
+                        for s in LO..HI {
+                            acc[s][$j] = l.add(acc[s][$j], l.sad(v, tv[s]));
+                        }
+                    }
+                )*};
+            }
+            each_window!(0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15);
+        }
+        // The first and last S - 1 frame rows meet only some rows of
+        // windows (rows of windows lo..hi): frame row r's 48 bytes and the
+        // template rows r - s (a zero vector for the others). A macro, not
+        // a closure: a closure is not compiled for AVX2 (its intrinsics
+        // became calls).
+        macro_rules! edge {
+            ($r:expr, $lo:expr, $hi:expr) => {{
+                let r = $r;
+                let blk: &[u8; 48] = f[base + r * stride..][..48].try_into().unwrap();
+                let tv: [__m256i; S] = core::array::from_fn(|s| match r.checked_sub(s) {
+                    Some(i) if i < th => l.ld(&t_rows[i], 0),
+                    _ => zero,
+                });
+                match ($lo, $hi) {
+                    (0, 1) => step::<W, DIRECT, 0, 1>(simd, &mut acc, blk, tv),
+                    (0, 2) => step::<W, DIRECT, 0, 2>(simd, &mut acc, blk, tv),
+                    (1, 2) => step::<W, DIRECT, 1, 2>(simd, &mut acc, blk, tv),
+                    (1, 3) => step::<W, DIRECT, 1, 3>(simd, &mut acc, blk, tv),
+                    (2, 3) => step::<W, DIRECT, 2, 3>(simd, &mut acc, blk, tv),
+                    _ => unreachable!("MULTI_ROWS is 2 or 3"),
+                }
+            }};
+        }
+        const _: () = assert!(S == 2 || S == 3);
+        for r in 0..S - 1 {
+            edge!(r, 0, r + 1);
+        }
+        // The batch's frame rows from its first window (one slice: one
+        // check a row, no overflow checks).
+        let fb = &f[base..][..(th + S - 2) * stride + 48];
+        // The frame rows every row of windows meets (r = S - 1 .. th), two
+        // a turn (the loop's counting and bounds checks once for both),
+        // with the template rows r, r - 1, ...
+        macro_rules! body {
+            ($blk:expr, $tr:expr) => {{
+                let blk: &[u8; 48] = $blk[..48].try_into().unwrap();
+                let tr: &[[u8; 32]] = $tr;
+                let tv: [__m256i; S] = core::array::from_fn(|s| l.ld(&tr[S - 1 - s], 0));
+                step::<W, DIRECT, 0, S>(simd, &mut acc, blk, tv);
+            }};
+        }
+        // U frame rows a turn: one bounds check for all (the others' follow
+        // from it), one count.
+        const U: usize = 2;
+        let mut o = (S - 1) * stride;
+        let span = (U - 1) * stride + 48;
+        let mut turns = t_rows.windows(S + U - 1);
+        for tr in turns.by_ref().step_by(U) {
+            let rows = &fb[o..][..span];
+            let mut q = 0;
+            for u in 0..U {
+                body!(&rows[q..], &tr[u..u + S]);
+                q += stride;
+            }
+            o += U * stride;
+        }
+        // The last (th + 1 - S) mod U rows.
+        for r in th - (th + 1 - S) % U..th {
+            body!(&fb[o..], &t_rows[r + 1 - S..=r]);
+            o += stride;
+        }
+        for r in th..th + S - 1 {
+            edge!(r, r + 1 - th, S);
+        }
+        acc
+    }
+
     /// [`windows!`] under AVX-512: 64-byte chunks eight windows at a time;
     /// 32-byte rows (gray windows) two per 64-byte `vpsadbw`, sixty-four
     /// at a time ([`paired`]), the rest with 32-byte vectors, sixteen
@@ -1353,6 +1786,143 @@ pub(crate) mod tests {
                     tpl.set(black.view());
                     let mut out = vec![0u32; 100];
                     tpl.sad_windows(white.view(), 0, 0, &mut out);
+                    assert!(
+                        out.iter().all(|&o| o as usize == 255 * tw * th),
+                        "{level:?} {tw}x{th}: {out:?}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// Asserts that `rows` rows of `n` windows from `(x0, y)` by
+    /// [`SadTemplate::sad_window_rows`] are the reference's SADs.
+    fn window_rows_match(
+        tpl: &SadTemplate,
+        frame: ImageView<'_, u8>,
+        t: ImageView<'_, u8>,
+        (x0, y): (usize, usize),
+        (n, rows): (usize, usize),
+        what: &str,
+    ) {
+        let mut out = vec![0u32; n * rows];
+        tpl.sad_window_rows(frame, x0, y, n, &mut out);
+        for (i, &o) in out.iter().enumerate() {
+            let (x, yy) = (x0 + i % n, y + i / n);
+            let want = reference(frame, t, x, yy);
+            assert_eq!(o, want, "{what}: ({x}, {yy}) of {n} x {rows}");
+        }
+    }
+
+    #[test]
+    fn window_rows_of_every_gray_width_equal_the_reference() {
+        // Every gray row length the shared-row batches take (11 to 32
+        // bytes) and some around them, templates of 1 to 4 rows and 20,
+        // 1 to 7 rows of windows (groups of MULTI_ROWS and a smaller
+        // last one), runs of windows of every length up to past a piece
+        // (whole batches and leftovers), up to the buffer's right and
+        // bottom edges (where the batches stop), in a crop (stride past
+        // the width), at every place in a cache line.
+        for level in levels() {
+            let mut tpl = SadTemplate::new(level);
+            for tw in [1, 8, 10, 11, 12, 16, 21, 29, 30, 31, 32, 33, 40] {
+                for th in [1, 2, 3, 4, 20] {
+                    let seed = (tw * 100 + th) as u32;
+                    let t_img = random(tw, th, 1, seed + 1);
+                    tpl.set(t_img.view());
+                    for left in [0, 5, 33, 63] {
+                        let fw = tw + 120;
+                        let fh = th + 8;
+                        let big = random(fw + left + 3, fh + 1, 1, seed + left as u32);
+                        let frame = big.crop(Rect::new(left, 1, fw, fh)).unwrap();
+                        let npx = fw - tw + 1;
+                        for rows in 1..=7.min(fh - th + 1) {
+                            for (x0, n) in
+                                [(0, npx), (1, 44), (3, 47), (npx - 57, 57), (2, 5), (7, 1)]
+                            {
+                                let y = fh - th + 1 - rows;
+                                let what = format!("{level:?} {tw}x{th} from {left}");
+                                window_rows_match(
+                                    &tpl,
+                                    frame,
+                                    t_img.view(),
+                                    (x0, 0),
+                                    (n, rows),
+                                    &what,
+                                );
+                                window_rows_match(
+                                    &tpl,
+                                    frame,
+                                    t_img.view(),
+                                    (x0, y),
+                                    (n, rows),
+                                    &what,
+                                );
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn window_rows_at_every_cache_line_offset_equal_the_reference() {
+        // Rows 64 and 320 bytes apart: crops from every offset of a cache
+        // line (every fourth one 320 apart), so that the shared-row
+        // batches (windows loaded, and vpalignr for a piece's last ones)
+        // run at every place in it, for every row length they take, with
+        // runs of windows up to the buffer's right and bottom edges.
+        for level in levels() {
+            let mut tpl = SadTemplate::new(level);
+            for (stride, step) in [(64, 1), (320, 4)] {
+                for tw in 11..=32 {
+                    for th in [2, 3, 20] {
+                        let seed = (stride + tw * 10 + th) as u32;
+                        let big = random(stride, th + 4, 1, seed);
+                        let t_img = random(tw, th, 1, seed + 1);
+                        tpl.set(t_img.view());
+                        for left in (0..=64.min(stride - tw - 9)).step_by(step) {
+                            let fw = (stride - left).min(tw + 99);
+                            let frame = big.crop(Rect::new(left, 0, fw, th + 4)).unwrap();
+                            let npx = fw - tw + 1;
+                            for (x0, y, rows) in
+                                [(0, 0, 2), (1, 1, 4), (npx.saturating_sub(50), 2, 3)]
+                            {
+                                let what =
+                                    format!("{level:?} {tw}x{th} stride {stride} from {left}");
+                                let n = npx - x0;
+                                window_rows_match(
+                                    &tpl,
+                                    frame,
+                                    t_img.view(),
+                                    (x0, y),
+                                    (n, rows),
+                                    &what,
+                                );
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn saturated_window_rows_of_every_narrow_width() {
+        // 255 against 0 in every byte: the largest column sums (16 bits
+        // at 257 rows) and window sums the shared-row batches take off and
+        // add up, in loaded and vpalignr batches.
+        for level in levels() {
+            for tw in 10..=33 {
+                for th in [2, 20, 256, 257, 258] {
+                    let white = Image::new(128, th + 3, 1, 255u8).unwrap();
+                    let black = Image::new(tw, th, 1, 0u8).unwrap();
+                    let mut tpl = SadTemplate::new(level);
+                    tpl.set(black.view());
+                    let n = 128 - tw + 1;
+                    let mut out = vec![0u32; n * 4];
+                    tpl.sad_window_rows(white.view(), 0, 0, n, &mut out);
                     assert!(
                         out.iter().all(|&o| o as usize == 255 * tw * th),
                         "{level:?} {tw}x{th}: {out:?}"
