@@ -1190,6 +1190,7 @@ mod x86 {
     /// slower (loaded batches of three windows 0.40 ms, of four 0.46 ms:
     /// out of registers).
     #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
     fn multi(
         simd: V3,
         accs: &mut [[__m256i; MULTI_PIECE8]; super::MULTI_ROWS],
