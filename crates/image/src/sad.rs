@@ -1106,10 +1106,13 @@ mod x86 {
     ) {
         const S: usize = super::MULTI_ROWS;
         let rows = out.len() / width;
+        // multi's accumulators, zeroed once for all its calls (3 KiB).
+        let mut accs = [[Avx2(simd).zero(); MULTI_PIECE8]; S];
         for r in (0..rows).step_by(S) {
             let done = if r + S <= rows && t.rows >= S {
                 multi(
                     simd,
+                    &mut accs,
                     t,
                     f,
                     stride,
@@ -1171,7 +1174,8 @@ mod x86 {
     /// batches' accumulators are kept until the piece's end, then added up
     /// and corrected eight windows a vector. Returns how many windows of
     /// each row it did (whole batches, stopping where the reads would leave
-    /// `f`).
+    /// `f`); it may have written scratch into up to seven windows of each
+    /// row past those, for the caller to overwrite. `accs` is scratch.
     ///
     /// On Zen 3 (2026-12-04) the gray MAD surface of a 30x20 template
     /// over 320x240 took about 0.38 ms this way against 0.43 ms row by row
@@ -1186,8 +1190,10 @@ mod x86 {
     /// slower (loaded batches of three windows 0.40 ms, of four 0.46 ms:
     /// out of registers).
     #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
     fn multi(
         simd: V3,
+        accs: &mut [[__m256i; MULTI_PIECE8]; super::MULTI_ROWS],
         t: &SadTemplate,
         f: &[u8],
         stride: usize,
@@ -1198,7 +1204,6 @@ mod x86 {
         const S: usize = super::MULTI_ROWS;
         const W: usize = MULTI_W;
         const P: usize = MULTI_PIECE;
-        const P8: usize = MULTI_PIECE8;
         let (n, th) = (t.row_len, t.rows);
         if !super::narrow_takes(n, th) || th < S {
             return 0;
@@ -1209,9 +1214,9 @@ mod x86 {
         let zero = l.zero();
         let (t_rows, _) = t.padded.as_chunks::<32>();
         let t_rows = &t_rows[..th];
-        // Each window's accumulator (four 64-bit lanes) until the piece's
-        // end; past the piece's windows, stale or zero lanes nobody reads.
-        let mut accs = [[zero; P8]; S];
+        // `accs`: each window's accumulator (four 64-bit lanes) until the
+        // piece's end; past the piece's windows, stale or zero lanes nobody
+        // reads.
         const DW: usize = MULTI_DW;
         let mut k = 0;
         while k + W <= width {
@@ -1278,7 +1283,7 @@ mod x86 {
                     zero,
                 ]);
                 let cols = cols.as_flattened();
-                let o = &mut out[s * width + k..][..len];
+                let o = &mut out[s * width..][..width];
                 let accs = &accs[s];
                 for g in (0..len).step_by(8) {
                     // Windows g .. g + 8: their columns' sums, 32 bits.
@@ -1296,8 +1301,16 @@ mod x86 {
                     let odd = sum4(simd, a[1], a[3], a[5], a[7]);
                     let sums = avx2._mm256_or_si256(even, avx2._mm256_slli_epi64::<32>(odd));
                     let res: [u32; 8] = cast(avx2._mm256_sub_epi32(sums, past));
-                    let m = (len - g).min(8);
-                    o[g..g + m].copy_from_slice(&res[..m]);
+                    // A whole group as one store where the row has room (a
+                    // copy of a variable length is a call to memcpy): the
+                    // sums past the piece are overwritten, by the next
+                    // piece or by windows_avx2_rows's windows_avx2_narrow.
+                    let at = k + g;
+                    if at + 8 <= width {
+                        o[at..at + 8].copy_from_slice(&res);
+                    } else {
+                        o[at..].copy_from_slice(&res[..width - at]);
+                    }
                 }
             }
             k += len;
