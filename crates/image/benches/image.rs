@@ -3,8 +3,8 @@
 use std::hint::black_box;
 
 use bayestrack_image::{
-    Affine2, Border, Connectivity, Image, ImageViewMut, label_components, open, rgb_to_hsv_into,
-    warp_into,
+    Affine2, Border, Connectivity, Image, ImageViewMut, label_components, open, rgb_to_gray_into,
+    rgb_to_hsv_into, warp_into,
 };
 use criterion::{Criterion, criterion_group, criterion_main};
 
@@ -46,6 +46,10 @@ fn bench_hsv(c: &mut Criterion) {
     let mut out = Image::new(320, 240, 3, 0f32).unwrap();
     c.bench_function("rgb_to_hsv_into 320x240", |b| {
         b.iter(|| rgb_to_hsv_into(black_box(frame.view()), &mut out.view_mut()).unwrap())
+    });
+    let mut gray = Image::new(320, 240, 1, 0u8).unwrap();
+    c.bench_function("rgb_to_gray_into 320x240", |b| {
+        b.iter(|| rgb_to_gray_into(black_box(frame.view()), &mut gray.view_mut()).unwrap())
     });
 }
 
