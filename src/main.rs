@@ -30,11 +30,13 @@ const DEFAULT_TRACKER: &str = "ncc-scale";
 const DEFAULT_DECODE_AHEAD: usize = 4;
 
 /// Threads that decode a folder's frames by default (`--decode-threads`):
-/// one. On the idle 2-core machine (2026-12-03) 2 threads make the fast
-/// trackers 1.1-1.3x faster (mad, ball-kf) but ncc-scale 5-10 % slower
-/// (three busy threads on two cores), under load they took 1.3-2.1x the
-/// wall time of 1 (mad on David), and pinned to one core 1.1-1.4x.
-const DEFAULT_DECODE_THREADS: usize = 1;
+/// two, the second only once the tracker has waited for a frame
+/// ([`DecodeAhead`]: decoding is then the bottleneck). With both always
+/// decoding (2026-12-03) the fast trackers ran 1.1-1.3x faster than with
+/// one but those busy on each frame (ncc-scale then, dcf, hkpf) 5-15 %
+/// slower, three busy threads on two cores; the second thread now stays
+/// idle behind them.
+const DEFAULT_DECODE_THREADS: usize = 2;
 
 #[derive(Parser)]
 #[command(
@@ -85,8 +87,9 @@ last ground-truth row are not scored. fps counts only the tracker's own time
 (not decoding frames or writing files); the whole run's fps counts everything
 from the first frame to the last box. Frames are decoded on other threads,
 --decode-ahead frames ahead of the tracker (0: in turn with it), a folder's
-frames on --decode-threads threads at once (a video or a stream on one); the
-boxes are the same either way. Progress goes to standard error when it is a
+frames on up to --decode-threads threads at once (a video or a stream on
+one; the threads after the first start once the tracker has waited for a
+frame); the boxes are the same either way. Progress goes to standard error when it is a
 terminal.
 
 Exit status: 0 on success, 1 when the run failed (the message names the file
@@ -147,7 +150,8 @@ struct TrackArgs {
     decode_ahead: usize,
     /// Threads that decode a folder's frames at once, each its own frame
     /// (with --decode-ahead 1 or more; a video or a Y4M stream is decoded
-    /// on one). Same boxes, same errors whatever the number.
+    /// on one); those after the first start only once the tracker has
+    /// waited for a frame. Same boxes, same errors whatever the number.
     #[arg(long, value_name = "K", default_value_t = DEFAULT_DECODE_THREADS,
           value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=64))]
     decode_threads: usize,
