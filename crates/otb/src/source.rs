@@ -726,7 +726,7 @@ impl Drop for PanicGuard<'_> {
 ///
 /// One thread decodes from the start; the others (helpers) wait until the
 /// loop has spent half its time waiting for frames since its first (over
-/// at least [`ENGAGE_AFTER`], in windows of [`ENGAGE_WINDOW`]), the sign
+/// at least 4 ms, in windows of 100 ms), the sign
 /// that decoding is well behind (a tracker taking less than half a
 /// frame's decoding time), and then decode too. Behind a slower tracker
 /// the first thread keeps up alone and the helpers never run: on the
@@ -784,18 +784,18 @@ pub struct DecodeAhead {
     remaining: Option<usize>,
     ended: bool,
     /// Since when the consumer's waiting is being measured (from its first
-    /// frame on; restarted every [`ENGAGE_WINDOW`]), and how long it has
+    /// frame on; restarted every `ENGAGE_WINDOW`), and how long it has
     /// waited since then.
     window: Option<(Instant, Duration)>,
 }
 
 /// How long the consumer must have run since its first frame (or the
 /// window's start) before its waiting engages the helpers.
-pub const ENGAGE_AFTER: Duration = Duration::from_millis(4);
+const ENGAGE_AFTER: Duration = Duration::from_millis(4);
 
 /// The window over which the consumer's waiting is measured: a slow start
 /// (a tracker's first frames) is forgotten after it.
-pub const ENGAGE_WINDOW: Duration = Duration::from_millis(100);
+const ENGAGE_WINDOW: Duration = Duration::from_millis(100);
 
 /// How often a waiting consumer checks whether to engage the helpers.
 const ENGAGE_POLL: Duration = Duration::from_millis(1);
