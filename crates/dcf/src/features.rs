@@ -330,11 +330,22 @@ impl Fhog {
     }
 }
 
-/// The unit vectors of the 9 directions `o * 20` degrees, `o < 9`.
+/// The unit vectors of the 9 directions `o * 20` degrees, `o < 9`: those
+/// past 90 degrees the mirror images `(-cos, sin)` of those before it
+/// (direction `9 - o` of direction `o`, `0 < o < 9`), which [`pixel`]
+/// relies on (the same `f32`s as rounding their own cosines and sines).
 fn directions() -> [(f32, f32); INSENSITIVE] {
-    std::array::from_fn(|o| {
+    let first: [(f32, f32); INSENSITIVE] = std::array::from_fn(|o| {
         let a = std::f64::consts::PI * o as f64 / INSENSITIVE as f64;
         (a.cos() as f32, a.sin() as f32)
+    });
+    std::array::from_fn(|o| {
+        if 2 * o > INSENSITIVE {
+            let (c, s) = first[INSENSITIVE - o];
+            (-c, s)
+        } else {
+            first[o]
+        }
     })
 }
 
@@ -347,13 +358,32 @@ fn directions() -> [(f32, f32); INSENSITIVE] {
 /// gradients) so that a vector loop keeps the running best in lanes of
 /// the comparisons' width (one blend per direction, no narrowing of each
 /// comparison's mask to bytes; the bins narrowed once at the end).
+///
+/// Direction `9 - o` is direction `o` mirrored, `(-c, s)` ([`directions`]):
+/// its `gx (-c) + gy s` is `gy s - gx c`, the same bits from the products
+/// of direction `o` (`-(gx c) + gy s` and `gy s - gx c` round alike), so
+/// the nine directions take eight products, not sixteen.
 #[inline(always)]
 fn pixel(gx: f32, gy: f32, dirs: &[(f32, f32); INSENSITIVE]) -> (f32, u32) {
+    let dot = |o: usize| {
+        let (c, s) = dirs[o];
+        let (p, q) = (gx * c, gy * s);
+        (p + q, q - p)
+    };
+    let ((d1, d8), (d2, d7), (d3, d6), (d4, d5)) = (dot(1), dot(2), dot(3), dot(4));
     let (mut best, mut bd, mut ba) = (0u32, gx, gx.abs());
-    for (o, &(c, s)) in dirs.iter().enumerate().skip(1) {
-        let d = gx * c + gy * s;
+    for (o, d) in [
+        (1, d1),
+        (2, d2),
+        (3, d3),
+        (4, d4),
+        (5, d5),
+        (6, d6),
+        (7, d7),
+        (8, d8),
+    ] {
         let better = d.abs() > ba;
-        best = if better { o as u32 } else { best };
+        best = if better { o } else { best };
         bd = if better { d } else { bd };
         ba = if better { d.abs() } else { ba };
     }
@@ -1048,6 +1078,71 @@ mod tests {
                         "{w}x{h}/{cell} {level:?}: value {i}"
                     );
                 }
+            }
+        }
+    }
+
+    /// [`pixel`]'s mirrored directions (eight products) against the
+    /// sixteen-product loop with each direction's own rounded cosine and
+    /// sine, bit for bit, at every level: signed zeros, ties, the
+    /// directions themselves and their bisectors, random gradients.
+    #[test]
+    fn mirrored_directions_give_the_bins_of_sixteen_products() {
+        let own: [(f32, f32); INSENSITIVE] = std::array::from_fn(|o| {
+            let a = std::f64::consts::PI * o as f64 / INSENSITIVE as f64;
+            (a.cos() as f32, a.sin() as f32)
+        });
+        let dirs = directions();
+        for (d, o) in dirs.iter().zip(&own) {
+            assert_eq!(
+                (d.0.to_bits(), d.1.to_bits()),
+                (o.0.to_bits(), o.1.to_bits())
+            );
+        }
+        let sixteen = |gx: f32, gy: f32| -> (f32, u32) {
+            let (mut best, mut bd, mut ba) = (0u32, gx, gx.abs());
+            for (o, &(c, s)) in own.iter().enumerate().skip(1) {
+                let d = gx * c + gy * s;
+                let better = d.abs() > ba;
+                best = if better { o as u32 } else { best };
+                bd = if better { d } else { bd };
+                ba = if better { d.abs() } else { ba };
+            }
+            let bin = if bd >= 0.0 { best } else { best + 9 };
+            ((gx * gx + gy * gy).sqrt(), bin)
+        };
+        let mut g: Vec<(f32, f32)> = Vec::new();
+        let special = [0.0, -0.0, 0.5, -0.5, 1.0, -1.0, 0.25, -0.125, 1e-30, -3.0];
+        for &a in &special {
+            for &b in &special {
+                g.push((a, b));
+            }
+        }
+        for k in 0..72 {
+            let a = std::f64::consts::PI * k as f64 / 36.0;
+            for r in [1.0, 0.37, 255.0] {
+                g.push(((r * a.cos()) as f32, (r * a.sin()) as f32));
+            }
+        }
+        let noise = random_patch(2000, 1, 5);
+        g.extend(noise.chunks_exact(2).map(|p| (p[0] - 0.5, 0.5 - p[1])));
+        let n = g.len();
+        let (gx, gy): (Vec<f32>, Vec<f32>) = g.iter().copied().unzip();
+        for level in SimdLevel::ALL {
+            let (mut mag, mut bin) = (vec![f32::NAN; n], vec![u32::MAX; n]);
+            level.run(GradientBins {
+                gx: &gx,
+                gy: &gy,
+                mag: &mut mag,
+                bin: &mut bin,
+            });
+            for (i, &(x, y)) in g.iter().enumerate() {
+                let (m, b) = sixteen(x, y);
+                assert_eq!(
+                    (mag[i].to_bits(), bin[i]),
+                    (m.to_bits(), b),
+                    "{level:?}: gradient ({x}, {y})"
+                );
             }
         }
     }
