@@ -212,48 +212,18 @@ impl Fhog {
 
     /// Per pixel: the gradient (one plane of `gx`, one of `gy`), then
     /// its magnitude and bin in one flat pass over the patch (a vector
-    /// loop with a single scalar remainder, whatever the row width).
+    /// loop with a single scalar remainder, whatever the row width); both
+    /// compiled for `level`.
     #[inline(never)]
     fn gradients(&mut self, level: SimdLevel, p: &[f32]) {
-        let (w, h) = (self.w, self.h);
-        let n = w * h;
-        let (p, gx, gy) = (&p[..n], &mut self.gx[..n], &mut self.gy[..n]);
-        // along y: central differences on the inner rows in one flat pass
-        // (row y at index i: rows y - 1 and y + 1 at i - w and i + w),
-        // one-sided on the first and last rows
-        if h == 1 {
-            // rows 0 and 0, weight 0 (as the row-by-row definition)
-            for ((g, &a), &b) in gy.iter_mut().zip(p).zip(p) {
-                *g = 0.0 * (b - a);
-            }
-        } else {
-            let (first, rest) = gy.split_at_mut(w);
-            let (inner, last) = rest.split_at_mut(n - 2 * w);
-            for ((g, &a), &b) in first.iter_mut().zip(&p[..w]).zip(&p[w..]) {
-                *g = 1.0 * (b - a);
-            }
-            for ((g, &a), &b) in inner.iter_mut().zip(&p[..n - 2 * w]).zip(&p[2 * w..]) {
-                *g = 0.5 * (b - a);
-            }
-            for ((g, &a), &b) in last.iter_mut().zip(&p[n - 2 * w..]).zip(&p[n - w..]) {
-                *g = 1.0 * (b - a);
-            }
-        }
-        // along x: central differences in one flat pass (the values that
-        // straddle two rows are overwritten), one-sided at both ends of
-        // each row
-        if w == 1 {
-            gx.fill(0.0);
-        } else {
-            for ((g, &l), &r) in gx[1..n - 1].iter_mut().zip(p).zip(&p[2..]) {
-                *g = 0.5 * (r - l);
-            }
-            for (g, row) in gx.chunks_exact_mut(w).zip(p.chunks_exact(w)) {
-                let last = w - 1;
-                g[0] = row[1] - row[0];
-                g[last] = row[last] - row[last - 1];
-            }
-        }
+        let n = self.w * self.h;
+        level.run(Differences {
+            w: self.w,
+            h: self.h,
+            p: &p[..n],
+            gx: &mut self.gx[..n],
+            gy: &mut self.gy[..n],
+        });
         level.run(GradientBins {
             gx: &self.gx,
             gy: &self.gy,
@@ -520,6 +490,61 @@ impl Kernel for Histograms<'_> {
                 da[i] = a;
                 db[i] = b;
                 di[i] = a + b;
+            }
+        }
+    }
+}
+
+/// The gradients of a `w x h` patch `p` along x and y (see
+/// [`Fhog::gradients`]).
+struct Differences<'a> {
+    w: usize,
+    h: usize,
+    p: &'a [f32],
+    gx: &'a mut [f32],
+    gy: &'a mut [f32],
+}
+
+impl Kernel for Differences<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        let Self { w, h, p, gx, gy } = self;
+        let n = w * h;
+        // along y: central differences on the inner rows in one flat pass
+        // (row y at index i: rows y - 1 and y + 1 at i - w and i + w),
+        // one-sided on the first and last rows
+        if h == 1 {
+            // rows 0 and 0, weight 0 (as the row-by-row definition)
+            for ((g, &a), &b) in gy.iter_mut().zip(p).zip(p) {
+                *g = 0.0 * (b - a);
+            }
+        } else {
+            let (first, rest) = gy.split_at_mut(w);
+            let (inner, last) = rest.split_at_mut(n - 2 * w);
+            for ((g, &a), &b) in first.iter_mut().zip(&p[..w]).zip(&p[w..]) {
+                *g = 1.0 * (b - a);
+            }
+            for ((g, &a), &b) in inner.iter_mut().zip(&p[..n - 2 * w]).zip(&p[2 * w..]) {
+                *g = 0.5 * (b - a);
+            }
+            for ((g, &a), &b) in last.iter_mut().zip(&p[n - 2 * w..]).zip(&p[n - w..]) {
+                *g = 1.0 * (b - a);
+            }
+        }
+        // along x: central differences in one flat pass (the values that
+        // straddle two rows are overwritten), one-sided at both ends of
+        // each row
+        if w == 1 {
+            gx.fill(0.0);
+        } else {
+            for ((g, &l), &r) in gx[1..n - 1].iter_mut().zip(p).zip(&p[2..]) {
+                *g = 0.5 * (r - l);
+            }
+            for (g, row) in gx.chunks_exact_mut(w).zip(p.chunks_exact(w)) {
+                let last = w - 1;
+                g[0] = row[1] - row[0];
+                g[last] = row[last] - row[last - 1];
             }
         }
     }
