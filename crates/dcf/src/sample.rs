@@ -173,6 +173,18 @@ impl Kernel for ColumnSums<'_> {
     }
 }
 
+/// The sum of some bytes (exact: integer additions in any order, compiled
+/// for the machine's vector width).
+struct ByteSum<'a>(&'a [u8]);
+
+impl Kernel for ByteSum<'_> {
+    type Output = u64;
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) -> u64 {
+        self.0.iter().map(|&p| u64::from(p)).sum()
+    }
+}
+
 /// One row of a plane and of its summed-area table in a region: the
 /// values as `f32`, and each table entry the one above plus the row's sum
 /// up to it (`left`, the sum left of the region, plus the running sum of
@@ -539,7 +551,7 @@ impl PatchSampler {
             let (upper, lower) = sum[y * cols..][..2 * cols].split_at_mut(cols);
             dispatch(TableRow {
                 // the row's sum left of the region
-                left: v[..r.x0].iter().map(|&p| u64::from(p)).sum(),
+                left: dispatch(ByteSum(&v[..r.x0])),
                 v: &v[r.x0..r.x1],
                 upper: &upper[r.x0..=r.x1],
                 lower: &mut lower[r.x0..=r.x1],
@@ -1356,6 +1368,25 @@ mod tests {
 #[cfg(test)]
 mod table_row_tests {
     use super::*;
+
+    #[test]
+    fn byte_sums_at_every_level() {
+        let v: Vec<u8> = (0..1000usize)
+            .map(|i| {
+                if i % 3 == 0 {
+                    255
+                } else {
+                    ((i * 2_654_435_761) >> 9) as u8
+                }
+            })
+            .collect();
+        for n in [0, 1, 7, 31, 32, 33, 100, 319, 1000] {
+            let want: u64 = v[..n].iter().map(|&p| p as u64).sum();
+            for level in SimdLevel::ALL {
+                assert_eq!(level.run(ByteSum(&v[..n])), want, "{level:?} {n}");
+            }
+        }
+    }
 
     #[test]
     fn the_running_sums_in_i32_are_the_u64_sums_bit_for_bit() {
