@@ -212,48 +212,18 @@ impl Fhog {
 
     /// Per pixel: the gradient (one plane of `gx`, one of `gy`), then
     /// its magnitude and bin in one flat pass over the patch (a vector
-    /// loop with a single scalar remainder, whatever the row width).
+    /// loop with a single scalar remainder, whatever the row width); both
+    /// compiled for `level`.
     #[inline(never)]
     fn gradients(&mut self, level: SimdLevel, p: &[f32]) {
-        let (w, h) = (self.w, self.h);
-        let n = w * h;
-        let (p, gx, gy) = (&p[..n], &mut self.gx[..n], &mut self.gy[..n]);
-        // along y: central differences on the inner rows in one flat pass
-        // (row y at index i: rows y - 1 and y + 1 at i - w and i + w),
-        // one-sided on the first and last rows
-        if h == 1 {
-            // rows 0 and 0, weight 0 (as the row-by-row definition)
-            for ((g, &a), &b) in gy.iter_mut().zip(p).zip(p) {
-                *g = 0.0 * (b - a);
-            }
-        } else {
-            let (first, rest) = gy.split_at_mut(w);
-            let (inner, last) = rest.split_at_mut(n - 2 * w);
-            for ((g, &a), &b) in first.iter_mut().zip(&p[..w]).zip(&p[w..]) {
-                *g = 1.0 * (b - a);
-            }
-            for ((g, &a), &b) in inner.iter_mut().zip(&p[..n - 2 * w]).zip(&p[2 * w..]) {
-                *g = 0.5 * (b - a);
-            }
-            for ((g, &a), &b) in last.iter_mut().zip(&p[n - 2 * w..]).zip(&p[n - w..]) {
-                *g = 1.0 * (b - a);
-            }
-        }
-        // along x: central differences in one flat pass (the values that
-        // straddle two rows are overwritten), one-sided at both ends of
-        // each row
-        if w == 1 {
-            gx.fill(0.0);
-        } else {
-            for ((g, &l), &r) in gx[1..n - 1].iter_mut().zip(p).zip(&p[2..]) {
-                *g = 0.5 * (r - l);
-            }
-            for (g, row) in gx.chunks_exact_mut(w).zip(p.chunks_exact(w)) {
-                let last = w - 1;
-                g[0] = row[1] - row[0];
-                g[last] = row[last] - row[last - 1];
-            }
-        }
+        let n = self.w * self.h;
+        level.run(Differences {
+            w: self.w,
+            h: self.h,
+            p: &p[..n],
+            gx: &mut self.gx[..n],
+            gy: &mut self.gy[..n],
+        });
         level.run(GradientBins {
             gx: &self.gx,
             gy: &self.gy,
@@ -330,11 +300,22 @@ impl Fhog {
     }
 }
 
-/// The unit vectors of the 9 directions `o * 20` degrees, `o < 9`.
+/// The unit vectors of the 9 directions `o * 20` degrees, `o < 9`: those
+/// past 90 degrees the mirror images `(-cos, sin)` of those before it
+/// (direction `9 - o` of direction `o`, `0 < o < 9`), which [`pixel`]
+/// relies on (the same `f32`s as rounding their own cosines and sines).
 fn directions() -> [(f32, f32); INSENSITIVE] {
-    std::array::from_fn(|o| {
+    let first: [(f32, f32); INSENSITIVE] = std::array::from_fn(|o| {
         let a = std::f64::consts::PI * o as f64 / INSENSITIVE as f64;
         (a.cos() as f32, a.sin() as f32)
+    });
+    std::array::from_fn(|o| {
+        if 2 * o > INSENSITIVE {
+            let (c, s) = first[INSENSITIVE - o];
+            (-c, s)
+        } else {
+            first[o]
+        }
     })
 }
 
@@ -347,13 +328,32 @@ fn directions() -> [(f32, f32); INSENSITIVE] {
 /// gradients) so that a vector loop keeps the running best in lanes of
 /// the comparisons' width (one blend per direction, no narrowing of each
 /// comparison's mask to bytes; the bins narrowed once at the end).
+///
+/// Direction `9 - o` is direction `o` mirrored, `(-c, s)` ([`directions`]):
+/// its `gx (-c) + gy s` is `gy s - gx c`, the same bits from the products
+/// of direction `o` (`-(gx c) + gy s` and `gy s - gx c` round alike), so
+/// the nine directions take eight products, not sixteen.
 #[inline(always)]
 fn pixel(gx: f32, gy: f32, dirs: &[(f32, f32); INSENSITIVE]) -> (f32, u32) {
+    let dot = |o: usize| {
+        let (c, s) = dirs[o];
+        let (p, q) = (gx * c, gy * s);
+        (p + q, q - p)
+    };
+    let ((d1, d8), (d2, d7), (d3, d6), (d4, d5)) = (dot(1), dot(2), dot(3), dot(4));
     let (mut best, mut bd, mut ba) = (0u32, gx, gx.abs());
-    for (o, &(c, s)) in dirs.iter().enumerate().skip(1) {
-        let d = gx * c + gy * s;
+    for (o, d) in [
+        (1, d1),
+        (2, d2),
+        (3, d3),
+        (4, d4),
+        (5, d5),
+        (6, d6),
+        (7, d7),
+        (8, d8),
+    ] {
         let better = d.abs() > ba;
-        best = if better { o as u32 } else { best };
+        best = if better { o } else { best };
         bd = if better { d } else { bd };
         ba = if better { d.abs() } else { ba };
     }
@@ -490,6 +490,61 @@ impl Kernel for Histograms<'_> {
                 da[i] = a;
                 db[i] = b;
                 di[i] = a + b;
+            }
+        }
+    }
+}
+
+/// The gradients of a `w x h` patch `p` along x and y (see
+/// [`Fhog::gradients`]).
+struct Differences<'a> {
+    w: usize,
+    h: usize,
+    p: &'a [f32],
+    gx: &'a mut [f32],
+    gy: &'a mut [f32],
+}
+
+impl Kernel for Differences<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        let Self { w, h, p, gx, gy } = self;
+        let n = w * h;
+        // along y: central differences on the inner rows in one flat pass
+        // (row y at index i: rows y - 1 and y + 1 at i - w and i + w),
+        // one-sided on the first and last rows
+        if h == 1 {
+            // rows 0 and 0, weight 0 (as the row-by-row definition)
+            for ((g, &a), &b) in gy.iter_mut().zip(p).zip(p) {
+                *g = 0.0 * (b - a);
+            }
+        } else {
+            let (first, rest) = gy.split_at_mut(w);
+            let (inner, last) = rest.split_at_mut(n - 2 * w);
+            for ((g, &a), &b) in first.iter_mut().zip(&p[..w]).zip(&p[w..]) {
+                *g = 1.0 * (b - a);
+            }
+            for ((g, &a), &b) in inner.iter_mut().zip(&p[..n - 2 * w]).zip(&p[2 * w..]) {
+                *g = 0.5 * (b - a);
+            }
+            for ((g, &a), &b) in last.iter_mut().zip(&p[n - 2 * w..]).zip(&p[n - w..]) {
+                *g = 1.0 * (b - a);
+            }
+        }
+        // along x: central differences in one flat pass (the values that
+        // straddle two rows are overwritten), one-sided at both ends of
+        // each row
+        if w == 1 {
+            gx.fill(0.0);
+        } else {
+            for ((g, &l), &r) in gx[1..n - 1].iter_mut().zip(p).zip(&p[2..]) {
+                *g = 0.5 * (r - l);
+            }
+            for (g, row) in gx.chunks_exact_mut(w).zip(p.chunks_exact(w)) {
+                let last = w - 1;
+                g[0] = row[1] - row[0];
+                g[last] = row[last] - row[last - 1];
             }
         }
     }
@@ -1048,6 +1103,71 @@ mod tests {
                         "{w}x{h}/{cell} {level:?}: value {i}"
                     );
                 }
+            }
+        }
+    }
+
+    /// [`pixel`]'s mirrored directions (eight products) against the
+    /// sixteen-product loop with each direction's own rounded cosine and
+    /// sine, bit for bit, at every level: signed zeros, ties, the
+    /// directions themselves and their bisectors, random gradients.
+    #[test]
+    fn mirrored_directions_give_the_bins_of_sixteen_products() {
+        let own: [(f32, f32); INSENSITIVE] = std::array::from_fn(|o| {
+            let a = std::f64::consts::PI * o as f64 / INSENSITIVE as f64;
+            (a.cos() as f32, a.sin() as f32)
+        });
+        let dirs = directions();
+        for (d, o) in dirs.iter().zip(&own) {
+            assert_eq!(
+                (d.0.to_bits(), d.1.to_bits()),
+                (o.0.to_bits(), o.1.to_bits())
+            );
+        }
+        let sixteen = |gx: f32, gy: f32| -> (f32, u32) {
+            let (mut best, mut bd, mut ba) = (0u32, gx, gx.abs());
+            for (o, &(c, s)) in own.iter().enumerate().skip(1) {
+                let d = gx * c + gy * s;
+                let better = d.abs() > ba;
+                best = if better { o as u32 } else { best };
+                bd = if better { d } else { bd };
+                ba = if better { d.abs() } else { ba };
+            }
+            let bin = if bd >= 0.0 { best } else { best + 9 };
+            ((gx * gx + gy * gy).sqrt(), bin)
+        };
+        let mut g: Vec<(f32, f32)> = Vec::new();
+        let special = [0.0, -0.0, 0.5, -0.5, 1.0, -1.0, 0.25, -0.125, 1e-30, -3.0];
+        for &a in &special {
+            for &b in &special {
+                g.push((a, b));
+            }
+        }
+        for k in 0..72 {
+            let a = std::f64::consts::PI * k as f64 / 36.0;
+            for r in [1.0, 0.37, 255.0] {
+                g.push(((r * a.cos()) as f32, (r * a.sin()) as f32));
+            }
+        }
+        let noise = random_patch(2000, 1, 5);
+        g.extend(noise.chunks_exact(2).map(|p| (p[0] - 0.5, 0.5 - p[1])));
+        let n = g.len();
+        let (gx, gy): (Vec<f32>, Vec<f32>) = g.iter().copied().unzip();
+        for level in SimdLevel::ALL {
+            let (mut mag, mut bin) = (vec![f32::NAN; n], vec![u32::MAX; n]);
+            level.run(GradientBins {
+                gx: &gx,
+                gy: &gy,
+                mag: &mut mag,
+                bin: &mut bin,
+            });
+            for (i, &(x, y)) in g.iter().enumerate() {
+                let (m, b) = sixteen(x, y);
+                assert_eq!(
+                    (mag[i].to_bits(), bin[i]),
+                    (m.to_bits(), b),
+                    "{level:?}: gradient ({x}, {y})"
+                );
             }
         }
     }

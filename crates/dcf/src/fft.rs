@@ -568,9 +568,10 @@ impl Fft2 {
         let (w, h, wc) = (self.w, self.h, self.w / 2 + 1);
         self.col_inv
             .process_with_scratch(spectrum, &mut self.col_scratch);
-        for (u, col) in spectrum.chunks_exact(h).enumerate() {
-            for (o, &v) in self.rows[u..].iter_mut().step_by(wc).zip(col) {
-                *o = v;
+        // columns to rows, each row written in order (bin (u, y) at u h + y)
+        for (y, row) in self.rows.chunks_exact_mut(wc).enumerate() {
+            for (o, col) in row.iter_mut().zip(spectrum.chunks_exact(h)) {
+                *o = col[y];
             }
         }
         let norm = 1.0 / (w * h) as f32;

@@ -211,7 +211,9 @@ impl Correlator {
 /// `accum += sum over channels of z_hat . conj(x_hat)`, bin by bin, the
 /// channels in order: the same sums as the scalar loop, compiled for the
 /// machine's vector width (each bin's products and additions stay in the
-/// same order, so every level gives the same bits).
+/// same order, so every level gives the same bits). [`SUM_BINS`] bins at
+/// a time go through every channel with their sums held in registers
+/// (not loaded and stored again for each channel).
 struct ChannelSum<'a> {
     xf: &'a [C32],
     zf: &'a [C32],
@@ -223,13 +225,39 @@ impl SimdKernel for ChannelSum<'_> {
     #[inline(always)]
     fn run<T: Token>(self, _: T) {
         let s = self.accum.len();
+        // blocks of SUM_BINS bins summed over every channel in registers
+        // (each bin's sum in channel order, as below), the rest channel
+        // by channel
+        let (blocks, _) = self.accum.as_chunks_mut::<SUM_BINS>();
+        for (b, acc) in blocks.iter_mut().enumerate() {
+            let mut t = *acc;
+            for (xc, zc) in self.xf.chunks_exact(s).zip(self.zf.chunks_exact(s)) {
+                let (x, z) = (
+                    &xc[b * SUM_BINS..][..SUM_BINS],
+                    &zc[b * SUM_BINS..][..SUM_BINS],
+                );
+                for ((a, x), z) in t.iter_mut().zip(x).zip(z) {
+                    *a += z * x.conj();
+                }
+            }
+            *acc = t;
+        }
+        let done = blocks.len() * SUM_BINS;
         for (xc, zc) in self.xf.chunks_exact(s).zip(self.zf.chunks_exact(s)) {
-            for ((a, x), z) in self.accum.iter_mut().zip(xc).zip(zc) {
+            for ((a, x), z) in self.accum[done..]
+                .iter_mut()
+                .zip(&xc[done..])
+                .zip(&zc[done..])
+            {
                 *a += z * x.conj();
             }
         }
     }
 }
+
+/// Bins of [`ChannelSum`] summed over the channels at once (four AVX2
+/// vectors of `C32`).
+const SUM_BINS: usize = 16;
 
 /// `sum x^2` over `x` in `f64` (each square exact) as [`ENERGY_LANES`]
 /// interleaved partial sums, value `i` into sum `i mod ENERGY_LANES`, added
@@ -713,7 +741,8 @@ mod tests {
         use bayestrack_image::simd::SimdLevel;
         // bin counts that are not a multiple of any vector width, one
         // channel and many; the accumulator starts non-zero
-        for (s, channels) in [(1, 1), (7, 3), (33, 31), (131, 5)] {
+        // (and whole blocks of bins only, the trackers' 9 x 40 bins)
+        for (s, channels) in [(1, 1), (7, 3), (33, 31), (131, 5), (16, 2), (360, 31)] {
             let c32 = |v: Vec<f32>| -> Vec<C32> {
                 v.chunks_exact(2).map(|p| C32::new(p[0], p[1])).collect()
             };

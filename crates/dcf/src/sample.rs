@@ -173,6 +173,18 @@ impl Kernel for ColumnSums<'_> {
     }
 }
 
+/// The sum of some bytes (exact: integer additions in any order, compiled
+/// for the machine's vector width).
+struct ByteSum<'a>(&'a [u8]);
+
+impl Kernel for ByteSum<'_> {
+    type Output = u64;
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) -> u64 {
+        self.0.iter().map(|&p| u64::from(p)).sum()
+    }
+}
+
 /// One row of a plane and of its summed-area table in a region: the
 /// values as `f32`, and each table entry the one above plus the row's sum
 /// up to it (`left`, the sum left of the region, plus the running sum of
@@ -539,7 +551,7 @@ impl PatchSampler {
             let (upper, lower) = sum[y * cols..][..2 * cols].split_at_mut(cols);
             dispatch(TableRow {
                 // the row's sum left of the region
-                left: v[..r.x0].iter().map(|&p| u64::from(p)).sum(),
+                left: dispatch(ByteSum(&v[..r.x0])),
                 v: &v[r.x0..r.x1],
                 upper: &upper[r.x0..=r.x1],
                 lower: &mut lower[r.x0..=r.x1],
@@ -763,14 +775,22 @@ fn edges(a: f64, b: f64, n: usize) -> (f64, f64) {
 /// Two rows of a summed-area table interpolated along x at the column
 /// edges `xs`, in one pass (the same values as [`along_edges`] on each).
 #[inline(always)]
+#[allow(clippy::needless_range_loop)]
 fn along_edges2(rows: [&[f64]; 2], xs: &[(usize, f64)], out: [&mut Vec<f64>; 2]) {
     let [ra, rb] = rows;
     let [oa, ob] = out;
-    for ((oa, ob), &(i, g)) in oa.iter_mut().zip(ob.iter_mut()).zip(xs) {
-        let [a0, a1]: [f64; 2] = ra[i..i + 2].try_into().unwrap_or_default();
-        let [b0, b1]: [f64; 2] = rb[i..i + 2].try_into().unwrap_or_default();
-        *oa = a0 + g * (a1 - a0);
-        *ob = b0 + g * (b1 - b0);
+    // (one length for both rows, one for the edges and outputs, and an
+    // index loop: fewer bounds tests and live pointers than zipped
+    // iterators, a tenth fewer instructions)
+    let len = ra.len().min(rb.len());
+    let (ra, rb) = (&ra[..len], &rb[..len]);
+    let n = xs.len().min(oa.len()).min(ob.len());
+    let (oa, ob, xs) = (&mut oa[..n], &mut ob[..n], &xs[..n]);
+    for k in 0..n {
+        let (i, g) = xs[k];
+        let (a, b) = (&ra[i..][..2], &rb[i..][..2]);
+        oa[k] = a[0] + g * (a[1] - a[0]);
+        ob[k] = b[0] + g * (b[1] - b[0]);
     }
 }
 
@@ -1356,6 +1376,25 @@ mod tests {
 #[cfg(test)]
 mod table_row_tests {
     use super::*;
+
+    #[test]
+    fn byte_sums_at_every_level() {
+        let v: Vec<u8> = (0..1000usize)
+            .map(|i| {
+                if i % 3 == 0 {
+                    255
+                } else {
+                    ((i * 2_654_435_761) >> 9) as u8
+                }
+            })
+            .collect();
+        for n in [0, 1, 7, 31, 32, 33, 100, 319, 1000] {
+            let want: u64 = v[..n].iter().map(|&p| p as u64).sum();
+            for level in SimdLevel::ALL {
+                assert_eq!(level.run(ByteSum(&v[..n])), want, "{level:?} {n}");
+            }
+        }
+    }
 
     #[test]
     fn the_running_sums_in_i32_are_the_u64_sums_bit_for_bit() {
