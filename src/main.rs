@@ -30,8 +30,8 @@ const DEFAULT_TRACKER: &str = "ncc-scale";
 const DEFAULT_DECODE_AHEAD: usize = 4;
 
 /// Threads that decode a folder's frames by default (`--decode-threads`):
-/// two, the second only once the tracker has waited for a frame
-/// ([`DecodeAhead`]: decoding is then the bottleneck). With both always
+/// two, the second only once the tracker has spent half its time waiting
+/// for frames ([`DecodeAhead`]: decoding is then well behind). With both always
 /// decoding (2026-12-03) the fast trackers ran 1.1-1.3x faster than with
 /// one but those busy on each frame (ncc-scale then, dcf, hkpf) 5-15 %
 /// slower, three busy threads on two cores; the second thread now stays
@@ -88,8 +88,8 @@ last ground-truth row are not scored. fps counts only the tracker's own time
 from the first frame to the last box. Frames are decoded on other threads,
 --decode-ahead frames ahead of the tracker (0: in turn with it), a folder's
 frames on up to --decode-threads threads at once (a video or a stream on
-one; the threads after the first start once the tracker has waited for a
-frame); the boxes are the same either way. Progress goes to standard error when it is a
+one; the threads after the first start once the tracker has spent half its
+time waiting for frames); the boxes are the same either way. Progress goes to standard error when it is a
 terminal.
 
 Exit status: 0 on success, 1 when the run failed (the message names the file
@@ -151,7 +151,7 @@ struct TrackArgs {
     /// Threads that decode a folder's frames at once, each its own frame
     /// (with --decode-ahead 1 or more; a video or a Y4M stream is decoded
     /// on one); those after the first start only once the tracker has
-    /// waited for a frame. Same boxes, same errors whatever the number.
+    /// spent half its time waiting for frames. Same boxes, same errors whatever the number.
     #[arg(long, value_name = "K", default_value_t = DEFAULT_DECODE_THREADS,
           value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=64))]
     decode_threads: usize,

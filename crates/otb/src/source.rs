@@ -671,8 +671,8 @@ struct Handover {
     /// The thread that holds the source waits here for room.
     room: Condvar,
     /// The helpers (the decoding threads after the first) wait here until
-    /// the consumer has waited for a frame ([`Queue::engaged`]) or the run
-    /// is over.
+    /// the consumer has spent half its time waiting for frames
+    /// ([`Queue::engaged`]) or the run is over.
     wanted: Condvar,
     /// Items taken from the source and not yet handed to the consumer, at
     /// most (queued, or being decoded).
@@ -870,8 +870,8 @@ impl DecodeAhead {
 /// A decoding thread's loop: takes the next frame from the source (in
 /// turn with the other threads, when there is room), decodes it and puts
 /// it in its place, up to the end of the source or until the consumer is
-/// gone. A `helper` first waits until the consumer has waited for a frame
-/// (and returns if the run ends before).
+/// gone. A `helper` first waits until the consumer has spent half its
+/// time waiting for frames (and returns if the run ends before).
 fn decode_into<S: FrameSource>(feed: &Mutex<Feed<S>>, handover: &Handover, helper: bool) {
     let _guard = PanicGuard(handover);
     if helper {
