@@ -3,8 +3,8 @@
 //! bilinear interpolation when enlarging; edge pixels replicated outside
 //! the frame (as KCF's and DSST's patch extraction does).
 
-use bayestrack_image::ImageView;
 use bayestrack_image::simd::{Kernel, SimdLevel, Token, dispatch};
+use bayestrack_image::{ImageView, gray_level};
 
 use crate::error::{DcfError, Result};
 
@@ -75,15 +75,6 @@ fn values<'a>(frame: ImageView<'a, u8>, y: usize, src: Source, line: &'a mut [u8
     }
 }
 
-/// One pixel's gray level: bayestrack_image::rgb_to_gray_into's formula
-/// (the weights times 2^16, rounded).
-#[inline(always)]
-fn gray(p: &[u8]) -> u32 {
-    const W: [u32; 3] = [19595, 38470, 7471];
-    let acc = W[0] * u32::from(p[0]) + W[1] * u32::from(p[1]) + W[2] * u32::from(p[2]);
-    (acc + (1 << 15)) >> 16
-}
-
 /// The gray levels of one RGB row.
 struct GrayLine<'a> {
     row: &'a [u8],
@@ -95,7 +86,7 @@ impl Kernel for GrayLine<'_> {
     #[inline(always)]
     fn run<T: Token>(self, _: T) {
         for (o, p) in self.line.iter_mut().zip(self.row.chunks_exact(3)) {
-            *o = gray(p) as u8;
+            *o = gray_level(p);
         }
     }
 }
@@ -160,7 +151,7 @@ impl Kernel for ColumnSums<'_> {
                     }
                     Columns::Gray => {
                         for (a, p) in part.iter_mut().zip(row[..3 * n].chunks_exact(3)) {
-                            *a += gray(p);
+                            *a += u32::from(gray_level(p));
                         }
                     }
                 }

@@ -163,10 +163,12 @@ pub fn rgb_to_gray_into(src: ImageView<'_, u8>, out: &mut ImageViewMut<'_, u8>) 
     Ok(())
 }
 
-/// One RGB pixel's gray level in fixed point: the weights times 2^16,
-/// rounded (`(19595 r + 38470 g + 7471 b + 2^15) >> 16`, exact integers).
+/// One RGB pixel's (`p[..3]`) gray level as [`rgb_to_gray_into`] gives
+/// it, in fixed point: the weights times 2^16, rounded (`(19595 r + 38470
+/// g + 7471 b + 2^15) >> 16`, exact integers), for loops that convert
+/// pixels on their own way.
 #[inline(always)]
-fn gray_fixed(p: &[u8]) -> u8 {
+pub fn gray_level(p: &[u8]) -> u8 {
     const W: [u32; 3] = [19595, 38470, 7471];
     let acc = W[0] * u32::from(p[0]) + W[1] * u32::from(p[1]) + W[2] * u32::from(p[2]);
     ((acc + (1 << 15)) >> 16) as u8
@@ -189,7 +191,7 @@ impl Kernel for GrayRows<'_, '_> {
         let Self { src, out } = self;
         for y in 0..src.height() {
             for (d, p) in out.row_mut(y).iter_mut().zip(src.row(y).chunks_exact(3)) {
-                *d = gray_fixed(p);
+                *d = gray_level(p);
             }
         }
     }

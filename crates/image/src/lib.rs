@@ -16,8 +16,8 @@ mod warp;
 mod warp_simd;
 
 pub use crate::color::{
-    Hsv, LUMA_WEIGHTS, Rgb, gray_to_rgb, hsv_to_rgb, hue_distance, rgb_to_gray, rgb_to_gray_into,
-    rgb_to_hsv, rgb_to_hsv_into, to_gray_unit, to_gray_unit_into,
+    Hsv, LUMA_WEIGHTS, Rgb, gray_level, gray_to_rgb, hsv_to_rgb, hue_distance, rgb_to_gray,
+    rgb_to_gray_into, rgb_to_hsv, rgb_to_hsv_into, to_gray_unit, to_gray_unit_into,
 };
 pub use crate::components::{Blob, Components, Connectivity, label_components};
 pub use crate::core::{Image, ImageView, ImageViewMut, Pixel, Rect};
