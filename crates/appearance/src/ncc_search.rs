@@ -23,6 +23,7 @@
 //! the image, added to one accumulator per position), which vectorises. A
 //! flat window (no texture) scores 0.
 
+use bayestrack_image::simd::{Kernel, SimdLevel, Token};
 use bayestrack_image::{ImageView, IntegralImage, Rect};
 
 use crate::error::check_window;
@@ -244,6 +245,19 @@ impl NccSearch {
         corners: Rect,
         out: &mut Vec<f32>,
     ) -> Result<NccMatch> {
+        self.map_with(SimdLevel::detect(), image, template, corners, out)
+    }
+
+    /// [`NccSearch::map_into`] with its loops compiled for `level` (every
+    /// level gives the same bits).
+    fn map_with(
+        &mut self,
+        level: SimdLevel,
+        image: ImageView<'_, f32>,
+        template: &NccTemplate,
+        corners: Rect,
+        out: &mut Vec<f32>,
+    ) -> Result<NccMatch> {
         image.expect_channels("ncc search", 1)?;
         let (tw, th) = (template.width, template.height);
         if tw == 0 || corners.width == 0 || corners.height == 0 {
@@ -264,7 +278,7 @@ impl NccSearch {
         let sub = image.crop(area)?;
         let (nx, ny) = (corners.width, corners.height);
         if template.is_weighted() {
-            self.weighted_rows(sub, template, nx)?;
+            self.weighted_rows(level, sub, template, nx)?;
         } else {
             self.integral
                 .compute(sub)
@@ -285,46 +299,24 @@ impl NccSearch {
         };
         for j in 0..ny {
             let acc = &mut self.acc[..nx];
-            acc.fill(0.0);
-            for (r, trow) in template.values.chunks_exact(tw).enumerate() {
-                let frow = sub.row(j + r);
-                // Four template columns per pass over the accumulators:
-                // fewer loads and stores of `acc` per multiply-add.
-                let mut quads = trow.chunks_exact(4);
-                let mut c = 0;
-                for t in &mut quads {
-                    let (f0, f1) = (&frow[c..c + nx], &frow[c + 1..c + 1 + nx]);
-                    let (f2, f3) = (&frow[c + 2..c + 2 + nx], &frow[c + 3..c + 3 + nx]);
-                    for i in 0..nx {
-                        acc[i] += t[0] * f0[i] + t[1] * f1[i] + t[2] * f2[i] + t[3] * f3[i];
-                    }
-                    c += 4;
-                }
-                for &t in quads.remainder() {
-                    let src = &frow[c..c + nx];
-                    for (a, &f) in acc.iter_mut().zip(src) {
-                        *a += t * f;
-                    }
-                    c += 1;
-                }
-            }
+            level.run(CorrelateRow {
+                values: &template.values,
+                tw,
+                sub,
+                j,
+                acc,
+            });
             if template.is_weighted() {
-                // Second separable pass: weighted sums down the columns.
-                let (ws, wq) = (&mut self.col[..nx], &mut self.col_sq[..nx]);
-                ws.fill(0.0);
-                wq.fill(0.0);
-                for (r, &k) in template.ky.iter().enumerate() {
-                    let k = f64::from(k);
-                    let at = (j + r) * nx;
-                    let (rs, rq) = (&self.rows[at..at + nx], &self.rows_sq[at..at + nx]);
-                    for (a, &v) in ws.iter_mut().zip(rs) {
-                        *a += k * v;
-                    }
-                    for (a, &v) in wq.iter_mut().zip(rq) {
-                        *a += k * v;
-                    }
-                }
+                level.run(WeightedColumn {
+                    ky: &template.ky,
+                    rows: &self.rows,
+                    rows_sq: &self.rows_sq,
+                    j,
+                    ws: &mut self.col[..nx],
+                    wq: &mut self.col_sq[..nx],
+                });
             }
+            let acc = &self.acc[..nx];
             for (i, &num) in acc.iter().enumerate() {
                 // Variance of the window (weighted: weights summing to 1).
                 let var = if template.is_weighted() {
@@ -354,36 +346,144 @@ impl NccSearch {
 
     /// First separable pass: for every row of `sub` and every position `i`,
     /// `sum_c kx[c] I(i + c)` and the same of `I^2`.
-    fn weighted_rows(&mut self, sub: ImageView<'_, f32>, t: &NccTemplate, nx: usize) -> Result<()> {
+    fn weighted_rows(
+        &mut self,
+        level: SimdLevel,
+        sub: ImageView<'_, f32>,
+        t: &NccTemplate,
+        nx: usize,
+    ) -> Result<()> {
         let rows = sub.height();
         self.rows.clear();
         self.rows.resize(rows * nx, 0.0);
         self.rows_sq.clear();
         self.rows_sq.resize(rows * nx, 0.0);
-        for y in 0..rows {
-            let src = sub.row(y);
-            let (s, q) = (
-                &mut self.rows[y * nx..(y + 1) * nx],
-                &mut self.rows_sq[y * nx..(y + 1) * nx],
-            );
-            for (c, &k) in t.kx.iter().enumerate() {
-                let k = f64::from(k);
-                let src = &src[c..c + nx];
-                for (a, &p) in s.iter_mut().zip(src) {
-                    *a += k * f64::from(p);
-                }
-                for (b, &p) in q.iter_mut().zip(src) {
-                    let p = f64::from(p);
-                    *b += k * p * p;
-                }
-            }
-            if !s.iter().chain(q.iter()).all(|v| v.is_finite()) {
+        let pairs = self
+            .rows
+            .chunks_exact_mut(nx)
+            .zip(self.rows_sq.chunks_exact_mut(nx));
+        for (y, (s, q)) in pairs.enumerate() {
+            let finite = level.run(WeightedRow {
+                kx: &t.kx,
+                src: sub.row(y),
+                s,
+                q,
+            });
+            if !finite {
                 return Err(AppearanceError::NonFinite {
                     what: "ncc search image",
                 });
             }
         }
         Ok(())
+    }
+}
+
+/// `acc[i] += sum_r sum_c t(c, r) I(i + c, j + r)` for the row `j` of
+/// positions, `acc` zeroed first: four template columns per pass over the
+/// accumulators (fewer loads and stores of `acc` per multiply-add), each
+/// position's products added in the same order at every level.
+struct CorrelateRow<'a> {
+    values: &'a [f32],
+    tw: usize,
+    sub: ImageView<'a, f32>,
+    j: usize,
+    acc: &'a mut [f32],
+}
+
+impl Kernel for CorrelateRow<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        let acc = self.acc;
+        let nx = acc.len();
+        acc.fill(0.0);
+        for (r, trow) in self.values.chunks_exact(self.tw).enumerate() {
+            let frow = self.sub.row(self.j + r);
+            let mut quads = trow.chunks_exact(4);
+            let mut c = 0;
+            for t in &mut quads {
+                let (f0, f1) = (&frow[c..c + nx], &frow[c + 1..c + 1 + nx]);
+                let (f2, f3) = (&frow[c + 2..c + 2 + nx], &frow[c + 3..c + 3 + nx]);
+                for i in 0..nx {
+                    acc[i] += t[0] * f0[i] + t[1] * f1[i] + t[2] * f2[i] + t[3] * f3[i];
+                }
+                c += 4;
+            }
+            for &t in quads.remainder() {
+                let src = &frow[c..c + nx];
+                for (a, &f) in acc.iter_mut().zip(src) {
+                    *a += t * f;
+                }
+                c += 1;
+            }
+        }
+    }
+}
+
+/// The second separable pass for the row `j` of positions: the weighted
+/// sums down the columns of the row sums and of the squares' row sums
+/// into `ws` and `wq` (zeroed first).
+struct WeightedColumn<'a> {
+    ky: &'a [f32],
+    rows: &'a [f64],
+    rows_sq: &'a [f64],
+    j: usize,
+    ws: &'a mut [f64],
+    wq: &'a mut [f64],
+}
+
+impl Kernel for WeightedColumn<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        let (ws, wq) = (self.ws, self.wq);
+        let nx = ws.len();
+        ws.fill(0.0);
+        wq.fill(0.0);
+        for (r, &k) in self.ky.iter().enumerate() {
+            let k = f64::from(k);
+            let at = (self.j + r) * nx;
+            let (rs, rq) = (&self.rows[at..at + nx], &self.rows_sq[at..at + nx]);
+            for (a, &v) in ws.iter_mut().zip(rs) {
+                *a += k * v;
+            }
+            for (a, &v) in wq.iter_mut().zip(rq) {
+                *a += k * v;
+            }
+        }
+    }
+}
+
+/// The first separable pass for one image row: `s[i] += sum_c kx[c]
+/// I(i + c)` and `q[i] += sum_c kx[c] I(i + c)^2`, column by column;
+/// whether every sum is finite.
+struct WeightedRow<'a> {
+    kx: &'a [f32],
+    src: &'a [f32],
+    s: &'a mut [f64],
+    q: &'a mut [f64],
+}
+
+impl Kernel for WeightedRow<'_> {
+    type Output = bool;
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) -> bool {
+        let nx = self.s.len();
+        for (c, &k) in self.kx.iter().enumerate() {
+            let k = f64::from(k);
+            let src = &self.src[c..c + nx];
+            for (a, &p) in self.s.iter_mut().zip(src) {
+                *a += k * f64::from(p);
+            }
+            for (b, &p) in self.q.iter_mut().zip(src) {
+                let p = f64::from(p);
+                *b += k * p * p;
+            }
+        }
+        // `&` over all (no early exit), which vectorises
+        let finite = |v: &[f64]| v.iter().fold(true, |ok, x| ok & x.is_finite());
+        finite(self.s) & finite(self.q)
     }
 }
 
@@ -512,6 +612,85 @@ mod tests {
         // a failed set leaves the template as it was
         assert_eq!(prepared.width(), 9);
         assert!(prepared.is_weighted());
+    }
+
+    /// The dispatched loops give the scalar loops' bits at every level,
+    /// plain and weighted, over widths around the vector lengths and
+    /// templates with and without a column remainder.
+    #[test]
+    fn every_level_gives_the_scalar_bits() {
+        let img = texture(64, 40);
+        for (tw, th) in [(9, 6), (8, 5), (3, 7), (13, 11)] {
+            let t = img.crop(Rect::new(20, 9, tw, th)).unwrap().to_image();
+            let kx: Vec<f32> = (0..tw).map(|u| 1.0 + (u * (tw - 1 - u)) as f32).collect();
+            let ky: Vec<f32> = (0..th).map(|v| 0.5 + (v * (th - 1 - v)) as f32).collect();
+            let plain = NccTemplate::new(t.view()).unwrap();
+            let mut weighted = NccTemplate::default();
+            weighted.set_weighted(t.view(), &kx, &ky).unwrap();
+            for template in [&plain, &weighted] {
+                for nx in [1, 3, 4, 7, 8, 9, 15, 16, 17, 33, 64 - tw] {
+                    let corners = Rect::new(0, 2, nx, 40 - th - 2);
+                    let mut search = NccSearch::new();
+                    let (mut want, mut got) = (Vec::new(), Vec::new());
+                    let m0 = search
+                        .map_with(SimdLevel::Scalar, img.view(), template, corners, &mut want)
+                        .unwrap();
+                    for level in SimdLevel::ALL {
+                        let m = search
+                            .map_with(level, img.view(), template, corners, &mut got)
+                            .unwrap();
+                        assert_eq!(m, m0, "{level:?} {tw}x{th} nx {nx}");
+                        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                        assert_eq!(bits(&got), bits(&want), "{level:?} {tw}x{th} nx {nx}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// A NaN or infinite pixel in the searched area is an error, plain or
+    /// weighted, at every level; one outside it is not read.
+    #[test]
+    fn non_finite_pixels_in_the_search_are_errors() {
+        let t = texture(30, 25)
+            .crop(Rect::new(5, 7, 9, 6))
+            .unwrap()
+            .to_image();
+        let plain = NccTemplate::new(t.view()).unwrap();
+        let mut weighted = NccTemplate::default();
+        weighted
+            .set_weighted(t.view(), &[1.0; 9], &[1.0, 2.0, 3.0, 3.0, 2.0, 1.0])
+            .unwrap();
+        for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            let mut img = texture(30, 25);
+            img.set(17, 11, 0, bad);
+            for template in [&plain, &weighted] {
+                for level in SimdLevel::ALL {
+                    let mut search = NccSearch::new();
+                    let mut out = Vec::new();
+                    let r = search.map_with(
+                        level,
+                        img.view(),
+                        template,
+                        Rect::new(2, 3, 15, 12),
+                        &mut out,
+                    );
+                    assert!(
+                        matches!(r, Err(AppearanceError::NonFinite { .. })),
+                        "{bad} {level:?}"
+                    );
+                    // windows over columns 0..16 and rows 0..15 only: clear of (17, 11)
+                    let r = search.map_with(
+                        level,
+                        img.view(),
+                        template,
+                        Rect::new(0, 0, 8, 10),
+                        &mut out,
+                    );
+                    assert!(r.is_ok(), "{bad} {level:?}");
+                }
+            }
+        }
     }
 
     #[test]

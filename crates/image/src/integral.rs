@@ -8,6 +8,7 @@
 //! `(x, y)` and size `w x h` is `S(x+w, y+h) - S(x, y+h) - S(x+w, y) + S(x, y)`.
 //! Sums are accumulated in `f64`, exact for integer pixels up to `2^53`.
 
+use crate::simd::{Kernel, Token, dispatch};
 use crate::{Image, ImageError, ImageView, ImageViewMut, Pixel, Rect, Result};
 
 /// Summed-area tables of a 1-channel image and of its squared values.
@@ -152,11 +153,15 @@ pub struct AreaSampler {
     width: usize,
     height: usize,
     sum: Vec<f64>,
-    /// Scratch: the table interpolated at two fractional rows.
+    /// Scratch: the table at every column edge of the top and bottom
+    /// edge of an output row.
     rows: [Vec<f64>; 2],
-    /// Scratch: per output column, the cell index and fraction of both
-    /// edges, and the width.
-    cols: Vec<(usize, f64, usize, f64, f64)>,
+    /// Scratch: the distinct column edges of an output row (cell index
+    /// and fraction, left to right).
+    xs: Vec<(usize, f64)>,
+    /// Scratch: per output column, the index in `xs` of both edges, and
+    /// the width.
+    cols: Vec<(usize, usize, f64)>,
 }
 
 impl AreaSampler {
@@ -199,9 +204,10 @@ impl AreaSampler {
         (i, v - i as f64)
     }
 
-    /// The summed-area table interpolated at row coordinate `y` for every
-    /// integer column, into `out`.
-    fn row_at(&self, y: f64, out: &mut Vec<f64>) {
+    /// The summed-area table at row coordinate `y` and each column edge
+    /// of `xs` into `out`: bilinear, the rows first (`p + f (q - p)` at the
+    /// edge's two integer columns), then along the row.
+    fn edge_values(&self, y: f64, xs: &[(usize, f64)], out: &mut Vec<f64>) {
         let cols = self.width + 1;
         let (j, f) = Self::cell(y, self.height);
         let (a, b) = (
@@ -209,7 +215,12 @@ impl AreaSampler {
             &self.sum[(j + 1) * cols..(j + 2) * cols],
         );
         out.clear();
-        out.extend(a.iter().zip(b).map(|(&p, &q)| p + f * (q - p)));
+        out.extend(xs.iter().map(|&(i, g)| {
+            let (p, q) = (&a[i..i + 2], &b[i..i + 2]);
+            let left = p[0] + f * (q[0] - p[0]);
+            let right = p[1] + f * (q[1] - p[1]);
+            left + g * (right - left)
+        }));
     }
 
     /// Fills `out` (1 channel): output pixel `(u, v)` is the mean of the
@@ -261,27 +272,41 @@ impl AreaSampler {
                 (p, p + 1.0)
             }
         };
-        let mut cols = std::mem::take(&mut self.cols);
+        // column edges: a column's left edge is the last right edge when
+        // they are the same coordinate (columns that tile the source)
+        let (mut xs, mut cols) = (std::mem::take(&mut self.xs), std::mem::take(&mut self.cols));
+        xs.clear();
         cols.clear();
+        let mut last = f64::NAN;
         for u in 0..out.width() {
             let (a, b) = edges(x0 + u as f64 * sx, x0 + (u + 1) as f64 * sx, w);
-            let (ia, fa) = Self::cell(a, w);
-            let (ib, fb) = Self::cell(b, w);
-            cols.push((ia, fa, ib, fb, 1.0 / (b - a)));
+            if a != last {
+                xs.push(Self::cell(a, w));
+            }
+            xs.push(Self::cell(b, w));
+            last = b;
+            cols.push((xs.len() - 2, xs.len() - 1, 1.0 / (b - a)));
         }
         let [mut top, mut bottom] = std::mem::take(&mut self.rows);
-        let at = |r: &[f64], i: usize, f: f64| r[i] + f * (r[i + 1] - r[i]);
+        // the bottom edge's values, reused as the next top edge's when it
+        // is the same coordinate
+        let mut last = f64::NAN;
         for v in 0..out.height() {
             let (a, b) = edges(y0 + v as f64 * sy, y0 + (v + 1) as f64 * sy, h);
-            self.row_at(a, &mut top);
-            self.row_at(b, &mut bottom);
+            if a == last {
+                std::mem::swap(&mut top, &mut bottom);
+            } else {
+                self.edge_values(a, &xs, &mut top);
+            }
+            self.edge_values(b, &xs, &mut bottom);
+            last = b;
             let inv_h = 1.0 / (b - a);
-            for (o, &(ia, fa, ib, fb, inv_w)) in out.row_mut(v).iter_mut().zip(&cols) {
-                let area =
-                    at(&bottom, ib, fb) - at(&bottom, ia, fa) - at(&top, ib, fb) + at(&top, ia, fa);
+            for (o, &(ea, eb, inv_w)) in out.row_mut(v).iter_mut().zip(&cols) {
+                let area = bottom[eb] - bottom[ea] - top[eb] + top[ea];
                 *o = (area * inv_h * inv_w) as f32;
             }
         }
+        self.xs = xs;
         self.cols = cols;
         self.rows = [top, bottom];
         Ok(())
@@ -319,9 +344,17 @@ pub fn gray_region_into(
     };
     out.reshape(ow, oh, 1, 0.0)?;
     let f = factor;
+    if f == 1 {
+        for oy in 0..oh {
+            dispatch(LumaRow {
+                src: region.row(oy),
+                channels: ch,
+                out: out.row_mut(oy),
+            });
+        }
+        return Ok(());
+    }
     let scale = 1.0 / (f * f) as f32;
-    // Luma weights in fixed point (2^16) for RGB: exact sums of integers.
-    const W: [u64; 3] = [19595, 38470, 7471];
     let mut acc = vec![0u64; ow];
     for oy in 0..oh {
         acc.fill(0);
@@ -336,7 +369,8 @@ pub fn gray_region_into(
                     *a += block
                         .chunks_exact(3)
                         .map(|p| {
-                            W[0] * u64::from(p[0]) + W[1] * u64::from(p[1]) + W[2] * u64::from(p[2])
+                            let w = LUMA_FIXED.map(u64::from);
+                            w[0] * u64::from(p[0]) + w[1] * u64::from(p[1]) + w[2] * u64::from(p[2])
                         })
                         .sum::<u64>();
                 }
@@ -347,6 +381,40 @@ pub fn gray_region_into(
         }
     }
     Ok(())
+}
+
+/// Luma weights of [`gray_region_into`] in fixed point (`2^16`): its
+/// sums are exact integers.
+const LUMA_FIXED: [u32; 3] = [19595, 38470, 7471];
+
+/// One row of [`gray_region_into`] at factor 1: each pixel's fixed-point
+/// luma (gray: the level times `2^16`) as `f32` over `2^16`. The sum is
+/// below `2^24`, so the `f32` holds it exactly and the scaling by a power
+/// of two is exact: the factor-`f` path's `(a as f64 / 65536.0) as f32`,
+/// bit for bit, at every level.
+struct LumaRow<'a> {
+    src: &'a [u8],
+    channels: usize,
+    out: &'a mut [f32],
+}
+
+impl Kernel for LumaRow<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        const INV: f32 = 1.0 / 65536.0;
+        if self.channels == 1 {
+            for (o, &v) in self.out.iter_mut().zip(self.src) {
+                *o = ((u32::from(v) << 16) as f32) * INV;
+            }
+        } else {
+            let w = LUMA_FIXED;
+            for (o, p) in self.out.iter_mut().zip(self.src.chunks_exact(3)) {
+                let a = w[0] * u32::from(p[0]) + w[1] * u32::from(p[1]) + w[2] * u32::from(p[2]);
+                *o = (a as f32) * INV;
+            }
+        }
+    }
 }
 
 /// Fills `sum` (and, when `SQUARES`, `sum_sq`) with the `(w + 1) x (h + 1)`
@@ -363,11 +431,17 @@ fn summed_area<T: Pixel, const SQUARES: bool>(
 ) -> Result<()> {
     let (w, h) = (src.width(), src.height());
     let cols = w + 1;
-    sum.clear();
-    sum.resize(cols * (h + 1), 0.0);
-    if SQUARES {
-        sum_sq.clear();
-        sum_sq.resize(cols * (h + 1), 0.0);
+    // every entry but the first row's and first column's is written
+    // below: those are zeroed, the rest not cleared first
+    for t in [&mut *sum, &mut *sum_sq]
+        .into_iter()
+        .take(1 + usize::from(SQUARES))
+    {
+        t.resize(cols * (h + 1), 0.0);
+        t[..cols].fill(0.0);
+        for r in t.chunks_exact_mut(cols) {
+            r[0] = 0.0;
+        }
     }
     for y in 0..h {
         let (mut rs, mut rq) = (0f64, 0f64);
@@ -415,6 +489,30 @@ mod tests {
             let (m, v) = ii.mean_var(Rect::new(x, y, w, h)).unwrap();
             let n = (w * h) as f64;
             assert!((m - s / n).abs() < 1e-12 && (v - (q / n - (s / n).powi(2))).abs() < 1e-9);
+        }
+    }
+
+    /// Tables rebuilt over earlier ones of other sizes (larger, smaller,
+    /// other widths) equal tables built fresh: no stale entry survives.
+    #[test]
+    fn rebuilt_tables_equal_fresh_ones() {
+        let img = |w: usize, h: usize, k: usize| {
+            Image::from_fn(w, h, |x, y| ((x * 31 + y * 17 + k) % 23) as f32 + 1.0).unwrap()
+        };
+        let (mut ii, mut area) = (IntegralImage::default(), AreaSampler::default());
+        for (k, (w, h)) in [(9, 7), (13, 4), (5, 11), (9, 7), (3, 3)]
+            .into_iter()
+            .enumerate()
+        {
+            let src = img(w, h, k);
+            ii.compute(src.view()).unwrap();
+            area.compute(src.view()).unwrap();
+            let fresh = IntegralImage::new(src.view()).unwrap();
+            assert!(ii.sum == fresh.sum && ii.sum_sq == fresh.sum_sq, "{w}x{h}");
+            assert!(
+                area.sum == AreaSampler::new(src.view()).unwrap().sum,
+                "{w}x{h}"
+            );
         }
     }
 
@@ -476,6 +574,115 @@ mod tests {
         assert!(one(&mut AreaSampler::default(), 0.0, 0.0, 1.0, 1.0).is_err());
         let rgb = Image::new(2, 2, 3, 0u8).unwrap();
         assert!(AreaSampler::new(rgb.view()).is_err());
+    }
+
+    /// Factor 1's dispatched row gives the fixed-point formula's bits at
+    /// every level: every gray level, and RGB colours on a grid of every
+    /// third level (and 255) in each channel.
+    #[test]
+    fn factor_one_luma_is_the_fixed_point_formula_at_every_level() {
+        use crate::simd::SimdLevel;
+        let formula = |a: u64| (a as f64 / 65536.0) as f32;
+        let gray: Vec<u8> = (0..=255).collect();
+        let mut levels: Vec<u8> = (0..=255).step_by(3).collect();
+        levels.push(255);
+        let mut rgb = Vec::new();
+        for &r in &levels {
+            for &g in &levels {
+                for &b in &levels {
+                    rgb.extend([r, g, b]);
+                }
+            }
+        }
+        let want_gray: Vec<u32> = gray
+            .iter()
+            .map(|&v| formula(u64::from(v) << 16).to_bits())
+            .collect();
+        let w = LUMA_FIXED.map(u64::from);
+        let want_rgb: Vec<u32> = rgb
+            .chunks_exact(3)
+            .map(|p| {
+                let a = w[0] * u64::from(p[0]) + w[1] * u64::from(p[1]) + w[2] * u64::from(p[2]);
+                formula(a).to_bits()
+            })
+            .collect();
+        for level in SimdLevel::ALL {
+            for (src, channels, want) in [(&gray, 1, &want_gray), (&rgb, 3, &want_rgb)] {
+                let mut out = vec![0f32; src.len() / channels];
+                level.run(LumaRow {
+                    src,
+                    channels,
+                    out: &mut out,
+                });
+                let got: Vec<u32> = out.iter().map(|v| v.to_bits()).collect();
+                assert!(got == *want, "{level:?}, {channels} channels");
+            }
+        }
+    }
+
+    /// `sample_into` (the table interpolated only at the column edges, an
+    /// edge shared by two columns or two rows computed once) gives the
+    /// bits of the plain computation: both rows' table interpolated at
+    /// every integer column for every output row, then along the row at
+    /// both edges of every output pixel.
+    #[test]
+    fn area_sampling_reusing_rows_is_the_plain_computation() {
+        let img = Image::from_fn(37, 29, |x, y| {
+            ((x * 37 + y * 91 + x * y * 7) % 61) as f32 * 1.7
+        })
+        .unwrap();
+        let mut s = AreaSampler::new(img.view()).unwrap();
+        let (w, h) = (37usize, 29usize);
+        let sum = s.sum.clone();
+        let plain = |x0: f64, y0: f64, sx: f64, sy: f64, ow: usize, oh: usize| -> Vec<u32> {
+            let edges = |a: f64, b: f64, n: usize| -> (f64, f64) {
+                let (lo, hi) = (a.clamp(0.0, n as f64), b.clamp(0.0, n as f64));
+                if hi - lo > 1e-9 {
+                    (lo, hi)
+                } else {
+                    let p = (lo.min(n as f64 - 0.5)).floor().max(0.0);
+                    (p, p + 1.0)
+                }
+            };
+            let row = |y: f64| -> Vec<f64> {
+                let (j, f) = AreaSampler::cell(y, h);
+                let cols = w + 1;
+                (0..cols)
+                    .map(|i| {
+                        let (p, q) = (sum[j * cols + i], sum[(j + 1) * cols + i]);
+                        p + f * (q - p)
+                    })
+                    .collect()
+            };
+            let at = |r: &[f64], i: usize, f: f64| r[i] + f * (r[i + 1] - r[i]);
+            let mut out = Vec::new();
+            for v in 0..oh {
+                let (a, b) = edges(y0 + v as f64 * sy, y0 + (v + 1) as f64 * sy, h);
+                let (top, bottom) = (row(a), row(b));
+                for u in 0..ow {
+                    let (ca, cb) = edges(x0 + u as f64 * sx, x0 + (u + 1) as f64 * sx, w);
+                    let (ia, fa) = AreaSampler::cell(ca, w);
+                    let (ib, fb) = AreaSampler::cell(cb, w);
+                    let area = at(&bottom, ib, fb) - at(&bottom, ia, fa) - at(&top, ib, fb)
+                        + at(&top, ia, fa);
+                    out.push(((area * (1.0 / (b - a))) * (1.0 / (cb - ca))) as f32);
+                }
+            }
+            out.iter().map(|v| v.to_bits()).collect()
+        };
+        for (x0, y0, sx, sy, ow, oh) in [
+            (0.0, 0.0, 1.0, 1.0, 37, 29),
+            (0.3, 0.7, 1.37, 0.61, 20, 40),
+            (-3.2, -2.5, 0.9, 1.1, 45, 33),
+            (10.25, 5.5, 2.5, 2.25, 9, 11),
+            (30.0, 25.0, 1.0, 3.0, 12, 6),
+        ] {
+            let mut buf = vec![0f32; ow * oh];
+            let mut out = ImageViewMut::from_slice(&mut buf, ow, oh, 1, ow).unwrap();
+            s.sample_into(x0, y0, sx, sy, &mut out).unwrap();
+            let got: Vec<u32> = buf.iter().map(|v| v.to_bits()).collect();
+            assert!(got == plain(x0, y0, sx, sy, ow, oh), "{x0} {y0} {sx} {sy}");
+        }
     }
 
     #[test]
