@@ -126,7 +126,12 @@ fn rgb_to_hsv_f32(r: f32, g: f32, b: f32) -> (f32, f32, f32) {
 /// infinite argument gives NaN (there is no distance to give).
 #[inline]
 pub fn hue_distance(a: f32, b: f32) -> f32 {
-    let d = (a - b).rem_euclid(1.0);
+    let d = a - b;
+    // `d.rem_euclid(1.0)` without the call to `fmodf` where it is the
+    // identity: `d % 1.0` is `d` (sign and all) when `|d| < 1`, which two
+    // hues in [0, 1) always are
+    let r = if d.abs() < 1.0 { d } else { d % 1.0 };
+    let d = if r < 0.0 { r + 1.0 } else { r };
     if d > 0.5 { d - 1.0 } else { d }
 }
 
@@ -433,6 +438,50 @@ mod tests {
 
     #[test]
     fn hue_distance_wraps() {
+        // the same bits as through `rem_euclid`, on hues of every 8-bit
+        // colour against hues across [0, 1) and beyond, and the edges
+        let reference = |a: f32, b: f32| {
+            let d = (a - b).rem_euclid(1.0);
+            if d > 0.5 { d - 1.0 } else { d }
+        };
+        let mut hues: Vec<f32> = (0..=255u8)
+            .flat_map(|r| {
+                (0..=255u8)
+                    .step_by(5)
+                    .map(move |g| Hsv::from_rgb(Rgb::new(r, g, 17)).h)
+            })
+            .collect();
+        hues.extend([
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            0.5,
+            -0.5,
+            2.75,
+            -3.25,
+            1e-30,
+            f32::MAX,
+            f32::NAN,
+        ]);
+        for &b in &[
+            0.0f32,
+            0.02,
+            0.5,
+            0.98,
+            0.999_999_9,
+            1.5,
+            -0.25,
+            f32::INFINITY,
+        ] {
+            for &a in &hues {
+                let (got, want) = (hue_distance(a, b), reference(a, b));
+                assert!(
+                    got.to_bits() == want.to_bits() || (got.is_nan() && want.is_nan()),
+                    "{a} {b}"
+                );
+            }
+        }
         assert!((hue_distance(0.98, 0.02) + 0.04).abs() < 1e-6);
         assert!((hue_distance(0.02, 0.98) - 0.04).abs() < 1e-6);
         assert!((hue_distance(0.3, 0.1) - 0.2).abs() < 1e-6);
