@@ -146,9 +146,10 @@ impl OddRows {
 /// scalar recipe is one vector operation and each bin one contiguous store;
 /// arrays of fewer rows go row by row ([`untangle_row`]). The common widths
 /// (`w / 2` of 4, 5, 6, 8, 9, 10 or 12 bins) are unrolled
-/// ([`untangle_fixed`]), and a width of 16 where `rustfft` runs its AVX
-/// butterfly skips the packing and the inner FFT call too: [`Width16`]
-/// computes the whole row transforms in lanes, with `rustfft`'s bits.
+/// ([`untangle_fixed`]), and widths of 16 and 12 where `rustfft` runs
+/// its AVX planner skip the packing and the inner FFT call too:
+/// [`Width16`] and [`Width12`] compute the whole row transforms in lanes,
+/// with `rustfft`'s bits.
 #[derive(Clone)]
 struct EvenRows {
     fft: Arc<dyn Fft<f32>>,
@@ -169,6 +170,10 @@ struct EvenRows {
     /// AVX butterfly, whose bits it reproduces (elsewhere `rustfft` and
     /// the untangling, as other widths).
     lanes16: bool,
+    /// The twiddle of `rustfft`'s butterfly of 3 ([`Width12`]).
+    fft3_twiddle: C32,
+    /// Whether a width of 12 takes [`Width12`] (as `lanes16`).
+    lanes12: bool,
 }
 
 /// Whether `rustfft` plans its AVX algorithms on this machine (AVX and
@@ -219,6 +224,12 @@ impl EvenRows {
                 C32::new(angle.cos() as f32, angle.sin() as f32)
             }),
             lanes16: w == 16 && rustfft_avx(),
+            // rustfft's compute_twiddle(1, 3), forward
+            fft3_twiddle: {
+                let angle = -2f64 * std::f64::consts::PI / 3.0;
+                C32::new(angle.cos() as f32, angle.sin() as f32)
+            },
+            lanes12: w == 12 && rustfft_avx(),
         }
     }
 
@@ -238,6 +249,16 @@ impl EvenRows {
             level.run(Width16 {
                 h,
                 fft_twiddles: &self.fft8_twiddles,
+                twiddles: &self.twiddles,
+                input,
+                spectra,
+            });
+            return;
+        }
+        if self.lanes12 && h >= LANES {
+            level.run(Width12 {
+                h,
+                fft_twiddle: self.fft3_twiddle,
                 twiddles: &self.twiddles,
                 input,
                 spectra,
@@ -603,6 +624,93 @@ impl Kernel for Width16<'_> {
     }
 }
 
+/// [`Width16`] for a width of 12: the inner complex FFT of 6 is the
+/// arithmetic of `rustfft`'s `Butterfly6` (what its AVX planner gives that
+/// length: Good-Thomas over two butterflies of 3 and three of 2, plain
+/// multiplications and additions), then [`untangle_lanes`].
+struct Width12<'a> {
+    h: usize,
+    /// `rustfft`'s twiddle of its butterfly of 3, `compute_twiddle(1, 3)`.
+    fft_twiddle: C32,
+    /// `realfft`'s untangling twiddles (two).
+    twiddles: &'a [C32],
+    input: &'a [f32],
+    spectra: &'a mut [C32],
+}
+
+impl Kernel for Width12<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        let h = self.h;
+        for (array, dst) in self
+            .input
+            .chunks_exact(12 * h)
+            .zip(self.spectra.chunks_exact_mut(7 * h))
+        {
+            let (rows, _) = array.as_chunks::<12>();
+            let last = h - LANES;
+            for y in (0..last).step_by(LANES).chain([last]) {
+                let block: &[[f32; 12]; LANES] = rows[y..y + LANES].try_into().expect("LANES");
+                width12_block(self.fft_twiddle, self.twiddles, block, h, &mut dst[y..]);
+            }
+        }
+    }
+}
+
+/// `rustfft`'s `Butterfly3::perform_fft_contiguous` on lanes.
+#[inline(always)]
+fn butterfly3(t: C32, v: [CLanes; 3]) -> [CLanes; 3] {
+    let xp = cadd(&v[1], &v[2]);
+    let xn = csub(&v[1], &v[2]);
+    let sum = cadd(&v[0], &xp);
+    let mut scaled = ([0.0f32; LANES], [0.0f32; LANES]);
+    let mut temp_b = ([0.0f32; LANES], [0.0f32; LANES]);
+    for l in 0..LANES {
+        scaled.0[l] = t.re * xp.0[l];
+        scaled.1[l] = t.re * xp.1[l];
+        temp_b.0[l] = -t.im * xn.1[l];
+        temp_b.1[l] = t.im * xn.0[l];
+    }
+    let temp_a = cadd(&v[0], &scaled);
+    [sum, cadd(&temp_a, &temp_b), csub(&temp_a, &temp_b)]
+}
+
+/// [`Width12`]'s [`LANES`] rows.
+#[inline(always)]
+fn width12_block(tw3: C32, twiddles: &[C32], rows: &[[f32; 12]; LANES], h: usize, dst: &mut [C32]) {
+    let mut z = [([0.0f32; LANES], [0.0f32; LANES]); 6];
+    let mut keep = [false; LANES];
+    for (l, row) in rows.iter().enumerate() {
+        for (j, zj) in z.iter_mut().enumerate() {
+            zj.0[l] = row[2 * j];
+            zj.1[l] = row[2 * j + 1];
+        }
+        let mut any = 0u32;
+        for &v in row {
+            any |= u32::from(v != 0.0);
+        }
+        keep[l] = any != 0;
+    }
+    // Butterfly6: Good-Thomas, columns of 3 then rows of 2
+    let a = butterfly3(tw3, [z[0], z[2], z[4]]);
+    let b = butterfly3(tw3, [z[3], z[5], z[1]]);
+    let out = [
+        cadd(&a[0], &b[0]),
+        csub(&a[1], &b[1]),
+        cadd(&a[2], &b[2]),
+        csub(&a[0], &b[0]),
+        cadd(&a[1], &b[1]),
+        csub(&a[2], &b[2]),
+    ];
+    let mut re = [[0.0f32; LANES]; 6];
+    let mut im = [[0.0f32; LANES]; 6];
+    for ((r, i), o) in re.iter_mut().zip(&mut im).zip(&out) {
+        (*r, *i) = *o;
+    }
+    untangle_lanes(h, twiddles, &re, &im, &keep, dst);
+}
+
 /// A complex number per lane: real parts, imaginary parts.
 type CLanes = (Lanes, Lanes);
 
@@ -816,8 +924,8 @@ impl Fft2 {
     /// [`Fft2::spectrum_len`], one after the other): the same numbers as
     /// `k` calls of [`Fft2::forward`], the transforms of all the arrays
     /// batched (one call of the row FFT over every row, an even width's
-    /// rows untangled eight at a time in vector lanes, a width of 16's
-    /// whole row transforms in lanes where `rustfft` runs its AVX code (see
+    /// rows untangled eight at a time in vector lanes, a width of 16's or
+    /// 12's whole row transforms in lanes where `rustfft` runs its AVX code (see
     /// `EvenRows`), and one call of the
     /// column FFT over every column).
     ///
@@ -1134,52 +1242,63 @@ pub(crate) mod tests {
     }
 
     #[test]
-    fn width16_lanes_are_the_same_at_every_level_and_rustfft_where_it_runs_avx() {
-        // the width-16 kernel on its own (whether or not this machine
-        // takes it): every level the scalar level's bits, and where
-        // rustfft runs its AVX butterfly, the rows of rustfft and the
-        // scalar untangling; heights at and around multiples of the lanes,
-        // zero rows (first, last, every third of the second array) and
-        // rows zero but for one sample
-        let w = 16;
-        for h in [8, 9, 15, 16, 17, 24, 40, 45] {
-            let mut x = Vec::new();
-            for k in 0..3 {
-                let mut a = signal(w, h, (h * 17 + k) as u32);
-                a[..w].fill(0.0);
-                a[(h - 1) * w..].fill(0.0);
-                if k == 1 {
-                    for y in (1..h).step_by(3) {
-                        a[y * w..(y + 1) * w].fill(0.0);
+    fn lane_widths_are_the_same_at_every_level_and_rustfft_where_it_runs_avx() {
+        // the width-16 and width-12 kernels on their own (whether or not
+        // this machine takes them): every level the scalar level's bits,
+        // and where rustfft runs its AVX planner, the rows of rustfft and
+        // the scalar untangling; heights at and around multiples of the
+        // lanes, zero rows (first, last, every third of the second array)
+        // and rows zero but for one sample
+        for w in [12, 16] {
+            for h in [8, 9, 15, 16, 17, 24, 40, 45] {
+                let mut x = Vec::new();
+                for k in 0..3 {
+                    let mut a = signal(w, h, (w * 131 + h * 17 + k) as u32);
+                    a[..w].fill(0.0);
+                    a[(h - 1) * w..].fill(0.0);
+                    if k == 1 {
+                        for y in (1..h).step_by(3) {
+                            a[y * w..(y + 1) * w].fill(0.0);
+                        }
                     }
+                    if k == 2 {
+                        a[w..2 * w - 1].fill(0.0);
+                        a[2 * w + 1..3 * w].fill(0.0);
+                    }
+                    x.extend(a);
                 }
-                if k == 2 {
-                    a[w..2 * w - 1].fill(0.0);
-                    a[2 * w + 1..3 * w].fill(0.0);
+                let rows = EvenRows::new(w, &mut FftPlanner::new());
+                let run = |level: SimdLevel| {
+                    let mut got = vec![C32::new(f32::NAN, 7.0); 3 * (w / 2 + 1) * h];
+                    if w == 16 {
+                        level.run(Width16 {
+                            h,
+                            fft_twiddles: &rows.fft8_twiddles,
+                            twiddles: &rows.twiddles,
+                            input: &x,
+                            spectra: &mut got,
+                        });
+                    } else {
+                        level.run(Width12 {
+                            h,
+                            fft_twiddle: rows.fft3_twiddle,
+                            twiddles: &rows.twiddles,
+                            input: &x,
+                            spectra: &mut got,
+                        });
+                    }
+                    got
+                };
+                let bits = |v: &[C32]| -> Vec<(u32, u32)> {
+                    v.iter().map(|c| (c.re.to_bits(), c.im.to_bits())).collect()
+                };
+                let want = bits(&run(SimdLevel::Scalar));
+                for level in SimdLevel::ALL {
+                    assert_eq!(bits(&run(level)), want, "{w}x{h} {level:?}");
                 }
-                x.extend(a);
-            }
-            let rows = EvenRows::new(w, &mut FftPlanner::new());
-            let run = |level: SimdLevel| {
-                let mut got = vec![C32::new(f32::NAN, 7.0); 3 * 9 * h];
-                level.run(Width16 {
-                    h,
-                    fft_twiddles: &rows.fft8_twiddles,
-                    twiddles: &rows.twiddles,
-                    input: &x,
-                    spectra: &mut got,
-                });
-                got
-            };
-            let bits = |v: &[C32]| -> Vec<(u32, u32)> {
-                v.iter().map(|c| (c.re.to_bits(), c.im.to_bits())).collect()
-            };
-            let want = bits(&run(SimdLevel::Scalar));
-            for level in SimdLevel::ALL {
-                assert_eq!(bits(&run(level)), want, "16x{h} {level:?}");
-            }
-            if rustfft_avx() {
-                assert_eq!(bits(&scalar_rows(w, h, &x)), want, "16x{h} rustfft");
+                if rustfft_avx() {
+                    assert_eq!(bits(&scalar_rows(w, h, &x)), want, "{w}x{h} rustfft");
+                }
             }
         }
     }
