@@ -144,7 +144,12 @@ impl OddRows {
 /// one per vector lane ([`untangle_block`]): a bin's outputs for those rows
 /// are next to each other in the column-major spectrum, so each step of the
 /// scalar recipe is one vector operation and each bin one contiguous store;
-/// arrays of fewer rows go row by row ([`untangle_row`]).
+/// arrays of fewer rows go row by row ([`untangle_row`]). The common widths
+/// (`w / 2` of 4, 5, 6, 8, 9, 10 or 12 bins) are unrolled
+/// ([`untangle_fixed`]), and widths of 16 and 12 where `rustfft` runs
+/// its AVX planner skip the packing and the inner FFT call too:
+/// [`Width16`] and [`Width12`] compute the whole row transforms in lanes,
+/// with `rustfft`'s bits.
 #[derive(Clone)]
 struct EvenRows {
     fft: Arc<dyn Fft<f32>>,
@@ -159,6 +164,29 @@ struct EvenRows {
     /// One block of [`LANES`] rows' transforms, bin-major: `block[k][r]`
     /// is row `r`'s bin `k`.
     block: Vec<[C32; LANES]>,
+    /// The twiddles of `rustfft`'s 8-point butterfly ([`Width16`]).
+    fft8_twiddles: [C32; 4],
+    /// Whether a width of 16 takes [`Width16`]: where `rustfft` runs its
+    /// AVX butterfly, whose bits it reproduces (elsewhere `rustfft` and
+    /// the untangling, as other widths).
+    lanes16: bool,
+    /// The twiddle of `rustfft`'s butterfly of 3 ([`Width12`]).
+    fft3_twiddle: C32,
+    /// Whether a width of 12 takes [`Width12`] (as `lanes16`).
+    lanes12: bool,
+}
+
+/// Whether `rustfft` plans its AVX algorithms on this machine (AVX and
+/// FMA).
+fn rustfft_avx() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx") && std::arch::is_x86_feature_detected!("fma")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
 }
 
 /// Rows untangled at once (one AVX2 vector of `f32`).
@@ -190,6 +218,18 @@ impl EvenRows {
             scratch,
             nonzero: Vec::new(),
             block: vec![[C32::default(); LANES]; w / 2],
+            // rustfft's compute_twiddle(j, 8), forward
+            fft8_twiddles: std::array::from_fn(|j| {
+                let angle = -2f64 * std::f64::consts::PI / 8.0 * j as f64;
+                C32::new(angle.cos() as f32, angle.sin() as f32)
+            }),
+            lanes16: w == 16 && rustfft_avx(),
+            // rustfft's compute_twiddle(1, 3), forward
+            fft3_twiddle: {
+                let angle = -2f64 * std::f64::consts::PI / 3.0;
+                C32::new(angle.cos() as f32, angle.sin() as f32)
+            },
+            lanes12: w == 12 && rustfft_avx(),
         }
     }
 
@@ -205,6 +245,26 @@ impl EvenRows {
         input: &[f32],
         spectra: &mut [C32],
     ) {
+        if self.lanes16 && h >= LANES {
+            level.run(Width16 {
+                h,
+                fft_twiddles: &self.fft8_twiddles,
+                twiddles: &self.twiddles,
+                input,
+                spectra,
+            });
+            return;
+        }
+        if self.lanes12 && h >= LANES {
+            level.run(Width12 {
+                h,
+                fft_twiddle: self.fft3_twiddle,
+                twiddles: &self.twiddles,
+                input,
+                spectra,
+            });
+            return;
+        }
         let (m, count) = (w / 2, input.len() / w);
         let len = count * m;
         self.nonzero.clear();
@@ -302,14 +362,29 @@ impl Kernel for Untangle<'_> {
                 // (overlapping the one before: the same rows again give
                 // the same bins)
                 let last = h - LANES;
+                let mut fixed = true;
                 for y in (0..last).step_by(LANES).chain([last]) {
-                    untangle_block(
-                        h,
-                        self.twiddles,
-                        &rows[y * m..][..LANES * m],
-                        self.block,
-                        &mut dst[y..],
-                    );
+                    let (o, d) = (&rows[y * m..][..LANES * m], &mut dst[y..]);
+                    let keep: &[bool; LANES] = nonzero[y..y + LANES].try_into().expect("LANES");
+                    // the common widths unrolled (fixed-size arrays: no
+                    // loop or bounds check left; zero rows' bins written
+                    // as zeros), the others generic
+                    match m {
+                        4 => untangle_fixed::<4>(h, self.twiddles, o, keep, d),
+                        5 => untangle_fixed::<5>(h, self.twiddles, o, keep, d),
+                        6 => untangle_fixed::<6>(h, self.twiddles, o, keep, d),
+                        8 => untangle_fixed::<8>(h, self.twiddles, o, keep, d),
+                        9 => untangle_fixed::<9>(h, self.twiddles, o, keep, d),
+                        10 => untangle_fixed::<10>(h, self.twiddles, o, keep, d),
+                        12 => untangle_fixed::<12>(h, self.twiddles, o, keep, d),
+                        _ => {
+                            untangle_block(h, self.twiddles, o, self.block, d);
+                            fixed = false;
+                        }
+                    }
+                }
+                if fixed {
+                    continue;
                 }
             } else {
                 for (y, o) in rows.chunks_exact(m).enumerate() {
@@ -431,6 +506,327 @@ fn untangle_block(
     }
 }
 
+/// [`untangle_block`] for rows of a fixed `M` bins (twiddles
+/// `(M - 1) / 2`), the rows whose `keep` is false written as zeros: the
+/// rows moved into lanes, then [`untangle_lanes`].
+#[inline(always)]
+fn untangle_fixed<const M: usize>(
+    h: usize,
+    twiddles: &[C32],
+    o: &[C32],
+    keep: &[bool; LANES],
+    dst: &mut [C32],
+) {
+    let (rows, _) = o.as_chunks::<M>();
+    let rows: &[[C32; M]; LANES] = rows[..LANES].try_into().expect("LANES rows");
+    // bin k of every row, real and imaginary parts apart
+    let re: [Lanes; M] = std::array::from_fn(|k| std::array::from_fn(|r| rows[r][k].re));
+    let im: [Lanes; M] = std::array::from_fn(|k| std::array::from_fn(|r| rows[r][k].im));
+    untangle_lanes(h, twiddles, &re, &im, keep, dst);
+}
+
+/// [`untangle_row`] for [`LANES`] rows' transforms of a fixed `M` bins
+/// (twiddles `(M - 1) / 2`) held in lanes (`re[k][r]`, `im[k][r]`: row
+/// `r`'s bin `k`), row `r` into `dst[u h + r]`, zeros where `keep[r]` is
+/// false: each step unrolled over fixed-size arrays, one vector operation
+/// for the `LANES` rows, the same operations in the same order as the
+/// scalar recipe (the same bits).
+#[inline(always)]
+fn untangle_lanes<const M: usize>(
+    h: usize,
+    twiddles: &[C32],
+    re: &[Lanes; M],
+    im: &[Lanes; M],
+    keep: &[bool; LANES],
+    dst: &mut [C32],
+) {
+    let twiddles = &twiddles[..(M - 1) / 2];
+    let mut store = |u: usize, re: Lanes, im: Lanes| {
+        let d: &mut [C32; LANES] = (&mut dst[u * h..][..LANES]).try_into().expect("LANES bins");
+        *d = std::array::from_fn(|l| {
+            if keep[l] {
+                C32::new(re[l], im[l])
+            } else {
+                C32::default()
+            }
+        });
+    };
+    let zero = [0.0f32; LANES];
+    store(0, std::array::from_fn(|l| re[0][l] + im[0][l]), zero);
+    store(M, std::array::from_fn(|l| re[0][l] - im[0][l]), zero);
+    let half = 0.5f32;
+    for (i, tw) in twiddles.iter().enumerate() {
+        let (k, kr) = (i + 1, M - i - 1);
+        let (out_re, out_im, rev_re, rev_im) = (&re[k], &im[k], &re[kr], &im[kr]);
+        let sum_re: Lanes = std::array::from_fn(|l| out_re[l] + rev_re[l]);
+        let sum_im: Lanes = std::array::from_fn(|l| out_im[l] + rev_im[l]);
+        let diff_re: Lanes = std::array::from_fn(|l| out_re[l] - rev_re[l]);
+        let diff_im: Lanes = std::array::from_fn(|l| out_im[l] - rev_im[l]);
+        let half_sum_re: Lanes = std::array::from_fn(|l| half * sum_re[l]);
+        let half_diff_im: Lanes = std::array::from_fn(|l| half * diff_im[l]);
+        let real: Lanes = std::array::from_fn(|l| sum_im[l] * tw.re + diff_re[l] * tw.im);
+        let imag: Lanes = std::array::from_fn(|l| sum_im[l] * tw.im - diff_re[l] * tw.re);
+        store(
+            k,
+            std::array::from_fn(|l| half_sum_re[l] + real[l]),
+            std::array::from_fn(|l| half_diff_im[l] + imag[l]),
+        );
+        store(
+            kr,
+            std::array::from_fn(|l| half_sum_re[l] - real[l]),
+            std::array::from_fn(|l| imag[l] - half_diff_im[l]),
+        );
+    }
+    if M.is_multiple_of(2) && M >= 2 {
+        store(M / 2, re[M / 2], std::array::from_fn(|l| -im[M / 2][l]));
+    }
+}
+
+/// The row transforms of a width of 16 (the inner complex FFT of 8 and
+/// the untangling) for [`LANES`] rows at a time, one per lane, straight
+/// from the real rows to the column-major spectrum (no packing, no call
+/// of the inner FFT, no transposition of its output). The 8-point FFT is
+/// the arithmetic of `rustfft`'s AVX `Butterfly8Avx` (what its planner
+/// gives a machine with AVX and FMA, as every x86-64-v3 one): the same
+/// additions, and its twiddle products as fused multiply-adds
+/// (`f32::mul_add`, exactly rounded at every level, so every level gives
+/// the same bits); then [`untangle_lanes`]. Zero rows' bins are written as
+/// zeros, as the other widths'.
+struct Width16<'a> {
+    h: usize,
+    /// `rustfft`'s twiddles of its 8-point butterfly, `compute_twiddle(j, 8)`.
+    fft_twiddles: &'a [C32; 4],
+    /// `realfft`'s untangling twiddles (three).
+    twiddles: &'a [C32],
+    input: &'a [f32],
+    spectra: &'a mut [C32],
+}
+
+impl Kernel for Width16<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        let h = self.h;
+        for (array, dst) in self
+            .input
+            .chunks_exact(16 * h)
+            .zip(self.spectra.chunks_exact_mut(9 * h))
+        {
+            let (rows, _) = array.as_chunks::<16>();
+            // blocks of LANES rows, the last one flush with the end (as
+            // Untangle's)
+            let last = h - LANES;
+            for y in (0..last).step_by(LANES).chain([last]) {
+                let block: &[[f32; 16]; LANES] = rows[y..y + LANES].try_into().expect("LANES");
+                width16_block(self.fft_twiddles, self.twiddles, block, h, &mut dst[y..]);
+            }
+        }
+    }
+}
+
+/// [`Width16`] for a width of 12: the inner complex FFT of 6 is the
+/// arithmetic of `rustfft`'s `Butterfly6` (what its AVX planner gives that
+/// length: Good-Thomas over two butterflies of 3 and three of 2, plain
+/// multiplications and additions), then [`untangle_lanes`].
+struct Width12<'a> {
+    h: usize,
+    /// `rustfft`'s twiddle of its butterfly of 3, `compute_twiddle(1, 3)`.
+    fft_twiddle: C32,
+    /// `realfft`'s untangling twiddles (two).
+    twiddles: &'a [C32],
+    input: &'a [f32],
+    spectra: &'a mut [C32],
+}
+
+impl Kernel for Width12<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        let h = self.h;
+        for (array, dst) in self
+            .input
+            .chunks_exact(12 * h)
+            .zip(self.spectra.chunks_exact_mut(7 * h))
+        {
+            let (rows, _) = array.as_chunks::<12>();
+            let last = h - LANES;
+            for y in (0..last).step_by(LANES).chain([last]) {
+                let block: &[[f32; 12]; LANES] = rows[y..y + LANES].try_into().expect("LANES");
+                width12_block(self.fft_twiddle, self.twiddles, block, h, &mut dst[y..]);
+            }
+        }
+    }
+}
+
+/// `rustfft`'s `Butterfly3::perform_fft_contiguous` on lanes.
+#[inline(always)]
+fn butterfly3(t: C32, v: [CLanes; 3]) -> [CLanes; 3] {
+    let xp = cadd(&v[1], &v[2]);
+    let xn = csub(&v[1], &v[2]);
+    let sum = cadd(&v[0], &xp);
+    let mut scaled = ([0.0f32; LANES], [0.0f32; LANES]);
+    let mut temp_b = ([0.0f32; LANES], [0.0f32; LANES]);
+    for l in 0..LANES {
+        scaled.0[l] = t.re * xp.0[l];
+        scaled.1[l] = t.re * xp.1[l];
+        temp_b.0[l] = -t.im * xn.1[l];
+        temp_b.1[l] = t.im * xn.0[l];
+    }
+    let temp_a = cadd(&v[0], &scaled);
+    [sum, cadd(&temp_a, &temp_b), csub(&temp_a, &temp_b)]
+}
+
+/// [`Width12`]'s [`LANES`] rows.
+#[inline(always)]
+fn width12_block(tw3: C32, twiddles: &[C32], rows: &[[f32; 12]; LANES], h: usize, dst: &mut [C32]) {
+    let mut z = [([0.0f32; LANES], [0.0f32; LANES]); 6];
+    let mut keep = [false; LANES];
+    for (l, row) in rows.iter().enumerate() {
+        for (j, zj) in z.iter_mut().enumerate() {
+            zj.0[l] = row[2 * j];
+            zj.1[l] = row[2 * j + 1];
+        }
+        let mut any = 0u32;
+        for &v in row {
+            any |= u32::from(v != 0.0);
+        }
+        keep[l] = any != 0;
+    }
+    // Butterfly6: Good-Thomas, columns of 3 then rows of 2
+    let a = butterfly3(tw3, [z[0], z[2], z[4]]);
+    let b = butterfly3(tw3, [z[3], z[5], z[1]]);
+    let out = [
+        cadd(&a[0], &b[0]),
+        csub(&a[1], &b[1]),
+        cadd(&a[2], &b[2]),
+        csub(&a[0], &b[0]),
+        cadd(&a[1], &b[1]),
+        csub(&a[2], &b[2]),
+    ];
+    let mut re = [[0.0f32; LANES]; 6];
+    let mut im = [[0.0f32; LANES]; 6];
+    for ((r, i), o) in re.iter_mut().zip(&mut im).zip(&out) {
+        (*r, *i) = *o;
+    }
+    untangle_lanes(h, twiddles, &re, &im, &keep, dst);
+}
+
+/// A complex number per lane: real parts, imaginary parts.
+type CLanes = (Lanes, Lanes);
+
+/// `a + b` lane by lane.
+#[inline(always)]
+fn cadd(a: &CLanes, b: &CLanes) -> CLanes {
+    let mut o = ([0.0; LANES], [0.0; LANES]);
+    for l in 0..LANES {
+        o.0[l] = a.0[l] + b.0[l];
+        o.1[l] = a.1[l] + b.1[l];
+    }
+    o
+}
+
+/// `a - b` lane by lane.
+#[inline(always)]
+fn csub(a: &CLanes, b: &CLanes) -> CLanes {
+    let mut o = ([0.0; LANES], [0.0; LANES]);
+    for l in 0..LANES {
+        o.0[l] = a.0[l] - b.0[l];
+        o.1[l] = a.1[l] - b.1[l];
+    }
+    o
+}
+
+/// `a t` as `rustfft`'s `AvxVector::mul_complex`, lane by lane:
+/// `fmaddsub(re, t, im * swap(t))`, fused.
+#[inline(always)]
+fn ctwiddle(a: &CLanes, t: C32) -> CLanes {
+    let mut o = ([0.0; LANES], [0.0; LANES]);
+    for l in 0..LANES {
+        o.0[l] = a.0[l].mul_add(t.re, -(a.1[l] * t.im));
+        o.1[l] = a.0[l].mul_add(t.im, a.1[l] * t.re);
+    }
+    o
+}
+
+/// `a (-i)`: the parts swapped, the new imaginary one negated (a sign
+/// flip, as `rustfft`'s xor).
+#[inline(always)]
+fn crotate(a: &CLanes) -> CLanes {
+    let mut o = (a.1, [0.0; LANES]);
+    for l in 0..LANES {
+        o.1[l] = -a.0[l];
+    }
+    o
+}
+
+/// [`Width16`]'s [`LANES`] rows.
+#[inline(always)]
+fn width16_block(
+    tw8: &[C32; 4],
+    twiddles: &[C32],
+    rows: &[[f32; 16]; LANES],
+    h: usize,
+    dst: &mut [C32],
+) {
+    // the rows as 8 complex pairs, sample 2j + 1 the imaginary part, and
+    // which rows are not all zero
+    let mut z = [([0.0f32; LANES], [0.0f32; LANES]); 8];
+    let mut keep = [false; LANES];
+    for (l, row) in rows.iter().enumerate() {
+        for (j, zj) in z.iter_mut().enumerate() {
+            zj.0[l] = row[2 * j];
+            zj.1[l] = row[2 * j + 1];
+        }
+        let mut any = 0u32;
+        for &v in row {
+            any |= u32::from(v != 0.0);
+        }
+        keep[l] = any != 0;
+    }
+    // Butterfly8Avx::perform_fft_f32: butterflies of 2 down the two
+    // halves, the twiddles, butterflies of 4 (two of 2 with a rotation)
+    let i0 = [
+        cadd(&z[0], &z[4]),
+        cadd(&z[1], &z[5]),
+        cadd(&z[2], &z[6]),
+        cadd(&z[3], &z[7]),
+    ];
+    let i1 = [
+        ctwiddle(&csub(&z[0], &z[4]), tw8[0]),
+        ctwiddle(&csub(&z[1], &z[5]), tw8[1]),
+        ctwiddle(&csub(&z[2], &z[6]), tw8[2]),
+        ctwiddle(&csub(&z[3], &z[7]), tw8[3]),
+    ];
+    let pb0 = [
+        cadd(&i0[0], &i0[2]),
+        cadd(&i0[1], &i0[3]),
+        cadd(&i1[0], &i1[2]),
+        cadd(&i1[1], &i1[3]),
+    ];
+    let pb1 = [
+        csub(&i0[0], &i0[2]),
+        crotate(&csub(&i0[1], &i0[3])),
+        csub(&i1[0], &i1[2]),
+        crotate(&csub(&i1[1], &i1[3])),
+    ];
+    let out = [
+        cadd(&pb0[0], &pb0[1]),
+        cadd(&pb0[2], &pb0[3]),
+        cadd(&pb1[0], &pb1[1]),
+        cadd(&pb1[2], &pb1[3]),
+        csub(&pb0[0], &pb0[1]),
+        csub(&pb0[2], &pb0[3]),
+        csub(&pb1[0], &pb1[1]),
+        csub(&pb1[2], &pb1[3]),
+    ];
+    let mut re = [[0.0f32; LANES]; 8];
+    let mut im = [[0.0f32; LANES]; 8];
+    for ((r, i), o) in re.iter_mut().zip(&mut im).zip(&out) {
+        (*r, *i) = *o;
+    }
+    untangle_lanes(h, twiddles, &re, &im, &keep, dst);
+}
+
 impl std::fmt::Debug for Fft2 {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Fft2")
@@ -528,7 +924,9 @@ impl Fft2 {
     /// [`Fft2::spectrum_len`], one after the other): the same numbers as
     /// `k` calls of [`Fft2::forward`], the transforms of all the arrays
     /// batched (one call of the row FFT over every row, an even width's
-    /// rows untangled eight at a time in vector lanes, and one call of the
+    /// rows untangled eight at a time in vector lanes, a width of 16's or
+    /// 12's whole row transforms in lanes where `rustfft` runs its AVX code (see
+    /// `EvenRows`), and one call of the
     /// column FFT over every column).
     ///
     /// # Errors
@@ -838,6 +1236,68 @@ pub(crate) mod tests {
                             "{w}x{h} {level:?}: bin {i} {g} vs {e}"
                         );
                     }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn lane_widths_are_the_same_at_every_level_and_rustfft_where_it_runs_avx() {
+        // the width-16 and width-12 kernels on their own (whether or not
+        // this machine takes them): every level the scalar level's bits,
+        // and where rustfft runs its AVX planner, the rows of rustfft and
+        // the scalar untangling; heights at and around multiples of the
+        // lanes, zero rows (first, last, every third of the second array)
+        // and rows zero but for one sample
+        for w in [12, 16] {
+            for h in [8, 9, 15, 16, 17, 24, 40, 45] {
+                let mut x = Vec::new();
+                for k in 0..3 {
+                    let mut a = signal(w, h, (w * 131 + h * 17 + k) as u32);
+                    a[..w].fill(0.0);
+                    a[(h - 1) * w..].fill(0.0);
+                    if k == 1 {
+                        for y in (1..h).step_by(3) {
+                            a[y * w..(y + 1) * w].fill(0.0);
+                        }
+                    }
+                    if k == 2 {
+                        a[w..2 * w - 1].fill(0.0);
+                        a[2 * w + 1..3 * w].fill(0.0);
+                    }
+                    x.extend(a);
+                }
+                let rows = EvenRows::new(w, &mut FftPlanner::new());
+                let run = |level: SimdLevel| {
+                    let mut got = vec![C32::new(f32::NAN, 7.0); 3 * (w / 2 + 1) * h];
+                    if w == 16 {
+                        level.run(Width16 {
+                            h,
+                            fft_twiddles: &rows.fft8_twiddles,
+                            twiddles: &rows.twiddles,
+                            input: &x,
+                            spectra: &mut got,
+                        });
+                    } else {
+                        level.run(Width12 {
+                            h,
+                            fft_twiddle: rows.fft3_twiddle,
+                            twiddles: &rows.twiddles,
+                            input: &x,
+                            spectra: &mut got,
+                        });
+                    }
+                    got
+                };
+                let bits = |v: &[C32]| -> Vec<(u32, u32)> {
+                    v.iter().map(|c| (c.re.to_bits(), c.im.to_bits())).collect()
+                };
+                let want = bits(&run(SimdLevel::Scalar));
+                for level in SimdLevel::ALL {
+                    assert_eq!(bits(&run(level)), want, "{w}x{h} {level:?}");
+                }
+                if rustfft_avx() {
+                    assert_eq!(bits(&scalar_rows(w, h, &x)), want, "{w}x{h} rustfft");
                 }
             }
         }
