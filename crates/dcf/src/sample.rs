@@ -860,17 +860,18 @@ fn along_runs<const R: usize>(rows: [&[f64]; R], runs: Runs<'_>, mut out: [&mut 
     }
 }
 
-/// A summed-area table read at the column edges `xs`.
-struct Table<'a> {
+/// A summed-area table read at the column edges `xs`, along x by `runs`
+/// if `RUNS` (a path compiled for each: the edge-by-edge one as before
+/// runs were looked for).
+struct Table<'a, const RUNS: bool> {
     sum: &'a [f64],
     cols: usize,
     h: usize,
     xs: &'a [(usize, f64)],
-    /// The edges as runs, where they are long enough to pay.
-    runs: Option<Runs<'a>>,
+    runs: Runs<'a>,
 }
 
-impl Table<'_> {
+impl<const RUNS: bool> Table<'_, RUNS> {
     /// Row `j` of the table.
     #[inline(always)]
     fn row(&self, j: usize) -> &[f64] {
@@ -880,9 +881,10 @@ impl Table<'_> {
     /// Table row `j` interpolated along x at every column edge, into `o`.
     #[inline(always)]
     fn along(&self, j: usize, o: &mut [f64]) {
-        match self.runs {
-            Some(runs) => along_runs([self.row(j)], runs, [o]),
-            None => along_edges(self.row(j), self.xs, o),
+        if RUNS {
+            along_runs([self.row(j)], self.runs, [o]);
+        } else {
+            along_edges(self.row(j), self.xs, o);
         }
     }
 
@@ -890,12 +892,11 @@ impl Table<'_> {
     /// edge, into `out` (the same values as [`Table::along`] on each).
     #[inline(always)]
     fn along2(&self, j: usize, out: [&mut Vec<f64>; 2]) {
-        match self.runs {
-            Some(runs) => {
-                let [oa, ob] = out;
-                along_runs([self.row(j), self.row(j + 1)], runs, [oa, ob]);
-            }
-            None => along_edges2([self.row(j), self.row(j + 1)], self.xs, out),
+        if RUNS {
+            let [oa, ob] = out;
+            along_runs([self.row(j), self.row(j + 1)], self.runs, [oa, ob]);
+        } else {
+            along_edges2([self.row(j), self.row(j + 1)], self.xs, out);
         }
     }
 
@@ -958,15 +959,16 @@ impl Table<'_> {
 /// The rows of an area-averaged patch (see [`PatchSampler::area`]): the
 /// table interpolated along x at the column edges once per table row
 /// (kept while the next edge reads it), then along y at each row edge,
-/// then each output pixel from its four corners.
-struct AreaRows<'a> {
+/// then each output pixel from its four corners (the table read along x
+/// by runs of edges if `RUNS`).
+struct AreaRows<'a, const RUNS: bool> {
     sum: &'a [f64],
     w: usize,
     h: usize,
     y0: f64,
     sy: f64,
     xs: &'a [(usize, f64)],
-    runs: Option<Runs<'a>>,
+    runs: Runs<'a>,
     spans: &'a [(usize, usize)],
     widths: &'a [f64],
     /// The table at the row edges above and below an output row.
@@ -979,7 +981,7 @@ struct AreaRows<'a> {
     gain: f32,
 }
 
-impl Kernel for AreaRows<'_> {
+impl<const RUNS: bool> Kernel for AreaRows<'_, RUNS> {
     type Output = ();
     #[inline(always)]
     fn run<T: Token>(self, _: T) {
@@ -1012,7 +1014,7 @@ impl Kernel for AreaRows<'_> {
         // consecutive row edges a step under 2 apart read the table row
         // after the one below the first
         let ahead = sy < 2.0;
-        let table = Table {
+        let table = Table::<RUNS> {
             sum,
             cols,
             h,
@@ -1063,8 +1065,8 @@ impl PatchSampler {
     /// once per distinct edge (about one corner per output pixel instead of
     /// four), and along x once per table row, the same values bit for bit;
     /// along x in vector chunks over the runs of edges on consecutive
-    /// table columns where they average 3 edges or more ([`Runs`]: steps
-    /// under 2), edge by edge otherwise.
+    /// table columns where they average 3 edges or more on rows of 24
+    /// edges or more ([`Runs`]: steps under 4/3), edge by edge otherwise.
     fn area(
         &mut self,
         level: SimdLevel,
@@ -1102,38 +1104,53 @@ impl PatchSampler {
             self.widths.push(b - a);
         }
         // the edges as runs on consecutive table columns (vector loads
-        // along x), where the runs average at least `MIN_RUN` edges
+        // along x), where the runs average at least `MIN_RUN` edges; not
+        // even looked for on rows of under `MIN_EDGES` edges or steps of
+        // 4/3 or more (runs of under 3 edges), where they would not pay
         const MIN_RUN: usize = 3;
+        const MIN_EDGES: usize = 24;
         self.gs.clear();
         self.runs.clear();
-        for (k, &(i, g)) in self.xs.iter().enumerate() {
+        let wanted = self.xs.len() >= MIN_EDGES && 3.0 * sx < 4.0;
+        for (k, &(i, g)) in self.xs.iter().enumerate().filter(|_| wanted) {
             self.gs.push(g);
             match self.runs.last_mut() {
                 Some((k0, k1, i0)) if *k1 == k && *i0 + (k - *k0) == i => *k1 = k + 1,
                 _ => self.runs.push((k, k + 1, i)),
             }
         }
-        let runs = (MIN_RUN * self.runs.len() <= self.xs.len()).then_some(Runs {
+        let use_runs = wanted && MIN_RUN * self.runs.len() <= self.xs.len();
+        let runs = Runs {
             runs: &self.runs,
             gs: &self.gs,
-        });
-        level.run(AreaRows {
-            sum: &self.sums[ch],
-            w,
-            h,
-            y0,
-            sy,
-            xs: &self.xs,
-            runs,
-            spans: &self.spans,
-            widths: &self.widths,
-            top: &mut self.top,
-            bottom: &mut self.bottom,
-            rows: &mut self.rows,
-            out,
-            ow,
-            gain,
-        });
+        };
+        // (one macro for the two kernels' fields)
+        macro_rules! rows {
+            ($runs:literal) => {
+                level.run(AreaRows::<$runs> {
+                    sum: &self.sums[ch],
+                    w,
+                    h,
+                    y0,
+                    sy,
+                    xs: &self.xs,
+                    runs,
+                    spans: &self.spans,
+                    widths: &self.widths,
+                    top: &mut self.top,
+                    bottom: &mut self.bottom,
+                    rows: &mut self.rows,
+                    out,
+                    ow,
+                    gain,
+                })
+            };
+        }
+        if use_runs {
+            rows!(true);
+        } else {
+            rows!(false);
+        }
     }
 }
 
@@ -1224,10 +1241,10 @@ mod area_tests {
             // loads along x): long runs, runs of exactly 4 and of under 4,
             // runs cut by the frame's left and right edges
             (1.7, 1.2, 1.0375, 1.05, 33, 15),
-            (2.0, 0.5, 1.25, 1.3, 21, 13),
-            (0.4, 3.3, 1.3, 1.1, 19, 11),
+            (2.0, 0.5, 1.25, 1.3, 27, 13),
+            (0.4, 3.3, 1.28, 1.1, 26, 11),
             (-6.3, 1.1, 1.0375, 1.1, 41, 9),
-            (21.1, 2.0, 1.2, 1.7, 17, 10),
+            (14.1, 2.0, 1.2, 1.7, 24, 10),
         ];
         let mut with_runs = 0;
         for (x0, y0, sx, sy, ow, oh) in cases {
@@ -1249,7 +1266,7 @@ mod area_tests {
             let scaled: Vec<f32> = want.iter().map(|b| b * gain).collect();
             assert_bits(&got, &scaled, &format!("gain {x0},{y0} {sx}x{sy}"));
             // (the last call's edges: read as runs or edge by edge)
-            if 3 * s.runs.len() <= s.xs.len() {
+            if !s.runs.is_empty() && 3 * s.runs.len() <= s.xs.len() {
                 with_runs += 1;
             }
         }
