@@ -18,6 +18,10 @@ pub struct PatchSampler {
     sums: Vec<Vec<f64>>,
     /// Scratch: the distinct column edges of a patch.
     xs: Vec<(usize, f64)>,
+    /// Scratch: the edges' fractions, and the runs of edges on
+    /// consecutive table columns (see [`Runs`]).
+    gs: Vec<f64>,
+    runs: Vec<(usize, usize, usize)>,
     /// Scratch (area averaging): per output column, its edges' indices in
     /// `xs` ...
     spans: Vec<(usize, usize)>,
@@ -795,19 +799,105 @@ fn along_edges(row: &[f64], xs: &[(usize, f64)], out: &mut [f64]) {
     }
 }
 
-/// A summed-area table read at the column edges `xs`.
-struct Table<'a> {
+/// The column edges as runs on consecutive table columns: each run
+/// `(k0, k1, i)` the edges `k0..k1`, edge `k` on table column
+/// `i + k - k0`, with every edge's fraction in `gs`. A patch's steps are
+/// at least 1 along x, so when they are under 2 most edges sit one table
+/// column after the one before: a run reads its table row and the row
+/// shifted by one as contiguous slices (vector loads, no gather).
+#[derive(Clone, Copy)]
+struct Runs<'a> {
+    runs: &'a [(usize, usize, usize)],
+    gs: &'a [f64],
+}
+
+/// Edges per chunk of [`along_runs`] (one AVX2 vector of `f64`).
+const RUN_LANES: usize = 4;
+
+/// `R` rows of a summed-area table interpolated along x at the edges of
+/// `runs`, into `out`: the same values as [`along_edges`] on each (the
+/// same arithmetic on each edge), in chunks of [`RUN_LANES`] edges, the
+/// last chunk of a run ending at its last edge (overlapping the one
+/// before: an edge written twice gets the same bits); runs shorter than
+/// a chunk edge by edge.
+#[inline(always)]
+fn along_runs<const R: usize>(rows: [&[f64]; R], runs: Runs<'_>, mut out: [&mut [f64]; R]) {
+    /// The chunk of edges from the first of `g` and `o`, from table
+    /// columns `a` (one more than the edges): whole arrays, so that the
+    /// loads of a chunk are vector loads (the callers' chunks lie in
+    /// their run: always whole).
+    #[inline(always)]
+    fn chunk(a: &[f64], g: &[f64], o: &mut [f64]) {
+        let (Some(a), Some(g), Some(o)) = (
+            a.first_chunk::<{ RUN_LANES + 1 }>(),
+            g.first_chunk::<RUN_LANES>(),
+            o.first_chunk_mut::<RUN_LANES>(),
+        ) else {
+            return;
+        };
+        *o = std::array::from_fn(|l| a[l] + g[l] * (a[l + 1] - a[l]));
+    }
+    for &(k0, k1, i) in runs.runs {
+        let len = k1 - k0;
+        let g = &runs.gs[k0..k1];
+        for (row, o) in rows.iter().zip(out.iter_mut()) {
+            // (edge k0 + t reads a[t] and a[t + 1])
+            let (a, o) = (&row[i..=i + len], &mut o[k0..k1]);
+            if len < RUN_LANES {
+                for t in 0..len {
+                    o[t] = a[t] + g[t] * (a[t + 1] - a[t]);
+                }
+                continue;
+            }
+            let mut t = 0;
+            while t + RUN_LANES < len {
+                chunk(&a[t..], &g[t..], &mut o[t..]);
+                t += RUN_LANES;
+            }
+            let t = len - RUN_LANES;
+            chunk(&a[t..], &g[t..], &mut o[t..]);
+        }
+    }
+}
+
+/// A summed-area table read at the column edges `xs`, along x by `runs`
+/// if `RUNS` (a path compiled for each: the edge-by-edge one as before
+/// runs were looked for).
+struct Table<'a, const RUNS: bool> {
     sum: &'a [f64],
     cols: usize,
     h: usize,
     xs: &'a [(usize, f64)],
+    runs: Runs<'a>,
 }
 
-impl Table<'_> {
+impl<const RUNS: bool> Table<'_, RUNS> {
     /// Row `j` of the table.
     #[inline(always)]
     fn row(&self, j: usize) -> &[f64] {
         &self.sum[j * self.cols..][..self.cols]
+    }
+
+    /// Table row `j` interpolated along x at every column edge, into `o`.
+    #[inline(always)]
+    fn along(&self, j: usize, o: &mut [f64]) {
+        if RUNS {
+            along_runs([self.row(j)], self.runs, [o]);
+        } else {
+            along_edges(self.row(j), self.xs, o);
+        }
+    }
+
+    /// Table rows `j` and `j + 1` interpolated along x at every column
+    /// edge, into `out` (the same values as [`Table::along`] on each).
+    #[inline(always)]
+    fn along2(&self, j: usize, out: [&mut Vec<f64>; 2]) {
+        if RUNS {
+            let [oa, ob] = out;
+            along_runs([self.row(j), self.row(j + 1)], self.runs, [oa, ob]);
+        } else {
+            along_edges2([self.row(j), self.row(j + 1)], self.xs, out);
+        }
     }
 
     /// The table at row coordinate `y` at every column edge, into `o`,
@@ -836,10 +926,10 @@ impl Table<'_> {
                 let (p, q) = [(1, 2), (0, 2), (0, 1)][a];
                 if let Ok([rp, rq]) = rows.get_disjoint_mut([p, q]) {
                     if ahead && j + 2 <= self.h {
-                        along_edges2([self.row(j + 1), self.row(j + 2)], xs, [rp, rq]);
+                        self.along2(j + 1, [rp, rq]);
                         held[q] = j + 2;
                     } else {
-                        along_edges(self.row(j + 1), xs, rp);
+                        self.along(j + 1, rp);
                     }
                 }
                 held[p] = j + 1;
@@ -847,13 +937,13 @@ impl Table<'_> {
             }
             (None, Some(b)) => {
                 let p = if b == 0 { 1 } else { 0 };
-                along_edges(self.row(j), xs, &mut rows[p]);
+                self.along(j, &mut rows[p]);
                 held[p] = j;
                 (p, b)
             }
             (None, None) => {
                 let [ra, rb, _] = rows;
-                along_edges2([self.row(j), self.row(j + 1)], xs, [ra, rb]);
+                self.along2(j, [ra, rb]);
                 *held = [j, j + 1, usize::MAX];
                 (0, 1)
             }
@@ -869,14 +959,16 @@ impl Table<'_> {
 /// The rows of an area-averaged patch (see [`PatchSampler::area`]): the
 /// table interpolated along x at the column edges once per table row
 /// (kept while the next edge reads it), then along y at each row edge,
-/// then each output pixel from its four corners.
-struct AreaRows<'a> {
+/// then each output pixel from its four corners (the table read along x
+/// by runs of edges if `RUNS`).
+struct AreaRows<'a, const RUNS: bool> {
     sum: &'a [f64],
     w: usize,
     h: usize,
     y0: f64,
     sy: f64,
     xs: &'a [(usize, f64)],
+    runs: Runs<'a>,
     spans: &'a [(usize, usize)],
     widths: &'a [f64],
     /// The table at the row edges above and below an output row.
@@ -889,7 +981,7 @@ struct AreaRows<'a> {
     gain: f32,
 }
 
-impl Kernel for AreaRows<'_> {
+impl<const RUNS: bool> Kernel for AreaRows<'_, RUNS> {
     type Output = ();
     #[inline(always)]
     fn run<T: Token>(self, _: T) {
@@ -900,6 +992,7 @@ impl Kernel for AreaRows<'_> {
             y0,
             sy,
             xs,
+            runs,
             spans,
             widths,
             top,
@@ -921,7 +1014,13 @@ impl Kernel for AreaRows<'_> {
         // consecutive row edges a step under 2 apart read the table row
         // after the one below the first
         let ahead = sy < 2.0;
-        let table = Table { sum, cols, h, xs };
+        let table = Table::<RUNS> {
+            sum,
+            cols,
+            h,
+            xs,
+            runs,
+        };
         // every column's left edge the previous one's right edge (all but
         // patches running off the frame's side)
         let contiguous = n == ow + 1;
@@ -964,7 +1063,10 @@ impl PatchSampler {
     ///
     /// Neighbouring rectangles share their edges: the table is interpolated
     /// once per distinct edge (about one corner per output pixel instead of
-    /// four), and along x once per table row, the same values bit for bit.
+    /// four), and along x once per table row, the same values bit for bit;
+    /// along x in vector chunks over the runs of edges on consecutive
+    /// table columns where they average 3 edges or more on rows of 24
+    /// edges or more ([`Runs`]: steps under 4/3), edge by edge otherwise.
     fn area(
         &mut self,
         level: SimdLevel,
@@ -1001,22 +1103,54 @@ impl PatchSampler {
             self.spans.push((ia, self.xs.len() - 1));
             self.widths.push(b - a);
         }
-        level.run(AreaRows {
-            sum: &self.sums[ch],
-            w,
-            h,
-            y0,
-            sy,
-            xs: &self.xs,
-            spans: &self.spans,
-            widths: &self.widths,
-            top: &mut self.top,
-            bottom: &mut self.bottom,
-            rows: &mut self.rows,
-            out,
-            ow,
-            gain,
-        });
+        // the edges as runs on consecutive table columns (vector loads
+        // along x), where the runs average at least `MIN_RUN` edges; not
+        // even looked for on rows of under `MIN_EDGES` edges or steps of
+        // 4/3 or more (runs of under 3 edges), where they would not pay
+        const MIN_RUN: usize = 3;
+        const MIN_EDGES: usize = 24;
+        self.gs.clear();
+        self.runs.clear();
+        let wanted = self.xs.len() >= MIN_EDGES && 3.0 * sx < 4.0;
+        for (k, &(i, g)) in self.xs.iter().enumerate().filter(|_| wanted) {
+            self.gs.push(g);
+            match self.runs.last_mut() {
+                Some((k0, k1, i0)) if *k1 == k && *i0 + (k - *k0) == i => *k1 = k + 1,
+                _ => self.runs.push((k, k + 1, i)),
+            }
+        }
+        let use_runs = wanted && MIN_RUN * self.runs.len() <= self.xs.len();
+        let runs = Runs {
+            runs: &self.runs,
+            gs: &self.gs,
+        };
+        // (one macro for the two kernels' fields)
+        macro_rules! rows {
+            ($runs:literal) => {
+                level.run(AreaRows::<$runs> {
+                    sum: &self.sums[ch],
+                    w,
+                    h,
+                    y0,
+                    sy,
+                    xs: &self.xs,
+                    runs,
+                    spans: &self.spans,
+                    widths: &self.widths,
+                    top: &mut self.top,
+                    bottom: &mut self.bottom,
+                    rows: &mut self.rows,
+                    out,
+                    ow,
+                    gain,
+                })
+            };
+        }
+        if use_runs {
+            rows!(true);
+        } else {
+            rows!(false);
+        }
     }
 }
 
@@ -1103,7 +1237,16 @@ mod area_tests {
             // the scale filter's small patches, steps either side of 2
             (5.3, -1.2, 1.8, 1.6, 14, 36),
             (11.7, 2.4, 2.2, 1.45, 9, 14),
+            // column edges in runs on consecutive table columns (vector
+            // loads along x): long runs, runs of exactly 4 and of under 4,
+            // runs cut by the frame's left and right edges
+            (1.7, 1.2, 1.0375, 1.05, 33, 15),
+            (2.0, 0.5, 1.25, 1.3, 27, 13),
+            (0.4, 3.3, 1.28, 1.1, 26, 11),
+            (-6.3, 1.1, 1.0375, 1.1, 41, 9),
+            (14.1, 2.0, 1.2, 1.7, 24, 10),
         ];
+        let mut with_runs = 0;
         for (x0, y0, sx, sy, ow, oh) in cases {
             let want = reference(&s, x0, y0, sx, sy, ow, oh);
             let mut got = vec![f32::NAN; ow * oh];
@@ -1122,7 +1265,17 @@ mod area_tests {
                 .unwrap();
             let scaled: Vec<f32> = want.iter().map(|b| b * gain).collect();
             assert_bits(&got, &scaled, &format!("gain {x0},{y0} {sx}x{sy}"));
+            // (the last call's edges: read as runs or edge by edge)
+            if !s.runs.is_empty() && 3 * s.runs.len() <= s.xs.len() {
+                with_runs += 1;
+            }
         }
+        // both ways of reading the table along x are checked
+        assert!(
+            with_runs >= 5 && cases.len() - with_runs >= 5,
+            "{with_runs} of {}",
+            cases.len()
+        );
     }
 }
 
