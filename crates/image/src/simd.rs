@@ -15,7 +15,9 @@
 //! `Kernel::run` and everything its hot loop calls must be
 //! `#[inline(always)]`: a function that is not inlined into the dispatched
 //! copy runs the baseline code. Kernels use no fused multiply-add and sum
-//! in a fixed order, so every level gives the same bits.
+//! in a fixed order, so every level gives the same bits (a kernel that
+//! must reproduce another library's fused products writes them as
+//! `mul_add`, exactly rounded at every level: the dcf crate's FFT rows).
 //!
 //! ```
 //! use bayestrack_image::simd::{Kernel, SimdLevel, Token, dispatch};
