@@ -526,13 +526,15 @@ fn untangle_fixed<const M: usize>(
     // bin k of every row, real and imaginary parts apart
     let re: [Lanes; M] = std::array::from_fn(|k| std::array::from_fn(|r| rows[r][k].re));
     let im: [Lanes; M] = std::array::from_fn(|k| std::array::from_fn(|r| rows[r][k].im));
-    untangle_lanes(h, twiddles, &re, &im, keep, dst);
+    let keep: Lanes32 = std::array::from_fn(|l| 0u32.wrapping_sub(u32::from(keep[l])));
+    untangle_lanes(h, twiddles, &re, &im, &keep, dst);
 }
 
 /// [`untangle_row`] for [`LANES`] rows' transforms of a fixed `M` bins
 /// (twiddles `(M - 1) / 2`) held in lanes (`re[k][r]`, `im[k][r]`: row
 /// `r`'s bin `k`), row `r` into `dst[u h + r]`, zeros where `keep[r]` is
-/// false: each step unrolled over fixed-size arrays, one vector operation
+/// zero (it is all ones or zero: the bins are masked with it, one vector
+/// `and`): each step unrolled over fixed-size arrays, one vector operation
 /// for the `LANES` rows, the same operations in the same order as the
 /// scalar recipe (the same bits).
 #[inline(always)]
@@ -541,19 +543,14 @@ fn untangle_lanes<const M: usize>(
     twiddles: &[C32],
     re: &[Lanes; M],
     im: &[Lanes; M],
-    keep: &[bool; LANES],
+    keep: &Lanes32,
     dst: &mut [C32],
 ) {
     let twiddles = &twiddles[..(M - 1) / 2];
     let mut store = |u: usize, re: Lanes, im: Lanes| {
         let d: &mut [C32; LANES] = (&mut dst[u * h..][..LANES]).try_into().expect("LANES bins");
-        *d = std::array::from_fn(|l| {
-            if keep[l] {
-                C32::new(re[l], im[l])
-            } else {
-                C32::default()
-            }
-        });
+        let masked = |v: f32, l: usize| f32::from_bits(v.to_bits() & keep[l]);
+        *d = std::array::from_fn(|l| C32::new(masked(re[l], l), masked(im[l], l)));
     };
     let zero = [0.0f32; LANES];
     store(0, std::array::from_fn(|l| re[0][l] + im[0][l]), zero);
@@ -700,7 +697,7 @@ fn butterfly6(tw3: C32, z: &[CLanes; 6]) -> [CLanes; 6] {
 #[inline(always)]
 fn width12_block(tw3: C32, twiddles: &[C32], rows: &[[f32; 12]; LANES], h: usize, dst: &mut [C32]) {
     let mut z = [([0.0f32; LANES], [0.0f32; LANES]); 6];
-    let mut keep = [false; LANES];
+    let mut keep = [0u32; LANES];
     for (l, row) in rows.iter().enumerate() {
         for (j, zj) in z.iter_mut().enumerate() {
             zj.0[l] = row[2 * j];
@@ -710,7 +707,7 @@ fn width12_block(tw3: C32, twiddles: &[C32], rows: &[[f32; 12]; LANES], h: usize
         for &v in row {
             any |= u32::from(v != 0.0);
         }
-        keep[l] = any != 0;
+        keep[l] = 0u32.wrapping_sub(any);
     }
     let out = butterfly6(tw3, &z);
     let mut re = [[0.0f32; LANES]; 6];
@@ -723,6 +720,9 @@ fn width12_block(tw3: C32, twiddles: &[C32], rows: &[[f32; 12]; LANES], h: usize
 
 /// A complex number per lane: real parts, imaginary parts.
 type CLanes = (Lanes, Lanes);
+
+/// A bit mask per lane.
+type Lanes32 = [u32; LANES];
 
 /// `a + b` lane by lane.
 #[inline(always)]
@@ -834,7 +834,7 @@ fn width16_block(
     // the rows as 8 complex pairs, sample 2j + 1 the imaginary part, and
     // which rows are not all zero
     let mut z = [([0.0f32; LANES], [0.0f32; LANES]); 8];
-    let mut keep = [false; LANES];
+    let mut keep = [0u32; LANES];
     for (l, row) in rows.iter().enumerate() {
         for (j, zj) in z.iter_mut().enumerate() {
             zj.0[l] = row[2 * j];
@@ -844,7 +844,7 @@ fn width16_block(
         for &v in row {
             any |= u32::from(v != 0.0);
         }
-        keep[l] = any != 0;
+        keep[l] = 0u32.wrapping_sub(any);
     }
     let out = butterfly8(tw8, &z, crotate);
     let mut re = [[0.0f32; LANES]; 8];
