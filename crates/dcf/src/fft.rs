@@ -63,6 +63,10 @@ pub struct Fft2 {
     /// The row transforms, all rows of a call at once.
     row_fwd: Rows,
     c2r: Arc<dyn ComplexToReal<f32>>,
+    /// The inverse row transforms of a width of 16 or 12 in lanes
+    /// ([`InverseRows`]), where `rustfft` runs its AVX code; `None`
+    /// elsewhere (one `realfft` call per row).
+    inv_rows: Option<InverseTwiddles>,
     col_fwd: Arc<dyn Fft<f32>>,
     col_inv: Arc<dyn Fft<f32>>,
     rows: Vec<C32>,
@@ -522,13 +526,15 @@ fn untangle_fixed<const M: usize>(
     // bin k of every row, real and imaginary parts apart
     let re: [Lanes; M] = std::array::from_fn(|k| std::array::from_fn(|r| rows[r][k].re));
     let im: [Lanes; M] = std::array::from_fn(|k| std::array::from_fn(|r| rows[r][k].im));
-    untangle_lanes(h, twiddles, &re, &im, keep, dst);
+    let keep: Lanes32 = std::array::from_fn(|l| 0u32.wrapping_sub(u32::from(keep[l])));
+    untangle_lanes(h, twiddles, &re, &im, &keep, dst);
 }
 
 /// [`untangle_row`] for [`LANES`] rows' transforms of a fixed `M` bins
 /// (twiddles `(M - 1) / 2`) held in lanes (`re[k][r]`, `im[k][r]`: row
 /// `r`'s bin `k`), row `r` into `dst[u h + r]`, zeros where `keep[r]` is
-/// false: each step unrolled over fixed-size arrays, one vector operation
+/// zero (it is all ones or zero: the bins are masked with it, one vector
+/// `and`): each step unrolled over fixed-size arrays, one vector operation
 /// for the `LANES` rows, the same operations in the same order as the
 /// scalar recipe (the same bits).
 #[inline(always)]
@@ -537,19 +543,14 @@ fn untangle_lanes<const M: usize>(
     twiddles: &[C32],
     re: &[Lanes; M],
     im: &[Lanes; M],
-    keep: &[bool; LANES],
+    keep: &Lanes32,
     dst: &mut [C32],
 ) {
     let twiddles = &twiddles[..(M - 1) / 2];
     let mut store = |u: usize, re: Lanes, im: Lanes| {
         let d: &mut [C32; LANES] = (&mut dst[u * h..][..LANES]).try_into().expect("LANES bins");
-        *d = std::array::from_fn(|l| {
-            if keep[l] {
-                C32::new(re[l], im[l])
-            } else {
-                C32::default()
-            }
-        });
+        let masked = |v: f32, l: usize| f32::from_bits(v.to_bits() & keep[l]);
+        *d = std::array::from_fn(|l| C32::new(masked(re[l], l), masked(im[l], l)));
     };
     let zero = [0.0f32; LANES];
     store(0, std::array::from_fn(|l| re[0][l] + im[0][l]), zero);
@@ -676,11 +677,27 @@ fn butterfly3(t: C32, v: [CLanes; 3]) -> [CLanes; 3] {
     [sum, cadd(&temp_a, &temp_b), csub(&temp_a, &temp_b)]
 }
 
+/// `rustfft`'s `Butterfly6` on lanes (either direction: `tw3` is its
+/// butterfly of 3's twiddle): Good-Thomas, columns of 3 then rows of 2.
+#[inline(always)]
+fn butterfly6(tw3: C32, z: &[CLanes; 6]) -> [CLanes; 6] {
+    let a = butterfly3(tw3, [z[0], z[2], z[4]]);
+    let b = butterfly3(tw3, [z[3], z[5], z[1]]);
+    [
+        cadd(&a[0], &b[0]),
+        csub(&a[1], &b[1]),
+        cadd(&a[2], &b[2]),
+        csub(&a[0], &b[0]),
+        cadd(&a[1], &b[1]),
+        csub(&a[2], &b[2]),
+    ]
+}
+
 /// [`Width12`]'s [`LANES`] rows.
 #[inline(always)]
 fn width12_block(tw3: C32, twiddles: &[C32], rows: &[[f32; 12]; LANES], h: usize, dst: &mut [C32]) {
     let mut z = [([0.0f32; LANES], [0.0f32; LANES]); 6];
-    let mut keep = [false; LANES];
+    let mut keep = [0u32; LANES];
     for (l, row) in rows.iter().enumerate() {
         for (j, zj) in z.iter_mut().enumerate() {
             zj.0[l] = row[2 * j];
@@ -690,19 +707,9 @@ fn width12_block(tw3: C32, twiddles: &[C32], rows: &[[f32; 12]; LANES], h: usize
         for &v in row {
             any |= u32::from(v != 0.0);
         }
-        keep[l] = any != 0;
+        keep[l] = 0u32.wrapping_sub(any);
     }
-    // Butterfly6: Good-Thomas, columns of 3 then rows of 2
-    let a = butterfly3(tw3, [z[0], z[2], z[4]]);
-    let b = butterfly3(tw3, [z[3], z[5], z[1]]);
-    let out = [
-        cadd(&a[0], &b[0]),
-        csub(&a[1], &b[1]),
-        cadd(&a[2], &b[2]),
-        csub(&a[0], &b[0]),
-        cadd(&a[1], &b[1]),
-        csub(&a[2], &b[2]),
-    ];
+    let out = butterfly6(tw3, &z);
     let mut re = [[0.0f32; LANES]; 6];
     let mut im = [[0.0f32; LANES]; 6];
     for ((r, i), o) in re.iter_mut().zip(&mut im).zip(&out) {
@@ -713,6 +720,9 @@ fn width12_block(tw3: C32, twiddles: &[C32], rows: &[[f32; 12]; LANES], h: usize
 
 /// A complex number per lane: real parts, imaginary parts.
 type CLanes = (Lanes, Lanes);
+
+/// A bit mask per lane.
+type Lanes32 = [u32; LANES];
 
 /// `a + b` lane by lane.
 #[inline(always)]
@@ -759,32 +769,23 @@ fn crotate(a: &CLanes) -> CLanes {
     o
 }
 
-/// [`Width16`]'s [`LANES`] rows.
+/// `a i`: the parts swapped, the new real one negated (`rustfft`'s
+/// inverse rotation).
 #[inline(always)]
-fn width16_block(
-    tw8: &[C32; 4],
-    twiddles: &[C32],
-    rows: &[[f32; 16]; LANES],
-    h: usize,
-    dst: &mut [C32],
-) {
-    // the rows as 8 complex pairs, sample 2j + 1 the imaginary part, and
-    // which rows are not all zero
-    let mut z = [([0.0f32; LANES], [0.0f32; LANES]); 8];
-    let mut keep = [false; LANES];
-    for (l, row) in rows.iter().enumerate() {
-        for (j, zj) in z.iter_mut().enumerate() {
-            zj.0[l] = row[2 * j];
-            zj.1[l] = row[2 * j + 1];
-        }
-        let mut any = 0u32;
-        for &v in row {
-            any |= u32::from(v != 0.0);
-        }
-        keep[l] = any != 0;
+fn crotate_inverse(a: &CLanes) -> CLanes {
+    let mut o = ([0.0; LANES], a.0);
+    for l in 0..LANES {
+        o.0[l] = -a.1[l];
     }
-    // Butterfly8Avx::perform_fft_f32: butterflies of 2 down the two
-    // halves, the twiddles, butterflies of 4 (two of 2 with a rotation)
+    o
+}
+
+/// `rustfft`'s `Butterfly8Avx::perform_fft_f32` on lanes: butterflies of 2
+/// down the two halves, the twiddles `tw8` (fused, as its `mul_complex`),
+/// butterflies of 4 (two of 2 with a rotation by a quarter turn: `rotate`,
+/// [`crotate`] forward, [`crotate_inverse`] inverse).
+#[inline(always)]
+fn butterfly8(tw8: &[C32; 4], z: &[CLanes; 8], rotate: impl Fn(&CLanes) -> CLanes) -> [CLanes; 8] {
     let i0 = [
         cadd(&z[0], &z[4]),
         cadd(&z[1], &z[5]),
@@ -805,11 +806,11 @@ fn width16_block(
     ];
     let pb1 = [
         csub(&i0[0], &i0[2]),
-        crotate(&csub(&i0[1], &i0[3])),
+        rotate(&csub(&i0[1], &i0[3])),
         csub(&i1[0], &i1[2]),
-        crotate(&csub(&i1[1], &i1[3])),
+        rotate(&csub(&i1[1], &i1[3])),
     ];
-    let out = [
+    [
         cadd(&pb0[0], &pb0[1]),
         cadd(&pb0[2], &pb0[3]),
         cadd(&pb1[0], &pb1[1]),
@@ -818,13 +819,183 @@ fn width16_block(
         csub(&pb0[2], &pb0[3]),
         csub(&pb1[0], &pb1[1]),
         csub(&pb1[2], &pb1[3]),
-    ];
+    ]
+}
+
+/// [`Width16`]'s [`LANES`] rows.
+#[inline(always)]
+fn width16_block(
+    tw8: &[C32; 4],
+    twiddles: &[C32],
+    rows: &[[f32; 16]; LANES],
+    h: usize,
+    dst: &mut [C32],
+) {
+    // the rows as 8 complex pairs, sample 2j + 1 the imaginary part, and
+    // which rows are not all zero
+    let mut z = [([0.0f32; LANES], [0.0f32; LANES]); 8];
+    let mut keep = [0u32; LANES];
+    for (l, row) in rows.iter().enumerate() {
+        for (j, zj) in z.iter_mut().enumerate() {
+            zj.0[l] = row[2 * j];
+            zj.1[l] = row[2 * j + 1];
+        }
+        let mut any = 0u32;
+        for &v in row {
+            any |= u32::from(v != 0.0);
+        }
+        keep[l] = 0u32.wrapping_sub(any);
+    }
+    let out = butterfly8(tw8, &z, crotate);
     let mut re = [[0.0f32; LANES]; 8];
     let mut im = [[0.0f32; LANES]; 8];
     for ((r, i), o) in re.iter_mut().zip(&mut im).zip(&out) {
         (*r, *i) = *o;
     }
     untangle_lanes(h, twiddles, &re, &im, &keep, dst);
+}
+
+/// The twiddles of [`InverseRows`]: `realfft`'s complex-to-real ones and
+/// those of `rustfft`'s inverse butterfly.
+#[derive(Clone, Debug)]
+struct InverseTwiddles {
+    /// `realfft`'s `compute_twiddle(i, w).conj()`, `i = 1..w / 4`.
+    c2r: Vec<C32>,
+    /// `rustfft`'s `compute_twiddle(j, 8, Inverse)` (a width of 16).
+    fft8: [C32; 4],
+    /// `rustfft`'s `compute_twiddle(1, 3, Inverse)` (a width of 12).
+    fft3: C32,
+}
+
+impl InverseTwiddles {
+    fn new(w: usize) -> Self {
+        let twiddle = |i: usize, n: usize| {
+            let angle = -2f64 * std::f64::consts::PI / n as f64 * i as f64;
+            C32::new(angle.cos() as f32, angle.sin() as f32).conj()
+        };
+        let count = if w.is_multiple_of(4) {
+            w / 4
+        } else {
+            w / 4 + 1
+        };
+        Self {
+            c2r: (1..count).map(|i| twiddle(i, w)).collect(),
+            fft8: std::array::from_fn(|j| twiddle(j, 8)),
+            fft3: twiddle(1, 3),
+        }
+    }
+}
+
+/// The inverse row transforms of [`Fft2::inverse`] for a width of 16 or
+/// 12, [`LANES`] rows at a time, one per lane: each block's bins read
+/// straight from the column-major spectrum (a bin of `LANES` consecutive
+/// rows is contiguous there: no transposition into rows), `realfft`'s
+/// `ComplexToRealEven` on them ([`c2r_lanes`]: its pre-processing, then the
+/// inverse complex FFT of `w / 2` as `rustfft`'s AVX planner computes it,
+/// [`butterfly8`] for 16, [`butterfly6`] for 12), normalised and written
+/// into the rows. The same operations in the same order as the one row at
+/// a time path (the DC and Nyquist bins' imaginary parts taken as zero, as
+/// it sets them): the same bits at every level, and `realfft`'s where
+/// `rustfft` runs its AVX code (only there is this taken).
+struct InverseRows<'a> {
+    w: usize,
+    h: usize,
+    twiddles: &'a InverseTwiddles,
+    spectrum: &'a [C32],
+    out: &'a mut [f32],
+}
+
+impl Kernel for InverseRows<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        let (w, h) = (self.w, self.h);
+        let norm = 1.0 / (w * h) as f32;
+        let t = self.twiddles;
+        // blocks of LANES rows, the last one flush with the end (as
+        // Untangle's: the rows written twice get the same values)
+        let last = h - LANES;
+        for y in (0..last).step_by(LANES).chain([last]) {
+            let (spec, rows) = (&self.spectrum[y..], &mut self.out[y * w..][..LANES * w]);
+            if w == 16 {
+                let z = c2r_lanes::<8>(&t.c2r, spec, h);
+                let z = butterfly8(&t.fft8, &z, crotate_inverse);
+                store_rows(&z, norm, rows.as_chunks_mut::<16>().0);
+            } else {
+                let z = c2r_lanes::<6>(&t.c2r, spec, h);
+                let z = butterfly6(t.fft3, &z);
+                store_rows(&z, norm, rows.as_chunks_mut::<12>().0);
+            }
+        }
+    }
+}
+
+/// `realfft`'s `ComplexToRealEven` pre-processing of [`LANES`] rows'
+/// half spectra of `M + 1` bins (row `r`'s bin `u` at `spec[u h + r]`),
+/// lane by lane, term for term: the `M` inputs of its inverse complex FFT.
+/// The DC and Nyquist bins' imaginary parts are taken as zero (as
+/// [`Fft2::inverse`] sets them), which makes `realfft`'s subtractions of
+/// them exact: left out.
+#[inline(always)]
+fn c2r_lanes<const M: usize>(twiddles: &[C32], spec: &[C32], h: usize) -> [CLanes; M] {
+    let load = |u: usize| -> CLanes {
+        let b: &[C32; LANES] = spec[u * h..][..LANES].try_into().expect("LANES bins");
+        (
+            std::array::from_fn(|l| b[l].re),
+            std::array::from_fn(|l| b[l].im),
+        )
+    };
+    let mut z = [([0.0f32; LANES], [0.0f32; LANES]); M];
+    let (first, last) = (load(0).0, load(M).0);
+    z[0] = (
+        std::array::from_fn(|l| first[l] + last[l]),
+        std::array::from_fn(|l| first[l] - last[l]),
+    );
+    for (i, tw) in twiddles[..(M - 1) / 2].iter().enumerate() {
+        let (k, kr) = (i + 1, M - i - 1);
+        let (sum, diff) = {
+            let (a, b) = (load(k), load(kr));
+            (cadd(&a, &b), csub(&a, &b))
+        };
+        // twiddled_re_sum.im + twiddled_im_diff.re
+        let real: Lanes = std::array::from_fn(|l| sum.1[l] * tw.re + diff.0[l] * tw.im);
+        // twiddled_im_sum.im - twiddled_re_diff.re
+        let imag: Lanes = std::array::from_fn(|l| sum.1[l] * tw.im - diff.0[l] * tw.re);
+        z[k] = (
+            std::array::from_fn(|l| sum.0[l] - real[l]),
+            std::array::from_fn(|l| diff.1[l] - imag[l]),
+        );
+        z[kr] = (
+            std::array::from_fn(|l| sum.0[l] + real[l]),
+            std::array::from_fn(|l| -imag[l] - diff.1[l]),
+        );
+    }
+    // an odd number of bins leaves the middle one: doubled, conjugated
+    if M.is_multiple_of(2) {
+        let c = load(M / 2);
+        z[M / 2] = (
+            std::array::from_fn(|l| c.0[l] + c.0[l]),
+            std::array::from_fn(|l| -(c.1[l] + c.1[l])),
+        );
+    }
+    z
+}
+
+/// The inverse FFT's outputs `z` of [`LANES`] rows (complex `j` of row
+/// `r`: its samples `2 j` and `2 j + 1`) times `norm`, into `rows`.
+#[inline(always)]
+fn store_rows<const M: usize, const W: usize>(z: &[CLanes; M], norm: f32, rows: &mut [[f32; W]]) {
+    let scaled: [CLanes; M] = std::array::from_fn(|j| {
+        (
+            std::array::from_fn(|l| z[j].0[l] * norm),
+            std::array::from_fn(|l| z[j].1[l] * norm),
+        )
+    });
+    for (l, row) in rows[..LANES].iter_mut().enumerate() {
+        for (j, pair) in row.as_chunks_mut::<2>().0.iter_mut().enumerate() {
+            *pair = [scaled[j].0[l], scaled[j].1[l]];
+        }
+    }
 }
 
 impl std::fmt::Debug for Fft2 {
@@ -860,6 +1031,7 @@ impl Fft2 {
         };
         let col_fwd = cplx.plan_fft_forward(h);
         let col_inv = cplx.plan_fft_inverse(h);
+        let inv_rows = ((w == 16 || w == 12) && rustfft_avx()).then(|| InverseTwiddles::new(w));
         let wc = w / 2 + 1;
         let real_scratch_len = c2r.get_scratch_len();
         let col_scratch_len = col_fwd
@@ -870,6 +1042,7 @@ impl Fft2 {
             h,
             row_fwd,
             c2r,
+            inv_rows,
             col_fwd,
             col_inv,
             rows: vec![C32::default(); wc * h],
@@ -957,7 +1130,10 @@ impl Fft2 {
 
     /// The real array of the half spectrum `spectrum` into `out`,
     /// normalised (`inverse(forward(x)) == x`). `spectrum` is used as
-    /// scratch and left changed.
+    /// scratch and left changed. The column FFTs in one call, then the row
+    /// transforms: one `realfft` call per row, or for a width of 16 or 12
+    /// where `rustfft` runs its AVX code, eight rows at a time in vector
+    /// lanes with `realfft`'s bits (see `InverseRows`).
     ///
     /// # Errors
     /// [`DcfError::Size`] for buffers of another size.
@@ -966,6 +1142,19 @@ impl Fft2 {
         let (w, h, wc) = (self.w, self.h, self.w / 2 + 1);
         self.col_inv
             .process_with_scratch(spectrum, &mut self.col_scratch);
+        if let Some(twiddles) = &self.inv_rows
+            && h >= LANES
+        {
+            // the best level this CPU has (as `forward_many`)
+            SimdLevel::Avx512.run(InverseRows {
+                w,
+                h,
+                twiddles,
+                spectrum,
+                out,
+            });
+            return Ok(());
+        }
         // columns to rows, each row written in order (bin (u, y) at u h + y)
         for (y, row) in self.rows.chunks_exact_mut(wc).enumerate() {
             for (o, col) in row.iter_mut().zip(spectrum.chunks_exact(h)) {
@@ -1300,6 +1489,104 @@ pub(crate) mod tests {
                     assert_eq!(bits(&scalar_rows(w, h, &x)), want, "{w}x{h} rustfft");
                 }
             }
+        }
+    }
+
+    /// The real arrays of `spectrum` (a half spectrum of `w x h`, its
+    /// columns already inverse transformed) as the plain recipe computes
+    /// them: each row gathered, its DC and Nyquist bins' imaginary parts
+    /// zeroed, one `realfft` call, normalised.
+    fn reference_inverse_rows(w: usize, h: usize, spectrum: &[C32]) -> Vec<f32> {
+        let c2r = RealFftPlanner::<f32>::new().plan_fft_inverse(w);
+        let wc = w / 2 + 1;
+        let norm = 1.0 / (w * h) as f32;
+        let mut out = vec![0.0f32; w * h];
+        for (y, row) in out.chunks_exact_mut(w).enumerate() {
+            let mut src: Vec<C32> = (0..wc).map(|u| spectrum[u * h + y]).collect();
+            src[0].im = 0.0;
+            if w.is_multiple_of(2) {
+                src[wc - 1].im = 0.0;
+            }
+            c2r.process(&mut src, row).unwrap();
+            for v in row.iter_mut() {
+                *v *= norm;
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn inverse_row_lanes_are_the_same_at_every_level_and_realfft_where_it_runs_avx() {
+        // the inverse lane kernel on its own (whether or not this machine
+        // takes it), widths 16 and 12, heights at and around multiples of
+        // the lanes: every level the scalar level's bits, and where rustfft
+        // runs its AVX planner, realfft's; the DC and Nyquist bins hold
+        // imaginary parts (ignored), and every sample must be written
+        for w in [12, 16] {
+            for h in [8, 9, 15, 16, 17, 24, 40, 45] {
+                let wc = w / 2 + 1;
+                let re = signal(wc, h, (w * 31 + h) as u32);
+                let im = signal(wc, h, (w * 37 + h) as u32);
+                let spectrum: Vec<C32> =
+                    re.iter().zip(&im).map(|(&a, &b)| C32::new(a, b)).collect();
+                let twiddles = InverseTwiddles::new(w);
+                let run = |level: SimdLevel| {
+                    let mut out = vec![f32::NAN; w * h];
+                    level.run(InverseRows {
+                        w,
+                        h,
+                        twiddles: &twiddles,
+                        spectrum: &spectrum,
+                        out: &mut out,
+                    });
+                    out.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+                };
+                let want = run(SimdLevel::Scalar);
+                for level in SimdLevel::ALL {
+                    assert_eq!(run(level), want, "{w}x{h} {level:?}");
+                }
+                if rustfft_avx() {
+                    let r = reference_inverse_rows(w, h, &spectrum);
+                    let r: Vec<u32> = r.iter().map(|v| v.to_bits()).collect();
+                    assert_eq!(r, want, "{w}x{h} realfft");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn inverse_is_the_plain_recipe_bit_for_bit() {
+        // Fft2::inverse (lanes or one realfft call per row, whichever this
+        // machine takes) against rustfft down the columns and realfft on
+        // each row
+        for (w, h) in [
+            (16, 40),
+            (16, 9),
+            (16, 3),
+            (12, 17),
+            (12, 5),
+            (10, 9),
+            (8, 8),
+            (7, 9),
+        ] {
+            let mut f = Fft2::new(w, h).unwrap();
+            let s = f.spectrum_len();
+            let re = signal(s, 1, (w * 11 + h) as u32);
+            let im = signal(s, 1, (w * 13 + h) as u32);
+            let spectrum: Vec<C32> = re.iter().zip(&im).map(|(&a, &b)| C32::new(a, b)).collect();
+            let mut cols = spectrum.clone();
+            FftPlanner::<f32>::new()
+                .plan_fft_inverse(h)
+                .process(&mut cols);
+            let want: Vec<u32> = reference_inverse_rows(w, h, &cols)
+                .iter()
+                .map(|v| v.to_bits())
+                .collect();
+            let mut spec = spectrum.clone();
+            let mut out = vec![f32::NAN; w * h];
+            f.inverse(&mut spec, &mut out).unwrap();
+            let got: Vec<u32> = out.iter().map(|v| v.to_bits()).collect();
+            assert_eq!(got, want, "{w}x{h}");
         }
     }
 
