@@ -204,6 +204,19 @@ impl AreaSampler {
         (i, v - i as f64)
     }
 
+    /// The edges `a < b` of an output pixel along an axis of `n` source
+    /// pixels, clipped; a degenerate interval is widened to the nearest
+    /// source pixel.
+    fn edges(a: f64, b: f64, n: usize) -> (f64, f64) {
+        let (lo, hi) = (a.clamp(0.0, n as f64), b.clamp(0.0, n as f64));
+        if hi - lo > 1e-9 {
+            (lo, hi)
+        } else {
+            let p = (lo.min(n as f64 - 0.5)).floor().max(0.0);
+            (p, p + 1.0)
+        }
+    }
+
     /// The summed-area table at row coordinate `y` and each column edge
     /// of `xs` into `out`: bilinear, the rows first (`p + f (q - p)` at the
     /// edge's two integer columns), then along the row.
@@ -261,17 +274,7 @@ impl AreaSampler {
             });
         }
         let (w, h) = (self.width, self.height);
-        // Column edges, clipped; a degenerate interval is widened to the
-        // nearest source pixel.
-        let edges = |a: f64, b: f64, n: usize| -> (f64, f64) {
-            let (lo, hi) = (a.clamp(0.0, n as f64), b.clamp(0.0, n as f64));
-            if hi - lo > 1e-9 {
-                (lo, hi)
-            } else {
-                let p = (lo.min(n as f64 - 0.5)).floor().max(0.0);
-                (p, p + 1.0)
-            }
-        };
+        let edges = Self::edges;
         // column edges: a column's left edge is the last right edge when
         // they are the same coordinate (columns that tile the source)
         let (mut xs, mut cols) = (std::mem::take(&mut self.xs), std::mem::take(&mut self.cols));
@@ -635,15 +638,7 @@ mod tests {
         let (w, h) = (37usize, 29usize);
         let sum = s.sum.clone();
         let plain = |x0: f64, y0: f64, sx: f64, sy: f64, ow: usize, oh: usize| -> Vec<u32> {
-            let edges = |a: f64, b: f64, n: usize| -> (f64, f64) {
-                let (lo, hi) = (a.clamp(0.0, n as f64), b.clamp(0.0, n as f64));
-                if hi - lo > 1e-9 {
-                    (lo, hi)
-                } else {
-                    let p = (lo.min(n as f64 - 0.5)).floor().max(0.0);
-                    (p, p + 1.0)
-                }
-            };
+            let edges = AreaSampler::edges;
             let row = |y: f64| -> Vec<f64> {
                 let (j, f) = AreaSampler::cell(y, h);
                 let cols = w + 1;
