@@ -170,14 +170,12 @@ struct EvenRows {
     block: Vec<[C32; LANES]>,
     /// The twiddles of `rustfft`'s 8-point butterfly ([`Width16`]).
     fft8_twiddles: [C32; 4],
-    /// Whether a width of 16 takes [`Width16`]: where `rustfft` runs its
-    /// AVX butterfly, whose bits it reproduces (elsewhere `rustfft` and
-    /// the untangling, as other widths).
-    lanes16: bool,
     /// The twiddle of `rustfft`'s butterfly of 3 ([`Width12`]).
     fft3_twiddle: C32,
-    /// Whether a width of 12 takes [`Width12`] (as `lanes16`).
-    lanes12: bool,
+    /// Whether a width of 16 or 12 takes [`Width16`] or [`Width12`]: where
+    /// `rustfft` runs its AVX butterflies, whose bits they reproduce
+    /// (elsewhere `rustfft` and the untangling, as other widths).
+    lanes: bool,
 }
 
 /// Whether `rustfft` plans its AVX algorithms on this machine (AVX and
@@ -199,18 +197,27 @@ const LANES: usize = 8;
 /// One value per row of a block.
 type Lanes = [f32; LANES];
 
+/// `rustfft`'s and `realfft`'s `compute_twiddle(i, n)` (forward): the
+/// angle in `f64`, rounded to `f32`.
+fn compute_twiddle(i: usize, n: usize) -> C32 {
+    let angle = -2f64 * std::f64::consts::PI / n as f64 * i as f64;
+    C32::new(angle.cos() as f32, angle.sin() as f32)
+}
+
+/// One more than the number of `realfft`'s twiddles of an even width `w`
+/// (`i = 1..untangle_end(w)`).
+fn untangle_end(w: usize) -> usize {
+    if w.is_multiple_of(4) {
+        w / 4
+    } else {
+        w / 4 + 1
+    }
+}
+
 impl EvenRows {
     fn new(w: usize, planner: &mut FftPlanner<f32>) -> Self {
-        let twiddle_count = if w.is_multiple_of(4) {
-            w / 4
-        } else {
-            w / 4 + 1
-        };
-        let twiddles = (1..twiddle_count)
-            .map(|i| {
-                let angle = -2f64 * std::f64::consts::PI / w as f64 * i as f64;
-                C32::new(angle.cos() as f32, angle.sin() as f32) * 0.5f32
-            })
+        let twiddles = (1..untangle_end(w))
+            .map(|i| compute_twiddle(i, w) * 0.5f32)
             .collect();
         let fft = planner.plan_fft_forward(w / 2);
         let scratch = vec![C32::default(); fft.get_outofplace_scratch_len()];
@@ -222,18 +229,9 @@ impl EvenRows {
             scratch,
             nonzero: Vec::new(),
             block: vec![[C32::default(); LANES]; w / 2],
-            // rustfft's compute_twiddle(j, 8), forward
-            fft8_twiddles: std::array::from_fn(|j| {
-                let angle = -2f64 * std::f64::consts::PI / 8.0 * j as f64;
-                C32::new(angle.cos() as f32, angle.sin() as f32)
-            }),
-            lanes16: w == 16 && rustfft_avx(),
-            // rustfft's compute_twiddle(1, 3), forward
-            fft3_twiddle: {
-                let angle = -2f64 * std::f64::consts::PI / 3.0;
-                C32::new(angle.cos() as f32, angle.sin() as f32)
-            },
-            lanes12: w == 12 && rustfft_avx(),
+            fft8_twiddles: std::array::from_fn(|j| compute_twiddle(j, 8)),
+            fft3_twiddle: compute_twiddle(1, 3),
+            lanes: (w == 16 || w == 12) && rustfft_avx(),
         }
     }
 
@@ -249,24 +247,24 @@ impl EvenRows {
         input: &[f32],
         spectra: &mut [C32],
     ) {
-        if self.lanes16 && h >= LANES {
-            level.run(Width16 {
-                h,
-                fft_twiddles: &self.fft8_twiddles,
-                twiddles: &self.twiddles,
-                input,
-                spectra,
-            });
-            return;
-        }
-        if self.lanes12 && h >= LANES {
-            level.run(Width12 {
-                h,
-                fft_twiddle: self.fft3_twiddle,
-                twiddles: &self.twiddles,
-                input,
-                spectra,
-            });
+        if self.lanes && h >= LANES {
+            if w == 16 {
+                level.run(Width16 {
+                    h,
+                    fft_twiddles: &self.fft8_twiddles,
+                    twiddles: &self.twiddles,
+                    input,
+                    spectra,
+                });
+            } else {
+                level.run(Width12 {
+                    h,
+                    fft_twiddle: self.fft3_twiddle,
+                    twiddles: &self.twiddles,
+                    input,
+                    spectra,
+                });
+            }
             return;
         }
         let (m, count) = (w / 2, input.len() / w);
@@ -869,17 +867,9 @@ struct InverseTwiddles {
 
 impl InverseTwiddles {
     fn new(w: usize) -> Self {
-        let twiddle = |i: usize, n: usize| {
-            let angle = -2f64 * std::f64::consts::PI / n as f64 * i as f64;
-            C32::new(angle.cos() as f32, angle.sin() as f32).conj()
-        };
-        let count = if w.is_multiple_of(4) {
-            w / 4
-        } else {
-            w / 4 + 1
-        };
+        let twiddle = |i: usize, n: usize| compute_twiddle(i, n).conj();
         Self {
-            c2r: (1..count).map(|i| twiddle(i, w)).collect(),
+            c2r: (1..untangle_end(w)).map(|i| twiddle(i, w)).collect(),
             fft8: std::array::from_fn(|j| twiddle(j, 8)),
             fft3: twiddle(1, 3),
         }
