@@ -174,9 +174,16 @@ pub fn rgb_to_gray_into(src: ImageView<'_, u8>, out: &mut ImageViewMut<'_, u8>) 
 /// pixels on their own way.
 #[inline(always)]
 pub fn gray_level(p: &[u8]) -> u8 {
+    ((luma_fixed(p) + (1 << 15)) >> 16) as u8
+}
+
+/// One RGB pixel's (`p[..3]`) luma times 2^16, unrounded: `19595 r +
+/// 38470 g + 7471 b`, an exact integer below 2^24 (the sum of
+/// [`gray_level`] and of `gray_region_into`).
+#[inline(always)]
+pub(crate) fn luma_fixed(p: &[u8]) -> u32 {
     const W: [u32; 3] = [19595, 38470, 7471];
-    let acc = W[0] * u32::from(p[0]) + W[1] * u32::from(p[1]) + W[2] * u32::from(p[2]);
-    ((acc + (1 << 15)) >> 16) as u8
+    W[0] * u32::from(p[0]) + W[1] * u32::from(p[1]) + W[2] * u32::from(p[2])
 }
 
 /// The rows of [`rgb_to_gray_into`] (3 channels, checked) as a dispatched

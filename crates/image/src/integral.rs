@@ -8,6 +8,7 @@
 //! `(x, y)` and size `w x h` is `S(x+w, y+h) - S(x, y+h) - S(x+w, y) + S(x, y)`.
 //! Sums are accumulated in `f64`, exact for integer pixels up to `2^53`.
 
+use crate::color::luma_fixed;
 use crate::simd::{Kernel, Token, dispatch};
 use crate::{Image, ImageError, ImageView, ImageViewMut, Pixel, Rect, Result};
 
@@ -371,10 +372,7 @@ pub fn gray_region_into(
                 for (a, block) in acc.iter_mut().zip(row.chunks_exact(3 * f)) {
                     *a += block
                         .chunks_exact(3)
-                        .map(|p| {
-                            let w = LUMA_FIXED.map(u64::from);
-                            w[0] * u64::from(p[0]) + w[1] * u64::from(p[1]) + w[2] * u64::from(p[2])
-                        })
+                        .map(|p| u64::from(luma_fixed(p)))
                         .sum::<u64>();
                 }
             }
@@ -385,10 +383,6 @@ pub fn gray_region_into(
     }
     Ok(())
 }
-
-/// Luma weights of [`gray_region_into`] in fixed point (`2^16`): its
-/// sums are exact integers.
-const LUMA_FIXED: [u32; 3] = [19595, 38470, 7471];
 
 /// One row of [`gray_region_into`] at factor 1: each pixel's fixed-point
 /// luma (gray: the level times `2^16`) as `f32` over `2^16`. The sum is
@@ -411,10 +405,8 @@ impl Kernel for LumaRow<'_> {
                 *o = ((u32::from(v) << 16) as f32) * INV;
             }
         } else {
-            let w = LUMA_FIXED;
             for (o, p) in self.out.iter_mut().zip(self.src.chunks_exact(3)) {
-                let a = w[0] * u32::from(p[0]) + w[1] * u32::from(p[1]) + w[2] * u32::from(p[2]);
-                *o = (a as f32) * INV;
+                *o = (luma_fixed(p) as f32) * INV;
             }
         }
     }
@@ -601,7 +593,8 @@ mod tests {
             .iter()
             .map(|&v| formula(u64::from(v) << 16).to_bits())
             .collect();
-        let w = LUMA_FIXED.map(u64::from);
+        // BT.601's weights times 2^16, rounded, written out here
+        let w: [u64; 3] = [19595, 38470, 7471];
         let want_rgb: Vec<u32> = rgb
             .chunks_exact(3)
             .map(|p| {
