@@ -9,7 +9,7 @@
 //! `f(z) = F^-1(k_hat^{xz} . alpha_hat)`; the model is interpolated from
 //! frame to frame with a learning rate.
 
-use bayestrack_image::simd::{Kernel as SimdKernel, Token, dispatch};
+use bayestrack_image::simd::{Kernel as SimdKernel, SimdLevel, Token, dispatch};
 
 use crate::error::{DcfError, Result};
 use crate::fft::{C32, Fft2};
@@ -83,6 +83,8 @@ pub struct Correlator {
     fft: Fft2,
     channels: usize,
     spatial: Vec<f32>,
+    /// The Gaussian kernel's values at every shift.
+    values: Vec<f32>,
     accum: Vec<C32>,
 }
 
@@ -103,6 +105,7 @@ impl Correlator {
         let s = fft.spectrum_len();
         Ok(Self {
             spatial: vec![0.0; w * h],
+            values: vec![0.0; w * h],
             accum: vec![C32::default(); s],
             fft,
             channels,
@@ -179,11 +182,15 @@ impl Correlator {
             Kernel::Gaussian { sigma } => {
                 self.fft.inverse(&mut self.accum, &mut self.spatial)?;
                 let inv = 1.0 / (sigma * sigma * numel);
-                for v in self.spatial.iter_mut() {
-                    let d = (xx + zz - 2.0 * *v as f64).max(0.0);
-                    *v = (-d * inv).exp() as f32;
-                }
-                self.fft.forward(&self.spatial, out)?;
+                gaussian_values(
+                    SimdLevel::Avx512,
+                    xx,
+                    zz,
+                    inv,
+                    &self.spatial,
+                    &mut self.values,
+                );
+                self.fft.forward(&self.values, out)?;
             }
         }
         Ok(())
@@ -253,6 +260,119 @@ impl SimdKernel for ChannelSum<'_> {
             }
         }
     }
+}
+
+/// The Gaussian kernel's exponent at a shift whose cross-correlation is
+/// `c`: `-max(xx + zz - 2 c, 0) inv`.
+#[inline(always)]
+fn gaussian_exponent(xx: f64, zz: f64, inv: f64, c: f32) -> f64 {
+    -(xx + zz - 2.0 * c as f64).max(0.0) * inv
+}
+
+/// The Gaussian kernel's values `exp(gaussian_exponent(..))` of the
+/// cross-correlations `corr` into `out`: libm's `exp` in `f64` rounded to
+/// `f32`, bit for bit. A vector pass ([`GaussianValues`]) gives every value
+/// whose rounding it can prove; the rest (about one in three thousand, none
+/// on most windows) are libm's own call.
+fn gaussian_values(level: SimdLevel, xx: f64, zz: f64, inv: f64, corr: &[f32], out: &mut [f32]) {
+    let left = level.run(GaussianValues {
+        xx,
+        zz,
+        inv,
+        corr,
+        out: &mut *out,
+    });
+    if left {
+        for (o, &c) in out.iter_mut().zip(corr) {
+            if o.is_nan() {
+                *o = gaussian_exponent(xx, zz, inv, c).exp() as f32;
+            }
+        }
+    }
+}
+
+/// [`gaussian_values`]' vector pass: each value through
+/// [`exp_to_f32_or_nan`], NaN where libm must decide; returns whether any
+/// value was left.
+struct GaussianValues<'a> {
+    xx: f64,
+    zz: f64,
+    inv: f64,
+    corr: &'a [f32],
+    out: &'a mut [f32],
+}
+
+impl SimdKernel for GaussianValues<'_> {
+    type Output = bool;
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) -> bool {
+        let Self {
+            xx,
+            zz,
+            inv,
+            corr,
+            out,
+        } = self;
+        let mut left = 0u32;
+        for (o, &c) in out.iter_mut().zip(corr) {
+            let e = exp_to_f32_or_nan(gaussian_exponent(xx, zz, inv, c));
+            left |= e.is_nan() as u32;
+            *o = e;
+        }
+        left != 0
+    }
+}
+
+/// `exp(t)` rounded to `f32` (round to nearest) where the rounding is
+/// certain to be that of libm's `t.exp() as f32`, NaN otherwise and for
+/// `t` outside `[-700, 700]` or NaN: a branch-free evaluation that
+/// vectorises.
+///
+/// [`exp_approx`]'s `y` is within `2^-40` of `exp(t)` relative to it, and
+/// libm's `exp` within an ulp of `f64` (`2^-52`): both lie in
+/// `[y (1 - 2^-36), y (1 + 2^-36)]`. When the two ends round to the same
+/// `f32`, so does every value between them (rounding is monotonic), libm's
+/// included. Otherwise (`y` within `2^-36` of halfway between two `f32`s)
+/// NaN hands the value to libm.
+#[inline(always)]
+fn exp_to_f32_or_nan(t: f64) -> f32 {
+    const DELTA: f64 = 1.0 / (1u64 << 36) as f64;
+    let y = exp_approx(t);
+    let (lo, hi) = ((y * (1.0 - DELTA)) as f32, (y * (1.0 + DELTA)) as f32);
+    if (-700.0..=700.0).contains(&t) && lo.to_bits() == hi.to_bits() {
+        lo
+    } else {
+        f32::NAN
+    }
+}
+
+/// `exp(t)` within `2^-40` relative for `t` in `[-700, 700]`, branch-free:
+/// range reduction `t = n ln 2 + r`, `|r| <= ln 2 / 2`, with fdlibm's
+/// two-part `ln 2` (`r`'s rounding under `2^-43` relative to `exp(t)`
+/// for `|t| <= 700`); the Taylor polynomial of degree 10 (remainder under
+/// `2^-41`, Horner's roundings a few `2^-53`); `2^n` from its exponent
+/// bits. (Measured: test `exp_approx_is_within_its_bound`.)
+#[inline(always)]
+fn exp_approx(t: f64) -> f64 {
+    // adding 1.5 2^52 rounds to an integer, held in the low mantissa bits
+    const SHIFT: f64 = 6755399441055744.0;
+    // fdlibm's ln 2 in two parts (the first with 21 trailing zero bits:
+    // `n LN2_HI` is exact for |n| < 2^21)
+    const LN2_HI: f64 = f64::from_bits(0x3fe6_2e42_fee0_0000);
+    const LN2_LO: f64 = f64::from_bits(0x3dea_39ef_3579_3c76);
+    let s = t * std::f64::consts::LOG2_E + SHIFT;
+    let n = s - SHIFT;
+    let r = (t - n * LN2_HI) - n * LN2_LO;
+    // 1 + r + r^2/2! + ... + r^10/10!, Horner's scheme
+    let mut p = 1.0 / 3_628_800.0;
+    for f in [
+        362_880.0, 40_320.0, 5_040.0, 720.0, 120.0, 24.0, 6.0, 2.0, 1.0, 1.0,
+    ] {
+        p = p * r + 1.0 / f;
+    }
+    // 2^n from its exponent bits (n is the integer in s's low bits)
+    let k = (s.to_bits() as i64).wrapping_sub(SHIFT.to_bits() as i64);
+    p * f64::from_bits((k.wrapping_add(1023) as u64) << 52)
 }
 
 /// Bins of [`ChannelSum`] summed over the channels at once (four AVX2
@@ -733,6 +853,134 @@ mod tests {
                 let got = level.run(Energy(&x));
                 assert_eq!(got.to_bits(), want.to_bits(), "{n} values, {level:?}");
             }
+        }
+    }
+
+    /// `n` pseudo-random `u64`s (xorshift64*), for the `exp` tests.
+    fn bits(n: usize, seed: u64) -> Vec<u64> {
+        let mut x = seed | 1;
+        (0..n)
+            .map(|_| {
+                x ^= x >> 12;
+                x ^= x << 25;
+                x ^= x >> 27;
+                x.wrapping_mul(0x2545_f491_4f6c_dd1d)
+            })
+            .collect()
+    }
+
+    /// Uniform in `[a, b)`.
+    fn uniform(n: usize, seed: u64, a: f64, b: f64) -> Vec<f64> {
+        let unit = |u: u64| (u >> 11) as f64 / (1u64 << 53) as f64;
+        bits(n, seed)
+            .into_iter()
+            .map(|u| a + (b - a) * unit(u))
+            .collect()
+    }
+
+    #[test]
+    fn exp_approx_is_within_its_bound() {
+        let mut worst = 0.0f64;
+        for t in uniform(400_000, 1, -700.0, 700.0)
+            .into_iter()
+            .chain(uniform(400_000, 2, -1.0, 1.0))
+            .chain([-700.0, 700.0, 0.0, -0.0, -0.5 * std::f64::consts::LN_2])
+        {
+            let want = t.exp();
+            worst = worst.max(((exp_approx(t) - want) / want).abs());
+        }
+        // libm's own error (half an ulp, 2^-53) included
+        assert!(worst < 2f64.powi(-40), "worst relative error {worst:e}");
+    }
+
+    /// `exp_to_f32_or_nan` over a slice, compiled for each level.
+    struct Exps<'a>(&'a [f64], &'a mut [f32]);
+
+    impl SimdKernel for Exps<'_> {
+        type Output = ();
+        #[inline(always)]
+        fn run<T: Token>(self, _: T) {
+            for (o, &t) in self.1.iter_mut().zip(self.0) {
+                *o = exp_to_f32_or_nan(t);
+            }
+        }
+    }
+
+    #[test]
+    fn exp_to_f32_is_libms_rounding() {
+        // the kernel's exponents ([-104, 0]: below, every f32 is 0), the
+        // whole range, the edges and past them
+        let mut ts: Vec<f64> = uniform(100_000, 3, -110.0, 0.0);
+        ts.extend(uniform(20_000, 4, -700.0, 700.0));
+        ts.extend([
+            0.0,
+            -0.0,
+            -5e-324,
+            1e-300,
+            -87.3,
+            -103.97,
+            -103.98,
+            88.72,
+            88.73,
+            -700.0,
+            700.0,
+            -700.1,
+            700.1,
+            -745.2,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            f64::NAN,
+        ]);
+        // near halfway between neighbouring f32s (subnormal ones too):
+        // t = ln m, exp(t) within about |t| 2^-53 of m
+        let halfway = bits(30_000, 5).into_iter().map(|u| {
+            let f = f32::from_bits(1 + (u as u32) % 0x3f80_0000);
+            ((f as f64 + f.next_up() as f64) / 2.0).ln()
+        });
+        let near = ts.len();
+        ts.extend(halfway);
+        let want: Vec<u32> = ts.iter().map(|t| (t.exp() as f32).to_bits()).collect();
+        for level in SimdLevel::ALL {
+            let mut got = vec![0.0f32; ts.len()];
+            level.run(Exps(&ts, &mut got));
+            let mut left = [0usize; 2];
+            for (i, (g, &w)) in got.iter().zip(&want).enumerate() {
+                if g.is_nan() {
+                    left[usize::from(i >= near)] += 1;
+                } else {
+                    assert_eq!(g.to_bits(), w, "{level:?}: t = {:e}", ts[i]);
+                }
+            }
+            // the halfway values are left to libm, few others (6 out of
+            // range, about one in 3,000 within 2^-36 of halfway)
+            assert!(left[0] <= 6 + near / 1_000, "{level:?}: {left:?}");
+            assert!(left[1] >= 29_000, "{level:?}: {left:?}");
+        }
+    }
+
+    #[test]
+    fn gaussian_values_are_libms_at_every_level() {
+        // cross-correlations around their energies, so that the exponents
+        // cover [-30, 0] and some differences clamp to 0
+        let n = 16 * 40 + 3;
+        let (xx, zz) = (412.5, 377.25);
+        let inv = 1.0 / (0.25 * 16.0 * 40.0 * 31.0) * 25.0;
+        let corr: Vec<f32> = uniform(n, 6, 0.0, 450.0)
+            .iter()
+            .map(|&v| v as f32)
+            .collect();
+        let want: Vec<u32> = corr
+            .iter()
+            .map(|&c| {
+                let d = (xx + zz - 2.0 * c as f64).max(0.0);
+                ((-d * inv).exp() as f32).to_bits()
+            })
+            .collect();
+        for level in SimdLevel::ALL {
+            let mut got = vec![0.0f32; n];
+            gaussian_values(level, xx, zz, inv, &corr, &mut got);
+            let got: Vec<u32> = got.iter().map(|v| v.to_bits()).collect();
+            assert_eq!(got, want, "{level:?}");
         }
     }
 
