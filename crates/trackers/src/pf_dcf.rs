@@ -325,10 +325,16 @@ impl Map {
         if !(u.abs() <= w / 2.0 && v.abs() <= h / 2.0) {
             return None;
         }
-        let (u, v) = (u.rem_euclid(w), v.rem_euclid(h));
-        let (i0, j0) = (u.floor() as usize % self.w, v.floor() as usize % self.h);
+        // `rem_euclid` and `floor` without their library calls: for
+        // `|u| <= w / 2`, `u % w` is `u`, so `u.rem_euclid(w)` is `u + w`
+        // below 0 and `u` otherwise (-0 included), and on the result
+        // (>= 0) truncation is the floor: the same bits
+        let wrap = |u: f64, w: f64| if u < 0.0 { u + w } else { u };
+        let (u, v) = (wrap(u, w), wrap(v, h));
+        let (fu, fv) = (u as usize, v as usize);
+        let (i0, j0) = (fu % self.w, fv % self.h);
         let (i1, j1) = ((i0 + 1) % self.w, (j0 + 1) % self.h);
-        let (fx, fy) = ((u - u.floor()) as f32, (v - v.floor()) as f32);
+        let (fx, fy) = ((u - fu as f64) as f32, (v - fv as f64) as f32);
         let g = |i: usize, j: usize| self.data[j * self.w + i];
         let top = g(i0, j0) + fx * (g(i1, j0) - g(i0, j0));
         let bot = g(i0, j1) + fx * (g(i1, j1) - g(i0, j1));
@@ -979,6 +985,54 @@ mod tests {
             inter / (a.width * a.height + b.width * b.height - inter)
         };
         got.iter().zip(truth).map(|(a, b)| iou(a, b)).sum::<f64>() / got.len() as f64
+    }
+
+    /// `Map::at` as first written (`rem_euclid` and `floor`): the same
+    /// bits at every offset within half the window, the edges, -0 and
+    /// values a rounding away from 0 and from the edges included.
+    #[test]
+    fn map_reads_as_rem_euclid_and_floor() {
+        let (w, h) = (16usize, 40usize);
+        let m = Map {
+            centre: (0.0, 0.0),
+            w,
+            h,
+            px: (3.7, 2.3),
+            data: (0..w * h).map(|i| ((i * 37 % 101) as f32).sin()).collect(),
+        };
+        let reference = |dx: f64, dy: f64| -> Option<f32> {
+            let (u, v) = (dx / m.px.0, dy / m.px.1);
+            let (wf, hf) = (w as f64, h as f64);
+            if !(u.abs() <= wf / 2.0 && v.abs() <= hf / 2.0) {
+                return None;
+            }
+            let (u, v) = (u.rem_euclid(wf), v.rem_euclid(hf));
+            let (i0, j0) = (u.floor() as usize % w, v.floor() as usize % h);
+            let (i1, j1) = ((i0 + 1) % w, (j0 + 1) % h);
+            let (fx, fy) = ((u - u.floor()) as f32, (v - v.floor()) as f32);
+            let g = |i: usize, j: usize| m.data[j * w + i];
+            let top = g(i0, j0) + fx * (g(i1, j0) - g(i0, j0));
+            let bot = g(i0, j1) + fx * (g(i1, j1) - g(i0, j1));
+            Some(top + fy * (bot - top))
+        };
+        let mut xs: Vec<f64> = (-700..=700).map(|k| k as f64 * 0.0437).collect();
+        let edges = [w as f64 / 2.0 * m.px.0, h as f64 / 2.0 * m.px.1];
+        for e in edges {
+            for v in [e, -e, e * (1.0 + 1e-16), -e * (1.0 - 1e-16)] {
+                xs.extend([v, v.next_up(), v.next_down()]);
+            }
+        }
+        xs.extend([0.0, -0.0, 1e-300, -1e-300, 5e-324, -5e-324, f64::NAN]);
+        let bits = |r: Option<f32>| r.map(f32::to_bits);
+        for &dx in &xs {
+            for &dy in xs.iter().step_by(7).chain(&xs[xs.len() - 30..]) {
+                assert_eq!(
+                    bits(m.at(dx, dy)),
+                    bits(reference(dx, dy)),
+                    "({dx:e}, {dy:e})"
+                );
+            }
+        }
     }
 
     /// A target moving on a curve while it grows by 40 % or shrinks by 30 %
