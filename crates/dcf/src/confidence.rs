@@ -2,20 +2,73 @@
 //! (Bolme et al. 2010, MOSSE) and the average peak-to-correlation energy
 //! (Wang, Liu and Huang 2017, LMCF).
 
+use bayestrack_image::simd::{Kernel, Token, dispatch};
+
 /// Side of the window around the peak that the PSR leaves out of the
 /// sidelobe (MOSSE's 11x11).
 pub const PSR_EXCLUDE: usize = 11;
 
 /// The maximum of `response` and its index (the first on ties; NaN never
-/// wins).
+/// wins; `(-inf, 0)` when nothing exceeds -inf).
+///
+/// The maximum from [`Range`]'s lanes, then the first value equal to it:
+/// the first index at which a running `v > best` would have stopped
+/// moving, and its value (`+0` and `-0` are equal, so the first zero of
+/// either sign, as the running test keeps it).
 pub fn peak(response: &[f32]) -> (f32, usize) {
-    let mut best = (f32::NEG_INFINITY, 0);
-    for (i, &v) in response.iter().enumerate() {
-        if v > best.0 {
-            best = (v, i);
-        }
+    let (max, _) = dispatch(Range(response));
+    if max == f32::NEG_INFINITY {
+        return (max, 0);
     }
-    best
+    let (chunks, _) = response.as_chunks::<RANGE_LANES>();
+    // whole chunks branch-free (one vector compare each), then the values
+    let start = chunks
+        .iter()
+        .position(|c| c.iter().fold(false, |a, &v| a | (v == max)))
+        .map_or(chunks.len() * RANGE_LANES, |k| k * RANGE_LANES);
+    let i = start
+        + response[start..]
+            .iter()
+            .position(|&v| v == max)
+            .unwrap_or(0);
+    (response[i], i)
+}
+
+/// Values of [`Range`] taken at once (one AVX2 vector of `f32`).
+const RANGE_LANES: usize = 8;
+
+/// The largest and the smallest value of a slice (NaN never chosen;
+/// `(-inf, +inf)` when there is no other): [`RANGE_LANES`] running
+/// maxima and minima side by side (`if v > m { v } else { m }`), then
+/// across the lanes. The same values as one running maximum and minimum,
+/// in whatever order (but the sign of a zero extreme, which neither
+/// [`peak`] nor [`apce`] lets through).
+struct Range<'a>(&'a [f32]);
+
+impl Kernel for Range<'_> {
+    type Output = (f32, f32);
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) -> (f32, f32) {
+        let up = |m: f32, v: f32| if v > m { v } else { m };
+        let down = |m: f32, v: f32| if v < m { v } else { m };
+        let mut hi = [f32::NEG_INFINITY; RANGE_LANES];
+        let mut lo = [f32::INFINITY; RANGE_LANES];
+        let (chunks, tail) = self.0.as_chunks::<RANGE_LANES>();
+        for c in chunks {
+            for k in 0..RANGE_LANES {
+                hi[k] = up(hi[k], c[k]);
+                lo[k] = down(lo[k], c[k]);
+            }
+        }
+        for &v in tail {
+            hi[0] = up(hi[0], v);
+            lo[0] = down(lo[0], v);
+        }
+        (
+            hi.into_iter().fold(f32::NEG_INFINITY, up),
+            lo.into_iter().fold(f32::INFINITY, down),
+        )
+    }
 }
 
 /// Peak-to-sidelobe ratio of a `w x h` response: `(F_max - mu) / sigma`
@@ -64,8 +117,10 @@ pub fn apce(response: &[f32]) -> f64 {
     if response.is_empty() {
         return 0.0;
     }
-    let max = response.iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b)) as f64;
-    let min = response.iter().fold(f32::INFINITY, |a, &b| a.min(b)) as f64;
+    // (a zero extreme's sign changes neither (max - min)^2 nor any
+    // (v - min)^2)
+    let (max, min) = dispatch(Range(response));
+    let (max, min) = (max as f64, min as f64);
     let energy: f64 = response
         .iter()
         .map(|&v| (v as f64 - min) * (v as f64 - min))
@@ -188,6 +243,86 @@ mod tests {
         assert!((apce(&r) - 2.0).abs() < 1e-9);
         assert_eq!(apce(&[2.0; 5]), 0.0);
         assert_eq!(apce(&[]), 0.0);
+    }
+
+    /// Responses with ties, zeros of both signs, NaNs and infinities at
+    /// assorted places, of lengths around the lanes and the trackers' own.
+    fn awkward() -> Vec<Vec<f32>> {
+        let special = [
+            0.0,
+            -0.0,
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            3.5,
+            -3.5,
+        ];
+        let mut out = Vec::new();
+        let mut x = 0x2545_f491u32;
+        for n in (0..=40).chain([63, 64, 65, 640]) {
+            for variant in 0..13 {
+                let v: Vec<f32> = (0..n)
+                    .map(|_| {
+                        x ^= x << 13;
+                        x ^= x >> 17;
+                        x ^= x << 5;
+                        match (variant, x % 16) {
+                            // few distinct values: many ties
+                            (0..=3, r) => (r % 4) as f32 - 2.0,
+                            (4..=7, r) if r < 3 => special[(x >> 8) as usize % special.len()],
+                            (8, _) => f32::NAN,
+                            (9, _) => [-0.0, 0.0][(x >> 9) as usize % 2],
+                            (10, _) => f32::NEG_INFINITY,
+                            // a zero maximum, its first one of either sign
+                            (11, r) => [-1.0, 0.0, -0.0][r as usize % 3],
+                            _ => (x >> 8) as f32 / 1e6 - 8.0,
+                        }
+                    })
+                    .collect();
+                out.push(v);
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn peak_and_apce_are_the_running_loops() {
+        fn peak_running(r: &[f32]) -> (f32, usize) {
+            let mut best = (f32::NEG_INFINITY, 0);
+            for (i, &v) in r.iter().enumerate() {
+                if v > best.0 {
+                    best = (v, i);
+                }
+            }
+            best
+        }
+        fn apce_running(r: &[f32]) -> f64 {
+            if r.is_empty() {
+                return 0.0;
+            }
+            let max = r.iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b)) as f64;
+            let min = r.iter().fold(f32::INFINITY, |a, &b| a.min(b)) as f64;
+            let energy: f64 = r
+                .iter()
+                .map(|&v| (v as f64 - min) * (v as f64 - min))
+                .sum::<f64>()
+                / r.len() as f64;
+            if energy <= 0.0 || !energy.is_finite() {
+                return 0.0;
+            }
+            (max - min) * (max - min) / energy
+        }
+        for r in awkward() {
+            let (a, b) = (peak(&r), peak_running(&r));
+            assert_eq!((a.0.to_bits(), a.1), (b.0.to_bits(), b.1), "{r:?}");
+            assert_eq!(apce(&r).to_bits(), apce_running(&r).to_bits(), "{r:?}");
+            for level in bayestrack_image::simd::SimdLevel::ALL {
+                let (hi, lo) = level.run(Range(&r));
+                let hi_running = r.iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b));
+                let lo_running = r.iter().fold(f32::INFINITY, |a, &b| a.min(b));
+                assert!(hi == hi_running && lo == lo_running, "{level:?}: {r:?}");
+            }
+        }
     }
 
     #[test]
