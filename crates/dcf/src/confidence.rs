@@ -121,15 +121,42 @@ pub fn apce(response: &[f32]) -> f64 {
     // (v - min)^2)
     let (max, min) = dispatch(Range(response));
     let (max, min) = (max as f64, min as f64);
-    let energy: f64 = response
-        .iter()
-        .map(|&v| (v as f64 - min) * (v as f64 - min))
-        .sum::<f64>()
-        / response.len() as f64;
+    let energy = dispatch(Spread { response, min }) / response.len() as f64;
     if energy <= 0.0 || !energy.is_finite() {
         return 0.0;
     }
     (max - min) * (max - min) / energy
+}
+
+/// `sum (v - min)^2` over a response as one running `f64` sum in value
+/// order: [`RANGE_LANES`] terms computed side by side in vector lanes,
+/// then added one after the other (the plain loop's additions, in its
+/// order).
+struct Spread<'a> {
+    response: &'a [f32],
+    min: f64,
+}
+
+impl Kernel for Spread<'_> {
+    type Output = f64;
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) -> f64 {
+        let min = self.min;
+        let term = |v: f32| (v as f64 - min) * (v as f64 - min);
+        // from -0, as `Iterator::sum` (the same bits: no term is -0)
+        let mut e = -0.0f64;
+        let (chunks, tail) = self.response.as_chunks::<RANGE_LANES>();
+        for c in chunks {
+            let terms: [f64; RANGE_LANES] = std::array::from_fn(|i| term(c[i]));
+            for t in terms {
+                e += t;
+            }
+        }
+        for &v in tail {
+            e += term(v);
+        }
+        e
+    }
 }
 
 /// LMCF's update rule (Wang et al. 2017, sec. 3.3): learn only when both
@@ -321,6 +348,10 @@ mod tests {
                 let hi_running = r.iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b));
                 let lo_running = r.iter().fold(f32::INFINITY, |a, &b| a.min(b));
                 assert!(hi == hi_running && lo == lo_running, "{level:?}: {r:?}");
+                let min = 0.37;
+                let spread = level.run(Spread { response: &r, min });
+                let running: f64 = r.iter().map(|&v| (v as f64 - min) * (v as f64 - min)).sum();
+                assert_eq!(spread.to_bits(), running.to_bits(), "{level:?}: {r:?}");
             }
         }
     }
