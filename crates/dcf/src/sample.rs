@@ -883,7 +883,7 @@ impl Chunks<'_> {
 /// edges): the same values as [`along_edges`] on each (the same arithmetic
 /// on each edge), [`LANES`] edges at a time.
 #[inline(always)]
-fn along_chunks<const R: usize>(rows: [&[f64]; R], c: Chunks<'_>, mut out: [&mut [f64]; R]) {
+fn along_chunks<const R: usize>(rows: [&[f64]; R], c: Chunks<'_>, out: [&mut [f64]; R]) {
     // every chunk lies in the rows and the outputs (as cut); its indices
     // clamped to them all the same, so that the compiler sees it (no test
     // per chunk)
@@ -893,6 +893,9 @@ fn along_chunks<const R: usize>(rows: [&[f64]; R], c: Chunks<'_>, mut out: [&mut
         return;
     }
     let (last_i, last_k) = (cols - LANES - 1, len - LANES);
+    // (one length for the rows, one for the outputs: one test each)
+    let rows = rows.map(|r| &r[..cols]);
+    let mut out = out.map(|o| &mut o[..len]);
     for &(k, i) in c.chunks {
         let (k, i) = (k.min(last_k), i.min(last_i));
         // (whole arrays: the loads and stores of a chunk are vector ones)
