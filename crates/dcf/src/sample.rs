@@ -1079,8 +1079,12 @@ impl<const CHUNKS: bool> Kernel for AreaRows<'_, CHUNKS> {
         // patches running off the frame's side)
         let contiguous = n == ow + 1;
         let mut bottom_at = f64::NAN;
-        for (v, row) in out.chunks_exact_mut(ow).enumerate() {
-            let (a, b) = edges(y0 + v as f64 * sy, y0 + (v + 1) as f64 * sy, h);
+        // the output row's index as f64, counted (exact integers: the same
+        // values as converting it, without a u64 conversion per row)
+        let mut v = 0.0;
+        for row in out.chunks_exact_mut(ow) {
+            let (a, b) = edges(y0 + v * sy, y0 + (v + 1.0) * sy, h);
+            v += 1.0;
             if a == bottom_at {
                 std::mem::swap(top, bottom);
             } else {
