@@ -18,10 +18,13 @@ pub struct PatchSampler {
     sums: Vec<Vec<f64>>,
     /// Scratch: the distinct column edges of a patch.
     xs: Vec<(usize, f64)>,
-    /// Scratch: the edges' fractions, and the runs of edges on
-    /// consecutive table columns (see [`Runs`]).
+    /// Scratch: the edges' fractions, the runs of edges on consecutive
+    /// table columns, and the chunks and single edges they are read by
+    /// (see [`Chunks`]).
     gs: Vec<f64>,
     runs: Vec<(usize, usize, usize)>,
+    chunks: Vec<(usize, usize)>,
+    singles: Vec<usize>,
     /// Scratch (area averaging): per output column, its edges' indices in
     /// `xs` ...
     spans: Vec<(usize, usize)>,
@@ -34,8 +37,8 @@ pub struct PatchSampler {
     /// Scratch: the table interpolated at the column edges of two rows.
     top: Vec<f64>,
     bottom: Vec<f64>,
-    /// Scratch: three rows of the table interpolated at the column edges.
-    rows: [Vec<f64>; 3],
+    /// Scratch: rows of the table interpolated at the column edges.
+    rows: [Vec<f64>; SLOTS],
     /// The loaded region (empty before a load).
     region: Region,
     /// Scratch for loading: one row's values, the column sums above the
@@ -771,7 +774,7 @@ fn edges(a: f64, b: f64, n: usize) -> (f64, f64) {
 /// edges `xs`, in one pass (the same values as [`along_edges`] on each).
 #[inline(always)]
 #[allow(clippy::needless_range_loop)]
-fn along_edges2(rows: [&[f64]; 2], xs: &[(usize, f64)], out: [&mut Vec<f64>; 2]) {
+fn along_edges2(rows: [&[f64]; 2], xs: &[(usize, f64)], out: [&mut [f64]; 2]) {
     let [ra, rb] = rows;
     let [oa, ob] = out;
     // (one length for both rows, one for the edges and outputs, and an
@@ -799,79 +802,141 @@ fn along_edges(row: &[f64], xs: &[(usize, f64)], out: &mut [f64]) {
     }
 }
 
-/// The column edges as runs on consecutive table columns: each run
-/// `(k0, k1, i)` the edges `k0..k1`, edge `k` on table column
-/// `i + k - k0`, with every edge's fraction in `gs`. A patch's steps are
-/// at least 1 along x, so when they are under 2 most edges sit one table
-/// column after the one before: a run reads its table row and the row
-/// shifted by one as contiguous slices (vector loads, no gather).
+/// Edges per chunk of [`along_chunks`] (one AVX2 vector of `f64`).
+const LANES: usize = 4;
+
+/// The column edges read along x in chunks of [`LANES`] edges on
+/// consecutive table columns: chunk `(k, i)` is edges `k..k + LANES`, read
+/// from table columns `i..=i + LANES`, with every edge's fraction in `gs`
+/// (`LANES - 1` more entries after the last edge's); `singles` are edges
+/// read one by one, from `xs`.
+///
+/// A patch's steps are at least 1 along x, so when they are under 2 most
+/// edges sit one table column after the one before: each run of such
+/// edges reads its table row and the row shifted by one as contiguous
+/// slices (vector loads, no gather), in one flat list of chunks for the
+/// whole row (no per-run setup). A run of `LANES` edges or more is cut
+/// into chunks, its last chunk ending at its last edge (overlapping the one
+/// before: an edge written twice gets the same bits). A shorter run is one
+/// chunk writing past its last edge, onto edges of later runs, whose own
+/// chunks come after it in the list and write them again (and onto the
+/// `LANES - 1` spare entries after the last edge); where that chunk would
+/// read past the end of the table row, the run's edges are singles,
+/// read after every chunk.
 #[derive(Clone, Copy)]
-struct Runs<'a> {
-    runs: &'a [(usize, usize, usize)],
+struct Chunks<'a> {
+    chunks: &'a [(usize, usize)],
+    singles: &'a [usize],
+    xs: &'a [(usize, f64)],
     gs: &'a [f64],
 }
 
-/// Edges per chunk of [`along_runs`] (one AVX2 vector of `f64`).
-const RUN_LANES: usize = 4;
-
-/// `R` rows of a summed-area table interpolated along x at the edges of
-/// `runs`, into `out`: the same values as [`along_edges`] on each (the
-/// same arithmetic on each edge), in chunks of [`RUN_LANES`] edges, the
-/// last chunk of a run ending at its last edge (overlapping the one
-/// before: an edge written twice gets the same bits); runs shorter than
-/// a chunk edge by edge.
-#[inline(always)]
-fn along_runs<const R: usize>(rows: [&[f64]; R], runs: Runs<'_>, mut out: [&mut [f64]; R]) {
-    /// The chunk of edges from the first of `g` and `o`, from table
-    /// columns `a` (one more than the edges): whole arrays, so that the
-    /// loads of a chunk are vector loads (the callers' chunks lie in
-    /// their run: always whole).
-    #[inline(always)]
-    fn chunk(a: &[f64], g: &[f64], o: &mut [f64]) {
-        let (Some(a), Some(g), Some(o)) = (
-            a.first_chunk::<{ RUN_LANES + 1 }>(),
-            g.first_chunk::<RUN_LANES>(),
-            o.first_chunk_mut::<RUN_LANES>(),
-        ) else {
-            return;
-        };
-        *o = std::array::from_fn(|l| a[l] + g[l] * (a[l + 1] - a[l]));
+impl Chunks<'_> {
+    /// The edges `xs` as runs on consecutive table columns, into `runs`:
+    /// each run `(k0, k1, i)` the edges `k0..k1`, edge `k` on table column
+    /// `i + k - k0`.
+    fn find_runs(xs: &[(usize, f64)], runs: &mut Vec<(usize, usize, usize)>) {
+        runs.clear();
+        for (k, &(i, _)) in xs.iter().enumerate() {
+            match runs.last_mut() {
+                Some((k0, k1, i0)) if *k1 == k && *i0 + (k - *k0) == i => *k1 = k + 1,
+                _ => runs.push((k, k + 1, i)),
+            }
+        }
     }
-    for &(k0, k1, i) in runs.runs {
-        let len = k1 - k0;
-        let g = &runs.gs[k0..k1];
-        for (row, o) in rows.iter().zip(out.iter_mut()) {
-            // (edge k0 + t reads a[t] and a[t + 1])
-            let (a, o) = (&row[i..=i + len], &mut o[k0..k1]);
-            if len < RUN_LANES {
-                for t in 0..len {
-                    o[t] = a[t] + g[t] * (a[t + 1] - a[t]);
-                }
+
+    /// The chunks and singles of the runs `runs` of the edges `xs` on a
+    /// table of `cols` columns, into `chunks` and `singles`, and the
+    /// edges' fractions into `gs`.
+    fn cut(
+        xs: &[(usize, f64)],
+        runs: &[(usize, usize, usize)],
+        cols: usize,
+        chunks: &mut Vec<(usize, usize)>,
+        singles: &mut Vec<usize>,
+        gs: &mut Vec<f64>,
+    ) {
+        gs.clear();
+        gs.extend(xs.iter().map(|&(_, g)| g));
+        gs.resize(xs.len() + LANES - 1, 0.0);
+        chunks.clear();
+        singles.clear();
+        for &(k0, k1, i) in runs {
+            let len = k1 - k0;
+            if len < LANES && i + LANES + 1 > cols {
+                singles.extend(k0..k1);
                 continue;
             }
             let mut t = 0;
-            while t + RUN_LANES < len {
-                chunk(&a[t..], &g[t..], &mut o[t..]);
-                t += RUN_LANES;
+            while t + LANES < len {
+                chunks.push((k0 + t, i + t));
+                t += LANES;
             }
-            let t = len - RUN_LANES;
-            chunk(&a[t..], &g[t..], &mut o[t..]);
+            let t = len.max(LANES) - LANES;
+            chunks.push((k0 + t, i + t));
         }
     }
 }
 
-/// A summed-area table read at the column edges `xs`, along x by `runs`
-/// if `RUNS` (a path compiled for each: the edge-by-edge one as before
-/// runs were looked for).
-struct Table<'a, const RUNS: bool> {
+/// `R` rows of a summed-area table interpolated along x at the edges of
+/// `c`, into `out` (each at least `LANES - 1` entries longer than the
+/// edges): the same values as [`along_edges`] on each (the same arithmetic
+/// on each edge), [`LANES`] edges at a time.
+#[inline(always)]
+fn along_chunks<const R: usize>(rows: [&[f64]; R], c: Chunks<'_>, out: [&mut [f64]; R]) {
+    // every chunk lies in the rows and the outputs (as cut); its indices
+    // clamped to them all the same, so that the compiler sees it (no test
+    // per chunk)
+    let cols = rows.iter().map(|r| r.len()).min().unwrap_or(0);
+    let len = out.iter().map(|o| o.len()).fold(c.gs.len(), usize::min);
+    if cols < LANES + 1 || len < LANES {
+        return;
+    }
+    let (last_i, last_k) = (cols - LANES - 1, len - LANES);
+    // (one length for the rows, one for the outputs: one test each)
+    let rows = rows.map(|r| &r[..cols]);
+    let mut out = out.map(|o| &mut o[..len]);
+    for &(k, i) in c.chunks {
+        let (k, i) = (k.min(last_k), i.min(last_i));
+        // (whole arrays: the loads and stores of a chunk are vector ones)
+        let g: &[f64; LANES] = c.gs[k..k + LANES].try_into().unwrap_or(&[0.0; LANES]);
+        for (row, o) in rows.iter().zip(out.iter_mut()) {
+            let a: &[f64; LANES + 1] = row[i..i + LANES + 1]
+                .try_into()
+                .unwrap_or(&[0.0; LANES + 1]);
+            let o: &mut [f64; LANES] = match (&mut o[k..k + LANES]).try_into() {
+                Ok(o) => o,
+                Err(_) => continue,
+            };
+            *o = std::array::from_fn(|l| a[l] + g[l] * (a[l + 1] - a[l]));
+        }
+    }
+    for &k in c.singles {
+        let (i, g) = c.xs[k];
+        for (row, o) in rows.iter().zip(out.iter_mut()) {
+            let [a0, a1]: [f64; 2] = row[i..i + 2].try_into().unwrap_or_default();
+            o[k] = a0 + g * (a1 - a0);
+        }
+    }
+}
+
+/// Table rows interpolated along x kept at once: row `j` in slot
+/// `j % SLOTS` (a row edge reads rows `j` and `j + 1`, and interpolating
+/// `j + 2` in the same pass needs a third slot; a power of two).
+const SLOTS: usize = 4;
+
+/// A summed-area table read at the column edges `xs`, along x by `chunks`
+/// if `CHUNKS` (a path compiled for each: the edge-by-edge one as before
+/// chunks were looked for).
+struct Table<'a, const CHUNKS: bool> {
     sum: &'a [f64],
     cols: usize,
     h: usize,
     xs: &'a [(usize, f64)],
-    runs: Runs<'a>,
+    chunks: Chunks<'a>,
 }
 
-impl<const RUNS: bool> Table<'_, RUNS> {
+impl<const CHUNKS: bool> Table<'_, CHUNKS> {
     /// Row `j` of the table.
     #[inline(always)]
     fn row(&self, j: usize) -> &[f64] {
@@ -881,8 +946,8 @@ impl<const RUNS: bool> Table<'_, RUNS> {
     /// Table row `j` interpolated along x at every column edge, into `o`.
     #[inline(always)]
     fn along(&self, j: usize, o: &mut [f64]) {
-        if RUNS {
-            along_runs([self.row(j)], self.runs, [o]);
+        if CHUNKS {
+            along_chunks([self.row(j)], self.chunks, [o]);
         } else {
             along_edges(self.row(j), self.xs, o);
         }
@@ -891,64 +956,52 @@ impl<const RUNS: bool> Table<'_, RUNS> {
     /// Table rows `j` and `j + 1` interpolated along x at every column
     /// edge, into `out` (the same values as [`Table::along`] on each).
     #[inline(always)]
-    fn along2(&self, j: usize, out: [&mut Vec<f64>; 2]) {
-        if RUNS {
-            let [oa, ob] = out;
-            along_runs([self.row(j), self.row(j + 1)], self.runs, [oa, ob]);
+    fn along2(&self, j: usize, out: [&mut [f64]; 2]) {
+        if CHUNKS {
+            along_chunks([self.row(j), self.row(j + 1)], self.chunks, out);
         } else {
             along_edges2([self.row(j), self.row(j + 1)], self.xs, out);
         }
     }
 
     /// The table at row coordinate `y` at every column edge, into `o`,
-    /// from table rows interpolated along x kept in `rows` (`held`: which
-    /// rows they are): the same values as interpolating both rows along x
-    /// for each edge (each table row is interpolated the same way
-    /// whichever edge reads it). Where the row below is missing and
-    /// `ahead`, the one after it is interpolated in the same pass (the
-    /// next edge reads it when the step is under 2).
+    /// from table rows interpolated along x kept in `rows` (row `j` in
+    /// slot `j % SLOTS`; `held`: which row each slot holds): the same
+    /// values as interpolating both rows along x for each edge (each table
+    /// row is interpolated the same way whichever edge reads it). Where
+    /// the row below is missing and `ahead`, the one after it is
+    /// interpolated in the same pass (the next edge reads it when the step
+    /// is under 2).
     #[inline(always)]
     fn row_at(
         &self,
         y: f64,
         ahead: bool,
-        rows: &mut [Vec<f64>; 3],
-        held: &mut [usize; 3],
+        rows: &mut [Vec<f64>; SLOTS],
+        held: &mut [usize; SLOTS],
         o: &mut [f64],
     ) {
-        let xs = self.xs;
         let j = (y as usize).min(self.h - 1);
         let f = y - j as f64;
-        let slot = |k: usize| held.iter().position(|&r| r == k);
-        let (a, b) = match (slot(j), slot(j + 1)) {
-            (Some(a), Some(b)) => (a, b),
-            (Some(a), None) => {
-                let (p, q) = [(1, 2), (0, 2), (0, 1)][a];
-                if let Ok([rp, rq]) = rows.get_disjoint_mut([p, q]) {
-                    if ahead && j + 2 <= self.h {
-                        self.along2(j + 1, [rp, rq]);
-                        held[q] = j + 2;
-                    } else {
-                        self.along(j + 1, rp);
-                    }
+        let (a, b, c) = (j % SLOTS, (j + 1) % SLOTS, (j + 2) % SLOTS);
+        if held[b] != j + 1 {
+            if let Ok([ra, rb, rc]) = rows.get_disjoint_mut([a, b, c]) {
+                if held[a] != j {
+                    self.along2(j, [ra, rb]);
+                    held[a] = j;
+                } else if ahead && j + 2 <= self.h {
+                    self.along2(j + 1, [rb, rc]);
+                    held[c] = j + 2;
+                } else {
+                    self.along(j + 1, rb);
                 }
-                held[p] = j + 1;
-                (a, p)
             }
-            (None, Some(b)) => {
-                let p = if b == 0 { 1 } else { 0 };
-                self.along(j, &mut rows[p]);
-                held[p] = j;
-                (p, b)
-            }
-            (None, None) => {
-                let [ra, rb, _] = rows;
-                self.along2(j, [ra, rb]);
-                *held = [j, j + 1, usize::MAX];
-                (0, 1)
-            }
-        };
-        let n = xs.len();
+            held[b] = j + 1;
+        } else if held[a] != j {
+            self.along(j, &mut rows[a]);
+            held[a] = j;
+        }
+        let n = self.xs.len();
         let (ra, rb) = (&rows[a][..n], &rows[b][..n]);
         for ((o, &a), &b) in o[..n].iter_mut().zip(ra).zip(rb) {
             *o = a + f * (b - a);
@@ -960,28 +1013,28 @@ impl<const RUNS: bool> Table<'_, RUNS> {
 /// table interpolated along x at the column edges once per table row
 /// (kept while the next edge reads it), then along y at each row edge,
 /// then each output pixel from its four corners (the table read along x
-/// by runs of edges if `RUNS`).
-struct AreaRows<'a, const RUNS: bool> {
+/// by chunks of edges if `CHUNKS`).
+struct AreaRows<'a, const CHUNKS: bool> {
     sum: &'a [f64],
     w: usize,
     h: usize,
     y0: f64,
     sy: f64,
     xs: &'a [(usize, f64)],
-    runs: Runs<'a>,
+    chunks: Chunks<'a>,
     spans: &'a [(usize, usize)],
     widths: &'a [f64],
     /// The table at the row edges above and below an output row.
     top: &'a mut Vec<f64>,
     bottom: &'a mut Vec<f64>,
-    /// Three table rows interpolated along x.
-    rows: &'a mut [Vec<f64>; 3],
+    /// Table rows interpolated along x.
+    rows: &'a mut [Vec<f64>; SLOTS],
     out: &'a mut [f32],
     ow: usize,
     gain: f32,
 }
 
-impl<const RUNS: bool> Kernel for AreaRows<'_, RUNS> {
+impl<const CHUNKS: bool> Kernel for AreaRows<'_, CHUNKS> {
     type Output = ();
     #[inline(always)]
     fn run<T: Token>(self, _: T) {
@@ -992,7 +1045,7 @@ impl<const RUNS: bool> Kernel for AreaRows<'_, RUNS> {
             y0,
             sy,
             xs,
-            runs,
+            chunks,
             spans,
             widths,
             top,
@@ -1007,26 +1060,31 @@ impl<const RUNS: bool> Kernel for AreaRows<'_, RUNS> {
         top.resize(n, 0.0);
         bottom.resize(n, 0.0);
         for r in rows.iter_mut() {
-            r.resize(n, 0.0);
+            // (the chunks' spare entries after the last edge)
+            r.resize(n + LANES - 1, 0.0);
         }
         // the table rows held in `rows`
-        let mut held = [usize::MAX; 3];
+        let mut held = [usize::MAX; SLOTS];
         // consecutive row edges a step under 2 apart read the table row
         // after the one below the first
         let ahead = sy < 2.0;
-        let table = Table::<RUNS> {
+        let table = Table::<CHUNKS> {
             sum,
             cols,
             h,
             xs,
-            runs,
+            chunks,
         };
         // every column's left edge the previous one's right edge (all but
         // patches running off the frame's side)
         let contiguous = n == ow + 1;
         let mut bottom_at = f64::NAN;
-        for (v, row) in out.chunks_exact_mut(ow).enumerate() {
-            let (a, b) = edges(y0 + v as f64 * sy, y0 + (v + 1) as f64 * sy, h);
+        // the output row's index as f64, counted (exact integers: the same
+        // values as converting it, without a u64 conversion per row)
+        let mut v = 0.0;
+        for row in out.chunks_exact_mut(ow) {
+            let (a, b) = edges(y0 + v * sy, y0 + (v + 1.0) * sy, h);
+            v += 1.0;
             if a == bottom_at {
                 std::mem::swap(top, bottom);
             } else {
@@ -1066,7 +1124,7 @@ impl PatchSampler {
     /// four), and along x once per table row, the same values bit for bit;
     /// along x in vector chunks over the runs of edges on consecutive
     /// table columns where they average 3 edges or more on rows of 24
-    /// edges or more ([`Runs`]: steps under 4/3), edge by edge otherwise.
+    /// edges or more ([`Chunks`]: steps under 4/3), edge by edge otherwise.
     fn area(
         &mut self,
         level: SimdLevel,
@@ -1109,32 +1167,36 @@ impl PatchSampler {
         // 4/3 or more (runs of under 3 edges), where they would not pay
         const MIN_RUN: usize = 3;
         const MIN_EDGES: usize = 24;
-        self.gs.clear();
         self.runs.clear();
         let wanted = self.xs.len() >= MIN_EDGES && 3.0 * sx < 4.0;
-        for (k, &(i, g)) in self.xs.iter().enumerate().filter(|_| wanted) {
-            self.gs.push(g);
-            match self.runs.last_mut() {
-                Some((k0, k1, i0)) if *k1 == k && *i0 + (k - *k0) == i => *k1 = k + 1,
-                _ => self.runs.push((k, k + 1, i)),
-            }
+        if wanted {
+            Chunks::find_runs(&self.xs, &mut self.runs);
         }
-        let use_runs = wanted && MIN_RUN * self.runs.len() <= self.xs.len();
-        let runs = Runs {
-            runs: &self.runs,
+        let use_chunks = wanted && MIN_RUN * self.runs.len() <= self.xs.len();
+        if use_chunks {
+            let (chunks, singles) = (&mut self.chunks, &mut self.singles);
+            Chunks::cut(&self.xs, &self.runs, w + 1, chunks, singles, &mut self.gs);
+        } else {
+            self.chunks.clear();
+            self.singles.clear();
+        }
+        let chunks = Chunks {
+            chunks: &self.chunks,
+            singles: &self.singles,
+            xs: &self.xs,
             gs: &self.gs,
         };
         // (one macro for the two kernels' fields)
         macro_rules! rows {
-            ($runs:literal) => {
-                level.run(AreaRows::<$runs> {
+            ($chunks:literal) => {
+                level.run(AreaRows::<$chunks> {
                     sum: &self.sums[ch],
                     w,
                     h,
                     y0,
                     sy,
                     xs: &self.xs,
-                    runs,
+                    chunks,
                     spans: &self.spans,
                     widths: &self.widths,
                     top: &mut self.top,
@@ -1146,7 +1208,7 @@ impl PatchSampler {
                 })
             };
         }
-        if use_runs {
+        if use_chunks {
             rows!(true);
         } else {
             rows!(false);
@@ -1266,7 +1328,7 @@ mod area_tests {
             let scaled: Vec<f32> = want.iter().map(|b| b * gain).collect();
             assert_bits(&got, &scaled, &format!("gain {x0},{y0} {sx}x{sy}"));
             // (the last call's edges: read as runs or edge by edge)
-            if !s.runs.is_empty() && 3 * s.runs.len() <= s.xs.len() {
+            if !s.chunks.is_empty() {
                 with_runs += 1;
             }
         }
@@ -1276,6 +1338,189 @@ mod area_tests {
             "{with_runs} of {}",
             cases.len()
         );
+    }
+
+    /// Rows of a table read along x by chunks at a level: one row, or two
+    /// in one pass if `both`.
+    struct AlongChunks<'a> {
+        rows: [&'a [f64]; 2],
+        c: Chunks<'a>,
+        out: [&'a mut [f64]; 2],
+        both: bool,
+    }
+
+    impl Kernel for AlongChunks<'_> {
+        type Output = ();
+        #[inline(always)]
+        fn run<T: Token>(self, _: T) {
+            let [oa, ob] = self.out;
+            if self.both {
+                along_chunks(self.rows, self.c, [oa, ob]);
+            } else {
+                along_chunks([self.rows[0]], self.c, [oa]);
+            }
+        }
+    }
+
+    #[test]
+    fn chunks_read_the_table_as_edge_by_edge() {
+        let cols = 61;
+        let row = |r: usize| -> Vec<f64> {
+            (0..cols)
+                .map(|x| ((x * 7919 + r * 104_729) % 100_003 * 255 + x) as f64)
+                .collect()
+        };
+        let rows = [row(1), row(2)];
+        // run lengths (each run's edges on consecutive columns, a gap of
+        // one to three columns after it): under, at and over a chunk's
+        // edges, short runs last (singles at the row's end)
+        let patterns: [&[usize]; 7] = [
+            &[1, 1, 1],
+            &[2, 5, 3, 1, 4],
+            &[4],
+            &[9, 1, 8, 2],
+            &[3, 3, 3, 3],
+            &[7, 12, 6, 4, 3],
+            &[5, 4, 8, 1],
+        ];
+        let (mut runs, mut chunks, mut singles, mut gs) = (vec![], vec![], vec![], vec![]);
+        let mut with_singles = 0;
+        for (p, lens) in patterns.iter().enumerate() {
+            let gap = |r: usize| 1 + (r + p) % 3;
+            let span: usize = lens.iter().enumerate().map(|(r, &l)| l + gap(r)).sum();
+            // from the row's first column, and ending at its last edge
+            // column (`cols - 2`: an edge reads its column and the next)
+            for start in [0, cols - 1 - span + gap(lens.len() - 1)] {
+                let mut xs = vec![];
+                let mut c = start;
+                for (r, &l) in lens.iter().enumerate() {
+                    for t in 0..l {
+                        let g = ((xs.len() * 37 + 11) % 64) as f64 / 64.0 + 1.0 / 3.0;
+                        xs.push((c + t, g.fract()));
+                    }
+                    c += l + gap(r);
+                }
+                Chunks::find_runs(&xs, &mut runs);
+                assert_eq!(runs.len(), lens.len());
+                Chunks::cut(&xs, &runs, cols, &mut chunks, &mut singles, &mut gs);
+                with_singles += usize::from(!singles.is_empty());
+                let c = Chunks {
+                    chunks: &chunks,
+                    singles: &singles,
+                    xs: &xs,
+                    gs: &gs,
+                };
+                let n = xs.len();
+                let want: Vec<Vec<f64>> = rows
+                    .iter()
+                    .map(|r| {
+                        let mut o = vec![f64::NAN; n];
+                        along_edges(r, &xs, &mut o);
+                        o
+                    })
+                    .collect();
+                for level in SimdLevel::ALL {
+                    for both in [false, true] {
+                        let mut out =
+                            [vec![f64::NAN; n + LANES - 1], vec![f64::NAN; n + LANES - 1]];
+                        let [oa, ob] = &mut out;
+                        level.run(AlongChunks {
+                            rows: [&rows[0], &rows[1]],
+                            c,
+                            out: [oa, ob],
+                            both,
+                        });
+                        for (r, (got, want)) in out
+                            .iter()
+                            .zip(&want)
+                            .enumerate()
+                            .take(1 + usize::from(both))
+                        {
+                            let bits =
+                                |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                            assert_eq!(
+                                bits(&got[..n]),
+                                bits(want),
+                                "{level:?} {lens:?} from {start} row {r} of {}",
+                                1 + usize::from(both)
+                            );
+                        }
+                    }
+                }
+            }
+        }
+        // runs that would read past the row's end were read edge by edge
+        assert!(with_singles >= 3, "{with_singles}");
+    }
+
+    #[test]
+    fn area_matches_the_reference_at_every_step_and_side() {
+        // a frame larger than the patches, which are larger than the
+        // sequences' own (64 x 160 at steps near 1.1), at steps from 0.5
+        // (bilinear) to 3, inside the frame and running off each side and
+        // corner
+        let (w, h) = (157, 113);
+        let img =
+            Image::from_fn(w, h, |x, y| ((x * 73 + y * 151 + x * y * 7) % 256) as u8).unwrap();
+        let mut s = PatchSampler::new();
+        s.load(img.view()).unwrap();
+        let steps = [
+            0.5,
+            1.0,
+            1.0125,
+            1.1,
+            1.1234,
+            1.25,
+            4.0 / 3.0,
+            1.5,
+            1.9,
+            2.0,
+            2.6,
+            3.0,
+        ];
+        let (ow, oh) = (72, 40);
+        let mut by_chunks = 0;
+        for (n, &sx) in steps.iter().enumerate() {
+            let sy = steps[(n * 5 + 3) % steps.len()];
+            let (pw, ph) = (ow as f64 * sx, oh as f64 * sy);
+            // inside; off the left, right, top and bottom; the corners
+            let places = [
+                (7.3, 5.6),
+                (-pw / 3.0, 20.2),
+                (w as f64 - 2.0 * pw / 3.0, 9.9),
+                (11.1, -ph / 2.0),
+                (3.4, h as f64 - ph / 4.0),
+                (-pw / 2.0, -ph / 2.0),
+                (w as f64 - pw / 2.0, h as f64 - ph / 3.0),
+                (-2.0 * pw, 4.5),
+            ];
+            for (x0, y0) in places {
+                let mut got = vec![f32::NAN; ow * oh];
+                let want = if sx >= 1.0 && sy >= 1.0 {
+                    reference(&s, x0, y0, sx, sy, ow, oh)
+                } else {
+                    s.sample_at(
+                        SimdLevel::Scalar,
+                        0,
+                        (x0, y0, sx, sy),
+                        &mut got,
+                        ow,
+                        oh,
+                        1.0,
+                    )
+                    .unwrap();
+                    got.clone()
+                };
+                for level in SimdLevel::ALL {
+                    got.fill(f32::NAN);
+                    s.sample_at(level, 0, (x0, y0, sx, sy), &mut got, ow, oh, 1.0)
+                        .unwrap();
+                    assert_bits(&got, &want, &format!("{level:?} {x0},{y0} {sx}x{sy}"));
+                }
+                by_chunks += usize::from(!s.chunks.is_empty());
+            }
+        }
+        assert!(by_chunks >= 15, "{by_chunks}");
     }
 }
 
