@@ -58,28 +58,32 @@ pub struct Fhog {
     /// Gradients along x and y, per pixel.
     gx: Vec<f32>,
     gy: Vec<f32>,
+    /// Per pixel: its magnitude divided by `b^2` (what its shares split)
+    /// and its bin (as wide as the gradients: the vector loop that finds
+    /// them keeps its lanes that wide).
     mag: Vec<f32>,
-    /// Each pixel's bin (as wide as the gradients: the vector loop that
-    /// finds them keeps its lanes that wide).
     bin: Vec<u32>,
     sensitive: Vec<f32>,
-    padded: Vec<f32>,
     /// Per pixel of the whole cells' rows (`hb * cell` rows of `w`): the
-    /// offset of its upper-left cell in a histogram plane (see
-    /// [`Fhog::histograms`]; past the last whole cell, the bottom padding
-    /// row, whose 2x2 cells are all padding), the weights of the left and
-    /// right cells (0 off the grid and past the last whole cell), of the
-    /// upper and lower cells.
-    px_cell: Vec<u32>,
-    px_lo: Vec<f32>,
-    px_hi: Vec<f32>,
-    px_up: Vec<f32>,
-    px_down: Vec<f32>,
-    /// Scratch of the histograms: each pixel's four shares (side by side:
-    /// upper-left, upper-right, lower-left, lower-right cell) and its
-    /// offset in the padded histograms.
-    shares: Vec<f32>,
+    /// offset of its left cells' pair in a bin's plane of a band (see
+    /// [`Fhog::histograms`]; 0 past the last whole cell, never read), then
+    /// (scratch) that offset plus its bin's plane.
+    px_col: Vec<u32>,
     tops: Vec<u32>,
+    /// Per column of the whole cells: the weights of its shares in the
+    /// order of a band's 2x2 cells (the left cell's two rows, the right
+    /// one's): the left cell's twice, the right one's twice (0 for a cell
+    /// off the grid).
+    col_weights: Vec<[f32; 4]>,
+    /// Per row of the whole cells: its band (its upper cell row + 1) and
+    /// the weights of its shares in the band's slots (the even one, the
+    /// odd one, twice: the upper cell row's slot is the band's parity).
+    row_weights: Vec<(usize, [f32; 4])>,
+    /// The histograms of a band, `[pad pair][18 planes][pad pair]`.
+    band: Vec<f32>,
+    /// Per slot, the mask that clears it in [`LANES`] pairs (data rather
+    /// than constants: see [`clear`]).
+    keep: [[u32; 2 * LANES]; 2],
     insensitive: Vec<f32>,
     block: Vec<f32>,
     /// Per cell: its energy, then the norms of its four blocks and its
@@ -106,30 +110,32 @@ impl Fhog {
         let (wb, hb) = (w / cell, h / cell);
         let nb = wb * hb;
         let rows = hb * cell;
-        let px = rows * w;
-        // a pixel past the last whole cell goes to the last plane's bottom
-        // padding row (and the guard row after it) with weights 0, so the
-        // scatter goes over whole rows and what it adds is dropped
-        let past = ((hb + 1) * wb + 1) as u32;
-        let (mut px_cell, mut px_lo, mut px_hi) = (vec![past; px], vec![0.0; px], vec![0.0; px]);
-        let (mut px_up, mut px_down) = (vec![0.0; px], vec![0.0; px]);
-        for y in 0..rows {
-            let (y0, fy) = split(y, cell);
-            for x in 0..wb * cell {
-                let (c0, fx) = split(x, cell);
-                let i = y * w + x;
-                px_cell[i] = (y0 * wb + c0) as u32;
-                // a column off the grid (left of the first cell, right of
-                // the last) gets weight 0: its share, +0.0, lands on the
-                // neighbouring row's edge cell and changes no value there
-                let lo = if c0 == 0 { 0.0 } else { 1.0 - fx };
-                let hi = if c0 == wb { 0.0 } else { fx };
-                (px_lo[i], px_hi[i]) = (lo, hi);
-            }
-            for i in y * w..(y + 1) * w {
-                (px_up[i], px_down[i]) = (1.0 - fy, fy);
+        let cols: Vec<(usize, f32)> = (0..wb * cell).map(|x| split(x, cell)).collect();
+        let mut px_col = vec![0; rows * w];
+        for row in px_col.chunks_exact_mut(w) {
+            for (p, &(c0, _)) in row.iter_mut().zip(&cols) {
+                *p = 2 * c0 as u32;
             }
         }
+        // a column off the grid (left of the first cell, right of the last)
+        // gets weight 0: its share, +0.0, lands on the neighbouring plane's
+        // edge cell (or a pad pair) and changes no value there
+        let col_weights = cols
+            .iter()
+            .map(|&(c0, fx)| {
+                let lo = if c0 == 0 { 0.0 } else { 1.0 - fx };
+                let hi = if c0 == wb { 0.0 } else { fx };
+                [lo, lo, hi, hi]
+            })
+            .collect();
+        let row_weights = (0..rows)
+            .map(|y| {
+                let (y0, fy) = split(y, cell);
+                let (up, down) = (1.0 - fy, fy);
+                let (even, odd) = if y0 % 2 == 0 { (up, down) } else { (down, up) };
+                (y0, [even, odd, even, odd])
+            })
+            .collect();
         Ok(Self {
             w,
             h,
@@ -141,14 +147,12 @@ impl Fhog {
             mag: vec![0.0; w * h],
             bin: vec![0; w * h],
             sensitive: vec![0.0; SENSITIVE * nb],
-            padded: vec![0.0; SENSITIVE * wb * (hb + 2) + wb + 2],
-            px_cell,
-            px_lo,
-            px_hi,
-            px_up,
-            px_down,
-            shares: vec![0.0; 4 * px],
-            tops: vec![0; px],
+            tops: vec![0; px_col.len()],
+            px_col,
+            col_weights,
+            row_weights,
+            band: vec![0.0; band_len(wb)],
+            keep: std::array::from_fn(|s| std::array::from_fn(|k| if k % 2 == s { 0 } else { !0 })),
             insensitive: vec![0.0; INSENSITIVE * nb],
             block: vec![0.0; wb.saturating_sub(1).max(1) * hb.saturating_sub(1).max(1)],
             energy: vec![0.0; nb],
@@ -224,7 +228,9 @@ impl Fhog {
             gx: &mut self.gx[..n],
             gy: &mut self.gy[..n],
         });
+        let inv = 1.0 / self.cell as f32;
         level.run(GradientBins {
+            norm: inv * inv,
             gx: &self.gx,
             gy: &self.gy,
             mag: &mut self.mag,
@@ -232,41 +238,42 @@ impl Fhog {
         });
     }
 
-    /// Each pixel's four shares added into the padded histograms in pixel
-    /// order (one slice per pixel: no bounds test per share); every
-    /// pixel's shares and histogram offset are computed first in one
-    /// vector pass, then added in one scalar pass, one pixel after the
-    /// other. Each cell's sum is the same as on a grid padded on all four
-    /// sides for finite gradients: the shares of the columns off the grid
-    /// are +0.0 there, and `x + 0.0` is `x` (or +0.0 for -0.0, which the
-    /// read-back gives anyway).
+    /// Each pixel's four shares added into the histograms in pixel order,
+    /// band by band. A band is the two cell rows a pixel row adds to (the
+    /// pixel rows with the same upper cell row); the band buffer holds, per
+    /// bin, one plane of the band's cells with each cell's two rows side
+    /// by side, so that a pixel's four shares go to four neighbouring
+    /// values (one 4-wide add: the same four sums as four scalar adds).
+    /// A cell row keeps its slot (even or odd) of the pairs while it is in
+    /// a band: when the pixel rows pass to the next band, the upper row
+    /// is complete, copied out and cleared to +0.0, and its slot takes the
+    /// new lower row (the other row's sums carry on in place).
+    ///
+    /// Every pixel's offset (its bin's plane and its column) comes from one
+    /// vector pass. The cell rows off the grid (above the first, below the
+    /// last) are not copied out; the shares of the columns off the grid
+    /// have weight 0 (see [`Fhog::new`]) and land, as +0.0, on a
+    /// neighbouring plane's edge cell or a pad pair, which `x + 0.0 = x`
+    /// leaves as they are (every sum is +0.0 or positive, for finite
+    /// gradients); so each cell's sum is the one on a grid padded on all
+    /// four sides.
     #[inline(never)]
     fn histograms(&mut self, level: SimdLevel) {
         let (wb, hb) = (self.wb, self.hb);
         let nb = wb * hb;
-        // binned on planes of hb + 2 rows of wb cells (a padding row above
-        // and below the grid), one value before the first plane and a row
-        // after the last: the shares that fall off the grid above or below
-        // land in padding and are dropped, those left or right of it have
-        // weight 0 (see `Fhog::new`), so the inner loop has no bounds tests
-        let np = wb * (hb + 2);
         level.run(Histograms {
             w: self.w,
-            cell: self.cell,
-            rows: hb * self.cell,
+            cells: wb * self.cell,
             wb,
             hb,
-            np,
             mag: &self.mag,
             bin: &self.bin,
-            px_cell: &self.px_cell,
-            px_lo: &self.px_lo,
-            px_hi: &self.px_hi,
-            px_up: &self.px_up,
-            px_down: &self.px_down,
-            shares: &mut self.shares,
+            px_col: &self.px_col,
             tops: &mut self.tops,
-            padded: &mut self.padded,
+            col_weights: &self.col_weights,
+            row_weights: &self.row_weights,
+            band: &mut self.band,
+            keep: &self.keep,
             sensitive: &mut self.sensitive[..SENSITIVE * nb],
             insensitive: &mut self.insensitive[..INSENSITIVE * nb],
         });
@@ -378,71 +385,162 @@ fn split(i: usize, cell: usize) -> (usize, f32) {
 /// The orientation histograms of the cells (see [`Fhog::histograms`]).
 struct Histograms<'a> {
     w: usize,
-    cell: usize,
-    rows: usize,
+    /// Pixels across the whole cells.
+    cells: usize,
     wb: usize,
     hb: usize,
-    np: usize,
     mag: &'a [f32],
     bin: &'a [u32],
-    px_cell: &'a [u32],
-    px_lo: &'a [f32],
-    px_hi: &'a [f32],
-    px_up: &'a [f32],
-    px_down: &'a [f32],
-    shares: &'a mut [f32],
+    px_col: &'a [u32],
     tops: &'a mut [u32],
-    padded: &'a mut [f32],
+    col_weights: &'a [[f32; 4]],
+    row_weights: &'a [(usize, [f32; 4])],
+    band: &'a mut [f32],
+    keep: &'a [[u32; 2 * LANES]; 2],
     sensitive: &'a mut [f32],
     insensitive: &'a mut [f32],
 }
 
-/// Every pixel's four shares and offset (one flat pass: vectorises).
-/// A pixel's four shares are stored side by side (one output stream, so
-/// that the scatter loads each pair of neighbouring cells' shares at
-/// once).
-#[allow(clippy::too_many_arguments)]
+/// Length of the band buffer for `wb` cells across: a pad pair, the 18
+/// bins' planes of `wb` pairs (a cell's two rows), a pad pair.
+fn band_len(wb: usize) -> usize {
+    2 * SENSITIVE * wb + 4
+}
+
+/// One pixel row's shares added into `band`, pixel after pixel (four a
+/// step): each pixel's four shares `wx * (wy * m)` (the order of the
+/// definition's products) added into the four values from its offset.
 #[inline(always)]
-fn shares(
-    norm: f32,
-    np: u32,
-    mag: &[f32],
-    bin: &[u32],
-    (cell, lo, hi): (&[u32], &[f32], &[f32]),
-    (up, down): (&[f32], &[f32]),
-    quads: &mut [f32],
-    tops: &mut [u32],
-) {
-    let n = tops.len();
-    let (mag, bin, cell, lo, hi) = (&mag[..n], &bin[..n], &cell[..n], &lo[..n], &hi[..n]);
-    let (up, down) = (&up[..n], &down[..n]);
-    for (i, q) in quads[..4 * n].chunks_exact_mut(4).enumerate() {
-        let m = mag[i] * norm;
-        let (wy1, wy0) = (down[i] * m, up[i] * m);
-        q[0] = lo[i] * wy0;
-        q[1] = hi[i] * wy0;
-        q[2] = lo[i] * wy1;
-        q[3] = hi[i] * wy1;
-        tops[i] = bin[i] * np + cell[i];
+fn scatter(band: &mut [f32], tops: &[u32], mag: &[f32], cols: &[[f32; 4]], wy: [f32; 4]) {
+    let mut add = |top: u32, m: f32, wx: &[f32; 4]| {
+        let top = top as usize;
+        let cells = &mut band[top..top + 4];
+        for k in 0..4 {
+            cells[k] += wx[k] * (wy[k] * m);
+        }
+    };
+    const STEP: usize = 4;
+    let (t, m, c) = (
+        tops.chunks_exact(STEP),
+        mag.chunks_exact(STEP),
+        cols.chunks_exact(STEP),
+    );
+    let rest = (t.remainder(), m.remainder(), c.remainder());
+    for ((t, m), c) in t.zip(m).zip(c) {
+        for j in 0..STEP {
+            add(t[j], m[j], &c[j]);
+        }
+    }
+    for ((&t, &m), c) in rest.0.iter().zip(rest.1).zip(rest.2) {
+        add(t, m, c);
     }
 }
 
-/// One row's shares added into the padded histograms, pixel after pixel.
-/// Scalar code (the baseline's two-wide adds at most, the same at every
-/// level), kept out of line so that the kernel's live values leave it
-/// all the registers.
-#[inline(never)]
-fn scatter(padded: &mut [f32], stride: u32, tops: &[u32], quads: &[f32]) {
-    // (both under 2^32: their sum cannot overflow, one bounds test less)
-    let pw = stride as usize;
-    for (&top, q) in tops.iter().zip(quads.chunks_exact(4)) {
-        // the 2x2 cells the pixel's shares go to, one slice
-        let top = top as usize;
-        let cells = &mut padded[top..top + pw + 2];
-        cells[0] += q[0];
-        cells[1] += q[1];
-        cells[pw] += q[2];
-        cells[pw + 1] += q[3];
+/// The end of band `band`: its upper cell row (row `band - 1` of the
+/// grid, if on it), in slot `band % 2` of the pairs of the band buffer's
+/// `planes`, copied out into `sensitive`, and cleared to +0.0.
+#[inline(always)]
+fn next_band(
+    planes: &mut [f32],
+    band: usize,
+    wb: usize,
+    hb: usize,
+    sensitive: &mut [f32],
+    keep: &[[u32; 2 * LANES]; 2],
+) {
+    let slot = band % 2;
+    let keep = &keep[slot];
+    if !(1..=hb).contains(&band) {
+        // (in chunks of LANES pairs, the last one ending at the end:
+        // clearing a value twice clears it)
+        let n = planes.len();
+        for pairs in planes.chunks_exact_mut(2 * LANES) {
+            clear(pairs, keep);
+        }
+        if !n.is_multiple_of(2 * LANES) {
+            clear(&mut planes[n - 2 * LANES..], keep);
+        }
+        return;
+    }
+    let row = (band - 1) * wb;
+    if slot == 0 {
+        take_rows::<0>(planes, row, wb, hb, sensitive, keep);
+    } else {
+        take_rows::<1>(planes, row, wb, hb, sensitive, keep);
+    }
+}
+
+/// Slot `S` of each plane's `wb` pairs copied out to `row` of its bin in
+/// `sensitive` and cleared (`keep`: all ones but in slot `S`), in chunks
+/// of [`LANES`] cells. A row that is not a multiple of [`LANES`] long
+/// takes one more chunk, ending at its end: copied first (the chunk
+/// before it clears some of its values), cleared last (clearing a value
+/// twice clears it).
+#[inline(always)]
+fn take_rows<const S: usize>(
+    planes: &mut [f32],
+    row: usize,
+    wb: usize,
+    hb: usize,
+    sensitive: &mut [f32],
+    keep: &[u32; 2 * LANES],
+) {
+    for (plane, out) in planes
+        .chunks_exact_mut(2 * wb)
+        .zip(sensitive.chunks_exact_mut(wb * hb))
+    {
+        let out = &mut out[row..][..wb];
+        if wb < LANES {
+            for (o, pair) in out.iter_mut().zip(plane.chunks_exact_mut(2)) {
+                *o = pair[S];
+                pair[S] = 0.0;
+            }
+            continue;
+        }
+        let tail = wb - LANES;
+        let partial = !wb.is_multiple_of(LANES);
+        if partial {
+            let pairs = &plane[2 * tail..][..2 * LANES];
+            let out = &mut out[tail..][..LANES];
+            for k in 0..LANES {
+                out[k] = pairs[2 * k + S];
+            }
+        }
+        for (o, pairs) in out
+            .chunks_exact_mut(LANES)
+            .zip(plane.chunks_exact_mut(2 * LANES))
+        {
+            take::<S>(pairs, o, keep);
+        }
+        if partial {
+            clear(&mut plane[2 * tail..], keep);
+        }
+    }
+}
+
+/// [`LANES`] pairs: slot `S` copied to `out`, then cleared. (The copy is
+/// taken from the pairs masked with the complement of `keep`, the same
+/// values in slot `S`: so that the pairs are loaded whole, once, for both.)
+#[inline(always)]
+fn take<const S: usize>(pairs: &mut [f32], out: &mut [f32], keep: &[u32; 2 * LANES]) {
+    let (pairs, out) = (&mut pairs[..2 * LANES], &mut out[..LANES]);
+    let v: [u32; 2 * LANES] = std::array::from_fn(|k| pairs[k].to_bits());
+    for k in 0..2 * LANES {
+        pairs[k] = f32::from_bits(v[k] & keep[k]);
+    }
+    for k in 0..LANES {
+        out[k] = f32::from_bits(v[2 * k + S] & !keep[2 * k + S]);
+    }
+}
+
+/// [`LANES`] pairs masked with `keep` (a mask read from memory, so that
+/// the clearing stays two vector stores rather than one store per
+/// cleared value).
+#[inline(always)]
+fn clear(pairs: &mut [f32], keep: &[u32; 2 * LANES]) {
+    let pairs = &mut pairs[..2 * LANES];
+    for k in 0..2 * LANES {
+        pairs[k] = f32::from_bits(pairs[k].to_bits() & keep[k]);
     }
 }
 
@@ -450,46 +548,48 @@ impl Kernel for Histograms<'_> {
     type Output = ();
     #[inline(always)]
     fn run<T: Token>(self, _: T) {
-        let (w, wb, np) = (self.w, self.wb, self.np);
-        let inv = 1.0 / self.cell as f32;
-        let norm = inv * inv;
-        let px = self.rows * w;
-        // cleared to -0.0 (vector stores rather than a byte fill): every
-        // share is +0.0 or positive, so a cell that receives one holds
-        // the same bits as when cleared to +0.0, and one that receives
-        // none is read back below as -0.0 + 0.0 = +0.0
-        let padded = &mut self.padded[..SENSITIVE * np + wb + 2];
-        padded.fill(-0.0);
-        let quads = &mut self.shares[..4 * px];
-        let tops = &mut self.tops[..px];
-        shares(
-            norm,
-            np as u32,
-            self.mag,
-            self.bin,
-            (self.px_cell, self.px_lo, self.px_hi),
-            (self.px_up, self.px_down),
-            quads,
-            tops,
-        );
-        // in one pass over the whole rows: the pixels past the last whole
-        // cell add into the padding (see `px_cell`), which is dropped
-        scatter(padded, wb as u32, tops, quads);
-        // the grid without its padding; the insensitive bins the sums of
-        // opposite sensitive ones
-        // (each plane's grid is one contiguous run: one flat loop)
-        let nb = wb * self.hb;
-        let (lo_bins, hi_bins) = self.sensitive.split_at_mut(INSENSITIVE * nb);
-        for o in 0..INSENSITIVE {
-            let grid = |o: usize| 1 + o * np + wb..1 + o * np + wb + nb;
-            let (pa, pb) = (&padded[grid(o)], &padded[grid(o + INSENSITIVE)]);
-            let (da, db) = (&mut lo_bins[o * nb..][..nb], &mut hi_bins[o * nb..][..nb]);
-            let di = &mut self.insensitive[o * nb..][..nb];
-            for i in 0..nb {
-                let (a, b) = (pa[i] + 0.0, pb[i] + 0.0);
-                da[i] = a;
-                db[i] = b;
-                di[i] = a + b;
+        let (w, cells, wb, hb) = (self.w, self.cells, self.wb, self.hb);
+        let plane = (2 * wb) as u32;
+        let n = self.tops.len();
+        for ((t, &b), &c) in self
+            .tops
+            .iter_mut()
+            .zip(&self.bin[..n])
+            .zip(&self.px_col[..n])
+        {
+            *t = b * plane + c;
+        }
+        let band = self.band;
+        band.fill(0.0);
+        let planes = 2..2 + 2 * SENSITIVE * wb;
+        let mut at = self.row_weights[0].0;
+        let cols = &self.col_weights[..cells];
+        for (y, &(y0, wy)) in self.row_weights.iter().enumerate() {
+            if y0 != at {
+                next_band(
+                    &mut band[planes.clone()],
+                    at,
+                    wb,
+                    hb,
+                    self.sensitive,
+                    self.keep,
+                );
+                at = y0;
+            }
+            let (tops, mag) = (&self.tops[y * w..][..cells], &self.mag[y * w..][..cells]);
+            scatter(band, tops, mag, cols, wy);
+        }
+        next_band(&mut band[planes], at, wb, hb, self.sensitive, self.keep);
+        // the insensitive bins: the sums of opposite sensitive ones
+        let nb = wb * hb;
+        let (lo_bins, hi_bins) = self.sensitive.split_at(INSENSITIVE * nb);
+        for ((a, b), d) in lo_bins
+            .chunks_exact(nb)
+            .zip(hi_bins.chunks_exact(nb))
+            .zip(self.insensitive.chunks_exact_mut(nb))
+        {
+            for ((d, &a), &b) in d.iter_mut().zip(a).zip(b) {
+                *d = a + b;
             }
         }
     }
@@ -550,8 +650,10 @@ impl Kernel for Differences<'_> {
     }
 }
 
-/// The magnitude and bin of every pixel of a patch from its gradients.
+/// The magnitude times `norm` and the bin of every pixel of a patch from
+/// its gradients.
 struct GradientBins<'a> {
+    norm: f32,
     gx: &'a [f32],
     gy: &'a [f32],
     mag: &'a mut [f32],
@@ -566,7 +668,8 @@ impl Kernel for GradientBins<'_> {
         let n = self.mag.len();
         let (gx, gy, bin) = (&self.gx[..n], &self.gy[..n], &mut self.bin[..n]);
         for (((m, o), &gx), &gy) in self.mag.iter_mut().zip(bin).zip(gx).zip(gy) {
-            (*m, *o) = pixel(gx, gy, &dirs);
+            let (mag, bin) = pixel(gx, gy, &dirs);
+            (*m, *o) = (mag * self.norm, bin);
         }
     }
 }
@@ -1079,10 +1182,22 @@ mod tests {
             (37, 29, 4),
             (41, 40, 5),
             (17, 31, 3),
-            // the trackers' sizes: a search window, scale-filter patches
+            // the trackers' sizes: search windows, scale-filter patches
             (62, 155, 4),
+            (64, 160, 4),
+            (48, 128, 4),
+            (72, 108, 4),
             (14, 36, 4),
             (15, 35, 4),
+            // band rows of 8k cells, 8k + 1 (one more, overlapping chunk) and
+            // 4k + 2 (a band of 18 (4k + 2) pairs, no whole number of
+            // 16-value chunks), several cell sizes
+            (129, 19, 4),
+            (133, 19, 4),
+            (79, 23, 3),
+            (34, 21, 1),
+            (52, 15, 2),
+            (85, 29, 5),
         ];
         for (k, &(w, h, cell)) in sizes.iter().enumerate() {
             let patch = random_patch(w, h, 7 + k as u32);
@@ -1156,6 +1271,7 @@ mod tests {
         for level in SimdLevel::ALL {
             let (mut mag, mut bin) = (vec![f32::NAN; n], vec![u32::MAX; n]);
             level.run(GradientBins {
+                norm: 1.0,
                 gx: &gx,
                 gy: &gy,
                 mag: &mut mag,
