@@ -518,9 +518,9 @@ fn take_rows<const S: usize>(
     }
 }
 
-/// [`LANES`] pairs: slot `S` copied to `out`, then cleared. (The copy is
-/// taken from the pairs masked with the complement of `keep`, the same
-/// values in slot `S`: so that the pairs are loaded whole, once, for both.)
+/// [`LANES`] pairs: slot `S` copied to `out`, then cleared. (The pairs
+/// are loaded whole, once, for both; slot `S` taken from the loaded
+/// values by a shuffle, not gathered from memory.)
 #[inline(always)]
 fn take<const S: usize>(pairs: &mut [f32], out: &mut [f32], keep: &[u32; 2 * LANES]) {
     let (pairs, out) = (&mut pairs[..2 * LANES], &mut out[..LANES]);
@@ -529,7 +529,7 @@ fn take<const S: usize>(pairs: &mut [f32], out: &mut [f32], keep: &[u32; 2 * LAN
         pairs[k] = f32::from_bits(v[k] & keep[k]);
     }
     for k in 0..LANES {
-        out[k] = f32::from_bits(v[2 * k + S] & !keep[2 * k + S]);
+        out[k] = f32::from_bits(v[2 * k + S]);
     }
 }
 
