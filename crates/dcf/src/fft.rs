@@ -69,6 +69,10 @@ pub struct Fft2 {
     inv_rows: Option<InverseTwiddles>,
     col_fwd: Arc<dyn Fft<f32>>,
     col_inv: Arc<dyn Fft<f32>>,
+    /// The forward and inverse column transforms of a height of 40 in
+    /// lanes ([`Columns40`]), where `rustfft` runs its AVX code; `None`
+    /// elsewhere (`rustfft` down each column).
+    col_lanes: Option<[Radix5x8; 2]>,
     rows: Vec<C32>,
     real_scratch: Vec<C32>,
     col_scratch: Vec<C32>,
@@ -988,6 +992,201 @@ fn store_rows<const M: usize, const W: usize>(z: &[CLanes; M], norm: f32, rows: 
     }
 }
 
+/// The twiddles of `rustfft`'s AVX plan for columns of 40, one direction:
+/// `MixedRadix5xnAvx` over `Butterfly8Avx` ([`Columns40`]).
+#[derive(Clone, Debug)]
+struct Radix5x8 {
+    /// `MixedRadix5xnAvx`'s, `compute_twiddle(i j, 40)` at `[i - 1][j]`.
+    mixed: [[C32; 8]; 4],
+    /// Its butterfly of 5's, `compute_twiddle(1, 5)` and `(2, 5)`.
+    fft5: [C32; 2],
+    /// `Butterfly8Avx`'s, `compute_twiddle(j, 8)`.
+    fft8: [C32; 4],
+}
+
+impl Radix5x8 {
+    /// The forward twiddles, or the inverse ones (`rustfft`'s inverse
+    /// twiddles are the forward ones conjugated).
+    fn new(inverse: bool) -> Self {
+        let twiddle = |i: usize, n: usize| {
+            let t = compute_twiddle(i, n);
+            if inverse { t.conj() } else { t }
+        };
+        Self {
+            mixed: std::array::from_fn(|i| std::array::from_fn(|j| twiddle((i + 1) * j, 40))),
+            fft5: [twiddle(1, 5), twiddle(2, 5)],
+            fft8: std::array::from_fn(|j| twiddle(j, 8)),
+        }
+    }
+}
+
+/// The column FFTs of a height of 40 (the complex FFT of every column of
+/// `data`, in place, at least [`LANES`] columns), [`LANES`] columns at a
+/// time, one per lane. `rustfft`'s AVX planner makes `MixedRadix5xnAvx`
+/// over `Butterfly8Avx` for that length: the column as 5 rows of 8,
+/// butterflies of 5 down its 8 columns ([`butterfly5`]), its twiddles
+/// ([`ctwiddle_left`]), butterflies of 8 along the 5 rows
+/// ([`butterfly8`]), the 5 x 8 result read out transposed. This is that
+/// arithmetic, term for term, fused where it fuses (`mul_add`, exactly
+/// rounded at every level: the same bits at every level, and `rustfft`'s
+/// where it runs its AVX code; only there is this taken). The columns go
+/// into lanes and back element by element ([`load_lanes`],
+/// [`store_lanes`]). A count of columns that is not a multiple of
+/// [`LANES`] ends with a block flush with the end, loaded and transformed
+/// before the others are transformed in place and stored after them (the
+/// columns it shares with the block before get the same values again).
+struct Columns40<'a> {
+    twiddles: &'a Radix5x8,
+    inverse: bool,
+    data: &'a mut [C32],
+}
+
+impl Kernel for Columns40<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, _: T) {
+        // Butterfly8Avx's quarter turn is the direction's (its butterfly
+        // of 5's is always `a i`)
+        if self.inverse {
+            columns40(self.twiddles, self.data, crotate_inverse);
+        } else {
+            columns40(self.twiddles, self.data, crotate);
+        }
+    }
+}
+
+/// [`Columns40`]'s blocks.
+#[inline(always)]
+fn columns40(t: &Radix5x8, data: &mut [C32], rotate: impl Fn(&CLanes) -> CLanes + Copy) {
+    const H: usize = 40;
+    let n = data.len() / H;
+    let tail = !n.is_multiple_of(LANES);
+    let zero = ([0.0f32; LANES], [0.0f32; LANES]);
+    let mut last = [zero; H];
+    if tail {
+        let mut z = [zero; H];
+        load_lanes(data, n - LANES, &mut z);
+        fft40(t, &mut z, &mut last, rotate);
+    }
+    let (mut z, mut out) = ([zero; H], [zero; H]);
+    for c in (0..n - n % LANES).step_by(LANES) {
+        load_lanes(data, c, &mut z);
+        fft40(t, &mut z, &mut out, rotate);
+        store_lanes(&out, data, c);
+    }
+    if tail {
+        store_lanes(&last, data, n - LANES);
+    }
+}
+
+/// `MixedRadix5xnAvx`'s length-40 FFT of [`LANES`] columns in lanes, `z`
+/// into `out` (`z` left changed): row `i`'s bin `j` of the 5 x 8 rows'
+/// transforms is output `5 j + i`.
+#[inline(always)]
+fn fft40(
+    t: &Radix5x8,
+    z: &mut [CLanes; 40],
+    out: &mut [CLanes; 40],
+    rotate: impl Fn(&CLanes) -> CLanes + Copy,
+) {
+    for j in 0..8 {
+        let o = butterfly5(&t.fft5, [z[j], z[j + 8], z[j + 16], z[j + 24], z[j + 32]]);
+        z[j] = o[0];
+        for i in 1..5 {
+            z[j + 8 * i] = ctwiddle_left(t.mixed[i - 1][j], &o[i]);
+        }
+    }
+    for (i, row) in z.as_chunks::<8>().0.iter().enumerate() {
+        for (j, o) in butterfly8(&t.fft8, row, rotate).into_iter().enumerate() {
+            out[5 * j + i] = o;
+        }
+    }
+}
+
+/// `rustfft`'s `AvxVector::column_butterfly5` on lanes (either direction:
+/// `tw5` are its twiddles of the direction; its quarter turns are always
+/// `a i`, [`crotate_inverse`]): plain sums and differences, its twiddle
+/// products fused where it fuses (`fmadd`, `fnmadd`).
+#[inline(always)]
+fn butterfly5(tw5: &[C32; 2], r: [CLanes; 5]) -> [CLanes; 5] {
+    // a t + c, lane by lane, fused (fnmadd: -t)
+    let fmadd = |t: f32, a: &CLanes, c: &CLanes| -> CLanes {
+        let mut o = ([0.0; LANES], [0.0; LANES]);
+        for l in 0..LANES {
+            o.0[l] = t.mul_add(a.0[l], c.0[l]);
+            o.1[l] = t.mul_add(a.1[l], c.1[l]);
+        }
+        o
+    };
+    let scale = |t: f32, a: &CLanes| -> CLanes {
+        (
+            std::array::from_fn(|l| t * a.0[l]),
+            std::array::from_fn(|l| t * a.1[l]),
+        )
+    };
+    let (sum1, diff4) = (cadd(&r[1], &r[4]), csub(&r[1], &r[4]));
+    let (sum2, diff3) = (cadd(&r[2], &r[3]), csub(&r[2], &r[3]));
+    let (rotated4, rotated3) = (crotate_inverse(&diff4), crotate_inverse(&diff3));
+    let output0 = cadd(&r[0], &cadd(&sum1, &sum2));
+    let [t0, t1] = *tw5;
+    let twiddled1_mid = fmadd(t0.re, &sum1, &r[0]);
+    let twiddled2_mid = fmadd(t1.re, &sum1, &r[0]);
+    let twiddled3_mid = scale(t1.im, &rotated4);
+    let twiddled4_mid = scale(t0.im, &rotated4);
+    let twiddled1 = fmadd(t1.re, &sum2, &twiddled1_mid);
+    let twiddled2 = fmadd(t0.re, &sum2, &twiddled2_mid);
+    let twiddled3 = fmadd(-t0.im, &rotated3, &twiddled3_mid);
+    let twiddled4 = fmadd(t1.im, &rotated3, &twiddled4_mid);
+    [
+        output0,
+        cadd(&twiddled1, &twiddled4),
+        cadd(&twiddled2, &twiddled3),
+        csub(&twiddled2, &twiddled3),
+        csub(&twiddled1, &twiddled4),
+    ]
+}
+
+/// `t a` as `rustfft`'s `AvxVector::mul_complex(t, a)`, the twiddle the
+/// left operand (its mixed-radix steps; [`ctwiddle`] is the other order,
+/// which fuses the other product): `fmaddsub(t.re, a, t.im * swap(a))`.
+#[inline(always)]
+fn ctwiddle_left(t: C32, a: &CLanes) -> CLanes {
+    let mut o = ([0.0; LANES], [0.0; LANES]);
+    for l in 0..LANES {
+        o.0[l] = t.re.mul_add(a.0[l], -(t.im * a.1[l]));
+        o.1[l] = t.re.mul_add(a.1[l], t.im * a.0[l]);
+    }
+    o
+}
+
+/// The [`LANES`] columns of `H` from column `c` of `data` into lanes:
+/// `z[p]` is point `p` of each.
+#[inline(always)]
+fn load_lanes<const H: usize>(data: &[C32], c: usize, z: &mut [CLanes; H]) {
+    let cols: &[[C32; H]; LANES] = data[c * H..].as_chunks::<H>().0[..LANES]
+        .try_into()
+        .expect("LANES columns");
+    for (p, zp) in z.iter_mut().enumerate() {
+        for (l, col) in cols.iter().enumerate() {
+            zp.0[l] = col[p].re;
+            zp.1[l] = col[p].im;
+        }
+    }
+}
+
+/// [`load_lanes`]' way back.
+#[inline(always)]
+fn store_lanes<const H: usize>(z: &[CLanes; H], data: &mut [C32], c: usize) {
+    let cols: &mut [[C32; H]; LANES] = (&mut data[c * H..].as_chunks_mut::<H>().0[..LANES])
+        .try_into()
+        .expect("LANES columns");
+    for (p, zp) in z.iter().enumerate() {
+        for (l, col) in cols.iter_mut().enumerate() {
+            col[p] = C32::new(zp.0[l], zp.1[l]);
+        }
+    }
+}
+
 impl std::fmt::Debug for Fft2 {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Fft2")
@@ -1022,6 +1221,7 @@ impl Fft2 {
         let col_fwd = cplx.plan_fft_forward(h);
         let col_inv = cplx.plan_fft_inverse(h);
         let inv_rows = ((w == 16 || w == 12) && rustfft_avx()).then(|| InverseTwiddles::new(w));
+        let col_lanes = (h == 40 && rustfft_avx()).then(|| [false, true].map(Radix5x8::new));
         let wc = w / 2 + 1;
         let real_scratch_len = c2r.get_scratch_len();
         let col_scratch_len = col_fwd
@@ -1035,6 +1235,7 @@ impl Fft2 {
             inv_rows,
             col_fwd,
             col_inv,
+            col_lanes,
             rows: vec![C32::default(); wc * h],
             real_scratch: vec![C32::default(); real_scratch_len],
             col_scratch: vec![C32::default(); col_scratch_len],
@@ -1070,6 +1271,30 @@ impl Fft2 {
             });
         }
         Ok(())
+    }
+
+    /// The column FFTs of `data` (columns of `h`), in place: in lanes
+    /// where [`Columns40`] reproduces `rustfft`'s plan and there are
+    /// [`LANES`] columns or more, else `rustfft`.
+    fn columns(&mut self, inverse: bool, data: &mut [C32]) {
+        match &self.col_lanes {
+            Some(twiddles) if data.len() >= LANES * self.h => {
+                // the best level this CPU has (as the rows)
+                SimdLevel::Avx512.run(Columns40 {
+                    twiddles: &twiddles[usize::from(inverse)],
+                    inverse,
+                    data,
+                });
+            }
+            _ => {
+                let fft = if inverse {
+                    &self.col_inv
+                } else {
+                    &self.col_fwd
+                };
+                fft.process_with_scratch(data, &mut self.col_scratch);
+            }
+        }
     }
 
     /// The half spectrum of `input` (`w x h` row-major) into `out`
@@ -1113,8 +1338,7 @@ impl Fft2 {
             Rows::Even(rows) => rows.forward(SimdLevel::Avx512, w, h, input, out),
             Rows::Odd(rows) => rows.forward(w, h, input, out),
         }
-        self.col_fwd
-            .process_with_scratch(out, &mut self.col_scratch);
+        self.columns(false, out);
         Ok(())
     }
 
@@ -1130,8 +1354,7 @@ impl Fft2 {
     pub fn inverse(&mut self, spectrum: &mut [C32], out: &mut [f32]) -> Result<()> {
         self.check(out.len(), spectrum.len())?;
         let (w, h, wc) = (self.w, self.h, self.w / 2 + 1);
-        self.col_inv
-            .process_with_scratch(spectrum, &mut self.col_scratch);
+        self.columns(true, spectrum);
         if let Some(twiddles) = &self.inv_rows
             && h >= LANES
         {
@@ -1577,6 +1800,49 @@ pub(crate) mod tests {
             f.inverse(&mut spec, &mut out).unwrap();
             let got: Vec<u32> = out.iter().map(|v| v.to_bits()).collect();
             assert_eq!(got, want, "{w}x{h}");
+        }
+    }
+
+    #[test]
+    fn column_lanes_of_40_are_rustfft_bit_for_bit_at_every_level() {
+        // Columns40 on its own, both directions, every count of columns
+        // from 8 (its least) to 40, multiples of the lanes or not: every
+        // level the scalar level's bits, and where rustfft runs its AVX
+        // code (the plan it reproduces), rustfft's
+        for inverse in [false, true] {
+            let twiddles = Radix5x8::new(inverse);
+            let mut planner = FftPlanner::<f32>::new();
+            let fft = if inverse {
+                planner.plan_fft_inverse(40)
+            } else {
+                planner.plan_fft_forward(40)
+            };
+            for n in LANES..=40 {
+                let re = signal(40, n, (n * 3 + usize::from(inverse)) as u32);
+                let im = signal(40, n, (n * 5 + 1) as u32);
+                let data: Vec<C32> = re.iter().zip(&im).map(|(&a, &b)| C32::new(a, b)).collect();
+                let bits = |v: &[C32]| -> Vec<(u32, u32)> {
+                    v.iter().map(|c| (c.re.to_bits(), c.im.to_bits())).collect()
+                };
+                let run = |level: SimdLevel| {
+                    let mut d = data.clone();
+                    level.run(Columns40 {
+                        twiddles: &twiddles,
+                        inverse,
+                        data: &mut d,
+                    });
+                    bits(&d)
+                };
+                let want = run(SimdLevel::Scalar);
+                for level in SimdLevel::ALL {
+                    assert_eq!(run(level), want, "{n} columns {level:?} inverse {inverse}");
+                }
+                if rustfft_avx() {
+                    let mut r = data.clone();
+                    fft.process(&mut r);
+                    assert_eq!(bits(&r), want, "{n} columns rustfft inverse {inverse}");
+                }
+            }
         }
     }
 
