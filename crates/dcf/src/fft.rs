@@ -25,7 +25,9 @@ use realfft::{ComplexToReal, RealFftPlanner};
 use rustfft::num_complex::Complex32;
 use rustfft::{Fft, FftPlanner};
 
-use bayestrack_image::simd::{Kernel, SimdLevel, Token};
+use bayestrack_image::simd::{
+    Kernel, SimdLevel, Token, add8, complex_parts_mut, mul_add8, mul8, neg8, sub8, transpose8,
+};
 
 use crate::error::{DcfError, Result};
 
@@ -608,7 +610,7 @@ struct Width16<'a> {
 impl Kernel for Width16<'_> {
     type Output = ();
     #[inline(always)]
-    fn run<T: Token>(self, _: T) {
+    fn run<T: Token>(self, token: T) {
         let h = self.h;
         for (array, dst) in self
             .input
@@ -621,7 +623,14 @@ impl Kernel for Width16<'_> {
             let last = h - LANES;
             for y in (0..last).step_by(LANES).chain([last]) {
                 let block: &[[f32; 16]; LANES] = rows[y..y + LANES].try_into().expect("LANES");
-                width16_block(self.fft_twiddles, self.twiddles, block, h, &mut dst[y..]);
+                width16_block(
+                    token,
+                    self.fft_twiddles,
+                    self.twiddles,
+                    block,
+                    h,
+                    &mut dst[y..],
+                );
             }
         }
     }
@@ -644,7 +653,7 @@ struct Width12<'a> {
 impl Kernel for Width12<'_> {
     type Output = ();
     #[inline(always)]
-    fn run<T: Token>(self, _: T) {
+    fn run<T: Token>(self, token: T) {
         let h = self.h;
         for (array, dst) in self
             .input
@@ -655,7 +664,14 @@ impl Kernel for Width12<'_> {
             let last = h - LANES;
             for y in (0..last).step_by(LANES).chain([last]) {
                 let block: &[[f32; 12]; LANES] = rows[y..y + LANES].try_into().expect("LANES");
-                width12_block(self.fft_twiddle, self.twiddles, block, h, &mut dst[y..]);
+                width12_block(
+                    token,
+                    self.fft_twiddle,
+                    self.twiddles,
+                    block,
+                    h,
+                    &mut dst[y..],
+                );
             }
         }
     }
@@ -663,41 +679,42 @@ impl Kernel for Width12<'_> {
 
 /// `rustfft`'s `Butterfly3::perform_fft_contiguous` on lanes.
 #[inline(always)]
-fn butterfly3(t: C32, v: [CLanes; 3]) -> [CLanes; 3] {
-    let xp = cadd(&v[1], &v[2]);
-    let xn = csub(&v[1], &v[2]);
-    let sum = cadd(&v[0], &xp);
-    let mut scaled = ([0.0f32; LANES], [0.0f32; LANES]);
-    let mut temp_b = ([0.0f32; LANES], [0.0f32; LANES]);
-    for l in 0..LANES {
-        scaled.0[l] = t.re * xp.0[l];
-        scaled.1[l] = t.re * xp.1[l];
-        temp_b.0[l] = -t.im * xn.1[l];
-        temp_b.1[l] = t.im * xn.0[l];
-    }
-    let temp_a = cadd(&v[0], &scaled);
-    [sum, cadd(&temp_a, &temp_b), csub(&temp_a, &temp_b)]
+fn butterfly3<T: Token>(tk: T, t: C32, v: [CLanes; 3]) -> [CLanes; 3] {
+    let xp = cadd(tk, &v[1], &v[2]);
+    let xn = csub(tk, &v[1], &v[2]);
+    let sum = cadd(tk, &v[0], &xp);
+    let scaled = (mul8(tk, splat(t.re), xp.0), mul8(tk, splat(t.re), xp.1));
+    let temp_b = (mul8(tk, splat(-t.im), xn.1), mul8(tk, splat(t.im), xn.0));
+    let temp_a = cadd(tk, &v[0], &scaled);
+    [sum, cadd(tk, &temp_a, &temp_b), csub(tk, &temp_a, &temp_b)]
 }
 
 /// `rustfft`'s `Butterfly6` on lanes (either direction: `tw3` is its
 /// butterfly of 3's twiddle): Good-Thomas, columns of 3 then rows of 2.
 #[inline(always)]
-fn butterfly6(tw3: C32, z: &[CLanes; 6]) -> [CLanes; 6] {
-    let a = butterfly3(tw3, [z[0], z[2], z[4]]);
-    let b = butterfly3(tw3, [z[3], z[5], z[1]]);
+fn butterfly6<T: Token>(tk: T, tw3: C32, z: &[CLanes; 6]) -> [CLanes; 6] {
+    let a = butterfly3(tk, tw3, [z[0], z[2], z[4]]);
+    let b = butterfly3(tk, tw3, [z[3], z[5], z[1]]);
     [
-        cadd(&a[0], &b[0]),
-        csub(&a[1], &b[1]),
-        cadd(&a[2], &b[2]),
-        csub(&a[0], &b[0]),
-        cadd(&a[1], &b[1]),
-        csub(&a[2], &b[2]),
+        cadd(tk, &a[0], &b[0]),
+        csub(tk, &a[1], &b[1]),
+        cadd(tk, &a[2], &b[2]),
+        csub(tk, &a[0], &b[0]),
+        cadd(tk, &a[1], &b[1]),
+        csub(tk, &a[2], &b[2]),
     ]
 }
 
 /// [`Width12`]'s [`LANES`] rows.
 #[inline(always)]
-fn width12_block(tw3: C32, twiddles: &[C32], rows: &[[f32; 12]; LANES], h: usize, dst: &mut [C32]) {
+fn width12_block<T: Token>(
+    tk: T,
+    tw3: C32,
+    twiddles: &[C32],
+    rows: &[[f32; 12]; LANES],
+    h: usize,
+    dst: &mut [C32],
+) {
     let mut z = [([0.0f32; LANES], [0.0f32; LANES]); 6];
     let mut keep = [0u32; LANES];
     for (l, row) in rows.iter().enumerate() {
@@ -711,7 +728,7 @@ fn width12_block(tw3: C32, twiddles: &[C32], rows: &[[f32; 12]; LANES], h: usize
         }
         keep[l] = 0u32.wrapping_sub(any);
     }
-    let out = butterfly6(tw3, &z);
+    let out = butterfly6(tk, tw3, &z);
     let mut re = [[0.0f32; LANES]; 6];
     let mut im = [[0.0f32; LANES]; 6];
     for ((r, i), o) in re.iter_mut().zip(&mut im).zip(&out) {
@@ -728,58 +745,44 @@ type Lanes32 = [u32; LANES];
 
 /// `a + b` lane by lane.
 #[inline(always)]
-fn cadd(a: &CLanes, b: &CLanes) -> CLanes {
-    let mut o = ([0.0; LANES], [0.0; LANES]);
-    for l in 0..LANES {
-        o.0[l] = a.0[l] + b.0[l];
-        o.1[l] = a.1[l] + b.1[l];
-    }
-    o
+fn cadd<T: Token>(tk: T, a: &CLanes, b: &CLanes) -> CLanes {
+    (add8(tk, a.0, b.0), add8(tk, a.1, b.1))
 }
 
 /// `a - b` lane by lane.
 #[inline(always)]
-fn csub(a: &CLanes, b: &CLanes) -> CLanes {
-    let mut o = ([0.0; LANES], [0.0; LANES]);
-    for l in 0..LANES {
-        o.0[l] = a.0[l] - b.0[l];
-        o.1[l] = a.1[l] - b.1[l];
-    }
-    o
+fn csub<T: Token>(tk: T, a: &CLanes, b: &CLanes) -> CLanes {
+    (sub8(tk, a.0, b.0), sub8(tk, a.1, b.1))
+}
+
+/// `t` in every lane.
+#[inline(always)]
+fn splat(t: f32) -> Lanes {
+    [t; LANES]
 }
 
 /// `a t` as `rustfft`'s `AvxVector::mul_complex`, lane by lane:
 /// `fmaddsub(re, t, im * swap(t))`, fused.
 #[inline(always)]
-fn ctwiddle(a: &CLanes, t: C32) -> CLanes {
-    let mut o = ([0.0; LANES], [0.0; LANES]);
-    for l in 0..LANES {
-        o.0[l] = a.0[l].mul_add(t.re, -(a.1[l] * t.im));
-        o.1[l] = a.0[l].mul_add(t.im, a.1[l] * t.re);
-    }
-    o
+fn ctwiddle<T: Token>(tk: T, a: &CLanes, t: C32) -> CLanes {
+    (
+        mul_add8(tk, a.0, splat(t.re), neg8(tk, mul8(tk, a.1, splat(t.im)))),
+        mul_add8(tk, a.0, splat(t.im), mul8(tk, a.1, splat(t.re))),
+    )
 }
 
 /// `a (-i)`: the parts swapped, the new imaginary one negated (a sign
 /// flip, as `rustfft`'s xor).
 #[inline(always)]
-fn crotate(a: &CLanes) -> CLanes {
-    let mut o = (a.1, [0.0; LANES]);
-    for l in 0..LANES {
-        o.1[l] = -a.0[l];
-    }
-    o
+fn crotate<T: Token>(tk: T, a: &CLanes) -> CLanes {
+    (a.1, neg8(tk, a.0))
 }
 
 /// `a i`: the parts swapped, the new real one negated (`rustfft`'s
 /// inverse rotation).
 #[inline(always)]
-fn crotate_inverse(a: &CLanes) -> CLanes {
-    let mut o = ([0.0; LANES], a.0);
-    for l in 0..LANES {
-        o.0[l] = -a.1[l];
-    }
-    o
+fn crotate_inverse<T: Token>(tk: T, a: &CLanes) -> CLanes {
+    (neg8(tk, a.1), a.0)
 }
 
 /// `rustfft`'s `Butterfly8Avx::perform_fft_f32` on lanes: butterflies of 2
@@ -787,46 +790,52 @@ fn crotate_inverse(a: &CLanes) -> CLanes {
 /// butterflies of 4 (two of 2 with a rotation by a quarter turn: `rotate`,
 /// [`crotate`] forward, [`crotate_inverse`] inverse).
 #[inline(always)]
-fn butterfly8(tw8: &[C32; 4], z: &[CLanes; 8], rotate: impl Fn(&CLanes) -> CLanes) -> [CLanes; 8] {
+fn butterfly8<T: Token>(
+    tk: T,
+    tw8: &[C32; 4],
+    z: &[CLanes; 8],
+    rotate: impl Fn(T, &CLanes) -> CLanes,
+) -> [CLanes; 8] {
     let i0 = [
-        cadd(&z[0], &z[4]),
-        cadd(&z[1], &z[5]),
-        cadd(&z[2], &z[6]),
-        cadd(&z[3], &z[7]),
+        cadd(tk, &z[0], &z[4]),
+        cadd(tk, &z[1], &z[5]),
+        cadd(tk, &z[2], &z[6]),
+        cadd(tk, &z[3], &z[7]),
     ];
     let i1 = [
-        ctwiddle(&csub(&z[0], &z[4]), tw8[0]),
-        ctwiddle(&csub(&z[1], &z[5]), tw8[1]),
-        ctwiddle(&csub(&z[2], &z[6]), tw8[2]),
-        ctwiddle(&csub(&z[3], &z[7]), tw8[3]),
+        ctwiddle(tk, &csub(tk, &z[0], &z[4]), tw8[0]),
+        ctwiddle(tk, &csub(tk, &z[1], &z[5]), tw8[1]),
+        ctwiddle(tk, &csub(tk, &z[2], &z[6]), tw8[2]),
+        ctwiddle(tk, &csub(tk, &z[3], &z[7]), tw8[3]),
     ];
     let pb0 = [
-        cadd(&i0[0], &i0[2]),
-        cadd(&i0[1], &i0[3]),
-        cadd(&i1[0], &i1[2]),
-        cadd(&i1[1], &i1[3]),
+        cadd(tk, &i0[0], &i0[2]),
+        cadd(tk, &i0[1], &i0[3]),
+        cadd(tk, &i1[0], &i1[2]),
+        cadd(tk, &i1[1], &i1[3]),
     ];
     let pb1 = [
-        csub(&i0[0], &i0[2]),
-        rotate(&csub(&i0[1], &i0[3])),
-        csub(&i1[0], &i1[2]),
-        rotate(&csub(&i1[1], &i1[3])),
+        csub(tk, &i0[0], &i0[2]),
+        rotate(tk, &csub(tk, &i0[1], &i0[3])),
+        csub(tk, &i1[0], &i1[2]),
+        rotate(tk, &csub(tk, &i1[1], &i1[3])),
     ];
     [
-        cadd(&pb0[0], &pb0[1]),
-        cadd(&pb0[2], &pb0[3]),
-        cadd(&pb1[0], &pb1[1]),
-        cadd(&pb1[2], &pb1[3]),
-        csub(&pb0[0], &pb0[1]),
-        csub(&pb0[2], &pb0[3]),
-        csub(&pb1[0], &pb1[1]),
-        csub(&pb1[2], &pb1[3]),
+        cadd(tk, &pb0[0], &pb0[1]),
+        cadd(tk, &pb0[2], &pb0[3]),
+        cadd(tk, &pb1[0], &pb1[1]),
+        cadd(tk, &pb1[2], &pb1[3]),
+        csub(tk, &pb0[0], &pb0[1]),
+        csub(tk, &pb0[2], &pb0[3]),
+        csub(tk, &pb1[0], &pb1[1]),
+        csub(tk, &pb1[2], &pb1[3]),
     ]
 }
 
 /// [`Width16`]'s [`LANES`] rows.
 #[inline(always)]
-fn width16_block(
+fn width16_block<T: Token>(
+    tk: T,
     tw8: &[C32; 4],
     twiddles: &[C32],
     rows: &[[f32; 16]; LANES],
@@ -848,7 +857,7 @@ fn width16_block(
         }
         keep[l] = 0u32.wrapping_sub(any);
     }
-    let out = butterfly8(tw8, &z, crotate);
+    let out = butterfly8(tk, tw8, &z, crotate);
     let mut re = [[0.0f32; LANES]; 8];
     let mut im = [[0.0f32; LANES]; 8];
     for ((r, i), o) in re.iter_mut().zip(&mut im).zip(&out) {
@@ -902,7 +911,7 @@ struct InverseRows<'a> {
 impl Kernel for InverseRows<'_> {
     type Output = ();
     #[inline(always)]
-    fn run<T: Token>(self, _: T) {
+    fn run<T: Token>(self, token: T) {
         let (w, h) = (self.w, self.h);
         let norm = 1.0 / (w * h) as f32;
         let t = self.twiddles;
@@ -912,12 +921,12 @@ impl Kernel for InverseRows<'_> {
         for y in (0..last).step_by(LANES).chain([last]) {
             let (spec, rows) = (&self.spectrum[y..], &mut self.out[y * w..][..LANES * w]);
             if w == 16 {
-                let z = c2r_lanes::<8>(&t.c2r, spec, h);
-                let z = butterfly8(&t.fft8, &z, crotate_inverse);
+                let z = c2r_lanes::<_, 8>(token, &t.c2r, spec, h);
+                let z = butterfly8(token, &t.fft8, &z, crotate_inverse);
                 store_rows(&z, norm, rows.as_chunks_mut::<16>().0);
             } else {
-                let z = c2r_lanes::<6>(&t.c2r, spec, h);
-                let z = butterfly6(t.fft3, &z);
+                let z = c2r_lanes::<_, 6>(token, &t.c2r, spec, h);
+                let z = butterfly6(token, t.fft3, &z);
                 store_rows(&z, norm, rows.as_chunks_mut::<12>().0);
             }
         }
@@ -931,7 +940,12 @@ impl Kernel for InverseRows<'_> {
 /// [`Fft2::inverse`] sets them), which makes `realfft`'s subtractions of
 /// them exact: left out.
 #[inline(always)]
-fn c2r_lanes<const M: usize>(twiddles: &[C32], spec: &[C32], h: usize) -> [CLanes; M] {
+fn c2r_lanes<T: Token, const M: usize>(
+    tk: T,
+    twiddles: &[C32],
+    spec: &[C32],
+    h: usize,
+) -> [CLanes; M] {
     let load = |u: usize| -> CLanes {
         let b: &[C32; LANES] = spec[u * h..][..LANES].try_into().expect("LANES bins");
         (
@@ -949,7 +963,7 @@ fn c2r_lanes<const M: usize>(twiddles: &[C32], spec: &[C32], h: usize) -> [CLane
         let (k, kr) = (i + 1, M - i - 1);
         let (sum, diff) = {
             let (a, b) = (load(k), load(kr));
-            (cadd(&a, &b), csub(&a, &b))
+            (cadd(tk, &a, &b), csub(tk, &a, &b))
         };
         // twiddled_re_sum.im + twiddled_im_diff.re
         let real: Lanes = std::array::from_fn(|l| sum.1[l] * tw.re + diff.0[l] * tw.im);
@@ -1044,38 +1058,69 @@ struct Columns40<'a> {
 impl Kernel for Columns40<'_> {
     type Output = ();
     #[inline(always)]
-    fn run<T: Token>(self, _: T) {
+    fn run<T: Token>(self, token: T) {
         // Butterfly8Avx's quarter turn is the direction's (its butterfly
         // of 5's is always `a i`)
         if self.inverse {
-            columns40(self.twiddles, self.data, crotate_inverse);
+            columns40(token, self.twiddles, self.data, crotate_inverse);
         } else {
-            columns40(self.twiddles, self.data, crotate);
+            columns40(token, self.twiddles, self.data, crotate);
         }
     }
 }
 
 /// [`Columns40`]'s blocks.
 #[inline(always)]
-fn columns40(t: &Radix5x8, data: &mut [C32], rotate: impl Fn(&CLanes) -> CLanes + Copy) {
+fn columns40<T: Token>(
+    token: T,
+    t: &Radix5x8,
+    data: &mut [C32],
+    rotate: impl Fn(T, &CLanes) -> CLanes + Copy,
+) {
     const H: usize = 40;
     let n = data.len() / H;
+    let data = complex_parts_mut(data);
     let tail = !n.is_multiple_of(LANES);
-    let zero = ([0.0f32; LANES], [0.0f32; LANES]);
-    let mut last = [zero; H];
+    let mut last = Points40::ZERO;
     if tail {
-        let mut z = [zero; H];
-        load_lanes(data, n - LANES, &mut z);
-        fft40(t, &mut z, &mut last, rotate);
+        let mut z = Points40::ZERO;
+        load_lanes(token, data, n - LANES, &mut z);
+        fft40(token, t, &mut z, &mut last, rotate);
     }
-    let (mut z, mut out) = ([zero; H], [zero; H]);
+    let (mut z, mut out) = (Points40::ZERO, Points40::ZERO);
     for c in (0..n - n % LANES).step_by(LANES) {
-        load_lanes(data, c, &mut z);
-        fft40(t, &mut z, &mut out, rotate);
-        store_lanes(&out, data, c);
+        load_lanes(token, data, c, &mut z);
+        fft40(token, t, &mut z, &mut out, rotate);
+        store_lanes(token, &out, data, c);
     }
     if tail {
-        store_lanes(&last, data, n - LANES);
+        store_lanes(token, &last, data, n - LANES);
+    }
+}
+
+/// [`LANES`] columns of 40 points in lanes, the real parts and the
+/// imaginary parts apart (each a run of whole vectors: kept so, the
+/// compiler does each step on whole 256-bit vectors).
+#[derive(Clone, Copy)]
+struct Points40 {
+    re: [Lanes; 40],
+    im: [Lanes; 40],
+}
+
+impl Points40 {
+    const ZERO: Self = Self {
+        re: [[0.0; LANES]; 40],
+        im: [[0.0; LANES]; 40],
+    };
+
+    #[inline(always)]
+    fn get(&self, p: usize) -> CLanes {
+        (self.re[p], self.im[p])
+    }
+
+    #[inline(always)]
+    fn set(&mut self, p: usize, v: CLanes) {
+        (self.re[p], self.im[p]) = v;
     }
 }
 
@@ -1083,23 +1128,47 @@ fn columns40(t: &Radix5x8, data: &mut [C32], rotate: impl Fn(&CLanes) -> CLanes 
 /// into `out` (`z` left changed): row `i`'s bin `j` of the 5 x 8 rows'
 /// transforms is output `5 j + i`.
 #[inline(always)]
-fn fft40(
+fn fft40<T: Token>(
+    tk: T,
     t: &Radix5x8,
-    z: &mut [CLanes; 40],
-    out: &mut [CLanes; 40],
-    rotate: impl Fn(&CLanes) -> CLanes + Copy,
+    z: &mut Points40,
+    out: &mut Points40,
+    rotate: impl Fn(T, &CLanes) -> CLanes + Copy,
 ) {
+    // (the steps' values named one by one, no arrays of them indexed in
+    // loops: those stay in memory, and the compiler then vectorises
+    // their stores across the real and imaginary parts)
     for j in 0..8 {
-        let o = butterfly5(&t.fft5, [z[j], z[j + 8], z[j + 16], z[j + 24], z[j + 32]]);
-        z[j] = o[0];
-        for i in 1..5 {
-            z[j + 8 * i] = ctwiddle_left(t.mixed[i - 1][j], &o[i]);
-        }
+        let [o0, o1, o2, o3, o4] = butterfly5(
+            tk,
+            &t.fft5,
+            [
+                z.get(j),
+                z.get(j + 8),
+                z.get(j + 16),
+                z.get(j + 24),
+                z.get(j + 32),
+            ],
+        );
+        let m = |i: usize| t.mixed[i][j];
+        z.set(j, o0);
+        z.set(j + 8, ctwiddle_left(tk, m(0), &o1));
+        z.set(j + 16, ctwiddle_left(tk, m(1), &o2));
+        z.set(j + 24, ctwiddle_left(tk, m(2), &o3));
+        z.set(j + 32, ctwiddle_left(tk, m(3), &o4));
     }
-    for (i, row) in z.as_chunks::<8>().0.iter().enumerate() {
-        for (j, o) in butterfly8(&t.fft8, row, rotate).into_iter().enumerate() {
-            out[5 * j + i] = o;
-        }
+    for i in 0..5 {
+        let g = |k: usize| z.get(8 * i + k);
+        let row = [g(0), g(1), g(2), g(3), g(4), g(5), g(6), g(7)];
+        let [o0, o1, o2, o3, o4, o5, o6, o7] = butterfly8(tk, &t.fft8, &row, rotate);
+        out.set(i, o0);
+        out.set(5 + i, o1);
+        out.set(10 + i, o2);
+        out.set(15 + i, o3);
+        out.set(20 + i, o4);
+        out.set(25 + i, o5);
+        out.set(30 + i, o6);
+        out.set(35 + i, o7);
     }
 }
 
@@ -1108,26 +1177,20 @@ fn fft40(
 /// `a i`, [`crotate_inverse`]): plain sums and differences, its twiddle
 /// products fused where it fuses (`fmadd`, `fnmadd`).
 #[inline(always)]
-fn butterfly5(tw5: &[C32; 2], r: [CLanes; 5]) -> [CLanes; 5] {
+fn butterfly5<T: Token>(tk: T, tw5: &[C32; 2], r: [CLanes; 5]) -> [CLanes; 5] {
     // a t + c, lane by lane, fused (fnmadd: -t)
     let fmadd = |t: f32, a: &CLanes, c: &CLanes| -> CLanes {
-        let mut o = ([0.0; LANES], [0.0; LANES]);
-        for l in 0..LANES {
-            o.0[l] = t.mul_add(a.0[l], c.0[l]);
-            o.1[l] = t.mul_add(a.1[l], c.1[l]);
-        }
-        o
-    };
-    let scale = |t: f32, a: &CLanes| -> CLanes {
         (
-            std::array::from_fn(|l| t * a.0[l]),
-            std::array::from_fn(|l| t * a.1[l]),
+            mul_add8(tk, splat(t), a.0, c.0),
+            mul_add8(tk, splat(t), a.1, c.1),
         )
     };
-    let (sum1, diff4) = (cadd(&r[1], &r[4]), csub(&r[1], &r[4]));
-    let (sum2, diff3) = (cadd(&r[2], &r[3]), csub(&r[2], &r[3]));
-    let (rotated4, rotated3) = (crotate_inverse(&diff4), crotate_inverse(&diff3));
-    let output0 = cadd(&r[0], &cadd(&sum1, &sum2));
+    let scale =
+        |t: f32, a: &CLanes| -> CLanes { (mul8(tk, splat(t), a.0), mul8(tk, splat(t), a.1)) };
+    let (sum1, diff4) = (cadd(tk, &r[1], &r[4]), csub(tk, &r[1], &r[4]));
+    let (sum2, diff3) = (cadd(tk, &r[2], &r[3]), csub(tk, &r[2], &r[3]));
+    let (rotated4, rotated3) = (crotate_inverse(tk, &diff4), crotate_inverse(tk, &diff3));
+    let output0 = cadd(tk, &r[0], &cadd(tk, &sum1, &sum2));
     let [t0, t1] = *tw5;
     let twiddled1_mid = fmadd(t0.re, &sum1, &r[0]);
     let twiddled2_mid = fmadd(t1.re, &sum1, &r[0]);
@@ -1139,10 +1202,10 @@ fn butterfly5(tw5: &[C32; 2], r: [CLanes; 5]) -> [CLanes; 5] {
     let twiddled4 = fmadd(t1.im, &rotated3, &twiddled4_mid);
     [
         output0,
-        cadd(&twiddled1, &twiddled4),
-        cadd(&twiddled2, &twiddled3),
-        csub(&twiddled2, &twiddled3),
-        csub(&twiddled1, &twiddled4),
+        cadd(tk, &twiddled1, &twiddled4),
+        cadd(tk, &twiddled2, &twiddled3),
+        csub(tk, &twiddled2, &twiddled3),
+        csub(tk, &twiddled1, &twiddled4),
     ]
 }
 
@@ -1150,39 +1213,47 @@ fn butterfly5(tw5: &[C32; 2], r: [CLanes; 5]) -> [CLanes; 5] {
 /// left operand (its mixed-radix steps; [`ctwiddle`] is the other order,
 /// which fuses the other product): `fmaddsub(t.re, a, t.im * swap(a))`.
 #[inline(always)]
-fn ctwiddle_left(t: C32, a: &CLanes) -> CLanes {
-    let mut o = ([0.0; LANES], [0.0; LANES]);
-    for l in 0..LANES {
-        o.0[l] = t.re.mul_add(a.0[l], -(t.im * a.1[l]));
-        o.1[l] = t.re.mul_add(a.1[l], t.im * a.0[l]);
-    }
-    o
+fn ctwiddle_left<T: Token>(tk: T, t: C32, a: &CLanes) -> CLanes {
+    (
+        mul_add8(tk, splat(t.re), a.0, neg8(tk, mul8(tk, splat(t.im), a.1))),
+        mul_add8(tk, splat(t.re), a.1, mul8(tk, splat(t.im), a.0)),
+    )
 }
 
-/// The [`LANES`] columns of `H` from column `c` of `data` into lanes:
-/// `z[p]` is point `p` of each.
+/// The [`LANES`] columns of 40 from column `c` of `data` (its
+/// [`complex_parts`]: a column is 80 values) into lanes: `z[p]` is point
+/// `p` of each. Four points of the eight columns at a time: a column's
+/// four complex numbers are eight consecutive `f32` (real, imaginary,
+/// ...), and the transpose of those eight rows of eight
+/// ([`transpose8`]) is the four points' real and imaginary parts, one
+/// column per lane.
 #[inline(always)]
-fn load_lanes<const H: usize>(data: &[C32], c: usize, z: &mut [CLanes; H]) {
-    let cols: &[[C32; H]; LANES] = data[c * H..].as_chunks::<H>().0[..LANES]
-        .try_into()
-        .expect("LANES columns");
-    for (p, zp) in z.iter_mut().enumerate() {
-        for (l, col) in cols.iter().enumerate() {
-            zp.0[l] = col[p].re;
-            zp.1[l] = col[p].im;
+fn load_lanes<T: Token>(token: T, data: &[f32], c: usize, z: &mut Points40) {
+    let cols = &data[c * 80..].as_chunks::<80>().0[..LANES];
+    for p in 0..10 {
+        let mut rows = [[0.0f32; LANES]; LANES];
+        for (r, col) in rows.iter_mut().zip(cols) {
+            *r = col.as_chunks::<8>().0[p];
+        }
+        let t = transpose8(token, &rows);
+        for k in 0..4 {
+            z.set(4 * p + k, (t[2 * k], t[2 * k + 1]));
         }
     }
 }
 
 /// [`load_lanes`]' way back.
 #[inline(always)]
-fn store_lanes<const H: usize>(z: &[CLanes; H], data: &mut [C32], c: usize) {
-    let cols: &mut [[C32; H]; LANES] = (&mut data[c * H..].as_chunks_mut::<H>().0[..LANES])
-        .try_into()
-        .expect("LANES columns");
-    for (p, zp) in z.iter().enumerate() {
-        for (l, col) in cols.iter_mut().enumerate() {
-            col[p] = C32::new(zp.0[l], zp.1[l]);
+fn store_lanes<T: Token>(token: T, z: &Points40, data: &mut [f32], c: usize) {
+    let cols = &mut data[c * 80..].as_chunks_mut::<80>().0[..LANES];
+    for p in 0..10 {
+        let mut rows = [[0.0f32; LANES]; LANES];
+        for k in 0..4 {
+            (rows[2 * k], rows[2 * k + 1]) = z.get(4 * p + k);
+        }
+        let t = transpose8(token, &rows);
+        for (col, r) in cols.iter_mut().zip(&t) {
+            col.as_chunks_mut::<8>().0[p] = *r;
         }
     }
 }
