@@ -26,7 +26,8 @@ use rustfft::num_complex::Complex32;
 use rustfft::{Fft, FftPlanner};
 
 use bayestrack_image::simd::{
-    Kernel, SimdLevel, Token, add8, complex_parts_mut, mul_add8, mul8, neg8, sub8, transpose8,
+    Kernel, SimdLevel, Token, add8, complex_parts_mut, interleave8, mul_add8, mul8, neg8, sub8,
+    transpose8,
 };
 
 use crate::error::{DcfError, Result};
@@ -74,7 +75,7 @@ pub struct Fft2 {
     /// The forward and inverse column transforms of a height of 40 in
     /// lanes ([`Columns40`]), where `rustfft` runs its AVX code; `None`
     /// elsewhere (`rustfft` down each column).
-    col_lanes: Option<[Radix5x8; 2]>,
+    col_lanes: Option<ColumnLanes>,
     rows: Vec<C32>,
     real_scratch: Vec<C32>,
     col_scratch: Vec<C32>,
@@ -356,7 +357,7 @@ struct Untangle<'a> {
 impl Kernel for Untangle<'_> {
     type Output = ();
     #[inline(always)]
-    fn run<T: Token>(self, _: T) {
+    fn run<T: Token>(self, token: T) {
         let (h, m) = (self.h, self.block.len());
         let s = (m + 1) * h;
         for ((nonzero, rows), dst) in self
@@ -378,13 +379,13 @@ impl Kernel for Untangle<'_> {
                     // loop or bounds check left; zero rows' bins written
                     // as zeros), the others generic
                     match m {
-                        4 => untangle_fixed::<4>(h, self.twiddles, o, keep, d),
-                        5 => untangle_fixed::<5>(h, self.twiddles, o, keep, d),
-                        6 => untangle_fixed::<6>(h, self.twiddles, o, keep, d),
-                        8 => untangle_fixed::<8>(h, self.twiddles, o, keep, d),
-                        9 => untangle_fixed::<9>(h, self.twiddles, o, keep, d),
-                        10 => untangle_fixed::<10>(h, self.twiddles, o, keep, d),
-                        12 => untangle_fixed::<12>(h, self.twiddles, o, keep, d),
+                        4 => untangle_fixed::<_, 4>(token, h, self.twiddles, o, keep, d),
+                        5 => untangle_fixed::<_, 5>(token, h, self.twiddles, o, keep, d),
+                        6 => untangle_fixed::<_, 6>(token, h, self.twiddles, o, keep, d),
+                        8 => untangle_fixed::<_, 8>(token, h, self.twiddles, o, keep, d),
+                        9 => untangle_fixed::<_, 9>(token, h, self.twiddles, o, keep, d),
+                        10 => untangle_fixed::<_, 10>(token, h, self.twiddles, o, keep, d),
+                        12 => untangle_fixed::<_, 12>(token, h, self.twiddles, o, keep, d),
                         _ => {
                             untangle_block(h, self.twiddles, o, self.block, d);
                             fixed = false;
@@ -518,7 +519,8 @@ fn untangle_block(
 /// `(M - 1) / 2`), the rows whose `keep` is false written as zeros: the
 /// rows moved into lanes, then [`untangle_lanes`].
 #[inline(always)]
-fn untangle_fixed<const M: usize>(
+fn untangle_fixed<T: Token, const M: usize>(
+    tk: T,
     h: usize,
     twiddles: &[C32],
     o: &[C32],
@@ -531,7 +533,7 @@ fn untangle_fixed<const M: usize>(
     let re: [Lanes; M] = std::array::from_fn(|k| std::array::from_fn(|r| rows[r][k].re));
     let im: [Lanes; M] = std::array::from_fn(|k| std::array::from_fn(|r| rows[r][k].im));
     let keep: Lanes32 = std::array::from_fn(|l| 0u32.wrapping_sub(u32::from(keep[l])));
-    untangle_lanes(h, twiddles, &re, &im, &keep, dst);
+    untangle_lanes(tk, h, twiddles, &re, &im, &keep, dst);
 }
 
 /// [`untangle_row`] for [`LANES`] rows' transforms of a fixed `M` bins
@@ -542,7 +544,8 @@ fn untangle_fixed<const M: usize>(
 /// for the `LANES` rows, the same operations in the same order as the
 /// scalar recipe (the same bits).
 #[inline(always)]
-fn untangle_lanes<const M: usize>(
+fn untangle_lanes<T: Token, const M: usize>(
+    tk: T,
     h: usize,
     twiddles: &[C32],
     re: &[Lanes; M],
@@ -551,10 +554,15 @@ fn untangle_lanes<const M: usize>(
     dst: &mut [C32],
 ) {
     let twiddles = &twiddles[..(M - 1) / 2];
+    // a bin's LANES outputs interleaved into whole vectors, stored whole
     let mut store = |u: usize, re: Lanes, im: Lanes| {
-        let d: &mut [C32; LANES] = (&mut dst[u * h..][..LANES]).try_into().expect("LANES bins");
-        let masked = |v: f32, l: usize| f32::from_bits(v.to_bits() & keep[l]);
-        *d = std::array::from_fn(|l| C32::new(masked(re[l], l), masked(im[l], l)));
+        let d: &mut [f32; 2 * LANES] = complex_parts_mut(&mut dst[u * h..][..LANES])
+            .try_into()
+            .expect("LANES bins");
+        let masked = |v: Lanes| -> Lanes {
+            std::array::from_fn(|l| f32::from_bits(v[l].to_bits() & keep[l]))
+        };
+        *d = interleave8(tk, &masked(re), &masked(im));
     };
     let zero = [0.0f32; LANES];
     store(0, std::array::from_fn(|l| re[0][l] + im[0][l]), zero);
@@ -734,7 +742,7 @@ fn width12_block<T: Token>(
     for ((r, i), o) in re.iter_mut().zip(&mut im).zip(&out) {
         (*r, *i) = *o;
     }
-    untangle_lanes(h, twiddles, &re, &im, &keep, dst);
+    untangle_lanes(tk, h, twiddles, &re, &im, &keep, dst);
 }
 
 /// A complex number per lane: real parts, imaginary parts.
@@ -863,7 +871,7 @@ fn width16_block<T: Token>(
     for ((r, i), o) in re.iter_mut().zip(&mut im).zip(&out) {
         (*r, *i) = *o;
     }
-    untangle_lanes(h, twiddles, &re, &im, &keep, dst);
+    untangle_lanes(tk, h, twiddles, &re, &im, &keep, dst);
 }
 
 /// The twiddles of [`InverseRows`]: `realfft`'s complex-to-real ones and
@@ -1006,6 +1014,13 @@ fn store_rows<const M: usize, const W: usize>(z: &[CLanes; M], norm: f32, rows: 
     }
 }
 
+/// What [`Columns40`] needs: both directions' twiddles, and its blocks.
+#[derive(Clone)]
+struct ColumnLanes {
+    twiddles: [Radix5x8; 2],
+    blocks: Box<[Points40; 2]>,
+}
+
 /// The twiddles of `rustfft`'s AVX plan for columns of 40, one direction:
 /// `MixedRadix5xnAvx` over `Butterfly8Avx` ([`Columns40`]).
 #[derive(Clone, Debug)]
@@ -1041,17 +1056,20 @@ impl Radix5x8 {
 /// butterflies of 5 down its 8 columns ([`butterfly5`]), its twiddles
 /// ([`ctwiddle_left`]), butterflies of 8 along the 5 rows
 /// ([`butterfly8`]), the 5 x 8 result read out transposed. This is that
-/// arithmetic, term for term, fused where it fuses (`mul_add`, exactly
-/// rounded at every level: the same bits at every level, and `rustfft`'s
-/// where it runs its AVX code; only there is this taken). The columns go
-/// into lanes and back element by element ([`load_lanes`],
-/// [`store_lanes`]). A count of columns that is not a multiple of
-/// [`LANES`] ends with a block flush with the end, loaded and transformed
-/// before the others are transformed in place and stored after them (the
-/// columns it shares with the block before get the same values again).
+/// arithmetic, term for term, each step one lane operation of the image
+/// crate's (`mul_add8` where it fuses, exactly rounded at every level: the
+/// same bits at every level, and `rustfft`'s where it runs its AVX code;
+/// only there is this taken). The columns go into lanes and back by 8 x 8
+/// transposes ([`load_lanes`], [`store_lanes`]). A count of columns that
+/// is not a multiple of [`LANES`] ends with a block flush with the end,
+/// of which only the columns not done before are stored (lanes do not mix:
+/// the others' lanes, transformed twice, touch nothing).
 struct Columns40<'a> {
     twiddles: &'a Radix5x8,
     inverse: bool,
+    /// A block's points and its transform (kept by the caller: not
+    /// cleared at each call).
+    blocks: &'a mut [Points40; 2],
     data: &'a mut [C32],
 }
 
@@ -1061,10 +1079,11 @@ impl Kernel for Columns40<'_> {
     fn run<T: Token>(self, token: T) {
         // Butterfly8Avx's quarter turn is the direction's (its butterfly
         // of 5's is always `a i`)
+        let (t, blocks, data) = (self.twiddles, self.blocks, self.data);
         if self.inverse {
-            columns40(token, self.twiddles, self.data, crotate_inverse);
+            columns40(token, t, blocks, data, crotate_inverse);
         } else {
-            columns40(token, self.twiddles, self.data, crotate);
+            columns40(token, t, blocks, data, crotate);
         }
     }
 }
@@ -1074,27 +1093,21 @@ impl Kernel for Columns40<'_> {
 fn columns40<T: Token>(
     token: T,
     t: &Radix5x8,
+    [z, out]: &mut [Points40; 2],
     data: &mut [C32],
     rotate: impl Fn(T, &CLanes) -> CLanes + Copy,
 ) {
-    const H: usize = 40;
-    let n = data.len() / H;
+    let n = data.len() / 40;
     let data = complex_parts_mut(data);
-    let tail = !n.is_multiple_of(LANES);
-    let mut last = Points40::ZERO;
-    if tail {
-        let mut z = Points40::ZERO;
-        load_lanes(token, data, n - LANES, &mut z);
-        fft40(token, t, &mut z, &mut last, rotate);
-    }
-    let (mut z, mut out) = (Points40::ZERO, Points40::ZERO);
     for c in (0..n - n % LANES).step_by(LANES) {
-        load_lanes(token, data, c, &mut z);
-        fft40(token, t, &mut z, &mut out, rotate);
-        store_lanes(token, &out, data, c);
+        load_lanes(token, data, c, z);
+        fft40(token, t, z, out, rotate);
+        store_lanes(token, out, data, c, 0);
     }
-    if tail {
-        store_lanes(token, &last, data, n - LANES);
+    if !n.is_multiple_of(LANES) {
+        load_lanes(token, data, n - LANES, z);
+        fft40(token, t, z, out, rotate);
+        store_lanes(token, out, data, n - LANES, LANES - n % LANES);
     }
 }
 
@@ -1242,9 +1255,9 @@ fn load_lanes<T: Token>(token: T, data: &[f32], c: usize, z: &mut Points40) {
     }
 }
 
-/// [`load_lanes`]' way back.
+/// [`load_lanes`]' way back, the columns from `c + skip` on only.
 #[inline(always)]
-fn store_lanes<T: Token>(token: T, z: &Points40, data: &mut [f32], c: usize) {
+fn store_lanes<T: Token>(token: T, z: &Points40, data: &mut [f32], c: usize, skip: usize) {
     let cols = &mut data[c * 80..].as_chunks_mut::<80>().0[..LANES];
     for p in 0..10 {
         let mut rows = [[0.0f32; LANES]; LANES];
@@ -1252,7 +1265,7 @@ fn store_lanes<T: Token>(token: T, z: &Points40, data: &mut [f32], c: usize) {
             (rows[2 * k], rows[2 * k + 1]) = z.get(4 * p + k);
         }
         let t = transpose8(token, &rows);
-        for (col, r) in cols.iter_mut().zip(&t) {
+        for (col, r) in cols.iter_mut().zip(&t).skip(skip) {
             col.as_chunks_mut::<8>().0[p] = *r;
         }
     }
@@ -1292,7 +1305,10 @@ impl Fft2 {
         let col_fwd = cplx.plan_fft_forward(h);
         let col_inv = cplx.plan_fft_inverse(h);
         let inv_rows = ((w == 16 || w == 12) && rustfft_avx()).then(|| InverseTwiddles::new(w));
-        let col_lanes = (h == 40 && rustfft_avx()).then(|| [false, true].map(Radix5x8::new));
+        let col_lanes = (h == 40 && rustfft_avx()).then(|| ColumnLanes {
+            twiddles: [false, true].map(Radix5x8::new),
+            blocks: Box::new([Points40::ZERO; 2]),
+        });
         let wc = w / 2 + 1;
         let real_scratch_len = c2r.get_scratch_len();
         let col_scratch_len = col_fwd
@@ -1348,12 +1364,13 @@ impl Fft2 {
     /// where [`Columns40`] reproduces `rustfft`'s plan and there are
     /// [`LANES`] columns or more, else `rustfft`.
     fn columns(&mut self, inverse: bool, data: &mut [C32]) {
-        match &self.col_lanes {
-            Some(twiddles) if data.len() >= LANES * self.h => {
+        match &mut self.col_lanes {
+            Some(lanes) if data.len() >= LANES * self.h => {
                 // the best level this CPU has (as the rows)
                 SimdLevel::Avx512.run(Columns40 {
-                    twiddles: &twiddles[usize::from(inverse)],
+                    twiddles: &lanes.twiddles[usize::from(inverse)],
                     inverse,
+                    blocks: &mut lanes.blocks,
                     data,
                 });
             }
@@ -1900,6 +1917,7 @@ pub(crate) mod tests {
                     level.run(Columns40 {
                         twiddles: &twiddles,
                         inverse,
+                        blocks: &mut Box::new([Points40::ZERO; 2]),
                         data: &mut d,
                     });
                     bits(&d)

@@ -287,6 +287,62 @@ mod tests {
         }
     }
 
+    /// The five lane operations at a level, on the same three inputs.
+    struct Arithmetic([F32x8; 3]);
+
+    impl Kernel for Arithmetic {
+        type Output = [F32x8; 5];
+        #[inline(always)]
+        fn run<T: Token>(self, token: T) -> [F32x8; 5] {
+            let [a, b, c] = self.0;
+            [
+                add8(token, a, b),
+                sub8(token, a, b),
+                mul8(token, a, b),
+                mul_add8(token, a, b, c),
+                neg8(token, a),
+            ]
+        }
+    }
+
+    #[test]
+    fn lane_arithmetic_is_the_plain_operations_bit_for_bit_at_every_level() {
+        // ordinary values, the special ones (signed zeros, NaNs,
+        // infinities, subnormals), and products whose fused and unfused
+        // roundings differ (x (1 + 2^-12) - x^2 (1 + 2^-11) cancels)
+        let x = 1.0f32 + f32::EPSILON * 7.0;
+        let y = 1.0f32 + f32::EPSILON * 5.0;
+        let fused = ([x; 8], [y; 8], [-(x * y); 8]);
+        assert_ne!(x.mul_add(y, -(x * y)), 0.0);
+        for seed in 0..64 {
+            let v = values(24, seed);
+            let mut ins: [F32x8; 3] = std::array::from_fn(|k| v[8 * k..][..8].try_into().unwrap());
+            if seed == 0 {
+                ins = [fused.0, fused.1, fused.2];
+            }
+            let [a, b, c] = ins;
+            let want = [
+                std::array::from_fn(|l| a[l] + b[l]),
+                std::array::from_fn(|l| a[l] - b[l]),
+                std::array::from_fn(|l| a[l] * b[l]),
+                std::array::from_fn(|l| a[l].mul_add(b[l], c[l])),
+                a.map(|v| -v),
+            ];
+            for level in SimdLevel::ALL {
+                let got = level.run(Arithmetic(ins));
+                for (k, (g, w)) in got.iter().zip(&want).enumerate() {
+                    for l in 0..8 {
+                        // a NaN result's payload is the CPU's choice
+                        // (both NaN is the same answer)
+                        let same =
+                            g[l].to_bits() == w[l].to_bits() || g[l].is_nan() && w[l].is_nan();
+                        assert!(same, "{level:?} op {k} lane {l}: {} vs {}", g[l], w[l]);
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn moves_are_the_plain_loops_bit_for_bit_at_every_level() {
         for seed in 0..16 {
