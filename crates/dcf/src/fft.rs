@@ -723,19 +723,20 @@ fn width12_block<T: Token>(
     h: usize,
     dst: &mut [C32],
 ) {
-    let mut z = [([0.0f32; LANES], [0.0f32; LANES]); 6];
-    let mut keep = [0u32; LANES];
-    for (l, row) in rows.iter().enumerate() {
-        for (j, zj) in z.iter_mut().enumerate() {
-            zj.0[l] = row[2 * j];
-            zj.1[l] = row[2 * j + 1];
-        }
-        let mut any = 0u32;
-        for &v in row {
-            any |= u32::from(v != 0.0);
-        }
-        keep[l] = 0u32.wrapping_sub(any);
-    }
+    // samples 0..8 and 4..12 of each row transposed: complex pairs 0..4
+    // and 2..6, one row per lane
+    let a = transpose8(tk, &rows.map(|r| r[..8].try_into().expect("8")));
+    let b = transpose8(tk, &rows.map(|r| r[4..].try_into().expect("8")));
+    let z = [
+        (a[0], a[1]),
+        (a[2], a[3]),
+        (a[4], a[5]),
+        (a[6], a[7]),
+        (b[4], b[5]),
+        (b[6], b[7]),
+    ];
+    let (ka, kb) = (nonzero_lanes(&a), nonzero_lanes(&b[4..]));
+    let keep = std::array::from_fn(|l| ka[l] | kb[l]);
     let out = butterfly6(tk, tw3, &z);
     let mut re = [[0.0f32; LANES]; 6];
     let mut im = [[0.0f32; LANES]; 6];
@@ -743,6 +744,19 @@ fn width12_block<T: Token>(
         (*r, *i) = *o;
     }
     untangle_lanes(tk, h, twiddles, &re, &im, &keep, dst);
+}
+
+/// All ones in the lanes where one of `samples` is not zero, zero in the
+/// others (the rows' samples transposed: which rows are not all zero).
+#[inline(always)]
+fn nonzero_lanes(samples: &[Lanes]) -> Lanes32 {
+    let mut any = [0u32; LANES];
+    for v in samples {
+        for l in 0..LANES {
+            any[l] |= u32::from(v[l] != 0.0);
+        }
+    }
+    std::array::from_fn(|l| 0u32.wrapping_sub(any[l]))
 }
 
 /// A complex number per lane: real parts, imaginary parts.
@@ -850,21 +864,23 @@ fn width16_block<T: Token>(
     h: usize,
     dst: &mut [C32],
 ) {
-    // the rows as 8 complex pairs, sample 2j + 1 the imaginary part, and
-    // which rows are not all zero
-    let mut z = [([0.0f32; LANES], [0.0f32; LANES]); 8];
-    let mut keep = [0u32; LANES];
-    for (l, row) in rows.iter().enumerate() {
-        for (j, zj) in z.iter_mut().enumerate() {
-            zj.0[l] = row[2 * j];
-            zj.1[l] = row[2 * j + 1];
-        }
-        let mut any = 0u32;
-        for &v in row {
-            any |= u32::from(v != 0.0);
-        }
-        keep[l] = 0u32.wrapping_sub(any);
-    }
+    // the rows as 8 complex pairs, sample 2j + 1 the imaginary part (each
+    // half of the rows transposed: one row per lane), and which rows are
+    // not all zero
+    let a = transpose8(tk, &rows.map(|r| r[..8].try_into().expect("8")));
+    let b = transpose8(tk, &rows.map(|r| r[8..].try_into().expect("8")));
+    let z = [
+        (a[0], a[1]),
+        (a[2], a[3]),
+        (a[4], a[5]),
+        (a[6], a[7]),
+        (b[0], b[1]),
+        (b[2], b[3]),
+        (b[4], b[5]),
+        (b[6], b[7]),
+    ];
+    let (ka, kb) = (nonzero_lanes(&a), nonzero_lanes(&b));
+    let keep = std::array::from_fn(|l| ka[l] | kb[l]);
     let out = butterfly8(tk, tw8, &z, crotate);
     let mut re = [[0.0f32; LANES]; 8];
     let mut im = [[0.0f32; LANES]; 8];
