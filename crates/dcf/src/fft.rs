@@ -26,8 +26,8 @@ use rustfft::num_complex::Complex32;
 use rustfft::{Fft, FftPlanner};
 
 use bayestrack_image::simd::{
-    Kernel, SimdLevel, Token, add8, complex_parts_mut, interleave8, mul_add8, mul8, neg8, sub8,
-    transpose8,
+    Kernel, SimdLevel, Token, add8, complex_parts, complex_parts_mut, deinterleave8, interleave8,
+    mul_add8, mul8, neg8, sub8, transpose8,
 };
 
 use crate::error::{DcfError, Result};
@@ -947,14 +947,27 @@ impl Kernel for InverseRows<'_> {
             if w == 16 {
                 let z = c2r_lanes::<_, 8>(token, &t.c2r, spec, h);
                 let z = butterfly8(token, &t.fft8, &z, crotate_inverse);
-                store_rows(&z, norm, rows.as_chunks_mut::<16>().0);
+                store_rows(token, &z, norm, rows.as_chunks_mut::<16>().0);
             } else {
                 let z = c2r_lanes::<_, 6>(token, &t.c2r, spec, h);
                 let z = butterfly6(token, t.fft3, &z);
-                store_rows(&z, norm, rows.as_chunks_mut::<12>().0);
+                store_rows(token, &z, norm, rows.as_chunks_mut::<12>().0);
             }
         }
     }
+}
+
+/// The [`LANES`] complex numbers of `spec` from `at`, their real and
+/// imaginary parts apart (whole vectors split: [`deinterleave8`]).
+#[inline(always)]
+fn bins<T: Token>(tk: T, spec: &[C32], at: usize) -> CLanes {
+    let [re, im] = deinterleave8(
+        tk,
+        complex_parts(&spec[at..][..LANES])
+            .try_into()
+            .expect("LANES bins"),
+    );
+    (re, im)
 }
 
 /// `realfft`'s `ComplexToRealEven` pre-processing of [`LANES`] rows'
@@ -970,13 +983,7 @@ fn c2r_lanes<T: Token, const M: usize>(
     spec: &[C32],
     h: usize,
 ) -> [CLanes; M] {
-    let load = |u: usize| -> CLanes {
-        let b: &[C32; LANES] = spec[u * h..][..LANES].try_into().expect("LANES bins");
-        (
-            std::array::from_fn(|l| b[l].re),
-            std::array::from_fn(|l| b[l].im),
-        )
-    };
+    let load = |u: usize| bins(tk, spec, u * h);
     let mut z = [([0.0f32; LANES], [0.0f32; LANES]); M];
     let (first, last) = (load(0).0, load(M).0);
     z[0] = (
@@ -1016,16 +1023,25 @@ fn c2r_lanes<T: Token, const M: usize>(
 /// The inverse FFT's outputs `z` of [`LANES`] rows (complex `j` of row
 /// `r`: its samples `2 j` and `2 j + 1`) times `norm`, into `rows`.
 #[inline(always)]
-fn store_rows<const M: usize, const W: usize>(z: &[CLanes; M], norm: f32, rows: &mut [[f32; W]]) {
-    let scaled: [CLanes; M] = std::array::from_fn(|j| {
-        (
-            std::array::from_fn(|l| z[j].0[l] * norm),
-            std::array::from_fn(|l| z[j].1[l] * norm),
-        )
-    });
-    for (l, row) in rows[..LANES].iter_mut().enumerate() {
-        for (j, pair) in row.as_chunks_mut::<2>().0.iter_mut().enumerate() {
-            *pair = [scaled[j].0[l], scaled[j].1[l]];
+fn store_rows<T: Token, const M: usize, const W: usize>(
+    tk: T,
+    z: &[CLanes; M],
+    norm: f32,
+    rows: &mut [[f32; W]],
+) {
+    let mut parts = [[0.0f32; LANES]; 8];
+    // four complex outputs (eight samples) of every row at a time,
+    // transposed into the rows; a last group of fewer (a width of 12)
+    // pads with zeros and stores its rows' first samples
+    for g in (0..M).step_by(4) {
+        let n = (M - g).min(4);
+        for (k, zk) in z[g..g + n].iter().enumerate() {
+            parts[2 * k] = mul8(tk, zk.0, splat(norm));
+            parts[2 * k + 1] = mul8(tk, zk.1, splat(norm));
+        }
+        let t = transpose8(tk, &parts);
+        for (row, t) in rows[..LANES].iter_mut().zip(&t) {
+            row[2 * g..2 * (g + n)].copy_from_slice(&t[..2 * n]);
         }
     }
 }
