@@ -257,8 +257,8 @@ mod tests {
         ];
         (0..n)
             .map(|i| {
-                let k = i as u32 * 2_654_435_761 ^ seed;
-                if k % 5 == 0 {
+                let k = (i as u32).wrapping_mul(2_654_435_761) ^ seed;
+                if k.is_multiple_of(5) {
                     special[(k / 5) as usize % special.len()]
                 } else {
                     f32::from_bits(k.rotate_left(7))
