@@ -1393,11 +1393,13 @@ impl Fft2 {
     }
 
     /// The column FFTs of `data` (columns of `h`), in place: in lanes
-    /// where [`Columns40`] reproduces `rustfft`'s plan and there are
-    /// [`LANES`] columns or more, else `rustfft`.
+    /// where [`Columns40`] reproduces `rustfft`'s plan, there are
+    /// [`LANES`] columns or more and the kernels may run AVX2 (below, its
+    /// plain loops' fused products cost more than `rustfft`'s AVX code,
+    /// which gives the same bits), else `rustfft`.
     fn columns(&mut self, inverse: bool, data: &mut [C32]) {
         match &mut self.col_lanes {
-            Some(lanes) if data.len() >= LANES * self.h => {
+            Some(lanes) if data.len() >= LANES * self.h && SimdLevel::Avx2.is_available() => {
                 // the best level this CPU has (as the rows)
                 SimdLevel::Avx512.run(Columns40 {
                     twiddles: &lanes.twiddles[usize::from(inverse)],
