@@ -1180,9 +1180,8 @@ fn fft40<T: Token>(
     out: &mut Points40,
     rotate: impl Fn(T, &CLanes) -> CLanes + Copy,
 ) {
-    // (the steps' values named one by one, no arrays of them indexed in
-    // loops: those stay in memory, and the compiler then vectorises
-    // their stores across the real and imaginary parts)
+    // (the steps' values named one by one: arrays of them indexed in
+    // loops stay in memory)
     for j in 0..8 {
         let [o0, o1, o2, o3, o4] = butterfly5(
             tk,

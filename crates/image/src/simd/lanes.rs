@@ -1,8 +1,13 @@
-//! Moves of `f32` values between memory's order and vector lanes, for
-//! kernels (in any crate) that compute eight independent problems at once,
-//! one per lane: an 8 x 8 transpose ([`transpose8`]) and the split of
-//! eight complex numbers' interleaved parts into two lanes and back
-//! ([`deinterleave8`], [`interleave8`]).
+//! Lanes for kernels (in any crate) that compute eight independent
+//! problems at once, one per lane: moves of `f32` values between memory's
+//! order and lanes (an 8 x 8 transpose, [`transpose8`]; the split of eight
+//! complex numbers' interleaved parts into two lanes and back,
+//! [`deinterleave8`], [`interleave8`]) and the lane-by-lane arithmetic on
+//! them ([`add8`], [`sub8`], [`mul8`], [`mul_add8`], [`neg8`]: each lane's
+//! one IEEE operation, so the same bits at every level). Written as plain
+//! loops over `[f32; 8]` in a large kernel, both came out of the compiler
+//! split into 128-bit halves, mixed across arrays and spilled; these are
+//! whole 256-bit vector operations where the [`Token`] has AVX2.
 //!
 //! Complex data (the `num_complex` type `rustfft` and the dcf crate use)
 //! takes them through its `f32` view ([`complex_parts`],
@@ -11,13 +16,11 @@
 //! apart into complex numbers one field at a time, they were moved
 //! element by element).
 //!
-//! They are pure data moves: every level gives the same values (no
-//! arithmetic). Where the [`Token`] has AVX2 (the AVX2 and AVX-512 levels)
-//! they are AVX shuffles on whole 256-bit vectors (what the compiler does
-//! not find by itself from the plain loops: it moves such arrays element
-//! by element); elsewhere the plain loops. Like every function a kernel's
-//! hot loop calls, they are `#[inline(always)]`: call them from inside
-//! [`Kernel::run`](super::Kernel::run) with its token.
+//! The moves are pure data moves: every level gives the same values.
+//! Where the [`Token`] has AVX2 (the AVX2 and AVX-512 levels) everything
+//! is AVX on whole 256-bit vectors; elsewhere the plain loops. Like every
+//! function a kernel's hot loop calls, they are `#[inline(always)]`: call
+//! them from inside [`Kernel::run`](super::Kernel::run) with its token.
 
 use pulp::num_complex::Complex;
 
