@@ -25,7 +25,10 @@ use realfft::{ComplexToReal, RealFftPlanner};
 use rustfft::num_complex::Complex32;
 use rustfft::{Fft, FftPlanner};
 
-use bayestrack_image::simd::{Kernel, SimdLevel, Token};
+use bayestrack_image::simd::{
+    Kernel, SimdLevel, Token, add8, complex_parts, complex_parts_mut, deinterleave8, interleave8,
+    mul_add8, mul8, neg8, sub8, transpose8,
+};
 
 use crate::error::{DcfError, Result};
 
@@ -69,6 +72,10 @@ pub struct Fft2 {
     inv_rows: Option<InverseTwiddles>,
     col_fwd: Arc<dyn Fft<f32>>,
     col_inv: Arc<dyn Fft<f32>>,
+    /// The forward and inverse column transforms of a height of 40 in
+    /// lanes ([`Columns40`]), where `rustfft` runs its AVX code; `None`
+    /// elsewhere (`rustfft` down each column).
+    col_lanes: Option<ColumnLanes>,
     rows: Vec<C32>,
     real_scratch: Vec<C32>,
     col_scratch: Vec<C32>,
@@ -350,7 +357,7 @@ struct Untangle<'a> {
 impl Kernel for Untangle<'_> {
     type Output = ();
     #[inline(always)]
-    fn run<T: Token>(self, _: T) {
+    fn run<T: Token>(self, token: T) {
         let (h, m) = (self.h, self.block.len());
         let s = (m + 1) * h;
         for ((nonzero, rows), dst) in self
@@ -372,13 +379,13 @@ impl Kernel for Untangle<'_> {
                     // loop or bounds check left; zero rows' bins written
                     // as zeros), the others generic
                     match m {
-                        4 => untangle_fixed::<4>(h, self.twiddles, o, keep, d),
-                        5 => untangle_fixed::<5>(h, self.twiddles, o, keep, d),
-                        6 => untangle_fixed::<6>(h, self.twiddles, o, keep, d),
-                        8 => untangle_fixed::<8>(h, self.twiddles, o, keep, d),
-                        9 => untangle_fixed::<9>(h, self.twiddles, o, keep, d),
-                        10 => untangle_fixed::<10>(h, self.twiddles, o, keep, d),
-                        12 => untangle_fixed::<12>(h, self.twiddles, o, keep, d),
+                        4 => untangle_fixed::<_, 4>(token, h, self.twiddles, o, keep, d),
+                        5 => untangle_fixed::<_, 5>(token, h, self.twiddles, o, keep, d),
+                        6 => untangle_fixed::<_, 6>(token, h, self.twiddles, o, keep, d),
+                        8 => untangle_fixed::<_, 8>(token, h, self.twiddles, o, keep, d),
+                        9 => untangle_fixed::<_, 9>(token, h, self.twiddles, o, keep, d),
+                        10 => untangle_fixed::<_, 10>(token, h, self.twiddles, o, keep, d),
+                        12 => untangle_fixed::<_, 12>(token, h, self.twiddles, o, keep, d),
                         _ => {
                             untangle_block(h, self.twiddles, o, self.block, d);
                             fixed = false;
@@ -512,7 +519,8 @@ fn untangle_block(
 /// `(M - 1) / 2`), the rows whose `keep` is false written as zeros: the
 /// rows moved into lanes, then [`untangle_lanes`].
 #[inline(always)]
-fn untangle_fixed<const M: usize>(
+fn untangle_fixed<T: Token, const M: usize>(
+    tk: T,
     h: usize,
     twiddles: &[C32],
     o: &[C32],
@@ -525,7 +533,7 @@ fn untangle_fixed<const M: usize>(
     let re: [Lanes; M] = std::array::from_fn(|k| std::array::from_fn(|r| rows[r][k].re));
     let im: [Lanes; M] = std::array::from_fn(|k| std::array::from_fn(|r| rows[r][k].im));
     let keep: Lanes32 = std::array::from_fn(|l| 0u32.wrapping_sub(u32::from(keep[l])));
-    untangle_lanes(h, twiddles, &re, &im, &keep, dst);
+    untangle_lanes(tk, h, twiddles, &re, &im, &keep, dst);
 }
 
 /// [`untangle_row`] for [`LANES`] rows' transforms of a fixed `M` bins
@@ -536,7 +544,8 @@ fn untangle_fixed<const M: usize>(
 /// for the `LANES` rows, the same operations in the same order as the
 /// scalar recipe (the same bits).
 #[inline(always)]
-fn untangle_lanes<const M: usize>(
+fn untangle_lanes<T: Token, const M: usize>(
+    tk: T,
     h: usize,
     twiddles: &[C32],
     re: &[Lanes; M],
@@ -545,10 +554,15 @@ fn untangle_lanes<const M: usize>(
     dst: &mut [C32],
 ) {
     let twiddles = &twiddles[..(M - 1) / 2];
+    // a bin's LANES outputs interleaved into whole vectors, stored whole
     let mut store = |u: usize, re: Lanes, im: Lanes| {
-        let d: &mut [C32; LANES] = (&mut dst[u * h..][..LANES]).try_into().expect("LANES bins");
-        let masked = |v: f32, l: usize| f32::from_bits(v.to_bits() & keep[l]);
-        *d = std::array::from_fn(|l| C32::new(masked(re[l], l), masked(im[l], l)));
+        let d: &mut [f32; 2 * LANES] = complex_parts_mut(&mut dst[u * h..][..LANES])
+            .try_into()
+            .expect("LANES bins");
+        let masked = |v: Lanes| -> Lanes {
+            std::array::from_fn(|l| f32::from_bits(v[l].to_bits() & keep[l]))
+        };
+        *d = interleave8(tk, &masked(re), &masked(im));
     };
     let zero = [0.0f32; LANES];
     store(0, std::array::from_fn(|l| re[0][l] + im[0][l]), zero);
@@ -604,7 +618,7 @@ struct Width16<'a> {
 impl Kernel for Width16<'_> {
     type Output = ();
     #[inline(always)]
-    fn run<T: Token>(self, _: T) {
+    fn run<T: Token>(self, token: T) {
         let h = self.h;
         for (array, dst) in self
             .input
@@ -617,7 +631,14 @@ impl Kernel for Width16<'_> {
             let last = h - LANES;
             for y in (0..last).step_by(LANES).chain([last]) {
                 let block: &[[f32; 16]; LANES] = rows[y..y + LANES].try_into().expect("LANES");
-                width16_block(self.fft_twiddles, self.twiddles, block, h, &mut dst[y..]);
+                width16_block(
+                    token,
+                    self.fft_twiddles,
+                    self.twiddles,
+                    block,
+                    h,
+                    &mut dst[y..],
+                );
             }
         }
     }
@@ -640,7 +661,7 @@ struct Width12<'a> {
 impl Kernel for Width12<'_> {
     type Output = ();
     #[inline(always)]
-    fn run<T: Token>(self, _: T) {
+    fn run<T: Token>(self, token: T) {
         let h = self.h;
         for (array, dst) in self
             .input
@@ -651,7 +672,14 @@ impl Kernel for Width12<'_> {
             let last = h - LANES;
             for y in (0..last).step_by(LANES).chain([last]) {
                 let block: &[[f32; 12]; LANES] = rows[y..y + LANES].try_into().expect("LANES");
-                width12_block(self.fft_twiddle, self.twiddles, block, h, &mut dst[y..]);
+                width12_block(
+                    token,
+                    self.fft_twiddle,
+                    self.twiddles,
+                    block,
+                    h,
+                    &mut dst[y..],
+                );
             }
         }
     }
@@ -659,61 +687,76 @@ impl Kernel for Width12<'_> {
 
 /// `rustfft`'s `Butterfly3::perform_fft_contiguous` on lanes.
 #[inline(always)]
-fn butterfly3(t: C32, v: [CLanes; 3]) -> [CLanes; 3] {
-    let xp = cadd(&v[1], &v[2]);
-    let xn = csub(&v[1], &v[2]);
-    let sum = cadd(&v[0], &xp);
-    let mut scaled = ([0.0f32; LANES], [0.0f32; LANES]);
-    let mut temp_b = ([0.0f32; LANES], [0.0f32; LANES]);
-    for l in 0..LANES {
-        scaled.0[l] = t.re * xp.0[l];
-        scaled.1[l] = t.re * xp.1[l];
-        temp_b.0[l] = -t.im * xn.1[l];
-        temp_b.1[l] = t.im * xn.0[l];
-    }
-    let temp_a = cadd(&v[0], &scaled);
-    [sum, cadd(&temp_a, &temp_b), csub(&temp_a, &temp_b)]
+fn butterfly3<T: Token>(tk: T, t: C32, v: [CLanes; 3]) -> [CLanes; 3] {
+    let xp = cadd(tk, &v[1], &v[2]);
+    let xn = csub(tk, &v[1], &v[2]);
+    let sum = cadd(tk, &v[0], &xp);
+    let scaled = (mul8(tk, splat(t.re), xp.0), mul8(tk, splat(t.re), xp.1));
+    let temp_b = (mul8(tk, splat(-t.im), xn.1), mul8(tk, splat(t.im), xn.0));
+    let temp_a = cadd(tk, &v[0], &scaled);
+    [sum, cadd(tk, &temp_a, &temp_b), csub(tk, &temp_a, &temp_b)]
 }
 
 /// `rustfft`'s `Butterfly6` on lanes (either direction: `tw3` is its
 /// butterfly of 3's twiddle): Good-Thomas, columns of 3 then rows of 2.
 #[inline(always)]
-fn butterfly6(tw3: C32, z: &[CLanes; 6]) -> [CLanes; 6] {
-    let a = butterfly3(tw3, [z[0], z[2], z[4]]);
-    let b = butterfly3(tw3, [z[3], z[5], z[1]]);
+fn butterfly6<T: Token>(tk: T, tw3: C32, z: &[CLanes; 6]) -> [CLanes; 6] {
+    let a = butterfly3(tk, tw3, [z[0], z[2], z[4]]);
+    let b = butterfly3(tk, tw3, [z[3], z[5], z[1]]);
     [
-        cadd(&a[0], &b[0]),
-        csub(&a[1], &b[1]),
-        cadd(&a[2], &b[2]),
-        csub(&a[0], &b[0]),
-        cadd(&a[1], &b[1]),
-        csub(&a[2], &b[2]),
+        cadd(tk, &a[0], &b[0]),
+        csub(tk, &a[1], &b[1]),
+        cadd(tk, &a[2], &b[2]),
+        csub(tk, &a[0], &b[0]),
+        cadd(tk, &a[1], &b[1]),
+        csub(tk, &a[2], &b[2]),
     ]
 }
 
 /// [`Width12`]'s [`LANES`] rows.
 #[inline(always)]
-fn width12_block(tw3: C32, twiddles: &[C32], rows: &[[f32; 12]; LANES], h: usize, dst: &mut [C32]) {
-    let mut z = [([0.0f32; LANES], [0.0f32; LANES]); 6];
-    let mut keep = [0u32; LANES];
-    for (l, row) in rows.iter().enumerate() {
-        for (j, zj) in z.iter_mut().enumerate() {
-            zj.0[l] = row[2 * j];
-            zj.1[l] = row[2 * j + 1];
-        }
-        let mut any = 0u32;
-        for &v in row {
-            any |= u32::from(v != 0.0);
-        }
-        keep[l] = 0u32.wrapping_sub(any);
-    }
-    let out = butterfly6(tw3, &z);
+fn width12_block<T: Token>(
+    tk: T,
+    tw3: C32,
+    twiddles: &[C32],
+    rows: &[[f32; 12]; LANES],
+    h: usize,
+    dst: &mut [C32],
+) {
+    // samples 0..8 and 4..12 of each row transposed: complex pairs 0..4
+    // and 2..6, one row per lane
+    let a = transpose8(tk, &rows.map(|r| r[..8].try_into().expect("8")));
+    let b = transpose8(tk, &rows.map(|r| r[4..].try_into().expect("8")));
+    let z = [
+        (a[0], a[1]),
+        (a[2], a[3]),
+        (a[4], a[5]),
+        (a[6], a[7]),
+        (b[4], b[5]),
+        (b[6], b[7]),
+    ];
+    let (ka, kb) = (nonzero_lanes(&a), nonzero_lanes(&b[4..]));
+    let keep = std::array::from_fn(|l| ka[l] | kb[l]);
+    let out = butterfly6(tk, tw3, &z);
     let mut re = [[0.0f32; LANES]; 6];
     let mut im = [[0.0f32; LANES]; 6];
     for ((r, i), o) in re.iter_mut().zip(&mut im).zip(&out) {
         (*r, *i) = *o;
     }
-    untangle_lanes(h, twiddles, &re, &im, &keep, dst);
+    untangle_lanes(tk, h, twiddles, &re, &im, &keep, dst);
+}
+
+/// All ones in the lanes where one of `samples` is not zero, zero in the
+/// others (the rows' samples transposed: which rows are not all zero).
+#[inline(always)]
+fn nonzero_lanes(samples: &[Lanes]) -> Lanes32 {
+    let mut any = [0u32; LANES];
+    for v in samples {
+        for l in 0..LANES {
+            any[l] |= u32::from(v[l] != 0.0);
+        }
+    }
+    std::array::from_fn(|l| 0u32.wrapping_sub(any[l]))
 }
 
 /// A complex number per lane: real parts, imaginary parts.
@@ -724,58 +767,44 @@ type Lanes32 = [u32; LANES];
 
 /// `a + b` lane by lane.
 #[inline(always)]
-fn cadd(a: &CLanes, b: &CLanes) -> CLanes {
-    let mut o = ([0.0; LANES], [0.0; LANES]);
-    for l in 0..LANES {
-        o.0[l] = a.0[l] + b.0[l];
-        o.1[l] = a.1[l] + b.1[l];
-    }
-    o
+fn cadd<T: Token>(tk: T, a: &CLanes, b: &CLanes) -> CLanes {
+    (add8(tk, a.0, b.0), add8(tk, a.1, b.1))
 }
 
 /// `a - b` lane by lane.
 #[inline(always)]
-fn csub(a: &CLanes, b: &CLanes) -> CLanes {
-    let mut o = ([0.0; LANES], [0.0; LANES]);
-    for l in 0..LANES {
-        o.0[l] = a.0[l] - b.0[l];
-        o.1[l] = a.1[l] - b.1[l];
-    }
-    o
+fn csub<T: Token>(tk: T, a: &CLanes, b: &CLanes) -> CLanes {
+    (sub8(tk, a.0, b.0), sub8(tk, a.1, b.1))
+}
+
+/// `t` in every lane.
+#[inline(always)]
+fn splat(t: f32) -> Lanes {
+    [t; LANES]
 }
 
 /// `a t` as `rustfft`'s `AvxVector::mul_complex`, lane by lane:
 /// `fmaddsub(re, t, im * swap(t))`, fused.
 #[inline(always)]
-fn ctwiddle(a: &CLanes, t: C32) -> CLanes {
-    let mut o = ([0.0; LANES], [0.0; LANES]);
-    for l in 0..LANES {
-        o.0[l] = a.0[l].mul_add(t.re, -(a.1[l] * t.im));
-        o.1[l] = a.0[l].mul_add(t.im, a.1[l] * t.re);
-    }
-    o
+fn ctwiddle<T: Token>(tk: T, a: &CLanes, t: C32) -> CLanes {
+    (
+        mul_add8(tk, a.0, splat(t.re), neg8(tk, mul8(tk, a.1, splat(t.im)))),
+        mul_add8(tk, a.0, splat(t.im), mul8(tk, a.1, splat(t.re))),
+    )
 }
 
 /// `a (-i)`: the parts swapped, the new imaginary one negated (a sign
 /// flip, as `rustfft`'s xor).
 #[inline(always)]
-fn crotate(a: &CLanes) -> CLanes {
-    let mut o = (a.1, [0.0; LANES]);
-    for l in 0..LANES {
-        o.1[l] = -a.0[l];
-    }
-    o
+fn crotate<T: Token>(tk: T, a: &CLanes) -> CLanes {
+    (a.1, neg8(tk, a.0))
 }
 
 /// `a i`: the parts swapped, the new real one negated (`rustfft`'s
 /// inverse rotation).
 #[inline(always)]
-fn crotate_inverse(a: &CLanes) -> CLanes {
-    let mut o = ([0.0; LANES], a.0);
-    for l in 0..LANES {
-        o.0[l] = -a.1[l];
-    }
-    o
+fn crotate_inverse<T: Token>(tk: T, a: &CLanes) -> CLanes {
+    (neg8(tk, a.1), a.0)
 }
 
 /// `rustfft`'s `Butterfly8Avx::perform_fft_f32` on lanes: butterflies of 2
@@ -783,74 +812,82 @@ fn crotate_inverse(a: &CLanes) -> CLanes {
 /// butterflies of 4 (two of 2 with a rotation by a quarter turn: `rotate`,
 /// [`crotate`] forward, [`crotate_inverse`] inverse).
 #[inline(always)]
-fn butterfly8(tw8: &[C32; 4], z: &[CLanes; 8], rotate: impl Fn(&CLanes) -> CLanes) -> [CLanes; 8] {
+fn butterfly8<T: Token>(
+    tk: T,
+    tw8: &[C32; 4],
+    z: &[CLanes; 8],
+    rotate: impl Fn(T, &CLanes) -> CLanes,
+) -> [CLanes; 8] {
     let i0 = [
-        cadd(&z[0], &z[4]),
-        cadd(&z[1], &z[5]),
-        cadd(&z[2], &z[6]),
-        cadd(&z[3], &z[7]),
+        cadd(tk, &z[0], &z[4]),
+        cadd(tk, &z[1], &z[5]),
+        cadd(tk, &z[2], &z[6]),
+        cadd(tk, &z[3], &z[7]),
     ];
     let i1 = [
-        ctwiddle(&csub(&z[0], &z[4]), tw8[0]),
-        ctwiddle(&csub(&z[1], &z[5]), tw8[1]),
-        ctwiddle(&csub(&z[2], &z[6]), tw8[2]),
-        ctwiddle(&csub(&z[3], &z[7]), tw8[3]),
+        ctwiddle(tk, &csub(tk, &z[0], &z[4]), tw8[0]),
+        ctwiddle(tk, &csub(tk, &z[1], &z[5]), tw8[1]),
+        ctwiddle(tk, &csub(tk, &z[2], &z[6]), tw8[2]),
+        ctwiddle(tk, &csub(tk, &z[3], &z[7]), tw8[3]),
     ];
     let pb0 = [
-        cadd(&i0[0], &i0[2]),
-        cadd(&i0[1], &i0[3]),
-        cadd(&i1[0], &i1[2]),
-        cadd(&i1[1], &i1[3]),
+        cadd(tk, &i0[0], &i0[2]),
+        cadd(tk, &i0[1], &i0[3]),
+        cadd(tk, &i1[0], &i1[2]),
+        cadd(tk, &i1[1], &i1[3]),
     ];
     let pb1 = [
-        csub(&i0[0], &i0[2]),
-        rotate(&csub(&i0[1], &i0[3])),
-        csub(&i1[0], &i1[2]),
-        rotate(&csub(&i1[1], &i1[3])),
+        csub(tk, &i0[0], &i0[2]),
+        rotate(tk, &csub(tk, &i0[1], &i0[3])),
+        csub(tk, &i1[0], &i1[2]),
+        rotate(tk, &csub(tk, &i1[1], &i1[3])),
     ];
     [
-        cadd(&pb0[0], &pb0[1]),
-        cadd(&pb0[2], &pb0[3]),
-        cadd(&pb1[0], &pb1[1]),
-        cadd(&pb1[2], &pb1[3]),
-        csub(&pb0[0], &pb0[1]),
-        csub(&pb0[2], &pb0[3]),
-        csub(&pb1[0], &pb1[1]),
-        csub(&pb1[2], &pb1[3]),
+        cadd(tk, &pb0[0], &pb0[1]),
+        cadd(tk, &pb0[2], &pb0[3]),
+        cadd(tk, &pb1[0], &pb1[1]),
+        cadd(tk, &pb1[2], &pb1[3]),
+        csub(tk, &pb0[0], &pb0[1]),
+        csub(tk, &pb0[2], &pb0[3]),
+        csub(tk, &pb1[0], &pb1[1]),
+        csub(tk, &pb1[2], &pb1[3]),
     ]
 }
 
 /// [`Width16`]'s [`LANES`] rows.
 #[inline(always)]
-fn width16_block(
+fn width16_block<T: Token>(
+    tk: T,
     tw8: &[C32; 4],
     twiddles: &[C32],
     rows: &[[f32; 16]; LANES],
     h: usize,
     dst: &mut [C32],
 ) {
-    // the rows as 8 complex pairs, sample 2j + 1 the imaginary part, and
-    // which rows are not all zero
-    let mut z = [([0.0f32; LANES], [0.0f32; LANES]); 8];
-    let mut keep = [0u32; LANES];
-    for (l, row) in rows.iter().enumerate() {
-        for (j, zj) in z.iter_mut().enumerate() {
-            zj.0[l] = row[2 * j];
-            zj.1[l] = row[2 * j + 1];
-        }
-        let mut any = 0u32;
-        for &v in row {
-            any |= u32::from(v != 0.0);
-        }
-        keep[l] = 0u32.wrapping_sub(any);
-    }
-    let out = butterfly8(tw8, &z, crotate);
+    // the rows as 8 complex pairs, sample 2j + 1 the imaginary part (each
+    // half of the rows transposed: one row per lane), and which rows are
+    // not all zero
+    let a = transpose8(tk, &rows.map(|r| r[..8].try_into().expect("8")));
+    let b = transpose8(tk, &rows.map(|r| r[8..].try_into().expect("8")));
+    let z = [
+        (a[0], a[1]),
+        (a[2], a[3]),
+        (a[4], a[5]),
+        (a[6], a[7]),
+        (b[0], b[1]),
+        (b[2], b[3]),
+        (b[4], b[5]),
+        (b[6], b[7]),
+    ];
+    let (ka, kb) = (nonzero_lanes(&a), nonzero_lanes(&b));
+    let keep = std::array::from_fn(|l| ka[l] | kb[l]);
+    let out = butterfly8(tk, tw8, &z, crotate);
     let mut re = [[0.0f32; LANES]; 8];
     let mut im = [[0.0f32; LANES]; 8];
     for ((r, i), o) in re.iter_mut().zip(&mut im).zip(&out) {
         (*r, *i) = *o;
     }
-    untangle_lanes(h, twiddles, &re, &im, &keep, dst);
+    untangle_lanes(tk, h, twiddles, &re, &im, &keep, dst);
 }
 
 /// The twiddles of [`InverseRows`]: `realfft`'s complex-to-real ones and
@@ -898,7 +935,7 @@ struct InverseRows<'a> {
 impl Kernel for InverseRows<'_> {
     type Output = ();
     #[inline(always)]
-    fn run<T: Token>(self, _: T) {
+    fn run<T: Token>(self, token: T) {
         let (w, h) = (self.w, self.h);
         let norm = 1.0 / (w * h) as f32;
         let t = self.twiddles;
@@ -908,16 +945,29 @@ impl Kernel for InverseRows<'_> {
         for y in (0..last).step_by(LANES).chain([last]) {
             let (spec, rows) = (&self.spectrum[y..], &mut self.out[y * w..][..LANES * w]);
             if w == 16 {
-                let z = c2r_lanes::<8>(&t.c2r, spec, h);
-                let z = butterfly8(&t.fft8, &z, crotate_inverse);
-                store_rows(&z, norm, rows.as_chunks_mut::<16>().0);
+                let z = c2r_lanes::<_, 8>(token, &t.c2r, spec, h);
+                let z = butterfly8(token, &t.fft8, &z, crotate_inverse);
+                store_rows(token, &z, norm, rows.as_chunks_mut::<16>().0);
             } else {
-                let z = c2r_lanes::<6>(&t.c2r, spec, h);
-                let z = butterfly6(t.fft3, &z);
-                store_rows(&z, norm, rows.as_chunks_mut::<12>().0);
+                let z = c2r_lanes::<_, 6>(token, &t.c2r, spec, h);
+                let z = butterfly6(token, t.fft3, &z);
+                store_rows(token, &z, norm, rows.as_chunks_mut::<12>().0);
             }
         }
     }
+}
+
+/// The [`LANES`] complex numbers of `spec` from `at`, their real and
+/// imaginary parts apart (whole vectors split: [`deinterleave8`]).
+#[inline(always)]
+fn bins<T: Token>(tk: T, spec: &[C32], at: usize) -> CLanes {
+    let [re, im] = deinterleave8(
+        tk,
+        complex_parts(&spec[at..][..LANES])
+            .try_into()
+            .expect("LANES bins"),
+    );
+    (re, im)
 }
 
 /// `realfft`'s `ComplexToRealEven` pre-processing of [`LANES`] rows'
@@ -927,14 +977,13 @@ impl Kernel for InverseRows<'_> {
 /// [`Fft2::inverse`] sets them), which makes `realfft`'s subtractions of
 /// them exact: left out.
 #[inline(always)]
-fn c2r_lanes<const M: usize>(twiddles: &[C32], spec: &[C32], h: usize) -> [CLanes; M] {
-    let load = |u: usize| -> CLanes {
-        let b: &[C32; LANES] = spec[u * h..][..LANES].try_into().expect("LANES bins");
-        (
-            std::array::from_fn(|l| b[l].re),
-            std::array::from_fn(|l| b[l].im),
-        )
-    };
+fn c2r_lanes<T: Token, const M: usize>(
+    tk: T,
+    twiddles: &[C32],
+    spec: &[C32],
+    h: usize,
+) -> [CLanes; M] {
+    let load = |u: usize| bins(tk, spec, u * h);
     let mut z = [([0.0f32; LANES], [0.0f32; LANES]); M];
     let (first, last) = (load(0).0, load(M).0);
     z[0] = (
@@ -945,7 +994,7 @@ fn c2r_lanes<const M: usize>(twiddles: &[C32], spec: &[C32], h: usize) -> [CLane
         let (k, kr) = (i + 1, M - i - 1);
         let (sum, diff) = {
             let (a, b) = (load(k), load(kr));
-            (cadd(&a, &b), csub(&a, &b))
+            (cadd(tk, &a, &b), csub(tk, &a, &b))
         };
         // twiddled_re_sum.im + twiddled_im_diff.re
         let real: Lanes = std::array::from_fn(|l| sum.1[l] * tw.re + diff.0[l] * tw.im);
@@ -974,16 +1023,281 @@ fn c2r_lanes<const M: usize>(twiddles: &[C32], spec: &[C32], h: usize) -> [CLane
 /// The inverse FFT's outputs `z` of [`LANES`] rows (complex `j` of row
 /// `r`: its samples `2 j` and `2 j + 1`) times `norm`, into `rows`.
 #[inline(always)]
-fn store_rows<const M: usize, const W: usize>(z: &[CLanes; M], norm: f32, rows: &mut [[f32; W]]) {
-    let scaled: [CLanes; M] = std::array::from_fn(|j| {
+fn store_rows<T: Token, const M: usize, const W: usize>(
+    tk: T,
+    z: &[CLanes; M],
+    norm: f32,
+    rows: &mut [[f32; W]],
+) {
+    let mut parts = [[0.0f32; LANES]; 8];
+    // four complex outputs (eight samples) of every row at a time,
+    // transposed into the rows; a last group of fewer (a width of 12)
+    // pads with zeros and stores its rows' first samples
+    for g in (0..M).step_by(4) {
+        let n = (M - g).min(4);
+        for (k, zk) in z[g..g + n].iter().enumerate() {
+            parts[2 * k] = mul8(tk, zk.0, splat(norm));
+            parts[2 * k + 1] = mul8(tk, zk.1, splat(norm));
+        }
+        let t = transpose8(tk, &parts);
+        for (row, t) in rows[..LANES].iter_mut().zip(&t) {
+            row[2 * g..2 * (g + n)].copy_from_slice(&t[..2 * n]);
+        }
+    }
+}
+
+/// What [`Columns40`] needs: both directions' twiddles, and its blocks.
+#[derive(Clone)]
+struct ColumnLanes {
+    twiddles: [Radix5x8; 2],
+    blocks: Box<[Points40; 2]>,
+}
+
+/// The twiddles of `rustfft`'s AVX plan for columns of 40, one direction:
+/// `MixedRadix5xnAvx` over `Butterfly8Avx` ([`Columns40`]).
+#[derive(Clone, Debug)]
+struct Radix5x8 {
+    /// `MixedRadix5xnAvx`'s, `compute_twiddle(i j, 40)` at `[i - 1][j]`.
+    mixed: [[C32; 8]; 4],
+    /// Its butterfly of 5's, `compute_twiddle(1, 5)` and `(2, 5)`.
+    fft5: [C32; 2],
+    /// `Butterfly8Avx`'s, `compute_twiddle(j, 8)`.
+    fft8: [C32; 4],
+}
+
+impl Radix5x8 {
+    /// The forward twiddles, or the inverse ones (`rustfft`'s inverse
+    /// twiddles are the forward ones conjugated).
+    fn new(inverse: bool) -> Self {
+        let twiddle = |i: usize, n: usize| {
+            let t = compute_twiddle(i, n);
+            if inverse { t.conj() } else { t }
+        };
+        Self {
+            mixed: std::array::from_fn(|i| std::array::from_fn(|j| twiddle((i + 1) * j, 40))),
+            fft5: [twiddle(1, 5), twiddle(2, 5)],
+            fft8: std::array::from_fn(|j| twiddle(j, 8)),
+        }
+    }
+}
+
+/// The column FFTs of a height of 40 (the complex FFT of every column of
+/// `data`, in place, at least [`LANES`] columns), [`LANES`] columns at a
+/// time, one per lane. `rustfft`'s AVX planner makes `MixedRadix5xnAvx`
+/// over `Butterfly8Avx` for that length: the column as 5 rows of 8,
+/// butterflies of 5 down its 8 columns ([`butterfly5`]), its twiddles
+/// ([`ctwiddle_left`]), butterflies of 8 along the 5 rows
+/// ([`butterfly8`]), the 5 x 8 result read out transposed. This is that
+/// arithmetic, term for term, each step one lane operation of the image
+/// crate's (`mul_add8` where it fuses, exactly rounded at every level: the
+/// same bits at every level, and `rustfft`'s where it runs its AVX code;
+/// only there is this taken). The columns go into lanes and back by 8 x 8
+/// transposes ([`load_lanes`], [`store_lanes`]). A count of columns that
+/// is not a multiple of [`LANES`] ends with a block flush with the end,
+/// of which only the columns not done before are stored (lanes do not mix:
+/// the others' lanes, transformed twice, touch nothing).
+struct Columns40<'a> {
+    twiddles: &'a Radix5x8,
+    inverse: bool,
+    /// A block's points and its transform (kept by the caller: not
+    /// cleared at each call).
+    blocks: &'a mut [Points40; 2],
+    data: &'a mut [C32],
+}
+
+impl Kernel for Columns40<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<T: Token>(self, token: T) {
+        // Butterfly8Avx's quarter turn is the direction's (its butterfly
+        // of 5's is always `a i`)
+        let (t, blocks, data) = (self.twiddles, self.blocks, self.data);
+        if self.inverse {
+            columns40(token, t, blocks, data, crotate_inverse);
+        } else {
+            columns40(token, t, blocks, data, crotate);
+        }
+    }
+}
+
+/// [`Columns40`]'s blocks.
+#[inline(always)]
+fn columns40<T: Token>(
+    token: T,
+    t: &Radix5x8,
+    [z, out]: &mut [Points40; 2],
+    data: &mut [C32],
+    rotate: impl Fn(T, &CLanes) -> CLanes + Copy,
+) {
+    let n = data.len() / 40;
+    let data = complex_parts_mut(data);
+    for c in (0..n - n % LANES).step_by(LANES) {
+        load_lanes(token, data, c, z);
+        fft40(token, t, z, out, rotate);
+        store_lanes(token, out, data, c, 0);
+    }
+    if !n.is_multiple_of(LANES) {
+        load_lanes(token, data, n - LANES, z);
+        fft40(token, t, z, out, rotate);
+        store_lanes(token, out, data, n - LANES, LANES - n % LANES);
+    }
+}
+
+/// [`LANES`] columns of 40 points in lanes, the real parts and the
+/// imaginary parts apart (each a run of whole vectors: kept so, the
+/// compiler does each step on whole 256-bit vectors).
+#[derive(Clone, Copy)]
+struct Points40 {
+    re: [Lanes; 40],
+    im: [Lanes; 40],
+}
+
+impl Points40 {
+    const ZERO: Self = Self {
+        re: [[0.0; LANES]; 40],
+        im: [[0.0; LANES]; 40],
+    };
+
+    #[inline(always)]
+    fn get(&self, p: usize) -> CLanes {
+        (self.re[p], self.im[p])
+    }
+
+    #[inline(always)]
+    fn set(&mut self, p: usize, v: CLanes) {
+        (self.re[p], self.im[p]) = v;
+    }
+}
+
+/// `MixedRadix5xnAvx`'s length-40 FFT of [`LANES`] columns in lanes, `z`
+/// into `out` (`z` left changed): row `i`'s bin `j` of the 5 x 8 rows'
+/// transforms is output `5 j + i`.
+#[inline(always)]
+fn fft40<T: Token>(
+    tk: T,
+    t: &Radix5x8,
+    z: &mut Points40,
+    out: &mut Points40,
+    rotate: impl Fn(T, &CLanes) -> CLanes + Copy,
+) {
+    // (the steps' values named one by one: arrays of them indexed in
+    // loops stay in memory)
+    for j in 0..8 {
+        let [o0, o1, o2, o3, o4] = butterfly5(
+            tk,
+            &t.fft5,
+            [
+                z.get(j),
+                z.get(j + 8),
+                z.get(j + 16),
+                z.get(j + 24),
+                z.get(j + 32),
+            ],
+        );
+        let m = |i: usize| t.mixed[i][j];
+        z.set(j, o0);
+        z.set(j + 8, ctwiddle_left(tk, m(0), &o1));
+        z.set(j + 16, ctwiddle_left(tk, m(1), &o2));
+        z.set(j + 24, ctwiddle_left(tk, m(2), &o3));
+        z.set(j + 32, ctwiddle_left(tk, m(3), &o4));
+    }
+    for i in 0..5 {
+        let g = |k: usize| z.get(8 * i + k);
+        let row = [g(0), g(1), g(2), g(3), g(4), g(5), g(6), g(7)];
+        let [o0, o1, o2, o3, o4, o5, o6, o7] = butterfly8(tk, &t.fft8, &row, rotate);
+        out.set(i, o0);
+        out.set(5 + i, o1);
+        out.set(10 + i, o2);
+        out.set(15 + i, o3);
+        out.set(20 + i, o4);
+        out.set(25 + i, o5);
+        out.set(30 + i, o6);
+        out.set(35 + i, o7);
+    }
+}
+
+/// `rustfft`'s `AvxVector::column_butterfly5` on lanes (either direction:
+/// `tw5` are its twiddles of the direction; its quarter turns are always
+/// `a i`, [`crotate_inverse`]): plain sums and differences, its twiddle
+/// products fused where it fuses (`fmadd`, `fnmadd`).
+#[inline(always)]
+fn butterfly5<T: Token>(tk: T, tw5: &[C32; 2], r: [CLanes; 5]) -> [CLanes; 5] {
+    // a t + c, lane by lane, fused (fnmadd: -t)
+    let fmadd = |t: f32, a: &CLanes, c: &CLanes| -> CLanes {
         (
-            std::array::from_fn(|l| z[j].0[l] * norm),
-            std::array::from_fn(|l| z[j].1[l] * norm),
+            mul_add8(tk, splat(t), a.0, c.0),
+            mul_add8(tk, splat(t), a.1, c.1),
         )
-    });
-    for (l, row) in rows[..LANES].iter_mut().enumerate() {
-        for (j, pair) in row.as_chunks_mut::<2>().0.iter_mut().enumerate() {
-            *pair = [scaled[j].0[l], scaled[j].1[l]];
+    };
+    let scale =
+        |t: f32, a: &CLanes| -> CLanes { (mul8(tk, splat(t), a.0), mul8(tk, splat(t), a.1)) };
+    let (sum1, diff4) = (cadd(tk, &r[1], &r[4]), csub(tk, &r[1], &r[4]));
+    let (sum2, diff3) = (cadd(tk, &r[2], &r[3]), csub(tk, &r[2], &r[3]));
+    let (rotated4, rotated3) = (crotate_inverse(tk, &diff4), crotate_inverse(tk, &diff3));
+    let output0 = cadd(tk, &r[0], &cadd(tk, &sum1, &sum2));
+    let [t0, t1] = *tw5;
+    let twiddled1_mid = fmadd(t0.re, &sum1, &r[0]);
+    let twiddled2_mid = fmadd(t1.re, &sum1, &r[0]);
+    let twiddled3_mid = scale(t1.im, &rotated4);
+    let twiddled4_mid = scale(t0.im, &rotated4);
+    let twiddled1 = fmadd(t1.re, &sum2, &twiddled1_mid);
+    let twiddled2 = fmadd(t0.re, &sum2, &twiddled2_mid);
+    let twiddled3 = fmadd(-t0.im, &rotated3, &twiddled3_mid);
+    let twiddled4 = fmadd(t1.im, &rotated3, &twiddled4_mid);
+    [
+        output0,
+        cadd(tk, &twiddled1, &twiddled4),
+        cadd(tk, &twiddled2, &twiddled3),
+        csub(tk, &twiddled2, &twiddled3),
+        csub(tk, &twiddled1, &twiddled4),
+    ]
+}
+
+/// `t a` as `rustfft`'s `AvxVector::mul_complex(t, a)`, the twiddle the
+/// left operand (its mixed-radix steps; [`ctwiddle`] is the other order,
+/// which fuses the other product): `fmaddsub(t.re, a, t.im * swap(a))`.
+#[inline(always)]
+fn ctwiddle_left<T: Token>(tk: T, t: C32, a: &CLanes) -> CLanes {
+    (
+        mul_add8(tk, splat(t.re), a.0, neg8(tk, mul8(tk, splat(t.im), a.1))),
+        mul_add8(tk, splat(t.re), a.1, mul8(tk, splat(t.im), a.0)),
+    )
+}
+
+/// The [`LANES`] columns of 40 from column `c` of `data` (its
+/// [`complex_parts`]: a column is 80 values) into lanes: `z[p]` is point
+/// `p` of each. Four points of the eight columns at a time: a column's
+/// four complex numbers are eight consecutive `f32` (real, imaginary,
+/// ...), and the transpose of those eight rows of eight
+/// ([`transpose8`]) is the four points' real and imaginary parts, one
+/// column per lane.
+#[inline(always)]
+fn load_lanes<T: Token>(token: T, data: &[f32], c: usize, z: &mut Points40) {
+    let cols = &data[c * 80..].as_chunks::<80>().0[..LANES];
+    for p in 0..10 {
+        let mut rows = [[0.0f32; LANES]; LANES];
+        for (r, col) in rows.iter_mut().zip(cols) {
+            *r = col.as_chunks::<8>().0[p];
+        }
+        let t = transpose8(token, &rows);
+        for k in 0..4 {
+            z.set(4 * p + k, (t[2 * k], t[2 * k + 1]));
+        }
+    }
+}
+
+/// [`load_lanes`]' way back, the columns from `c + skip` on only.
+#[inline(always)]
+fn store_lanes<T: Token>(token: T, z: &Points40, data: &mut [f32], c: usize, skip: usize) {
+    let cols = &mut data[c * 80..].as_chunks_mut::<80>().0[..LANES];
+    for p in 0..10 {
+        let mut rows = [[0.0f32; LANES]; LANES];
+        for k in 0..4 {
+            (rows[2 * k], rows[2 * k + 1]) = z.get(4 * p + k);
+        }
+        let t = transpose8(token, &rows);
+        for (col, r) in cols.iter_mut().zip(&t).skip(skip) {
+            col.as_chunks_mut::<8>().0[p] = *r;
         }
     }
 }
@@ -1022,6 +1336,10 @@ impl Fft2 {
         let col_fwd = cplx.plan_fft_forward(h);
         let col_inv = cplx.plan_fft_inverse(h);
         let inv_rows = ((w == 16 || w == 12) && rustfft_avx()).then(|| InverseTwiddles::new(w));
+        let col_lanes = (h == 40 && rustfft_avx()).then(|| ColumnLanes {
+            twiddles: [false, true].map(Radix5x8::new),
+            blocks: Box::new([Points40::ZERO; 2]),
+        });
         let wc = w / 2 + 1;
         let real_scratch_len = c2r.get_scratch_len();
         let col_scratch_len = col_fwd
@@ -1035,6 +1353,7 @@ impl Fft2 {
             inv_rows,
             col_fwd,
             col_inv,
+            col_lanes,
             rows: vec![C32::default(); wc * h],
             real_scratch: vec![C32::default(); real_scratch_len],
             col_scratch: vec![C32::default(); col_scratch_len],
@@ -1070,6 +1389,33 @@ impl Fft2 {
             });
         }
         Ok(())
+    }
+
+    /// The column FFTs of `data` (columns of `h`), in place: in lanes
+    /// where [`Columns40`] reproduces `rustfft`'s plan, there are
+    /// [`LANES`] columns or more and the kernels may run AVX2 (below, its
+    /// plain loops' fused products cost more than `rustfft`'s AVX code,
+    /// which gives the same bits), else `rustfft`.
+    fn columns(&mut self, inverse: bool, data: &mut [C32]) {
+        match &mut self.col_lanes {
+            Some(lanes) if data.len() >= LANES * self.h && SimdLevel::Avx2.is_available() => {
+                // the best level this CPU has (as the rows)
+                SimdLevel::Avx512.run(Columns40 {
+                    twiddles: &lanes.twiddles[usize::from(inverse)],
+                    inverse,
+                    blocks: &mut lanes.blocks,
+                    data,
+                });
+            }
+            _ => {
+                let fft = if inverse {
+                    &self.col_inv
+                } else {
+                    &self.col_fwd
+                };
+                fft.process_with_scratch(data, &mut self.col_scratch);
+            }
+        }
     }
 
     /// The half spectrum of `input` (`w x h` row-major) into `out`
@@ -1113,8 +1459,7 @@ impl Fft2 {
             Rows::Even(rows) => rows.forward(SimdLevel::Avx512, w, h, input, out),
             Rows::Odd(rows) => rows.forward(w, h, input, out),
         }
-        self.col_fwd
-            .process_with_scratch(out, &mut self.col_scratch);
+        self.columns(false, out);
         Ok(())
     }
 
@@ -1130,8 +1475,7 @@ impl Fft2 {
     pub fn inverse(&mut self, spectrum: &mut [C32], out: &mut [f32]) -> Result<()> {
         self.check(out.len(), spectrum.len())?;
         let (w, h, wc) = (self.w, self.h, self.w / 2 + 1);
-        self.col_inv
-            .process_with_scratch(spectrum, &mut self.col_scratch);
+        self.columns(true, spectrum);
         if let Some(twiddles) = &self.inv_rows
             && h >= LANES
         {
@@ -1577,6 +1921,50 @@ pub(crate) mod tests {
             f.inverse(&mut spec, &mut out).unwrap();
             let got: Vec<u32> = out.iter().map(|v| v.to_bits()).collect();
             assert_eq!(got, want, "{w}x{h}");
+        }
+    }
+
+    #[test]
+    fn column_lanes_of_40_are_rustfft_bit_for_bit_at_every_level() {
+        // Columns40 on its own, both directions, every count of columns
+        // from 8 (its least) to 40, multiples of the lanes or not: every
+        // level the scalar level's bits, and where rustfft runs its AVX
+        // code (the plan it reproduces), rustfft's
+        for inverse in [false, true] {
+            let twiddles = Radix5x8::new(inverse);
+            let mut planner = FftPlanner::<f32>::new();
+            let fft = if inverse {
+                planner.plan_fft_inverse(40)
+            } else {
+                planner.plan_fft_forward(40)
+            };
+            for n in LANES..=40 {
+                let re = signal(40, n, (n * 3 + usize::from(inverse)) as u32);
+                let im = signal(40, n, (n * 5 + 1) as u32);
+                let data: Vec<C32> = re.iter().zip(&im).map(|(&a, &b)| C32::new(a, b)).collect();
+                let bits = |v: &[C32]| -> Vec<(u32, u32)> {
+                    v.iter().map(|c| (c.re.to_bits(), c.im.to_bits())).collect()
+                };
+                let run = |level: SimdLevel| {
+                    let mut d = data.clone();
+                    level.run(Columns40 {
+                        twiddles: &twiddles,
+                        inverse,
+                        blocks: &mut Box::new([Points40::ZERO; 2]),
+                        data: &mut d,
+                    });
+                    bits(&d)
+                };
+                let want = run(SimdLevel::Scalar);
+                for level in SimdLevel::ALL {
+                    assert_eq!(run(level), want, "{n} columns {level:?} inverse {inverse}");
+                }
+                if rustfft_avx() {
+                    let mut r = data.clone();
+                    fft.process(&mut r);
+                    assert_eq!(bits(&r), want, "{n} columns rustfft inverse {inverse}");
+                }
+            }
         }
     }
 

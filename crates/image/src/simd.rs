@@ -43,6 +43,13 @@
 
 use std::sync::atomic::{AtomicU8, Ordering};
 
+mod lanes;
+
+pub use lanes::{
+    F32x8, add8, complex_parts, complex_parts_mut, deinterleave8, interleave8, mul_add8, mul8,
+    neg8, sub8, transpose8,
+};
+
 /// An instruction set the kernels can run with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[non_exhaustive]
