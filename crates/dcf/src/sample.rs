@@ -3,7 +3,7 @@
 //! bilinear interpolation when enlarging; edge pixels replicated outside
 //! the frame (as KCF's and DSST's patch extraction does).
 
-use bayestrack_image::simd::{Kernel, SimdLevel, Token, dispatch};
+use bayestrack_image::simd::{Kernel, SimdLevel, Token};
 use bayestrack_image::{ImageView, gray_level};
 
 use crate::error::{DcfError, Result};
@@ -45,64 +45,16 @@ pub struct PatchSampler {
     /// region.
     line: Vec<u8>,
     above: Vec<u64>,
-    /// Scratch for loading: partial column sums.
+    /// Scratch for loading: partial column sums; a row's running sums in
+    /// groups ([`table_row`]).
     part: Vec<u32>,
-    /// Scratch for loading: a row's running sums in the region.
-    prefix: Vec<i32>,
+    grouped: Vec<u16>,
 }
 
-/// Where a plane's values come from.
-#[derive(Debug, Clone, Copy)]
-enum Source {
-    /// One channel of the frame.
-    Channel(usize),
-    /// The gray level of an RGB frame.
-    Gray,
-}
-
-/// The values of row `y` of `frame` from `src`, columns `0..line.len()`.
-fn values<'a>(frame: ImageView<'a, u8>, y: usize, src: Source, line: &'a mut [u8]) -> &'a [u8] {
-    let row = frame.row(y);
-    let n = line.len();
-    match (src, frame.channels()) {
-        (Source::Channel(_), 1) => &row[..n],
-        (Source::Channel(ch), c) => {
-            for (o, p) in line.iter_mut().zip(row.chunks_exact(c)) {
-                *o = p[ch];
-            }
-            line
-        }
-        (Source::Gray, _) => {
-            dispatch(GrayLine {
-                row: &row[..3 * n],
-                line: &mut *line,
-            });
-            line
-        }
-    }
-}
-
-/// The gray levels of one RGB row.
-struct GrayLine<'a> {
-    row: &'a [u8],
-    line: &'a mut [u8],
-}
-
-impl Kernel for GrayLine<'_> {
-    type Output = ();
-    #[inline(always)]
-    fn run<T: Token>(self, _: T) {
-        for (o, p) in self.line.iter_mut().zip(self.row.chunks_exact(3)) {
-            *o = gray_level(p);
-        }
-    }
-}
-
-/// What a column of [`ColumnSums`] adds up.
+/// What a plane's values are, per pixel of a frame row.
 #[derive(Debug, Clone, Copy)]
 enum Columns {
-    /// The row's bytes: a one-channel frame, or every channel of an
-    /// interleaved one in place.
+    /// The row's bytes: a one-channel frame.
     Bytes,
     /// One channel of an interleaved frame.
     Channel(usize),
@@ -111,23 +63,61 @@ enum Columns {
 }
 
 impl Columns {
-    /// The columns of plane source `src` of a frame of `c` channels.
-    fn of(src: Source, c: usize) -> Self {
-        match (src, c) {
-            (Source::Channel(_), 1) => Self::Bytes,
-            (Source::Channel(ch), _) => Self::Channel(ch),
-            (Source::Gray, _) => Self::Gray,
+    /// Plane `k`'s values on a frame of `c` channels: the gray level of an
+    /// RGB frame if `gray`, else channel `k` (a gray frame's bytes as they
+    /// are).
+    fn of(gray: bool, k: usize, c: usize) -> Self {
+        match (gray, c) {
+            (true, 3) => Self::Gray,
+            (_, 1) => Self::Bytes,
+            _ => Self::Channel(k),
         }
+    }
+
+    /// The values of pixels `0..n` of a frame row of `c` channels: the
+    /// row's own bytes, or converted into `line`.
+    #[inline(always)]
+    fn values<'a>(self, row: &'a [u8], c: usize, n: usize, line: &'a mut [u8]) -> &'a [u8] {
+        let line = &mut line[..n];
+        match self {
+            Self::Bytes => return &row[..n],
+            Self::Channel(ch) => {
+                for (o, p) in line.iter_mut().zip(row[..n * c].chunks_exact(c)) {
+                    *o = p[ch];
+                }
+            }
+            Self::Gray => {
+                for (o, p) in line.iter_mut().zip(row[..3 * n].chunks_exact(3)) {
+                    *o = gray_level(p);
+                }
+            }
+        }
+        line
     }
 }
 
+/// Rows or values added up in `u32` at a time (below 2^32: 255 * 2^24 <
+/// 2^32).
+const PART: usize = 1 << 24;
+
+/// The sum of some bytes (exact: partial sums in `u32` over at most
+/// [`PART`] bytes at a time, added in `u64`).
+#[inline(always)]
+fn byte_sum(v: &[u8]) -> u64 {
+    v.chunks(PART)
+        .map(|b| u64::from(b.iter().map(|&p| u32::from(p)).sum::<u32>()))
+        .sum()
+}
+
 /// The column sums of rows `0..rows` of `frame` over the columns of
-/// `above`, added into it (exact integers: partial sums in `u32` over at
-/// most 2^24 rows at a time, then added to the `u64`s).
+/// `above`, added into it: of the gray levels of an RGB frame if `gray`,
+/// else of the row's bytes (every channel of an interleaved frame in
+/// place). Exact integers: partial sums in `u32` over at most [`PART`]
+/// rows at a time, then added to the `u64`s.
 struct ColumnSums<'a> {
     frame: ImageView<'a, u8>,
     rows: usize,
-    columns: Columns,
+    gray: bool,
     above: &'a mut [u64],
     part: &'a mut [u32],
 }
@@ -138,28 +128,19 @@ impl Kernel for ColumnSums<'_> {
     fn run<T: Token>(self, _: T) {
         let n = self.above.len();
         let part = &mut self.part[..n];
-        let c = self.frame.channels();
         let mut y = 0;
         while y < self.rows {
-            let end = self.rows.min(y + (1 << 24));
+            let end = self.rows.min(y + PART);
             part.fill(0);
             for y in y..end {
                 let row = self.frame.row(y);
-                match self.columns {
-                    Columns::Bytes => {
-                        for (a, &p) in part.iter_mut().zip(&row[..n]) {
-                            *a += u32::from(p);
-                        }
+                if self.gray {
+                    for (a, p) in part.iter_mut().zip(row[..3 * n].chunks_exact(3)) {
+                        *a += u32::from(gray_level(p));
                     }
-                    Columns::Channel(ch) => {
-                        for (a, p) in part.iter_mut().zip(row.chunks_exact(c)) {
-                            *a += u32::from(p[ch]);
-                        }
-                    }
-                    Columns::Gray => {
-                        for (a, p) in part.iter_mut().zip(row[..3 * n].chunks_exact(3)) {
-                            *a += u32::from(gray_level(p));
-                        }
+                } else {
+                    for (a, &p) in part.iter_mut().zip(&row[..n]) {
+                        *a += u32::from(p);
                     }
                 }
             }
@@ -171,73 +152,119 @@ impl Kernel for ColumnSums<'_> {
     }
 }
 
-/// The sum of some bytes (exact: integer additions in any order, compiled
-/// for the machine's vector width).
-struct ByteSum<'a>(&'a [u8]);
+/// Values per group of [`table_row`]'s running sums.
+const GROUP: usize = 8;
 
-impl Kernel for ByteSum<'_> {
-    type Output = u64;
-    #[inline(always)]
-    fn run<T: Token>(self, _: T) -> u64 {
-        self.0.iter().map(|&p| u64::from(p)).sum()
-    }
+/// The four bytes of `x` (lowest first) each in the low byte of a
+/// 16-bit lane of a `u64`.
+#[inline(always)]
+fn spread(x: u32) -> u64 {
+    let t = u64::from(x);
+    let t = (t | t << 16) & 0x0000_ffff_0000_ffff;
+    (t | t << 8) & 0x00ff_00ff_00ff_00ff
 }
 
 /// One row of a plane and of its summed-area table in a region: the
-/// values as `f32`, and each table entry the one above plus the row's sum
-/// up to it (`left`, the sum left of the region, plus the running sum of
-/// `v`): an exact integer, whatever way it is added up (the running sums
-/// in `i32` where they fit, converted and added to `left` in `f64`: the
-/// same value as the `u64` sum converted).
-struct TableRow<'a> {
+/// values `v` as `f32`, and each table entry the one above (`upper`, from
+/// the region's first column to one past its last) plus the row's sum up
+/// to it (`left`, the sum left of the region, plus the running sum of
+/// `v`), into `lower`; `sums`: scratch, as long as `v`.
+///
+/// Every entry is an exact integer below 2^53 (for any frame of under
+/// 2^45 pixels), so any way of adding it up gives the same bits. Each
+/// group of [`GROUP`] values is summed up to each of its values in the
+/// 16-bit lanes of two `u64`s (at most 8 * 255: no carry between lanes),
+/// the values spread one a lane and multiplied by `0x0001_0001_0001_0001`
+/// (each lane the sum of the lanes up to it), the first four's total
+/// added to the last four: one pass over the row with no dependence from
+/// group to group (the compiler vectorises it across groups). Then each
+/// table entry is the one above plus the row's sum before the group (in
+/// `f64`) plus its sum in the group, in vector lanes.
+#[inline(always)]
+fn table_row(
     left: u64,
-    v: &'a [u8],
-    /// The table's row above and this row, from the region's first column
-    /// to one past its last.
-    upper: &'a [f64],
-    lower: &'a mut [f64],
-    dst: &'a mut [f32],
-    prefix: &'a mut [i32],
+    v: &[u8],
+    upper: &[f64],
+    lower: &mut [f64],
+    dst: &mut [f32],
+    sums: &mut [u16],
+) {
+    const ONES: u64 = 0x0001_0001_0001_0001;
+    let n = v.len();
+    let (upper, lower) = (&upper[..=n], &mut lower[..=n]);
+    let (dst, sums) = (&mut dst[..n], &mut sums[..n]);
+    for (d, &p) in dst.iter_mut().zip(v) {
+        *d = f32::from(p);
+    }
+    let (groups, rest) = v.as_chunks::<GROUP>();
+    let (sums, _) = sums.as_chunks_mut::<GROUP>();
+    for (s, &p) in sums.iter_mut().zip(groups) {
+        let p = u64::from_le_bytes(p);
+        let a = spread(p as u32).wrapping_mul(ONES);
+        let b = (spread((p >> 32) as u32) + (a >> 48)).wrapping_mul(ONES);
+        *s = std::array::from_fn(|l| ((if l < 4 { a } else { b }) >> (16 * (l % 4))) as u16);
+    }
+    // (through i64: the same value, u64 -> f64 has no one-instruction form
+    // before AVX-512)
+    let mut run = left as i64 as f64;
+    lower[0] = upper[0] + run;
+    let (outs, outs_rest) = lower[1..].as_chunks_mut::<GROUP>();
+    let (ups, ups_rest) = upper[1..].as_chunks::<GROUP>();
+    for ((o, u), s) in outs.iter_mut().zip(ups).zip(&*sums) {
+        *o = std::array::from_fn(|l| u[l] + (run + f64::from(s[l])));
+        run += f64::from(s[GROUP - 1]);
+    }
+    for ((o, &u), &p) in outs_rest.iter_mut().zip(ups_rest).zip(rest) {
+        run += f64::from(p);
+        *o = u + run;
+    }
 }
 
-impl Kernel for TableRow<'_> {
+/// Rows `y0..y1` of a region of `frame` into every plane and its
+/// summed-area table (the tables' row `y0` filled before): per row and
+/// plane, the values up to the region's right edge ([`Columns::values`]),
+/// their sum left of the region, then [`table_row`]; all the rows in one
+/// dispatch.
+struct FillRows<'a> {
+    frame: ImageView<'a, u8>,
+    region: Region,
+    /// Planes of gray levels (see [`Columns::of`]).
+    gray: bool,
+    planes: &'a mut [Vec<f32>],
+    sums: &'a mut [Vec<f64>],
+    line: &'a mut [u8],
+    /// Scratch for [`table_row`].
+    grouped: &'a mut [u16],
+}
+
+impl Kernel for FillRows<'_> {
     type Output = ();
     #[inline(always)]
     fn run<T: Token>(self, _: T) {
         let Self {
-            left,
-            v,
-            upper,
-            lower,
-            dst,
-            prefix,
+            frame,
+            region: r,
+            gray,
+            planes,
+            sums,
+            line,
+            grouped,
         } = self;
-        for (d, &p) in dst.iter_mut().zip(v) {
-            *d = f32::from(p);
-        }
-        let (Some((&u0, upper)), Some((l0, lower))) =
-            (upper.split_first(), lower.split_first_mut())
-        else {
-            return;
-        };
-        *l0 = u0 + left as i64 as f64;
-        let n = v.len();
-        if n < 1 << 23 && prefix.len() >= n {
-            // below 2^31: 255 n < 2^31
-            let mut t = 0i32;
-            for (r, &p) in prefix.iter_mut().zip(v) {
-                t += i32::from(p);
-                *r = t;
-            }
-            let l = left as i64 as f64;
-            for ((o, &u), &r) in lower.iter_mut().zip(upper).zip(&prefix[..n]) {
-                *o = u + (l + f64::from(r));
-            }
-        } else {
-            let mut run = left;
-            for ((o, &u), &p) in lower.iter_mut().zip(upper).zip(v) {
-                run += u64::from(p);
-                *o = u + run as i64 as f64;
+        let (w, c) = (frame.width(), frame.channels());
+        let cols = w + 1;
+        for y in r.y0..r.y1 {
+            let row = frame.row(y);
+            for (k, (plane, sum)) in planes.iter_mut().zip(sums.iter_mut()).enumerate() {
+                let v = Columns::of(gray, k, c).values(row, c, r.x1, line);
+                let (upper, lower) = sum[y * cols..][..2 * cols].split_at_mut(cols);
+                table_row(
+                    byte_sum(&v[..r.x0]),
+                    &v[r.x0..],
+                    &upper[r.x0..=r.x1],
+                    &mut lower[r.x0..=r.x1],
+                    &mut plane[y * w..][r.x0..r.x1],
+                    grouped,
+                );
             }
         }
     }
@@ -374,16 +401,7 @@ impl PatchSampler {
     /// [`DcfError::InvalidParameter`] for an empty frame or a region that
     /// is empty or not inside the frame.
     pub fn load_region(&mut self, frame: ImageView<'_, u8>, region: Region) -> Result<()> {
-        let c = frame.channels();
-        self.prepare(frame, region, c)?;
-        if (2..=4).contains(&c) {
-            self.fill_interleaved(frame);
-        } else {
-            for ch in 0..c {
-                self.fill(frame, ch, Source::Channel(ch));
-            }
-        }
-        Ok(())
+        self.load_at(SimdLevel::Avx512, frame, region, false)
     }
 
     /// Loads the gray levels of `region` of `frame` as one plane: a gray
@@ -397,19 +415,29 @@ impl PatchSampler {
     /// than 1 or 3 channels, or a region that is empty or not inside the
     /// frame.
     pub fn load_gray_region(&mut self, frame: ImageView<'_, u8>, region: Region) -> Result<()> {
-        let src = match frame.channels() {
-            1 => Source::Channel(0),
-            3 => Source::Gray,
-            c => {
-                return Err(DcfError::InvalidParameter {
-                    name: "frame channels",
-                    value: c as f64,
-                    reason: "gray levels are read from 1- or 3-channel frames",
-                });
-            }
-        };
-        self.prepare(frame, region, 1)?;
-        self.fill(frame, 0, src);
+        self.load_at(SimdLevel::Avx512, frame, region, true)
+    }
+
+    /// [`PatchSampler::load_gray_region`] if `gray`, else
+    /// [`PatchSampler::load_region`], with the kernels at `level` (or the
+    /// best level below it this CPU runs): the same bits at every level.
+    fn load_at(
+        &mut self,
+        level: SimdLevel,
+        frame: ImageView<'_, u8>,
+        region: Region,
+        gray: bool,
+    ) -> Result<()> {
+        let c = frame.channels();
+        if gray && c != 1 && c != 3 {
+            return Err(DcfError::InvalidParameter {
+                name: "frame channels",
+                value: c as f64,
+                reason: "gray levels are read from 1- or 3-channel frames",
+            });
+        }
+        self.prepare(frame, region, if gray { 1 } else { c })?;
+        self.fill(level, frame, gray);
         Ok(())
     }
 
@@ -454,109 +482,53 @@ impl PatchSampler {
         self.line.resize(r.x1, 0);
         self.above.resize(r.x1 * c, 0);
         self.part.resize(r.x1 * c, 0);
+        self.grouped.resize(r.x1 - r.x0, 0);
         self.region = r;
         Ok(())
     }
 
-    /// Fills every plane of a frame of 2 to 4 channels and its summed-area
-    /// table in the loaded region, in one pass over the frame's rows (the
-    /// same values as [`PatchSampler::fill`] per channel).
-    fn fill_interleaved(&mut self, frame: ImageView<'_, u8>) {
+    /// Fills every plane and its summed-area table in the loaded region:
+    /// gray levels if `gray` (one plane), else one plane per channel (see
+    /// [`Columns::of`]); the kernels at `level` (or the best level below
+    /// it this CPU runs): the same bits at every level.
+    fn fill(&mut self, level: SimdLevel, frame: ImageView<'_, u8>, gray: bool) {
         let (w, r, c) = (self.w, self.region, frame.channels());
         let cols = w + 1;
-        self.prefix.resize(r.x1 - r.x0, 0);
-        // column sums of the rows above the region, interleaved as the
-        // frame (exact integers, as in `fill`)
-        let above = &mut self.above[..r.x1 * c];
-        above.fill(0);
-        dispatch(ColumnSums {
-            frame,
-            rows: r.y0,
-            columns: Columns::Bytes,
-            above: &mut *above,
-            part: &mut self.part,
-        });
-        for (ch, sum) in self.sums.iter_mut().enumerate() {
-            let top = &mut sum[r.y0 * cols..][..cols];
-            let mut t: u64 = above[..r.x0 * c].iter().skip(ch).step_by(c).sum();
-            top[r.x0] = t as i64 as f64;
-            for x in r.x0..r.x1 {
-                t += above[x * c + ch];
-                top[x + 1] = t as i64 as f64;
-            }
-        }
-        let mut left = [0u64; 4];
-        for y in r.y0..r.y1 {
-            let row = &frame.row(y)[..r.x1 * c];
-            // each channel's sum left of the region
-            left.fill(0);
-            for p in row[..r.x0 * c].chunks_exact(c) {
-                for (l, &v) in left.iter_mut().zip(p) {
-                    *l += u64::from(v);
-                }
-            }
-            for (ch, (plane, sum)) in self.planes.iter_mut().zip(self.sums.iter_mut()).enumerate() {
-                let (upper, lower) = sum[y * cols..][..2 * cols].split_at_mut(cols);
-                // the channel's values in the region
-                let v = &mut self.line[..r.x1 - r.x0];
-                for (o, p) in v.iter_mut().zip(row[r.x0 * c..].chunks_exact(c)) {
-                    *o = p[ch];
-                }
-                dispatch(TableRow {
-                    left: left[ch],
-                    v,
-                    upper: &upper[r.x0..=r.x1],
-                    lower: &mut lower[r.x0..=r.x1],
-                    dst: &mut plane[y * w..][r.x0..r.x1],
-                    prefix: &mut self.prefix,
-                });
-            }
-        }
-    }
-
-    /// Fills plane `k` and its summed-area table in the loaded region from
-    /// `src`.
-    fn fill(&mut self, frame: ImageView<'_, u8>, k: usize, src: Source) {
-        let (w, r) = (self.w, self.region);
-        let cols = w + 1;
-        let (plane, sum) = (&mut self.planes[k], &mut self.sums[k]);
-        let (line, above) = (&mut self.line[..r.x1], &mut self.above[..r.x1]);
-        self.prefix.resize(r.x1 - r.x0, 0);
         // every entry of the table is an exact integer (below 2^53 for any
         // frame of under 2^45 pixels): integer sums in any order give the
         // whole frame's values bit for bit (converted through i64, the
         // same value: u64 -> f64 has no one-instruction form before
-        // AVX-512). Column sums of the rows above
-        // the region (u64: any height):
+        // AVX-512). Column sums of the rows above the region (u64: any
+        // height), of the gray levels or of every channel in place:
+        let stride = if gray { 1 } else { c };
+        let above = &mut self.above[..r.x1 * stride];
         above.fill(0);
-        dispatch(ColumnSums {
+        level.run(ColumnSums {
             frame,
             rows: r.y0,
-            columns: Columns::of(src, frame.channels()),
+            gray: gray && c == 3,
             above: &mut *above,
             part: &mut self.part,
         });
-        // the table's row y0 at columns x0..=x1
-        let top = &mut sum[r.y0 * cols..][..cols];
-        let mut t: u64 = above[..r.x0].iter().sum();
-        top[r.x0] = t as i64 as f64;
-        for (x, &a) in above.iter().enumerate().skip(r.x0) {
-            t += a;
-            top[x + 1] = t as i64 as f64;
+        // each table's row y0 at columns x0..=x1
+        for (k, sum) in self.sums.iter_mut().enumerate() {
+            let top = &mut sum[r.y0 * cols..][..cols];
+            let mut t: u64 = above[..r.x0 * stride].iter().skip(k).step_by(stride).sum();
+            top[r.x0] = t as i64 as f64;
+            for x in r.x0..r.x1 {
+                t += above[x * stride + k];
+                top[x + 1] = t as i64 as f64;
+            }
         }
-        for y in r.y0..r.y1 {
-            let v = values(frame, y, src, line);
-            let (upper, lower) = sum[y * cols..][..2 * cols].split_at_mut(cols);
-            dispatch(TableRow {
-                // the row's sum left of the region
-                left: dispatch(ByteSum(&v[..r.x0])),
-                v: &v[r.x0..r.x1],
-                upper: &upper[r.x0..=r.x1],
-                lower: &mut lower[r.x0..=r.x1],
-                dst: &mut plane[y * w..][r.x0..r.x1],
-                prefix: &mut self.prefix,
-            });
-        }
+        level.run(FillRows {
+            frame,
+            region: r,
+            gray,
+            planes: &mut self.planes,
+            sums: &mut self.sums,
+            line: &mut self.line,
+            grouped: &mut self.grouped,
+        });
     }
 
     /// Channels loaded.
@@ -981,8 +953,11 @@ impl<const CHUNKS: bool> Table<'_, CHUNKS> {
         held: &mut [usize; SLOTS],
         o: &mut [f64],
     ) {
-        let j = (y as usize).min(self.h - 1);
-        let f = y - j as f64;
+        // y >= 0 (an edge clamped to the frame) and below 2^53: through
+        // i64 the same integers as through u64, one conversion instruction
+        // each way (u64 <-> f64 takes several before AVX-512)
+        let j = (y as i64 as usize).min(self.h - 1);
+        let f = y - j as i64 as f64;
         let (a, b, c) = (j % SLOTS, (j + 1) % SLOTS, (j + 2) % SLOTS);
         if held[b] != j + 1 {
             if let Ok([ra, rb, rc]) = rows.get_disjoint_mut([a, b, c]) {
@@ -1765,63 +1740,194 @@ mod tests {
 #[cfg(test)]
 mod table_row_tests {
     use super::*;
+    use bayestrack_image::{Image, Rect};
+
+    /// [`table_row`] as a kernel, to run it at each level.
+    struct Row<'a> {
+        left: u64,
+        v: &'a [u8],
+        upper: &'a [f64],
+        lower: &'a mut [f64],
+        dst: &'a mut [f32],
+        sums: &'a mut [u16],
+    }
+
+    impl Kernel for Row<'_> {
+        type Output = ();
+        #[inline(always)]
+        fn run<T: Token>(self, _: T) {
+            let Self {
+                left,
+                v,
+                upper,
+                lower,
+                dst,
+                sums,
+            } = self;
+            table_row(left, v, upper, lower, dst, sums);
+        }
+    }
+
+    fn bits(v: &[f64]) -> Vec<u64> {
+        v.iter().map(|x| x.to_bits()).collect()
+    }
 
     #[test]
-    fn byte_sums_at_every_level() {
-        let v: Vec<u8> = (0..1000usize)
+    fn table_rows_are_the_u64_running_sums_at_every_level() {
+        let len = 1001;
+        let v: Vec<u8> = (0..len)
             .map(|i| {
-                if i % 3 == 0 {
+                if i % 5 == 0 {
                     255
                 } else {
-                    ((i * 2_654_435_761) >> 9) as u8
+                    ((i * 2_654_435_761usize) >> 9) as u8
                 }
             })
             .collect();
-        for n in [0, 1, 7, 31, 32, 33, 100, 319, 1000] {
-            let want: u64 = v[..n].iter().map(|&p| p as u64).sum();
-            for level in SimdLevel::ALL {
-                assert_eq!(level.run(ByteSum(&v[..n])), want, "{level:?} {n}");
+        let upper: Vec<f64> = (0..=len)
+            .map(|i| (i * 1_000_003 % 7919) as f64 * 255.0)
+            .collect();
+        // a tail alone, whole groups, groups and a tail, groups in vector
+        // lanes (4 at a time) and alone; lefts up to 2^40
+        for n in [0, 1, 7, 8, 9, 15, 16, 17, 31, 32, 33, 40, 64, 300, 1001] {
+            for left in [0u64, 255, 123_456_789, (1 << 40) + 17] {
+                // the plain running sum
+                let mut want = vec![upper[0] + left as f64];
+                let mut run = left;
+                for (&p, &u) in v[..n].iter().zip(&upper[1..]) {
+                    run += u64::from(p);
+                    want.push(u + run as f64);
+                }
+                let values: Vec<f32> = v[..n].iter().map(|&p| f32::from(p)).collect();
+                for level in SimdLevel::ALL {
+                    let (mut lower, mut dst) = (vec![f64::NAN; n + 1], vec![f32::NAN; n]);
+                    level.run(Row {
+                        left,
+                        v: &v[..n],
+                        upper: &upper[..=n],
+                        lower: &mut lower,
+                        dst: &mut dst,
+                        sums: &mut vec![0; n],
+                    });
+                    assert_eq!(bits(&lower), bits(&want), "{level:?} {n} left {left}");
+                    assert_eq!(dst, values, "{level:?} {n}");
+                }
             }
         }
     }
 
+    /// A frame of `c` channels with varied levels, 255s in runs.
+    fn frame(w: usize, h: usize, c: usize) -> Image<u8> {
+        let data = (0..w * h * c)
+            .map(|i| {
+                if (i / 7) % 11 == 0 {
+                    255
+                } else {
+                    ((i * 2_654_435_761) >> 11) as u8
+                }
+            })
+            .collect();
+        Image::from_vec(w, h, c, data).unwrap()
+    }
+
+    /// The planes (`gray`: the gray level of an RGB frame, else each
+    /// channel) and their summed-area tables, plainly: u64 sums converted.
+    fn reference(f: ImageView<'_, u8>, gray: bool) -> Vec<(Vec<f32>, Vec<f64>)> {
+        let (w, h, c) = (f.width(), f.height(), f.channels());
+        let planes: Vec<Vec<u8>> = if gray && c == 3 {
+            let mut g = Image::new(w, h, 1, 0u8).unwrap();
+            bayestrack_image::rgb_to_gray_into(f, &mut g.view_mut()).unwrap();
+            vec![g.as_slice().to_vec()]
+        } else {
+            (0..c)
+                .map(|ch| {
+                    (0..h)
+                        .flat_map(|y| (0..w).map(move |x| f.row(y)[x * c + ch]))
+                        .collect()
+                })
+                .collect()
+        };
+        planes
+            .into_iter()
+            .map(|p| {
+                let mut sum = vec![0u64; (w + 1) * (h + 1)];
+                for y in 0..h {
+                    for x in 0..w {
+                        sum[(y + 1) * (w + 1) + x + 1] = sum[y * (w + 1) + x + 1]
+                            + sum[(y + 1) * (w + 1) + x]
+                            - sum[y * (w + 1) + x]
+                            + u64::from(p[y * w + x]);
+                    }
+                }
+                let values = p.iter().map(|&v| f32::from(v)).collect();
+                (values, sum.iter().map(|&s| s as f64).collect())
+            })
+            .collect()
+    }
+
     #[test]
-    fn the_running_sums_in_i32_are_the_u64_sums_bit_for_bit() {
-        let n = 300;
-        let v: Vec<u8> = (0..n)
-            .map(|i| ((i * 2_654_435_761usize) >> 9) as u8)
-            .collect();
-        let upper: Vec<f64> = (0..=n)
-            .map(|i| (i * 1_000_003 % 7919) as f64 * 255.0)
-            .collect();
-        for left in [0u64, 255, 123_456_789, (1 << 40) + 17] {
-            let row = |level: SimdLevel, prefix: &mut [i32]| {
-                let (mut lower, mut dst) = (vec![f64::NAN; n + 1], vec![f32::NAN; n]);
-                level.run(TableRow {
-                    left,
-                    v: &v,
-                    upper: &upper,
-                    lower: &mut lower,
-                    dst: &mut dst,
-                    prefix,
-                });
-                (lower, dst)
+    fn loads_are_the_plain_tables_at_every_level() {
+        // larger than the sequences' frames (320 x 240, 360 x 240) and
+        // their regions; a crop of a wider frame (rows apart by more than
+        // their width)
+        let (w, h) = (411, 263);
+        let r = |x0, y0, x1, y1| Region { x0, y0, x1, y1 };
+        // the whole frame, at each side and corner, inside, one pixel,
+        // one column, one row, odd widths either side of whole blocks
+        let regions = [
+            r(0, 0, w, h),
+            r(0, 0, 70, 50),
+            r(w - 83, 0, w, 61),
+            r(0, h - 40, 99, h),
+            r(w - 9, h - 17, w, h),
+            r(37, 51, 358, 209),
+            r(200, 100, 201, 101),
+            r(5, 0, 6, h),
+            r(0, 130, w, 131),
+            r(100, 7, 117, 250),
+            r(1, 1, w - 1, h - 1),
+        ];
+        for c in [1, 2, 3, 4, 5] {
+            let wide = frame(w + 13, h + 2, c);
+            let rect = Rect {
+                x: 5,
+                y: 1,
+                width: w,
+                height: h,
             };
-            // no scratch: the u64 running sum (the path for rows of 2^23
-            // pixels or more)
-            let (want, values) = row(SimdLevel::Scalar, &mut []);
-            let mut run = left;
-            for (x, &p) in v.iter().enumerate() {
-                assert_eq!(values[x], f32::from(p));
-                run += u64::from(p);
-                assert_eq!(want[x + 1], upper[x + 1] + run as i64 as f64);
-            }
-            assert_eq!(want[0], upper[0] + left as f64);
-            for level in SimdLevel::ALL {
-                let (got, dst) = row(level, &mut vec![0; n]);
-                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-                assert_eq!(bits(&got), bits(&want), "{level:?} left {left}");
-                assert_eq!(dst, values);
+            let f = wide.crop(rect).unwrap();
+            for gray in [false, true] {
+                if gray && c != 1 && c != 3 {
+                    continue;
+                }
+                let want = reference(f, gray);
+                let mut s = PatchSampler::new();
+                for (n, &reg) in regions.iter().enumerate() {
+                    for level in SimdLevel::ALL {
+                        // a previous load elsewhere: every value read is
+                        // this load's
+                        let other = regions[(n + 3) % regions.len()];
+                        s.load_at(level, frame(w, h, c).view(), other, gray)
+                            .unwrap();
+                        s.load_at(level, f, reg, gray).unwrap();
+                        assert_eq!(s.channels(), want.len());
+                        let cols = w + 1;
+                        for (k, (plane, sum)) in want.iter().enumerate() {
+                            for y in reg.y0..=reg.y1 {
+                                let at =
+                                    |t: &[f64]| bits(&t[y * cols + reg.x0..=y * cols + reg.x1]);
+                                let what = format!(
+                                    "{level:?} {c} ch gray {gray} plane {k} {reg:?} row {y}"
+                                );
+                                assert_eq!(at(&s.sums[k]), at(sum), "{what}");
+                                if y < reg.y1 {
+                                    let at = |p: &[f32]| p[y * w + reg.x0..y * w + reg.x1].to_vec();
+                                    assert_eq!(at(&s.planes[k]), at(plane), "{what}");
+                                }
+                            }
+                        }
+                    }
+                }
             }
         }
     }
