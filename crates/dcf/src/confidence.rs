@@ -11,7 +11,7 @@ pub const PSR_EXCLUDE: usize = 11;
 /// The maximum of `response` and its index (the first on ties; NaN never
 /// wins; `(-inf, 0)` when nothing exceeds -inf).
 ///
-/// The maximum from [`Range`]'s lanes, then the first value equal to it:
+/// The maximum from `Range`'s lanes, then the first value equal to it:
 /// the first index at which a running `v > best` would have stopped
 /// moving, and its value (`+0` and `-0` are equal, so the first zero of
 /// either sign, as the running test keeps it).
