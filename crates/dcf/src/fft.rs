@@ -159,7 +159,7 @@ impl OddRows {
 /// (`w / 2` of 4, 5, 6, 8, 9, 10 or 12 bins) are unrolled
 /// ([`untangle_fixed`]), and widths of 16 and 12 where `rustfft` runs
 /// its AVX planner skip the packing and the inner FFT call too:
-/// [`Width16`] and [`Width12`] compute the whole row transforms in lanes,
+/// [`RowLanes`] computes the whole row transforms in lanes,
 /// with `rustfft`'s bits.
 #[derive(Clone)]
 struct EvenRows {
@@ -175,11 +175,11 @@ struct EvenRows {
     /// One block of [`LANES`] rows' transforms, bin-major: `block[k][r]`
     /// is row `r`'s bin `k`.
     block: Vec<[C32; LANES]>,
-    /// The twiddles of `rustfft`'s 8-point butterfly ([`Width16`]).
+    /// The twiddles of `rustfft`'s 8-point butterfly ([`RowLanes`]).
     fft8_twiddles: [C32; 4],
-    /// The twiddle of `rustfft`'s butterfly of 3 ([`Width12`]).
+    /// The twiddle of `rustfft`'s butterfly of 3 ([`RowLanes`]).
     fft3_twiddle: C32,
-    /// Whether a width of 16 or 12 takes [`Width16`] or [`Width12`]: where
+    /// Whether a width of 16 or 12 takes [`RowLanes`]: where
     /// `rustfft` runs its AVX butterflies, whose bits they reproduce
     /// (elsewhere `rustfft` and the untangling, as other widths).
     lanes: bool,
@@ -242,6 +242,32 @@ impl EvenRows {
         }
     }
 
+    /// [`RowLanes`] for a width `w` of 16 or 12 (`h >= LANES`), compiled
+    /// for `level`.
+    fn row_lanes(&self, level: SimdLevel, w: usize, h: usize, input: &[f32], spectra: &mut [C32]) {
+        fn run<const W: usize>(
+            rows: &EvenRows,
+            level: SimdLevel,
+            h: usize,
+            input: &[f32],
+            spectra: &mut [C32],
+        ) {
+            level.run(RowLanes::<W> {
+                h,
+                fft8_twiddles: &rows.fft8_twiddles,
+                fft3_twiddle: rows.fft3_twiddle,
+                twiddles: &rows.twiddles,
+                input,
+                spectra,
+            });
+        }
+        if w == 16 {
+            run::<16>(self, level, h, input, spectra);
+        } else {
+            run::<12>(self, level, h, input, spectra);
+        }
+    }
+
     /// The row spectra of `input` (`k` arrays of `h` rows of `w`) into
     /// `spectra` (`k` column-major half spectra of `(w / 2 + 1) h`), the
     /// packing and untangling compiled for `level` (every level gives the
@@ -255,23 +281,7 @@ impl EvenRows {
         spectra: &mut [C32],
     ) {
         if self.lanes && h >= LANES {
-            if w == 16 {
-                level.run(Width16 {
-                    h,
-                    fft_twiddles: &self.fft8_twiddles,
-                    twiddles: &self.twiddles,
-                    input,
-                    spectra,
-                });
-            } else {
-                level.run(Width12 {
-                    h,
-                    fft_twiddle: self.fft3_twiddle,
-                    twiddles: &self.twiddles,
-                    input,
-                    spectra,
-                });
-            }
+            self.row_lanes(level, w, h, input, spectra);
             return;
         }
         let (m, count) = (w / 2, input.len() / w);
@@ -595,91 +605,58 @@ fn untangle_lanes<T: Token, const M: usize>(
     }
 }
 
-/// The row transforms of a width of 16 (the inner complex FFT of 8 and
-/// the untangling) for [`LANES`] rows at a time, one per lane, straight
-/// from the real rows to the column-major spectrum (no packing, no call
-/// of the inner FFT, no transposition of its output). The 8-point FFT is
-/// the arithmetic of `rustfft`'s AVX `Butterfly8Avx` (what its planner
-/// gives a machine with AVX and FMA, as every x86-64-v3 one): the same
-/// additions, and its twiddle products as fused multiply-adds
-/// (`f32::mul_add`, exactly rounded at every level, so every level gives
-/// the same bits); then [`untangle_lanes`]. Zero rows' bins are written as
-/// zeros, as the other widths'.
-struct Width16<'a> {
+/// The row transforms of a width `W` of 16 or 12 (the inner complex FFT
+/// of `W / 2` and the untangling) for [`LANES`] rows at a time, one per
+/// lane, straight from the real rows to the column-major spectrum (no
+/// packing, no call of the inner FFT, no transposition of its output).
+/// The inner FFT is the arithmetic of what `rustfft`'s AVX planner gives
+/// that length (what it gives a machine with AVX and FMA, as every
+/// x86-64-v3 one): for 8, `Butterfly8Avx` ([`width16_block`]: the same
+/// additions, and its twiddle products as fused multiply-adds, exactly
+/// rounded at every level, so every level gives the same bits); for 6,
+/// `Butterfly6` ([`width12_block`]: Good-Thomas over two butterflies of 3
+/// and three of 2, plain multiplications and additions); then
+/// [`untangle_lanes`]. Zero rows' bins are written as zeros, as the other
+/// widths'.
+struct RowLanes<'a, const W: usize> {
     h: usize,
-    /// `rustfft`'s twiddles of its 8-point butterfly, `compute_twiddle(j, 8)`.
-    fft_twiddles: &'a [C32; 4],
-    /// `realfft`'s untangling twiddles (three).
+    /// `rustfft`'s twiddles of its 8-point butterfly, `compute_twiddle(j, 8)`
+    /// (a width of 16).
+    fft8_twiddles: &'a [C32; 4],
+    /// `rustfft`'s twiddle of its butterfly of 3, `compute_twiddle(1, 3)`
+    /// (a width of 12).
+    fft3_twiddle: C32,
+    /// `realfft`'s untangling twiddles.
     twiddles: &'a [C32],
     input: &'a [f32],
     spectra: &'a mut [C32],
 }
 
-impl Kernel for Width16<'_> {
+impl<const W: usize> Kernel for RowLanes<'_, W> {
     type Output = ();
     #[inline(always)]
     fn run<T: Token>(self, token: T) {
         let h = self.h;
         for (array, dst) in self
             .input
-            .chunks_exact(16 * h)
-            .zip(self.spectra.chunks_exact_mut(9 * h))
+            .chunks_exact(W * h)
+            .zip(self.spectra.chunks_exact_mut((W / 2 + 1) * h))
         {
-            let (rows, _) = array.as_chunks::<16>();
+            let (rows, _) = array.as_chunks::<W>();
             // blocks of LANES rows, the last one flush with the end (as
             // Untangle's)
             let last = h - LANES;
             for y in (0..last).step_by(LANES).chain([last]) {
-                let block: &[[f32; 16]; LANES] = rows[y..y + LANES].try_into().expect("LANES");
-                width16_block(
-                    token,
-                    self.fft_twiddles,
-                    self.twiddles,
-                    block,
-                    h,
-                    &mut dst[y..],
-                );
-            }
-        }
-    }
-}
-
-/// [`Width16`] for a width of 12: the inner complex FFT of 6 is the
-/// arithmetic of `rustfft`'s `Butterfly6` (what its AVX planner gives that
-/// length: Good-Thomas over two butterflies of 3 and three of 2, plain
-/// multiplications and additions), then [`untangle_lanes`].
-struct Width12<'a> {
-    h: usize,
-    /// `rustfft`'s twiddle of its butterfly of 3, `compute_twiddle(1, 3)`.
-    fft_twiddle: C32,
-    /// `realfft`'s untangling twiddles (two).
-    twiddles: &'a [C32],
-    input: &'a [f32],
-    spectra: &'a mut [C32],
-}
-
-impl Kernel for Width12<'_> {
-    type Output = ();
-    #[inline(always)]
-    fn run<T: Token>(self, token: T) {
-        let h = self.h;
-        for (array, dst) in self
-            .input
-            .chunks_exact(12 * h)
-            .zip(self.spectra.chunks_exact_mut(7 * h))
-        {
-            let (rows, _) = array.as_chunks::<12>();
-            let last = h - LANES;
-            for y in (0..last).step_by(LANES).chain([last]) {
-                let block: &[[f32; 12]; LANES] = rows[y..y + LANES].try_into().expect("LANES");
-                width12_block(
-                    token,
-                    self.fft_twiddle,
-                    self.twiddles,
-                    block,
-                    h,
-                    &mut dst[y..],
-                );
+                // (the block at its own width: W is one of the two)
+                let flat = rows[y..y + LANES].as_flattened();
+                let dst = &mut dst[y..];
+                if W == 16 {
+                    let block = flat.as_chunks::<16>().0.try_into().expect("LANES");
+                    width16_block(token, self.fft8_twiddles, self.twiddles, block, h, dst);
+                } else {
+                    let block = flat.as_chunks::<12>().0.try_into().expect("LANES");
+                    width12_block(token, self.fft3_twiddle, self.twiddles, block, h, dst);
+                }
             }
         }
     }
@@ -713,7 +690,7 @@ fn butterfly6<T: Token>(tk: T, tw3: C32, z: &[CLanes; 6]) -> [CLanes; 6] {
     ]
 }
 
-/// [`Width12`]'s [`LANES`] rows.
+/// [`RowLanes`]' [`LANES`] rows of 12.
 #[inline(always)]
 fn width12_block<T: Token>(
     tk: T,
@@ -854,7 +831,7 @@ fn butterfly8<T: Token>(
     ]
 }
 
-/// [`Width16`]'s [`LANES`] rows.
+/// [`RowLanes`]' [`LANES`] rows of 16.
 #[inline(always)]
 fn width16_block<T: Token>(
     tk: T,
@@ -1793,23 +1770,7 @@ pub(crate) mod tests {
                 let rows = EvenRows::new(w, &mut FftPlanner::new());
                 let run = |level: SimdLevel| {
                     let mut got = vec![C32::new(f32::NAN, 7.0); 3 * (w / 2 + 1) * h];
-                    if w == 16 {
-                        level.run(Width16 {
-                            h,
-                            fft_twiddles: &rows.fft8_twiddles,
-                            twiddles: &rows.twiddles,
-                            input: &x,
-                            spectra: &mut got,
-                        });
-                    } else {
-                        level.run(Width12 {
-                            h,
-                            fft_twiddle: rows.fft3_twiddle,
-                            twiddles: &rows.twiddles,
-                            input: &x,
-                            spectra: &mut got,
-                        });
-                    }
+                    rows.row_lanes(level, w, h, &x, &mut got);
                     got
                 };
                 let bits = |v: &[C32]| -> Vec<(u32, u32)> {
