@@ -715,12 +715,26 @@ fn width12_block<T: Token>(
     let (ka, kb) = (nonzero_lanes(&a), nonzero_lanes(&b[4..]));
     let keep = std::array::from_fn(|l| ka[l] | kb[l]);
     let out = butterfly6(tk, tw3, &z);
-    let mut re = [[0.0f32; LANES]; 6];
-    let mut im = [[0.0f32; LANES]; 6];
-    for ((r, i), o) in re.iter_mut().zip(&mut im).zip(&out) {
+    untangle_outputs(tk, h, twiddles, &out, &keep, dst);
+}
+
+/// The inner FFT's `M` outputs of [`RowLanes`]' blocks (complex lanes)
+/// split into real and imaginary lanes, then [`untangle_lanes`].
+#[inline(always)]
+fn untangle_outputs<T: Token, const M: usize>(
+    tk: T,
+    h: usize,
+    twiddles: &[C32],
+    out: &[CLanes; M],
+    keep: &Lanes32,
+    dst: &mut [C32],
+) {
+    let mut re = [[0.0f32; LANES]; M];
+    let mut im = [[0.0f32; LANES]; M];
+    for ((r, i), o) in re.iter_mut().zip(&mut im).zip(out) {
         (*r, *i) = *o;
     }
-    untangle_lanes(tk, h, twiddles, &re, &im, &keep, dst);
+    untangle_lanes(tk, h, twiddles, &re, &im, keep, dst);
 }
 
 /// All ones in the lanes where one of `samples` is not zero, zero in the
@@ -858,13 +872,14 @@ fn width16_block<T: Token>(
     ];
     let (ka, kb) = (nonzero_lanes(&a), nonzero_lanes(&b));
     let keep = std::array::from_fn(|l| ka[l] | kb[l]);
-    let out = butterfly8(tk, tw8, &z, crotate);
-    let mut re = [[0.0f32; LANES]; 8];
-    let mut im = [[0.0f32; LANES]; 8];
-    for ((r, i), o) in re.iter_mut().zip(&mut im).zip(&out) {
-        (*r, *i) = *o;
-    }
-    untangle_lanes(tk, h, twiddles, &re, &im, &keep, dst);
+    untangle_outputs(
+        tk,
+        h,
+        twiddles,
+        &butterfly8(tk, tw8, &z, crotate),
+        &keep,
+        dst,
+    );
 }
 
 /// The twiddles of [`InverseRows`]: `realfft`'s complex-to-real ones and
