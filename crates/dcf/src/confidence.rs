@@ -129,9 +129,7 @@ pub fn apce(response: &[f32]) -> f64 {
 }
 
 /// `sum (v - min)^2` over a response as one running `f64` sum in value
-/// order: [`RANGE_LANES`] terms computed side by side in vector lanes,
-/// then added one after the other (the plain loop's additions, in its
-/// order).
+/// order ([`sum_in_order`]).
 struct Spread<'a> {
     response: &'a [f32],
     min: f64,
@@ -142,20 +140,33 @@ impl Kernel for Spread<'_> {
     #[inline(always)]
     fn run<T: Token>(self, _: T) -> f64 {
         let min = self.min;
-        let term = |v: f32| (v as f64 - min) * (v as f64 - min);
         // from -0, as `Iterator::sum` (the same bits: no term is -0)
         let mut e = -0.0f64;
-        let (chunks, tail) = self.response.as_chunks::<RANGE_LANES>();
-        for c in chunks {
-            let terms: [f64; RANGE_LANES] = std::array::from_fn(|i| term(c[i]));
-            for t in terms {
-                e += t;
-            }
-        }
-        for &v in tail {
-            e += term(v);
-        }
+        sum_in_order(&mut e, self.response, |v| {
+            (v as f64 - min) * (v as f64 - min)
+        });
         e
+    }
+}
+
+/// Terms computed at once by [`sum_in_order`].
+const SUM_TERMS: usize = 8;
+
+/// `*e += term(x)` for each `x` of `xs` in turn: the terms of
+/// [`SUM_TERMS`] values computed side by side (vector lanes), then added
+/// one after the other, the additions and their order those of the plain
+/// loop (whose every step waited for its term). In a dispatched kernel.
+#[inline(always)]
+pub(crate) fn sum_in_order<X: Copy>(e: &mut f64, xs: &[X], term: impl Fn(X) -> f64) {
+    let (chunks, tail) = xs.as_chunks::<SUM_TERMS>();
+    for c in chunks {
+        let terms: [f64; SUM_TERMS] = std::array::from_fn(|i| term(c[i]));
+        for t in terms {
+            *e += t;
+        }
+    }
+    for &x in tail {
+        *e += term(x);
     }
 }
 

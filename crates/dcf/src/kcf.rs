@@ -11,6 +11,7 @@
 
 use bayestrack_image::simd::{Kernel as SimdKernel, SimdLevel, Token, dispatch};
 
+use crate::confidence::sum_in_order;
 use crate::error::{DcfError, Result};
 use crate::fft::{C32, Fft2};
 
@@ -382,18 +383,14 @@ const SUM_BINS: usize = 16;
 /// Parseval's `sum |X|^2` over half spectra of `w x h` arrays
 /// (column-major, `w / 2 + 1` columns of `h` bins, one spectrum after the
 /// other), the columns other than the first and (for even `w`) the last
-/// counted twice: one running `f64` sum in bin order. The terms
-/// `k |X|^2` of [`SUM_TERMS`] bins are computed side by side in vector
-/// lanes and then added one after the other, the same additions in the
-/// same order as the plain loop (whose every step waited for its term).
+/// counted twice: one running `f64` sum in bin order
+/// ([`sum_in_order`]: the terms `k |X|^2` of eight bins side by side in
+/// vector lanes, added one after the other as in the plain loop).
 struct SpectrumEnergy<'a> {
     spectra: &'a [C32],
     w: usize,
     h: usize,
 }
-
-/// Terms of [`SpectrumEnergy`] computed at once.
-const SUM_TERMS: usize = 8;
 
 impl SimdKernel for SpectrumEnergy<'_> {
     type Output = f64;
@@ -406,17 +403,7 @@ impl SimdKernel for SpectrumEnergy<'_> {
             for (u, col) in c.chunks_exact(h).enumerate() {
                 let twice = u != 0 && !(w % 2 == 0 && u == wc - 1);
                 let k = if twice { 2.0 } else { 1.0 };
-                let (chunks, tail) = col.as_chunks::<SUM_TERMS>();
-                for b in chunks {
-                    let terms: [f64; SUM_TERMS] =
-                        std::array::from_fn(|i| k * b[i].norm_sqr() as f64);
-                    for t in terms {
-                        e += t;
-                    }
-                }
-                for v in tail {
-                    e += k * v.norm_sqr() as f64;
-                }
+                sum_in_order(&mut e, col, |v| k * v.norm_sqr() as f64);
             }
         }
         e
