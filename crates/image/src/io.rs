@@ -160,14 +160,17 @@ fn png_end(bytes: &[u8]) -> Option<usize> {
     }
 }
 
-fn decode(path: &Path) -> Result<image::DynamicImage> {
+/// Decodes the file at `path`; a JPEG's pixels go into `buffer`'s memory
+/// ([`decode_bytes`]).
+fn decode(path: &Path, buffer: Vec<u8>) -> Result<image::DynamicImage> {
     let bytes = fs::read(path).map_err(io_err(path))?;
-    decode_bytes(&bytes, path)
+    decode_bytes(&bytes, path, buffer)
 }
 
 /// Decodes a PNG/JPEG file's `bytes`; `path` names it in errors (and
-/// gives the format when the bytes do not).
-fn decode_bytes(bytes: &[u8], path: &Path) -> Result<image::DynamicImage> {
+/// gives the format when the bytes do not). A JPEG is decoded into
+/// `buffer` (resized, its memory kept), a PNG into new memory.
+fn decode_bytes(bytes: &[u8], path: &Path, buffer: Vec<u8>) -> Result<image::DynamicImage> {
     let format = match image::guess_format(bytes) {
         Ok(format) => format,
         Err(guess) => {
@@ -205,10 +208,95 @@ fn decode_bytes(bytes: &[u8], path: &Path) -> Result<image::DynamicImage> {
             format: format!("{format:?}"),
         });
     }
-    image::load_from_memory_with_format(bytes, format).map_err(|source| ImageError::Decode {
-        path: path.to_path_buf(),
-        source,
-    })
+    let decoded = match format {
+        image::ImageFormat::Jpeg => decode_jpeg(bytes, buffer),
+        _ => None,
+    };
+    decoded
+        .unwrap_or_else(|| image::load_from_memory_with_format(bytes, format))
+        .map_err(|source| ImageError::Decode {
+            path: path.to_path_buf(),
+            source,
+        })
+}
+
+/// The image crate's largest output by default (`image::Limits`'s
+/// `max_alloc`, 512 MiB): a JPEG header may claim up to 65,535 x 65,535
+/// pixels, and no buffer is allocated for more than this.
+const MAX_JPEG_BYTES: usize = 512 * 1024 * 1024;
+
+/// A JPEG decoded as `image::load_from_memory_with_format` decodes it,
+/// into `data`'s memory, without its second pass over the headers and its
+/// copy of the bytes:
+/// the same decoder (zune-jpeg) with the same options (lenient, no size
+/// limit of its own), the same output colours (gray stays gray, every
+/// other colour space becomes RGB), the same 512 MiB limit on the output
+/// and the same errors; tested pixel for pixel against it. `None` for the
+/// kinds with alpha, which are left to the image crate.
+fn decode_jpeg(bytes: &[u8], mut data: Vec<u8>) -> Option<image::ImageResult<image::DynamicImage>> {
+    use zune_core::colorspace::ColorSpace;
+    // The image crate reads the headers with the default output (RGB),
+    // then decodes again with the output it chose: RGB where the input
+    // is not gray, so the one decoder here is configured alike.
+    let options = zune_core::options::DecoderOptions::default()
+        .set_strict_mode(false)
+        .set_max_width(usize::MAX)
+        .set_max_height(usize::MAX);
+    let mut decoder = zune_jpeg::JpegDecoder::new_with_options(
+        zune_core::bytestream::ZCursor::new(bytes),
+        options,
+    );
+    if let Err(e) = decoder.decode_headers() {
+        return Some(Err(jpeg_error(e)));
+    }
+    let (w, h) = decoder.dimensions()?;
+    let out = match decoder.input_colorspace()? {
+        ColorSpace::Luma => ColorSpace::Luma,
+        ColorSpace::RGBA | ColorSpace::LumaA => return None,
+        _ => ColorSpace::RGB,
+    };
+    decoder.set_options(decoder.options().jpeg_set_out_colorspace(out));
+    let size = decoder.output_buffer_size()?;
+    if size > MAX_JPEG_BYTES {
+        return Some(Err(image::ImageError::Limits(
+            image::error::LimitError::from_kind(image::error::LimitErrorKind::InsufficientMemory),
+        )));
+    }
+    // every byte is written by the decoder: a reused buffer's old pixels
+    // need no clearing
+    data.resize(size, 0);
+    if let Err(e) = decoder.decode_into(&mut data) {
+        return Some(Err(jpeg_error(e)));
+    }
+    // JPEG sizes are at most 65,535 a side
+    let (w, h) = (u32::try_from(w).ok()?, u32::try_from(h).ok()?);
+    Some(Ok(if out == ColorSpace::Luma {
+        image::DynamicImage::ImageLuma8(image::ImageBuffer::from_raw(w, h, data)?)
+    } else {
+        image::DynamicImage::ImageRgb8(image::ImageBuffer::from_raw(w, h, data)?)
+    }))
+}
+
+/// zune-jpeg's error as the image crate words it.
+fn jpeg_error(err: zune_jpeg::errors::DecodeErrors) -> image::ImageError {
+    use image::error::{
+        DecodingError, ImageFormatHint, LimitError, LimitErrorKind, UnsupportedError,
+        UnsupportedErrorKind,
+    };
+    use zune_jpeg::errors::DecodeErrors;
+    let jpeg = ImageFormatHint::Exact(image::ImageFormat::Jpeg);
+    match err {
+        DecodeErrors::Unsupported(desc) => {
+            image::ImageError::Unsupported(UnsupportedError::from_format_and_kind(
+                jpeg,
+                UnsupportedErrorKind::GenericFeature(format!("{desc:?}")),
+            ))
+        }
+        DecodeErrors::LargeDimensions(_) => {
+            image::ImageError::Limits(LimitError::from_kind(LimitErrorKind::DimensionError))
+        }
+        err => image::ImageError::Decoding(DecodingError::new(jpeg, err)),
+    }
 }
 
 fn from_dynamic(img: image::DynamicImage, gray: bool) -> Image<u8> {
@@ -231,11 +319,86 @@ fn from_dynamic(img: image::DynamicImage, gray: bool) -> Image<u8> {
 /// it is corrupt or not an image;
 /// [`ImageError::ZeroSize`] for an empty image.
 pub fn read_frame(path: impl AsRef<Path>) -> Result<Image<u8>> {
-    let path = path.as_ref();
-    let img = decode(path)?;
+    read_frame_into(path.as_ref(), Vec::new())
+}
+
+/// [`read_frame`], a JPEG decoded into `buffer`'s memory.
+fn read_frame_into(path: &Path, buffer: Vec<u8>) -> Result<Image<u8>> {
+    let img = decode(path, buffer)?;
     check_nonempty(&img)?;
     let gray = !img.color().has_color();
     Ok(from_dynamic(img, gray))
+}
+
+/// Pixel buffers of frames already used, for the next frames to be
+/// decoded into ([`FramePool::read_frame`], [`FramePool::give_back`]).
+///
+/// Each decoded frame otherwise takes new memory, which the system maps
+/// (and zeroes) page by page and takes back when the frame is dropped: for
+/// a 320 x 240 video that is most of a run's page faults, about 7 % of a
+/// fast tracker's whole run. Clones share the buffers, so the threads that
+/// decode and the one that tracks can hand them round. The pool keeps at
+/// most [`FramePool::MAX_BUFFERS`] buffers and [`FramePool::MAX_BYTES`]
+/// bytes; what comes back beyond that is freed.
+#[derive(Debug, Clone, Default)]
+pub struct FramePool {
+    buffers: std::sync::Arc<std::sync::Mutex<Vec<Vec<u8>>>>,
+}
+
+impl FramePool {
+    /// The most buffers kept.
+    pub const MAX_BUFFERS: usize = 16;
+    /// The most bytes kept (buffers' capacities).
+    pub const MAX_BYTES: usize = 256 << 20;
+
+    /// An empty pool.
+    #[must_use]
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    fn buffers(&self) -> std::sync::MutexGuard<'_, Vec<Vec<u8>>> {
+        // a buffer list is whole whatever a panicking holder was doing
+        self.buffers
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+
+    /// Reads a frame as [`read_frame`] does (the same pixels, the same
+    /// errors), a JPEG decoded into a buffer given back earlier when there
+    /// is one.
+    ///
+    /// # Errors
+    /// As [`read_frame`].
+    pub fn read_frame(&self, path: impl AsRef<Path>) -> Result<Image<u8>> {
+        let buffer = self.buffers().pop().unwrap_or_default();
+        read_frame_into(path.as_ref(), buffer)
+    }
+
+    /// Takes back a frame's pixels for a later [`FramePool::read_frame`]
+    /// (any image's: only its memory is reused).
+    pub fn give_back(&self, image: Image<u8>) {
+        let buffer = image.into_vec();
+        let mut buffers = self.buffers();
+        let held: usize = buffers.iter().map(Vec::capacity).sum();
+        if buffers.len() < Self::MAX_BUFFERS
+            && held.saturating_add(buffer.capacity()) <= Self::MAX_BYTES
+        {
+            buffers.push(buffer);
+        }
+    }
+
+    /// Buffers held now.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.buffers().len()
+    }
+
+    /// Whether no buffer is held.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
 }
 
 /// Decodes a PNG/JPEG frame held in memory, as [`read_frame`] does a file;
@@ -245,7 +408,7 @@ pub fn read_frame(path: impl AsRef<Path>) -> Result<Image<u8>> {
 /// # Errors
 /// As [`read_frame`], without [`ImageError::Io`].
 pub fn decode_frame(bytes: &[u8], path: impl AsRef<Path>) -> Result<Image<u8>> {
-    let img = decode_bytes(bytes, path.as_ref())?;
+    let img = decode_bytes(bytes, path.as_ref(), Vec::new())?;
     check_nonempty(&img)?;
     let gray = !img.color().has_color();
     Ok(from_dynamic(img, gray))
@@ -256,7 +419,7 @@ pub fn decode_frame(bytes: &[u8], path: impl AsRef<Path>) -> Result<Image<u8>> {
 /// # Errors
 /// As [`read_frame`].
 pub fn read_frame_gray(path: impl AsRef<Path>) -> Result<Image<u8>> {
-    let img = decode(path.as_ref())?;
+    let img = decode(path.as_ref(), Vec::new())?;
     check_nonempty(&img)?;
     Ok(from_dynamic(img, true))
 }
@@ -266,7 +429,7 @@ pub fn read_frame_gray(path: impl AsRef<Path>) -> Result<Image<u8>> {
 /// # Errors
 /// As [`read_frame`].
 pub fn read_frame_rgb(path: impl AsRef<Path>) -> Result<Image<u8>> {
-    let img = decode(path.as_ref())?;
+    let img = decode(path.as_ref(), Vec::new())?;
     check_nonempty(&img)?;
     Ok(from_dynamic(img, false))
 }
@@ -415,6 +578,155 @@ mod tests {
             decode_frame(&bytes[..whole - 1], "a.png"),
             Err(ImageError::Truncated { .. })
         ));
+        let _ = fs::remove_dir_all(&d);
+    }
+
+    /// `bytes` as the image crate's own loading decodes them (the
+    /// reference of [`decode_jpeg`]): the pixels in their kept colour kind,
+    /// or the error's words.
+    fn by_image_crate(bytes: &[u8]) -> std::result::Result<Image<u8>, String> {
+        let img = image::load_from_memory_with_format(bytes, image::ImageFormat::Jpeg)
+            .map_err(|e| e.to_string())?;
+        let gray = !img.color().has_color();
+        Ok(from_dynamic(img, gray))
+    }
+
+    /// `bytes` through [`decode_jpeg`] into `buffer`; `None` where it
+    /// leaves the image to the image crate.
+    fn by_direct_path(
+        bytes: &[u8],
+        buffer: Vec<u8>,
+    ) -> Option<std::result::Result<Image<u8>, String>> {
+        Some(match decode_jpeg(bytes, buffer)? {
+            Ok(img) => {
+                let gray = !img.color().has_color();
+                Ok(from_dynamic(img, gray))
+            }
+            Err(e) => Err(e.to_string()),
+        })
+    }
+
+    /// A `w x h` JPEG of `channels` 1 or 3 in memory.
+    fn jpeg_of(w: u32, h: u32, channels: u32, quality: u8) -> Vec<u8> {
+        let pixels: Vec<u8> = (0..w * h * channels)
+            .map(|i| ((i * 37 + i / 7 * 11) % 256) as u8)
+            .collect();
+        let kind = if channels == 1 {
+            image::ExtendedColorType::L8
+        } else {
+            image::ExtendedColorType::Rgb8
+        };
+        let mut out = Vec::new();
+        image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, quality)
+            .encode(&pixels, w, h, kind)
+            .unwrap();
+        out
+    }
+
+    #[test]
+    fn jpegs_decode_as_the_image_crate_decodes_them() {
+        for (w, h) in [(1, 1), (7, 5), (17, 9), (40, 24), (64, 48)] {
+            for channels in [1, 3] {
+                for quality in [30, 95] {
+                    let bytes = jpeg_of(w, h, channels, quality);
+                    let want = by_image_crate(&bytes).unwrap();
+                    assert_eq!(want.channels(), channels as usize);
+                    // new memory, a used buffer larger than the frame, a
+                    // smaller one: each byte is the decoder's
+                    let n = (w * h * 3) as usize;
+                    for buffer in [Vec::new(), vec![0xAB; n + 100], vec![0x55; 3]] {
+                        let got = by_direct_path(&bytes, buffer).unwrap().unwrap();
+                        assert_eq!(got, want, "{w}x{h}x{channels} q{quality}");
+                    }
+                    assert_eq!(decode_frame(&bytes, "a.jpg").unwrap(), want);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn damaged_jpegs_fail_or_decode_as_the_image_crate_does() {
+        // bytes changed anywhere past the start-of-image marker (headers,
+        // tables, scan): the direct path gives the image crate's pixels or
+        // its error, word for word
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = |n: usize| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state % n as u64) as usize
+        };
+        let (mut failed, mut decoded) = (0, 0);
+        for case in 0..400 {
+            let mut bytes = jpeg_of(24, 16, if case % 2 == 0 { 3 } else { 1 }, 75);
+            for _ in 0..1 + next(3) {
+                let at = 2 + next(bytes.len() - 2);
+                bytes[at] ^= 1 + next(255) as u8;
+            }
+            let Some(got) = by_direct_path(&bytes, vec![7; 100]) else {
+                continue;
+            };
+            assert_eq!(got, by_image_crate(&bytes), "case {case}");
+            if got.is_ok() {
+                decoded += 1;
+            } else {
+                failed += 1;
+            }
+        }
+        // both outcomes were exercised
+        assert!(
+            failed > 20 && decoded > 20,
+            "{failed} failed, {decoded} decoded"
+        );
+    }
+
+    #[test]
+    fn a_frame_pool_reuses_buffers_within_its_bounds() {
+        let d = tmpdir("pool");
+        let colour = d.join("1.jpg");
+        fs::write(&colour, jpeg_of(40, 24, 3, 80)).unwrap();
+        let gray = d.join("2.jpg");
+        fs::write(&gray, jpeg_of(17, 9, 1, 80)).unwrap();
+        let png = d.join("3.png");
+        write_png(
+            &png,
+            Image::from_fn(9, 7, |x, y| (x * 20 + y) as u8)
+                .unwrap()
+                .view(),
+        )
+        .unwrap();
+        let pool = FramePool::new();
+        assert!(pool.is_empty());
+        // each frame decoded into the buffer the previous one gave back
+        for p in [&colour, &gray, &png, &colour, &png, &gray] {
+            let img = pool.read_frame(p).unwrap();
+            assert_eq!(img, read_frame(p).unwrap(), "{}", p.display());
+            pool.give_back(img);
+            assert_eq!(pool.len(), 1);
+        }
+        // errors are read_frame's, and the buffer taken is not lost for good
+        let bad = d.join("4.jpg");
+        fs::write(&bad, b"not a JPEG at all").unwrap();
+        assert_eq!(
+            pool.read_frame(&bad).unwrap_err().to_string(),
+            read_frame(&bad).unwrap_err().to_string()
+        );
+        // at most MAX_BUFFERS buffers, MAX_BYTES bytes
+        for _ in 0..FramePool::MAX_BUFFERS + 5 {
+            pool.give_back(Image::new(4, 4, 1, 0).unwrap());
+        }
+        assert_eq!(pool.len(), FramePool::MAX_BUFFERS);
+        let pool = FramePool::new();
+        // (zeroed memory the system maps lazily: nothing is touched)
+        let big = Image::from_vec(
+            FramePool::MAX_BYTES / 1024 + 1,
+            1024,
+            1,
+            vec![0; (FramePool::MAX_BYTES / 1024 + 1) * 1024],
+        )
+        .unwrap();
+        pool.give_back(big);
+        assert!(pool.is_empty());
         let _ = fs::remove_dir_all(&d);
     }
 

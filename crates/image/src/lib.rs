@@ -26,8 +26,8 @@ pub use crate::error::{ImageError, Result};
 pub use crate::integral::{AreaSampler, IntegralImage, gray_region_into};
 #[cfg(feature = "io")]
 pub use crate::io::{
-    decode_frame, list_frames, read_frame, read_frame_gray, read_frame_rgb, write_frame_with_boxes,
-    write_png,
+    FramePool, decode_frame, list_frames, read_frame, read_frame_gray, read_frame_rgb,
+    write_frame_with_boxes, write_png,
 };
 pub use crate::morph::{close, dilate, erode, open};
 pub use crate::ops::{Mask, abs_diff, abs_diff_into, motion_mask, threshold, threshold_into};

@@ -5,7 +5,7 @@
 
 use std::path::PathBuf;
 
-use bayestrack_image::{ImageError, read_frame};
+use bayestrack_image::{FramePool, ImageError, read_frame};
 
 fn root() -> Option<PathBuf> {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/sequences");
@@ -37,4 +37,35 @@ fn truncated_real_jpeg_is_an_error_naming_the_file() {
         Err(e) => panic!("unexpected error {e}"),
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Every frame of the real sequences, read through one [`FramePool`] as
+/// `bayestrack track` reads a folder (each frame decoded into the buffer
+/// an earlier one gave back), has the pixels the image crate's own
+/// loading gives.
+#[test]
+fn real_frames_through_a_pool_are_the_image_crates_pixels() {
+    let Some(root) = root() else { return };
+    let pool = FramePool::new();
+    let mut frames = 0;
+    for seq in ["Crossing", "Couple", "David"] {
+        let dir = root.join(seq).join("img");
+        let Ok(paths) = bayestrack_image::list_frames(&dir) else {
+            eprintln!("SKIPPED: {} is missing", dir.display());
+            continue;
+        };
+        for p in paths {
+            let got = pool.read_frame(&p).unwrap();
+            let want = image::open(&p).unwrap();
+            let want = if want.color().has_color() {
+                want.into_rgb8().into_raw()
+            } else {
+                want.into_luma8().into_raw()
+            };
+            assert_eq!(got.as_slice(), &want[..], "{}", p.display());
+            pool.give_back(got);
+            frames += 1;
+        }
+    }
+    eprintln!("{frames} real frames compared");
 }

@@ -23,7 +23,7 @@ use std::sync::{Arc, Condvar, Mutex, MutexGuard, PoisonError};
 use std::thread::{JoinHandle, Scope};
 use std::time::{Duration, Instant};
 
-use bayestrack_image::{Image, ImageError};
+use bayestrack_image::{FramePool, Image, ImageError};
 
 use crate::error::OtbError;
 use crate::y4m::Y4mReader;
@@ -68,6 +68,13 @@ pub trait FrameSource: Iterator<Item = Result<Frame, OtbError>> {
     /// The default decodes now (a stream has to be read in order).
     fn next_pending(&mut self) -> Option<PendingFrame> {
         self.next().map(PendingFrame::ready)
+    }
+
+    /// Where a frame's pixels go once the consumer is done with them, for
+    /// the next frames to be decoded into (a folder's frames:
+    /// [`FramePool`]); `None` where the source reuses none.
+    fn frame_pool(&self) -> Option<FramePool> {
+        None
     }
 }
 
@@ -120,6 +127,7 @@ pub struct FolderSource<'a> {
     dir: &'a Path,
     frames: &'a [PathBuf],
     next: usize,
+    pool: FramePool,
 }
 
 impl<'a> FolderSource<'a> {
@@ -130,6 +138,7 @@ impl<'a> FolderSource<'a> {
             dir,
             frames,
             next: 0,
+            pool: FramePool::new(),
         }
     }
 }
@@ -170,8 +179,9 @@ impl FrameSource for FolderSource<'_> {
         let index = self.next;
         let path = self.frames.get(index)?.clone();
         self.next += 1;
+        let pool = self.pool.clone();
         Some(PendingFrame::later(move || {
-            decode_numbered(index, &path, |p| bayestrack_image::read_frame(p)).map(|image| Frame {
+            decode_numbered(index, &path, |p| pool.read_frame(p)).map(|image| Frame {
                 number: index + 1,
                 name: file_name(&path),
                 image,
@@ -192,6 +202,10 @@ impl FrameSource for FolderSource<'_> {
             self.next += 1;
             Ok(())
         })
+    }
+
+    fn frame_pool(&self) -> Option<FramePool> {
+        Some(self.pool.clone())
     }
 }
 
@@ -626,6 +640,10 @@ impl<S: FrameSource> FrameSource for Select<S> {
             Err(e) => Some(PendingFrame::ready(Err(e))),
         }
     }
+
+    fn frame_pool(&self) -> Option<FramePool> {
+        self.inner.frame_pool()
+    }
 }
 
 impl<S: FrameSource + ?Sized> FrameSource for Box<S> {
@@ -643,6 +661,10 @@ impl<S: FrameSource + ?Sized> FrameSource for Box<S> {
 
     fn next_pending(&mut self) -> Option<PendingFrame> {
         (**self).next_pending()
+    }
+
+    fn frame_pool(&self) -> Option<FramePool> {
+        (**self).frame_pool()
     }
 }
 
@@ -782,6 +804,7 @@ pub struct DecodeAhead {
     handover: Arc<Handover>,
     describe: String,
     remaining: Option<usize>,
+    pool: Option<FramePool>,
     ended: bool,
     /// Since when the consumer's waiting is being measured (from its first
     /// frame on; restarted every `ENGAGE_WINDOW`), and how long it has
@@ -833,6 +856,7 @@ impl DecodeAhead {
     {
         let describe = source.describe();
         let remaining = source.remaining();
+        let pool = source.frame_pool();
         let threads = threads.max(1);
         let handover = Arc::new(Handover {
             queue: Mutex::new(Queue {
@@ -861,6 +885,7 @@ impl DecodeAhead {
             handover,
             describe,
             remaining,
+            pool,
             ended: false,
             window: None,
         }
@@ -1027,6 +1052,10 @@ impl FrameSource for DecodeAhead {
 
     fn remaining(&self) -> Option<usize> {
         self.remaining
+    }
+
+    fn frame_pool(&self) -> Option<FramePool> {
+        self.pool.clone()
     }
 }
 

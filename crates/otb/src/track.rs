@@ -144,6 +144,7 @@ where
         init,
         on_bad_frame,
         &mut sink,
+        |_| {},
     )
 }
 
@@ -243,6 +244,7 @@ where
     S: FnMut(FrameBox<'_>) -> Result<(), OtbError>,
 {
     let describe = source.describe();
+    let pool = source.frame_pool();
     let frames = source.map(|r| {
         r.map(|f| Input {
             number: f.number,
@@ -260,6 +262,11 @@ where
         init,
         on_bad_frame,
         &mut sink,
+        |image| {
+            if let Some(pool) = &pool {
+                pool.give_back(image);
+            }
+        },
     )
 }
 
@@ -276,7 +283,8 @@ struct Input<'f> {
 /// frame that did not decode (the stream says which position failed only
 /// through the next good frame: the failed one is the one after the last);
 /// with `convert_channels` every frame is brought to the first frame's
-/// channel count ([`TrackRun::converted`]).
+/// channel count ([`TrackRun::converted`]). A frame's own pixels go to
+/// `give_back` once the sink has had them (a source's [`bayestrack_image::FramePool`]).
 #[allow(clippy::too_many_arguments)]
 fn run_frames<'f, S>(
     tracker: &mut dyn Tracker,
@@ -288,6 +296,7 @@ fn run_frames<'f, S>(
     init: BBox,
     on_bad_frame: OnBadFrame,
     sink: &mut S,
+    mut give_back: impl FnMut(Image<u8>),
 ) -> Result<TrackRun, OtbError>
 where
     S: FnMut(FrameBox<'_>) -> Result<(), OtbError>,
@@ -341,7 +350,9 @@ where
         lost: false,
     })?;
     let mut previous = first.number;
-    drop(first);
+    if let Cow::Owned(image) = first.image {
+        give_back(image);
+    }
 
     let mut last = init;
     for (index, next) in (1..).zip(frames) {
@@ -392,6 +403,9 @@ where
             frame: Some(frame.image.view()),
             lost: estimate.lost,
         })?;
+        if let Cow::Owned(image) = frame.image {
+            give_back(image);
+        }
     }
     Ok(run)
 }
@@ -533,6 +547,56 @@ mod tests {
     /// What a run keeps per frame stays bounded on a long stream: no box,
     /// no number, at most [`CONVERTED_LISTED`] converted frames (issue 28:
     /// about 80 bytes a frame over millions of frames).
+    #[test]
+    fn a_folder_run_hands_each_frames_pixels_back_to_its_pool() {
+        let dir = std::env::temp_dir().join(format!("bayestrack-otb-pool-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let paths: Vec<PathBuf> = (1..=30)
+            .map(|n| {
+                let p = dir.join(format!("{n:04}.png"));
+                let img = Image::from_fn(8, 4, |x, y| (x + y + n) as u8).unwrap();
+                bayestrack_image::write_png(&p, img.view()).unwrap();
+                p
+            })
+            .collect();
+        let init = BBox::new(1.0, 1.0, 2.0, 2.0);
+        let run_with = |ahead: usize| {
+            let source = crate::source::FolderSource::new(&dir, &paths);
+            let pool = source.frame_pool().unwrap();
+            let mut boxes = Vec::new();
+            let mut drift = Drift {
+                bbox: init,
+                width: 0,
+            };
+            let mut sink = |f: FrameBox<'_>| {
+                boxes.push(f.bbox);
+                Ok(())
+            };
+            let run = if ahead == 0 {
+                let mut source = source;
+                track_stream(&mut drift, &mut source, init, OnBadFrame::Stop, &mut sink)
+            } else {
+                std::thread::scope(|scope| {
+                    let mut ahead =
+                        crate::source::DecodeAhead::with_threads(scope, source, ahead, 2);
+                    assert!(ahead.frame_pool().is_some());
+                    track_stream(&mut drift, &mut ahead, init, OnBadFrame::Stop, &mut sink)
+                })
+            };
+            assert_eq!(run.unwrap().frames_run, 30);
+            (boxes, pool.len())
+        };
+        // in turn: the one buffer goes round; ahead: as many as were in
+        // flight at once (at most the depth, the threads and the frame in
+        // hand), never one a frame
+        let (boxes, held) = run_with(0);
+        assert_eq!(held, 1);
+        let (ahead, held) = run_with(3);
+        assert_eq!(ahead, boxes);
+        assert!((1..=6).contains(&held), "{held} buffers held");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
     #[test]
     fn a_streamed_run_keeps_nothing_per_frame() {
         let bytes = gray_stream(5000);
