@@ -220,6 +220,8 @@ struct RgbBins<'a> {
 
 impl Kernel for RgbBins<'_> {
     type Output = ();
+    /// AVX2 at most: measured slower with AVX-512 (see [`Kernel::WIDEST`]).
+    const WIDEST: SimdLevel = SimdLevel::Avx2;
     #[inline(always)]
     fn run<T: Token>(self, _: T) {
         let RgbBins { lut, row, out } = self;
@@ -805,6 +807,8 @@ struct CountWeights<'a> {
 
 impl Kernel for CountWeights<'_> {
     type Output = ();
+    /// AVX2 at most: measured slower with AVX-512 (see [`Kernel::WIDEST`]).
+    const WIDEST: SimdLevel = SimdLevel::Avx2;
     #[inline(always)]
     fn run<T: Token>(self, _: T) {
         let [c0, c1, c2, c3] = self.counts;
@@ -823,6 +827,8 @@ struct Bhattacharyya<'a> {
 
 impl Kernel for Bhattacharyya<'_> {
     type Output = f32;
+    /// AVX2 at most: measured slower with AVX-512 (see [`Kernel::WIDEST`]).
+    const WIDEST: SimdLevel = SimdLevel::Avx2;
     #[inline(always)]
     fn run<T: Token>(self, _: T) -> f32 {
         // The terms `sqrt(p_u q_u)` of the bins with `p_u > 0` summed in bin
@@ -885,6 +891,8 @@ struct EllipseFast<'a> {
 
 impl Kernel for EllipseFast<'_> {
     type Output = f32;
+    /// AVX2 at most: measured slower with AVX-512 (see [`Kernel::WIDEST`]).
+    const WIDEST: SimdLevel = SimdLevel::Avx2;
     #[inline(always)]
     fn run<T: Token>(self, _: T) -> f32 {
         // A copy of the loop for step 1 (the common one), its step a

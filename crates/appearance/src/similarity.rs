@@ -13,7 +13,7 @@
 //! Algorithm 1 step 7 prints `mu_B - sigma_B`), and pose tuning stops once a
 //! particle reaches `mu_T - sigma_T` ([`TargetModel::stop_threshold`]).
 
-use bayestrack_image::simd::{Kernel, Token, dispatch};
+use bayestrack_image::simd::{Kernel, SimdLevel, Token, dispatch};
 use bayestrack_image::{Image, ImageView};
 
 use crate::{AppearanceError, Result};
@@ -132,6 +132,8 @@ struct CentredSums<'a> {
 
 impl Kernel for CentredSums<'_> {
     type Output = (f64, f64);
+    /// AVX2 at most: measured slower with AVX-512 (see [`Kernel::WIDEST`]).
+    const WIDEST: SimdLevel = SimdLevel::Avx2;
     #[inline(always)]
     fn run<K: Token>(self, _: K) -> (f64, f64) {
         centred_sums(self.a, self.dev, self.w, self.h, self.ma)
@@ -193,6 +195,8 @@ struct ExactSum<'a> {
 
 impl Kernel for ExactSum<'_> {
     type Output = Option<f64>;
+    /// AVX2 at most: measured slower with AVX-512 (see [`Kernel::WIDEST`]).
+    const WIDEST: SimdLevel = SimdLevel::Avx2;
     #[inline(always)]
     fn run<K: Token>(self, _: K) -> Option<f64> {
         exact_sum(self.a, self.w, self.h)

@@ -130,7 +130,10 @@ impl SimdLevel {
         #[cfg(target_arch = "x86_64")]
         {
             use pulp::x86::{V1, V3, V4};
-            let rank = self.rank().min(MAX_LEVEL.load(Ordering::Relaxed));
+            let rank = self
+                .rank()
+                .min(MAX_LEVEL.load(Ordering::Relaxed))
+                .min(K::WIDEST.rank());
             if rank >= 3
                 && let Some(token) = V4::try_new()
             {
@@ -220,6 +223,12 @@ pub fn dispatch<K: Kernel>(kernel: K) -> K::Output {
 pub trait Kernel {
     /// What the loop returns.
     type Output;
+    /// The widest level worth running this kernel at: [`dispatch`] and
+    /// [`SimdLevel::run`] run at most this one (the default, AVX-512, caps
+    /// nothing). A kernel that takes longer with AVX-512 than with AVX2
+    /// (measured, not guessed) says [`SimdLevel::Avx2`]: on a machine with
+    /// AVX-512 it then runs its AVX2 copy, the same bits.
+    const WIDEST: SimdLevel = SimdLevel::Avx512;
     /// The loop, compiled for the level `T` stands for (mark it
     /// `#[inline(always)]`, and everything it calls in its hot loop).
     fn run<T: Token>(self, token: T) -> Self::Output;
@@ -366,5 +375,30 @@ mod tests {
             assert_eq!(ran, level.or_best(), "{level:?}");
         }
         assert_eq!(dispatch(Which), SimdLevel::detect());
+    }
+
+    /// [`Which`] capped at AVX2.
+    struct NarrowWhich;
+    impl Kernel for NarrowWhich {
+        type Output = SimdLevel;
+        const WIDEST: SimdLevel = SimdLevel::Avx2;
+        #[inline(always)]
+        fn run<T: Token>(self, _: T) -> SimdLevel {
+            T::LEVEL
+        }
+    }
+
+    #[test]
+    fn a_kernel_capped_at_avx2_never_runs_wider() {
+        let widest = SimdLevel::Avx2.or_best();
+        for level in SimdLevel::ALL {
+            let want = if level == SimdLevel::Avx512 {
+                widest
+            } else {
+                level.or_best()
+            };
+            assert_eq!(level.run(NarrowWhich), want, "{level:?}");
+        }
+        assert_eq!(dispatch(NarrowWhich), widest);
     }
 }

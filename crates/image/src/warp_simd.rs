@@ -128,6 +128,8 @@ struct Rows<'a, 'b, 'c, T, const CH: usize> {
 
 impl<T: Pixel, const CH: usize> Kernel for Rows<'_, '_, '_, T, CH> {
     type Output = ();
+    /// AVX2 at most: measured slower with AVX-512 (see [`Kernel::WIDEST`]).
+    const WIDEST: SimdLevel = SimdLevel::Avx2;
     #[inline(always)]
     fn run<K: Token>(self, token: K) {
         let Rows { warp, out } = self;
