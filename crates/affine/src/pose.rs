@@ -96,6 +96,9 @@ struct PoolCells3<'a> {
 
 impl simd::Kernel for PoolCells3<'_> {
     type Output = ();
+    /// AVX2 at most: measured slower with AVX-512 (see
+    /// [`simd::Kernel::WIDEST`]).
+    const WIDEST: simd::SimdLevel = simd::SimdLevel::Avx2;
     #[inline(always)]
     fn run<K: Token>(self, _: K) {
         let (ps, cells) = (self.ps, self.ps / 3);

@@ -560,6 +560,9 @@ struct Update<'a> {
 
 impl simd::Kernel for Update<'_> {
     type Output = ();
+    /// AVX2 at most: measured slower with AVX-512 (see
+    /// [`simd::Kernel::WIDEST`]).
+    const WIDEST: simd::SimdLevel = simd::SimdLevel::Avx2;
     #[inline(always)]
     fn run<T: Token>(self, _: T) {
         self.lwpr.update_inline(self.x, self.y, self.yp);
