@@ -123,6 +123,8 @@
 use std::convert::Infallible;
 
 use bayestrack_dcf::confidence::ApceGate;
+use bayestrack_dcf::sample::{PatchSampler, Region};
+use bayestrack_dcf::scale::{ScaleConfig, ScaleFilter, ScaleResponse};
 use bayestrack_dcf::{Dcf, DcfConfig, Response, SharedFeatures, SharedGrid};
 use bayestrack_image::{BBox, ImageView};
 use bayestrack_options::{choice, options};
@@ -142,6 +144,20 @@ const NAME: &str = "pf-dcf";
 const KEY: u64 = 0x70_6664_6366;
 
 type State = SVector<f64, 5>;
+
+/// The scale filter of [`PfDcfConfig::scale_likelihood`]: fDSST's
+/// published parameters (17 scales interpolated to 33, step 1.02,
+/// learning rate 0.025).
+fn scale_config() -> ScaleConfig {
+    ScaleConfig::fdsst()
+}
+
+/// The region of a `w x h` frame that `f` reads at `at`, `scale` (the
+/// whole frame where it has none).
+fn scale_region(f: &ScaleFilter, w: usize, h: usize, at: (f64, f64), scale: f64) -> Region {
+    f.region(w, h, at.0, at.1, scale)
+        .unwrap_or(Region::whole(w, h))
+}
 
 options! {
     /// Every parameter of [`PfDcfTracker`]. The correlation filter's are
@@ -239,6 +255,23 @@ options! {
         /// the pyramid's step `ln a` (0.5: the best of the three scales is
         /// within half a step of the best scale between them).
         pub peak_scale_spread: f64 = 0.5;
+        /// `lambda_s` of the scale likelihood `exp(lambda_s S(ln s) /
+        /// S_bar)` (module docs, "Likelihood"): the response of fDSST's
+        /// scale filter (Danelljan et al. 2017, its published parameters,
+        /// [`ScaleConfig::fdsst`]) over its 33 interpolated scales, at the
+        /// window's response peak, read at each particle's log-scale. 0
+        /// (the default) computes no scale filter: the earlier boxes bit
+        /// for bit. Its principled value is the translation term's
+        /// [`PfDcfConfig::likelihood`] (20): both responses are scaled by
+        /// their mean learnt peak, so one `lambda` weighs them alike.
+        pub scale_likelihood: f64 = 0.0;
+        /// Scales of the translation response while tracking: 3 (SiamFC's
+        /// pyramid, [`PfDcfConfig::scale_step`] apart) or 1 (the predicted
+        /// log-scale only: two responses a frame fewer; the log-scale then
+        /// comes from the scale likelihood alone, so 1 needs
+        /// [`PfDcfConfig::scale_likelihood`] > 0). The lost search keeps
+        /// its own ([`PfDcfConfig::redetect_levels`]). Default 3.
+        pub tracking_levels: usize = 3;
     }
     groups {
         /// The correlation filter (KCF's published values).
@@ -355,6 +388,27 @@ impl PfDcfConfig {
                 return bad(name, v, "must be in [1, 100]");
             }
         }
+        if !(self.scale_likelihood.is_finite() && (0.0..=1000.0).contains(&self.scale_likelihood)) {
+            return bad(
+                "scale_likelihood",
+                self.scale_likelihood,
+                "must be in [0, 1000]",
+            );
+        }
+        if !matches!(self.tracking_levels, 1 | 3) {
+            return bad(
+                "tracking_levels",
+                self.tracking_levels as f64,
+                "must be 1 or 3",
+            );
+        }
+        if self.tracking_levels == 1 && self.scale_likelihood == 0.0 {
+            return bad(
+                "tracking_levels",
+                1.0,
+                "1 needs scale_likelihood > 0 (the log-scale would have no measurement)",
+            );
+        }
         if !matches!(self.redetect_levels, 1 | 3) {
             return bad(
                 "redetect_levels",
@@ -447,6 +501,38 @@ struct Responses {
     stride: (f64, f64),
     /// `lambda / R_bar`.
     gain: f64,
+    /// The scale filter's response (`None`: no scale term this frame).
+    scale: Option<ScaleTerm>,
+}
+
+/// The scale likelihood's response over log-scales (module docs,
+/// "Likelihood").
+#[derive(Debug, Clone, Default)]
+struct ScaleTerm {
+    /// Log-scale of the first value, and the spacing of the values.
+    first: f64,
+    step: f64,
+    values: Vec<f64>,
+    /// `lambda_s / S_bar`.
+    gain: f64,
+}
+
+impl ScaleTerm {
+    /// `lambda_s S(ls) / S_bar`: linear between the two values that
+    /// bracket `ls`, the outer value beyond them.
+    #[inline]
+    fn log_likelihood(&self, ls: f64) -> f64 {
+        let n = self.values.len();
+        let u = ((ls - self.first) / self.step).clamp(0.0, (n - 1) as f64);
+        let i = (u as usize).min(n.saturating_sub(2));
+        let t = u - i as f64;
+        let v = if n < 2 {
+            self.values[0]
+        } else {
+            (1.0 - t) * self.values[i] + t * self.values[i + 1]
+        };
+        self.gain * v
+    }
 }
 
 impl Responses {
@@ -481,7 +567,10 @@ impl Responses {
             let t = (ls - a) / (b - a);
             (1.0 - t) * read(&maps[l - 1]) + t * read(&maps[l])
         };
-        self.gain * r
+        match &self.scale {
+            Some(st) => self.gain * r + st.log_likelihood(ls),
+            None => self.gain * r,
+        }
     }
 }
 
@@ -727,6 +816,13 @@ pub struct PfDcfCore {
     /// The last learnt estimate `(cx, cy, ln s)`: where a lost search is
     /// centred.
     anchor: (f64, f64, f64),
+    /// fDSST's scale filter, with the gray levels it reads (`None` with
+    /// [`PfDcfConfig::scale_likelihood`] 0).
+    scale: Option<ScaleFilter>,
+    scale_sampler: PatchSampler,
+    scale_response: ScaleResponse,
+    /// Sum and count of the learnt scale peaks (`S_bar`).
+    scale_peaks: (f64, u64),
     diagnostics: PfDcfDiagnostics,
 }
 
@@ -764,6 +860,10 @@ impl PfDcfCore {
             offsets: Vec::new(),
             lost: false,
             anchor: (0.0, 0.0, 0.0),
+            scale: None,
+            scale_sampler: PatchSampler::new(),
+            scale_response: ScaleResponse::default(),
+            scale_peaks: (0.0, 0),
             diagnostics: PfDcfDiagnostics::default(),
         })
     }
@@ -819,7 +919,12 @@ impl PfDcfCore {
         let r = &mut self.responses;
         r.levels.clear();
         let g = if wide { c.redetect_grid } else { 1 };
-        if c.scale_noise > 0.0 && !(wide && c.redetect_levels == 1) {
+        let three = if wide {
+            c.redetect_levels == 3
+        } else {
+            c.tracking_levels == 3
+        };
+        if c.scale_noise > 0.0 && three {
             let d = c.scale_step.ln();
             r.levels.extend([ls - d, ls, ls + d]);
         } else {
@@ -1116,6 +1221,20 @@ impl TrackerCore for PfDcfCore {
         // R_bar starts from the first frame's own response peak
         let peak0 = self.dcf.detect((cx, cy), 1.0)?.max as f64;
         self.peaks = (peak0, 1);
+        // the scale filter learns the first frame whole; S_bar starts from
+        // its own peak there, as R_bar
+        self.scale = None;
+        self.scale_peaks = (0.0, 0);
+        self.responses.scale = None;
+        if c.scale_likelihood > 0.0 {
+            let mut f = ScaleFilter::new(scale_config(), w, h)?;
+            let r = scale_region(&f, gray.width(), gray.height(), (cx, cy), 1.0);
+            self.scale_sampler.load_gray_region(gray, r)?;
+            f.train(&mut self.scale_sampler, cx, cy, 1.0, 1.0)?;
+            let (_, p0) = f.detect(&mut self.scale_sampler, cx, cy, 1.0)?;
+            self.scale_peaks = (f64::from(p0), 1);
+            self.scale = Some(f);
+        }
         self.lost = false;
         self.anchor = (cx, cy, 0.0);
         self.diagnostics = PfDcfDiagnostics::default();
@@ -1149,6 +1268,33 @@ impl TrackerCore for PfDcfCore {
         };
         let centre = in_frame((px, py), self.frame);
         let best = self.respond(frame, centre, pl, wide)?;
+        // the scale filter's response while tracking, at the window's
+        // response peak (fDSST's order: translation, then scale there)
+        let (fw, fh) = (frame.width(), frame.height());
+        let mut scale_peak = None;
+        match self.scale.as_mut() {
+            Some(f) if !wide => {
+                let at = in_frame(best.at, self.frame);
+                let s = pl.exp();
+                let r = scale_region(f, fw, fh, at, s);
+                self.scale_sampler.load_gray_region(frame, r)?;
+                let sr = &mut self.scale_response;
+                f.respond(&mut self.scale_sampler, at.0, at.1, s, sr)?;
+                let mean_peak = if self.scale_peaks.1 > 0 {
+                    self.scale_peaks.0 / self.scale_peaks.1 as f64
+                } else {
+                    f64::from(sr.peak)
+                };
+                let mut term = self.responses.scale.take().unwrap_or_default();
+                term.first = pl + sr.log_factors[0];
+                term.step = scale_config().step.ln();
+                term.values.clone_from(&sr.values);
+                term.gain = c.scale_likelihood / mean_peak.max(1e-3);
+                self.responses.scale = Some(term);
+                scale_peak = Some(f64::from(sr.peak));
+            }
+            _ => self.responses.scale = None,
+        }
         // while lost, a centred second look at the grid's best peak decides
         // re-acquisition: when the gate would learn it, the particles
         // restart there
@@ -1172,7 +1318,12 @@ impl TrackerCore for PfDcfCore {
                 .rev()
                 .max_by(|&a, &b| r.maps[a].peak.total_cmp(&r.maps[b].peak))
                 .unwrap_or(0);
-            let ls = r.levels[l];
+            // with the scale likelihood, the scale filter's estimate
+            let ls = match &r.scale {
+                Some(_) => (pl + self.scale_response.factor.ln())
+                    .clamp(self.scale_bounds.0, self.scale_bounds.1),
+                None => r.levels[l],
+            };
             let tau_s = c.peak_scale_spread * c.scale_step.ln();
             Peak::new(
                 c.peak_fraction,
@@ -1218,6 +1369,25 @@ impl TrackerCore for PfDcfCore {
             self.anchor = (mean[0], mean[1], mean[4]);
             self.peaks.0 += peak;
             self.peaks.1 += 1;
+            // the scale filter learns where the model does, at fDSST's rate
+            if let Some(f) = self.scale.as_mut() {
+                let r = scale_region(f, fw, fh, at, scale);
+                // a frame without a scale response loaded nothing yet
+                if scale_peak.is_none() || !self.scale_sampler.holds(&r) {
+                    self.scale_sampler.load_gray_region(frame, r)?;
+                }
+                f.train(
+                    &mut self.scale_sampler,
+                    at.0,
+                    at.1,
+                    scale,
+                    scale_config().learning_rate,
+                )?;
+                if let Some(p) = scale_peak {
+                    self.scale_peaks.0 += p;
+                    self.scale_peaks.1 += 1;
+                }
+            }
         } else {
             self.diagnostics.lost_frames += 1;
         }
