@@ -749,6 +749,72 @@ impl ScaleFilter {
     }
 }
 
+/// The whole response of one scale detection ([`ScaleFilter::respond`]):
+/// what [`ScaleFilter::detect`] returns, and the response at each of the
+/// scales it chose among, in ascending order of scale.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ScaleResponse {
+    /// The relative factor [`ScaleFilter::detect`] returns (the same bits).
+    pub factor: f64,
+    /// The response's peak [`ScaleFilter::detect`] returns (the same bits;
+    /// the largest of `values`, as `f32`).
+    pub peak: f32,
+    /// `ln` of each scale's factor relative to the detection's scale,
+    /// ascending: DSST's sampled scales (`(floor(S/2) - n) ln a`), fDSST's
+    /// interpolated ones (`e ln a`, `e = -floor((I-1)/2) ... floor(I/2)`),
+    /// one step `ln a` apart.
+    pub log_factors: Vec<f64>,
+    /// The response at each of `log_factors`, scaled as `peak`.
+    pub values: Vec<f64>,
+}
+
+impl ScaleFilter {
+    /// [`ScaleFilter::detect`], keeping the whole response in `out`: the
+    /// factor and peak are `detect`'s (it is called), the response its
+    /// buffer as `detect` left it, scaled as the peak (fDSST: the
+    /// interpolated response over `I`; DSST: the sampled one over `S`).
+    ///
+    /// # Errors
+    /// As [`ScaleFilter::detect`].
+    pub fn respond(
+        &mut self,
+        sampler: &mut PatchSampler,
+        cx: f64,
+        cy: f64,
+        scale: f64,
+        out: &mut ScaleResponse,
+    ) -> Result<()> {
+        let (factor, peak) = self.detect(sampler, cx, cy, scale)?;
+        out.factor = factor;
+        out.peak = peak;
+        out.log_factors.clear();
+        out.values.clear();
+        let ln_step = self.config.step.ln();
+        if let Some(fd) = &self.fd {
+            // index n is exponent n up to (I - 1) / 2, n - I above
+            let ni = fd.interp.len();
+            let half = (ni - 1) / 2;
+            for n in (half + 1..ni).chain(0..=half) {
+                let e = if n <= half {
+                    n as f64
+                } else {
+                    n as f64 - ni as f64
+                };
+                out.log_factors.push(e * ln_step);
+                out.values.push(fd.interp[n] / ni as f64);
+            }
+        } else {
+            // sample n has the factor step^(floor(S/2) - n): largest first
+            let s = self.config.scales;
+            for n in (0..s).rev() {
+                out.log_factors.push(((s / 2) as f64 - n as f64) * ln_step);
+                out.values.push(f64::from(self.resp[n].re / s as f32));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// The windowed samples transposed into the spectra's rows (`xs`: row
 /// `d` holds feature `d` of every scale), eight features at a time (one
 /// load of eight values per scale, eight rows written).
@@ -931,6 +997,55 @@ mod tests {
         let mut s1 = sampler(1.04);
         let (factor, _) = f.detect(&mut s1, 79.5, 59.5, 1.04).unwrap();
         assert!((factor - 1.0).abs() < 0.02, "{factor}");
+    }
+
+    /// `respond` gives `detect`'s factor and peak bit for bit (on two
+    /// copies of one trained filter), its peak is the largest value, the
+    /// scales ascend one step apart, and a parabola through the largest
+    /// value and its neighbours lands on `detect`'s factor: the values sit
+    /// at their scales. DSST and fDSST.
+    #[test]
+    fn respond_is_detect_with_the_whole_response() {
+        for config in [ScaleConfig::default(), ScaleConfig::fdsst()] {
+            let mut f = ScaleFilter::new(config, 40.0, 28.0).unwrap();
+            let mut s0 = sampler(1.0);
+            f.train(&mut s0, 79.5, 59.5, 1.0, 0.025).unwrap();
+            let mut out = ScaleResponse::default();
+            for (zoom, at) in [(1.04, 1.0), (1.0 / 1.04, 1.0), (1.1, 1.02), (0.93, 0.97)] {
+                let mut g = f.clone();
+                let mut s1 = sampler(zoom);
+                let (factor, peak) = f.detect(&mut s1, 79.5, 59.5, at).unwrap();
+                g.respond(&mut s1, 79.5, 59.5, at, &mut out).unwrap();
+                assert_eq!(
+                    (out.factor.to_bits(), out.peak.to_bits()),
+                    (factor.to_bits(), peak.to_bits()),
+                    "{config:?} zoom {zoom}"
+                );
+                let n = out.values.len();
+                assert_eq!(n, 33);
+                assert_eq!(out.log_factors.len(), n);
+                let ln_step = config.step.ln();
+                for w in out.log_factors.windows(2) {
+                    assert!((w[1] - w[0] - ln_step).abs() < 1e-12, "{w:?}");
+                }
+                let (i, &best) = out
+                    .values
+                    .iter()
+                    .enumerate()
+                    .max_by(|a, b| a.1.total_cmp(b.1))
+                    .unwrap();
+                assert_eq!((best as f32).to_bits(), peak.to_bits());
+                let off = if 0 < i && i + 1 < n {
+                    let v = |k: usize| out.values[k] as f32;
+                    parabola_offset(v(i - 1), v(i), v(i + 1))
+                } else {
+                    0.0
+                };
+                let want = factor.ln();
+                let got = out.log_factors[i] + off * ln_step;
+                assert!((got - want).abs() < 1e-4 * ln_step, "{got} vs {want}");
+            }
+        }
     }
 
     /// fDSST as first written here, kept as the reference of the fast

@@ -43,6 +43,30 @@
 //! and frame, so a particle costs a bilinear look-up: the particle count
 //! is nearly free next to the filter's FFTs.
 //!
+//! The three responses barely tell scales a few per cent apart. With
+//! [`PfDcfConfig::scale_likelihood`] `lambda_s > 0` (the default, 20) a
+//! second factor measures the scale: fDSST's scale filter
+//! ([`bayestrack_dcf::scale::ScaleFilter`], Danelljan et al. 2017, its
+//! published parameters), the filter the `dcf` tracker uses, computes its
+//! response `S` over its 33 interpolated scales (`1.02^e` times the
+//! predicted scale `exp(E[ln s])`, `e = -16 ... 16`;
+//! [`ScaleFilter::respond`]) at the peak of the window's middle-scale
+//! response, once a tracked frame before the particles move, and
+//! `ln p(y | x) = lambda R(x) / R_bar + lambda_s S(ln s) / S_bar`, `S(ln
+//! s)` linear between the two interpolated scales that bracket the
+//! particle's log-scale (the outer value beyond them), `S_bar` the mean of
+//! the scale peaks learnt (the first frame's own peak before any). The
+//! peak, not the frame's estimate: the likelihood must be fixed before the
+//! particles are weighed, and the scale filter samples the target alone
+//! (no padding), which the predicted centre's error after a turn would
+//! blur; the peak is this frame's translation measurement, where fDSST
+//! itself measures scale. `lambda_s = lambda`: both responses are divided
+//! by their mean learnt peak, so one `lambda` weighs them alike. While
+//! lost there is no scale factor (the grid's search). With
+//! [`PfDcfConfig::tracking_levels`] 1 the translation response is computed
+//! at the predicted log-scale only (every particle reads it) and the
+//! log-scale is measured by the scale factor alone.
+//!
 //! # Proposal
 //! With [`PfDcfConfig::peak_fraction`] `beta = 0` (the default) the
 //! particles are drawn from the dynamics (the bootstrap filter, weight
@@ -66,7 +90,8 @@
 //! the log-scale as the jump gives it (`ln s'`) or, on the
 //! constant-velocity branch, from `N(ls*, tau_s^2)`, `ls*` the highest
 //! response's log-scale and `tau_s` [`PfDcfConfig::peak_scale_spread`]
-//! times `ln a`. Velocity and a jump's log-scale come from the
+//! times `ln a` (with the scale likelihood, `ls*` is the scale filter's
+//! estimate instead, within the filter's bounds). Velocity and a jump's log-scale come from the
 //! transition's own conditional in both components and cancel, so
 //!
 //! - a jump (velocity and log-scale kept exactly, an atom no continuous
@@ -89,8 +114,10 @@
 //! the frame is the peak and APCE of the middle scale's response (Wang et
 //! al. 2017's LMCF gate: both at least `beta_1 = 0.7`, `beta_2 = 0.45` of
 //! their means over the frames learnt). A frame that passes is learnt at
-//! the estimate (the filter's published learning rate); a frame that
-//! fails is **lost**: the model is frozen, and while lost
+//! the estimate (the filter's published learning rate; the scale filter,
+//! when there is one, at the same estimate with fDSST's learning rate
+//! 0.025); a frame that fails is **lost**: the model and the scale filter
+//! are frozen, and while lost
 //! ([`PfDcfConfig::redetect`]) the particles spread
 //! [`PfDcfConfig::redetect_spread`] times wider in position and velocity
 //! and [`PfDcfConfig::redetect_scale_spread`] times wider in log-scale,
@@ -104,14 +131,19 @@
 //! window nearest to it (a window without outer scales its middle one at
 //! every log-scale); the particles then diffuse without velocity. The
 //! target is re-acquired on the first frame whose best window passes the
-//! gate again. [`PfDcfCore::diagnostics`] counts lost frames and
+//! gate again: a second look, a window centred on the grid's best peak at
+//! the last learnt log-scale or, with [`PfDcfConfig::redetect_scale`] (the
+//! default with the scale filter), at the scale filter's estimate there
+//! (measured from the last learnt scale), where the particles restart
+//! when the gate admits it. [`PfDcfCore::diagnostics`] counts lost frames and
 //! re-acquisitions.
 //!
 //! # Cost
 //! A frame loads (and of an RGB frame converts to gray) only the union of
 //! the windows it scores, then what the second look or the update lacks
 //! ([`Dcf::load_windows`], [`Dcf::ensure_loaded`]): the same numbers as a
-//! whole-frame load.
+//! whole-frame load. The scale filter keeps its own sampler, loaded with
+//! the region its 17 samples read (about 1.36 target sizes across).
 //!
 //! # Randomness
 //! The engine (`bayestrack-particle`'s `Smc`, systematic resampling
@@ -123,6 +155,8 @@
 use std::convert::Infallible;
 
 use bayestrack_dcf::confidence::ApceGate;
+use bayestrack_dcf::sample::{PatchSampler, Region};
+use bayestrack_dcf::scale::{ScaleConfig, ScaleFilter, ScaleResponse};
 use bayestrack_dcf::{Dcf, DcfConfig, Response, SharedFeatures, SharedGrid};
 use bayestrack_image::{BBox, ImageView};
 use bayestrack_options::{choice, options};
@@ -142,6 +176,20 @@ const NAME: &str = "pf-dcf";
 const KEY: u64 = 0x70_6664_6366;
 
 type State = SVector<f64, 5>;
+
+/// The scale filter of [`PfDcfConfig::scale_likelihood`]: fDSST's
+/// published parameters (17 scales interpolated to 33, step 1.02,
+/// learning rate 0.025).
+fn scale_config() -> ScaleConfig {
+    ScaleConfig::fdsst()
+}
+
+/// The region of a `w x h` frame that `f` reads at `at`, `scale` (the
+/// whole frame where it has none).
+fn scale_region(f: &ScaleFilter, w: usize, h: usize, at: (f64, f64), scale: f64) -> Region {
+    f.region(w, h, at.0, at.1, scale)
+        .unwrap_or(Region::whole(w, h))
+}
 
 options! {
     /// Every parameter of [`PfDcfTracker`]. The correlation filter's are
@@ -239,6 +287,43 @@ options! {
         /// the pyramid's step `ln a` (0.5: the best of the three scales is
         /// within half a step of the best scale between them).
         pub peak_scale_spread: f64 = 0.5;
+        /// `lambda_s` of the scale likelihood `exp(lambda_s S(ln s) /
+        /// S_bar)` (module docs, "Likelihood"): the response of fDSST's
+        /// scale filter (Danelljan et al. 2017, its published parameters,
+        /// [`ScaleConfig::fdsst`]) over its 33 interpolated scales, at the
+        /// window's response peak, read at each particle's log-scale; 0
+        /// computes no scale filter (the boxes of before the option, bit
+        /// for bit). The default, 20, is the translation term's
+        /// [`PfDcfConfig::likelihood`] (both responses are divided by their
+        /// mean learnt peak, so one `lambda` weighs them alike), not swept;
+        /// on the stress set it passed against 0: over twelve pairs of set
+        /// and tracker seeds mean SR@0.5 +0.041 (standard error 0.013),
+        /// AUC +0.067 (docs/results.md, "fDSST's scale filter as a scale
+        /// likelihood").
+        pub scale_likelihood: f64 = 20.0;
+        /// Scales of the translation response while tracking: 3 (SiamFC's
+        /// pyramid, [`PfDcfConfig::scale_step`] apart) or 1 (the predicted
+        /// log-scale only: two responses a frame fewer; the log-scale then
+        /// comes from the scale likelihood alone, so 1 needs
+        /// [`PfDcfConfig::scale_likelihood`] > 0). The lost search keeps
+        /// its own ([`PfDcfConfig::redetect_levels`]). The default, 3, is
+        /// the stress set's choice: one scale scored 0.020 lower mean
+        /// SR@0.5 over twelve pairs of set and tracker seeds (0.016 with
+        /// [`PfDcfConfig::redetect_scale`]), beyond the 0.005 a cheaper
+        /// variant may lose (docs/results.md).
+        pub tracking_levels: usize = 3;
+        /// While lost, measure the scale filter (from the last learnt
+        /// scale) at the grid's best peak, take the re-acquiring second
+        /// look at that scale instead of the last learnt one, and restart
+        /// the particles there when the gate admits it (false: the second
+        /// look at the last learnt scale). Without the scale filter
+        /// ([`PfDcfConfig::scale_likelihood`] 0) it does nothing, so that
+        /// `scale_likelihood=0` alone gives the boxes of before the scale
+        /// filter. The default, true, is the
+        /// stress set's choice: over twelve pairs of set and tracker seeds
+        /// its mean SR@0.5 was 0.011 above `scale_likelihood` alone's
+        /// (standard error 0.004), AUC +0.014 (docs/results.md).
+        pub redetect_scale: bool = true;
     }
     groups {
         /// The correlation filter (KCF's published values).
@@ -355,6 +440,27 @@ impl PfDcfConfig {
                 return bad(name, v, "must be in [1, 100]");
             }
         }
+        if !(self.scale_likelihood.is_finite() && (0.0..=1000.0).contains(&self.scale_likelihood)) {
+            return bad(
+                "scale_likelihood",
+                self.scale_likelihood,
+                "must be in [0, 1000]",
+            );
+        }
+        if !matches!(self.tracking_levels, 1 | 3) {
+            return bad(
+                "tracking_levels",
+                self.tracking_levels as f64,
+                "must be 1 or 3",
+            );
+        }
+        if self.tracking_levels == 1 && self.scale_likelihood == 0.0 {
+            return bad(
+                "tracking_levels",
+                1.0,
+                "1 needs scale_likelihood > 0 (the log-scale would have no measurement)",
+            );
+        }
         if !matches!(self.redetect_levels, 1 | 3) {
             return bad(
                 "redetect_levels",
@@ -447,6 +553,38 @@ struct Responses {
     stride: (f64, f64),
     /// `lambda / R_bar`.
     gain: f64,
+    /// The scale filter's response (`None`: no scale term this frame).
+    scale: Option<ScaleTerm>,
+}
+
+/// The scale likelihood's response over log-scales (module docs,
+/// "Likelihood").
+#[derive(Debug, Clone, Default)]
+struct ScaleTerm {
+    /// Log-scale of the first value, and the spacing of the values.
+    first: f64,
+    step: f64,
+    values: Vec<f64>,
+    /// `lambda_s / S_bar`.
+    gain: f64,
+}
+
+impl ScaleTerm {
+    /// `lambda_s S(ls) / S_bar`: linear between the two values that
+    /// bracket `ls`, the outer value beyond them.
+    #[inline]
+    fn log_likelihood(&self, ls: f64) -> f64 {
+        let n = self.values.len();
+        let u = ((ls - self.first) / self.step).clamp(0.0, (n - 1) as f64);
+        let i = (u as usize).min(n.saturating_sub(2));
+        let t = u - i as f64;
+        let v = if n < 2 {
+            self.values[0]
+        } else {
+            (1.0 - t) * self.values[i] + t * self.values[i + 1]
+        };
+        self.gain * v
+    }
 }
 
 impl Responses {
@@ -481,7 +619,10 @@ impl Responses {
             let t = (ls - a) / (b - a);
             (1.0 - t) * read(&maps[l - 1]) + t * read(&maps[l])
         };
-        self.gain * r
+        match &self.scale {
+            Some(st) => self.gain * r + st.log_likelihood(ls),
+            None => self.gain * r,
+        }
     }
 }
 
@@ -727,6 +868,13 @@ pub struct PfDcfCore {
     /// The last learnt estimate `(cx, cy, ln s)`: where a lost search is
     /// centred.
     anchor: (f64, f64, f64),
+    /// fDSST's scale filter, with the gray levels it reads (`None` with
+    /// [`PfDcfConfig::scale_likelihood`] 0).
+    scale: Option<ScaleFilter>,
+    scale_sampler: PatchSampler,
+    scale_response: ScaleResponse,
+    /// Sum and count of the learnt scale peaks (`S_bar`).
+    scale_peaks: (f64, u64),
     diagnostics: PfDcfDiagnostics,
 }
 
@@ -764,6 +912,10 @@ impl PfDcfCore {
             offsets: Vec::new(),
             lost: false,
             anchor: (0.0, 0.0, 0.0),
+            scale: None,
+            scale_sampler: PatchSampler::new(),
+            scale_response: ScaleResponse::default(),
+            scale_peaks: (0.0, 0),
             diagnostics: PfDcfDiagnostics::default(),
         })
     }
@@ -819,7 +971,12 @@ impl PfDcfCore {
         let r = &mut self.responses;
         r.levels.clear();
         let g = if wide { c.redetect_grid } else { 1 };
-        if c.scale_noise > 0.0 && !(wide && c.redetect_levels == 1) {
+        let three = if wide {
+            c.redetect_levels == 3
+        } else {
+            c.tracking_levels == 3
+        };
+        if c.scale_noise > 0.0 && three {
             let d = c.scale_step.ln();
             r.levels.extend([ls - d, ls, ls + d]);
         } else {
@@ -1116,6 +1273,20 @@ impl TrackerCore for PfDcfCore {
         // R_bar starts from the first frame's own response peak
         let peak0 = self.dcf.detect((cx, cy), 1.0)?.max as f64;
         self.peaks = (peak0, 1);
+        // the scale filter learns the first frame whole; S_bar starts from
+        // its own peak there, as R_bar
+        self.scale = None;
+        self.scale_peaks = (0.0, 0);
+        self.responses.scale = None;
+        if c.scale_likelihood > 0.0 {
+            let mut f = ScaleFilter::new(scale_config(), w, h)?;
+            let r = scale_region(&f, gray.width(), gray.height(), (cx, cy), 1.0);
+            self.scale_sampler.load_gray_region(gray, r)?;
+            f.train(&mut self.scale_sampler, cx, cy, 1.0, 1.0)?;
+            let (_, p0) = f.detect(&mut self.scale_sampler, cx, cy, 1.0)?;
+            self.scale_peaks = (f64::from(p0), 1);
+            self.scale = Some(f);
+        }
         self.lost = false;
         self.anchor = (cx, cy, 0.0);
         self.diagnostics = PfDcfDiagnostics::default();
@@ -1149,12 +1320,50 @@ impl TrackerCore for PfDcfCore {
         };
         let centre = in_frame((px, py), self.frame);
         let best = self.respond(frame, centre, pl, wide)?;
+        // the scale filter's response while tracking, at the window's
+        // response peak (fDSST's order: translation, then scale there)
+        let (fw, fh) = (frame.width(), frame.height());
+        let mut scale_peak = None;
+        match self.scale.as_mut() {
+            Some(f) if !wide => {
+                let at = in_frame(best.at, self.frame);
+                let s = pl.exp();
+                let r = scale_region(f, fw, fh, at, s);
+                self.scale_sampler.load_gray_region(frame, r)?;
+                let sr = &mut self.scale_response;
+                f.respond(&mut self.scale_sampler, at.0, at.1, s, sr)?;
+                let mean_peak = if self.scale_peaks.1 > 0 {
+                    self.scale_peaks.0 / self.scale_peaks.1 as f64
+                } else {
+                    f64::from(sr.peak)
+                };
+                let mut term = self.responses.scale.take().unwrap_or_default();
+                term.first = pl + sr.log_factors[0];
+                term.step = scale_config().step.ln();
+                term.values.clone_from(&sr.values);
+                term.gain = c.scale_likelihood / mean_peak.max(1e-3);
+                self.responses.scale = Some(term);
+                scale_peak = Some(f64::from(sr.peak));
+            }
+            _ => self.responses.scale = None,
+        }
         // while lost, a centred second look at the grid's best peak decides
         // re-acquisition: when the gate would learn it, the particles
         // restart there
         let found = if wide {
-            let look = self.second_look(frame, best.at, pl)?;
-            self.gate.would_admit(look.peak, look.apce).then_some(look)
+            // with `redetect_scale`, at the scale filter's estimate there
+            let mut ls = pl;
+            if let (true, Some(f)) = (c.redetect_scale, self.scale.as_mut()) {
+                let at = in_frame(best.at, self.frame);
+                let r = scale_region(f, fw, fh, at, pl.exp());
+                self.scale_sampler.load_gray_region(frame, r)?;
+                let (factor, _) = f.detect(&mut self.scale_sampler, at.0, at.1, pl.exp())?;
+                ls = (pl + factor.ln()).clamp(self.scale_bounds.0, self.scale_bounds.1);
+            }
+            let look = self.second_look(frame, best.at, ls)?;
+            self.gate
+                .would_admit(look.peak, look.apce)
+                .then_some((look, ls))
         } else {
             None
         };
@@ -1172,7 +1381,12 @@ impl TrackerCore for PfDcfCore {
                 .rev()
                 .max_by(|&a, &b| r.maps[a].peak.total_cmp(&r.maps[b].peak))
                 .unwrap_or(0);
-            let ls = r.levels[l];
+            // with the scale likelihood, the scale filter's estimate
+            let ls = match &r.scale {
+                Some(_) => (pl + self.scale_response.factor.ln())
+                    .clamp(self.scale_bounds.0, self.scale_bounds.1),
+                None => r.levels[l],
+            };
             let tau_s = c.peak_scale_spread * c.scale_step.ln();
             Peak::new(
                 c.peak_fraction,
@@ -1194,8 +1408,8 @@ impl TrackerCore for PfDcfCore {
         };
         let smc = self.smc.as_mut().ok_or(TrackerError::NotInitialised)?;
         let (peak, apce) = match found {
-            Some(look) => {
-                let particles = vec![State::new(look.at.0, look.at.1, 0.0, 0.0, pl); c.particles];
+            Some((look, ls)) => {
+                let particles = vec![State::new(look.at.0, look.at.1, 0.0, 0.0, ls); c.particles];
                 smc.set = ParticleSet::new(particles)?;
                 (look.peak, look.apce)
             }
@@ -1218,6 +1432,25 @@ impl TrackerCore for PfDcfCore {
             self.anchor = (mean[0], mean[1], mean[4]);
             self.peaks.0 += peak;
             self.peaks.1 += 1;
+            // the scale filter learns where the model does, at fDSST's rate
+            if let Some(f) = self.scale.as_mut() {
+                let r = scale_region(f, fw, fh, at, scale);
+                // a frame without a scale response loaded nothing yet
+                if scale_peak.is_none() || !self.scale_sampler.holds(&r) {
+                    self.scale_sampler.load_gray_region(frame, r)?;
+                }
+                f.train(
+                    &mut self.scale_sampler,
+                    at.0,
+                    at.1,
+                    scale,
+                    scale_config().learning_rate,
+                )?;
+                if let Some(p) = scale_peak {
+                    self.scale_peaks.0 += p;
+                    self.scale_peaks.1 += 1;
+                }
+            }
         } else {
             self.diagnostics.lost_frames += 1;
         }
@@ -1304,10 +1537,12 @@ mod tests {
     }
 
     /// A target moving on a curve while it grows by 40 % or shrinks by 30 %
-    /// over 60 frames, gray and RGB, two seeds. Measured (this build): mean
-    /// IoU 0.811 to 0.902, worst centre error 1.84 to 2.16 px, final size
-    /// within 19 % of the truth (the scale lags a growing target: ratio
-    /// 0.81 to 0.88 at 1.4x). Bounds: IoU 0.78, centre 3.5 px, size 20 %.
+    /// over 60 frames, gray and RGB, two seeds. Measured without the scale
+    /// filter: mean IoU 0.811 to 0.902, worst centre error 1.84 to 2.16
+    /// px, final size within 19 % of the truth (the scale lags a growing
+    /// target: ratio 0.81 to 0.88 at 1.4x); with it (the default, this
+    /// build): IoU 0.882 to 0.919, centre 1.71 to 3.27 px, final size
+    /// within 6.6 %. Bounds: IoU 0.78, centre 3.5 px, size 20 %.
     #[test]
     fn holds_growing_and_shrinking_targets() {
         for (rgb, grow) in [(false, 1.4), (true, 1.4), (false, 0.7), (true, 1.0)] {
@@ -1328,6 +1563,68 @@ mod tests {
                 assert!((last - 1.0).abs() < 0.2, "{case}: size ratio {last:.3}");
             }
         }
+    }
+
+    /// Largest area error `|w h / (w' h') - 1|` over the frames.
+    fn area_error(got: &[BBox], truth: &[BBox]) -> f64 {
+        got.iter()
+            .zip(truth)
+            .map(|(g, t)| (g.width * g.height / (t.width * t.height) - 1.0).abs())
+            .fold(0.0, f64::max)
+    }
+
+    /// The default without the scale filter (`redetect_scale` then does
+    /// nothing: `no_scale_likelihood_gives_the_earlier_boxes` checks both
+    /// of its values).
+    fn without_scale_filter() -> PfDcfConfig {
+        PfDcfConfig {
+            scale_likelihood: 0.0,
+            ..PfDcfConfig::default()
+        }
+    }
+
+    /// The scale filter sizes a target growing by 40 % or shrinking to
+    /// 0.55x over 60 frames (gray and RGB, seeds 1-3): the area error is
+    /// at most 17 % on every frame of every run with the default, and more
+    /// than that somewhere in every run without the scale filter (today's
+    /// default before it). Measured (this build): 0.043 to 0.156 with it,
+    /// 0.179 to 0.344 without.
+    #[test]
+    fn the_scale_filter_sizes_growing_and_shrinking_targets() {
+        const BOUND: f64 = 0.17;
+        for (rgb, grow) in [(false, 1.4), (true, 1.4), (false, 0.7), (true, 0.55)] {
+            let (frames, truth) = scene(61, rgb, 3.0, |k| growing(k, grow));
+            for seed in [1, 2, 3] {
+                let case = format!("rgb {rgb} grow {grow} seed {seed}");
+                let got = run(&mut pf(PfDcfConfig::default(), seed), &frames, truth[0]);
+                let with = area_error(&got, &truth);
+                let got = run(&mut pf(without_scale_filter(), seed), &frames, truth[0]);
+                let without = area_error(&got, &truth);
+                eprintln!(
+                    "{case}: area error {with:.3} with the scale filter, {without:.3} without"
+                );
+                assert!(with <= BOUND, "{case}: {with:.3} with the scale filter");
+                assert!(without > BOUND, "{case}: {without:.3} without it");
+            }
+        }
+    }
+
+    /// `tracking_levels = 1`: one translation response a tracked frame,
+    /// and the scale filter still sizes the growing target (area error
+    /// within the bound above; measured 0.151, seed 1).
+    #[test]
+    fn one_tracking_level_computes_one_response_a_frame() {
+        let (frames, truth) = scene(61, false, 3.0, |k| growing(k, 1.4));
+        let config = PfDcfConfig {
+            tracking_levels: 1,
+            ..PfDcfConfig::default()
+        };
+        let mut t = pf(config, 1);
+        let got = run(&mut t, &frames, truth[0]);
+        let d = t.diagnostics();
+        assert_eq!((d.lost_frames, d.responses), (0, 60), "{d:?}");
+        let e = area_error(&got, &truth);
+        assert!(e <= 0.17, "{e:.3}");
     }
 
     /// With the log-scale noise 0 the particles keep the first size: the
@@ -1418,13 +1715,17 @@ mod tests {
         }
     }
 
-    /// The bootstrap filter (`peak_fraction` 0): the jump scene's tests
-    /// below were measured with it and test the lost search, which the
-    /// peak proposal does not touch.
+    /// The bootstrap filter (`peak_fraction` 0) without the scale filter
+    /// (`scale_likelihood` 0): the jump scene's tests below were measured
+    /// with it and test the lost search's mechanics. With the scale filter
+    /// the jump scene's re-acquisition is as fragile as with the peak
+    /// proposal (measured: the default re-acquires with seed 1 of 1-3, as
+    /// without the scale filter with seed 2; the bootstrap with the scale
+    /// filter with seeds 1 and 2), and the cause was not found.
     fn bootstrap() -> PfDcfConfig {
         PfDcfConfig {
             peak_fraction: 0.0,
-            ..PfDcfConfig::default()
+            ..without_scale_filter()
         }
     }
 
@@ -1448,6 +1749,44 @@ mod tests {
             assert!(before < 3.0, "seed {seed}: {before:.2} px");
             assert!(lost[15..25].iter().all(|&l| l), "seed {seed}: {lost:?}");
         }
+    }
+
+    /// The scale filter learns the frames the gate admits and only those:
+    /// on the jump scene (seed 1), its response on a fixed probe (the
+    /// first frame at the first box) changes over every admitted frame
+    /// and over no refused one (the blank). Skipping its training (the
+    /// mutation) fails the first, training it on refused frames the
+    /// second.
+    #[test]
+    fn the_scale_filter_learns_the_admitted_frames_only() {
+        let (frames, truth) = jump_scene();
+        let mut t = pf(PfDcfConfig::default(), 1);
+        t.init(frames[0].view(), truth[0]).unwrap();
+        let mut probe = PatchSampler::new();
+        let whole = Region::whole(frames[0].width(), frames[0].height());
+        probe.load_gray_region(frames[0].view(), whole).unwrap();
+        let (cx, cy) = truth[0].center();
+        let mut state = |t: &PfDcfTracker| -> Vec<u64> {
+            let mut f = t.core().scale.clone().expect("a scale filter");
+            let mut out = ScaleResponse::default();
+            f.respond(&mut probe, cx - 1.0, cy - 1.0, 1.0, &mut out)
+                .unwrap();
+            out.values.iter().map(|v| v.to_bits()).collect()
+        };
+        let (mut admitted, mut refused) = (0, 0);
+        for (k, f) in frames.iter().enumerate().skip(1) {
+            let before = state(&t);
+            let lost = t.step(f.view()).unwrap().lost;
+            let after = state(&t);
+            if lost {
+                assert_eq!(before, after, "frame {k}: refused, yet learnt");
+                refused += 1;
+            } else {
+                assert_ne!(before, after, "frame {k}: admitted, not learnt");
+                admitted += 1;
+            }
+        }
+        assert!(admitted >= 10 && refused >= 10, "{admitted} {refused}");
     }
 
     /// Responses of a run: three a tracked frame; a frame after a lost one
@@ -1653,7 +1992,7 @@ mod tests {
         let (frames, truth) = scene(61, true, 3.0, |k| growing(k, 1.4));
         let config = PfDcfConfig {
             peak_fraction: 0.0,
-            ..PfDcfConfig::default()
+            ..without_scale_filter()
         };
         let got = run(&mut pf(config, 1), &frames, truth[0]);
         let (jumped, _, _) = lost_run(config, 1);
@@ -1667,6 +2006,35 @@ mod tests {
     }
 
     const GROWING_DIGEST: u64 = 0x2111_583b_c12a_16ef;
+
+    /// `scale_likelihood = 0` (with either `redetect_scale`) is the tracker
+    /// of before the scale filter (`peak_fraction` 0.2): the boxes of a
+    /// growing RGB target and of the jump scene hash as they did (digests
+    /// recorded with this configuration, whose Couple and Crossing digests
+    /// are main's before the scale filter, f84e1024f1af80a6 and
+    /// 9302a3437c42334c; seed 1).
+    #[test]
+    fn no_scale_likelihood_gives_the_earlier_boxes() {
+        let (frames, truth) = scene(61, true, 3.0, |k| growing(k, 1.4));
+        for redetect_scale in [true, false] {
+            let config = PfDcfConfig {
+                redetect_scale,
+                ..without_scale_filter()
+            };
+            let got = run(&mut pf(config, 1), &frames, truth[0]);
+            let (jumped, _, _) = lost_run(config, 1);
+            assert_eq!(
+                (digest(&got), digest(&jumped)),
+                (PEAK_GROWING_DIGEST, PEAK_JUMP_DIGEST),
+                "redetect_scale {redetect_scale}: {:x} {:x}",
+                digest(&got),
+                digest(&jumped)
+            );
+        }
+    }
+
+    const PEAK_GROWING_DIGEST: u64 = 0xbfb9_1182_4826_cab0;
+    const PEAK_JUMP_DIGEST: u64 = 0x0e8a_84c3_2d60_dbbe;
     const JUMP_DIGEST: u64 = 0xd501_20b8_27ec_7f55;
 
     /// A single window's responses at three scales, a Gaussian bump of
@@ -1711,6 +2079,7 @@ mod tests {
             maps,
             stride: (0.0, 0.0),
             gain: 6.0,
+            scale: None,
         }
     }
 
@@ -1934,6 +2303,26 @@ mod tests {
                 peak_fraction: 0.2,
                 position_noise: 0.0,
                 ..PfDcfConfig::default()
+            },
+            PfDcfConfig {
+                scale_likelihood: f64::NAN,
+                ..PfDcfConfig::default()
+            },
+            PfDcfConfig {
+                scale_likelihood: -1.0,
+                ..PfDcfConfig::default()
+            },
+            PfDcfConfig {
+                scale_likelihood: 1e4,
+                ..PfDcfConfig::default()
+            },
+            PfDcfConfig {
+                tracking_levels: 2,
+                ..PfDcfConfig::default()
+            },
+            PfDcfConfig {
+                tracking_levels: 1,
+                ..without_scale_filter()
             },
         ] {
             assert!(matches!(
