@@ -324,6 +324,14 @@ options! {
         /// its mean SR@0.5 was 0.011 above `scale_likelihood` alone's
         /// (standard error 0.004), AUC +0.014 (docs/results.md).
         pub redetect_scale: bool = true;
+        /// Second looks a lost frame may take: the first at the grid's best
+        /// peak, then, while the gate refuses, at the other windows'
+        /// middle-scale peaks, highest first (1: the best peak only).
+        /// The grid's windows are half a window apart, so a target between
+        /// two of them sits near a window's edge, where the cosine window
+        /// weakens its peak below the background's at the last learnt
+        /// place (docs/results.md).
+        pub redetect_looks: usize = 1;
     }
     groups {
         /// The correlation filter (KCF's published values).
@@ -466,6 +474,13 @@ impl PfDcfConfig {
                 "redetect_levels",
                 self.redetect_levels as f64,
                 "must be 1 or 3",
+            );
+        }
+        if self.redetect_looks == 0 || self.redetect_looks > self.redetect_grid.pow(2) {
+            return bad(
+                "redetect_looks",
+                self.redetect_looks as f64,
+                "must be 1 to the grid's windows (redetect_grid squared)",
             );
         }
         if self.redetect_grid == 0 || self.redetect_grid.is_multiple_of(2) || self.redetect_grid > 9
@@ -1189,6 +1204,34 @@ impl PfDcfCore {
     /// window), so the grid's own peaks rarely pass the gate; centred, the
     /// peak is what tracking would see. Returns the peak, APCE and the
     /// refined position.
+    /// The next place of a lost frame's second looks after the grid's
+    /// best peak `best`: the highest middle-scale peak of the windows not
+    /// yet `tried` (a bit per window; a window the frame's edge moved onto
+    /// another's centre is marked with it), `None` when none is left.
+    fn next_look(&self, best: (f64, f64), tried: &mut u128) -> Option<(f64, f64)> {
+        let r = &self.responses;
+        let nl = r.levels.len();
+        let mid = |k: usize| &r.maps[k * nl + nl / 2];
+        let mut pick: Option<usize> = None;
+        for k in 0..r.windows {
+            let m = mid(k);
+            if (*tried >> k) & 1 == 1 || m.at == best {
+                continue;
+            }
+            // equal peaks: the first in grid order
+            if pick.is_none_or(|p| m.peak > mid(p).peak) {
+                pick = Some(k);
+            }
+        }
+        let centre = mid(pick?).centre;
+        for k in 0..r.windows {
+            if mid(k).centre == centre {
+                *tried |= 1 << k;
+            }
+        }
+        pick.map(|p| mid(p).at)
+    }
+
     fn second_look(&mut self, frame: ImageView<'_, u8>, at: (f64, f64), ls: f64) -> Result<Best> {
         let at = in_frame(at, self.frame);
         self.dcf.ensure_loaded(frame, at, ls.exp())?;
@@ -1351,19 +1394,30 @@ impl TrackerCore for PfDcfCore {
         // re-acquisition: when the gate would learn it, the particles
         // restart there
         let found = if wide {
-            // with `redetect_scale`, at the scale filter's estimate there
-            let mut ls = pl;
-            if let (true, Some(f)) = (c.redetect_scale, self.scale.as_mut()) {
-                let at = in_frame(best.at, self.frame);
-                let r = scale_region(f, fw, fh, at, pl.exp());
-                self.scale_sampler.load_gray_region(frame, r)?;
-                let (factor, _) = f.detect(&mut self.scale_sampler, at.0, at.1, pl.exp())?;
-                ls = (pl + factor.ln()).clamp(self.scale_bounds.0, self.scale_bounds.1);
+            let (mut found, mut tried, mut at) = (None, 0u128, best.at);
+            for look in 0..c.redetect_looks {
+                if look > 0 {
+                    match self.next_look(best.at, &mut tried) {
+                        Some(next) => at = next,
+                        None => break,
+                    }
+                }
+                // with `redetect_scale`, at the scale filter's estimate there
+                let mut ls = pl;
+                if let (true, Some(f)) = (c.redetect_scale, self.scale.as_mut()) {
+                    let at = in_frame(at, self.frame);
+                    let r = scale_region(f, fw, fh, at, pl.exp());
+                    self.scale_sampler.load_gray_region(frame, r)?;
+                    let (factor, _) = f.detect(&mut self.scale_sampler, at.0, at.1, pl.exp())?;
+                    ls = (pl + factor.ln()).clamp(self.scale_bounds.0, self.scale_bounds.1);
+                }
+                let look = self.second_look(frame, at, ls)?;
+                if self.gate.would_admit(look.peak, look.apce) {
+                    found = Some((look, ls));
+                    break;
+                }
             }
-            let look = self.second_look(frame, best.at, ls)?;
-            self.gate
-                .would_admit(look.peak, look.apce)
-                .then_some((look, ls))
+            found
         } else {
             None
         };
