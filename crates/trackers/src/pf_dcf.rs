@@ -135,7 +135,11 @@
 //! the last learnt log-scale or, with [`PfDcfConfig::redetect_scale`] (the
 //! default with the scale filter), at the scale filter's estimate there
 //! (measured from the last learnt scale), where the particles restart
-//! when the gate admits it. [`PfDcfCore::diagnostics`] counts lost frames and
+//! when the gate admits it; while the gate refuses, up to
+//! [`PfDcfConfig::redetect_looks`] looks in all (3), the next ones at the
+//! other windows' middle-scale peaks, highest first (a target between two
+//! windows sits near their edges, where the cosine window weakens its
+//! peak). [`PfDcfCore::diagnostics`] counts lost frames and
 //! re-acquisitions.
 //!
 //! # Cost
@@ -326,12 +330,17 @@ options! {
         pub redetect_scale: bool = true;
         /// Second looks a lost frame may take: the first at the grid's best
         /// peak, then, while the gate refuses, at the other windows'
-        /// middle-scale peaks, highest first (1: the best peak only).
+        /// middle-scale peaks, highest first (1: the best peak only; at
+        /// most one a window).
         /// The grid's windows are half a window apart, so a target between
         /// two of them sits near a window's edge, where the cosine window
         /// weakens its peak below the background's at the last learnt
-        /// place (docs/results.md).
-        pub redetect_looks: usize = 1;
+        /// place (docs/results.md). The default, 3, is the stress set's
+        /// choice among 1, 2 and 3: over twelve pairs of set and tracker
+        /// seeds its mean SR@0.5 was 0.0030 above one look's (standard
+        /// error 0.0008, never below it), AUC +0.0024 (two looks: +0.0018,
+        /// s.e. 0.0006).
+        pub redetect_looks: usize = 3;
     }
     groups {
         /// The correlation filter (KCF's published values).
@@ -476,11 +485,12 @@ impl PfDcfConfig {
                 "must be 1 or 3",
             );
         }
-        if self.redetect_looks == 0 || self.redetect_looks > self.redetect_grid.pow(2) {
+        // (a grid with fewer windows takes as many looks as it has)
+        if self.redetect_looks == 0 || self.redetect_looks > 81 {
             return bad(
                 "redetect_looks",
                 self.redetect_looks as f64,
-                "must be 1 to the grid's windows (redetect_grid squared)",
+                "must be 1 to 81",
             );
         }
         if self.redetect_grid == 0 || self.redetect_grid.is_multiple_of(2) || self.redetect_grid > 9
@@ -1390,9 +1400,9 @@ impl TrackerCore for PfDcfCore {
             }
             _ => self.responses.scale = None,
         }
-        // while lost, a centred second look at the grid's best peak decides
-        // re-acquisition: when the gate would learn it, the particles
-        // restart there
+        // while lost, a centred second look at the grid's best peak (then
+        // at the next highest windows' peaks) decides re-acquisition: when
+        // the gate would learn it, the particles restart there
         let found = if wide {
             let (mut found, mut tried, mut at) = (None, 0u128, best.at);
             for look in 0..c.redetect_looks {
@@ -1629,10 +1639,12 @@ mod tests {
 
     /// The default without the scale filter (`redetect_scale` then does
     /// nothing: `no_scale_likelihood_gives_the_earlier_boxes` checks both
-    /// of its values).
+    /// of its values) and with one second look a lost frame (the tracker
+    /// before both).
     fn without_scale_filter() -> PfDcfConfig {
         PfDcfConfig {
             scale_likelihood: 0.0,
+            redetect_looks: 1,
             ..PfDcfConfig::default()
         }
     }
@@ -1770,12 +1782,14 @@ mod tests {
     }
 
     /// The bootstrap filter (`peak_fraction` 0) without the scale filter
-    /// (`scale_likelihood` 0): the jump scene's tests below were measured
-    /// with it and test the lost search's mechanics. With the scale filter
-    /// the jump scene's re-acquisition is as fragile as with the peak
-    /// proposal (measured: the default re-acquires with seed 1 of 1-3, as
-    /// without the scale filter with seed 2; the bootstrap with the scale
-    /// filter with seeds 1 and 2), and the cause was not found.
+    /// (`scale_likelihood` 0), one second look a lost frame: the jump
+    /// scene's tests below were measured with it and test the lost
+    /// search's mechanics. With one look, the scale filter or the peak
+    /// proposal made the jump scene's re-acquisition luck (one seed in
+    /// three): the target sits between two grid windows, near an edge
+    /// where the cosine window weakens its peak to the background's at
+    /// the last learnt place, and the one second look went to whichever
+    /// was higher (docs/results.md, "second looks").
     fn bootstrap() -> PfDcfConfig {
         PfDcfConfig {
             peak_fraction: 0.0,
@@ -1783,18 +1797,17 @@ mod tests {
         }
     }
 
-    /// What the default (the peak proposal, `beta` 0.2) does on the jump
-    /// scene, measured when it became the default: the target is held
-    /// until the blank (seeds 1-3: worst centre error 1.5-1.8 px over
-    /// frames 0-14), but only seed 2 re-acquires it after (seeds 1 and 3
-    /// stay lost from frame 15, centre error 64-103 px; the same with
-    /// `beta` 0.1 and 0.3, while the bootstrap filter re-acquires with
-    /// every seed). Why was not found (the lost search itself is the
-    /// bootstrap's; the gate's means, learnt while tracking, differ):
-    /// left open, docs/results.md.
+    /// The default holds the jump scene's target until the blank, loses
+    /// it over the blank and re-acquires it after with every seed (seeds
+    /// 1-3, measured: worst centre error 1.3-1.8 px before, 1.4-1.5 px
+    /// over frames 35-49): its extra second looks reach the target
+    /// between two grid windows. With one look (`redetect_looks` 1, the
+    /// mutation) seeds 1 and 3 stay lost (the second look goes to the
+    /// background where the target was last learnt).
     #[test]
-    fn the_default_holds_the_jump_scene_until_the_blank() {
+    fn the_default_re_detects_the_jump_scene() {
         let (_, truth) = jump_scene();
+        let mut one_look_found = 0;
         for seed in [1, 2, 3] {
             let (boxes, lost, d) = lost_run(PfDcfConfig::default(), seed);
             let (before, _) = errors(&boxes[..15], &truth[..15]);
@@ -1802,7 +1815,15 @@ mod tests {
             eprintln!("seed {seed}: before {before:.2}, after {after:.2}, {d:?}");
             assert!(before < 3.0, "seed {seed}: {before:.2} px");
             assert!(lost[15..25].iter().all(|&l| l), "seed {seed}: {lost:?}");
+            assert!(after < 3.0, "seed {seed}: {after:.2} px after");
+            let one = PfDcfConfig {
+                redetect_looks: 1,
+                ..PfDcfConfig::default()
+            };
+            let (boxes, _, _) = lost_run(one, seed);
+            one_look_found += usize::from(errors(&boxes[35..], &truth[35..]).0 < 3.0);
         }
+        assert!(one_look_found < 3, "one look re-acquired with every seed");
     }
 
     /// The scale filter learns the frames the gate admits and only those:
@@ -1980,10 +2001,12 @@ mod tests {
             (RedetectFeatures::PerWindow, OuterScales::EveryWindow, 61),
             (RedetectFeatures::Shared, OuterScales::BestWindow, 61),
         ] {
+            // one second look a lost frame: the cost is fixed
             let config = PfDcfConfig {
                 redetect_grid: 5,
                 redetect_features: features,
                 redetect_outer: outer,
+                redetect_looks: 1,
                 ..PfDcfConfig::default()
             };
             let (boxes, lost, d) = track_run(config, 1, &frames, truth[0]);
@@ -2327,6 +2350,14 @@ mod tests {
             },
             PfDcfConfig {
                 redetect_grid: 2,
+                ..PfDcfConfig::default()
+            },
+            PfDcfConfig {
+                redetect_looks: 0,
+                ..PfDcfConfig::default()
+            },
+            PfDcfConfig {
+                redetect_looks: 82,
                 ..PfDcfConfig::default()
             },
             PfDcfConfig {
