@@ -124,11 +124,12 @@ fn correlation_filters_on_couple() {
 }
 
 /// pf-dcf (the correlation response as a particle likelihood) on
-/// Crossing and Couple: measured AUC 0.781 and 0.600, P@20 1.000 and 0.943
-/// (seed 0, `cargo xtask otb`, with the re-detection's second look; before
-/// it Couple scored AUC 0.086); floors 0.6 / 0.45 and 0.9 / 0.8. David
-/// (AUC 0.595) is left out: 471 frames at about 12 fps in the test
-/// profile.
+/// Crossing and Couple: measured AUC 0.799 and 0.633, P@20 1.000 and 0.950
+/// (seed 0, `cargo xtask otb`, 2026-12-04, with the peak proposal, the
+/// scale filter and three second looks; 0.781 and 0.600 before them;
+/// before the re-detection's second look Couple scored AUC 0.086); floors
+/// 0.6 / 0.45 and 0.9 / 0.8. David (AUC 0.574) is left out: 471 frames
+/// in the test profile.
 #[test]
 fn pf_dcf_follows_crossing_and_couple() {
     for (name, auc_floor, p20_floor) in [("Crossing", 0.6, 0.9), ("Couple", 0.45, 0.8)] {
