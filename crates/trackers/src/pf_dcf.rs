@@ -216,8 +216,13 @@ options! {
         /// Velocity noise `sigma_v` per frame, fraction of the target size
         /// (0.05).
         pub velocity_noise: f64 = 0.05;
-        /// Log-scale noise `sigma_s` per frame (0.02); 0 keeps the first size.
-        pub scale_noise: f64 = 0.02;
+        /// Log-scale noise `sigma_s` per frame; 0 keeps the first size. The
+        /// default, 0.03, is the stress set's choice with the scale filter
+        /// among 0.02 (the choice before it), 0.03 and 0.04: over twelve
+        /// pairs of set and tracker seeds its mean SR@0.5 was 0.043 above
+        /// 0.02's (standard error 0.007, above it in every pair), AUC
+        /// +0.044 (docs/results.md).
+        pub scale_noise: f64 = 0.03;
         /// Fraction `e` of particles that jump instead of moving at
         /// constant velocity (0.1, as `hist-pf-scale`): they find a target
         /// that moved abruptly within the window.
@@ -1639,12 +1644,13 @@ mod tests {
 
     /// The default without the scale filter (`redetect_scale` then does
     /// nothing: `no_scale_likelihood_gives_the_earlier_boxes` checks both
-    /// of its values) and with one second look a lost frame (the tracker
-    /// before both).
+    /// of its values), with one second look a lost frame and the log-scale
+    /// noise of before (the tracker before all three).
     fn without_scale_filter() -> PfDcfConfig {
         PfDcfConfig {
             scale_likelihood: 0.0,
             redetect_looks: 1,
+            scale_noise: 0.02,
             ..PfDcfConfig::default()
         }
     }
@@ -1799,11 +1805,12 @@ mod tests {
 
     /// The default holds the jump scene's target until the blank, loses
     /// it over the blank and re-acquires it after with every seed (seeds
-    /// 1-3, measured: worst centre error 1.3-1.8 px before, 1.4-1.5 px
-    /// over frames 35-49): its extra second looks reach the target
-    /// between two grid windows. With one look (`redetect_looks` 1, the
-    /// mutation) seeds 1 and 3 stay lost (the second look goes to the
-    /// background where the target was last learnt).
+    /// 1-3, measured: worst centre error 1.6-1.7 px before, 1.2-1.7 px
+    /// over frames 35-49). At the log-scale noise the extra second looks
+    /// were chosen with (0.02), three looks re-acquire with every seed
+    /// (1.4-1.5 px after) and one (`redetect_looks` 1, the mutation) leaves
+    /// seeds 1 and 3 lost: its look goes to the background where the
+    /// target was last learnt, not to the target between two grid windows.
     #[test]
     fn the_default_re_detects_the_jump_scene() {
         let (_, truth) = jump_scene();
@@ -1816,9 +1823,18 @@ mod tests {
             assert!(before < 3.0, "seed {seed}: {before:.2} px");
             assert!(lost[15..25].iter().all(|&l| l), "seed {seed}: {lost:?}");
             assert!(after < 3.0, "seed {seed}: {after:.2} px after");
+            // the looks at the log-scale noise of when they were chosen
+            // (0.02): three re-acquire with every seed, one not
+            let three = PfDcfConfig {
+                scale_noise: 0.02,
+                ..PfDcfConfig::default()
+            };
+            let (boxes, _, _) = lost_run(three, seed);
+            let (after, _) = errors(&boxes[35..], &truth[35..]);
+            assert!(after < 3.0, "seed {seed}, three looks: {after:.2} px after");
             let one = PfDcfConfig {
                 redetect_looks: 1,
-                ..PfDcfConfig::default()
+                ..three
             };
             let (boxes, _, _) = lost_run(one, seed);
             one_look_found += usize::from(errors(&boxes[35..], &truth[35..]).0 < 3.0);
