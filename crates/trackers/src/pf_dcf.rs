@@ -68,9 +68,9 @@
 //! log-scale is measured by the scale factor alone.
 //!
 //! # Proposal
-//! With [`PfDcfConfig::peak_fraction`] `beta = 0` (the default) the
-//! particles are drawn from the dynamics (the bootstrap filter, weight
-//! `p(y | x)`). With `beta > 0`, while tracking (not while lost: the
+//! With [`PfDcfConfig::peak_fraction`] `beta = 0` the particles are
+//! drawn from the dynamics (the bootstrap filter, weight `p(y | x)`). With
+//! `beta > 0` (the default, 0.2), while tracking (not while lost: the
 //! grid's own search), each particle is drawn with probability `beta`
 //! from a component `g` at the response's peak instead, the mixture
 //! `q(x | x', y) = (1 - beta) p(x | x') + beta g(x | x', y)` of Isard and
@@ -1213,12 +1213,6 @@ impl PfDcfCore {
         Ok(best)
     }
 
-    /// Re-detection's second look: the response of a window centred on the
-    /// best peak of the lost search, at log-scale `ls`. Off-centre, the
-    /// cosine window damps a returning target's peak (by half at a quarter
-    /// window), so the grid's own peaks rarely pass the gate; centred, the
-    /// peak is what tracking would see. Returns the peak, APCE and the
-    /// refined position.
     /// The next place of a lost frame's second looks after the grid's
     /// best peak `best`: the highest middle-scale peak of the windows not
     /// yet `tried` (a bit per window; a window the frame's edge moved onto
@@ -1247,6 +1241,12 @@ impl PfDcfCore {
         pick.map(|p| mid(p).at)
     }
 
+    /// Re-detection's second look: the response of a window centred on the
+    /// best peak of the lost search, at log-scale `ls`. Off-centre, the
+    /// cosine window damps a returning target's peak (by half at a quarter
+    /// window), so the grid's own peaks rarely pass the gate; centred, the
+    /// peak is what tracking would see. Returns the peak, APCE and the
+    /// refined position.
     fn second_look(&mut self, frame: ImageView<'_, u8>, at: (f64, f64), ls: f64) -> Result<Best> {
         let at = in_frame(at, self.frame);
         self.dcf.ensure_loaded(frame, at, ls.exp())?;
