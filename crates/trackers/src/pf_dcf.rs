@@ -123,13 +123,15 @@
 //! and [`PfDcfConfig::redetect_scale_spread`] times wider in log-scale,
 //! and the response is computed in a grid of `g x g` windows
 //! ([`PfDcfConfig::redetect_grid`]) half a window apart around the last
-//! learnt estimate: the middle scale at every window, the two outer
-//! scales at the window whose middle-scale peak is highest
-//! ([`PfDcfConfig::redetect_outer`]; or at every window, or none with
-//! [`PfDcfConfig::redetect_levels`] 1; a window the frame's edge moves
-//! onto another's centre is computed once), each particle reading the
-//! window nearest to it (a window without outer scales its middle one at
-//! every log-scale); the particles then diffuse without velocity. The
+//! learnt estimate, at the last learnt scale (the default,
+//! [`PfDcfConfig::redetect_levels`] 1), their features cut out of one
+//! fHOG of the whole grid ([`PfDcfConfig::redetect_features`] `shared`);
+//! with three levels, the two outer scales too, at the window whose
+//! middle-scale peak is highest or at every window
+//! ([`PfDcfConfig::redetect_outer`]; a window the frame's edge moves onto
+//! another's centre is computed once), each particle reading the window
+//! nearest to it (a window without outer scales its middle one at every
+//! log-scale); the particles then diffuse without velocity. The
 //! target is re-acquired on the first frame whose best window passes the
 //! gate again: a second look, a window centred on the grid's best peak at
 //! the last learnt log-scale or, with [`PfDcfConfig::redetect_scale`] (the
@@ -242,15 +244,17 @@ options! {
         /// Windows per side of the search grid while lost (3: 3 x 3
         /// windows half a window apart, about 3.75 target sizes across).
         pub redetect_grid: usize = 3;
-        /// Scales while lost: 1 (the last learnt scale) or 3 (the three of
-        /// tracking, the outer two where [`PfDcfConfig::redetect_outer`]
-        /// says). The default, 3, is the stress set's choice: one scale
-        /// (a grid of 9 responses, against 27 with the outer scales at
-        /// every window) scored 0.006 lower mean SR@0.5 over twelve pairs
-        /// of set and tracker seeds (standard error 0.002;
-        /// docs/results.md); searching the grid a share per lost frame
-        /// scored lower still.
-        pub redetect_levels: usize = 3;
+        /// Scales while lost: 1 (the last learnt scale; the second looks
+        /// take theirs from the scale filter, [`PfDcfConfig::redetect_scale`])
+        /// or 3 (the three of tracking, the outer two where
+        /// [`PfDcfConfig::redetect_outer`] says). The default, 1, is the
+        /// stress set's choice (with `shared` features, below): before the
+        /// scale filter one scale scored 0.006 lower mean SR@0.5 over
+        /// twelve pairs of set and tracker seeds; with it, 0.0008 lower
+        /// (standard error 0.0006; AUC -0.0003), within the 0.005 a
+        /// cheaper search may lose (docs/results.md, "a cheaper lost
+        /// search with the scale filter").
+        pub redetect_levels: usize = 1;
         /// How a lost frame computes its grid's features:
         /// `per-window` (each window sampled and its fHOG computed on its
         /// own, clamped to the frame one by one) or `shared` (one patch
@@ -258,11 +262,15 @@ options! {
         /// cut out of it, the window centres rounded to whole cells: about
         /// 4/9 of the features' cost for the 3 x 3 grid; border cells see
         /// the pixels beyond their window, so not the same numbers). The
-        /// default, `per-window`, is the stress set's choice: `shared`
-        /// scored 0.008 lower mean SR@0.5 over twelve pairs of set and
-        /// tracker seeds (0.012 with one scale), beyond the 0.005 a
-        /// cheaper search may lose (docs/results.md).
-        pub redetect_features: RedetectFeatures = RedetectFeatures::PerWindow;
+        /// default, `shared`, is the stress set's choice: before the scale
+        /// filter it scored 0.008 lower mean SR@0.5 over twelve pairs of
+        /// set and tracker seeds (0.012 with one scale); with it and one
+        /// scale, 0.0005 lower (standard error 0.0012; AUC +0.0003), within
+        /// the 0.005 a cheaper search may lose, and the fewest
+        /// instructions a frame on Couple of the variants that passed
+        /// (docs/results.md, "a cheaper lost search with the scale
+        /// filter").
+        pub redetect_features: RedetectFeatures = RedetectFeatures::Shared;
         /// Where a lost frame with three scales and per-window features
         /// computes the outer two (`shared` features: at every window):
         /// `best-window` (the middle scale at every grid window first, the
@@ -1651,6 +1659,8 @@ mod tests {
             scale_likelihood: 0.0,
             redetect_looks: 1,
             scale_noise: 0.02,
+            redetect_levels: 3,
+            redetect_features: RedetectFeatures::PerWindow,
             ..PfDcfConfig::default()
         }
     }
@@ -1929,7 +1939,12 @@ mod tests {
     #[test]
     fn a_lost_frame_computes_the_outer_scales_at_the_best_window() {
         let (frames, truth) = jump_scene();
-        let mut t = pf(PfDcfConfig::default(), 1);
+        let config = PfDcfConfig {
+            redetect_levels: 3,
+            redetect_features: RedetectFeatures::PerWindow,
+            ..PfDcfConfig::default()
+        };
+        let mut t = pf(config, 1);
         t.init(frames[0].view(), truth[0]).unwrap();
         let peak = |m: &Map| m.data.iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b));
         let mut checked = 0;
@@ -2023,6 +2038,7 @@ mod tests {
                 redetect_features: features,
                 redetect_outer: outer,
                 redetect_looks: 1,
+                redetect_levels: 3,
                 ..PfDcfConfig::default()
             };
             let (boxes, lost, d) = track_run(config, 1, &frames, truth[0]);
