@@ -199,6 +199,10 @@ pub struct ScaleFilter {
     /// fDSST's model and buffers (`None` for DSST).
     fd: Option<Box<Fdsst>>,
     trained: bool,
+    /// Whether `raw` holds the last detection's samples.
+    detected: bool,
+    /// Scratch of [`ScaleFilter::train_detected`].
+    moved: Vec<f32>,
 }
 
 impl std::fmt::Debug for ScaleFilter {
@@ -566,6 +570,8 @@ impl ScaleFilter {
             resp: vec![C32::default(); s],
             fd,
             trained: false,
+            detected: false,
+            moved: Vec::new(),
         })
     }
 
@@ -680,6 +686,73 @@ impl ScaleFilter {
         rate: f64,
     ) -> Result<()> {
         self.sample_raw(sampler, cx, cy, scale)?;
+        self.detected = false;
+        self.learn_raw(rate);
+        Ok(())
+    }
+
+    /// [`ScaleFilter::train`] without sampling: learns the samples of the
+    /// last detection ([`ScaleFilter::detect`], [`ScaleFilter::respond`])
+    /// as those of a target `moved` (natural log of the scale) from the
+    /// detection's scale, each scale's features interpolated linearly
+    /// between the two sampled scales around its own log-scale plus
+    /// `moved` (the end scales beyond the sampled range); the position is
+    /// the detection's. A cheaper update than sampling the frame again
+    /// (the scale filter's half of ECO's reuse of the detection's
+    /// features; fDSST itself samples again).
+    ///
+    /// # Errors
+    /// [`DcfError::InvalidParameter`] for a `moved` that is not finite or
+    /// when the samples held are not a detection's (none yet, or a
+    /// training's since).
+    pub fn train_detected(&mut self, moved: f64, rate: f64) -> Result<()> {
+        if !moved.is_finite() {
+            return Err(DcfError::InvalidParameter {
+                name: "scale move",
+                value: moved,
+                reason: "must be finite",
+            });
+        }
+        if !self.detected {
+            return Err(DcfError::InvalidParameter {
+                name: "scale samples",
+                value: 0.0,
+                reason: "are not a detection's (none since the last training)",
+            });
+        }
+        let s = self.config.scales;
+        let dims = self.hog.len();
+        // the log-scales are evenly spaced: sample n at fractional index
+        // n + moved / spacing
+        let spacing = if s > 1 {
+            (self.factors[1] / self.factors[0]).ln()
+        } else {
+            1.0
+        };
+        let shift = if s > 1 { moved / spacing } else { 0.0 };
+        self.moved.resize(s * dims, 0.0);
+        for (n, out) in self.moved.chunks_exact_mut(dims).enumerate() {
+            let at = (n as f64 + shift).clamp(0.0, (s - 1) as f64);
+            let lo = (at.floor() as usize).min(s - 1);
+            let hi = (lo + 1).min(s - 1);
+            let f = (at - lo as f64) as f32;
+            let (a, b) = (
+                &self.raw[lo * dims..][..dims],
+                &self.raw[hi * dims..][..dims],
+            );
+            for ((o, &a), &b) in out.iter_mut().zip(a).zip(b) {
+                *o = a + f * (b - a);
+            }
+        }
+        std::mem::swap(&mut self.raw, &mut self.moved);
+        self.detected = false;
+        self.learn_raw(rate);
+        Ok(())
+    }
+
+    /// The model learns the samples in `raw` with `rate` (the first
+    /// training takes them whole).
+    fn learn_raw(&mut self, rate: f64) {
         if let Some(fd) = self.fd.as_mut() {
             let r = if self.trained { rate } else { 1.0 };
             fd.learn(&self.raw, self.hog.len(), r);
@@ -697,7 +770,6 @@ impl ScaleFilter {
             });
         }
         self.trained = true;
-        Ok(())
     }
 
     /// The scale change at `(cx, cy)` from `scale`: the relative factor of
@@ -718,6 +790,7 @@ impl ScaleFilter {
             return Err(DcfError::NotInitialised);
         }
         self.sample_raw(sampler, cx, cy, scale)?;
+        self.detected = true;
         if let Some(fd) = self.fd.as_mut() {
             return fd.detect(&self.raw, self.hog.len(), &self.config);
         }
@@ -997,6 +1070,50 @@ mod tests {
         let mut s1 = sampler(1.04);
         let (factor, _) = f.detect(&mut s1, 79.5, 59.5, 1.04).unwrap();
         assert!((factor - 1.0).abs() < 0.02, "{factor}");
+    }
+
+    /// `train_detected` with no move learns what `train` at the
+    /// detection's centre and scale learns, bit for bit (DSST and fDSST);
+    /// following a blob that grows 1.5 % a frame for 40 frames (to 1.81x)
+    /// while learning from the detections moved to each estimate (fDSST,
+    /// its rate 0.025), the scale stays within 0.6 steps of the truth on
+    /// every frame (measured: at most 0.30 steps; 0.31 sampling again);
+    /// with the move's sign flipped (the mutation) it drifts 2.17 steps
+    /// off. Bad input is an error.
+    #[test]
+    fn learning_from_the_detection_follows_a_zoom() {
+        for config in [ScaleConfig::default(), ScaleConfig::fdsst()] {
+            let mut a = ScaleFilter::new(config, 40.0, 28.0).unwrap();
+            a.train(&mut sampler(1.0), 79.5, 59.5, 1.0, 0.025).unwrap();
+            let mut b = a.clone();
+            assert!(b.train_detected(0.0, 0.025).is_err(), "no detection yet");
+            let mut s1 = sampler(1.03);
+            a.detect(&mut s1, 79.5, 59.5, 1.01).unwrap();
+            a.train(&mut s1, 79.5, 59.5, 1.01, 0.025).unwrap();
+            b.detect(&mut s1, 79.5, 59.5, 1.01).unwrap();
+            b.train_detected(0.0, 0.025).unwrap();
+            assert!(b.train_detected(0.0, 0.025).is_err(), "used already");
+            let mut s2 = sampler(1.06);
+            let (mut ra, mut rb) = (ScaleResponse::default(), ScaleResponse::default());
+            a.respond(&mut s2, 79.5, 59.5, 1.02, &mut ra).unwrap();
+            b.respond(&mut s2, 79.5, 59.5, 1.02, &mut rb).unwrap();
+            assert_eq!(ra, rb, "{config:?}");
+            assert!(b.train_detected(f64::NAN, 0.025).is_err());
+        }
+        let mut f = ScaleFilter::new(ScaleConfig::fdsst(), 40.0, 28.0).unwrap();
+        f.train(&mut sampler(1.0), 79.5, 59.5, 1.0, 1.0).unwrap();
+        let mut s = 1.0f64;
+        for k in 1..=40 {
+            let z = 1.015f64.powi(k);
+            let (factor, _) = f.detect(&mut sampler(z), 79.5, 59.5, s).unwrap();
+            s *= factor;
+            f.train_detected(factor.ln(), 0.025).unwrap();
+            let steps = (s.ln() - z.ln()).abs() / 1.02f64.ln();
+            assert!(
+                steps < 0.6,
+                "frame {k}: scale {s:.4}, truth {z:.4}: {steps:.2} steps"
+            );
+        }
     }
 
     /// `respond` gives `detect`'s factor and peak bit for bit (on two

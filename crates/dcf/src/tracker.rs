@@ -9,7 +9,7 @@ use crate::colour::ColourModel;
 use crate::confidence::{ApceGate, PSR_EXCLUDE, apce, psr};
 use crate::error::{DcfError, Result};
 use crate::features::{Fhog, HOG_CHANNELS};
-use crate::fft::next_smooth;
+use crate::fft::{C32, next_smooth};
 use crate::kcf::{KcfModel, Kernel, cosine_window, subcell_peak};
 use crate::sample::{PatchSampler, Region};
 use crate::scale::{ScaleConfig, ScaleFilter};
@@ -822,6 +822,58 @@ impl Dcf {
             .as_mut()
             .ok_or(DcfError::NotInitialised)?
             .train(&self.features, lr)?;
+        self.learn_scale(centre, scale, rate)
+    }
+
+    /// The last response's features ([`Dcf::detect`], [`Dcf::detect_cut`])
+    /// as their spectra, copied into `into` for [`Dcf::update_detected`].
+    ///
+    /// # Errors
+    /// [`DcfError::NotInitialised`] before [`Dcf::init`].
+    pub fn keep_detected(&self, into: &mut Vec<C32>) -> Result<()> {
+        let model = self.model.as_ref().ok_or(DcfError::NotInitialised)?;
+        into.clear();
+        into.extend_from_slice(model.detected());
+        Ok(())
+    }
+
+    /// [`Dcf::update`] from features already computed: `kept`
+    /// ([`Dcf::keep_detected`]) of a window centred at `window` at `scale`,
+    /// moved so that `centre` is learnt at the window's centre
+    /// ([`KcfModel::train_moved`]: ECO's reuse of the detection's
+    /// features). A scale filter, if any, learns at `centre` and `scale`
+    /// from the loaded frame as in [`Dcf::update`].
+    ///
+    /// # Errors
+    /// As [`Dcf::update`]; [`DcfError::Size`] for kept spectra of another
+    /// size.
+    pub fn update_detected(
+        &mut self,
+        kept: &[C32],
+        window: (f64, f64),
+        scale: f64,
+        centre: (f64, f64),
+        rate: f64,
+    ) -> Result<()> {
+        if !(0.0..=1.0).contains(&rate) {
+            return Err(DcfError::InvalidParameter {
+                name: "rate",
+                value: rate,
+                reason: "must be in [0, 1]",
+            });
+        }
+        let (px, py) = self.cell_pixels(scale);
+        let moved = ((centre.0 - window.0) / px, (centre.1 - window.1) / py);
+        let lr = self.config.learning_rate * rate;
+        self.model
+            .as_mut()
+            .ok_or(DcfError::NotInitialised)?
+            .train_moved(kept, moved, lr)?;
+        self.learn_scale(centre, scale, rate)
+    }
+
+    /// The scale filter's share of an update (nothing without one).
+    fn learn_scale(&mut self, centre: (f64, f64), scale: f64, rate: f64) -> Result<()> {
         if let (Some(f), Some(sc)) = (self.scale_filter.as_mut(), self.config.scale) {
             f.train(
                 &mut self.sampler,
