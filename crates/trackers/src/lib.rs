@@ -47,8 +47,8 @@ pub use multi_target::{
 };
 pub use ncc_scale::{NccScaleConfig, NccScaleCore, NccScaleTracker};
 pub use pf_dcf::{
-    OuterScales, PfDcfConfig, PfDcfCore, PfDcfDiagnostics, PfDcfTracker, RedetectFeatures,
-    UpdateFeatures,
+    LookScale, OuterScales, PfDcfConfig, PfDcfCore, PfDcfDiagnostics, PfDcfTracker,
+    RedetectFeatures, UpdateFeatures,
 };
 pub use registry::{REGISTRY, TrackerInfo, build_tracker, tracker_info};
 pub use shell::{ChannelPolicy, InitialBox, Needs, PlaneBuffers, Planes, Shell, TrackerCore};
