@@ -43,3 +43,17 @@ pub enum DcfError {
 
 /// Shorthand for results of this crate.
 pub type Result<T, E = DcfError> = std::result::Result<T, E>;
+
+/// `Ok` for a `rate` in `[0, 1]`, else [`DcfError::InvalidParameter`]
+/// naming it `name` (a NaN is outside).
+pub(crate) fn check_rate(name: &'static str, rate: f64) -> Result<()> {
+    if (0.0..=1.0).contains(&rate) {
+        Ok(())
+    } else {
+        Err(DcfError::InvalidParameter {
+            name,
+            value: rate,
+            reason: "must be in [0, 1]",
+        })
+    }
+}

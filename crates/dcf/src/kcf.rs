@@ -12,7 +12,7 @@
 use bayestrack_image::simd::{Kernel as SimdKernel, SimdLevel, Token, dispatch};
 
 use crate::confidence::sum_in_order;
-use crate::error::{DcfError, Result};
+use crate::error::{DcfError, Result, check_rate};
 use crate::fft::{C32, Fft2};
 
 /// The Hann window of length `n` as KCF builds it (`hann(n)` of MATLAB:
@@ -587,13 +587,7 @@ impl KcfModel {
     /// [`DcfError::Size`] for features of another size;
     /// [`DcfError::InvalidParameter`] for a rate outside `[0, 1]`.
     pub fn train(&mut self, features: &[f32], rate: f64) -> Result<()> {
-        if !(0.0..=1.0).contains(&rate) {
-            return Err(DcfError::InvalidParameter {
-                name: "learning rate",
-                value: rate,
-                reason: "must be in [0, 1]",
-            });
-        }
+        check_rate("learning rate", rate)?;
         let zz = self.corr.transform(features, &mut self.zf)?;
         self.learn(zz, rate)
     }
@@ -620,13 +614,7 @@ impl KcfModel {
     /// [`DcfError::InvalidParameter`] for a rate outside `[0, 1]` or a
     /// move that is not finite.
     pub fn train_moved(&mut self, zf: &[C32], moved: (f64, f64), rate: f64) -> Result<()> {
-        if !(0.0..=1.0).contains(&rate) {
-            return Err(DcfError::InvalidParameter {
-                name: "learning rate",
-                value: rate,
-                reason: "must be in [0, 1]",
-            });
-        }
+        check_rate("learning rate", rate)?;
         if !(moved.0.is_finite() && moved.1.is_finite()) {
             return Err(DcfError::InvalidParameter {
                 name: "move",

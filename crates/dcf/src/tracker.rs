@@ -7,7 +7,7 @@ use bayestrack_image::simd::{Kernel as SimdKernel, Token, dispatch};
 
 use crate::colour::ColourModel;
 use crate::confidence::{ApceGate, PSR_EXCLUDE, apce, psr};
-use crate::error::{DcfError, Result};
+use crate::error::{DcfError, Result, check_rate};
 use crate::features::{Fhog, HOG_CHANNELS};
 use crate::fft::{C32, next_smooth};
 use crate::kcf::{KcfModel, Kernel, cosine_window, subcell_peak};
@@ -809,13 +809,7 @@ impl Dcf {
     /// [`DcfError::NotInitialised`]; [`DcfError::InvalidParameter`] for a
     /// rate outside `[0, 1]`.
     pub fn update(&mut self, centre: (f64, f64), scale: f64, rate: f64) -> Result<()> {
-        if !(0.0..=1.0).contains(&rate) {
-            return Err(DcfError::InvalidParameter {
-                name: "rate",
-                value: rate,
-                reason: "must be in [0, 1]",
-            });
-        }
+        check_rate("rate", rate)?;
         self.extract(centre, scale)?;
         let lr = self.config.learning_rate * rate;
         self.model
@@ -855,13 +849,7 @@ impl Dcf {
         centre: (f64, f64),
         rate: f64,
     ) -> Result<()> {
-        if !(0.0..=1.0).contains(&rate) {
-            return Err(DcfError::InvalidParameter {
-                name: "rate",
-                value: rate,
-                reason: "must be in [0, 1]",
-            });
-        }
+        check_rate("rate", rate)?;
         let (px, py) = self.cell_pixels(scale);
         let moved = ((centre.0 - window.0) / px, (centre.1 - window.1) / py);
         let lr = self.config.learning_rate * rate;

@@ -1148,6 +1148,11 @@ impl PfDcfCore {
         // with `OuterScales::BestWindow`, the middle scale at every window
         // first and the outer two at the best one after
         let cascade = wide && nl == 3 && c.redetect_outer == OuterScales::BestWindow;
+        // a tracked frame keeps each level's features for the update
+        let keep_features = !wide && c.update_features == UpdateFeatures::Detection;
+        if keep_features {
+            self.kept.resize_with(nl, Vec::new);
+        }
         let first = if cascade { 1..2 } else { 0..nl };
         let mut best_k = 0;
         for j in 0..g {
@@ -1169,8 +1174,7 @@ impl PfDcfCore {
                         best_k = k;
                     }
                     self.diagnostics.responses += 1;
-                    if !wide && c.update_features == UpdateFeatures::Detection {
-                        self.kept.resize_with(nl, Vec::new);
+                    if keep_features {
                         self.dcf.keep_detected(&mut self.kept[l])?;
                     }
                 }
@@ -1539,6 +1543,10 @@ impl TrackerCore for PfDcfCore {
         // the gate would learn it, the particles restart there
         let found = if wide {
             let (mut found, mut tried, mut at) = (None, 0u128, best.at);
+            // with `redetect_scale`, each look at the scale filter's
+            // estimate there (or, `admitted`, at the last learnt scale, the
+            // estimate measured only where the look is admitted)
+            let after = c.redetect_scale_at == LookScale::Admitted;
             for look in 0..c.redetect_looks {
                 if look > 0 {
                     match self.next_look(best.at, &mut tried) {
@@ -1546,10 +1554,6 @@ impl TrackerCore for PfDcfCore {
                         None => break,
                     }
                 }
-                // with `redetect_scale`, at the scale filter's estimate there
-                // (or, `admitted`, at the last learnt scale, the estimate
-                // measured only where the look is admitted)
-                let after = c.redetect_scale_at == LookScale::Admitted;
                 let mut ls = pl;
                 if c.redetect_scale && !after {
                     ls = self.look_scale(frame, at, pl)?;
