@@ -2,7 +2,7 @@
 //! metrics: the set on which a tracker parameter is chosen (never on the
 //! three real sequences, which only report it).
 //!
-//! Seven stresses, each rendered in colour and as a gray variant (the
+//! Nine stresses, each rendered in colour and as a gray variant (the
 //! colour frame converted with BT.601 before the sensor noise), 320x240 at
 //! 30 fps, 120 frames by default:
 //!
@@ -15,6 +15,8 @@
 //! | `illumination` | a global gain ramp 1 -> 0.5 -> 1 -> 1.5 -> 1 with an offset, and a soft moving shadow (gain 0.35) that crosses the target |
 //! | `clutter` | four distractors of the target's colour and texture family (same base colour, same texture statistics, another texture), one crossing just behind the target |
 //! | `mixed` | moderate motion, scale 0.7x-1.4x, a pole, a gain ramp down to 0.6, two distractors |
+//! | `deformation` | non-rigid: the aspect swings 0.76x-1.32x in width (height inversely, three times) while two travelling waves displace the texture by up to 3 px inside the box |
+//! | `out-of-plane` | the target is a lit cylinder turning up to 80 degrees either way about its vertical axis (one and a half swings): the side first seen shrinks to a sliver, texture never seen turns into view |
 //!
 //! The gray variants are named `<sequence>-gray`. Every sequence is a
 //! [`StressScene`] (a [`SceneStream`] like the paper scenes), so
@@ -69,7 +71,7 @@ use crate::scenes::{
     scene_rng, streams,
 };
 
-pub use plan::FramePlan;
+pub use plan::{FramePlan, Look};
 pub use report::{SweepRow, stress_table, sweep_table};
 pub use write::{MANIFEST_FILE, SetSummary, write_set};
 
@@ -96,11 +98,15 @@ pub enum Stress {
     Clutter,
     /// Several stresses at once, milder.
     Mixed,
+    /// Non-rigid: the texture warps inside a box whose aspect changes.
+    Deformation,
+    /// The target is a cylinder that turns about its vertical axis.
+    OutOfPlane,
 }
 
 impl Stress {
     /// Every stress, in the set's order.
-    pub const ALL: [Stress; 7] = [
+    pub const ALL: [Stress; 9] = [
         Stress::PartialOcclusion,
         Stress::FullOcclusion,
         Stress::Scale,
@@ -108,6 +114,8 @@ impl Stress {
         Stress::Illumination,
         Stress::Clutter,
         Stress::Mixed,
+        Stress::Deformation,
+        Stress::OutOfPlane,
     ];
 
     /// The colour sequence's name (`partial-occlusion`, ...).
@@ -129,6 +137,8 @@ impl Stress {
             Stress::Illumination => ["illumination", "illumination-gray"],
             Stress::Clutter => ["clutter", "clutter-gray"],
             Stress::Mixed => ["mixed", "mixed-gray"],
+            Stress::Deformation => ["deformation", "deformation-gray"],
+            Stress::OutOfPlane => ["out-of-plane", "out-of-plane-gray"],
         }
     }
 

@@ -38,13 +38,39 @@ impl Shadow {
     }
 }
 
+/// How the target's texture is laid over its box in a frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Look {
+    /// The texture as it is, scaled with the box.
+    Rigid,
+    /// Non-rigid: the texture displaced inside the box by two travelling
+    /// waves (`amplitude` template pixels, at `phase`), the box's outline
+    /// unchanged (its aspect is the plan's).
+    Warp {
+        /// Phase of the waves, radians.
+        phase: f64,
+        /// Largest displacement, template pixels.
+        amplitude: f64,
+    },
+    /// A cylinder as wide as the box, turned `angle` radians about its
+    /// vertical axis: its texture wraps round it, the side facing the
+    /// camera is lit most.
+    Turn {
+        /// Turn from the first frame's pose, radians.
+        angle: f64,
+    },
+}
+
 /// The layout of one frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FramePlan {
     /// The target's extent.
     pub target: [f64; 4],
-    /// The target's scale (its size over [`TARGET_SIZE`]).
+    /// The target's scale (the geometric mean of its width and height
+    /// over [`TARGET_SIZE`]'s).
     pub scale: f64,
+    /// How its texture is laid over its box.
+    pub look: Look,
     /// Occluders in front of the target (never overlapping each other).
     pub occluders: Vec<[f64; 4]>,
     /// Distractors behind the target, each with the target's size at
@@ -63,7 +89,16 @@ pub struct FramePlan {
 
 /// Extent of a box of `size * scale` centred on `c`.
 fn extent(c: [f64; 2], scale: f64) -> [f64; 4] {
-    let (w, h) = (TARGET_SIZE[0] * scale, TARGET_SIZE[1] * scale);
+    extent_aspect(c, scale, 1.0)
+}
+
+/// Extent of a box of `size * scale` centred on `c`, its width times
+/// `aspect` and its height over it.
+fn extent_aspect(c: [f64; 2], scale: f64, aspect: f64) -> [f64; 4] {
+    let (w, h) = (
+        TARGET_SIZE[0] * scale * aspect,
+        TARGET_SIZE[1] * scale / aspect,
+    );
     [
         c[0] - w / 2.0,
         c[1] - h / 2.0,
@@ -78,6 +113,13 @@ pub(crate) fn overlap(a: [f64; 4], b: [f64; 4]) -> f64 {
     let h = (a[3].min(b[3]) - a[1].max(b[1])).max(0.0);
     w * h
 }
+
+/// The deformation's largest texture displacement, template pixels.
+const WARP_AMPLITUDE: f64 = 3.0;
+
+/// The out-of-plane turn's largest angle either way, radians (80 degrees:
+/// at the extremes the side first seen is a sliver at the edge).
+pub(crate) const TURN_ANGLE: f64 = 80.0 * PI / 180.0;
 
 /// The frame's extent.
 const FRAME: [f64; 4] = [-0.5, -0.5, WIDTH as f64 - 0.5, HEIGHT as f64 - 0.5];
@@ -121,6 +163,7 @@ pub(crate) fn plan(stress: Stress, frames: usize, seed: u64) -> Vec<FramePlan> {
             let mut p = FramePlan {
                 target: [0.0; 4],
                 scale: 1.0,
+                look: Look::Rigid,
                 occluders: Vec::new(),
                 distractors: Vec::new(),
                 gain: 1.0,
@@ -128,6 +171,7 @@ pub(crate) fn plan(stress: Stress, frames: usize, seed: u64) -> Vec<FramePlan> {
                 shadow: None,
                 visible_fraction: 1.0,
             };
+            let mut aspect = 1.0;
             let centre = match stress {
                 Stress::PartialOcclusion => {
                     p.occluders = vec![pole(118.0, 136.0), [200.0, 122.5, 300.0, FRAME[3]]];
@@ -186,8 +230,28 @@ pub(crate) fn plan(stress: Stress, frames: usize, seed: u64) -> Vec<FramePlan> {
                         120.0 + 45.0 * (tau + ph[1]).sin(),
                     ]
                 }
+                Stress::Deformation => {
+                    aspect = (0.4 * (3.0 * tau + ph[2]).sin()).exp2();
+                    p.look = Look::Warp {
+                        phase: 6.0 * tau + ph[3],
+                        amplitude: WARP_AMPLITUDE,
+                    };
+                    [
+                        160.0 + 80.0 * (tau + ph[0]).sin(),
+                        120.0 + 35.0 * (1.4 * tau + ph[1]).sin(),
+                    ]
+                }
+                Stress::OutOfPlane => {
+                    p.look = Look::Turn {
+                        angle: TURN_ANGLE * (1.5 * tau).sin(),
+                    };
+                    [
+                        160.0 + 80.0 * (tau + ph[0]).sin(),
+                        120.0 + 35.0 * (1.4 * tau + ph[1]).sin(),
+                    ]
+                }
             };
-            p.target = extent(centre, p.scale);
+            p.target = extent_aspect(centre, p.scale, aspect);
             p.visible_fraction = visible_fraction(p.target, &p.occluders);
             p
         })

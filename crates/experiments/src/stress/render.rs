@@ -4,7 +4,9 @@
 
 use bayestrack_image::Image;
 
-use super::plan::FramePlan;
+use std::f64::consts::PI;
+
+use super::plan::{FramePlan, Look};
 use super::{HEIGHT, KEY, Stress, TARGET_SIZE, WIDTH};
 use crate::scenes::render::{ValueNoise, blend, clipped_span, rect_cov, to_u8};
 use crate::scenes::{scene_rng, streams};
@@ -24,10 +26,15 @@ pub(crate) struct ObjectTexture {
     chroma: [ValueNoise; 3],
 }
 
+/// Radius of the turning cylinder at scale 1, template pixels.
+const TURN_RADIUS: f64 = TARGET_SIZE[0] / 2.0;
+
 impl ObjectTexture {
-    fn new(seed: u64, index: u64) -> Self {
+    /// The texture of object `index`, `w` template pixels wide (its box's
+    /// width, or a turning cylinder's circumference).
+    fn new(seed: u64, index: u64, w: f64) -> Self {
         let mut rng = scene_rng(seed, KEY, streams::LAYOUT, 1000 + index);
-        let [w, h] = TARGET_SIZE;
+        let h = TARGET_SIZE[1];
         Self {
             luminance: ValueNoise::new(w, h, 7.0, &mut rng),
             chroma: std::array::from_fn(|_| ValueNoise::new(w, h, 4.0, &mut rng)),
@@ -39,14 +46,48 @@ impl ObjectTexture {
     /// rim 1.5 px wide.
     #[inline]
     pub(crate) fn at(&self, u: f64, v: f64) -> [f64; 3] {
-        let l = 50.0 * self.luminance.at(u, v);
         let [w, h] = TARGET_SIZE;
         let rim = if u < 1.5 || v < 1.5 || u > w - 1.5 || v > h - 1.5 {
             0.6
         } else {
             1.0
         };
-        std::array::from_fn(|c| (TARGET_BASE[c] + l + 30.0 * self.chroma[c].at(u, v)) * rim)
+        self.shaded(u, v, rim)
+    }
+
+    /// The texture at `(u, v)` times `light`, without the rim.
+    #[inline]
+    fn shaded(&self, u: f64, v: f64, light: f64) -> [f64; 3] {
+        let l = 50.0 * self.luminance.at(u, v);
+        std::array::from_fn(|c| (TARGET_BASE[c] + l + 30.0 * self.chroma[c].at(u, v)) * light)
+    }
+
+    /// The colour at `(u, v)` of the box under `look`: the rim stays on
+    /// the box's outline, the texture under it warps or turns.
+    #[inline]
+    fn looked(&self, u: f64, v: f64, look: Look) -> [f64; 3] {
+        let [w, h] = TARGET_SIZE;
+        match look {
+            Look::Rigid => self.at(u, v),
+            Look::Warp { phase, amplitude } => {
+                let rim = if u < 1.5 || v < 1.5 || u > w - 1.5 || v > h - 1.5 {
+                    0.6
+                } else {
+                    1.0
+                };
+                let du = amplitude * (2.0 * PI * v / 22.0 + phase).sin();
+                let dv = amplitude * (2.0 * PI * u / 18.0 + 1.3 * phase).sin();
+                self.shaded(u + du, v + dv, rim)
+            }
+            Look::Turn { angle } => {
+                // the column's point on the cylinder, seen from the front
+                let s = ((u - TURN_RADIUS) / TURN_RADIUS).clamp(-1.0, 1.0);
+                let around = TURN_RADIUS * (s.asin() + angle + PI);
+                let lit = 0.45 + 0.55 * (1.0 - s * s).sqrt();
+                let rim = if v < 1.5 || v > h - 1.5 { 0.6 } else { 1.0 };
+                self.shaded(around, v, lit * rim)
+            }
+        }
     }
 }
 
@@ -83,17 +124,30 @@ impl Textures {
                 }
             }
         }
+        let width = if stress == Stress::OutOfPlane {
+            2.0 * PI * TURN_RADIUS
+        } else {
+            TARGET_SIZE[0]
+        };
         Self {
             background,
-            target: ObjectTexture::new(seed, key),
-            distractors: (1..=4).map(|i| ObjectTexture::new(seed, key + i)).collect(),
+            target: ObjectTexture::new(seed, key, width),
+            distractors: (1..=4)
+                .map(|i| ObjectTexture::new(seed, key + i, TARGET_SIZE[0]))
+                .collect(),
         }
     }
 }
 
-/// Paints `tex` over the extent `e` (scaled to it) into the RGB buffer.
-fn paint(buf: &mut [f32], e: [f64; 4], tex: &ObjectTexture) {
+/// Paints `tex` over the extent `e` (scaled to it) under `look` into the
+/// RGB buffer.
+fn paint(buf: &mut [f32], e: [f64; 4], tex: &ObjectTexture, look: Look) {
     let scale = (e[2] - e[0]) / TARGET_SIZE[0];
+    // a rigid box keeps its aspect: one scale for both axes
+    let scale_y = match look {
+        Look::Rigid => scale,
+        _ => (e[3] - e[1]) / TARGET_SIZE[1],
+    };
     for y in clipped_span(e[1], e[3], HEIGHT) {
         let yf = y as f64;
         for x in clipped_span(e[0], e[2], WIDTH) {
@@ -102,7 +156,7 @@ fn paint(buf: &mut [f32], e: [f64; 4], tex: &ObjectTexture) {
             if cov <= 0.0 {
                 continue;
             }
-            let col = tex.at((xf - e[0]) / scale, (yf - e[1]) / scale);
+            let col = tex.looked((xf - e[0]) / scale, (yf - e[1]) / scale_y, look);
             let px = &mut buf[(y * WIDTH + x) * 3..][..3];
             for (d, s) in px.iter_mut().zip(col) {
                 *d = blend(f64::from(*d), s, cov) as f32;
@@ -135,10 +189,10 @@ fn paint_occluder(buf: &mut [f32], e: [f64; 4]) {
 pub(crate) fn render(tex: &Textures, p: &FramePlan, hide_target: bool, out: &mut Image<u8>) {
     let mut buf = tex.background.clone();
     for (e, t) in p.distractors.iter().zip(&tex.distractors) {
-        paint(&mut buf, *e, t);
+        paint(&mut buf, *e, t, Look::Rigid);
     }
     if !hide_target {
-        paint(&mut buf, p.target, &tex.target);
+        paint(&mut buf, p.target, &tex.target, p.look);
     }
     for o in &p.occluders {
         paint_occluder(&mut buf, *o);
