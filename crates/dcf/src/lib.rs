@@ -33,5 +33,6 @@ mod tracker;
 
 pub use error::{DcfError, Result};
 pub use tracker::{
-    Dcf, DcfConfig, Padding, Response, SharedFeatures, SharedGrid, Staple, StapleConfig, Step,
+    ColourMerge, Dcf, DcfConfig, Padding, Response, SharedFeatures, SharedGrid, Staple,
+    StapleConfig, Step,
 };

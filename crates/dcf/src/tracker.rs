@@ -990,29 +990,39 @@ impl StapleConfig {
     /// [`DcfError::InvalidParameter`] naming the first bad one.
     pub fn validate(&self) -> Result<()> {
         self.dcf.validate()?;
-        for (name, v) in [
-            ("merge_factor", self.merge_factor),
-            ("colour_rate", self.colour_rate),
-            ("inner_padding", self.inner_padding),
-        ] {
-            if !(0.0..=1.0).contains(&v) {
-                return Err(DcfError::InvalidParameter {
-                    name,
-                    value: v,
-                    reason: "must be in [0, 1]",
-                });
-            }
-        }
-        Ok(())
+        check_colour(self.merge_factor, self.colour_rate, self.inner_padding)
     }
 }
 
-/// Staple (Bertinetto et al. 2016): [`Dcf`] with a colour-histogram
-/// response merged into the correlation response.
+/// The colour half's parameters, each in `[0, 1]`.
+fn check_colour(merge_factor: f64, colour_rate: f64, inner_padding: f64) -> Result<()> {
+    for (name, v) in [
+        ("merge_factor", merge_factor),
+        ("colour_rate", colour_rate),
+        ("inner_padding", inner_padding),
+    ] {
+        if !(0.0..=1.0).contains(&v) {
+            return Err(DcfError::InvalidParameter {
+                name,
+                value: v,
+                reason: "must be in [0, 1]",
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Staple's colour half (Bertinetto et al. 2016), for any [`Dcf`]:
+/// foreground and background colour histograms learnt over the filter's
+/// window, each pixel's object likelihood, its mean over the target's box
+/// at every cell displacement of the correlation response, and the two
+/// merged, `(1 - merge) cf + merge colour`. [`Staple`] drives one; so can
+/// any tracker that reads a [`Dcf`]'s responses.
 #[derive(Debug, Clone)]
-pub struct Staple {
-    config: StapleConfig,
-    dcf: Dcf,
+pub struct ColourMerge {
+    merge_factor: f64,
+    colour_rate: f64,
+    inner_padding: f64,
     colour: Option<ColourModel>,
     sampler: PatchSampler,
     planes: Vec<f32>,
@@ -1021,16 +1031,20 @@ pub struct Staple {
     merged: Response,
 }
 
-impl Staple {
-    /// A tracker model with `config`.
+impl ColourMerge {
+    /// The colour half with Staple's three parameters: the colour
+    /// response's weight in the merge (Staple: 0.3), the histograms'
+    /// learning rate (0.04) and the foreground's shrink as a fraction of
+    /// the target's mean side (0.2).
     ///
     /// # Errors
-    /// [`DcfError::InvalidParameter`] for a bad parameter.
-    pub fn new(config: StapleConfig) -> Result<Self> {
-        config.validate()?;
+    /// [`DcfError::InvalidParameter`] for a parameter outside `[0, 1]`.
+    pub fn new(merge_factor: f64, colour_rate: f64, inner_padding: f64) -> Result<Self> {
+        check_colour(merge_factor, colour_rate, inner_padding)?;
         Ok(Self {
-            dcf: Dcf::new(config.dcf)?,
-            config,
+            merge_factor,
+            colour_rate,
+            inner_padding,
             colour: None,
             sampler: PatchSampler::new(),
             planes: Vec::new(),
@@ -1040,30 +1054,20 @@ impl Staple {
         })
     }
 
-    /// The correlation filter.
-    pub fn dcf(&self) -> &Dcf {
-        &self.dcf
-    }
-
     /// The last merged response.
     pub fn response(&self) -> &Response {
         &self.merged
     }
 
-    /// Starts on `frame` (gray or RGB: the colour model reads it as given,
-    /// the correlation filter its gray levels).
+    /// Starts with `dcf` (already started on `frame`, gray or RGB: the
+    /// histograms read it as given): learns the histograms at the target.
     ///
     /// # Errors
-    /// As [`Dcf::init`]; a frame of another channel count than 1 or 3.
-    pub fn init(
-        &mut self,
-        frame: ImageView<'_, u8>,
-        centre: (f64, f64),
-        size: (f64, f64),
-    ) -> Result<()> {
-        self.dcf.init(frame, centre, size)?;
+    /// [`DcfError::NotInitialised`] for a `dcf` not started; a frame of
+    /// another channel count than 1 or 3.
+    pub fn init(&mut self, frame: ImageView<'_, u8>, dcf: &Dcf) -> Result<()> {
         self.colour = Some(ColourModel::new(frame.channels())?);
-        let g = self.dcf.geometry.ok_or(DcfError::NotInitialised)?;
+        let g = dcf.geometry.ok_or(DcfError::NotInitialised)?;
         self.planes = vec![0.0; frame.channels() * g.pw * g.ph];
         self.map = vec![0.0; g.pw * g.ph];
         self.scores = vec![0.0; g.nx * g.ny];
@@ -1074,12 +1078,34 @@ impl Staple {
             ..Response::default()
         };
         self.sampler.load(frame)?;
-        self.learn_colour(centre, 1.0, 1.0)
+        self.learn_at(dcf, dcf.centre(), 1.0, 1.0)
     }
 
-    /// Samples the colour patch around `centre` at `scale`.
-    fn colour_patch(&mut self, centre: (f64, f64), scale: f64) -> Result<Geometry> {
-        let g = self.dcf.geometry.ok_or(DcfError::NotInitialised)?;
+    /// Loads the pixels of `frame` that the window of `dcf` at `centre`,
+    /// `scale` reads, grown by `margin` pixels (the whole frame where the
+    /// window reads nothing).
+    ///
+    /// # Errors
+    /// [`DcfError::NotInitialised`]; a frame of another channel count.
+    pub fn load(
+        &mut self,
+        frame: ImageView<'_, u8>,
+        dcf: &Dcf,
+        centre: (f64, f64),
+        scale: f64,
+        margin: usize,
+    ) -> Result<()> {
+        let g = dcf.geometry.ok_or(DcfError::NotInitialised)?;
+        let (fw, fh) = (frame.width(), frame.height());
+        let r = g
+            .region(fw, fh, centre, scale)
+            .map_or(Region::whole(fw, fh), |r| r.grown(margin, fw, fh));
+        self.sampler.load_region(frame, r)
+    }
+
+    /// Samples the colour patch of `dcf`'s window at `centre`, `scale`.
+    fn patch(&mut self, dcf: &Dcf, centre: (f64, f64), scale: f64) -> Result<Geometry> {
+        let g = dcf.geometry.ok_or(DcfError::NotInitialised)?;
         let (x0, y0, sx, sy) = g.origin(centre, scale);
         let (w, h) = (self.sampler.width(), self.sampler.height());
         if let Some(r) = g.region(w, h, centre, scale)
@@ -1102,11 +1128,11 @@ impl Staple {
         )
     }
 
-    fn learn_colour(&mut self, centre: (f64, f64), scale: f64, rate: f64) -> Result<()> {
-        let g = self.colour_patch(centre, scale)?;
+    fn learn_at(&mut self, dcf: &Dcf, centre: (f64, f64), scale: f64, rate: f64) -> Result<()> {
+        let g = self.patch(dcf, centre, scale)?;
         let (bw, bh) = Self::target_box(&g);
         let (x0, y0) = ((g.pw - bw) / 2, (g.ph - bh) / 2);
-        let shrink = (self.config.inner_padding * (bw + bh) as f64 / 2.0).round() as usize;
+        let shrink = (self.inner_padding * (bw + bh) as f64 / 2.0).round() as usize;
         let colour = self.colour.as_mut().ok_or(DcfError::NotInitialised)?;
         colour.learn(
             &self.planes,
@@ -1114,8 +1140,119 @@ impl Staple {
             g.ph,
             (x0, y0, x0 + bw, y0 + bh),
             shrink.min(bw.min(bh).saturating_sub(1) / 2),
-            self.config.colour_rate * rate,
+            self.colour_rate * rate,
         )
+    }
+
+    /// The histograms learn the target at `centre`, `scale` (at `rate`
+    /// times their learning rate), loading the pixels they read unless
+    /// loaded.
+    ///
+    /// # Errors
+    /// [`DcfError::NotInitialised`].
+    pub fn learn(
+        &mut self,
+        frame: ImageView<'_, u8>,
+        dcf: &Dcf,
+        centre: (f64, f64),
+        scale: f64,
+        rate: f64,
+    ) -> Result<()> {
+        let g = dcf.geometry.ok_or(DcfError::NotInitialised)?;
+        let (fw, fh) = (frame.width(), frame.height());
+        let r = g
+            .region(fw, fh, centre, scale)
+            .unwrap_or(Region::whole(fw, fh));
+        if !self.sampler.holds(&r) {
+            self.sampler.load_region(frame, r)?;
+        }
+        self.learn_at(dcf, centre, scale, rate)
+    }
+
+    /// The response `dcf` computed last (its window at `centre`, `scale`)
+    /// merged with the colour score of the same displacements: peak,
+    /// displacement and APCE of the merge.
+    ///
+    /// # Errors
+    /// [`DcfError::NotInitialised`]; the window reads outside the loaded
+    /// region ([`ColourMerge::load`]); a non-finite merge.
+    pub fn merge(&mut self, dcf: &Dcf, centre: (f64, f64), scale: f64) -> Result<&Response> {
+        let g = self.patch(dcf, centre, scale)?;
+        let colour = self.colour.as_mut().ok_or(DcfError::NotInitialised)?;
+        colour.likelihood(&self.planes[..], g.pw, g.ph, &mut self.map)?;
+        let (bw, bh) = Self::target_box(&g);
+        colour.box_scores(
+            &self.map,
+            g.pw,
+            g.ph,
+            (bw, bh),
+            (g.nx, g.ny, dcf.config.cell),
+            &mut self.scores,
+        )?;
+        let m = self.merge_factor as f32;
+        for ((o, &cf), &p) in self
+            .merged
+            .data
+            .iter_mut()
+            .zip(&dcf.response.data)
+            .zip(&self.scores)
+        {
+            *o = (1.0 - m) * cf + m * p;
+        }
+        self.merged.px = dcf.response.px;
+        self.merged.finish()?;
+        Ok(&self.merged)
+    }
+}
+
+/// Staple (Bertinetto et al. 2016): [`Dcf`] with a colour-histogram
+/// response merged into the correlation response ([`ColourMerge`]).
+#[derive(Debug, Clone)]
+pub struct Staple {
+    dcf: Dcf,
+    colour: ColourMerge,
+}
+
+impl Staple {
+    /// A tracker model with `config`.
+    ///
+    /// # Errors
+    /// [`DcfError::InvalidParameter`] for a bad parameter.
+    pub fn new(config: StapleConfig) -> Result<Self> {
+        config.validate()?;
+        Ok(Self {
+            dcf: Dcf::new(config.dcf)?,
+            colour: ColourMerge::new(
+                config.merge_factor,
+                config.colour_rate,
+                config.inner_padding,
+            )?,
+        })
+    }
+
+    /// The correlation filter.
+    pub fn dcf(&self) -> &Dcf {
+        &self.dcf
+    }
+
+    /// The last merged response.
+    pub fn response(&self) -> &Response {
+        self.colour.response()
+    }
+
+    /// Starts on `frame` (gray or RGB: the colour model reads it as given,
+    /// the correlation filter its gray levels).
+    ///
+    /// # Errors
+    /// As [`Dcf::init`]; a frame of another channel count than 1 or 3.
+    pub fn init(
+        &mut self,
+        frame: ImageView<'_, u8>,
+        centre: (f64, f64),
+        size: (f64, f64),
+    ) -> Result<()> {
+        self.dcf.init(frame, centre, size)?;
+        self.colour.init(frame, &self.dcf)
     }
 
     /// One frame: the merged response gives the centre, DSST the scale;
@@ -1135,39 +1272,13 @@ impl Staple {
             .load_gray_region(frame, first.unwrap_or(whole))?;
         // the colour patches: the window now and after the update
         let growth = self.dcf.plan_growth();
-        let g = self.dcf.geometry.ok_or(DcfError::NotInitialised)?;
         let margin = self.dcf.motion.ceil() as usize + 4;
-        let colour = g
-            .region(fw, fh, c, s * growth)
-            .map(|r| r.grown(margin, fw, fh));
-        self.sampler.load_region(frame, colour.unwrap_or(whole))?;
+        self.colour.load(frame, &self.dcf, c, s * growth, margin)?;
         let r = self.dcf.detect(c, s)?;
         let (cf_peak, cf_apce) = (r.max as f64, r.apce);
-        let g = self.colour_patch(c, s)?;
-        let colour = self.colour.as_mut().ok_or(DcfError::NotInitialised)?;
-        colour.likelihood(&self.planes[..], g.pw, g.ph, &mut self.map)?;
-        let (bw, bh) = Self::target_box(&g);
-        colour.box_scores(
-            &self.map,
-            g.pw,
-            g.ph,
-            (bw, bh),
-            (g.nx, g.ny, self.dcf.config.cell),
-            &mut self.scores,
-        )?;
-        let m = self.config.merge_factor as f32;
-        for ((o, &cf), &p) in self
-            .merged
-            .data
-            .iter_mut()
-            .zip(&self.dcf.response.data)
-            .zip(&self.scores)
-        {
-            *o = (1.0 - m) * cf + m * p;
-        }
-        self.merged.px = self.dcf.response.px;
-        self.merged.finish()?;
-        let (dx, dy) = (self.merged.dx, self.merged.dy);
+        let merged = self.colour.merge(&self.dcf, c, s)?;
+        let (dx, dy, peak, psr, apce) =
+            (merged.dx, merged.dy, merged.max, merged.psr(), merged.apce);
         let centre = self.dcf.clamp_centre((c.0 + dx, c.1 + dy));
         if let Some(f) = &self.dcf.scale_filter
             && f.region(fw, fh, centre.0, centre.1, s)
@@ -1182,11 +1293,7 @@ impl Staple {
             let update = self.dcf.needs(fw, fh, centre, scale);
             ensure_gray(&mut self.dcf.sampler, frame, update)?;
             self.dcf.update(centre, scale, 1.0)?;
-            let r = g.region(fw, fh, centre, scale).unwrap_or(whole);
-            if !self.sampler.holds(&r) {
-                self.sampler.load_region(frame, r)?;
-            }
-            self.learn_colour(centre, scale, 1.0)?;
+            self.colour.learn(frame, &self.dcf, centre, scale, 1.0)?;
         }
         self.dcf.motion = (centre.0 - c.0).abs().max((centre.1 - c.1).abs());
         self.dcf.centre = centre;
@@ -1195,9 +1302,9 @@ impl Staple {
             centre,
             scale,
             size: self.dcf.size(),
-            peak: self.merged.max,
-            psr: self.merged.psr(),
-            apce: self.merged.apce,
+            peak,
+            psr,
+            apce,
             updated,
         })
     }

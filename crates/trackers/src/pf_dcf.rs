@@ -173,7 +173,7 @@ use bayestrack_dcf::confidence::ApceGate;
 use bayestrack_dcf::fft::C32;
 use bayestrack_dcf::sample::{PatchSampler, Region};
 use bayestrack_dcf::scale::{ScaleConfig, ScaleFilter, ScaleResponse};
-use bayestrack_dcf::{Dcf, DcfConfig, Response, SharedFeatures, SharedGrid};
+use bayestrack_dcf::{ColourMerge, Dcf, DcfConfig, Response, SharedFeatures, SharedGrid};
 use bayestrack_image::{BBox, ImageView};
 use bayestrack_options::{choice, options};
 use bayestrack_particle::{ParticleSet, Proposal, Resampling, Smc, stream_seed};
@@ -406,6 +406,22 @@ options! {
         /// the 0.005 a cheaper variant may lose (docs/results.md, "the
         /// scale filter learning from its detection").
         pub update_scale: UpdateFeatures = UpdateFeatures::Detection;
+        /// Weight of Staple's colour score in the tracking response, in
+        /// `[0, 1]` (0: none; Staple's published merge factor is 0.3):
+        /// the particles read `(1 - w) cf + w colour`, where `colour` is
+        /// the mean object likelihood of the colour histograms (learnt
+        /// as Staple learns them, at `colour_rate`, from the target's box
+        /// shrunk by `inner_padding`) over the target's box at each
+        /// displacement ([`bayestrack_dcf::ColourMerge`]); the gate still
+        /// reads the correlation response alone, as Staple's does. The
+        /// lost search and its second looks read the correlation
+        /// response alone.
+        pub colour_merge: f64 = 0.0;
+        /// Learning rate of the colour histograms (Staple: 0.04).
+        pub colour_rate: f64 = 0.04;
+        /// Foreground shrink per mean side of the colour histograms'
+        /// target box (Staple's inner padding: 0.2).
+        pub inner_padding: f64 = 0.2;
     }
     groups {
         /// The correlation filter (KCF's published values).
@@ -996,6 +1012,8 @@ pub struct PfDcfCore {
     /// The spectra of each tracking level's features
     /// ([`PfDcfConfig::update_features`] `detection`).
     kept: Vec<Vec<C32>>,
+    /// Staple's colour score ([`PfDcfConfig::colour_merge`] above 0).
+    colour: Option<ColourMerge>,
     diagnostics: PfDcfDiagnostics,
 }
 
@@ -1038,6 +1056,7 @@ impl PfDcfCore {
             scale_response: ScaleResponse::default(),
             scale_peaks: (0.0, 0),
             kept: Vec::new(),
+            colour: None,
             diagnostics: PfDcfDiagnostics::default(),
         })
     }
@@ -1142,9 +1161,15 @@ impl PfDcfCore {
         )?;
         let mut best = Best {
             peak: f64::NEG_INFINITY,
-            apce: 0.0,
             at: centre,
+            gate: (0.0, 0.0),
         };
+        // the colour score's pixels: the one window at its largest scale
+        let merge = !wide && self.colour.is_some();
+        if let Some(m) = self.colour.as_mut().filter(|_| merge) {
+            let top = levels.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            m.load(frame, &self.dcf, window(0, 0), top.exp(), 0)?;
+        }
         // with `OuterScales::BestWindow`, the middle scale at every window
         // first and the outer two at the best one after
         let cascade = wide && nl == 3 && c.redetect_outer == OuterScales::BestWindow;
@@ -1169,9 +1194,16 @@ impl PfDcfCore {
                     continue;
                 }
                 for l in first.clone() {
-                    let resp = self.dcf.detect(wc, r.levels[l].exp())?;
+                    let ls = r.levels[l].exp();
+                    let resp = self.dcf.detect(wc, ls)?;
+                    let cf = (resp.max as f64, resp.apce);
+                    let resp = match self.colour.as_mut().filter(|_| merge) {
+                        Some(m) => m.merge(&self.dcf, wc, ls)?,
+                        None => self.dcf.response(),
+                    };
                     if keep(&mut r.maps[k * nl + l], &mut best, wc, resp, l == nl / 2) {
                         best_k = k;
+                        best.gate = cf;
                     }
                     self.diagnostics.responses += 1;
                     if keep_features {
@@ -1304,8 +1336,8 @@ impl PfDcfCore {
             .load_shared(frame, (0..nl).map(|l| grid(l, offsets, levels)))?;
         let mut best = Best {
             peak: f64::NEG_INFINITY,
-            apce: 0.0,
             at: centre,
+            gate: (0.0, 0.0),
         };
         for l in 0..nl {
             let sg = grid(l, &self.offsets, &r.levels);
@@ -1387,8 +1419,8 @@ impl PfDcfCore {
         self.diagnostics.responses += 1;
         Ok(Best {
             peak: resp.max as f64,
-            apce: resp.apce,
             at: (at.0 + resp.dx, at.1 + resp.dy),
+            gate: (resp.max as f64, resp.apce),
         })
     }
 }
@@ -1409,8 +1441,8 @@ fn keep(m: &mut Map, best: &mut Best, wc: (f64, f64), resp: &Response, middle: b
     if highest {
         *best = Best {
             peak: resp.max as f64,
-            apce: resp.apce,
             at: (wc.0 + resp.dx, wc.1 + resp.dy),
+            gate: (resp.max as f64, resp.apce),
         };
     }
     highest
@@ -1424,10 +1456,13 @@ fn in_frame(p: (f64, f64), frame: (f64, f64)) -> (f64, f64) {
 /// The strongest middle-scale response of a frame.
 #[derive(Debug, Clone, Copy)]
 struct Best {
+    /// Peak of the map the particles read.
     peak: f64,
-    apce: f64,
     /// Where its peak is, frame pixels (0-based).
     at: (f64, f64),
+    /// Peak and APCE the gate reads: the correlation response's (the
+    /// same map without the colour score).
+    gate: (f64, f64),
 }
 
 impl TrackerCore for PfDcfCore {
@@ -1461,8 +1496,16 @@ impl TrackerCore for PfDcfCore {
         let max_scale = (self.frame.0 / w).min(self.frame.1 / h).max(1.0);
         self.scale_bounds = (min_scale.ln(), max_scale.ln());
         self.gate.reset();
-        // R_bar starts from the first frame's own response peak
-        let peak0 = self.dcf.detect((cx, cy), 1.0)?.max as f64;
+        // R_bar starts from the first frame's own response peak (merged
+        // with the colour score where the particles read one)
+        let mut peak0 = self.dcf.detect((cx, cy), 1.0)?.max as f64;
+        self.colour = None;
+        if c.colour_merge > 0.0 {
+            let mut m = ColourMerge::new(c.colour_merge, c.colour_rate, c.inner_padding)?;
+            m.init(gray, &self.dcf)?;
+            peak0 = m.merge(&self.dcf, (cx, cy), 1.0)?.max as f64;
+            self.colour = Some(m);
+        }
         self.peaks = (peak0, 1);
         // the scale filter learns the first frame whole; S_bar starts from
         // its own peak there, as R_bar
@@ -1559,7 +1602,7 @@ impl TrackerCore for PfDcfCore {
                     ls = self.look_scale(frame, at, pl)?;
                 }
                 let look = self.second_look(frame, at, ls)?;
-                if self.gate.would_admit(look.peak, look.apce) {
+                if self.gate.would_admit(look.gate.0, look.gate.1) {
                     if c.redetect_scale && after {
                         ls = self.look_scale(frame, look.at, pl)?;
                     }
@@ -1611,20 +1654,20 @@ impl TrackerCore for PfDcfCore {
             peak,
         };
         let smc = self.smc.as_mut().ok_or(TrackerError::NotInitialised)?;
-        let (peak, apce) = match found {
+        let (peak, gate) = match found {
             Some((look, ls)) => {
                 let particles = vec![State::new(look.at.0, look.at.1, 0.0, 0.0, ls); c.particles];
                 smc.set = ParticleSet::new(particles)?;
-                (look.peak, look.apce)
+                (look.peak, look.gate)
             }
             None => {
                 smc.step_with(&proposal, &(), &mut self.chunks)?;
-                (best.peak, best.apce)
+                (best.peak, best.gate)
             }
         };
         let mean: State = smc.set.mean();
         let n = smc.set.len();
-        let admitted = !c.gate.gate || self.gate.admit(peak, apce);
+        let admitted = !c.gate.gate || self.gate.admit(gate.0, gate.1);
         self.diagnostics.frames += 1;
         if admitted {
             if self.lost {
@@ -1641,6 +1684,9 @@ impl TrackerCore for PfDcfCore {
                     self.dcf.ensure_loaded(frame, at, scale)?;
                     self.dcf.update(at, scale, 1.0)?;
                 }
+            }
+            if let Some(m) = self.colour.as_mut() {
+                m.learn(frame, &self.dcf, at, scale, 1.0)?;
             }
             self.anchor = (mean[0], mean[1], mean[4]);
             self.peaks.0 += peak;
