@@ -1602,4 +1602,70 @@ mod tests {
         whole.detect(at, 1.02).unwrap();
         assert_eq!(bits(&part), bits(&whole), "after the update");
     }
+
+    /// An RGB frame: a red 24 x 30 box centred at `(cx, cy)` on a green
+    /// background, both under a gray-level texture fixed to the frame.
+    fn red_on_green(cx: f64, cy: f64) -> Image<u8> {
+        let (w, h) = (160, 120);
+        let mut data = Vec::with_capacity(w * h * 3);
+        for y in 0..h {
+            for x in 0..w {
+                let (u, v) = (x as f64 - cx, y as f64 - cy);
+                let t = 30.0 * (0.7 * x as f64).sin() * (0.4 * y as f64).cos();
+                let px = if u.abs() < 12.0 && v.abs() < 15.0 {
+                    [200.0 + t, 40.0 + t, 40.0 + t]
+                } else {
+                    [60.0 + t, 140.0 + t, 70.0 + t]
+                };
+                data.extend(px.map(|c: f64| c.clamp(0.0, 255.0) as u8));
+            }
+        }
+        Image::from_vec(w, h, 3, data).unwrap()
+    }
+
+    /// The colour half: with weight 0 the merge is the correlation
+    /// response bit for bit; with weight 1 it is the colour score alone,
+    /// which peaks where the red box went (8 px right, 3 px up of the
+    /// window's centre) within half a cell, where the correlation
+    /// response, held by the texture fixed to the frame, stays within a
+    /// pixel of the centre (seen by merging the correlation response in
+    /// place of the colour score); a window outside the loaded region and
+    /// parameters outside `[0, 1]` are errors.
+    #[test]
+    fn the_colour_merge_is_the_correlation_at_0_and_the_colour_at_1() {
+        let (f0, f1) = (red_on_green(80.0, 60.0), red_on_green(88.0, 57.0));
+        let mut dcf = Dcf::new(DcfConfig::default()).unwrap();
+        dcf.init(f0.view(), (80.0, 60.0), (24.0, 30.0)).unwrap();
+        let mut merges = [0.0, 1.0].map(|w| ColourMerge::new(w, 0.04, 0.2).unwrap());
+        for m in &mut merges {
+            m.init(f0.view(), &dcf).unwrap();
+        }
+        dcf.load(f1.view()).unwrap();
+        let cf: Vec<u32> = dcf
+            .detect((80.0, 60.0), 1.0)
+            .unwrap()
+            .data()
+            .iter()
+            .map(|v| v.to_bits())
+            .collect();
+        let [zero, one] = &mut merges;
+        zero.load(f1.view(), &dcf, (80.0, 60.0), 1.0, 0).unwrap();
+        let z = zero.merge(&dcf, (80.0, 60.0), 1.0).unwrap();
+        assert_eq!(z.data().iter().map(|v| v.to_bits()).collect::<Vec<_>>(), cf);
+        one.load(f1.view(), &dcf, (80.0, 60.0), 1.0, 0).unwrap();
+        let o = one.merge(&dcf, (80.0, 60.0), 1.0).unwrap();
+        assert!(
+            (o.dx - 8.0).abs() <= 2.0 && (o.dy + 3.0).abs() <= 2.0,
+            "colour peak at {:.2}, {:.2}",
+            o.dx,
+            o.dy
+        );
+        // a window the loaded region does not hold
+        assert!(one.merge(&dcf, (20.0, 60.0), 1.0).is_err());
+        for bad in [-0.1, 1.5, f64::NAN] {
+            assert!(ColourMerge::new(bad, 0.04, 0.2).is_err());
+            assert!(ColourMerge::new(0.3, bad, 0.2).is_err());
+            assert!(ColourMerge::new(0.3, 0.04, bad).is_err());
+        }
+    }
 }
