@@ -47,7 +47,7 @@ pub use multi_target::{
 };
 pub use ncc_scale::{NccScaleConfig, NccScaleCore, NccScaleTracker};
 pub use pf_dcf::{
-    LookScale, OuterScales, PfDcfConfig, PfDcfCore, PfDcfDiagnostics, PfDcfTracker,
+    GateResponse, LookScale, OuterScales, PfDcfConfig, PfDcfCore, PfDcfDiagnostics, PfDcfTracker,
     RedetectFeatures, UpdateFeatures,
 };
 pub use registry::{REGISTRY, TrackerInfo, build_tracker, tracker_info};

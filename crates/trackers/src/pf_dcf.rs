@@ -422,6 +422,14 @@ options! {
         /// Foreground shrink per mean side of the colour histograms'
         /// target box (Staple's inner padding: 0.2).
         pub inner_padding: f64 = 0.2;
+        /// What the update gate reads with [`PfDcfConfig::colour_merge`]
+        /// above 0: `correlation` (the correlation response alone, as
+        /// Staple's gate) or `merged` (the peak and APCE of the merged
+        /// map the particles read, its running means too; a lost frame's
+        /// second looks are then merged as well, and restart the
+        /// particles at the merged peak). Without colour both are the
+        /// correlation response.
+        pub gate_response: GateResponse = GateResponse::Correlation;
     }
     groups {
         /// The correlation filter (KCF's published values).
@@ -460,6 +468,19 @@ pub enum LookScale {
 
 choice! {
     LookScale { EveryLook = "every-look", Admitted = "admitted" }
+}
+
+/// What the update gate reads ([`PfDcfConfig::gate_response`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GateResponse {
+    /// The correlation response alone.
+    Correlation,
+    /// The response merged with the colour score.
+    Merged,
+}
+
+choice! {
+    GateResponse { Correlation = "correlation", Merged = "merged" }
 }
 
 /// What a tracked frame learns from ([`PfDcfConfig::update_features`]).
@@ -1203,7 +1224,9 @@ impl PfDcfCore {
                     };
                     if keep(&mut r.maps[k * nl + l], &mut best, wc, resp, l == nl / 2) {
                         best_k = k;
-                        best.gate = cf;
+                        if c.gate_response == GateResponse::Correlation {
+                            best.gate = cf;
+                        }
                     }
                     self.diagnostics.responses += 1;
                     if keep_features {
@@ -1414,9 +1437,19 @@ impl PfDcfCore {
 
     fn second_look(&mut self, frame: ImageView<'_, u8>, at: (f64, f64), ls: f64) -> Result<Best> {
         let at = in_frame(at, self.frame);
-        self.dcf.ensure_loaded(frame, at, ls.exp())?;
-        let resp = self.dcf.detect(at, ls.exp())?;
+        let s = ls.exp();
+        self.dcf.ensure_loaded(frame, at, s)?;
+        self.dcf.detect(at, s)?;
         self.diagnostics.responses += 1;
+        // with the gate on the merged response, the look is merged too
+        let merged = self.config.gate_response == GateResponse::Merged;
+        let resp = match self.colour.as_mut().filter(|_| merged) {
+            Some(m) => {
+                m.load(frame, &self.dcf, at, s, 0)?;
+                m.merge(&self.dcf, at, s)?
+            }
+            None => self.dcf.response(),
+        };
         Ok(Best {
             peak: resp.max as f64,
             at: (at.0 + resp.dx, at.1 + resp.dy),
