@@ -772,7 +772,7 @@ pub(crate) mod tests {
 
     /// Smooth random texture: a sum of a few sinusoids with random
     /// frequencies and phases, in `0..=255`.
-    fn texture(seed: u64) -> impl Fn(f64, f64) -> f64 {
+    pub(crate) fn texture(seed: u64) -> impl Fn(f64, f64) -> f64 {
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
         let waves: Vec<(f64, f64, f64)> = (0..8)
             .map(|_| {

@@ -1760,7 +1760,7 @@ impl TrackerCore for PfDcfCore {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::ncc_scale::tests::{errors, growing, run, scene};
+    use crate::ncc_scale::tests::{errors, growing, run, scene, texture};
     use crate::tracker::Tracker;
     use bayestrack_image::Image;
 
@@ -2765,5 +2765,98 @@ mod tests {
             t.step(other.view()),
             Err(TrackerError::FrameSizeChanged { .. })
         ));
+    }
+
+    /// An orange target whose texture two travelling waves warp further
+    /// every frame (its look keeps changing, its colour does not),
+    /// walking 1.2 px a frame across a static green-gray texture: the
+    /// stress set's `deformation` in small.
+    fn warping(frames: usize) -> (Vec<Image<u8>>, Vec<BBox>) {
+        let (fw, fh) = (160usize, 120usize);
+        let (bg, fg) = (texture(11), texture(23));
+        let mut out = Vec::new();
+        let mut boxes = Vec::new();
+        for k in 0..frames {
+            let t = k as f64;
+            let (cx, cy, w, h) = (40.0 + 1.2 * t, 60.0 + 10.0 * (t / 12.0).sin(), 24.0, 30.0);
+            let phase = 0.35 * t;
+            let mut data = Vec::with_capacity(fw * fh * 3);
+            for y in 0..fh {
+                for x in 0..fw {
+                    let (xf, yf) = (x as f64, y as f64);
+                    let (u, v) = ((xf - cx) / w, (yf - cy) / h);
+                    let p = if u.abs() <= 0.5 && v.abs() <= 0.5 {
+                        let a = u * 40.0 + 6.0 * (v * 12.0 + phase).sin();
+                        let b = v * 40.0 + 6.0 * (u * 10.0 + 1.3 * phase).sin();
+                        let g = 0.6 * fg(a, b) + 30.0 * (a * 0.25).cos();
+                        [(g * 1.3 + 40.0).min(255.0), g * 0.7, g * 0.4]
+                    } else {
+                        let g = bg(xf, yf);
+                        [g * 0.8, g, g * 0.85]
+                    };
+                    data.extend(p.map(|c| c as u8));
+                }
+            }
+            out.push(Image::from_vec(fw, fh, 3, data).unwrap());
+            boxes.push(BBox::new(
+                cx - (w - 1.0) / 2.0 + 1.0,
+                cy - (h - 1.0) / 2.0 + 1.0,
+                w,
+                h,
+            ));
+        }
+        (out, boxes)
+    }
+
+    /// With Staple's colour score and the gate reading the merged
+    /// response, pf-dcf holds a target whose texture keeps warping (worst
+    /// centre error 9.5-10.9 px on a 24 x 30 target, mean 3.8-4.3, 1-2
+    /// frames lost, tracker seeds 0-2); with the gate on the correlation
+    /// response, with or without colour, the gate refuses the changed
+    /// target, the model freezes, and the search loses it (worst errors
+    /// 35-94 px, 45-77 frames lost): the bounds fail.
+    #[test]
+    fn colour_and_a_gate_on_the_merged_response_hold_a_target_whose_look_changes() {
+        let (frames, truth) = warping(80);
+        for (colour, gate) in [
+            (0.3, GateResponse::Merged),
+            (0.0, GateResponse::Correlation),
+            (0.3, GateResponse::Correlation),
+        ] {
+            let mut worst = 0.0f64;
+            for seed in 0..3 {
+                let config = PfDcfConfig {
+                    colour_merge: colour,
+                    gate_response: gate,
+                    ..PfDcfConfig::default()
+                };
+                let mut t = pf(config, seed);
+                let got = run(&mut t, &frames, truth[0]);
+                let (centre, _) = errors(&got, &truth);
+                let mean = got
+                    .iter()
+                    .zip(&truth)
+                    .map(|(g, t)| {
+                        let (a, b) = (g.center(), t.center());
+                        (a.0 - b.0).hypot(a.1 - b.1)
+                    })
+                    .sum::<f64>()
+                    / got.len() as f64;
+                let lost = t.core().diagnostics().lost_frames;
+                if gate == GateResponse::Merged {
+                    assert!(
+                        centre <= 13.0 && mean <= 5.0 && lost <= 5,
+                        "seed {seed}: worst {centre:.2}, mean {mean:.2}, lost {lost}"
+                    );
+                }
+                worst = worst.max(centre);
+            }
+            if gate == GateResponse::Correlation {
+                assert!(
+                    worst > 30.0,
+                    "colour {colour}: worst centre error {worst:.2}"
+                );
+            }
+        }
     }
 }
