@@ -1029,6 +1029,8 @@ pub struct ColourMerge {
     map: Vec<f32>,
     scores: Vec<f32>,
     merged: Response,
+    /// The window of the patch in `planes` (the last merge's).
+    sampled: Option<((f64, f64), f64)>,
 }
 
 impl ColourMerge {
@@ -1051,6 +1053,7 @@ impl ColourMerge {
             map: Vec::new(),
             scores: Vec::new(),
             merged: Response::default(),
+            sampled: None,
         })
     }
 
@@ -1130,18 +1133,70 @@ impl ColourMerge {
 
     fn learn_at(&mut self, dcf: &Dcf, centre: (f64, f64), scale: f64, rate: f64) -> Result<()> {
         let g = self.patch(dcf, centre, scale)?;
+        self.sampled = Some((centre, scale));
         let (bw, bh) = Self::target_box(&g);
         let (x0, y0) = ((g.pw - bw) / 2, (g.ph - bh) / 2);
+        self.learn_box(&g, (x0, y0, x0 + bw, y0 + bh), rate)
+    }
+
+    /// The histograms learn the box `(x0, y0, x1, y1)` (model pixels) of
+    /// the patch in `planes`, its foreground shrunk by the inner padding.
+    fn learn_box(
+        &mut self,
+        g: &Geometry,
+        (x0, y0, x1, y1): (usize, usize, usize, usize),
+        rate: f64,
+    ) -> Result<()> {
+        let (bw, bh) = (x1 - x0, y1 - y0);
         let shrink = (self.inner_padding * (bw + bh) as f64 / 2.0).round() as usize;
         let colour = self.colour.as_mut().ok_or(DcfError::NotInitialised)?;
         colour.learn(
             &self.planes,
             g.pw,
             g.ph,
-            (x0, y0, x0 + bw, y0 + bh),
+            (x0, y0, x1, y1),
             shrink.min(bw.min(bh).saturating_sub(1) / 2),
             self.colour_rate * rate,
         )
+    }
+
+    /// The histograms learn the target at `centre`, `scale` from the
+    /// patch the last [`ColourMerge::merge`] sampled, without sampling
+    /// again: the target's box moved there in whole model pixels and
+    /// sized by `scale` over the patch's scale (ECO's reuse of the
+    /// detection's samples, for the colour model). Returns `false`, and
+    /// learns nothing, when that box would leave the patch (learn from a
+    /// patch sampled there, [`ColourMerge::learn`], instead).
+    ///
+    /// # Errors
+    /// [`DcfError::NotInitialised`] before any merge.
+    pub fn learn_detected(
+        &mut self,
+        dcf: &Dcf,
+        centre: (f64, f64),
+        scale: f64,
+        rate: f64,
+    ) -> Result<bool> {
+        let g = dcf.geometry.ok_or(DcfError::NotInitialised)?;
+        let (c, s) = self.sampled.ok_or(DcfError::NotInitialised)?;
+        let k = scale / s;
+        let bw = ((g.base.0 / g.rx * k).round() as usize).clamp(1, g.pw);
+        let bh = ((g.base.1 / g.ry * k).round() as usize).clamp(1, g.ph);
+        // the box's top-left in model pixels of the sampled patch: where
+        // the patch's own box is, moved by the offset rounded
+        let moved = |n: usize, b: usize, d: f64| ((n - b) / 2) as f64 + d.round();
+        let left = moved(g.pw, bw, (centre.0 - c.0) / (g.rx * s));
+        let top = moved(g.ph, bh, (centre.1 - c.1) / (g.ry * s));
+        if !(left >= 0.0
+            && top >= 0.0
+            && left + bw as f64 <= g.pw as f64
+            && top + bh as f64 <= g.ph as f64)
+        {
+            return Ok(false);
+        }
+        let (x0, y0) = (left as usize, top as usize);
+        self.learn_box(&g, (x0, y0, x0 + bw, y0 + bh), rate)?;
+        Ok(true)
     }
 
     /// The histograms learn the target at `centre`, `scale` (at `rate`
@@ -1178,6 +1233,7 @@ impl ColourMerge {
     /// region ([`ColourMerge::load`]); a non-finite merge.
     pub fn merge(&mut self, dcf: &Dcf, centre: (f64, f64), scale: f64) -> Result<&Response> {
         let g = self.patch(dcf, centre, scale)?;
+        self.sampled = Some((centre, scale));
         let colour = self.colour.as_mut().ok_or(DcfError::NotInitialised)?;
         colour.likelihood(&self.planes[..], g.pw, g.ph, &mut self.map)?;
         let (bw, bh) = Self::target_box(&g);
