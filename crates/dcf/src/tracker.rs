@@ -1724,4 +1724,50 @@ mod tests {
             assert!(ColourMerge::new(0.3, 0.04, bad).is_err());
         }
     }
+
+    /// Learning from the merge's patch: with no move it learns what a
+    /// patch sampled again learns (the next merges agree bit for bit);
+    /// moved by the red box's own move (8 px right, 3 px up) it learns the
+    /// box where it went (at learning rate 1, the histograms replaced),
+    /// so the next merge's colour score peaks on it within half a cell
+    /// (the move's sign flipped, the peak goes to -13.1, 0.8); a box moved
+    /// out of the patch learns nothing and says so.
+    #[test]
+    fn the_colour_model_learns_from_the_merge_patch_as_from_a_new_one() {
+        let (f0, f1) = (red_on_green(80.0, 60.0), red_on_green(88.0, 57.0));
+        let mut dcf = Dcf::new(DcfConfig::default()).unwrap();
+        dcf.init(f0.view(), (80.0, 60.0), (24.0, 30.0)).unwrap();
+        let mut fresh = ColourMerge::new(1.0, 1.0, 0.2).unwrap();
+        fresh.init(f0.view(), &dcf).unwrap();
+        let mut reused = fresh.clone();
+        dcf.load(f1.view()).unwrap();
+        dcf.detect((80.0, 60.0), 1.0).unwrap();
+        let bits = |r: &Response| r.data().iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        for m in [&mut fresh, &mut reused] {
+            m.load(f1.view(), &dcf, (80.0, 60.0), 1.0, 0).unwrap();
+            m.merge(&dcf, (80.0, 60.0), 1.0).unwrap();
+        }
+        fresh
+            .learn(f1.view(), &dcf, (80.0, 60.0), 1.0, 1.0)
+            .unwrap();
+        assert!(reused.learn_detected(&dcf, (80.0, 60.0), 1.0, 1.0).unwrap());
+        let a = bits(fresh.merge(&dcf, (80.0, 60.0), 1.0).unwrap());
+        let b = bits(reused.merge(&dcf, (80.0, 60.0), 1.0).unwrap());
+        assert_eq!(a, b);
+        // moved with the box: the histograms keep the red box
+        assert!(reused.learn_detected(&dcf, (88.0, 57.0), 1.0, 1.0).unwrap());
+        let o = reused.merge(&dcf, (80.0, 60.0), 1.0).unwrap();
+        assert!(
+            (o.dx - 8.0).abs() <= 2.0 && (o.dy + 3.0).abs() <= 2.0,
+            "colour peak at {:.2}, {:.2}",
+            o.dx,
+            o.dy
+        );
+        // out of the patch
+        assert!(
+            !reused
+                .learn_detected(&dcf, (160.0, 60.0), 1.0, 1.0)
+                .unwrap()
+        );
+    }
 }
