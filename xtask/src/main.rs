@@ -833,7 +833,7 @@ mod tests {
         assert!(!dir.exists());
         run(&["mad"], &[], None).unwrap();
         let csv = std::fs::read_to_string(dir.join("results/results.csv")).unwrap();
-        assert_eq!(csv.lines().count(), 1 + 14, "{csv}");
+        assert_eq!(csv.lines().count(), 1 + 18, "{csv}");
         assert!(csv.contains("\nfull-occlusion-gray,mad,"), "{csv}");
         run(&["ncc-scale"], &[], Some(("scale_step", &["1.02", "1.05"]))).unwrap();
         for v in ["1.02", "1.05"] {
