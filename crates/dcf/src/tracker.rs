@@ -994,6 +994,18 @@ impl StapleConfig {
     }
 }
 
+/// The pixels of `frame` that the window of `dcf` at `centre`, `scale`
+/// reads (`None`: nothing to load, as [`Geometry::region`]).
+fn window(
+    dcf: &Dcf,
+    frame: ImageView<'_, u8>,
+    centre: (f64, f64),
+    scale: f64,
+) -> Result<Option<Region>> {
+    let g = dcf.geometry.ok_or(DcfError::NotInitialised)?;
+    Ok(g.region(frame.width(), frame.height(), centre, scale))
+}
+
 /// The colour half's parameters, each in `[0, 1]`.
 fn check_colour(merge_factor: f64, colour_rate: f64, inner_padding: f64) -> Result<()> {
     for (name, v) in [
@@ -1098,10 +1110,8 @@ impl ColourMerge {
         scale: f64,
         margin: usize,
     ) -> Result<()> {
-        let g = dcf.geometry.ok_or(DcfError::NotInitialised)?;
         let (fw, fh) = (frame.width(), frame.height());
-        let r = g
-            .region(fw, fh, centre, scale)
+        let r = window(dcf, frame, centre, scale)?
             .map_or(Region::whole(fw, fh), |r| r.grown(margin, fw, fh));
         self.sampler.load_region(frame, r)
     }
@@ -1213,11 +1223,8 @@ impl ColourMerge {
         scale: f64,
         rate: f64,
     ) -> Result<()> {
-        let g = dcf.geometry.ok_or(DcfError::NotInitialised)?;
-        let (fw, fh) = (frame.width(), frame.height());
-        let r = g
-            .region(fw, fh, centre, scale)
-            .unwrap_or(Region::whole(fw, fh));
+        let r = window(dcf, frame, centre, scale)?
+            .unwrap_or(Region::whole(frame.width(), frame.height()));
         if !self.sampler.holds(&r) {
             self.sampler.load_region(frame, r)?;
         }
