@@ -957,6 +957,9 @@ pub struct StapleConfig {
     pub colour_rate: f64,
     /// Foreground shrink as a fraction of the mean side (Staple: 0.2).
     pub inner_padding: f64,
+    /// Whether the update gate reads the merged response's peak and APCE
+    /// (`false`: the correlation response's).
+    pub gate_merged: bool,
 }
 
 impl Default for StapleConfig {
@@ -979,6 +982,7 @@ impl Default for StapleConfig {
             merge_factor: 0.3,
             colour_rate: 0.04,
             inner_padding: 0.2,
+            gate_merged: false,
         }
     }
 }
@@ -1274,6 +1278,7 @@ impl ColourMerge {
 pub struct Staple {
     dcf: Dcf,
     colour: ColourMerge,
+    gate_merged: bool,
 }
 
 impl Staple {
@@ -1290,6 +1295,7 @@ impl Staple {
                 config.colour_rate,
                 config.inner_padding,
             )?,
+            gate_merged: config.gate_merged,
         })
     }
 
@@ -1351,7 +1357,11 @@ impl Staple {
             ensure_gray(&mut self.dcf.sampler, frame, later)?;
         }
         let scale = self.dcf.scale_change(centre, s)?;
-        let updated = self.dcf.admit(cf_peak, cf_apce);
+        let updated = if self.gate_merged {
+            self.dcf.admit(f64::from(peak), apce)
+        } else {
+            self.dcf.admit(cf_peak, cf_apce)
+        };
         if updated {
             let update = self.dcf.needs(fw, fh, centre, scale);
             ensure_gray(&mut self.dcf.sampler, frame, update)?;

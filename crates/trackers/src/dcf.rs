@@ -25,7 +25,7 @@ use bayestrack_dcf::kcf::Kernel;
 use bayestrack_dcf::scale::{ScaleConfig, ScaleMethod};
 use bayestrack_dcf::{Dcf, DcfConfig, Padding, Staple, StapleConfig, Step};
 use bayestrack_image::BBox;
-use bayestrack_options::options;
+use bayestrack_options::{choice, options};
 
 use crate::error::{Result, TrackerError};
 use crate::shell::{ChannelPolicy, InitialBox, Planes, Shell, TrackerCore};
@@ -172,6 +172,20 @@ impl GateOptions {
     }
 }
 
+/// What the update gate reads where a colour score is merged into the
+/// correlation response (`dcf-staple`'s and `pf-dcf`'s `gate_response`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GateResponse {
+    /// The correlation response alone.
+    Correlation,
+    /// The response merged with the colour score.
+    Merged,
+}
+
+choice! {
+    GateResponse { Correlation = "correlation", Merged = "merged" }
+}
+
 options! {
     /// Every parameter of [`DcfTracker`]: KCF's published HOG parameters
     /// (Henriques et al. 2015, sec. 6.1), fDSST's scale filter (Danelljan
@@ -242,6 +256,10 @@ options! {
         pub colour_rate: f64 = 0.04;
         /// Foreground shrink per mean side (Staple's inner padding: 0.2).
         pub inner_padding: f64 = 0.2;
+        /// What the update gate reads: `correlation` (the correlation
+        /// response alone) or `merged` (the merged map's peak and APCE, as
+        /// pf-dcf's gate).
+        pub gate_response: GateResponse = GateResponse::Correlation;
     }
     groups {
         /// The scale filter: Staple's regularisation 1e-3, and fDSST's
@@ -288,6 +306,7 @@ impl StapleTrackerConfig {
             merge_factor: self.merge_factor,
             colour_rate: self.colour_rate,
             inner_padding: self.inner_padding,
+            gate_merged: self.gate_response == GateResponse::Merged,
         }
     }
 }

@@ -30,8 +30,8 @@ pub use condensation::{
     PointCloudTracker,
 };
 pub use dcf::{
-    DcfCore, DcfTracker, DcfTrackerConfig, GateOptions, KcfOptions, ScaleOptions, StapleCore,
-    StapleTracker, StapleTrackerConfig,
+    DcfCore, DcfTracker, DcfTrackerConfig, GateOptions, GateResponse, KcfOptions, ScaleOptions,
+    StapleCore, StapleTracker, StapleTrackerConfig,
 };
 pub use engine::{CueFilter, CueProposal, StateModel, select_predict_measure};
 pub use error::{Result, TrackerError};
@@ -47,7 +47,7 @@ pub use multi_target::{
 };
 pub use ncc_scale::{NccScaleConfig, NccScaleCore, NccScaleTracker};
 pub use pf_dcf::{
-    GateResponse, LookScale, OuterScales, PfDcfConfig, PfDcfCore, PfDcfDiagnostics, PfDcfTracker,
+    LookScale, OuterScales, PfDcfConfig, PfDcfCore, PfDcfDiagnostics, PfDcfTracker,
     RedetectFeatures, UpdateFeatures,
 };
 pub use registry::{REGISTRY, TrackerInfo, build_tracker, tracker_info};

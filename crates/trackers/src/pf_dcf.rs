@@ -181,7 +181,7 @@ use nalgebra::SVector;
 use rand::{Rng, RngExt};
 use rand_distr::{Distribution, StandardNormal};
 
-use crate::dcf::{GateOptions, KcfOptions};
+use crate::dcf::{GateOptions, GateResponse, KcfOptions};
 use crate::engine::select_predict_measure;
 use crate::error::{Result, TrackerError};
 use crate::shell::{ChannelPolicy, InitialBox, Needs, Planes, Shell, TrackerCore};
@@ -489,19 +489,6 @@ pub enum LookScale {
 
 choice! {
     LookScale { EveryLook = "every-look", Admitted = "admitted" }
-}
-
-/// What the update gate reads ([`PfDcfConfig::gate_response`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum GateResponse {
-    /// The correlation response alone.
-    Correlation,
-    /// The response merged with the colour score.
-    Merged,
-}
-
-choice! {
-    GateResponse { Correlation = "correlation", Merged = "merged" }
 }
 
 /// What a tracked frame learns from ([`PfDcfConfig::update_features`]).
