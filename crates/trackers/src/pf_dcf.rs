@@ -555,8 +555,15 @@ impl PfDcfConfig {
         if !(0.0..=1.0).contains(&self.jump_fraction) {
             return bad("jump_fraction", self.jump_fraction, "must be in [0, 1]");
         }
-        if !(0.0..=1.0).contains(&self.peak_fraction) {
-            return bad("peak_fraction", self.peak_fraction, "must be in [0, 1]");
+        for (name, v) in [
+            ("peak_fraction", self.peak_fraction),
+            ("colour_merge", self.colour_merge),
+            ("colour_rate", self.colour_rate),
+            ("inner_padding", self.inner_padding),
+        ] {
+            if !(0.0..=1.0).contains(&v) {
+                return bad(name, v, "must be in [0, 1]");
+            }
         }
         for (name, v) in [
             ("peak_spread", self.peak_spread),
@@ -2718,6 +2725,18 @@ mod tests {
             },
             PfDcfConfig {
                 peak_fraction: f64::NAN,
+                ..PfDcfConfig::default()
+            },
+            PfDcfConfig {
+                colour_merge: 1.5,
+                ..PfDcfConfig::default()
+            },
+            PfDcfConfig {
+                colour_rate: f64::NAN,
+                ..PfDcfConfig::default()
+            },
+            PfDcfConfig {
+                inner_padding: -0.1,
                 ..PfDcfConfig::default()
             },
             PfDcfConfig {
