@@ -1787,4 +1787,58 @@ mod tests {
                 .unwrap()
         );
     }
+
+    /// An RGB frame: a 24 x 30 box of `base` colour under a texture that
+    /// moves with it, centred at `(cx, cy)` on a green background with a
+    /// texture fixed to the frame.
+    fn tinted(cx: f64, cy: f64, base: [f64; 3]) -> Image<u8> {
+        let (w, h) = (160, 120);
+        let mut data = Vec::with_capacity(w * h * 3);
+        for y in 0..h {
+            for x in 0..w {
+                let (u, v) = (x as f64 - cx, y as f64 - cy);
+                let px = if u.abs() < 12.0 && v.abs() < 15.0 {
+                    let t = 45.0 * (0.9 * u).sin() * (0.6 * v).cos();
+                    base.map(|c| c + t)
+                } else {
+                    let t = 30.0 * (0.7 * x as f64).sin() * (0.4 * y as f64).cos();
+                    [60.0 + t, 140.0 + t, 70.0 + t]
+                };
+                data.extend(px.map(|c: f64| c.clamp(0.0, 255.0) as u8));
+            }
+        }
+        Image::from_vec(w, h, 3, data).unwrap()
+    }
+
+    /// A red target turns green-gray (the background's hue) at frame 10
+    /// with its gray levels kept (BT.601: 0.299 r + 0.587 g + 0.114 b is
+    /// 88 either way): the correlation response, which reads gray levels,
+    /// hardly moves and Staple's default gate keeps learning it; the gate
+    /// on the merged response sees the colour score fall and refuses
+    /// (measured: 10 of the 10 frames after the change learnt, and 0).
+    #[test]
+    fn the_gate_on_the_merged_response_reads_the_colour_score() {
+        let learnt = |gate_merged: bool| {
+            let mut t = Staple::new(StapleConfig {
+                gate_merged,
+                ..StapleConfig::default()
+            })
+            .unwrap();
+            let red = [200.0, 40.0, 40.0];
+            t.init(tinted(60.0, 60.0, red).view(), (60.0, 60.0), (24.0, 30.0))
+                .unwrap();
+            (1..20usize)
+                .filter(|&k| {
+                    let base = if k < 10 { red } else { [40.0, 122.0, 40.0] };
+                    let f = tinted(60.0 + k as f64, 60.0, base);
+                    t.step(f.view()).unwrap().updated && k >= 10
+                })
+                .count()
+        };
+        let (cf, merged) = (learnt(false), learnt(true));
+        assert!(
+            cf >= 8 && merged <= 2,
+            "learnt after the change: {cf} with the correlation gate, {merged} with the merged one"
+        );
+    }
 }
