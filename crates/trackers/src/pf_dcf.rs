@@ -69,6 +69,17 @@
 //! response is computed at the predicted log-scale only (every particle
 //! reads it) and the log-scale is measured by the scale factor alone.
 //!
+//! `R` is by default Staple's merge (Bertinetto et al. 2016) of the
+//! correlation response with a colour score, `R = (1 - w) R_cf + w P`
+//! ([`PfDcfConfig::colour_merge`] `w`, Staple's 0.3): `P` at a
+//! displacement is the mean, over the target's box placed there, of each
+//! pixel's object likelihood under foreground and background colour
+//! histograms ([`bayestrack_dcf::ColourMerge`]; a gray-level histogram on
+//! gray video), and `R_bar` is the mean of the merged peaks. The lost
+//! grid reads `R_cf` alone. The colour score is what keeps a target whose
+//! texture changes (deformation, out-of-plane turns): chosen on the
+//! stress set, docs/results.md.
+//!
 //! # Proposal
 //! With [`PfDcfConfig::peak_fraction`] `beta = 0` the particles are
 //! drawn from the dynamics (the bootstrap filter, weight `p(y | x)`). With
@@ -113,9 +124,12 @@
 //!
 //! # Update and re-detection
 //! The estimate is the weighted mean of the particles. The confidence of
-//! the frame is the peak and APCE of the middle scale's response (Wang et
-//! al. 2017's LMCF gate: both at least `beta_1 = 0.7`, `beta_2 = 0.45` of
-//! their means over the frames learnt). A frame that passes is learnt at
+//! the frame is the peak and APCE of the middle scale's response, the
+//! merged one by default ([`PfDcfConfig::gate_response`]; Wang et al.
+//! 2017's LMCF gate: both at least `beta_1 = 0.7`, `beta_2 = 0.45` of
+//! their means over the frames learnt): a target whose texture changed
+//! keeps its colour and passes, a hidden one loses both and is refused.
+//! A frame that passes is learnt at
 //! the estimate (the filter's published learning rate; the scale filter,
 //! when there is one, at the same estimate with fDSST's learning rate
 //! 0.025), by default from the features of the response level nearest
@@ -123,8 +137,10 @@
 //! estimate is at the window's centre (ECO's reuse of the detection's
 //! features, [`PfDcfConfig::update_features`]) rather than from a window
 //! sampled again, and the scale filter from its frame's measurement
-//! ([`PfDcfConfig::update_scale`]); a frame that fails is **lost**: the model and the scale filter
-//! are frozen, and while lost
+//! ([`PfDcfConfig::update_scale`]), and the colour histograms from the
+//! merge's patch ([`PfDcfConfig::update_colour`]); a frame that fails is
+//! **lost**: the model, the scale filter and the histograms are frozen,
+//! and while lost
 //! ([`PfDcfConfig::redetect`]) the particles spread
 //! [`PfDcfConfig::redetect_spread`] times wider in position and velocity
 //! and [`PfDcfConfig::redetect_scale_spread`] times wider in log-scale,
@@ -1911,9 +1927,7 @@ mod tests {
             update_scale: UpdateFeatures::Extracted,
             redetect_scale_at: LookScale::EveryLook,
             tracking_levels: 3,
-            colour_merge: 0.0,
-            gate_response: GateResponse::Correlation,
-            ..PfDcfConfig::default()
+            ..without_colour()
         }
     }
 
