@@ -124,13 +124,13 @@ fn correlation_filters_on_couple() {
 }
 
 /// pf-dcf (the correlation response, merged with Staple's colour score,
-/// as a particle likelihood) on Crossing and Couple: measured AUC 0.781
-/// and 0.640, P@20 1.000 and 0.964 (seed 0, `cargo xtask otb`,
-/// 2026-12-04, with the colour score and the gate on the merged
-/// response; 0.790 and 0.609, P@20 1.000 and 0.950 without them; before
-/// the re-detection's second look Couple scored AUC 0.086); floors 0.6 /
-/// 0.45 and 0.9 / 0.8. David (AUC 0.618) is left out: 471 frames in the
-/// test profile.
+/// as a particle likelihood) on Crossing and Couple: measured AUC 0.788
+/// and 0.619, P@20 1.000 and 0.964 (seed 0, `cargo xtask otb`,
+/// 2026-12-04, with the colour score, the gate on the merged response
+/// and the first frame's velocity spread; 0.790 and 0.609, P@20 1.000
+/// and 0.950 without them; before the re-detection's second look Couple
+/// scored AUC 0.086); floors 0.6 / 0.45 and 0.9 / 0.8. David (AUC 0.600)
+/// is left out: 471 frames in the test profile.
 #[test]
 fn pf_dcf_follows_crossing_and_couple() {
     for (name, auc_floor, p20_floor) in [("Crossing", 0.6, 0.9), ("Couple", 0.45, 0.8)] {
