@@ -267,7 +267,8 @@ options! {
         pub redetect: bool = true;
         /// Position and velocity noise multiplier while lost (3).
         pub redetect_spread: f64 = 3.0;
-        /// Log-scale noise multiplier while lost (2).
+        /// Log-scale noise multiplier while lost (2; 0: the log-scale
+        /// held while lost, where nothing measures it).
         pub redetect_scale_spread: f64 = 2.0;
         /// Windows per side of the search grid while lost (3: 3 x 3
         /// windows half a window apart, about 3.75 target sizes across).
@@ -623,13 +624,16 @@ impl PfDcfConfig {
         if !(self.scale_step.is_finite() && self.scale_step > 1.0 && self.scale_step <= 2.0) {
             return bad("scale_step", self.scale_step, "must be in (1, 2]");
         }
-        for (name, v) in [
-            ("redetect_spread", self.redetect_spread),
-            ("redetect_scale_spread", self.redetect_scale_spread),
-        ] {
-            if !(v.is_finite() && (1.0..=100.0).contains(&v)) {
-                return bad(name, v, "must be in [1, 100]");
-            }
+        if !(self.redetect_spread.is_finite() && (1.0..=100.0).contains(&self.redetect_spread)) {
+            return bad(
+                "redetect_spread",
+                self.redetect_spread,
+                "must be in [1, 100]",
+            );
+        }
+        let rs = self.redetect_scale_spread;
+        if !(rs.is_finite() && (rs == 0.0 || (1.0..=100.0).contains(&rs))) {
+            return bad("redetect_scale_spread", rs, "must be 0 or in [1, 100]");
         }
         if !(self.scale_likelihood.is_finite() && (0.0..=1000.0).contains(&self.scale_likelihood)) {
             return bad(
