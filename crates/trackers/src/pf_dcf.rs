@@ -2761,6 +2761,10 @@ mod tests {
                 ..PfDcfConfig::default()
             },
             PfDcfConfig {
+                redetect_scale_spread: 0.5,
+                ..PfDcfConfig::default()
+            },
+            PfDcfConfig {
                 redetect_levels: 2,
                 ..PfDcfConfig::default()
             },
@@ -2988,6 +2992,48 @@ mod tests {
                     assert!(mean <= bound, "seed {seed}: {mean:.2} px");
                 } else {
                     assert!(mean >= bound, "at rest, seed {seed}: {mean:.2} px");
+                }
+            }
+        }
+    }
+
+    /// A target hidden for 40 frames behind a flat patch, the textured
+    /// background around it still in view: with the log-scale held while
+    /// lost (`redetect_scale_spread` 0) the box's area stays within 10 %
+    /// of the last tracked frame's (seeds 0-2; measured at most 2-4 %);
+    /// with the default's walk (2) it drifts by more than e^1 (measured
+    /// e^1.6-e^1.7 smaller: small particles stay on the background's narrow
+    /// peaks and survive). The set did not choose 0 (docs/results.md, "the
+    /// log-scale held while lost"): a lost box is scored off the target
+    /// whatever its size.
+    #[test]
+    fn the_box_keeps_its_size_while_lost_only_with_the_scale_held() {
+        let path = |k: usize| (60.0 + 0.3 * k as f64, 60.0, 24.0, 30.0);
+        let (mut frames, truth) = scene(50, false, 3.0, path);
+        for f in &mut frames[10..] {
+            for y in 35..85 {
+                for x in 40..100 {
+                    f.set(x, y, 0, 128);
+                }
+            }
+        }
+        for spread in [0.0, 2.0] {
+            for seed in 0..3 {
+                let config = PfDcfConfig {
+                    redetect_scale_spread: spread,
+                    ..PfDcfConfig::default()
+                };
+                let (boxes, lost, _) = track_run(config, seed, &frames, truth[0]);
+                assert!(lost[10..].iter().all(|&l| l), "seed {seed}: {lost:?}");
+                let a0 = boxes[9].width * boxes[9].height;
+                let worst = boxes[10..]
+                    .iter()
+                    .map(|b| (b.width * b.height / a0).ln().abs())
+                    .fold(0.0f64, f64::max);
+                if spread == 0.0 {
+                    assert!(worst <= 0.1, "held, seed {seed}: {worst:.3}");
+                } else {
+                    assert!(worst > 1.0, "walking, seed {seed}: {worst:.3}");
                 }
             }
         }
