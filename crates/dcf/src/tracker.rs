@@ -1045,7 +1045,7 @@ pub struct ColourMerge {
     map: Vec<f32>,
     scores: Vec<f32>,
     merged: Response,
-    /// The window of the patch in `planes` (the last merge's).
+    /// The window of the patch in `planes` (the last one sampled whole).
     sampled: Option<((f64, f64), f64)>,
 }
 
@@ -1131,24 +1131,25 @@ impl ColourMerge {
             return Err(outside());
         }
         let n = g.pw * g.ph;
+        self.sampled = None;
         for (ch, plane) in self.planes.chunks_exact_mut(n).enumerate() {
             self.sampler.sample(ch, x0, y0, sx, sy, plane, g.pw, g.ph)?;
         }
+        self.sampled = Some((centre, scale));
         Ok(g)
     }
 
-    /// The target box in model pixels.
-    fn target_box(g: &Geometry) -> (usize, usize) {
+    /// The target box in model pixels, `k` times its size in the patch.
+    fn target_box(g: &Geometry, k: f64) -> (usize, usize) {
         (
-            ((g.base.0 / g.rx).round() as usize).clamp(1, g.pw),
-            ((g.base.1 / g.ry).round() as usize).clamp(1, g.ph),
+            ((g.base.0 / g.rx * k).round() as usize).clamp(1, g.pw),
+            ((g.base.1 / g.ry * k).round() as usize).clamp(1, g.ph),
         )
     }
 
     fn learn_at(&mut self, dcf: &Dcf, centre: (f64, f64), scale: f64, rate: f64) -> Result<()> {
         let g = self.patch(dcf, centre, scale)?;
-        self.sampled = Some((centre, scale));
-        let (bw, bh) = Self::target_box(&g);
+        let (bw, bh) = Self::target_box(&g, 1.0);
         let (x0, y0) = ((g.pw - bw) / 2, (g.ph - bh) / 2);
         self.learn_box(&g, (x0, y0, x0 + bw, y0 + bh), rate)
     }
@@ -1193,9 +1194,7 @@ impl ColourMerge {
     ) -> Result<bool> {
         let g = dcf.geometry.ok_or(DcfError::NotInitialised)?;
         let (c, s) = self.sampled.ok_or(DcfError::NotInitialised)?;
-        let k = scale / s;
-        let bw = ((g.base.0 / g.rx * k).round() as usize).clamp(1, g.pw);
-        let bh = ((g.base.1 / g.ry * k).round() as usize).clamp(1, g.ph);
+        let (bw, bh) = Self::target_box(&g, scale / s);
         // the box's top-left in model pixels of the sampled patch: where
         // the patch's own box is, moved by the offset rounded
         let moved = |n: usize, b: usize, d: f64| ((n - b) / 2) as f64 + d.round();
@@ -1244,10 +1243,9 @@ impl ColourMerge {
     /// region ([`ColourMerge::load`]); a non-finite merge.
     pub fn merge(&mut self, dcf: &Dcf, centre: (f64, f64), scale: f64) -> Result<&Response> {
         let g = self.patch(dcf, centre, scale)?;
-        self.sampled = Some((centre, scale));
         let colour = self.colour.as_mut().ok_or(DcfError::NotInitialised)?;
         colour.likelihood(&self.planes[..], g.pw, g.ph, &mut self.map)?;
-        let (bw, bh) = Self::target_box(&g);
+        let (bw, bh) = Self::target_box(&g, 1.0);
         colour.box_scores(
             &self.map,
             g.pw,

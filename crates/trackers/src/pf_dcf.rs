@@ -194,7 +194,7 @@ use bayestrack_dcf::scale::{ScaleConfig, ScaleFilter, ScaleResponse};
 use bayestrack_dcf::{ColourMerge, Dcf, DcfConfig, Response, SharedFeatures, SharedGrid};
 use bayestrack_image::{BBox, ImageView};
 use bayestrack_options::{choice, options};
-use bayestrack_particle::{ParticleSet, Proposal, Resampling, Smc, stream_seed};
+use bayestrack_particle::{ParticleSet, Proposal, Resampling, Smc, stream_rng, stream_seed};
 use nalgebra::SVector;
 use rand::{Rng, RngExt};
 use rand_distr::{Distribution, StandardNormal};
@@ -1607,10 +1607,8 @@ impl TrackerCore for PfDcfCore {
         self.diagnostics = PfDcfDiagnostics::default();
         let mut particles = vec![State::new(cx, cy, 0.0, 0.0, 0.0); c.particles];
         if c.initial_velocity_spread > 0.0 {
-            use rand::SeedableRng;
             let sd = c.initial_velocity_spread * (w * h).sqrt();
-            let mut rng =
-                rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(stream_seed(&[KEY, self.seed, 1]));
+            let mut rng = stream_rng(&[KEY, self.seed, 1]);
             for p in &mut particles {
                 let (nx, ny): (f64, f64) = (
                     StandardNormal.sample(&mut rng),

@@ -41,18 +41,16 @@ impl ObjectTexture {
         }
     }
 
-    /// The colour at `(u, v)`: the base, a shared luminance field (so the
-    /// gray variant keeps the texture), a field per channel, and a darker
-    /// rim 1.5 px wide.
+    /// The darker rim 1.5 px wide along the box's outline: the light
+    /// factor at `(u, v)`.
     #[inline]
-    pub(crate) fn at(&self, u: f64, v: f64) -> [f64; 3] {
+    fn rim(u: f64, v: f64) -> f64 {
         let [w, h] = TARGET_SIZE;
-        let rim = if u < 1.5 || v < 1.5 || u > w - 1.5 || v > h - 1.5 {
+        if u < 1.5 || v < 1.5 || u > w - 1.5 || v > h - 1.5 {
             0.6
         } else {
             1.0
-        };
-        self.shaded(u, v, rim)
+        }
     }
 
     /// The texture at `(u, v)` times `light`, without the rim.
@@ -62,28 +60,25 @@ impl ObjectTexture {
         std::array::from_fn(|c| (TARGET_BASE[c] + l + 30.0 * self.chroma[c].at(u, v)) * light)
     }
 
-    /// The colour at `(u, v)` of the box under `look`: the rim stays on
-    /// the box's outline, the texture under it warps or turns.
+    /// The colour at `(u, v)` of the box under `look`: the base, a shared
+    /// luminance field (so the gray variant keeps the texture), a field per
+    /// channel, and a darker rim that stays on the box's outline while the
+    /// texture under it warps or turns.
     #[inline]
     fn looked(&self, u: f64, v: f64, look: Look) -> [f64; 3] {
-        let [w, h] = TARGET_SIZE;
         match look {
-            Look::Rigid => self.at(u, v),
+            Look::Rigid => self.shaded(u, v, Self::rim(u, v)),
             Look::Warp { phase, amplitude } => {
-                let rim = if u < 1.5 || v < 1.5 || u > w - 1.5 || v > h - 1.5 {
-                    0.6
-                } else {
-                    1.0
-                };
                 let du = amplitude * (2.0 * PI * v / 22.0 + phase).sin();
                 let dv = amplitude * (2.0 * PI * u / 18.0 + 1.3 * phase).sin();
-                self.shaded(u + du, v + dv, rim)
+                self.shaded(u + du, v + dv, Self::rim(u, v))
             }
             Look::Turn { angle } => {
                 // the column's point on the cylinder, seen from the front
                 let s = ((u - TURN_RADIUS) / TURN_RADIUS).clamp(-1.0, 1.0);
                 let around = TURN_RADIUS * (s.asin() + angle + PI);
                 let lit = 0.45 + 0.55 * (1.0 - s * s).sqrt();
+                let h = TARGET_SIZE[1];
                 let rim = if v < 1.5 || v > h - 1.5 { 0.6 } else { 1.0 };
                 self.shaded(around, v, lit * rim)
             }
